@@ -1,0 +1,1 @@
+"""causal: see README (later issues)."""

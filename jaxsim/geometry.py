@@ -1,0 +1,152 @@
+"""Walls as a precomputed signed distance field, and line-of-sight lookups (host side, numpy).
+
+The walls are axis-aligned boxes. Rather than testing every agent against every box each step
+(51 x 38 box distances), the simulator looks the distance up in a grid precomputed once:
+``benchmarks/bench_walls.py`` measures both. Each cell stores the signed distance to the nearest
+wall surface (negative inside a box) and the unit vector pointing away from that wall, which is
+exactly what pedsim's obstacle force needs (it only uses the closest obstacle point).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True)
+class DistanceField:
+    """Signed distance to the walls on a regular grid.
+
+    Attributes:
+      origin_m: (2,) world position of cell (0, 0)'s centre.
+      resolution_m: cell size.
+      sdf_m: (H, W) float32 signed distance (negative inside walls), row = y, column = x.
+      normal_x, normal_y: (H, W) float32 unit vector pointing away from the nearest wall.
+    """
+
+    origin_m: np.ndarray
+    resolution_m: float
+    sdf_m: np.ndarray
+    normal_x: np.ndarray
+    normal_y: np.ndarray
+
+
+def box_signed_distance(px: np.ndarray, py: np.ndarray, boxes_m: np.ndarray):
+    """Signed distance from points to the union of boxes, and the outward unit normal.
+
+    Args:
+      px, py: (...,) point coordinates.
+      boxes_m: (B, 4) boxes ``xmin, xmax, ymin, ymax``.
+
+    Returns:
+      (sd, nx, ny), each shaped like ``px``: distance to the nearest box surface (negative
+      inside), and the unit vector from that surface towards the point.
+    """
+    px = np.asarray(px, np.float64)[..., None]
+    py = np.asarray(py, np.float64)[..., None]
+    cx = (boxes_m[:, 0] + boxes_m[:, 1]) / 2
+    cy = (boxes_m[:, 2] + boxes_m[:, 3]) / 2
+    hx = (boxes_m[:, 1] - boxes_m[:, 0]) / 2
+    hy = (boxes_m[:, 3] - boxes_m[:, 2]) / 2
+    dx, dy = px - cx, py - cy
+    qx, qy = np.abs(dx) - hx, np.abs(dy) - hy
+    ox, oy = np.maximum(qx, 0), np.maximum(qy, 0)
+    outside = np.hypot(ox, oy)
+    inside = np.minimum(np.maximum(qx, qy), 0)
+    sd = outside + inside
+    # Normal: outside, along (ox, oy) with the sign of the offset; inside, along the axis of
+    # the closest face.
+    sx, sy = np.where(dx >= 0, 1.0, -1.0), np.where(dy >= 0, 1.0, -1.0)
+    safe = np.maximum(outside, 1e-12)
+    x_face = qx >= qy
+    nx = np.where(outside > 0, sx * ox / safe, np.where(x_face, sx, 0.0))
+    ny = np.where(outside > 0, sy * oy / safe, np.where(x_face, 0.0, sy))
+    best = np.argmin(sd, axis=-1)[..., None]
+    take = lambda a: np.take_along_axis(a, best, axis=-1)[..., 0]  # noqa: E731
+    return take(sd), take(nx), take(ny)
+
+
+def build_distance_field(boxes_m: np.ndarray, bounds_m: tuple[float, float, float, float],
+                         resolution_m: float = 0.05) -> DistanceField:
+    """Precompute the signed distance field over ``bounds_m = (xmin, xmax, ymin, ymax)``."""
+    xmin, xmax, ymin, ymax = bounds_m
+    xs = np.arange(xmin, xmax + resolution_m / 2, resolution_m)
+    ys = np.arange(ymin, ymax + resolution_m / 2, resolution_m)
+    sd = np.empty((len(ys), len(xs)))
+    nx, ny = np.empty_like(sd), np.empty_like(sd)
+    for row in range(0, len(ys), 64):  # bounded memory: 64 rows x W cells x B boxes at a time
+        gx, gy = np.meshgrid(xs, ys[row:row + 64])
+        sd[row:row + 64], nx[row:row + 64], ny[row:row + 64] = box_signed_distance(gx, gy, boxes_m)
+    return DistanceField(np.array([xmin, ymin]), resolution_m, sd.astype(np.float32),
+                         nx.astype(np.float32), ny.astype(np.float32))
+
+
+def segment_hits_boxes(p0: np.ndarray, p1: np.ndarray, boxes_m: np.ndarray) -> np.ndarray:
+    """Whether segments cross any box (slab test).
+
+    Args:
+      p0, p1: (..., 2) segment end points.
+      boxes_m: (B, 4) boxes.
+
+    Returns:
+      (...,) bool.
+    """
+    p0 = np.asarray(p0, np.float64)[..., None, :]
+    d = np.asarray(p1, np.float64)[..., None, :] - p0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / d
+        t1x = (boxes_m[:, 0] - p0[..., 0]) * inv[..., 0]
+        t2x = (boxes_m[:, 1] - p0[..., 0]) * inv[..., 0]
+        t1y = (boxes_m[:, 2] - p0[..., 1]) * inv[..., 1]
+        t2y = (boxes_m[:, 3] - p0[..., 1]) * inv[..., 1]
+    # A zero direction component: the slab is either always (inside) or never crossed.
+    in_x = (boxes_m[:, 0] <= p0[..., 0]) & (p0[..., 0] <= boxes_m[:, 1])
+    in_y = (boxes_m[:, 2] <= p0[..., 1]) & (p0[..., 1] <= boxes_m[:, 3])
+    zero_x, zero_y = d[..., 0] == 0, d[..., 1] == 0
+    tminx = np.where(zero_x, np.where(in_x, -np.inf, np.inf), np.minimum(t1x, t2x))
+    tmaxx = np.where(zero_x, np.where(in_x, np.inf, -np.inf), np.maximum(t1x, t2x))
+    tminy = np.where(zero_y, np.where(in_y, -np.inf, np.inf), np.minimum(t1y, t2y))
+    tmaxy = np.where(zero_y, np.where(in_y, np.inf, -np.inf), np.maximum(t1y, t2y))
+    tmin = np.maximum(np.maximum(tminx, tminy), 0.0)
+    tmax = np.minimum(np.minimum(tmaxx, tmaxy), 1.0)
+    return (tmin <= tmax).any(axis=-1)
+
+
+@dataclasses.dataclass(frozen=True)
+class WaypointGrid:
+    """For each grid cell, the nearest waypoint in line of sight (-1 if none).
+
+    Attributes:
+      origin_m, resolution_m: grid placement, as for :class:`DistanceField`.
+      nearest: (H, W) int32 waypoint index.
+    """
+
+    origin_m: np.ndarray
+    resolution_m: float
+    nearest: np.ndarray
+
+
+def build_waypoint_grid(waypoint_xy_m: np.ndarray, allowed: np.ndarray, boxes_m: np.ndarray,
+                        bounds_m: tuple[float, float, float, float], resolution_m: float = 0.25,
+                        candidates: int = 8) -> WaypointGrid:
+    """Nearest visible allowed waypoint per cell, checking the ``candidates`` nearest ones."""
+    xmin, xmax, ymin, ymax = bounds_m
+    xs = np.arange(xmin, xmax + resolution_m / 2, resolution_m)
+    ys = np.arange(ymin, ymax + resolution_m / 2, resolution_m)
+    gx, gy = np.meshgrid(xs, ys)
+    cells = np.stack([gx.ravel(), gy.ravel()], -1)
+    idx = np.flatnonzero(allowed)
+    wp = waypoint_xy_m[idx]
+    dist = np.linalg.norm(cells[:, None, :] - wp[None], axis=-1)
+    k = min(candidates, len(idx))
+    order = np.argsort(dist, axis=1)[:, :k]
+    nearest = np.full(len(cells), -1, np.int32)
+    for j in range(k):  # closest candidate first; keep the first one in sight
+        cand = order[:, j]
+        open_ = (nearest < 0) & ~segment_hits_boxes(cells, wp[cand], boxes_m)
+        nearest[open_] = idx[cand[open_]]
+    # Cells with no waypoint in sight (inside walls, behind shelves): fall back to the nearest.
+    nearest[nearest < 0] = idx[order[nearest < 0, 0]]
+    return WaypointGrid(np.array([xmin, ymin]), resolution_m, nearest.reshape(gy.shape))
+

@@ -1,0 +1,91 @@
+"""Shortest routes over the waypoint graph (host side, numpy; 73 nodes, so all pairs at once).
+
+The simulator never searches a graph inside ``jit``: workers look up ``next_hop[here, goal]``
+and the robot follows a route taken from a table. Both tables are built here once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+UNREACHABLE = -1
+
+
+def edge_lengths_m(waypoint_xy_m: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """(E,) Euclidean length of each edge."""
+    return np.linalg.norm(waypoint_xy_m[edges[:, 0]] - waypoint_xy_m[edges[:, 1]], axis=-1)
+
+
+def all_pairs_shortest(n: int, edges: np.ndarray, weights: np.ndarray,
+                       allowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Floyd-Warshall over an undirected graph.
+
+    Args:
+      n: number of nodes.
+      edges: (E, 2) int node pairs.
+      weights: (E,) non-negative edge costs.
+      allowed: (n,) bool; nodes that are False are neither used nor reachable.
+
+    Returns:
+      dist: (n, n) path cost (inf when unreachable).
+      next_hop: (n, n) int32 first node after ``i`` on a shortest path ``i -> j``
+        (``j`` itself for neighbours, ``i`` for ``i == j``, -1 when unreachable).
+    """
+    allowed = np.ones(n, bool) if allowed is None else np.asarray(allowed, bool)
+    dist = np.full((n, n), np.inf)
+    next_hop = np.full((n, n), UNREACHABLE, np.int32)
+    for (u, v), w in zip(edges, weights):
+        if allowed[u] and allowed[v] and w < dist[u, v]:
+            dist[u, v] = dist[v, u] = w
+            next_hop[u, v], next_hop[v, u] = v, u
+    idx = np.flatnonzero(allowed)
+    dist[idx, idx] = 0.0
+    next_hop[idx, idx] = idx
+    for k in range(n):
+        via = dist[:, k:k + 1] + dist[k:k + 1, :]
+        better = via < dist - 1e-12
+        dist = np.where(better, via, dist)
+        next_hop = np.where(better, next_hop[:, k:k + 1], next_hop)
+    return dist, next_hop
+
+
+def route(next_hop: np.ndarray, start: int, goal: int) -> list[int]:
+    """Waypoints from ``start`` (excluded) to ``goal`` (included); empty if start == goal.
+
+    Raises:
+      ValueError: when ``goal`` cannot be reached from ``start``.
+    """
+    path, here = [], start
+    while here != goal:
+        here = int(next_hop[here, goal])
+        if here == UNREACHABLE or len(path) > len(next_hop):
+            raise ValueError(f"waypoint {goal} is unreachable from {start}")
+        path.append(here)
+    return path
+
+
+def route_table(next_hop: np.ndarray, dist: np.ndarray, max_len: int | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Every shortest route as a padded table, the robot's plan format.
+
+    Returns:
+      routes: (n, n, L) int32; ``routes[i, j, :k]`` are the waypoints after ``i`` up to ``j``,
+        padded with ``j`` (so a route can be followed without a length check).
+      lengths: (n, n) int32 number of real hops ``k`` (0 for unreachable pairs or ``i == j``).
+    """
+    n = len(next_hop)
+    paths = {}
+    for i in range(n):
+        for j in range(n):
+            if np.isfinite(dist[i, j]):
+                paths[i, j] = route(next_hop, i, j)
+    longest = max((len(p) for p in paths.values()), default=1)
+    max_len = max(longest, 1) if max_len is None else max_len
+    if longest > max_len:
+        raise ValueError(f"a route has {longest} hops, more than max_len={max_len}")
+    routes = np.repeat(np.arange(n, dtype=np.int32)[None, :, None], n, 0).repeat(max_len, 2)
+    lengths = np.zeros((n, n), np.int32)
+    for (i, j), p in paths.items():
+        routes[i, j, :len(p)] = p
+        lengths[i, j] = len(p)
+    return routes, lengths

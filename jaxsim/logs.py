@@ -1,0 +1,230 @@
+"""Rollouts written to Parquet, in chunks, atomically.
+
+One row per logged sample per world. Columns:
+
+* ``world``, ``seed``, and the settings ``dt_s``, ``slot_length_s``, ``n_workers``,
+  ``obstacle_probability``: so runs can be concatenated and still told apart;
+* ``time_s``, ``slot`` (0-based index; names in ``run.json``);
+* robot: ``robot_x_m``, ``robot_y_m``, ``robot_speed_mps`` (V), ``battery_pct`` (B),
+  ``battery_change_pct`` (L of the last step), ``charging`` (C), ``obstacle`` (O), ``robot_mode``
+  (0 task, 1 to charger, 2 charging), ``robot_waypoint`` (nearest visible waypoint: W),
+  ``goal_wp``, ``leg_elapsed_s``, ``tasks_started``, ``tasks_succeeded``, ``tasks_failed``,
+  ``stalled_s``, ``n_present``;
+* ``density_<waypoint>``: Eq. (3) people per m^2 in each waypoint disc;
+* ``dist_worker_<i>``: robot-worker centre distance in m, NaN while worker i is absent;
+* with ``log_positions``: ``worker_x_<i>``, ``worker_y_<i>``, ``worker_status_<i>``.
+
+The file is written as ``logs.parquet.tmp`` and renamed when complete, so a killed run leaves
+no half file under the final name; ``run.json`` (settings, names, timings) is written the same way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import pathlib
+import time
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from jaxsim.scenario import Scenario
+
+LOG_FILE = "logs.parquet"
+META_FILE = "run.json"
+# Device memory for one time chunk of records (all worlds); bounds the host memory too.
+CHUNK_BUDGET_BYTES = 256 * 2**20
+
+ROBOT_COLUMNS = [
+    ("robot_x_m", "robot_x_m", pa.float32()), ("robot_y_m", "robot_y_m", pa.float32()),
+    ("robot_speed_mps", "robot_speed_mps", pa.float32()), ("battery_pct", "battery_pct", pa.float32()),
+    ("battery_change_pct", "battery_change_pct", pa.float32()), ("charging", "charging", pa.bool_()),
+    ("obstacle", "obstacle", pa.bool_()), ("robot_mode", "robot_mode", pa.int8()),
+    ("robot_waypoint", "robot_waypoint", pa.int16()), ("goal_wp", "goal_wp", pa.int16()),
+    ("leg_elapsed_s", "leg_elapsed_s", pa.float32()), ("tasks_started", "tasks_started", pa.int32()),
+    ("tasks_succeeded", "tasks_succeeded", pa.int32()), ("tasks_failed", "tasks_failed", pa.int32()),
+    ("stalled_s", "stalled_s", pa.float32()), ("n_present", "n_present", pa.int16()),
+]
+
+
+@dataclasses.dataclass
+class RunSummary:
+    """What a :func:`simulate_to_parquet` run did.
+
+    Attributes:
+      log_file, meta_file: the files written.
+      rows: rows in the log.
+      wall_s: wall time of the whole run (compile included); ``compile_s`` of the first chunk.
+      agent_steps_per_s: (workers + robot) x steps x worlds / wall_s.
+      mean_density_by_slot: (S, W) mean Eq. (3) density per slot and waypoint over all worlds.
+      slot_samples: (S,) samples that went into each slot's mean.
+      snapshot: worker/robot positions of world 0 at the snapshot time (or None).
+      final: per-world final counters (tasks succeeded/failed, battery).
+    """
+
+    log_file: pathlib.Path
+    meta_file: pathlib.Path
+    rows: int
+    wall_s: float
+    compile_s: float
+    agent_steps_per_s: float
+    mean_density_by_slot: np.ndarray
+    slot_samples: np.ndarray
+    snapshot: dict | None
+    final: dict
+
+
+def record_table(rec, world_ids: np.ndarray, scenario: Scenario, seed: int, log_positions: bool) -> pa.Table:
+    """Flatten batched numpy records (B, T, ...) into a table of B*T rows."""
+    p = scenario.params
+    b, t = rec.time_s.shape
+    cols: dict[str, pa.Array] = {
+        "world": pa.array(np.repeat(world_ids.astype(np.int32), t)),
+        "seed": pa.array(np.full(b * t, seed, np.int64)),
+        "dt_s": pa.array(np.full(b * t, p.dt_s, np.float32)),
+        "slot_length_s": pa.array(np.full(b * t, p.slot_length_s, np.float32)),
+        "n_workers": pa.array(np.full(b * t, p.n_workers, np.int16)),
+        "obstacle_probability": pa.array(np.full(b * t, p.robot_obstacle_probability, np.float32)),
+        "time_s": pa.array(rec.time_s.reshape(-1).astype(np.float64)),
+        "slot": pa.array(rec.slot.reshape(-1).astype(np.int8)),
+    }
+    for name, field, typ in ROBOT_COLUMNS:
+        cols[name] = pa.array(np.asarray(getattr(rec, field)).reshape(-1).astype(typ.to_pandas_dtype()))
+    for k, wp in enumerate(scenario.waypoint_ids):
+        cols[f"density_{wp}"] = pa.array(rec.density_ppm2[:, :, k].reshape(-1))
+    for i in range(p.n_workers):
+        cols[f"dist_worker_{i}"] = pa.array(rec.worker_dist_m[:, :, i].reshape(-1))
+    if log_positions:
+        for i in range(p.n_workers):
+            cols[f"worker_x_{i}"] = pa.array(rec.worker_x_m[:, :, i].reshape(-1))
+            cols[f"worker_y_{i}"] = pa.array(rec.worker_y_m[:, :, i].reshape(-1))
+            cols[f"worker_status_{i}"] = pa.array(rec.worker_status[:, :, i].reshape(-1).astype(np.int8))
+    return pa.table(cols)
+
+
+def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUDGET_BYTES) -> int:
+    """Largest divisor of ``n_samples`` whose chunk fits ``budget`` (equal chunks: one compile)."""
+    cap = max(1, budget // max(bytes_per_sample, 1))
+    best = 1
+    for d in range(1, int(np.sqrt(n_samples)) + 1):
+        if n_samples % d == 0:
+            for c in (d, n_samples // d):
+                if c <= cap:
+                    best = max(best, c)
+    return best
+
+
+def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, *, n_worlds: int, duration_s: float,
+                        seed: int = 0, sample_interval_s: float = 1.0, log_positions: bool = False,
+                        snapshot_time_s: float | None = None, progress: bool = True,
+                        chunk_budget_bytes: int = CHUNK_BUDGET_BYTES, plan=None) -> RunSummary:
+    """Simulate ``n_worlds`` worlds for ``duration_s`` and write ``logs.parquet`` + ``run.json``.
+
+    Args:
+      scenario: the validated scenario (its params included).
+      out_dir: output folder (created). Existing files of a previous run are replaced only when
+        this run completes.
+      n_worlds: batch size; world ``b`` is the same world for a given seed whatever ``n_worlds``.
+      duration_s: simulated time, a multiple of ``sample_interval_s``.
+      sample_interval_s: logging interval, a multiple of ``dt_s``.
+      log_positions: also log every worker's position and status.
+      snapshot_time_s: keep world 0's positions at this time for a picture.
+      plan: the robot's :class:`~jaxsim.world.RobotPlan` (default: shortest paths).
+
+    Raises:
+      ValueError: on inconsistent sizes, before anything is written.
+    """
+    import jax
+    from tqdm.auto import tqdm
+
+    from jaxsim import rollout, world as world_lib
+
+    p = scenario.params
+    every = sample_interval_s / p.dt_s
+    if n_worlds < 1:
+        raise ValueError(f"n_worlds must be >= 1, got {n_worlds}")
+    if sample_interval_s <= 0 or abs(every - round(every)) > 1e-6 or round(every) < 1:
+        raise ValueError(f"sample_interval_s={sample_interval_s} must be a positive multiple of dt_s={p.dt_s}")
+    every = int(round(every))
+    n_samples = duration_s / (every * p.dt_s)
+    if duration_s <= 0 or abs(n_samples - round(n_samples)) > 1e-6:
+        raise ValueError(f"duration_s={duration_s} must be a positive multiple of sample_interval_s={sample_interval_s}")
+    n_samples = int(round(n_samples))
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+
+    start = time.perf_counter()
+    world = world_lib.build_world(scenario)
+    plan = world_lib.shortest_path_plan(scenario) if plan is None else plan
+    keys = rollout.world_keys(seed, n_worlds)
+    states = rollout.init_batch(p, world, plan, keys)
+    per_sample = 4 * (scenario.n_waypoints + p.n_workers * (4 if log_positions else 2) + 32)
+    chunk = chunk_samples(n_samples, per_sample * n_worlds, chunk_budget_bytes)
+    n_chunks = n_samples // chunk
+
+    n_slots = scenario.n_slots
+    dens_sum = np.zeros((n_slots, scenario.n_waypoints))
+    dens_n = np.zeros(n_slots)
+    snapshot = None
+    final = {}
+    tmp = out / (LOG_FILE + ".tmp")
+    writer = None
+    rows = 0
+    compile_s = 0.0
+    bar = tqdm(total=n_samples * every * p.dt_s, unit="sim s", disable=not progress,
+               desc=f"simulate {n_worlds} world(s)")
+    try:
+        pending = rollout.run_samples(p, world, plan, states, keys, chunk, every)
+        for c in range(n_chunks):
+            states, rec = pending
+            if c + 1 < n_chunks:  # dispatch the next chunk before converting this one
+                pending = rollout.run_samples(p, world, plan, states, keys, chunk, every)
+            rec = rollout.to_numpy(rec)
+            if c == 0:
+                compile_s = time.perf_counter() - start
+            table = record_table(rec, np.arange(n_worlds), scenario, seed, log_positions)
+            if writer is None:
+                writer = pq.ParquetWriter(tmp, table.schema, compression="zstd")
+            writer.write_table(table)
+            rows += table.num_rows
+            np.add.at(dens_sum, rec.slot.reshape(-1), rec.density_ppm2.reshape(-1, scenario.n_waypoints))
+            np.add.at(dens_n, rec.slot.reshape(-1), 1)
+            if snapshot_time_s is not None and snapshot is None:
+                hit = np.flatnonzero(rec.time_s[0] >= snapshot_time_s - 1e-6)
+                if hit.size:
+                    k = hit[0]
+                    snapshot = {"time_s": float(rec.time_s[0, k]), "slot": int(rec.slot[0, k]),
+                                "worker_x_m": rec.worker_x_m[0, k], "worker_y_m": rec.worker_y_m[0, k],
+                                "worker_status": rec.worker_status[0, k],
+                                "robot_x_m": float(rec.robot_x_m[0, k]), "robot_y_m": float(rec.robot_y_m[0, k])}
+            final = {f: getattr(rec, f)[:, -1].tolist() for f in
+                     ("tasks_started", "tasks_succeeded", "tasks_failed", "battery_pct", "stalled_s")}
+            bar.update(chunk * every * p.dt_s)
+        writer.close()
+        writer = None
+        wall = time.perf_counter() - start
+        os.replace(tmp, out / LOG_FILE)
+    finally:
+        bar.close()
+        if writer is not None:
+            writer.close()
+        if tmp.exists():
+            tmp.unlink()
+
+    agent_steps = n_worlds * n_samples * every * (p.n_workers + 1)
+    meta = {
+        "seed": seed, "n_worlds": n_worlds, "duration_s": duration_s, "sample_interval_s": sample_interval_s,
+        "rows": rows, "wall_s": wall, "compile_s": compile_s, "agent_steps_per_s": agent_steps / wall,
+        "jax_devices": [str(d) for d in jax.devices()], "scenario": scenario.name,
+        "waypoints": list(scenario.waypoint_ids), "slots": list(scenario.slot_names),
+        "slot_clock": list(scenario.slot_clock), "params": dataclasses.asdict(p), "final": final,
+    }
+    meta_tmp = out / (META_FILE + ".tmp")
+    meta_tmp.write_text(json.dumps(meta, indent=1))
+    os.replace(meta_tmp, out / META_FILE)
+    with np.errstate(invalid="ignore"):
+        mean_density = dens_sum / dens_n[:, None]
+    return RunSummary(out / LOG_FILE, out / META_FILE, rows, wall, compile_s, agent_steps / wall,
+                      mean_density, dens_n, snapshot, final)

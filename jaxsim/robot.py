@@ -1,0 +1,136 @@
+"""The robot: follows the route given by a :class:`~jaxsim.world.RobotPlan`, slows and stalls
+behind people, meets static obstacles, runs its slot's task list and recharges. Pure JAX.
+
+* Motion: straight towards the next route waypoint at up to ``robot_max_speed_mps``, speeding
+  up at ``robot_accel_mps2`` (braking is immediate). A waypoint is reached within
+  ``robot_goal_tolerance_m``.
+* Crowds (the blocking rule): a person is *in the lane* when ahead of the robot with a lateral
+  offset below ``robot_radius + worker_radius + block_lane_margin``. With ``gap`` the free
+  distance to the nearest person in the lane, the speed is scaled by
+  ``clip((gap - stop_gap) / (slow_gap - stop_gap), 0, 1)``: the robot slows, then stalls until
+  the person moves (the workers' social force makes them step aside). Crowds cost time, as
+  the paper's navigation stack did.
+* Obstacles: when a task leg starts, with ``robot_obstacle_probability`` a static obstacle lies
+  at a uniform point of the planned path. Once the robot reaches it, it maneuvers for
+  ``robot_obstacle_length_m`` at ``robot_obstacle_speed_factor`` of its speed with ``O = 1``
+  (and ``K_o`` times the consumption).
+* Tasks: goals come from the slot's list in order (the list restarts when a slot begins, and
+  wraps around). A leg not finished within ``robot_leg_deadline_s`` fails; with
+  ``robot_teleport_on_failure`` the robot is put at the leg's goal, which is the next task's
+  start (the paper's protocol). After a leg, if the battery is below
+  ``battery_recharge_below_pct`` the robot drives to the charging station and charges
+  (``C = 1``, ``V = 0``) up to ``battery_charged_pct``.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from jaxsim import battery
+from jaxsim.params import SimParams
+from jaxsim.state import CHARGING, TASK, TO_CHARGER, RobotState
+from jaxsim.world import RobotPlan, World
+
+
+def _select(cond, a, b):
+    return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
+
+
+def start_leg(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot, start_wp,
+              to_charger, u_obs, u_at) -> RobotState:
+    """Begin the next leg from ``start_wp``: the next task of ``slot``, or the way to the charger."""
+    idx = jnp.where(r.task_slot == slot, r.task_idx + 1, 0) % world.robot_goal_count[slot]
+    goal = jnp.where(to_charger, world.charging_station, world.robot_goals[slot, idx])
+    has_obstacle = (~to_charger) & (u_obs < params.robot_obstacle_probability)
+    return r.replace(
+        mode=jnp.where(to_charger, TO_CHARGER, TASK).astype(jnp.int32),
+        route=plan.routes[slot, start_wp, goal], route_pos=jnp.int32(0),
+        route_hops=plan.hops[slot, start_wp, goal], leg_start_wp=start_wp.astype(jnp.int32),
+        goal_wp=goal.astype(jnp.int32),
+        task_idx=jnp.where(to_charger, r.task_idx, idx).astype(jnp.int32),
+        task_slot=jnp.where(to_charger, r.task_slot, slot).astype(jnp.int32),
+        leg_elapsed_s=jnp.float32(0.0), leg_dist_m=jnp.float32(0.0),
+        obstacle_at_m=jnp.where(has_obstacle, u_at * plan.length_m[slot, start_wp, goal], jnp.inf).astype(jnp.float32),
+        obstacle_left_m=jnp.float32(params.robot_obstacle_length_m),
+        tasks_started=r.tasks_started + jnp.where(to_charger, 0, 1).astype(jnp.int32))
+
+
+def crowd_speed_factor(params: SimParams, r: RobotState, hx, hy, wx, wy, present):
+    """The blocking rule: speed factor in [0, 1] from the people in the robot's lane."""
+    rel_x, rel_y = wx - r.x_m, wy - r.y_m
+    along = rel_x * hx + rel_y * hy
+    lateral = jnp.abs(rel_x * hy - rel_y * hx)
+    contact = params.robot_radius_m + params.worker_radius_m
+    in_lane = present & (along > 0) & (lateral < contact + params.robot_block_lane_margin_m)
+    gap = jnp.min(jnp.where(in_lane, along - contact, jnp.inf), initial=jnp.inf)
+    stop, slow = params.robot_block_stop_gap_m, params.robot_block_slow_gap_m
+    return jnp.clip((gap - stop) / (slow - stop), 0.0, 1.0)
+
+
+def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot,
+                 wx, wy, present, u) -> RobotState:
+    """One step of the robot. ``wx, wy, present``: (N,) workers; ``u``: (2,) uniform draws."""
+    moving = r.mode != CHARGING
+    aim = r.route[r.route_pos]
+    dx, dy = world.waypoint_x_m[aim] - r.x_m, world.waypoint_y_m[aim] - r.y_m
+    dist = jnp.sqrt(dx * dx + dy * dy)
+    hx = jnp.where(dist > 1e-6, dx / jnp.maximum(dist, 1e-6), r.heading_x)
+    hy = jnp.where(dist > 1e-6, dy / jnp.maximum(dist, 1e-6), r.heading_y)
+
+    in_obstacle = (r.mode == TASK) & (r.leg_dist_m >= r.obstacle_at_m) & (r.obstacle_left_m > 0)
+    v_des = params.robot_max_speed_mps * crowd_speed_factor(params, r, hx, hy, wx, wy, present)
+    v_des = jnp.where(in_obstacle, v_des * params.robot_obstacle_speed_factor, v_des)
+    v_des = jnp.where(moving & (r.battery_pct > 0), v_des, 0.0)
+    speed = jnp.minimum(v_des, r.speed_mps + params.robot_accel_mps2 * params.dt_s)
+    travel = jnp.minimum(speed * params.dt_s, dist)
+
+    charging = r.mode == CHARGING
+    change = battery.battery_change_pct(params, speed, charging, in_obstacle)
+    new = r.replace(
+        x_m=r.x_m + travel * hx, y_m=r.y_m + travel * hy, heading_x=hx, heading_y=hy,
+        speed_mps=speed, battery_pct=battery.next_battery_pct(r.battery_pct, change),
+        battery_change_pct=change, charging=charging, obstacle=in_obstacle,
+        leg_elapsed_s=r.leg_elapsed_s + params.dt_s, leg_dist_m=r.leg_dist_m + travel,
+        obstacle_left_m=jnp.where(in_obstacle, r.obstacle_left_m - travel, r.obstacle_left_m),
+        stalled_s=r.stalled_s + jnp.where(moving & (speed <= 0), params.dt_s, 0.0))
+
+    reached = moving & (dist - travel <= params.robot_goal_tolerance_m)
+    last = r.route_pos + 1 >= jnp.maximum(r.route_hops, 1)
+    new = new.replace(route_pos=jnp.where(reached & ~last, r.route_pos + 1, r.route_pos))
+    arrived = reached & last
+    task_mode = r.mode == TASK
+    success = task_mode & arrived
+    failure = task_mode & ~arrived & (new.leg_elapsed_s >= params.robot_leg_deadline_s)
+    at_charger = (r.mode == TO_CHARGER) & arrived
+    full = charging & (new.battery_pct >= params.battery_charged_pct)
+
+    new = new.replace(tasks_succeeded=r.tasks_succeeded + success, tasks_failed=r.tasks_failed + failure)
+    teleport = failure & params.robot_teleport_on_failure
+    goal_x, goal_y = world.waypoint_x_m[r.goal_wp], world.waypoint_y_m[r.goal_wp]
+    new = new.replace(x_m=jnp.where(teleport, goal_x, new.x_m), y_m=jnp.where(teleport, goal_y, new.y_m),
+                      speed_mps=jnp.where(failure | at_charger, 0.0, new.speed_mps))
+    new = new.replace(mode=jnp.where(at_charger, CHARGING, new.mode).astype(jnp.int32))
+
+    leg_over = success | failure
+    need_charge = leg_over & (new.battery_pct < params.battery_recharge_below_pct)
+    next_leg = start_leg(params, world, plan, new, slot, r.goal_wp, need_charge, u[0], u[1])
+    resume = start_leg(params, world, plan, new, slot, jnp.int32(world.charging_station), False, u[0], u[1])
+    new = _select(leg_over, next_leg, new)
+    return _select(full, resume, new)
+
+
+def init_robot(params: SimParams, world: World, plan: RobotPlan, u) -> RobotState:
+    """The robot at its start waypoint with a full battery, starting slot 0's first task."""
+    f = jnp.float32
+    i = jnp.int32
+    start = world.robot_start
+    r = RobotState(
+        x_m=world.waypoint_x_m[start], y_m=world.waypoint_y_m[start], heading_x=f(1.0), heading_y=f(0.0),
+        speed_mps=f(0.0), battery_pct=f(params.battery_initial_pct), battery_change_pct=f(0.0),
+        mode=i(TASK), charging=jnp.bool_(False), obstacle=jnp.bool_(False),
+        route=plan.routes[0, start, start], route_pos=i(0), route_hops=i(0), leg_start_wp=i(start),
+        goal_wp=i(start), task_idx=i(-1), task_slot=i(0), leg_elapsed_s=f(0.0), leg_dist_m=f(0.0),
+        obstacle_at_m=f(jnp.inf), obstacle_left_m=f(0.0), tasks_started=i(0), tasks_succeeded=i(0),
+        tasks_failed=i(0), stalled_s=f(0.0))
+    return start_leg(params, world, plan, r, jnp.int32(0), jnp.int32(start), False, u[0], u[1])

@@ -1,0 +1,129 @@
+"""Batched rollouts: ``lax.scan`` over time, ``vmap`` over worlds, chunked and sharded.
+
+Layout of the compiled program for a batch of ``B`` worlds and ``n_samples`` samples of
+``steps_per_sample`` steps each::
+
+    shard_map over host devices (B split across them)
+      lax.map over chunks of ``world_chunk`` worlds      (bounded live memory per chunk)
+        vmap over the chunk's worlds
+          scan over samples -> measure()                  (one Record per sample)
+            scan over steps_per_sample -> step()
+
+Randomness is counter-based: the key of world ``b`` at step ``t`` is
+``fold_in(world_key[b], t)``, so results do not depend on how time or worlds are chunked, and
+the same seed gives the same logs bit for bit.
+
+Two host devices are what lets XLA use both cores of a CPU: call
+:func:`jaxsim.devices.request_host_devices` before JAX is imported (the command line and benchmark do).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxsim.params import SimParams
+from jaxsim.state import Record, SimState
+from jaxsim.step import init_state, measure, step
+from jaxsim.world import RobotPlan, World
+
+DEFAULT_WORLD_CHUNK = 64
+
+
+def world_keys(seed: int, n_worlds: int) -> jax.Array:
+    """(n_worlds,) independent keys, world ``b`` always gets the same key for a given seed."""
+    base = jax.random.key(seed)
+    return jax.vmap(lambda b: jax.random.fold_in(base, b))(jnp.arange(n_worlds))
+
+
+def init_batch(params: SimParams, world: World, plan: RobotPlan, keys: jax.Array) -> SimState:
+    """Initial states of a batch of worlds, one per key (init key = ``fold_in(key, -1)``)."""
+    init = lambda k: init_state(params, world, plan, jax.random.fold_in(k, 2**31 - 1))  # noqa: E731
+    return jax.jit(jax.vmap(init))(keys)
+
+
+def _run_one(params: SimParams, world: World, plan: RobotPlan, state: SimState, key,
+             n_samples: int, steps_per_sample: int):
+    def inner(s, _):
+        return step(params, world, plan, s, jax.random.fold_in(key, s.step)), None
+
+    def outer(s, _):
+        s, _ = jax.lax.scan(inner, s, None, length=steps_per_sample)
+        return s, measure(params, world, s)
+
+    return jax.lax.scan(outer, state, None, length=n_samples)
+
+
+@functools.partial(jax.jit, static_argnames=("params", "n_samples", "steps_per_sample", "world_chunk"))
+def _run_batch(params, world, plan, states, keys, n_samples, steps_per_sample, world_chunk):
+    run = functools.partial(_run_one, params, world, plan, n_samples=n_samples,
+                            steps_per_sample=steps_per_sample)
+    b = keys.shape[0]
+    chunk = min(world_chunk, b)
+    if b % chunk:
+        chunk = b  # fall back to one vmap when the batch does not split evenly
+    return jax.lax.map(lambda sk: run(*sk), (states, keys), batch_size=chunk)
+
+
+@functools.lru_cache(maxsize=4)
+def _mesh(n_dev: int):
+    return jax.make_mesh((n_dev,), ("worlds",))
+
+
+@functools.lru_cache(maxsize=16)
+def _compiled(params: SimParams, n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: int):
+    def fn(world, plan, states, keys):
+        return _run_batch(params, world, plan, states, keys, n_samples, steps_per_sample, world_chunk)
+
+    if n_dev == 1:
+        return jax.jit(fn)
+    spec, rep = jax.sharding.PartitionSpec("worlds"), jax.sharding.PartitionSpec()
+    return jax.jit(jax.shard_map(fn, mesh=_mesh(n_dev), in_specs=(rep, rep, spec, spec),
+                                 out_specs=(spec, spec)))
+
+
+def run_samples(params: SimParams, world: World, plan: RobotPlan, states: SimState, keys: jax.Array,
+                n_samples: int, steps_per_sample: int, world_chunk: int = DEFAULT_WORLD_CHUNK
+                ) -> tuple[SimState, Record]:
+    """Advance a batch of worlds by ``n_samples * steps_per_sample`` steps.
+
+    Args:
+      states: batched :class:`SimState` with leading axis B.
+      keys: (B,) world keys (see :func:`world_keys`).
+      n_samples: records to return per world.
+      steps_per_sample: steps between two records.
+      world_chunk: worlds vectorised together inside ``lax.map``.
+
+    Returns:
+      (final states, records) with records shaped (B, n_samples, ...).
+    """
+    b = keys.shape[0]
+    n_dev = jax.local_device_count()
+    while n_dev > 1 and b % n_dev:
+        n_dev -= 1
+    fn = _compiled(params, n_samples, steps_per_sample, world_chunk, n_dev)
+    if n_dev > 1:
+        mesh = _mesh(n_dev)
+        split = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("worlds"))
+        same = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec())
+        world, plan = jax.device_put((world, plan), same)
+        states, keys = jax.device_put((states, keys), split)
+    return fn(world, plan, states, keys)
+
+
+def rollout(params: SimParams, world: World, plan: RobotPlan, seed: int, n_worlds: int,
+            n_steps: int, sample_every_steps: int = 1) -> tuple[SimState, Record]:
+    """Convenience: a whole rollout in memory (use :mod:`jaxsim.logs` for long runs)."""
+    if n_steps % sample_every_steps:
+        raise ValueError(f"n_steps={n_steps} is not a multiple of sample_every_steps={sample_every_steps}")
+    keys = world_keys(seed, n_worlds)
+    states = init_batch(params, world, plan, keys)
+    return run_samples(params, world, plan, states, keys, n_steps // sample_every_steps, sample_every_steps)
+
+
+def to_numpy(tree):
+    """Device arrays -> host numpy (one transfer)."""
+    return jax.tree.map(np.asarray, jax.device_get(tree))

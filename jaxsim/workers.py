@@ -1,0 +1,224 @@
+"""Workers: the PeopleFlow context (arrivals, destinations by time slot, activities, routes,
+replanning, departures) and their social-force motion. Pure JAX over (N,) arrays.
+
+Rules (seed 000 Sec. 4.2.3 and the issue; the parameters are in :class:`~jaxsim.params.SimParams`):
+
+* A worker arrives at ``arrive_s`` (uniform over the first slot) at the parking lot, draws a
+  destination from the current slot's probabilities and walks the humans' shortest waypoint
+  route to it (``next_hop`` lookups). An intermediate waypoint counts as reached within
+  ``max(radius, worker_min_reach_radius_m)``.
+* At the destination the worker walks to a personal spot inside the waypoint disc and stays for
+  the activity duration, uniform in ``[activity_min_s, activity_max_s]`` (toilets
+  ``[toilet_activity_min_s, toilet_activity_max_s]``), then draws the next destination with the
+  probabilities of the slot current at that time.
+* A walker that has not got closer to its target for ``worker_stuck_time_s`` replans from the
+  nearest waypoint in line of sight (a precomputed grid).
+* At ``depart_s`` (during the last working slot) the worker walks back to the parking lot and
+  leaves. Anyone still inside when a non-working slot starts is removed: nobody is in during
+  the off slot.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import jax.scipy.special as jss
+
+from jaxsim import social_force as sf
+from jaxsim.params import SimParams
+from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING, WorkerState
+from jaxsim.world import World
+
+# Share of the destination disc's radius within which a worker's activity spot is drawn.
+SPOT_RADIUS_FRACTION = 0.7
+# Distance to the spot under which a worker doing an activity slows down (m).
+SETTLE_DISTANCE_M = 1.0
+# Minimum clearance kept from wall surfaces by the hard wall constraint (m).
+WALL_CLEARANCE_M = 0.1
+# Required gain in distance to the target to count as progress (m).
+PROGRESS_M = 0.25
+
+
+def draw_destination(world: World, slot, u):
+    """Waypoint drawn from the slot's destination probabilities by inverse CDF (u in [0, 1))."""
+    idx = jnp.searchsorted(world.destination_cdf[slot], u, side="right")
+    return jnp.minimum(idx, world.n_waypoints - 1).astype(jnp.int32)
+
+
+def activity_duration_s(params: SimParams, world: World, dest, u):
+    """Activity duration at ``dest``: uniform, shorter for toilets."""
+    lo = jnp.where(world.is_toilet[dest], params.worker_toilet_activity_min_s, params.worker_activity_min_s)
+    hi = jnp.where(world.is_toilet[dest], params.worker_toilet_activity_max_s, params.worker_activity_max_s)
+    return lo + u * (hi - lo)
+
+
+def draw_spot(world: World, dest, u_radius, u_angle):
+    """Offset of a point drawn uniformly in the inner part of the destination disc."""
+    r = SPOT_RADIUS_FRACTION * world.waypoint_radius_m[dest] * jnp.sqrt(u_radius)
+    a = 2.0 * jnp.pi * u_angle
+    return r * jnp.cos(a), r * jnp.sin(a)
+
+
+def update_context(params: SimParams, world: World, w: WorkerState, time_s, slot, u) -> WorkerState:
+    """Arrivals, departures, waypoint progress, activities and replanning for one step.
+
+    Args:
+      time_s: () current time.
+      slot: () int32 current slot.
+      u: (6, N) uniform draws: destination, duration, spot radius, spot angle, 2 spare.
+
+    Returns:
+      the workers with updated status, targets and destinations (positions untouched).
+    """
+    u_dest, u_dur, u_r, u_a = u[0], u[1], u[2], u[3]
+    new_dest = draw_destination(world, slot, u_dest)
+    new_dur = activity_duration_s(params, world, new_dest, u_dur)
+    spot_dx, spot_dy = draw_spot(world, new_dest, u_r, u_a)
+    here = world.human_waypoint_grid.lookup(w.x_m, w.y_m)
+    inf = jnp.full_like(w.best_dist_m, jnp.inf)
+
+    status, leaving = w.status, w.leaving
+    target, dest = w.target_wp, w.dest_wp
+    sdx, sdy = w.spot_dx_m, w.spot_dy_m
+    activity_end, best, stuck = w.activity_end_s, w.best_dist_m, w.stuck_s
+    next_hop = world.human_next_hop
+
+    # Arrival at the parking lot: first destination of the day.
+    arrive = (status == WAITING) & (time_s >= w.arrive_s)
+    status = jnp.where(arrive, WALKING, status)
+    dest = jnp.where(arrive, new_dest, dest)
+    target = jnp.where(arrive, next_hop[world.parking, new_dest], target)
+    sdx, sdy = jnp.where(arrive, spot_dx, sdx), jnp.where(arrive, spot_dy, sdy)
+    best = jnp.where(arrive, inf, best)
+
+    # Departure: route back to the parking lot from the nearest visible waypoint.
+    present = (status == WALKING) | (status == ACTIVITY)
+    depart = present & ~leaving & (time_s >= w.depart_s)
+    leaving = leaving | depart
+    status = jnp.where(depart, WALKING, status)
+    dest = jnp.where(depart, world.parking, dest)
+    target = jnp.where(depart, here, target)
+    sdx, sdy = jnp.where(depart, 0.0, sdx), jnp.where(depart, 0.0, sdy)
+    best = jnp.where(depart, inf, best)
+
+    # Waypoint reached.
+    dx = world.waypoint_x_m[target] - w.x_m
+    dy = world.waypoint_y_m[target] - w.y_m
+    dist = jnp.sqrt(dx * dx + dy * dy)
+    reached = (status == WALKING) & (dist < world.reach_radius_m[target])
+    at_dest = reached & (target == dest)
+    via = reached & (target != dest)
+    target = jnp.where(via, next_hop[target, dest], target)
+    best = jnp.where(via, inf, best)
+    status = jnp.where(at_dest, jnp.where(leaving, LEFT, ACTIVITY), status)
+    activity_end = jnp.where(at_dest, time_s + activity_duration_s(params, world, dest, u_dur), activity_end)
+
+    # Activity over: next destination with the current slot's probabilities.
+    done = (status == ACTIVITY) & (time_s >= activity_end) & ~leaving
+    same = done & (new_dest == dest)
+    move = done & ~same
+    activity_end = jnp.where(same, time_s + new_dur, activity_end)
+    status = jnp.where(move, WALKING, status)
+    target = jnp.where(move, next_hop[dest, new_dest], target)
+    dest = jnp.where(move, new_dest, dest)
+    sdx, sdy = jnp.where(move, spot_dx, sdx), jnp.where(move, spot_dy, sdy)
+    best = jnp.where(move, inf, best)
+
+    # Stuck: no progress towards the target for a while -> replan from the nearest visible one.
+    dx = world.waypoint_x_m[target] - w.x_m
+    dy = world.waypoint_y_m[target] - w.y_m
+    dist = jnp.sqrt(dx * dx + dy * dy)
+    walking = status == WALKING
+    progress = dist < best - PROGRESS_M
+    best = jnp.where(walking & progress, dist, best)
+    stuck = jnp.where(walking & ~progress, stuck + params.dt_s, 0.0)
+    replan = walking & (stuck > params.worker_stuck_time_s)
+    onward = jnp.where(target == dest, dest, next_hop[target, dest])
+    target = jnp.where(replan, jnp.where(here == target, onward, here), target)
+    best = jnp.where(replan, inf, best)
+    stuck = jnp.where(replan, 0.0, stuck)
+
+    # The building closes in non-working slots.
+    present = (status == WALKING) | (status == ACTIVITY)
+    status = jnp.where(present & ~world.slot_working[slot], LEFT, status)
+
+    return w.replace(status=status, leaving=leaving, target_wp=target.astype(jnp.int32),
+                     dest_wp=dest.astype(jnp.int32), spot_dx_m=sdx, spot_dy_m=sdy,
+                     activity_end_s=activity_end, best_dist_m=best, stuck_s=stuck)
+
+
+def move(params: SimParams, world: World, w: WorkerState, robot_x, robot_y, robot_vx, robot_vy,
+         u1, u2) -> WorkerState:
+    """One social-force step of every present worker (semi-implicit Euler, pedsim speed cap).
+
+    The robot is an agent the workers avoid (its Moussaid force is scaled by
+    ``worker_robot_force_factor``); it is not moved here. ``u1, u2``: (N,) uniforms for the
+    random force. Walls are also a hard constraint: a worker that ends a step closer than
+    ``WALL_CLEARANCE_M`` to a wall surface is projected back out and loses its velocity into
+    the wall (the obstacle force alone lets fast walkers tunnel through 0.15 m walls at dt=0.1).
+    """
+    present = w.present
+    on_spot = w.target_wp == w.dest_wp
+    aim_x = world.waypoint_x_m[w.target_wp] + jnp.where(on_spot, w.spot_dx_m, 0.0)
+    aim_y = world.waypoint_y_m[w.target_wp] + jnp.where(on_spot, w.spot_dy_m, 0.0)
+    dx, dy = aim_x - w.x_m, aim_y - w.y_m
+    settle = jnp.minimum(1.0, jnp.sqrt(dx * dx + dy * dy) / SETTLE_DISTANCE_M)
+    speed = jnp.where(w.status == ACTIVITY, w.desired_speed_mps * settle, w.desired_speed_mps)
+    ax, ay = sf.desired_force(params, dx, dy, w.vx_mps, w.vy_mps, speed)
+
+    x = jnp.concatenate([w.x_m, robot_x[None]])
+    y = jnp.concatenate([w.y_m, robot_y[None]])
+    vx = jnp.concatenate([w.vx_mps, robot_vx[None]])
+    vy = jnp.concatenate([w.vy_mps, robot_vy[None]])
+    weight = jnp.concatenate([present.astype(x.dtype), jnp.full((1,), params.worker_robot_force_factor, x.dtype)])
+    sx, sy = sf.social_force(params, x, y, vx, vy, weight)
+    ax, ay = ax + sx[:-1], ay + sy[:-1]
+
+    wall = world.wall_sdf_m.lookup(w.x_m, w.y_m)
+    nx, ny = world.wall_normal_x.lookup(w.x_m, w.y_m), world.wall_normal_y.lookup(w.x_m, w.y_m)
+    ox, oy = sf.obstacle_force(params, wall, nx, ny)
+    rx, ry = sf.random_force(params, u1, u2)
+    ax, ay = ax + ox + rx, ay + oy + ry
+
+    vx = w.vx_mps + params.dt_s * ax
+    vy = w.vy_mps + params.dt_s * ay
+    speed_now = jnp.sqrt(vx * vx + vy * vy)
+    cap = jnp.minimum(1.0, w.desired_speed_mps / jnp.maximum(speed_now, 1e-6))
+    vx, vy = vx * cap, vy * cap
+    x_new = w.x_m + params.dt_s * vx
+    y_new = w.y_m + params.dt_s * vy
+
+    wall = world.wall_sdf_m.lookup(x_new, y_new)
+    nx, ny = world.wall_normal_x.lookup(x_new, y_new), world.wall_normal_y.lookup(x_new, y_new)
+    push = jnp.maximum(WALL_CLEARANCE_M - wall, 0.0)
+    x_new, y_new = x_new + push * nx, y_new + push * ny
+    into = jnp.minimum(vx * nx + vy * ny, 0.0) * (push > 0)
+    vx, vy = vx - into * nx, vy - into * ny
+
+    zero = jnp.zeros_like(vx)
+    return w.replace(x_m=jnp.where(present, x_new, w.x_m), y_m=jnp.where(present, y_new, w.y_m),
+                     vx_mps=jnp.where(present, vx, zero), vy_mps=jnp.where(present, vy, zero))
+
+
+def init_workers(params: SimParams, world: World, u) -> WorkerState:
+    """Workers waiting to arrive. ``u``: (5, N) uniforms (speed, arrival, departure, spawn x, y)."""
+    n = params.n_workers
+    # Desired speed ~ N(mean, std) clipped, by inverse CDF of the uniform draw.
+    z = jnp.sqrt(2.0) * jss.erfinv(2.0 * jnp.clip(u[0], 1e-6, 1 - 1e-6) - 1.0)
+    v0 = jnp.clip(params.worker_desired_speed_mean_mps + params.worker_desired_speed_std_mps * z,
+                  params.worker_desired_speed_min_mps, params.worker_max_speed_mps)
+    slot = params.slot_length_s
+    last_working = world.n_slots - 1 - jnp.argmax(world.slot_working[::-1])
+    margin = min(params.worker_exit_margin_s, 0.5 * slot)
+    arrive = u[1] * slot
+    depart = last_working * slot + u[2] * (slot - margin)
+    x = world.parking_x_m + (u[3] - 0.5) * params.worker_spawn_dx_m
+    y = world.parking_y_m + (u[4] - 0.5) * params.worker_spawn_dy_m
+    zeros = jnp.zeros(n, jnp.float32)
+    park = jnp.full(n, world.parking, jnp.int32)
+    return WorkerState(
+        x_m=x.astype(jnp.float32), y_m=y.astype(jnp.float32), vx_mps=zeros, vy_mps=zeros,
+        desired_speed_mps=v0.astype(jnp.float32), status=jnp.full(n, WAITING, jnp.int32),
+        leaving=jnp.zeros(n, bool), target_wp=park, dest_wp=park, spot_dx_m=zeros, spot_dy_m=zeros,
+        activity_end_s=zeros, arrive_s=arrive.astype(jnp.float32), depart_s=depart.astype(jnp.float32),
+        best_dist_m=jnp.full(n, jnp.inf, jnp.float32), stuck_s=zeros)
+

@@ -1,0 +1,1 @@
+"""planners: see README (later issues)."""
