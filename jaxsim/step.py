@@ -18,6 +18,18 @@ from jaxsim.state import Record, SimState
 from jaxsim.world import RobotPlan, World
 
 
+def uniform16(key, shape):
+    """Uniform draws in (0, 1) with 16-bit resolution, two per 32-bit random word.
+
+    Half the threefry work of ``jax.random.uniform`` (which was 40% of a step); 16 bits
+    resolve the schedule's 0.01 probabilities and give Gaussian tails to 4.7 sigma.
+    """
+    half = (shape[0] + 1) // 2
+    bits = jax.random.bits(key, (half, *shape[1:]), jnp.uint32)
+    words = jnp.concatenate([bits >> 16, bits & 0xFFFF])[: shape[0]]
+    return (words.astype(jnp.float32) + 0.5) * (1.0 / 65536.0)
+
+
 def current_slot(params: SimParams, world: World, step):
     """Slot index of ``step`` (the last slot goes on after the day's end)."""
     return jnp.minimum(step // params.steps_per_slot, world.n_slots - 1).astype(jnp.int32)
@@ -36,7 +48,7 @@ def step(params: SimParams, world: World, plan: RobotPlan, state: SimState, key)
     time_s = state.step.astype(jnp.float32) * params.dt_s
     slot = current_slot(params, world, state.step)
     n = params.n_workers
-    u = jax.random.uniform(key, (6, n + 1), minval=1e-7, maxval=1.0)
+    u = uniform16(key, (6, n + 1))
     w, r = state.workers, state.robot
     present = w.present
     w = workers_lib.update_context(params, world, w, time_s, slot, u[:, :n])

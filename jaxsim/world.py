@@ -27,14 +27,14 @@ WAYPOINT_GRID_RESOLUTION_M = 0.25
 class Grid:
     """A value grid over the world: cell (row, col) has its centre at origin + (col, row) * res."""
 
-    values: jnp.ndarray  # (H, W)
+    values: jnp.ndarray  # (H, W, ...)
     origin_x_m: float = struct.field(pytree_node=False)
     origin_y_m: float = struct.field(pytree_node=False)
     resolution_m: float = struct.field(pytree_node=False)
 
     def index(self, x, y):
         """Nearest cell (row, col) of points ``x, y`` (any shape), clamped to the grid."""
-        h, w = self.values.shape
+        h, w = self.values.shape[:2]
         col = jnp.clip(jnp.round((x - self.origin_x_m) / self.resolution_m), 0, w - 1).astype(jnp.int32)
         row = jnp.clip(jnp.round((y - self.origin_y_m) / self.resolution_m), 0, h - 1).astype(jnp.int32)
         return row, col
@@ -55,7 +55,8 @@ class World:
       human_next_hop: (W, W) int32 next waypoint on the humans' shortest route.
       destination_cdf: (S, W) cumulative destination probabilities per slot.
       slot_working: (S,) bool.
-      wall_sdf_m, wall_normal_x, wall_normal_y: grids of the wall distance field.
+      wall_field: (H, W, 3) grid of the wall distance field: signed distance (m) and the unit
+        normal (x, y) away from the nearest wall, packed so one gather reads all three.
       human_waypoint_grid, robot_waypoint_grid: nearest visible waypoint per cell.
       robot_goals: (S, T) int32 goal waypoints per slot (padded by repetition).
       robot_goal_count: (S,) int32 real goals per slot.
@@ -71,9 +72,7 @@ class World:
     human_next_hop: jnp.ndarray
     destination_cdf: jnp.ndarray
     slot_working: jnp.ndarray
-    wall_sdf_m: Grid
-    wall_normal_x: Grid
-    wall_normal_y: Grid
+    wall_field: Grid
     human_waypoint_grid: Grid
     robot_waypoint_grid: Grid
     robot_goals: jnp.ndarray
@@ -163,9 +162,7 @@ def build_world(scenario: Scenario) -> World:
         human_next_hop=jnp.asarray(next_hop),
         destination_cdf=jnp.asarray(cdf, jnp.float32),
         slot_working=jnp.asarray(scenario.slot_working),
-        wall_sdf_m=grid(field.sdf_m, field),
-        wall_normal_x=grid(field.normal_x, field),
-        wall_normal_y=grid(field.normal_y, field),
+        wall_field=grid(np.stack([field.sdf_m, field.normal_x, field.normal_y], axis=-1), field),
         human_waypoint_grid=grid(hgrid.nearest, hgrid),
         robot_waypoint_grid=grid(rgrid.nearest, rgrid),
         robot_goals=jnp.asarray(goals),

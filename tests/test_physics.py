@@ -1,0 +1,122 @@
+"""Social force, battery (Eq. 1-2 by hand), routes and the distance field: known answers."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.sparse.csgraph import shortest_path
+
+from jaxsim import battery, geometry, graph
+from jaxsim import social_force as sf
+
+
+def test_two_walkers_head_on_repel(warehouse):
+    p = warehouse.params
+    x, y = jnp.array([0.0, 1.0]), jnp.array([0.0, 0.0])
+    vx, vy = jnp.array([1.0, -1.0]), jnp.zeros(2)
+    ax, ay = sf.social_force(p, x, y, vx, vy, jnp.ones(2))
+    assert ax[0] < 0 < ax[1]  # pushed apart along x
+    np.testing.assert_allclose(ax[0], -ax[1], rtol=1e-5)  # mirror symmetry
+    # An absent agent (weight 0) exerts nothing.
+    ax0, ay0 = sf.social_force(p, x, y, vx, vy, jnp.array([1.0, 0.0]))
+    assert float(ax0[0]) == 0.0 and float(ay0[0]) == 0.0
+    # Farther is weaker.
+    far, _ = sf.social_force(p, jnp.array([0.0, 3.0]), y, vx, vy, jnp.ones(2))
+    assert abs(far[0]) < abs(ax[0])
+
+
+def test_desired_force_relaxes_to_desired_velocity(warehouse):
+    p = warehouse.params
+    ax, ay = sf.desired_force(p, jnp.float32(3.0), jnp.float32(4.0), jnp.float32(0.0), jnp.float32(0.0), 1.0)
+    np.testing.assert_allclose([ax, ay], [0.6 / p.worker_relaxation_time_s, 0.8 / p.worker_relaxation_time_s],
+                               rtol=1e-5)
+
+
+def test_wall_field_and_obstacle_force(warehouse):
+    boxes = np.array([[0.0, 1.0, 0.0, 1.0]])
+    sd, nx, ny = geometry.box_signed_distance(np.array([2.0, 0.5, 0.5]), np.array([0.5, 0.6, 3.0]), boxes)
+    np.testing.assert_allclose(sd, [1.0, -0.4, 2.0])
+    np.testing.assert_allclose(nx, [1.0, 0.0, 0.0])
+    np.testing.assert_allclose(ny, [0.0, 1.0, 1.0])
+    p = warehouse.params
+    near = sf.obstacle_force(p, 0.3, 1.0, 0.0)[0]
+    far = sf.obstacle_force(p, 1.0, 1.0, 0.0)[0]
+    assert near > far > 0
+    np.testing.assert_allclose(near / far, np.exp(0.7 / p.worker_obstacle_sigma_m), rtol=1e-5)
+
+
+def test_segment_hits_boxes():
+    boxes = np.array([[0.0, 1.0, 0.0, 1.0]])
+    p0 = np.array([[-1.0, 0.5], [-1.0, 2.0], [0.5, -1.0], [2.0, 2.0]])
+    p1 = np.array([[2.0, 0.5], [2.0, 2.0], [0.5, -0.5], [0.5, 0.5]])
+    assert segment_hits(p0, p1, boxes).tolist() == [True, False, False, True]
+
+
+def segment_hits(p0, p1, boxes):
+    return geometry.segment_hits_boxes(p0, p1, boxes)
+
+
+def test_battery_hand_computed(warehouse):
+    """120 s at 0.5 m/s without and with an obstacle, then 120 s charging (Eq. 1-2)."""
+    p = warehouse.params
+    ks, kd, ko, kc = (p.battery_static_pct_per_s, p.battery_dynamic_pct_per_m, p.battery_obstacle_factor,
+                      p.battery_charge_pct_per_s)
+    steps = int(round(120 / p.dt_s))
+
+    def run(b0, speed, charging, obstacle):
+        def body(b, _):
+            change = battery.battery_change_pct(p, jnp.float32(speed), charging, obstacle)
+            return battery.next_battery_pct(b, change), change
+        return jax.lax.scan(body, jnp.float32(b0), None, length=steps)
+
+    b1, l1 = run(100.0, 0.5, False, False)
+    np.testing.assert_allclose(l1, -p.dt_s * (ks + kd * 0.5), rtol=1e-6)  # Eq. (1), every step
+    expected1 = 100.0 - 120 * (ks + 0.5 * kd)  # = 100 - 120 * 100 / 14400
+    assert expected1 == pytest.approx(100 - 120 / 144)
+    b2, l2 = run(b1, 0.5, False, True)
+    np.testing.assert_allclose(l2, -p.dt_s * (ks + kd * 0.5) * ko, rtol=1e-6)
+    expected2 = expected1 - 120 * (ks + 0.5 * kd) * ko
+    b3, l3 = run(b2, 0.0, True, False)
+    np.testing.assert_allclose(l3, p.dt_s * kc, rtol=1e-6)
+    expected3 = expected2 + 120 * kc
+    # Eq. (2) summed in float32: at most half an ulp of 100 lost per step.
+    tol = steps * np.spacing(np.float32(100.0))
+    for got, want in [(b1, expected1), (b2, expected2), (b3, expected3)]:
+        assert abs(float(got) - want) <= tol
+    assert float(battery.next_battery_pct(jnp.float32(99.99), jnp.float32(1.0))) == 100.0
+    assert float(battery.next_battery_pct(jnp.float32(0.01), jnp.float32(-1.0))) == 0.0
+
+
+def test_all_pairs_routes_match_scipy(warehouse):
+    s = warehouse
+    w = graph.edge_lengths_m(s.waypoint_xy_m, s.edges)
+    dist, nxt = graph.all_pairs_shortest(s.n_waypoints, s.edges, w, s.robot_allowed)
+    keep = np.flatnonzero(s.robot_allowed)
+    m = np.zeros((s.n_waypoints, s.n_waypoints))
+    for (u, v), length in zip(s.edges, w):
+        if s.robot_allowed[u] and s.robot_allowed[v]:
+            m[u, v] = m[v, u] = length
+    ref = shortest_path(m, directed=False)
+    np.testing.assert_allclose(dist[np.ix_(keep, keep)], ref[np.ix_(keep, keep)], rtol=1e-9)
+    routes, hops = graph.route_table(nxt, dist)
+    edge_set = {tuple(e) for e in s.edges} | {tuple(e[::-1]) for e in s.edges}
+    rng = np.random.default_rng(0)
+    for i, j in rng.choice(keep, size=(200, 2)):
+        path = [i] + routes[i, j, :hops[i, j]].tolist()
+        assert path[-1] == j and all((a, b) in edge_set for a, b in zip(path, path[1:]))
+        assert s.parking not in path
+        length = sum(np.linalg.norm(s.waypoint_xy_m[a] - s.waypoint_xy_m[b]) for a, b in zip(path, path[1:]))
+        assert length == pytest.approx(dist[i, j])
+    assert not np.isfinite(dist[s.parking]).any()
+
+
+def test_fast_atan2_matches_arctan2():
+    angles = np.linspace(-np.pi, np.pi, 10001)
+    radius = np.linspace(0.01, 10, 10001)
+    y, x = radius * np.sin(angles), radius * np.cos(angles)
+    got = np.asarray(sf.fast_atan2(jnp.asarray(y, jnp.float32), jnp.asarray(x, jnp.float32)))
+    err = np.abs(np.angle(np.exp(1j * (got - np.arctan2(y, x)))))
+    assert err.max() < 3e-4
+    assert float(sf.fast_atan2(jnp.float32(0), jnp.float32(0))) == 0.0

@@ -1,0 +1,129 @@
+"""Invariants of the simulator over many random worlds, and the schedule over a reduced day."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxsim import geometry
+from jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_keys
+from jaxsim.scenario import load_scenario
+from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING
+from jaxsim.world import build_world, shortest_path_plan
+
+WALL_TOLERANCE_M = 0.02
+
+
+@pytest.fixture(scope="module")
+def day_rollout(short_day):
+    """24 random worlds through a whole day of 60 s slots, sampled every 0.5 s."""
+    scenario, world, plan = short_day
+    p = scenario.params
+    n_steps = scenario.n_slots * p.steps_per_slot
+    final, rec = rollout(p, world, plan, seed=3, n_worlds=24, n_steps=n_steps, sample_every_steps=5)
+    return scenario, to_numpy(final), to_numpy(rec)
+
+
+def test_no_nan_and_battery_in_range(day_rollout):
+    _, final, rec = day_rollout
+    for leaf in jax.tree.leaves(final):
+        if np.issubdtype(leaf.dtype, np.floating):
+            assert not np.isnan(leaf).any()
+    for name in ("robot_x_m", "robot_y_m", "robot_speed_mps", "battery_pct", "density_ppm2", "worker_x_m"):
+        assert not np.isnan(getattr(rec, name)).any(), name
+    assert (rec.battery_pct >= 0).all() and (rec.battery_pct <= 100).all()
+    assert (np.diff(rec.battery_pct, axis=1) < 0).any()  # it does discharge
+
+
+def test_nobody_inside_walls(day_rollout):
+    scenario, _, rec = day_rollout
+    present = (rec.worker_status == WALKING) | (rec.worker_status == ACTIVITY)
+    sd, _, _ = geometry.box_signed_distance(rec.worker_x_m[present], rec.worker_y_m[present], scenario.boxes_m)
+    assert sd.min() > -WALL_TOLERANCE_M, f"a worker is {-sd.min():.3f} m inside a wall"
+    rsd, _, _ = geometry.box_signed_distance(rec.robot_x_m, rec.robot_y_m, scenario.boxes_m)
+    assert rsd.min() > 0
+
+
+def test_speeds_bounded(day_rollout):
+    scenario, final, rec = day_rollout
+    p = scenario.params
+    speed = np.hypot(final.workers.vx_mps, final.workers.vy_mps)
+    assert (speed <= final.workers.desired_speed_mps + 1e-5).all()
+    assert (final.workers.desired_speed_mps <= p.worker_max_speed_mps).all()
+    assert (rec.robot_speed_mps >= 0).all() and (rec.robot_speed_mps <= p.robot_max_speed_mps + 1e-6).all()
+    # Between two samples a walker moves at most max speed x interval (+ wall projection slack).
+    both = (rec.worker_status[:, 1:] == WALKING) & (rec.worker_status[:, :-1] == WALKING)
+    step = np.hypot(np.diff(rec.worker_x_m, axis=1), np.diff(rec.worker_y_m, axis=1))[both]
+    assert step.max() <= p.worker_max_speed_mps * 0.5 + 0.1
+
+
+def test_workers_conserved_and_off_slot_empty(day_rollout):
+    scenario, _, rec = day_rollout
+    n = scenario.params.n_workers
+    counts = sum((rec.worker_status == code).sum(-1) for code in (WAITING, WALKING, ACTIVITY, LEFT))
+    assert (counts == n).all()
+    assert (rec.n_present == ((rec.worker_status == WALKING) | (rec.worker_status == ACTIVITY)).sum(-1)).all()
+    off = rec.slot == scenario.n_slots - 1
+    assert rec.n_present[off].max() == 0
+    # Everyone has arrived by the end of the first slot, nobody has left before the last working one.
+    end_s1 = rec.slot == 1
+    assert (rec.worker_status[end_s1] != WAITING).all()
+    before_s10 = rec.slot < 9
+    assert (rec.worker_status[before_s10] != LEFT).all()
+    # Left workers never come back.
+    was_left = np.maximum.accumulate(rec.worker_status == LEFT, axis=1)
+    assert (rec.worker_status[was_left] == LEFT).all()
+
+
+def test_robot_works_and_charges_only_at_the_station(day_rollout):
+    scenario, _, rec = day_rollout
+    assert (rec.tasks_succeeded[:, -1] > 0).all()
+    assert (np.diff(rec.tasks_started, axis=1) >= 0).all()
+    charging = rec.charging
+    if charging.any():
+        xy = scenario.waypoint_xy_m[scenario.charging_station]
+        assert np.hypot(rec.robot_x_m[charging] - xy[0], rec.robot_y_m[charging] - xy[1]).max() < 0.3
+        assert (rec.robot_speed_mps[charging] == 0).all()
+
+
+def test_same_seed_same_rollout_and_chunk_invariance(short_day):
+    scenario, world, plan = short_day
+    p = scenario.params
+    keys = world_keys(7, 4)
+    s0 = init_batch(p, world, plan, keys)
+    _, a = run_samples(p, world, plan, s0, keys, 20, 10)
+    s1, b1 = run_samples(p, world, plan, s0, keys, 10, 10)
+    _, b2 = run_samples(p, world, plan, s1, keys, 10, 10)
+    a = to_numpy(a)
+    b = jax.tree.map(lambda x, y: np.concatenate([x, y], axis=1), to_numpy(b1), to_numpy(b2))
+    for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)):
+        np.testing.assert_array_equal(x, y)
+    # World b is the same world whatever the batch size.
+    _, c = run_samples(p, world, plan, init_batch(p, world, plan, world_keys(7, 2)), world_keys(7, 2), 20, 10)
+    np.testing.assert_array_equal(to_numpy(c).worker_x_m, a.worker_x_m[:2])
+
+
+@pytest.mark.slow
+def test_reduced_day_reproduces_the_schedule():
+    """Each working slot's crowded waypoints are its high-probability ones (seed 000 Fig. 7)."""
+    scenario = load_scenario(slot_length_s=300.0)
+    world, plan = build_world(scenario), shortest_path_plan(scenario)
+    p = scenario.params
+    _, rec = rollout(p, world, plan, seed=11, n_worlds=4, n_steps=scenario.n_slots * p.steps_per_slot,
+                     sample_every_steps=10)
+    rec = to_numpy(rec)
+    people = rec.density_ppm2 * np.pi * scenario.waypoint_radius_m ** 2  # people in each disc
+    t_in_slot = rec.time_s % p.slot_length_s
+    canteen = {scenario.waypoint(n) for n in ("table-12", "table-23", "corridor-canteen-2", "corridor-canteen-3")}
+    for s in range(scenario.n_slots - 1):
+        # Let the previous slot's crowd move on; in the last working slot people leave, so use all of it.
+        late = (rec.slot == s) & ((t_in_slot > p.slot_length_s / 2) | (s == scenario.n_slots - 2))
+        mean = people[late].mean(axis=0)
+        high = set(np.flatnonzero(scenario.destination_p[s] >= 0.2))
+        top = set(np.argsort(-mean)[:len(high)])
+        assert top == high, (scenario.slot_names[s], [scenario.waypoint_ids[i] for i in top])
+        if s == 5:  # lunch: the canteen holds most of the workers
+            assert mean[list(canteen)].sum() > 0.5 * rec.n_present[late].mean()
+    assert rec.n_present[rec.slot == scenario.n_slots - 1].max() == 0
