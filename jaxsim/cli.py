@@ -103,7 +103,7 @@ def simulate(args: argparse.Namespace) -> int:
     mean = lambda k: sum(f[k]) / n  # noqa: E731
     print(f"\nsimulated {args.worlds} world(s) x {duration_s:.0f} s ({duration_s / p.slot_length_s:.2f} slots of "
           f"{p.slot_length_s:.0f} s), {p.n_workers} workers + robot, seed {args.seed}")
-    print(f"wall time {run.wall_s:.1f} s (first chunk incl. compile {run.compile_s:.1f} s), "
+    print(f"wall time {run.wall_s:.1f} s (until the first chunk, compile included: {run.compile_s:.1f} s), "
           f"{run.agent_steps_per_s / 1e6:.2f} M agent-steps/s")
     print(f"robot per world: {mean('tasks_succeeded'):.1f} tasks succeeded, {mean('tasks_failed'):.1f} failed, "
           f"stalled {mean('stalled_s'):.0f} s, final battery {mean('battery_pct'):.1f} %")

@@ -1,6 +1,7 @@
 """Rollouts written to Parquet, in chunks, atomically.
 
-One row per logged sample per world. Columns:
+One row per logged sample per world; rows come in time chunks, world by world within a chunk
+(sort by ``world, time_s`` for one series per world). Columns:
 
 * ``world``, ``seed``, and the settings ``dt_s``, ``slot_length_s``, ``n_workers``,
   ``obstacle_probability``: so runs can be concatenated and still told apart;
@@ -104,9 +105,11 @@ def record_table(rec, world_ids: np.ndarray, scenario: Scenario, seed: int, log_
     return pa.table(cols)
 
 
-def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUDGET_BYTES) -> int:
-    """Largest divisor of ``n_samples`` whose chunk fits ``budget`` (equal chunks: one compile)."""
-    cap = max(1, budget // max(bytes_per_sample, 1))
+def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUDGET_BYTES,
+                  min_chunks: int = 20) -> int:
+    """Largest divisor of ``n_samples`` whose chunk fits ``budget`` and leaves at least
+    ``min_chunks`` chunks for the progress bar (equal chunks: one compile)."""
+    cap = max(1, min(budget // max(bytes_per_sample, 1), n_samples // min_chunks))
     best = 1
     for d in range(1, int(np.sqrt(n_samples)) + 1):
         if n_samples % d == 0:
