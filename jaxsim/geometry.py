@@ -1,8 +1,8 @@
 """Walls as a precomputed signed distance field, and line-of-sight lookups (host side, numpy).
 
 The walls are axis-aligned boxes. Rather than testing every agent against every box each step
-(51 x 38 box distances), the simulator looks the distance up in a grid precomputed once:
-``benchmarks/bench_walls.py`` measures both. Each cell stores the signed distance to the nearest
+(51 x 38 box distances), the simulator looks the distance up in a grid precomputed once (one
+packed gather per agent and step; the analytic alternative was not benchmarked). Each cell stores the signed distance to the nearest
 wall surface (negative inside a box) and the unit vector pointing away from that wall, which is
 exactly what pedsim's obstacle force needs (it only uses the closest obstacle point).
 """
