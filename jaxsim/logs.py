@@ -129,7 +129,8 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, *, n_wo
       scenario: the validated scenario (its params included).
       out_dir: output folder (created). Existing files of a previous run are replaced only when
         this run completes.
-      n_worlds: batch size; world ``b`` is the same world for a given seed whatever ``n_worlds``.
+      n_worlds: batch size; world ``b`` is the same world for a given seed whatever ``n_worlds``
+        (bit for bit for the same ``n_worlds``, to float rounding across batch sizes).
       duration_s: simulated time, a multiple of ``sample_interval_s``.
       sample_interval_s: logging interval, a multiple of ``dt_s``.
       log_positions: also log every worker's position and status.

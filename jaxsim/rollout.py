@@ -9,9 +9,9 @@ Layout of the compiled program for a batch of ``B`` worlds and ``n_samples`` sam
           scan over samples -> measure()                  (one Record per sample)
             scan over steps_per_sample -> step()
 
-Randomness is counter-based: the key of world ``b`` at step ``t`` is
-``fold_in(world_key[b], t)``, so results do not depend on how time or worlds are chunked, and
-the same seed gives the same logs bit for bit.
+Randomness is counter-based: the draws of world ``b`` at step ``t`` are a hash of the world's
+seed (from ``world_key[b]``) and ``t`` (:func:`jaxsim.step.hash_uniform16`), so results do not
+depend on how time or worlds are chunked, and the same seed gives the same logs bit for bit.
 
 Two host devices are what lets XLA use both cores of a CPU: call
 :func:`jaxsim.devices.request_host_devices` before JAX is imported (the command line and benchmark do).
@@ -27,7 +27,7 @@ import numpy as np
 
 from jaxsim.params import SimParams
 from jaxsim.state import Record, SimState
-from jaxsim.step import init_state, measure, step
+from jaxsim.step import init_state, measure, step, world_seed_u32
 from jaxsim.world import RobotPlan, World
 
 DEFAULT_WORLD_CHUNK = 64
@@ -47,8 +47,10 @@ def init_batch(params: SimParams, world: World, plan: RobotPlan, keys: jax.Array
 
 def _run_one(params: SimParams, world: World, plan: RobotPlan, state: SimState, key,
              n_samples: int, steps_per_sample: int):
+    seed = world_seed_u32(key)
+
     def inner(s, _):
-        return step(params, world, plan, s, jax.random.fold_in(key, s.step)), None
+        return step(params, world, plan, s, seed), None
 
     def outer(s, _):
         s, _ = jax.lax.scan(inner, s, None, length=steps_per_sample)

@@ -120,3 +120,33 @@ def test_fast_atan2_matches_arctan2():
     err = np.abs(np.angle(np.exp(1j * (got - np.arctan2(y, x)))))
     assert err.max() < 3e-4
     assert float(sf.fast_atan2(jnp.float32(0), jnp.float32(0))) == 0.0
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 8, 51])
+def test_pairwise_social_force_equals_dense(warehouse, n):
+    """Each pair once (Newton's third law) gives the full-matrix result."""
+    p = warehouse.params
+    k = jax.random.split(jax.random.key(n), 5)
+    x, y = jax.random.uniform(k[0], (n,)) * 6, jax.random.uniform(k[1], (n,)) * 6
+    vx, vy = jax.random.normal(k[2], (n,)), jax.random.normal(k[3], (n,))
+    w = (jax.random.uniform(k[4], (n,)) > 0.3).astype(jnp.float32)
+    got = sf.social_force(p, x, y, vx, vy, w)
+    want = sf.social_force_dense(p, x, y, vx, vy, w)
+    scale = float(jnp.max(jnp.abs(jnp.stack(want)))) + 1.0
+    np.testing.assert_allclose(np.stack(got), np.stack(want), atol=2e-5 * scale)
+
+
+def test_hash_uniforms_are_uniform_and_independent():
+    from jaxsim.step import hash_uniform16
+
+    draws = jax.vmap(lambda s: hash_uniform16(jnp.uint32(12345), s, (6, 51)))(jnp.arange(2000))
+    u = np.asarray(draws)  # (steps, streams, agents)
+    assert ((u > 0) & (u < 1)).all()
+    assert abs(u.mean() - 0.5) < 0.005 and abs(u.var() - 1 / 12) < 0.002
+    hist, _ = np.histogram(u, bins=16, range=(0, 1))
+    assert hist.min() > 0.95 * u.size / 16
+    for a, b in [(u[1:], u[:-1]), (u[:, 1:], u[:, :-1]), (u[:, :, 1:], u[:, :, :-1])]:  # steps, streams, agents
+        assert abs(np.corrcoef(a.ravel(), b.ravel())[0, 1]) < 0.01
+    other = np.asarray(hash_uniform16(jnp.uint32(12346), jnp.int32(0), (6, 51)))
+    assert abs(np.corrcoef(other.ravel(), u[0].ravel())[0, 1]) < 0.2
+    np.testing.assert_array_equal(u[3], np.asarray(hash_uniform16(jnp.uint32(12345), jnp.int32(3), (6, 51))))

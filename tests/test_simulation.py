@@ -100,9 +100,10 @@ def test_same_seed_same_rollout_and_chunk_invariance(short_day):
     b = jax.tree.map(lambda x, y: np.concatenate([x, y], axis=1), to_numpy(b1), to_numpy(b2))
     for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)):
         np.testing.assert_array_equal(x, y)
-    # World b is the same world whatever the batch size.
+    # World b is the same world whatever the batch size (to float rounding: XLA may vectorise a
+    # reduction differently for another batch shape).
     _, c = run_samples(p, world, plan, init_batch(p, world, plan, world_keys(7, 2)), world_keys(7, 2), 20, 10)
-    np.testing.assert_array_equal(to_numpy(c).worker_x_m, a.worker_x_m[:2])
+    np.testing.assert_allclose(to_numpy(c).worker_x_m, a.worker_x_m[:2], rtol=0, atol=1e-4)
 
 
 @pytest.mark.slow
