@@ -107,7 +107,7 @@ def social_force(params: SimParams, x, y, vx, vy, weight):
 
 
 def social_force_dense(params: SimParams, x, y, vx, vy, weight):
-    """Moussaid interaction on every agent from every other one.
+    """Reference for :func:`social_force`: the full ``(A, A)`` matrix of pair forces.
 
     Args:
       x, y, vx, vy: (A,) positions and velocities of all agents (workers and robot).
@@ -116,27 +116,10 @@ def social_force_dense(params: SimParams, x, y, vx, vy, weight):
     Returns:
       (ax, ay): (A,) summed social acceleration, already scaled by ``social_force_factor``.
     """
-    dx = x[None, :] - x[:, None]  # (i, j): from i to j
-    dy = y[None, :] - y[:, None]
-    dist = jnp.sqrt(dx * dx + dy * dy)
-    inv = 1.0 / jnp.maximum(dist, _EPS)
-    ex, ey = dx * inv, dy * inv
-    ix = params.worker_social_lambda * (vx[:, None] - vx[None, :]) + ex
-    iy = params.worker_social_lambda * (vy[:, None] - vy[None, :]) + ey
-    ilen = jnp.sqrt(ix * ix + iy * iy)
-    iinv = 1.0 / jnp.maximum(ilen, _EPS)
-    ix, iy = ix * iinv, iy * iinv
-    theta = fast_atan2(ix * ey - iy * ex, ix * ex + iy * ey)
-    b = params.worker_social_gamma * ilen
-    base = -dist / jnp.maximum(b, _EPS)
-    nb_theta = b * theta
-    f_vel = -jnp.exp(base - (params.worker_social_n_prime * nb_theta) ** 2)
-    f_ang = -jnp.sign(theta) * jnp.exp(base - (params.worker_social_n * nb_theta) ** 2)
-    n = x.shape[0]
-    w = weight[None, :] * (1.0 - jnp.eye(n, dtype=x.dtype)) * params.worker_social_force_factor
-    ax = jnp.sum(w * (f_vel * ix - f_ang * iy), axis=1)
-    ay = jnp.sum(w * (f_vel * iy + f_ang * ix), axis=1)
-    return ax, ay
+    fx, fy = _moussaid_pair(params, x[None, :] - x[:, None], y[None, :] - y[:, None],
+                            vx[:, None] - vx[None, :], vy[:, None] - vy[None, :])  # (i, j): on i from j
+    w = weight[None, :] * (1.0 - jnp.eye(x.shape[0], dtype=x.dtype)) * params.worker_social_force_factor
+    return jnp.sum(w * fx, axis=1), jnp.sum(w * fy, axis=1)
 
 
 def obstacle_force(params: SimParams, wall_dist_m, normal_x, normal_y):
