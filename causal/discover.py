@@ -1,0 +1,199 @@
+"""Causal discovery with J-PCMCI+ (tigramite), the links as a plain table, a picture, a score.
+
+``tigramite`` traps (``shared/notes/causal-stack.md``) handled here: ``pc_alpha`` is always one
+float (``None`` or a list silently runs plain PCMCI+ without the contexts); the datasets go in
+as ``analysis_mode='multiple'``; a same-time link appears twice in the graph ('-->' one way,
+'<--' the other), so only '-->' entries are read, and direction comes from ``graph``, not from
+the symmetric ``p_matrix``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+import time
+
+import numpy as np
+
+from causal.variables import CONTEXTS, GROUND_TRUTH, VARIABLES, node_classification
+
+TESTS = ("parcorr", "regression")
+
+
+@dataclasses.dataclass(frozen=True)
+class Link:
+    """``cause(t - lag) -> effect(t)``; ``oriented`` False for an unoriented same-time link."""
+
+    cause: str
+    effect: str
+    lag: int
+    strength: float
+    p_value: float
+    oriented: bool = True
+
+
+@dataclasses.dataclass
+class Discovery:
+    """What J-PCMCI+ found.
+
+    Attributes:
+      links: the links, directed ones as cause -> effect.
+      test, alpha, tau_max: the settings.
+      n_samples: total samples over all datasets; seconds: wall time.
+    """
+
+    links: list[Link]
+    test: str
+    alpha: float
+    tau_max: int
+    n_samples: int
+    seconds: float
+
+    def as_set(self) -> set[tuple[str, str, int]]:
+        return {(k.cause, k.effect, k.lag) for k in self.links if k.oriented}
+
+    def save(self, path: str | pathlib.Path) -> pathlib.Path:
+        """Write the links and settings as JSON (a plain file any tool reads)."""
+        path = pathlib.Path(path)
+        obj = {"test": self.test, "alpha": self.alpha, "tau_max": self.tau_max, "n_samples": self.n_samples,
+               "seconds": self.seconds, "links": [dataclasses.asdict(k) for k in self.links]}
+        path.write_text(json.dumps(obj, indent=1))
+        return path
+
+    @classmethod
+    def load(cls, path: str | pathlib.Path) -> "Discovery":
+        obj = json.loads(pathlib.Path(path).read_text())
+        return cls([Link(**k) for k in obj["links"]], obj["test"], obj["alpha"], obj["tau_max"],
+                   obj["n_samples"], obj["seconds"])
+
+
+def run_jpcmciplus(data: dict[int, np.ndarray], *, names=VARIABLES, test: str = "parcorr", alpha: float = 0.01,
+                   tau_max: int = 1) -> Discovery:
+    """J-PCMCI+ over several datasets with the contexts declared as space contexts.
+
+    Args:
+      data: {dataset: (T, len(names)) array}.
+      test: ``parcorr`` (fast, linear) or ``regression`` (tigramite's RegressionCI for mixed
+        continuous / discrete data, as the paper's authors used).
+      alpha: the significance level (``pc_alpha``), one float.
+    """
+    from tigramite import data_processing as pp
+    from tigramite.jpcmciplus import JPCMCIplus
+
+    if test not in TESTS:
+        raise ValueError(f"test must be one of {TESTS}, got {test!r}")
+    if not isinstance(alpha, float) or not 0 < alpha < 1:
+        raise ValueError(f"alpha must be one float in (0, 1), got {alpha!r}")
+    names = list(names)
+    kwargs = {}
+    if test == "parcorr":
+        from tigramite.independence_tests.parcorr import ParCorr
+
+        ci = ParCorr(significance="analytic")
+    else:
+        from tigramite.independence_tests.regressionCI import RegressionCI
+
+        ci = RegressionCI(significance="analytic")
+        discrete = np.array([n in CONTEXTS for n in names], int)
+        kwargs["data_type"] = {k: np.broadcast_to(discrete, v.shape).copy() for k, v in data.items()}
+    start = time.perf_counter()
+    frame = pp.DataFrame({k: np.asarray(v, np.float64) for k, v in data.items()}, analysis_mode="multiple",
+                         var_names=names, **kwargs)
+    jp = JPCMCIplus(dataframe=frame, cond_ind_test=ci, node_classification=node_classification(names), verbosity=0)
+    res = jp.run_jpcmciplus(tau_min=0, tau_max=tau_max, pc_alpha=float(alpha))
+    seconds = time.perf_counter() - start
+    return Discovery(parse_graph(res, names), test, float(alpha), tau_max,
+                     int(sum(len(v) for v in data.values())), seconds)
+
+
+def parse_graph(res: dict, names) -> list[Link]:
+    """tigramite's result dict -> links (each same-time link once)."""
+    graph, val, pval = res["graph"], res["val_matrix"], res["p_matrix"]
+    links = []
+    n, _, taus = graph.shape
+    for tau in range(taus):
+        for i in range(n):
+            for j in range(n):
+                g = graph[i, j, tau]
+                if g == "-->":
+                    links.append(Link(names[i], names[j], tau, float(val[i, j, tau]), float(pval[i, j, tau])))
+                elif g in ("o-o", "x-x") and tau == 0 and i < j:
+                    links.append(Link(names[i], names[j], 0, float(val[i, j, 0]), float(pval[i, j, 0]), False))
+    return links
+
+
+def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
+    """Precision, recall and structural Hamming distance against the known graph.
+
+    A predicted link counts as right when its cause, effect and lag are in ``truth``. SHD adds
+    one per missing adjacency, one per extra adjacency and one per adjacency with the wrong or
+    no orientation.
+    """
+    adj = lambda a, b, lag: (frozenset((a, b)), lag) if lag == 0 else ((a, b), lag)  # noqa: E731
+    truth_adj = {adj(*t): t for t in truth}
+    found_adj = {}
+    for k in links:
+        found_adj[adj(k.cause, k.effect, k.lag)] = k
+    right = sum(1 for k in links if k.oriented and (k.cause, k.effect, k.lag) in truth)
+    missing = [t for a, t in truth_adj.items() if a not in found_adj]
+    extra = [k for a, k in found_adj.items() if a not in truth_adj]
+    misoriented = [k for a, k in found_adj.items() if a in truth_adj and
+                   not (k.oriented and (k.cause, k.effect, k.lag) in truth)]
+    return {"precision": right / max(len(links), 1), "recall": right / max(len(truth), 1),
+            "shd": len(missing) + len(extra) + len(misoriented),
+            "missing": [f"{c}(t-{lag})->{e}" if lag else f"{c}->{e}" for c, e, lag in sorted(missing)],
+            "extra": [_label(k) for k in extra], "misoriented": [_label(k) for k in misoriented]}
+
+
+def _label(k: Link) -> str:
+    arrow = "->" if k.oriented else "-"
+    return f"{k.cause}(t-{k.lag}){arrow}{k.effect}" if k.lag else f"{k.cause}{arrow}{k.effect}"
+
+
+# Fig. 8 layout: battery subgraph left, density subgraph right; contexts on the outside.
+LAYOUT = {"O": (0.0, 1.0), "C": (0.0, 0.0), "V": (1.0, 1.0), "L": (1.0, 0.0),
+          "W": (2.6, 1.0), "S": (2.6, 0.0), "D": (3.6, 0.5)}
+
+
+def draw(discovery: Discovery, path: str | pathlib.Path, title: str | None = None) -> pathlib.Path:
+    """The graph as a PNG like seed 000 Fig. 8: contexts grey, system variables orange, arrow
+    width by strength, self-lags as the node border width, lags written on links."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle, FancyArrowPatch
+
+    names = sorted({k.cause for k in discovery.links} | {k.effect for k in discovery.links} | set(VARIABLES))
+    pos = {n: LAYOUT.get(n, (1.8, -0.8 - 0.4 * i)) for i, n in enumerate(names)}
+    strengths = [abs(k.strength) for k in discovery.links] or [1.0]
+    top = max(strengths)
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
+    self_lag = {k.effect: k for k in discovery.links if k.cause == k.effect}
+    for n in names:
+        x, y = pos[n]
+        colour = "#c8c8c8" if n in CONTEXTS else "#f4a259"
+        width = 1.0 + 5.0 * abs(self_lag[n].strength) / top if n in self_lag else 1.0
+        ax.add_patch(Circle((x, y), 0.22, facecolor=colour, edgecolor="#333", lw=width, zorder=3))
+        ax.text(x, y, n, ha="center", va="center", fontsize=12, zorder=4)
+        if n in self_lag:
+            ax.text(x, y + 0.3, str(self_lag[n].lag), ha="center", fontsize=8, color="#333")
+    for k in discovery.links:
+        if k.cause == k.effect:
+            continue
+        arrow = FancyArrowPatch(pos[k.cause], pos[k.effect], arrowstyle="-|>" if k.oriented else "-",
+                                mutation_scale=14, shrinkA=16, shrinkB=16, lw=0.8 + 4.0 * abs(k.strength) / top,
+                                color="#444", connectionstyle="arc3,rad=0.12" if k.lag else "arc3", zorder=2)
+        ax.add_patch(arrow)
+        mx, my = (np.add(pos[k.cause], pos[k.effect])) / 2
+        ax.text(mx, my + 0.06, str(k.lag), fontsize=8, color="#1f4e79", ha="center")
+    ax.set_xlim(-0.5, 4.1)
+    ax.set_ylim(-0.5, 1.5)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    ax.set_title(title or f"J-PCMCI+ ({discovery.test}, alpha {discovery.alpha}, tau_max {discovery.tau_max})")
+    path = pathlib.Path(path)
+    fig.savefig(path, dpi=130, bbox_inches="tight")
+    plt.close(fig)
+    return path

@@ -1,0 +1,160 @@
+"""From simulator logs (``logs.parquet``) to the per-waypoint datasets J-PCMCI+ expects.
+
+For every world and every kept waypoint ``w`` one dataset (T, 7) holds, sample by sample,
+``V`` (robot speed), ``L`` (battery change since the previous kept sample), ``D`` (Eq. 3
+density at ``w``), ``W`` (= w, constant), ``S`` (slot), ``C`` (charging) and ``O`` (obstacle),
+in the order of :data:`causal.variables.VARIABLES`.
+
+Subsampling follows the paper's Nyquist rule (:func:`nyquist_step`): the highest significant
+frequency over the series sets the rate. Waypoints where nobody ever stands carry a constant
+``D`` and are dropped (reported); asking for one by name is an error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+
+from causal.variables import VARIABLES
+
+ROBOT_COLUMNS = ("world", "time_s", "slot", "robot_speed_mps", "battery_pct", "charging", "obstacle")
+# Share of a series' spectral energy (DC excluded) below its "highest significant frequency".
+SIGNIFICANT_ENERGY = 0.95
+
+
+class LogError(ValueError):
+    """The logs cannot give the causal variables; the message names the problem."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Datasets:
+    """Per-(world, waypoint) datasets ready for J-PCMCI+.
+
+    Attributes:
+      data: {dataset index: (T, 7) float array} in the order of :data:`VARIABLES`.
+      waypoints: waypoint name of each dataset, same keys.
+      worlds: world id of each dataset.
+      step: subsampling step (in logged samples); ``sample_interval_s * step`` is the period.
+      sample_interval_s: the logs' sampling interval.
+      dropped_waypoints: waypoints left out because their density never changes.
+      frequencies_hz: highest significant frequency found per variable.
+    """
+
+    data: dict[int, np.ndarray]
+    waypoints: dict[int, str]
+    worlds: dict[int, int]
+    step: int
+    sample_interval_s: float
+    dropped_waypoints: tuple[str, ...]
+    frequencies_hz: dict[str, float]
+
+    @property
+    def period_s(self) -> float:
+        return self.step * self.sample_interval_s
+
+
+def check_logs(df: pd.DataFrame, waypoints: list[str]) -> None:
+    """Raise :class:`LogError` naming the first missing column or unusable series."""
+    if df.empty:
+        raise LogError("the logs have no rows")
+    missing = [c for c in ROBOT_COLUMNS if c not in df.columns]
+    missing += [f"density_{w}" for w in waypoints if f"density_{w}" not in df.columns]
+    if missing:
+        raise LogError(f"the logs lack column(s) {', '.join(missing[:5])}"
+                       f"{' ...' if len(missing) > 5 else ''}: were they written by 'peopleflow simulate'?")
+    for col, name in [("robot_speed_mps", "V (robot_speed_mps)"), ("battery_pct", "L (from battery_pct)")]:
+        if df[col].nunique() < 2:
+            raise LogError(f"{name} is constant over the whole log: nothing to learn from it")
+    for col, name in [("charging", "C (charging)"), ("obstacle", "O (obstacle)")]:
+        if df[col].nunique() < 2:
+            raise LogError(f"context {name} is constant over the whole log (the robot never "
+                           f"{'charged' if col == 'charging' else 'met an obstacle'}): simulate longer or "
+                           f"drop the variable")
+
+
+def highest_frequency_hz(x: np.ndarray, dt_s: float, energy: float = SIGNIFICANT_ENERGY) -> float:
+    """Smallest frequency below which ``energy`` of the series' (non-DC) spectral energy lies."""
+    x = np.asarray(x, np.float64)
+    x = x - x.mean()
+    power = np.abs(np.fft.rfft(x)) ** 2
+    power[0] = 0.0
+    total = power.sum()
+    if total <= 0:
+        return 0.0
+    freqs = np.fft.rfftfreq(len(x), dt_s)
+    k = int(np.searchsorted(np.cumsum(power) / total, energy))
+    return float(freqs[min(k, len(freqs) - 1)])
+
+
+def nyquist_step(series: dict[str, np.ndarray], dt_s: float, energy: float = SIGNIFICANT_ENERGY
+                 ) -> tuple[int, dict[str, float]]:
+    """Subsampling step by the paper's rule: sample at ``>= 2 x`` the highest significant frequency.
+
+    Returns:
+      (step in samples, highest significant frequency per series).
+    """
+    freqs = {k: highest_frequency_hz(v, dt_s, energy) for k, v in series.items()}
+    f_max = max(freqs.values())
+    if f_max <= 0:
+        return 1, freqs
+    step = int(np.floor(1.0 / (2.0 * f_max * dt_s)))
+    return max(step, 1), freqs
+
+
+def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: list[str] | None = None,
+                   step: int | None = None, energy: float = SIGNIFICANT_ENERGY) -> Datasets:
+    """Per-(world, waypoint) datasets from a log table.
+
+    Args:
+      df: the log (``pandas.read_parquet(logs.parquet)``).
+      waypoint_names: all waypoint names of the scenario (index = W's value).
+      waypoints: waypoints to keep (default: every waypoint whose density ever changes).
+      step: subsampling step in samples (default: :func:`nyquist_step` over V, L, D, C, O of
+        world 0).
+    """
+    wanted = list(waypoint_names) if waypoints is None else list(waypoints)
+    unknown = [w for w in wanted if w not in waypoint_names]
+    if unknown:
+        raise LogError(f"unknown waypoint(s) {unknown}")
+    check_logs(df, wanted)
+    df = df.sort_values(["world", "time_s"], kind="stable")
+    dropped = [w for w in wanted if df[f"density_{w}"].nunique() < 2]
+    if waypoints is not None and dropped:
+        raise LogError(f"waypoint(s) {dropped} are empty: their density D never changes in the logs")
+    kept = [w for w in wanted if w not in dropped]
+    if not kept:
+        raise LogError("no waypoint has a changing density D: were there workers in the simulation?")
+    times = df.loc[df.world == df.world.iloc[0], "time_s"].to_numpy()
+    dt = float(np.median(np.diff(times))) if len(times) > 1 else 1.0
+
+    first = df[df.world == df.world.iloc[0]]
+    robot_l = np.diff(first.battery_pct.to_numpy(np.float64), prepend=first.battery_pct.iloc[0])
+    probe = {"V": first.robot_speed_mps.to_numpy(), "L": robot_l, "C": first.charging.to_numpy(float),
+             "O": first.obstacle.to_numpy(float)}
+    densest = max(kept, key=lambda w: first[f"density_{w}"].var())
+    probe["D"] = first[f"density_{densest}"].to_numpy()
+    auto_step, freqs = nyquist_step(probe, dt, energy)
+    step = auto_step if step is None else int(step)
+    if step < 1:
+        raise LogError(f"step must be >= 1, got {step}")
+
+    data, names, worlds = {}, {}, {}
+    index = {w: i for i, w in enumerate(waypoint_names)}
+    for world, g in df.groupby("world", sort=True):
+        g = g.iloc[::step]
+        battery = g.battery_pct.to_numpy(np.float64)
+        l_pct = np.diff(battery)  # L_t = B_t - B_{t-1}: the change over the period ending at t
+        base = {
+            "V": g.robot_speed_mps.to_numpy(np.float64)[1:], "L": l_pct,
+            "S": g.slot.to_numpy(np.float64)[1:], "C": g.charging.to_numpy(np.float64)[1:],
+            "O": g.obstacle.to_numpy(np.float64)[1:],
+        }
+        for w in kept:
+            cols = dict(base, D=g[f"density_{w}"].to_numpy(np.float64)[1:], W=np.full(len(l_pct), float(index[w])))
+            k = len(data)
+            data[k] = np.stack([cols[v] for v in VARIABLES], axis=1)
+            names[k] = w
+            worlds[k] = int(world)
+    return Datasets(data, names, worlds, step, dt, tuple(dropped), freqs)
