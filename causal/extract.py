@@ -37,6 +37,8 @@ class Datasets:
       waypoints: waypoint name of each dataset, same keys.
       worlds: world id of each dataset.
       step: subsampling step (in logged samples); ``sample_interval_s * step`` is the period.
+      nyquist_step: the step the paper's rule asked for (``step`` is larger when the sample
+        budget forced it).
       sample_interval_s: the logs' sampling interval.
       dropped_waypoints: waypoints left out because their density never changes.
       frequencies_hz: highest significant frequency found per variable.
@@ -46,6 +48,7 @@ class Datasets:
     waypoints: dict[int, str]
     worlds: dict[int, int]
     step: int
+    nyquist_step: int
     sample_interval_s: float
     dropped_waypoints: tuple[str, ...]
     frequencies_hz: dict[str, float]
@@ -104,7 +107,8 @@ def nyquist_step(series: dict[str, np.ndarray], dt_s: float, energy: float = SIG
 
 
 def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: list[str] | None = None,
-                   step: int | None = None, energy: float = SIGNIFICANT_ENERGY) -> Datasets:
+                   step: int | None = None, max_samples: int | None = None, worlds: list[int] | None = None,
+                   energy: float = SIGNIFICANT_ENERGY) -> Datasets:
     """Per-(world, waypoint) datasets from a log table.
 
     Args:
@@ -112,8 +116,15 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
       waypoint_names: all waypoint names of the scenario (index = W's value).
       waypoints: waypoints to keep (default: every waypoint whose density ever changes).
       step: subsampling step in samples (default: :func:`nyquist_step` over V, L, D, C, O of
-        world 0).
+        the first world, raised if needed to keep at most ``max_samples`` samples in all).
+      max_samples: sample budget over all datasets (J-PCMCI+ time grows with it).
+      worlds: world ids to use (default: all).
     """
+    if worlds is not None:
+        missing = sorted(set(worlds) - set(df.world.unique()))
+        if missing:
+            raise LogError(f"world(s) {missing} are not in the logs")
+        df = df[df.world.isin(worlds)]
     wanted = list(waypoint_names) if waypoints is None else list(waypoints)
     unknown = [w for w in wanted if w not in waypoint_names]
     if unknown:
@@ -136,11 +147,16 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
     densest = max(kept, key=lambda w: first[f"density_{w}"].var())
     probe["D"] = first[f"density_{densest}"].to_numpy()
     auto_step, freqs = nyquist_step(probe, dt, energy)
-    step = auto_step if step is None else int(step)
+    if step is None:
+        step = auto_step
+        if max_samples:
+            total = len(df) * len(kept)
+            step = max(step, int(np.ceil(total / max_samples)))
+    step = int(step)
     if step < 1:
         raise LogError(f"step must be >= 1, got {step}")
 
-    data, names, worlds = {}, {}, {}
+    data, names, world_of = {}, {}, {}
     index = {w: i for i, w in enumerate(waypoint_names)}
     for world, g in df.groupby("world", sort=True):
         g = g.iloc[::step]
@@ -156,5 +172,5 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
             k = len(data)
             data[k] = np.stack([cols[v] for v in VARIABLES], axis=1)
             names[k] = w
-            worlds[k] = int(world)
-    return Datasets(data, names, worlds, step, dt, tuple(dropped), freqs)
+            world_of[k] = int(world)
+    return Datasets(data, names, world_of, step, auto_step, dt, tuple(dropped), freqs)

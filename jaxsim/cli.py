@@ -3,7 +3,9 @@
     peopleflow simulate --worlds 8 --out runs/warehouse          # a full day, 8 worlds
     peopleflow simulate --slots 2 --slot-length-s 600 --out runs/quick
 
-Later jobs (``learn``, ``evaluate``) join as subcommands.
+    peopleflow learn --logs runs/warehouse                          # causal graph + engine
+
+Later jobs (``evaluate``) join as subcommands.
 """
 
 from __future__ import annotations
@@ -56,7 +58,42 @@ def build_parser() -> argparse.ArgumentParser:
                      help="time of the snapshot picture (default: the middle of the lunch slot S6, or of the run)")
     sim.add_argument("--log-positions", action="store_true", help="also log every worker's position and status")
     sim.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    lrn = sub.add_parser("learn", help="learn the causal graph and inference engine from simulator logs",
+                         description="J-PCMCI+ discovery and a pyAgrum inference engine from the logs of "
+                                     "'peopleflow simulate'; writes the graph, the engine, its tables and a report.")
+    lrn.add_argument("--logs", type=pathlib.Path, default=pathlib.Path("runs/warehouse"),
+                     help="folder written by 'peopleflow simulate' (default runs/warehouse)")
+    lrn.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: LOGS/causal)")
+    lrn.add_argument("--test", choices=["parcorr", "regression"], default="parcorr",
+                     help="conditional independence test: parcorr (fast) or regression (RegressionCI, mixed data)")
+    lrn.add_argument("--alpha", type=float, default=0.01, help="significance level (default 0.01)")
+    lrn.add_argument("--step", type=_positive_int, default=None,
+                     help="subsampling step in logged samples (default: the Nyquist rule)")
+    lrn.add_argument("--max-samples", type=_positive_int, default=200_000,
+                     help="discovery's sample budget over all datasets (default 200000); coarsens the step")
+    lrn.add_argument("--worlds", type=lambda s: [int(w) for w in s.split(",")], default=None,
+                     help="comma-separated world ids to learn from (default: all)")
+    lrn.add_argument("--waypoints", type=lambda s: s.split(","), default=None,
+                     help="comma-separated waypoints to learn (default: every non-empty one)")
+    lrn.add_argument("--compare-subsampling", action="store_true",
+                     help="also run discovery at the Nyquist step (no sample budget) and report both")
+    lrn.add_argument("--no-progress", action="store_true", help="print nothing but errors")
     return parser
+
+
+def learn(args: argparse.Namespace) -> int:
+    from causal.extract import LogError
+    from causal.learn import learn as run_learn
+
+    try:
+        run_learn(args.logs, args.out or args.logs / "causal", test=args.test, alpha=args.alpha, step=args.step,
+                  max_samples=args.max_samples, worlds=args.worlds, waypoints=args.waypoints, compare_subsampling=args.compare_subsampling,
+                  progress=not args.no_progress)
+    except (LogError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 0
 
 
 def simulate(args: argparse.Namespace) -> int:
@@ -123,6 +160,8 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "simulate":
         return simulate(args)
+    if args.command == "learn":
+        return learn(args)
     return 2  # pragma: no cover - argparse rejects unknown commands
 
 

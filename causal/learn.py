@@ -1,0 +1,126 @@
+"""The ``learn`` job: simulator logs in; causal graph, inference engine and a report out.
+
+    peopleflow learn --logs runs/warehouse --out runs/warehouse/causal
+
+Writes to ``--out``: ``discovery.json`` (links with lag, direction, strength, p-value),
+``causal_graph.png`` (like seed 000 Fig. 8), ``engine.bifxml`` + ``engine.json`` (the network),
+``engine_tables.npz`` (E[D | do(S), W] and E[L | do(V), C] as arrays for planners) and
+``report.json`` (settings, subsampling, score against the simulator's ground truth, timings).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+import time
+
+import numpy as np
+import pandas as pd
+
+from causal import discover, engine as engine_lib, extract
+
+
+@dataclasses.dataclass
+class LearnReport:
+    out_dir: pathlib.Path
+    report: dict
+
+
+def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: str = "parcorr", alpha: float = 0.01,
+          step: int | None = None, max_samples: int = 200_000, worlds: list[int] | None = None,
+          waypoints: list[str] | None = None, compare_subsampling: bool = False,
+          progress: bool = True) -> LearnReport:
+    """Run extraction, discovery, parameter learning and the do-queries on a run's logs.
+
+    Args:
+      logs_dir: a folder written by ``peopleflow simulate`` (``logs.parquet`` + ``run.json``).
+      test, alpha: J-PCMCI+ settings (see :func:`causal.discover.run_jpcmciplus`).
+      step: subsampling step in logged samples (default: the Nyquist rule, coarsened if needed
+        to keep ``max_samples`` samples over all datasets).
+      max_samples: discovery's sample budget (J-PCMCI+ time grows with it).
+      worlds: world ids to learn from (default: all).
+      waypoints: waypoints to learn (default: all whose density changes).
+      compare_subsampling: also run discovery at the Nyquist step (no budget) and report both.
+
+    Raises:
+      extract.LogError: the logs lack a column, a variable is constant, a waypoint is empty.
+    """
+    logs_dir, out = pathlib.Path(logs_dir), pathlib.Path(out_dir)
+    log_file, meta_file = logs_dir / "logs.parquet", logs_dir / "run.json"
+    for f in (log_file, meta_file):
+        if not f.is_file():
+            raise extract.LogError(f"{f} is missing: point --logs at a folder written by 'peopleflow simulate'")
+    meta = json.loads(meta_file.read_text())
+    names, slots = meta.get("waypoints"), meta.get("slots")
+    if not names or not slots:
+        raise extract.LogError(f"{meta_file} lacks the waypoint or slot names")
+    timings = {}
+    t0 = time.perf_counter()
+    say = print if progress else (lambda *a, **k: None)
+
+    say("reading logs ...", flush=True)
+    wanted = waypoints or names
+    columns = list(extract.ROBOT_COLUMNS) + [f"density_{w}" for w in wanted]
+    try:
+        df = pd.read_parquet(log_file, columns=columns)
+    except Exception as e:  # pyarrow names the missing column
+        if "density_" in str(e) or any(c in str(e) for c in extract.ROBOT_COLUMNS):
+            raise extract.LogError(f"the logs lack a needed column: {e}") from None
+        raise
+    datasets = extract.build_datasets(df, names, waypoints=waypoints, step=step, max_samples=max_samples,
+                                      worlds=worlds)
+    timings["extract_s"] = time.perf_counter() - t0
+    n_samples = sum(len(a) for a in datasets.data.values())
+    say(f"  {len(datasets.data)} datasets ({len(set(datasets.waypoints.values()))} waypoints x "
+        f"{len(set(datasets.worlds.values()))} worlds), {n_samples} samples after subsampling every "
+        f"{datasets.step} sample(s) ({datasets.period_s:g} s; the Nyquist rule asked for "
+        f"{datasets.nyquist_step}); dropped empty waypoints: "
+        f"{', '.join(datasets.dropped_waypoints) or 'none'}", flush=True)
+
+    say(f"J-PCMCI+ ({test}, alpha {alpha}) ...", flush=True)
+    t = time.perf_counter()
+    found = discover.run_jpcmciplus(datasets.data, test=test, alpha=alpha)
+    timings["discover_s"] = time.perf_counter() - t
+    quality = discover.score(found.links)
+    say(f"  {len(found.links)} links in {found.seconds:.1f} s: precision {quality['precision']:.2f}, "
+        f"recall {quality['recall']:.2f}, SHD {quality['shd']}", flush=True)
+
+    comparison = None
+    if compare_subsampling and datasets.step > datasets.nyquist_step:
+        say(f"J-PCMCI+ at the Nyquist step {datasets.nyquist_step}, for comparison ...", flush=True)
+        full = extract.build_datasets(df, names, waypoints=waypoints, step=datasets.nyquist_step,
+                                      worlds=worlds)
+        found_full = discover.run_jpcmciplus(full.data, test=test, alpha=alpha)
+        comparison = {"step": datasets.nyquist_step, "links": [discover._label(k) for k in found_full.links],
+                      "score": discover.score(found_full.links), "seconds": found_full.seconds}
+
+    say("learning the inference engine ...", flush=True)
+    t = time.perf_counter()
+    eng = engine_lib.CausalEngine.fit(datasets, found, n_slots=len(slots))
+    timings["fit_s"] = time.perf_counter() - t
+    t = time.perf_counter()
+    tables = eng.tables(names, progress=progress)
+    timings["queries_s"] = time.perf_counter() - t
+
+    out.mkdir(parents=True, exist_ok=True)
+    found.save(out / "discovery.json")
+    discover.draw(found, out / "causal_graph.png")
+    eng.save(out)
+    np.savez(out / engine_lib.TABLES_FILE, waypoints=np.array(names), slots=np.array(slots), **tables)
+    timings["total_s"] = time.perf_counter() - t0
+    report = {
+        "logs": str(logs_dir), "test": test, "alpha": alpha, "subsampling_step": datasets.step, "nyquist_step": datasets.nyquist_step,
+        "period_s": datasets.period_s, "highest_frequency_hz": datasets.frequencies_hz,
+        "dropped_waypoints": list(datasets.dropped_waypoints), "datasets": len(datasets.data),
+        "samples": n_samples, "links": [discover._label(k) for k in found.links], "score": quality,
+        "at_nyquist_step": comparison, "bins": {k: len(b.means) for k, b in eng.bins.items()},
+        "battery_pct_per_s": tables["battery_pct_per_s"].tolist(), "speed_mps": tables["speed_mps"].tolist(),
+        "timings": timings,
+    }
+    (out / "report.json").write_text(json.dumps(report, indent=1))
+    say(f"learn finished in {timings['total_s']:.1f} s (extract {timings['extract_s']:.1f}, discover "
+        f"{timings['discover_s']:.1f}, fit {timings['fit_s']:.1f}, queries {timings['queries_s']:.1f}); "
+        f"wrote {out}/{{discovery.json, causal_graph.png, engine.bifxml, engine.json, engine_tables.npz, "
+        f"report.json}}", flush=True)
+    return LearnReport(out, report)

@@ -1,0 +1,165 @@
+"""The causal pipeline on data with a known answer: graph recovery, do() vs conditioning,
+discretisation, subsampling, bad input, persistence, and the learn job end to end."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from causal import discover, engine as engine_lib, extract
+from causal.variables import GROUND_TRUTH, VARIABLES
+from synthetic import seed000_datasets
+
+
+def _datasets(data, names=None):
+    names = names or {k: f"wp{int(a[0, VARIABLES.index('W')])}" for k, a in data.items()}
+    return extract.Datasets(data, names, {k: 0 for k in data}, 1, 1, 1.0, (), {})
+
+
+def test_jpcmciplus_recovers_the_seed000_graph():
+    found = discover.run_jpcmciplus(seed000_datasets(n_samples=5000, seed=0), test="parcorr", alpha=0.01)
+    assert found.as_set() == set(GROUND_TRUTH)
+    assert all(k.oriented for k in found.links)
+    assert discover.score(found.links)["shd"] == 0
+
+
+def test_alpha_must_be_one_float():
+    data = seed000_datasets(n_samples=200)
+    for bad in (None, [0.01, 0.05], 0.0):
+        with pytest.raises(ValueError, match="alpha"):
+            discover.run_jpcmciplus(data, alpha=bad)
+
+
+def test_score_counts_missing_extra_and_misoriented():
+    links = [discover.Link("O", "V", 0, 0.5, 0.0), discover.Link("L", "V", 0, 0.5, 0.0),  # reversed
+             discover.Link("S", "V", 0, 0.1, 0.0)]  # extra
+    s = discover.score(links)
+    assert s["shd"] == len(GROUND_TRUTH) - 2 + 1 + 1
+    assert s["precision"] == pytest.approx(1 / 3) and s["recall"] == pytest.approx(1 / len(GROUND_TRUTH))
+
+
+def _confounded(n=20000, seed=0):
+    """O confounds V and L: obstacles make the robot slow AND drain the battery."""
+    rng = np.random.default_rng(seed)
+    o = (rng.random(n) < 0.3).astype(float)
+    v = np.where(rng.random(n) < np.where(o > 0, 0.2, 0.9), 0.5, 0.1)  # fast mostly without obstacle
+    l_pct = -0.01 - 0.02 * v - 0.05 * o + 0.001 * rng.standard_normal(n)
+    d = rng.random(n)
+    arr = np.stack([v, l_pct, d, np.zeros(n), np.zeros(n), np.zeros(n), o], 1)
+    return {0: arr}
+
+
+def test_do_differs_from_conditioning_and_matches_the_backdoor():
+    data = _confounded()
+    links = [discover.Link("O", "V", 0, 1, 0), discover.Link("O", "L", 0, 1, 0), discover.Link("V", "L", 0, 1, 0)]
+    found = discover.Discovery(links, "given", 0.01, 1, len(data[0]), 0.0)
+    eng = engine_lib.CausalEngine.fit(_datasets(data), found, n_slots=1, bins={"V": 2, "L": 6, "D": 2})
+    arr = data[0][1:]  # the engine learns on (previous, current) pairs
+    v_bin = eng.bins["V"].index(arr[:, 0])
+    l_rep = eng.bins["L"].means[eng.bins["L"].index(arr[:, 1])]
+    o = arr[:, 6]
+    fast = v_bin.max()
+    backdoor = sum(l_rep[(v_bin == fast) & (o == k)].mean() * np.mean(o == k) for k in (0, 1))
+    conditional = l_rep[v_bin == fast].mean()
+    do = eng.expected_battery_do(int(fast), 0)
+    given = eng.expected_battery_given(int(fast))
+    assert do == pytest.approx(backdoor, abs=1e-5)
+    assert given == pytest.approx(conditional, abs=1e-5)
+    assert abs(do - given) > 0.005  # conditioning on "fast" hides the obstacles' cost
+
+
+def test_engine_density_query_and_persistence(tmp_path):
+    data = seed000_datasets(n_samples=3000, seed=1)
+    found = discover.Discovery([discover.Link(*t, 1.0, 0.0) for t in sorted(GROUND_TRUTH)], "given", 0.01, 1, 0, 0)
+    eng = engine_lib.CausalEngine.fit(_datasets(data), found, n_slots=11)
+    names = [f"wp{w}" for w in range(len(data))] + ["never-seen"]
+    tables = eng.tables(names)
+    dens = tables["density_ppm2"]
+    assert dens.shape == (11, len(names)) and np.isnan(dens[:, -1]).all()
+    # The generator adds 0.3 per waypoint index and 0.2 per slot: the do() answers must rise with both.
+    assert np.all(np.diff(dens[:, :-1].mean(axis=0)) > 0) and dens[10, :-1].mean() > dens[0, :-1].mean()
+    np.testing.assert_allclose(dens[4, 2], eng.expected_density_do(4, "wp2"), rtol=1e-9)
+    eng.save(tmp_path)
+    again = engine_lib.CausalEngine.load(tmp_path).tables(names)
+    for k in tables:
+        np.testing.assert_allclose(again[k], tables[k], rtol=1e-5, equal_nan=True)  # BIF stores ~7 digits
+
+
+def test_elbow_finds_three_clusters_and_bins_cover_the_data():
+    rng = np.random.default_rng(0)
+    x = np.concatenate([rng.normal(c, 0.05, 3000) for c in (0.0, 1.0, 2.0)])
+    assert engine_lib.elbow_bins(x) == 3
+    b = engine_lib.Binning.fit(x)
+    assert b.edges[0] == x.min() and b.edges[-1] == x.max()
+    np.testing.assert_allclose(b.means, [0, 1, 2], atol=0.05)
+    spiky = np.concatenate([np.zeros(900), rng.random(100)])  # mostly empty waypoint
+    assert len(engine_lib.quantile_edges(spiky, 5)) >= 3
+
+
+def test_nyquist_step_from_a_known_frequency():
+    t = np.arange(20000) * 0.1
+    freq = extract.highest_frequency_hz(np.sin(2 * np.pi * 0.05 * t), 0.1)
+    assert freq == pytest.approx(0.05, abs=0.001)
+    step, _ = extract.nyquist_step({"x": np.sin(2 * np.pi * 0.05 * t)}, 0.1)
+    assert step == int(1 / (2 * 0.05 * 0.1))
+
+
+def _fake_logs(n=400):
+    rng = np.random.default_rng(0)
+    return pd.DataFrame({
+        "world": np.zeros(n, int), "time_s": np.arange(n, dtype=float), "slot": np.arange(n) * 11 // n,
+        "robot_speed_mps": rng.random(n) * 0.5, "battery_pct": 100 - np.arange(n) * 0.01,
+        "charging": np.arange(n) % 100 < 10, "obstacle": rng.random(n) < 0.1,
+        "density_a": rng.integers(0, 3, n) / 3.0, "density_b": np.zeros(n),
+    })
+
+
+def test_extraction_shapes_and_bad_input():
+    ds = extract.build_datasets(_fake_logs(), ["a", "b"], step=2)
+    assert ds.dropped_waypoints == ("b",) and list(ds.waypoints.values()) == ["a"]
+    arr = ds.data[0]
+    assert arr.shape == (199, 7) and (arr[:, VARIABLES.index("W")] == 0).all()
+    np.testing.assert_allclose(arr[:, VARIABLES.index("L")], -0.02)  # battery change per 2 samples
+    with pytest.raises(extract.LogError, match="density_c"):
+        extract.build_datasets(_fake_logs(), ["a", "c"], step=1)
+    with pytest.raises(extract.LogError, match="empty"):
+        extract.build_datasets(_fake_logs(), ["a", "b"], waypoints=["b"], step=1)
+    df = _fake_logs().drop(columns="robot_speed_mps")
+    with pytest.raises(extract.LogError, match="robot_speed_mps"):
+        extract.build_datasets(df, ["a"], step=1)
+    df = _fake_logs().assign(obstacle=False)
+    with pytest.raises(extract.LogError, match="O \\(obstacle\\) is constant"):
+        extract.build_datasets(df, ["a"], step=1)
+    with pytest.raises(extract.LogError, match="no rows"):
+        extract.build_datasets(_fake_logs().iloc[:0], ["a"], step=1)
+
+
+@pytest.mark.slow
+def test_learn_job_end_to_end(tmp_path):
+    import json
+
+    from jaxsim import cli
+
+    logs = tmp_path / "run"
+    # A short day in which the robot starts low on battery, so that it charges (C varies).
+    args = ["simulate", "--worlds", "2", "--slot-length-s", "60", "--out", str(logs), "--no-progress"]
+    import jaxsim.scenario as scen
+
+    original = scen.load_scenario
+    scen.load_scenario = lambda *a, **k: original(*a, **{**k, "battery_initial_pct": 21.0})
+    try:
+        assert cli.main(args) == 0
+    finally:
+        scen.load_scenario = original
+    assert cli.main(["learn", "--logs", str(logs), "--no-progress", "--max-samples", "60000"]) == 0
+    out = logs / "causal"
+    for name in ("discovery.json", "causal_graph.png", "engine.bifxml", "engine.json", "engine_tables.npz",
+                 "report.json"):
+        assert (out / name).stat().st_size > 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["timings"]["total_s"] > 0 and 0 <= report["score"]["recall"] <= 1
+    tables = np.load(out / "engine_tables.npz")
+    assert tables["density_ppm2"].shape == (11, 73)
+    assert np.isfinite(tables["battery_pct_per_s"][:, 0]).any()
+    assert cli.main(["learn", "--logs", str(tmp_path / "nothing"), "--no-progress"]) == 2
