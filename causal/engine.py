@@ -1,8 +1,9 @@
 """The causal inference engine: discretisation, a two-time-slice Bayesian network on the
 discovered structure, maximum likelihood parameters, and the do-queries of seed 000 Eq. 4-7.
 
-* Bins: quantile edges for V, L and D, their number chosen by :func:`elbow_bins` (pyAgrum's
-  own elbow option is broken in 3.3.1). The expectation of a binned variable uses the mean of
+* Bins: quantile edges for V, L and D with atoms (e.g. exactly top speed) in bins of their
+  own, their number chosen by :func:`elbow_bins` (pyAgrum's own elbow option is broken in
+  3.3.1). The expectation of a binned variable uses the mean of
   the data inside each bin, not the interval mid-point.
 * Network: nodes ``X0`` (previous sample) and ``Xt`` (current) for every variable, the
   convention of ``pyagrum.lib.dynamicBN``. A discovered link ``X -> Y`` at lag 0 becomes
@@ -36,9 +37,22 @@ TABLES_FILE = "engine_tables.npz"
 
 
 def quantile_edges(x: np.ndarray, k: int) -> np.ndarray:
-    """At most ``k`` quantile bins (ties merge bins), at least two bins when ``x`` varies."""
+    """Quantile bin edges (``k`` bins, fewer where ties merge them), with every atom isolated.
+
+    An atom is a value holding more than ``1/k`` of the data (a robot cruising at exactly its
+    top speed, a waypoint that is empty most of the time). Plain quantiles would bury it in a
+    wide bin; it gets a bin of its own, between the mid-points to its neighbouring values, as
+    in the paper's networks (top speed bin [0.499; 0.509)). At least two bins when ``x`` varies.
+    """
     x = np.asarray(x, np.float64)
-    edges = np.unique(np.quantile(x, np.linspace(0, 1, k + 1)))
+    edges = np.quantile(x, np.linspace(0, 1, k + 1))
+    values, counts = np.unique(x, return_counts=True)
+    for i in np.flatnonzero(counts > len(x) / k):
+        if i > 0:
+            edges = np.append(edges, (values[i - 1] + values[i]) / 2)
+        if i + 1 < len(values):
+            edges = np.append(edges, (values[i] + values[i + 1]) / 2)
+    edges = np.unique(edges)
     if len(edges) < 3:  # a spike (e.g. many zeros): split the distinct values in two
         lo, hi = float(x.min()), float(x.max())
         if lo == hi:
@@ -85,7 +99,13 @@ class Binning:
     @classmethod
     def fit(cls, x: np.ndarray, k: int | None = None) -> "Binning":
         x = np.asarray(x, np.float64)
-        edges = quantile_edges(x, k or elbow_bins(x))
+        return cls.from_edges(x, quantile_edges(x, k or elbow_bins(x)))
+
+    @classmethod
+    def from_edges(cls, x: np.ndarray, edges) -> "Binning":
+        """Given ("expert") edges; the per-bin means come from ``x``."""
+        x = np.asarray(x, np.float64)
+        edges = np.asarray(edges, np.float64)
         idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
         counts = np.bincount(idx, minlength=len(edges) - 1)
         sums = np.bincount(idx, weights=x, minlength=len(edges) - 1)

@@ -67,7 +67,7 @@ class SimParams:
     robot_leg_deadline_s: float
     robot_obstacle_probability: float
     robot_obstacle_length_m: float
-    robot_obstacle_speed_factor: float
+    robot_obstacle_speed_factor_min: float  # per obstacle, speed factor ~ U(min, 1)
     robot_teleport_on_failure: bool
     # battery (seed 000 Eq. 1-2)
     battery_initial_pct: float

@@ -12,8 +12,8 @@ behind people, meets static obstacles, runs its slot's task list and recharges. 
   the paper's navigation stack did.
 * Obstacles: when a task leg starts, with ``robot_obstacle_probability`` a static obstacle lies
   at a uniform point of the planned path. Once the robot reaches it, it maneuvers for
-  ``robot_obstacle_length_m`` at ``robot_obstacle_speed_factor`` of its speed with ``O = 1``
-  (and ``K_o`` times the consumption).
+  ``robot_obstacle_length_m`` at a share of its speed drawn per obstacle uniformly in
+  ``[robot_obstacle_speed_factor_min, 1]``, with ``O = 1`` (and ``K_o`` times the consumption).
 * Tasks: goals come from the slot's list in order (the list restarts when a slot begins, and
   wraps around). A leg not finished within ``robot_leg_deadline_s`` fails; with
   ``robot_teleport_on_failure`` the robot is put at the leg's goal, which is the next task's
@@ -38,8 +38,12 @@ def _select(cond, a, b):
 
 
 def start_leg(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot, start_wp,
-              to_charger, u_obs, u_at) -> RobotState:
-    """Begin the next leg from ``start_wp``: the next task of ``slot``, or the way to the charger."""
+              to_charger, u) -> RobotState:
+    """Begin the next leg from ``start_wp``: the next task of ``slot``, or the way to the charger.
+
+    ``u``: (3,) uniforms: obstacle or not, where on the path, how much it slows the robot.
+    """
+    u_obs, u_at, u_speed = u[0], u[1], u[2]
     idx = jnp.where(r.task_slot == slot, r.task_idx + 1, 0) % world.robot_goal_count[slot]
     goal = jnp.where(to_charger, world.charging_station, world.robot_goals[slot, idx])
     has_obstacle = (~to_charger) & (u_obs < params.robot_obstacle_probability)
@@ -53,6 +57,8 @@ def start_leg(params: SimParams, world: World, plan: RobotPlan, r: RobotState, s
         leg_elapsed_s=jnp.float32(0.0), leg_dist_m=jnp.float32(0.0),
         obstacle_at_m=jnp.where(has_obstacle, u_at * plan.length_m[slot, start_wp, goal], jnp.inf).astype(jnp.float32),
         obstacle_left_m=jnp.float32(params.robot_obstacle_length_m),
+        obstacle_speed_factor=(params.robot_obstacle_speed_factor_min
+                               + u_speed * (1.0 - params.robot_obstacle_speed_factor_min)).astype(jnp.float32),
         tasks_started=r.tasks_started + jnp.where(to_charger, 0, 1).astype(jnp.int32))
 
 
@@ -70,7 +76,7 @@ def crowd_speed_factor(params: SimParams, r: RobotState, hx, hy, wx, wy, present
 
 def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot,
                  wx, wy, present, u) -> RobotState:
-    """One step of the robot. ``wx, wy, present``: (N,) workers; ``u``: (2,) uniform draws."""
+    """One step of the robot. ``wx, wy, present``: (N,) workers; ``u``: (3,) uniform draws."""
     moving = r.mode != CHARGING
     aim = r.route[r.route_pos]
     dx, dy = world.waypoint_x_m[aim] - r.x_m, world.waypoint_y_m[aim] - r.y_m
@@ -80,7 +86,7 @@ def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState
 
     in_obstacle = (r.mode == TASK) & (r.leg_dist_m >= r.obstacle_at_m) & (r.obstacle_left_m > 0)
     v_des = params.robot_max_speed_mps * crowd_speed_factor(params, r, hx, hy, wx, wy, present)
-    v_des = jnp.where(in_obstacle, v_des * params.robot_obstacle_speed_factor, v_des)
+    v_des = jnp.where(in_obstacle, v_des * r.obstacle_speed_factor, v_des)
     v_des = jnp.where(moving & (r.battery_pct > 0), v_des, 0.0)
     speed = jnp.minimum(v_des, r.speed_mps + params.robot_accel_mps2 * params.dt_s)
     travel = jnp.minimum(speed * params.dt_s, dist)
@@ -114,8 +120,8 @@ def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState
 
     leg_over = success | failure
     need_charge = leg_over & (new.battery_pct < params.battery_recharge_below_pct)
-    next_leg = start_leg(params, world, plan, new, slot, r.goal_wp, need_charge, u[0], u[1])
-    resume = start_leg(params, world, plan, new, slot, jnp.int32(world.charging_station), False, u[0], u[1])
+    next_leg = start_leg(params, world, plan, new, slot, r.goal_wp, need_charge, u)
+    resume = start_leg(params, world, plan, new, slot, jnp.int32(world.charging_station), False, u)
     new = _select(leg_over, next_leg, new)
     return _select(full, resume, new)
 
@@ -131,6 +137,6 @@ def init_robot(params: SimParams, world: World, plan: RobotPlan, u) -> RobotStat
         mode=i(TASK), charging=jnp.bool_(False), obstacle=jnp.bool_(False),
         route=plan.routes[0, start, start], route_pos=i(0), route_hops=i(0), leg_start_wp=i(start),
         goal_wp=i(start), task_idx=i(-1), task_slot=i(0), leg_elapsed_s=f(0.0), leg_dist_m=f(0.0),
-        obstacle_at_m=f(jnp.inf), obstacle_left_m=f(0.0), tasks_started=i(0), tasks_succeeded=i(0),
+        obstacle_at_m=f(jnp.inf), obstacle_left_m=f(0.0), obstacle_speed_factor=f(1.0), tasks_started=i(0), tasks_succeeded=i(0),
         tasks_failed=i(0), stalled_s=f(0.0))
-    return start_leg(params, world, plan, r, jnp.int32(0), jnp.int32(start), False, u[0], u[1])
+    return start_leg(params, world, plan, r, jnp.int32(0), jnp.int32(start), False, u)

@@ -67,7 +67,12 @@ def _run_batch(params, world, plan, states, keys, n_samples, steps_per_sample, w
     chunk = min(world_chunk, b)
     if b % chunk:
         chunk = b  # fall back to one vmap when the batch does not split evenly
-    return jax.lax.map(lambda sk: run(*sk), (states, keys), batch_size=chunk)
+    # lax.map over chunks of vmapped worlds. The reshape is spelled out (lax.map's batch_size
+    # infers it with -1, which fails for zero-size leaves such as a world without workers).
+    split = lambda x: x.reshape((b // chunk, chunk) + x.shape[1:])  # noqa: E731
+    merge = lambda x: x.reshape((b,) + x.shape[2:])  # noqa: E731
+    out = jax.lax.map(lambda sk: jax.vmap(run)(*sk), jax.tree.map(split, (states, keys)))
+    return jax.tree.map(merge, out)
 
 
 @functools.lru_cache(maxsize=4)
@@ -83,8 +88,10 @@ def _compiled(params: SimParams, n_samples: int, steps_per_sample: int, world_ch
     if n_dev == 1:
         return jax.jit(fn)
     spec, rep = jax.sharding.PartitionSpec("worlds"), jax.sharding.PartitionSpec()
+    # check_vma off: every shard is independent (no collectives), and the check rejects the
+    # zero-size worker arrays of a world without workers (their varying-axis type is dropped).
     return jax.jit(jax.shard_map(fn, mesh=_mesh(n_dev), in_specs=(rep, rep, spec, spec),
-                                 out_specs=(spec, spec)))
+                                 out_specs=(spec, spec), check_vma=False))
 
 
 def run_samples(params: SimParams, world: World, plan: RobotPlan, states: SimState, keys: jax.Array,

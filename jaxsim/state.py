@@ -73,6 +73,7 @@ class RobotState:
       leg_elapsed_s, leg_dist_m: time and distance on the current leg.
       obstacle_at_m: leg distance at which the obstacle is met (inf: none on this leg).
       obstacle_left_m: maneuver distance still to go once met.
+      obstacle_speed_factor: share of the speed kept while maneuvering around this leg's obstacle.
       tasks_started, tasks_succeeded, tasks_failed: counters.
       stalled_s: total time the robot stood still while it had somewhere to go.
     """
@@ -98,6 +99,7 @@ class RobotState:
     leg_dist_m: jnp.ndarray
     obstacle_at_m: jnp.ndarray
     obstacle_left_m: jnp.ndarray
+    obstacle_speed_factor: jnp.ndarray
     tasks_started: jnp.ndarray
     tasks_succeeded: jnp.ndarray
     tasks_failed: jnp.ndarray

@@ -64,7 +64,7 @@ def init_state(params: SimParams, world: World, plan: RobotPlan, key) -> SimStat
     """A world at time 0: workers waiting to arrive, the robot starting slot 0's first task."""
     kw, kr = jax.random.split(key)
     workers = workers_lib.init_workers(params, world, jax.random.uniform(kw, (5, params.n_workers)))
-    robot = robot_lib.init_robot(params, world, plan, jax.random.uniform(kr, (2,)))
+    robot = robot_lib.init_robot(params, world, plan, jax.random.uniform(kr, (3,)))
     return SimState(workers=workers, robot=robot, step=jnp.int32(0))
 
 
@@ -84,7 +84,7 @@ def step(params: SimParams, world: World, plan: RobotPlan, state: SimState, seed
     w = workers_lib.move(params, world, w, r.x_m, r.y_m, r.speed_mps * r.heading_x,
                          r.speed_mps * r.heading_y, u[4, :n], u[5, :n])
     r = robot_lib.update_robot(params, world, plan, r, slot, state.workers.x_m, state.workers.y_m,
-                               present, u[:2, n])
+                               present, u[:3, n])
     return SimState(workers=w, robot=r, step=state.step + 1)
 
 

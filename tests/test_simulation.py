@@ -128,3 +128,13 @@ def test_reduced_day_reproduces_the_schedule():
         if s == 5:  # lunch: the canteen holds most of the workers
             assert mean[list(canteen)].sum() > 0.5 * rec.n_present[late].mean()
     assert rec.n_present[rec.slot == scenario.n_slots - 1].max() == 0
+
+
+def test_world_without_workers_runs():
+    """The off slot and the Sec. 6 ablation use worlds with nobody in them."""
+    scenario = load_scenario(n_workers=0, slot_length_s=30.0)
+    world, plan = build_world(scenario), shortest_path_plan(scenario)
+    final, rec = rollout(scenario.params, world, plan, seed=0, n_worlds=4, n_steps=600, sample_every_steps=10)
+    rec = to_numpy(rec)
+    assert rec.worker_dist_m.shape == (4, 60, 0) and (rec.n_present == 0).all()
+    assert (rec.robot_speed_mps.max(axis=1) > 0.4).all()  # the robot drives
