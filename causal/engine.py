@@ -254,15 +254,33 @@ class CausalEngine:
                                         values={"S0": s, "St": s, "W0": waypoint, "Wt": waypoint})
         return self._expect(tensor, "D")
 
+    def _slot_is_exogenous(self) -> bool:
+        """S0 has no parents and St only S0: then do(S0 = s, St = s) is plain conditioning."""
+        parents = lambda n: {self.bn.variable(p).name() for p in self.bn.parents(n)}  # noqa: E731
+        return not parents("S0") and parents("St") <= {"S0"}
+
     def expected_density_do_all(self, slot: int) -> np.ndarray:
-        """E[D | do(S = s), W = w] for every learned waypoint at once (one causalImpact call
-        with W left free; same answers as :meth:`expected_density_do`, 69x fewer calls)."""
+        """E[D | do(S = s), W = w] for every learned waypoint at once.
+
+        When S is exogenous in the learned graph (:meth:`_slot_is_exogenous`, the backdoor
+        criterion holds with an empty set) the intervention is read from one joint posterior
+        P(Dt, W0, Wt | S0 = s, St = s) by junction-tree inference; otherwise from one
+        ``causalImpact`` call with W left free. Both give :meth:`expected_density_do`'s answers
+        (the test checks it); the first is ~100x faster on the warehouse's 69-state W.
+        """
         import pyagrum as gum
 
-        cm = gum.CausalModel(self.bn)
         s = str(slot)
-        _, tensor, _ = gum.causalImpact(cm, on="Dt", doing={"S0", "St"}, knowing={"W0", "Wt"},
-                                        values={"S0": s, "St": s})
+        if self._slot_is_exogenous():
+            ie = gum.LazyPropagation(self.bn)
+            ie.addJointTarget({"Dt", "W0", "Wt"})
+            ie.setEvidence({"S0": s, "St": s})
+            ie.makeInference()
+            tensor = ie.jointPosterior({"Dt", "W0", "Wt"})
+        else:
+            cm = gum.CausalModel(self.bn)
+            _, tensor, _ = gum.causalImpact(cm, on="Dt", doing={"S0", "St"}, knowing={"W0", "Wt"},
+                                            values={"S0": s, "St": s})
         names = list(tensor.names)
         arr = np.asarray(tensor.tolist(), np.float64)  # axes in the reverse order of tensor.names
         arr = np.moveaxis(arr, [len(names) - 1 - names.index(n) for n in ("W0", "Wt", "Dt")], [0, 1, 2])

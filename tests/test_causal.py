@@ -80,6 +80,12 @@ def test_engine_density_query_and_persistence(tmp_path):
     # The generator adds 0.3 per waypoint index and 0.2 per slot: the do() answers must rise with both.
     assert np.all(np.diff(dens[:, :-1].mean(axis=0)) > 0) and dens[10, :-1].mean() > dens[0, :-1].mean()
     np.testing.assert_allclose(dens[4, 2], eng.expected_density_do(4, "wp2"), rtol=1e-9)
+    # The fast path (S exogenous: do = conditioning) and pyAgrum's causalImpact agree.
+    assert eng._slot_is_exogenous()
+    fast = eng.expected_density_do_all(6)
+    eng._slot_is_exogenous = lambda: False
+    np.testing.assert_allclose(eng.expected_density_do_all(6), fast, rtol=1e-9)
+    del eng._slot_is_exogenous
     eng.save(tmp_path)
     again = engine_lib.CausalEngine.load(tmp_path).tables(names)
     for k in tables:
