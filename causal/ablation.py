@@ -127,7 +127,7 @@ def run(out_dir: str | pathlib.Path, probabilities=PROBABILITIES, n_seeds: int =
         if abs(p - 0.3) < 1e-9:
             data = {k: np.stack([speed[k], l_pct[k], obstacle[k]], 1) for k in range(n_seeds)}
             found = discover.run_jpcmciplus(data, names=("V", "L", "O"), alpha=0.01)
-            structure = [discover._label(k) for k in found.links]
+            structure = [k.label for k in found.links]
     table = pd.DataFrame([dict(dataclasses.asdict(r), error_bayesian=r.error_bayesian, error_causal=r.error_causal)
                           for r in results])
     table.to_csv(out / "ablation.csv", index=False)

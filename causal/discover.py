@@ -32,6 +32,12 @@ class Link:
     p_value: float
     oriented: bool = True
 
+    @property
+    def label(self) -> str:
+        """``X->Y``, ``X(t-1)->Y``, or ``X-Y`` for an unoriented link."""
+        arrow = "->" if self.oriented else "-"
+        return f"{self.cause}(t-{self.lag}){arrow}{self.effect}" if self.lag else f"{self.cause}{arrow}{self.effect}"
+
 
 @dataclasses.dataclass
 class Discovery:
@@ -143,12 +149,7 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
     return {"precision": right / max(len(links), 1), "recall": right / max(len(truth), 1),
             "shd": len(missing) + len(extra) + len(misoriented),
             "missing": [f"{c}(t-{lag})->{e}" if lag else f"{c}->{e}" for c, e, lag in sorted(missing)],
-            "extra": [_label(k) for k in extra], "misoriented": [_label(k) for k in misoriented]}
-
-
-def _label(k: Link) -> str:
-    arrow = "->" if k.oriented else "-"
-    return f"{k.cause}(t-{k.lag}){arrow}{k.effect}" if k.lag else f"{k.cause}{arrow}{k.effect}"
+            "extra": [k.label for k in extra], "misoriented": [k.label for k in misoriented]}
 
 
 # Fig. 8 layout: battery subgraph left, density subgraph right; contexts on the outside.

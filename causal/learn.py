@@ -92,7 +92,7 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
         full = extract.build_datasets(df, names, waypoints=waypoints, step=datasets.nyquist_step,
                                       worlds=worlds)
         found_full = discover.run_jpcmciplus(full.data, test=test, alpha=alpha)
-        comparison = {"step": datasets.nyquist_step, "links": [discover._label(k) for k in found_full.links],
+        comparison = {"step": datasets.nyquist_step, "links": [k.label for k in found_full.links],
                       "score": discover.score(found_full.links), "seconds": found_full.seconds}
 
     say("learning the inference engine ...", flush=True)
@@ -113,7 +113,7 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
         "logs": str(logs_dir), "test": test, "alpha": alpha, "subsampling_step": datasets.step, "nyquist_step": datasets.nyquist_step,
         "period_s": datasets.period_s, "highest_frequency_hz": datasets.frequencies_hz,
         "dropped_waypoints": list(datasets.dropped_waypoints), "datasets": len(datasets.data),
-        "samples": n_samples, "links": [discover._label(k) for k in found.links], "score": quality,
+        "samples": n_samples, "links": [k.label for k in found.links], "score": quality,
         "at_nyquist_step": comparison, "bins": {k: len(b.means) for k, b in eng.bins.items()},
         "battery_pct_per_s": tables["battery_pct_per_s"].tolist(), "speed_mps": tables["speed_mps"].tolist(),
         "timings": timings,
