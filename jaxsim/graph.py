@@ -32,12 +32,27 @@ def all_pairs_shortest(n: int, edges: np.ndarray, weights: np.ndarray,
         (``j`` itself for neighbours, ``i`` for ``i == j``, -1 when unreachable).
     """
     allowed = np.ones(n, bool) if allowed is None else np.asarray(allowed, bool)
-    dist = np.full((n, n), np.inf)
-    next_hop = np.full((n, n), UNREACHABLE, np.int32)
+    cost = np.full((n, n), np.inf)
     for (u, v), w in zip(edges, weights):
-        if allowed[u] and allowed[v] and w < dist[u, v]:
-            dist[u, v] = dist[v, u] = w
-            next_hop[u, v], next_hop[v, u] = v, u
+        if allowed[u] and allowed[v] and w < cost[u, v]:
+            cost[u, v] = cost[v, u] = w
+    return floyd_warshall(cost, allowed)
+
+
+def floyd_warshall(cost: np.ndarray, allowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """All-pairs shortest paths over a dense, possibly directed cost matrix.
+
+    Args:
+      cost: (n, n) cost of the arc ``i -> j`` (inf where there is none); the diagonal is ignored.
+      allowed: (n,) bool; nodes that are False are neither used nor reachable.
+
+    Returns:
+      (dist, next_hop) as in :func:`all_pairs_shortest`.
+    """
+    n = len(cost)
+    allowed = np.ones(n, bool) if allowed is None else np.asarray(allowed, bool)
+    dist = np.where(allowed[:, None] & allowed[None, :], np.asarray(cost, np.float64), np.inf)
+    next_hop = np.where(np.isfinite(dist), np.arange(n, dtype=np.int32)[None, :], UNREACHABLE).astype(np.int32)
     idx = np.flatnonzero(allowed)
     dist[idx, idx] = 0.0
     next_hop[idx, idx] = idx
