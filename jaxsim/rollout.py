@@ -40,7 +40,7 @@ def world_keys(seed: int, n_worlds: int) -> jax.Array:
 
 
 def init_batch(params: SimParams, world: World, plan: RobotPlan, keys: jax.Array) -> SimState:
-    """Initial states of a batch of worlds, one per key (init key = ``fold_in(key, -1)``)."""
+    """Initial states of a batch of worlds, one per key (init key = ``fold_in(key, 2**31 - 1)``)."""
     init = lambda k: init_state(params, world, plan, jax.random.fold_in(k, 2**31 - 1))  # noqa: E731
     return jax.jit(jax.vmap(init))(keys)
 

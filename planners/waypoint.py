@@ -87,7 +87,8 @@ def causal_arc_costs(scenario: Scenario, density_ppm2: np.ndarray, battery_pct_p
 def plan_from_costs(scenario: Scenario, costs: np.ndarray, allowed: np.ndarray | None = None) -> RobotPlan:
     """A :class:`RobotPlan` from (S, W, W) arc costs (the robot's graph by default)."""
     allowed = scenario.robot_allowed if allowed is None else allowed
-    length = np.where(np.isfinite(arc_lengths_m(scenario)), arc_lengths_m(scenario), 0.0)
+    arcs = arc_lengths_m(scenario)
+    length = np.where(np.isfinite(arcs), arcs, 0.0)
     routes, hops, metres = [], [], []
     for s in range(len(costs)):
         dist, next_hop = graph.floyd_warshall(costs[s], allowed)

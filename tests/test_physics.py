@@ -51,11 +51,7 @@ def test_segment_hits_boxes():
     boxes = np.array([[0.0, 1.0, 0.0, 1.0]])
     p0 = np.array([[-1.0, 0.5], [-1.0, 2.0], [0.5, -1.0], [2.0, 2.0]])
     p1 = np.array([[2.0, 0.5], [2.0, 2.0], [0.5, -0.5], [0.5, 0.5]])
-    assert segment_hits(p0, p1, boxes).tolist() == [True, False, False, True]
-
-
-def segment_hits(p0, p1, boxes):
-    return geometry.segment_hits_boxes(p0, p1, boxes)
+    assert geometry.segment_hits_boxes(p0, p1, boxes).tolist() == [True, False, False, True]
 
 
 def test_battery_hand_computed(warehouse):
