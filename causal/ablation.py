@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from causal import discover
-from causal.engine import SMOOTHING, Binning
+from causal.engine import Binning, discretized_variable, learn_mle
 
 DISTANCE_M = 60.0
 SPEED_MPS = 0.5
@@ -85,23 +85,19 @@ def estimate(speed, l_pct, obstacle, params, period_s: float, p: float, seed: in
 
     v_bins, l_bins = Binning.from_edges(speed, SPEED_EDGES_MPS), Binning.fit(l_pct)
     bn = gum.BayesNet("ablation")
-    for name, b in (("V", v_bins), ("L", l_bins)):
-        var = gum.DiscretizedVariable(name, name, [float(e) for e in b.edges])
-        var.setEmpirical(True)
-        bn.add(var)
+    bn.add(discretized_variable("V", v_bins))
+    bn.add(discretized_variable("L", l_bins))
     bn.add(gum.LabelizedVariable("O", "O", ["0", "1"]))
     for a, b in (("O", "V"), ("O", "L"), ("V", "L")):
         bn.addArc(a, b)
-    data = pd.DataFrame({"V": speed, "L": l_pct, "O": obstacle.astype(int).astype(str)})
-    learner = gum.BNLearner(data, bn)
-    learner.useSmoothingPrior(SMOOTHING)
-    bn = learner.learnParameters(bn.dag())
+    bn = learn_mle(bn, pd.DataFrame({"V": speed, "L": l_pct, "O": obstacle.astype(int).astype(str)}))
     fast = int(v_bins.index(np.array([speed_mps]))[0])
     ie = gum.LazyPropagation(bn)
     ie.setEvidence({"V": fast})
     ie.makeInference()
     per_sample_bn = float(np.dot(np.asarray(ie.posterior("L").tolist()), l_bins.means))
-    _, tensor, _ = gum.causalImpact(gum.CausalModel(bn), on="L", doing="V", values={"V": bn.variable("V").label(fast)})
+    _, tensor, _ = gum.causalImpact(gum.CausalModel(bn), on="L", doing="V",
+                                    values={"V": bn.variable("V").label(fast)})
     probs = np.asarray(tensor.tolist(), np.float64).ravel()
     per_sample_cm = float(np.dot(probs / probs.sum(), l_bins.means))
     samples = distance_m / speed_mps / period_s

@@ -116,6 +116,26 @@ class Binning:
         return np.clip(np.searchsorted(self.edges, x, side="right") - 1, 0, len(self.edges) - 2)
 
 
+def discretized_variable(name: str, binning: Binning):
+    """A pyAgrum variable on ``binning``'s edges; values outside them fall in the end bins."""
+    import pyagrum as gum
+
+    var = gum.DiscretizedVariable(name, name, [float(e) for e in binning.edges])
+    var.setEmpirical(True)
+    return var
+
+
+def learn_mle(bn, data: pd.DataFrame):
+    """Maximum likelihood parameters on ``bn``'s structure, with the negligible smoothing prior
+    that keeps unseen parent combinations from stopping the learner (notes: keep the learner in
+    a variable, chaining its calls segfaulted)."""
+    import pyagrum as gum
+
+    learner = gum.BNLearner(data, bn)
+    learner.useSmoothingPrior(SMOOTHING)
+    return learner.learnParameters(bn.dag())
+
+
 def dag_arcs(discovery: Discovery) -> list[tuple[str, str]]:
     """Arcs of the two-slice network from the discovered links (see the module docstring)."""
     order = {v: i for i, v in enumerate(VARIABLES)}
@@ -186,34 +206,29 @@ class CausalEngine:
         for slice_ in ("0", "t"):
             for v in VARIABLES:
                 name = f"{v}{slice_}"
-                if v in CONTINUOUS:
-                    var = gum.DiscretizedVariable(name, name, [float(e) for e in binning[v].edges])
-                    var.setEmpirical(True)
-                else:
-                    var = gum.LabelizedVariable(name, name, labels[v])
-                bn.add(var)
+                bn.add(discretized_variable(name, binning[v]) if v in CONTINUOUS
+                       else gum.LabelizedVariable(name, name, labels[v]))
         arcs = dag_arcs(discovery)
         for a, b in arcs:
             bn.addArc(a, b)
+        w_names = np.asarray([code_to_name[c] for c in w_codes], dtype=object)
         data = pd.DataFrame()
         for col in table.columns:
             v = col[:-1]
             if v in CONTINUOUS:
                 data[col] = table[col].to_numpy(np.float64)
             elif v == "W":
-                data[col] = [code_to_name[int(c)] for c in table[col].to_numpy()]
+                data[col] = w_names[np.searchsorted(w_codes, table[col].to_numpy().astype(int))]
             else:
                 data[col] = table[col].to_numpy().astype(int).astype(str)
-        learner = gum.BNLearner(data, bn)
-        learner.useSmoothingPrior(SMOOTHING)
-        learned = learner.learnParameters(bn.dag())
+        learned = learn_mle(bn, data)
         n_v = len(binning["V"].means)
         support_vc = np.zeros((n_v, 2), np.int64)
         np.add.at(support_vc, (binning["V"].index(robot[:, VARIABLES.index("V")]),
                                robot[:, VARIABLES.index("C")].astype(int)), 1)
-        w_index = {c: i for i, c in enumerate(w_codes)}
         support_sw = np.zeros((n_slots, len(w_codes)), np.int64)
-        np.add.at(support_sw, (table["St"].to_numpy().astype(int), [w_index[int(c)] for c in table["Wt"]]), 1)
+        np.add.at(support_sw, (table["St"].to_numpy().astype(int),
+                               np.searchsorted(w_codes, table["Wt"].to_numpy().astype(int))), 1)
         return cls(learned, binning, labels, datasets.period_s, arcs, support_vc, support_sw)
 
     # -- queries ---------------------------------------------------------------------------

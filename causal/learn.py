@@ -110,7 +110,8 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
     np.savez(out / engine_lib.TABLES_FILE, waypoints=np.array(names), slots=np.array(slots), **tables)
     timings["total_s"] = time.perf_counter() - t0
     report = {
-        "logs": str(logs_dir), "test": test, "alpha": alpha, "subsampling_step": datasets.step, "nyquist_step": datasets.nyquist_step,
+        "logs": str(logs_dir), "test": test, "alpha": alpha, "subsampling_step": datasets.step,
+        "nyquist_step": datasets.nyquist_step,
         "period_s": datasets.period_s, "highest_frequency_hz": datasets.frequencies_hz,
         "dropped_waypoints": list(datasets.dropped_waypoints), "datasets": len(datasets.data),
         "samples": n_samples, "links": [k.label for k in found.links], "score": quality,

@@ -104,7 +104,8 @@ def ablation(args: argparse.Namespace) -> int:
     abl.run(args.out, args.probabilities, args.seeds, args.seed, progress=not args.no_progress)
     summary = json.loads((args.out / "ablation.json").read_text())
     print(f"structure found by J-PCMCI+ at p = 0.3: {summary['structure_at_p_0.3']}")
-    print(f"{'p':>5} {'L_ref':>8} {'L_BN':>8} {'L_CM':>8} {'MAE BN':>14} {'MAE CM':>14}   (battery % for 60 m at 0.5 m/s)")
+    print(f"{'p':>5} {'L_ref':>8} {'L_BN':>8} {'L_CM':>8} {'MAE BN':>14} {'MAE CM':>14}"
+          "   (battery % for 60 m at 0.5 m/s)")
     for r in summary["summary"]:
         print(f"{r['p']:>5.1f} {r['reference']:>8.3f} {r['bayesian']:>8.3f} {r['causal']:>8.3f} "
               f"{r['mae_bayesian']:>7.3f}+-{r['sd_bayesian']:.3f} {r['mae_causal']:>7.3f}+-{r['sd_causal']:.3f}")
@@ -118,8 +119,8 @@ def learn(args: argparse.Namespace) -> int:
 
     try:
         run_learn(args.logs, args.out or args.logs / "causal", test=args.test, alpha=args.alpha, step=args.step,
-                  max_samples=args.max_samples, worlds=args.worlds, waypoints=args.waypoints, compare_subsampling=args.compare_subsampling,
-                  progress=not args.no_progress)
+                  max_samples=args.max_samples, worlds=args.worlds, waypoints=args.waypoints,
+                  compare_subsampling=args.compare_subsampling, progress=not args.no_progress)
     except (LogError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

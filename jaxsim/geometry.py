@@ -2,9 +2,10 @@
 
 The walls are axis-aligned boxes. Rather than testing every agent against every box each step
 (51 x 38 box distances), the simulator looks the distance up in a grid precomputed once (one
-packed gather per agent and step; the analytic alternative was not benchmarked). Each cell stores the signed distance to the nearest
-wall surface (negative inside a box) and the unit vector pointing away from that wall, which is
-exactly what pedsim's obstacle force needs (it only uses the closest obstacle point).
+packed gather per agent and step; the analytic alternative was not benchmarked). Each cell
+stores the signed distance to the nearest wall surface (negative inside a box) and the unit
+vector pointing away from that wall, which is exactly what pedsim's obstacle force needs (it
+only uses the closest obstacle point).
 """
 
 from __future__ import annotations

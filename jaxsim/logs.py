@@ -154,7 +154,8 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, *, n_wo
     every = int(round(every))
     n_samples = duration_s / (every * p.dt_s)
     if duration_s <= 0 or abs(n_samples - round(n_samples)) > 1e-6:
-        raise ValueError(f"duration_s={duration_s} must be a positive multiple of sample_interval_s={sample_interval_s}")
+        raise ValueError(f"duration_s={duration_s} must be a positive multiple of "
+                         f"sample_interval_s={sample_interval_s}")
     n_samples = int(round(n_samples))
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -137,6 +137,6 @@ def init_robot(params: SimParams, world: World, plan: RobotPlan, u) -> RobotStat
         mode=i(TASK), charging=jnp.bool_(False), obstacle=jnp.bool_(False),
         route=plan.routes[0, start, start], route_pos=i(0), route_hops=i(0), leg_start_wp=i(start),
         goal_wp=i(start), task_idx=i(-1), task_slot=i(0), leg_elapsed_s=f(0.0), leg_dist_m=f(0.0),
-        obstacle_at_m=f(jnp.inf), obstacle_left_m=f(0.0), obstacle_speed_factor=f(1.0), tasks_started=i(0), tasks_succeeded=i(0),
-        tasks_failed=i(0), stalled_s=f(0.0))
+        obstacle_at_m=f(jnp.inf), obstacle_left_m=f(0.0), obstacle_speed_factor=f(1.0), tasks_started=i(0),
+        tasks_succeeded=i(0), tasks_failed=i(0), stalled_s=f(0.0))
     return start_leg(params, world, plan, r, jnp.int32(0), jnp.int32(start), False, u)

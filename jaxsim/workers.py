@@ -189,10 +189,11 @@ def move(params: SimParams, world: World, w: WorkerState, robot_x, robot_y, robo
     y_new = w.y_m + params.dt_s * vy
 
     # Distance after the move to first order (exact for a straight wall): saves a second lookup.
-    wall = wall + params.dt_s * (vx * nx + vy * ny)
+    v_normal = vx * nx + vy * ny
+    wall = wall + params.dt_s * v_normal
     push = jnp.maximum(WALL_CLEARANCE_M - wall, 0.0)
     x_new, y_new = x_new + push * nx, y_new + push * ny
-    into = jnp.minimum(vx * nx + vy * ny, 0.0) * (push > 0)
+    into = jnp.minimum(v_normal, 0.0) * (push > 0)
     vx, vy = vx - into * nx, vy - into * ny
 
     zero = jnp.zeros_like(vx)
