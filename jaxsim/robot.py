@@ -37,29 +37,39 @@ def _select(cond, a, b):
     return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
 
 
+def begin_leg(params: SimParams, plan: RobotPlan, r: RobotState, slot, start_wp, goal_wp, is_task,
+              u) -> RobotState:
+    """Put the robot on the planned route ``start_wp -> goal_wp`` of ``slot`` (leg counters reset).
+
+    ``is_task``: a task leg (obstacles may appear; mode TASK) rather than the way to the charger.
+    ``u``: (3,) uniforms: obstacle or not, where on the path, how much it slows the robot.
+    """
+    u_obs, u_at, u_speed = u[0], u[1], u[2]
+    has_obstacle = is_task & (u_obs < params.robot_obstacle_probability)
+    return r.replace(
+        mode=jnp.where(is_task, TASK, TO_CHARGER).astype(jnp.int32),
+        route=plan.routes[slot, start_wp, goal_wp], route_pos=jnp.int32(0),
+        route_hops=plan.hops[slot, start_wp, goal_wp], leg_start_wp=jnp.asarray(start_wp, jnp.int32),
+        goal_wp=jnp.asarray(goal_wp, jnp.int32), leg_elapsed_s=jnp.float32(0.0), leg_dist_m=jnp.float32(0.0),
+        obstacle_at_m=jnp.where(has_obstacle, u_at * plan.length_m[slot, start_wp, goal_wp],
+                                jnp.inf).astype(jnp.float32),
+        obstacle_left_m=jnp.float32(params.robot_obstacle_length_m),
+        obstacle_speed_factor=(params.robot_obstacle_speed_factor_min
+                               + u_speed * (1.0 - params.robot_obstacle_speed_factor_min)).astype(jnp.float32),
+        tasks_started=r.tasks_started + jnp.where(is_task, 1, 0).astype(jnp.int32))
+
+
 def start_leg(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot, start_wp,
               to_charger, u) -> RobotState:
     """Begin the next leg from ``start_wp``: the next task of ``slot``, or the way to the charger.
 
     ``u``: (3,) uniforms: obstacle or not, where on the path, how much it slows the robot.
     """
-    u_obs, u_at, u_speed = u[0], u[1], u[2]
     idx = jnp.where(r.task_slot == slot, r.task_idx + 1, 0) % world.robot_goal_count[slot]
     goal = jnp.where(to_charger, world.charging_station, world.robot_goals[slot, idx])
-    has_obstacle = (~to_charger) & (u_obs < params.robot_obstacle_probability)
-    return r.replace(
-        mode=jnp.where(to_charger, TO_CHARGER, TASK).astype(jnp.int32),
-        route=plan.routes[slot, start_wp, goal], route_pos=jnp.int32(0),
-        route_hops=plan.hops[slot, start_wp, goal], leg_start_wp=start_wp.astype(jnp.int32),
-        goal_wp=goal.astype(jnp.int32),
-        task_idx=jnp.where(to_charger, r.task_idx, idx).astype(jnp.int32),
-        task_slot=jnp.where(to_charger, r.task_slot, slot).astype(jnp.int32),
-        leg_elapsed_s=jnp.float32(0.0), leg_dist_m=jnp.float32(0.0),
-        obstacle_at_m=jnp.where(has_obstacle, u_at * plan.length_m[slot, start_wp, goal], jnp.inf).astype(jnp.float32),
-        obstacle_left_m=jnp.float32(params.robot_obstacle_length_m),
-        obstacle_speed_factor=(params.robot_obstacle_speed_factor_min
-                               + u_speed * (1.0 - params.robot_obstacle_speed_factor_min)).astype(jnp.float32),
-        tasks_started=r.tasks_started + jnp.where(to_charger, 0, 1).astype(jnp.int32))
+    r = begin_leg(params, plan, r, slot, start_wp, goal, ~jnp.asarray(to_charger), u)
+    return r.replace(task_idx=jnp.where(to_charger, r.task_idx, idx).astype(jnp.int32),
+                     task_slot=jnp.where(to_charger, r.task_slot, slot).astype(jnp.int32))
 
 
 def crowd_speed_factor(params: SimParams, r: RobotState, hx, hy, wx, wy, present):
@@ -74,9 +84,12 @@ def crowd_speed_factor(params: SimParams, r: RobotState, hx, hy, wx, wy, present
     return jnp.clip((gap - stop) / (slow - stop), 0.0, 1.0)
 
 
-def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot,
-                 wx, wy, present, u) -> RobotState:
-    """One step of the robot. ``wx, wy, present``: (N,) workers; ``u``: (3,) uniform draws."""
+def drive(params: SimParams, world: World, r: RobotState, wx, wy, present) -> tuple[RobotState, jnp.ndarray]:
+    """One step of motion along the current route: crowds, obstacle, battery, route progress.
+
+    ``wx, wy, present``: (N,) workers. Returns the moved robot and ``arrived`` (the last route
+    waypoint reached this step, while not charging). Task bookkeeping is the caller's.
+    """
     moving = r.mode != CHARGING
     aim = r.route[r.route_pos]
     dx, dy = world.waypoint_x_m[aim] - r.x_m, world.waypoint_y_m[aim] - r.y_m
@@ -104,12 +117,18 @@ def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState
     reached = moving & (dist - travel <= params.robot_goal_tolerance_m)
     last = r.route_pos + 1 >= jnp.maximum(r.route_hops, 1)
     new = new.replace(route_pos=jnp.where(reached & ~last, r.route_pos + 1, r.route_pos))
-    arrived = reached & last
+    return new, reached & last
+
+
+def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot,
+                 wx, wy, present, u) -> RobotState:
+    """One step of the robot's working day. ``wx, wy, present``: (N,) workers; ``u``: (3,) uniforms."""
+    new, arrived = drive(params, world, r, wx, wy, present)
     task_mode = r.mode == TASK
     success = task_mode & arrived
     failure = task_mode & ~arrived & (new.leg_elapsed_s >= params.robot_leg_deadline_s)
     at_charger = (r.mode == TO_CHARGER) & arrived
-    full = charging & (new.battery_pct >= params.battery_charged_pct)
+    full = (r.mode == CHARGING) & (new.battery_pct >= params.battery_charged_pct)
 
     new = new.replace(tasks_succeeded=r.tasks_succeeded + success, tasks_failed=r.tasks_failed + failure)
     teleport = failure & params.robot_teleport_on_failure
