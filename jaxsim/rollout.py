@@ -59,19 +59,19 @@ def _run_one(params: SimParams, world: World, plan: RobotPlan, state: SimState, 
     return jax.lax.scan(outer, state, None, length=n_samples)
 
 
-@functools.partial(jax.jit, static_argnames=("params", "n_samples", "steps_per_sample", "world_chunk"))
-def _run_batch(params, world, plan, states, keys, n_samples, steps_per_sample, world_chunk):
-    run = functools.partial(_run_one, params, world, plan, n_samples=n_samples,
-                            steps_per_sample=steps_per_sample)
-    b = keys.shape[0]
-    chunk = min(world_chunk, b)
-    if b % chunk:
-        chunk = b  # fall back to one vmap when the batch does not split evenly
-    # lax.map over chunks of vmapped worlds. The reshape is spelled out (lax.map's batch_size
-    # infers it with -1, which fails for zero-size leaves such as a world without workers).
+def map_worlds(run_one, batched, world_chunk: int):
+    """``vmap(run_one)`` over the leading (world) axis of the pytree tuple ``batched``, chunked.
+
+    ``lax.map`` runs chunks of ``world_chunk`` worlds (the largest divisor of the batch not above
+    it) one after another, which bounds live memory. The reshape is spelled out (``lax.map``'s
+    ``batch_size`` infers it with -1, which fails for zero-size leaves such as a world without
+    workers).
+    """
+    b = jax.tree.leaves(batched)[0].shape[0]
+    chunk = max(c for c in range(1, min(world_chunk, b) + 1) if b % c == 0)
     split = lambda x: x.reshape((b // chunk, chunk) + x.shape[1:])  # noqa: E731
     merge = lambda x: x.reshape((b,) + x.shape[2:])  # noqa: E731
-    out = jax.lax.map(lambda sk: jax.vmap(run)(*sk), jax.tree.map(split, (states, keys)))
+    out = jax.lax.map(lambda args: jax.vmap(run_one)(*args), jax.tree.map(split, batched))
     return jax.tree.map(merge, out)
 
 
@@ -80,18 +80,47 @@ def _mesh(n_dev: int):
     return jax.make_mesh((n_dev,), ("worlds",))
 
 
-@functools.lru_cache(maxsize=16)
-def _compiled(params: SimParams, n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: int):
-    def fn(world, plan, states, keys):
-        return _run_batch(params, world, plan, states, keys, n_samples, steps_per_sample, world_chunk)
+def devices_for(n_worlds: int) -> int:
+    """Host devices a batch of ``n_worlds`` is split over (the most that divide it evenly)."""
+    n_dev = jax.local_device_count()
+    while n_dev > 1 and n_worlds % n_dev:
+        n_dev -= 1
+    return n_dev
 
+
+def shard_worlds(fn, n_shared: int, n_batched: int, n_dev: int):
+    """``jit(fn)``, split over ``n_dev`` host devices along the world axis.
+
+    ``fn(*shared, *batched)``: the first ``n_shared`` arguments are replicated (world, plans),
+    the next ``n_batched`` have a leading world axis; every output has one.
+    """
     if n_dev == 1:
         return jax.jit(fn)
     spec, rep = jax.sharding.PartitionSpec("worlds"), jax.sharding.PartitionSpec()
     # check_vma off: every shard is independent (no collectives), and the check rejects the
     # zero-size worker arrays of a world without workers (their varying-axis type is dropped).
-    return jax.jit(jax.shard_map(fn, mesh=_mesh(n_dev), in_specs=(rep, rep, spec, spec),
-                                 out_specs=(spec, spec), check_vma=False))
+    return jax.jit(jax.shard_map(fn, mesh=_mesh(n_dev), in_specs=(rep,) * n_shared + (spec,) * n_batched,
+                                 out_specs=spec, check_vma=False))
+
+
+def place(n_dev: int, shared: tuple, batched: tuple) -> tuple[tuple, tuple]:
+    """Put ``shared`` on every device and split ``batched`` along the world axis."""
+    if n_dev == 1:
+        return shared, batched
+    mesh = _mesh(n_dev)
+    split = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("worlds"))
+    same = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec())
+    return jax.device_put(shared, same), jax.device_put(batched, split)
+
+
+@functools.lru_cache(maxsize=16)
+def _compiled(params: SimParams, n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: int):
+    def fn(world, plan, states, keys):
+        run = functools.partial(_run_one, params, world, plan, n_samples=n_samples,
+                                steps_per_sample=steps_per_sample)
+        return map_worlds(run, (states, keys), world_chunk)
+
+    return shard_worlds(fn, 2, 2, n_dev)
 
 
 def run_samples(params: SimParams, world: World, plan: RobotPlan, states: SimState, keys: jax.Array,
@@ -109,18 +138,10 @@ def run_samples(params: SimParams, world: World, plan: RobotPlan, states: SimSta
     Returns:
       (final states, records) with records shaped (B, n_samples, ...).
     """
-    b = keys.shape[0]
-    n_dev = jax.local_device_count()
-    while n_dev > 1 and b % n_dev:
-        n_dev -= 1
+    n_dev = devices_for(keys.shape[0])
     fn = _compiled(params, n_samples, steps_per_sample, world_chunk, n_dev)
-    if n_dev > 1:
-        mesh = _mesh(n_dev)
-        split = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("worlds"))
-        same = jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec())
-        world, plan = jax.device_put((world, plan), same)
-        states, keys = jax.device_put((states, keys), split)
-    return fn(world, plan, states, keys)
+    shared, batched = place(n_dev, (world, plan), (states, keys))
+    return fn(*shared, *batched)
 
 
 def rollout(params: SimParams, world: World, plan: RobotPlan, seed: int, n_worlds: int,

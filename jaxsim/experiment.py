@@ -1,0 +1,389 @@
+"""Seed 000's decision-making experiment (Sec. 5.2) in the batched simulator.
+
+One *experiment* is one time slot played with its context frozen: the workers draw their
+destinations from that slot's probabilities for as long as it takes, and the robot runs the
+slot's task list once (S1-S10: 200 tasks, S11: the 90-leg cleaning tour). Task ``k`` goes from
+the goal of task ``k - 1`` (the robot's start waypoint for ``k = 0``) to goal ``k``, on the
+route of the method's plan. The protocol's rules:
+
+* the battery is full when the experiment starts;
+* a task that does not reach its next route waypoint within ``robot_leg_deadline_s`` (45 s) is
+  a *congestion failure*: the robot is moved to the task's goal, which is the next task's start,
+  so every task starts from the same place for every method. The paper says "a 45 seconds
+  deadline for task completion"; the reference code (PeopleFlow's plan scripts) passes the
+  threshold to every waypoint ``goto`` of the route, so it bounds each hop, and the routes of
+  S1-S10 are ~19-21 m long, which at 0.5 m/s leaves no slack for a 45 s whole-task deadline.
+  ``ProtocolConfig.deadline_per_hop`` (default True, the reference code) chooses;
+* a battery below ``min_battery_pct`` (20 %) during a task is a *battery failure*: the task
+  ends there, the robot is moved on and the battery reset to 100 %; a battery below the
+  threshold at the moment a task succeeds is reset too, and the task counts as a success;
+* a method that may refuse (the causal planner, Eq. 10) checks before each task whether the
+  battery left after the route's predicted cost ``C_L`` would fall below the threshold; if so
+  the battery is reset to 100 % "as if the robot had been at the charging station" and the task
+  goes ahead (the refusal is logged);
+* the experiment ends when the last task ends; the workers keep moving until every world of the
+  batch is done, the finished robot stands still and is no longer measured.
+
+Common random numbers: a world's workers draw from a hash of (world seed, step) and the
+obstacle of task ``k`` from a hash of (world seed, ``k``), so two methods run with the same keys
+meet the same crowds' randomness and the same obstacles on the same tasks; the planner is the
+only difference (the crowds do diverge once the robots have been in different places, since
+workers avoid the robot).
+
+Before the first task the workers arrive over ``arrival_spread_s`` and walk for ``warmup_s``
+while the robot waits at its start, so the first tasks meet the slot's crowd, not an empty
+building (the paper's Gazebo runs started from spawned workers; it does not say how long after).
+
+What is measured per task (:class:`TaskLog`): outcome, refusal, time, stalled time (speed 0),
+distance, planned route length, battery used, and collisions, counted once per encounter: a
+person whose centre comes within ``collision_radius_m`` of the robot's (default: the robot's
+circumscribed radius plus the person's radius, i.e. the person's body enters the robot's
+circumscribed region) starts an encounter, which ends when they are ``collision_release_m``
+further away. Robot-person distances during tasks are histogrammed per world for Hall's zones.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from jaxsim import robot as robot_lib
+from jaxsim import rollout
+from jaxsim import workers as workers_lib
+from jaxsim.params import SimParams
+from jaxsim.state import SimState
+from jaxsim.step import hash_uniform16, init_state, world_seed_u32
+from jaxsim.world import RobotPlan, World
+
+# Task outcomes in TaskLog.outcome.
+NOT_RUN, SUCCESS, CONGESTION, BATTERY = -1, 0, 1, 2
+OUTCOME_NAMES = {SUCCESS: "success", CONGESTION: "congestion", BATTERY: "battery"}
+# Stream constant that separates the per-task obstacle draws from the per-step ones.
+_OBSTACLE_STREAM = np.uint32(0x5BD1E995)
+
+
+@dataclasses.dataclass(frozen=True)
+class ProtocolConfig:
+    """The experiment's settings (static: hashable, a jit argument).
+
+    Attributes:
+      min_battery_pct: B_min, the critical battery level (Sec. 5.2: 20 %).
+      reset_battery_pct: battery after a reset (100 %).
+      collision_radius_m: centre distance that starts a collision encounter (default set by
+        :meth:`for_params`: robot radius + person radius).
+      collision_release_m: extra distance that ends an encounter (hysteresis).
+      deadline_per_hop: the deadline bounds each route hop (reference code) rather than the
+        whole task (the paper's wording).
+      warmup_s: time the workers walk before the first task.
+      arrival_spread_s: workers arrive uniformly over this time from the start.
+      distance_bin_m, distance_bins: robot-person distance histogram (the last bin holds the rest).
+    """
+
+    min_battery_pct: float = 20.0
+    reset_battery_pct: float = 100.0
+    collision_radius_m: float = 0.475
+    collision_release_m: float = 0.05
+    deadline_per_hop: bool = True
+    warmup_s: float = 300.0
+    arrival_spread_s: float = 60.0
+    distance_bin_m: float = 0.1
+    distance_bins: int = 200
+
+    @classmethod
+    def for_params(cls, params: SimParams, **overrides) -> "ProtocolConfig":
+        """Defaults with the collision radius of ``params``' robot and workers."""
+        radius = params.robot_radius_m + params.worker_radius_m
+        return cls(**{"collision_radius_m": radius, **overrides})
+
+    def warmup_steps(self, params: SimParams) -> int:
+        return int(round(self.warmup_s / params.dt_s))
+
+
+@struct.dataclass
+class Method:
+    """What one method brings to the experiment (replicated over the batch).
+
+    Attributes:
+      plan: its routes per slot.
+      battery_cost_pct: (S, W, W) predicted battery use C_L of each planned route (Eq. 10).
+      may_refuse: () bool, applies the abort decision of Eq. (10).
+    """
+
+    plan: RobotPlan
+    battery_cost_pct: jnp.ndarray
+    may_refuse: jnp.ndarray
+
+
+def make_method(plan: RobotPlan, battery_cost_pct=None, may_refuse: bool = False) -> Method:
+    """A :class:`Method`; without a cost table it never refuses."""
+    if battery_cost_pct is None:
+        battery_cost_pct = np.zeros(plan.hops.shape, np.float32)
+        may_refuse = False
+    cost = jnp.asarray(battery_cost_pct, jnp.float32)
+    if cost.shape != plan.hops.shape:
+        raise ValueError(f"battery cost table shape {cost.shape}, expected {plan.hops.shape}")
+    return Method(plan=plan, battery_cost_pct=cost, may_refuse=jnp.bool_(may_refuse))
+
+
+@struct.dataclass
+class TaskLog:
+    """Per-task results of one experiment (T = the longest task list; unused entries NOT_RUN).
+
+    Attributes:
+      outcome: (T,) int32 NOT_RUN / SUCCESS / CONGESTION / BATTERY.
+      refused: (T,) bool, the method refused the task and reset its battery first.
+      time_s, stalled_s: (T,) task time and the part of it at speed 0.
+      distance_m: (T,) distance driven.
+      planned_m: (T,) length of the planned route.
+      battery_used_pct: (T,) battery consumed (%).
+      collisions: (T,) int32 collision encounters that started during the task.
+      start_wp, goal_wp: (T,) int32.
+    """
+
+    outcome: jnp.ndarray
+    refused: jnp.ndarray
+    time_s: jnp.ndarray
+    stalled_s: jnp.ndarray
+    distance_m: jnp.ndarray
+    planned_m: jnp.ndarray
+    battery_used_pct: jnp.ndarray
+    collisions: jnp.ndarray
+    start_wp: jnp.ndarray
+    goal_wp: jnp.ndarray
+
+
+@struct.dataclass
+class ExperimentState:
+    """One experiment: the simulated world plus the protocol's bookkeeping.
+
+    Attributes:
+      sim: workers, robot, step counter.
+      slot: () int32 the frozen time slot.
+      task: () int32 the current task (== n_tasks when done); n_tasks: () int32.
+      leg_open: () bool, the current task's leg has begun.
+      hop_elapsed_s: time since the robot last reached a route waypoint (or began the task).
+      leg_stalled_s, leg_battery_used_pct, leg_collisions: accumulators of the current task.
+      in_contact: (N,) bool, person in a collision encounter now.
+      log: :class:`TaskLog`.
+      distance_hist: (H,) int32 robot-person distances during tasks, one count per present
+        person per step.
+      end_step: () int32 step at which the last task ended (-1 while running).
+    """
+
+    sim: SimState
+    slot: jnp.ndarray
+    task: jnp.ndarray
+    n_tasks: jnp.ndarray
+    leg_open: jnp.ndarray
+    hop_elapsed_s: jnp.ndarray
+    leg_stalled_s: jnp.ndarray
+    leg_battery_used_pct: jnp.ndarray
+    leg_collisions: jnp.ndarray
+    in_contact: jnp.ndarray
+    log: TaskLog
+    distance_hist: jnp.ndarray
+    end_step: jnp.ndarray
+
+    @property
+    def done(self) -> jnp.ndarray:
+        return self.task >= self.n_tasks
+
+
+def init_experiment(params: SimParams, cfg: ProtocolConfig, world: World, method: Method, slot, key
+                    ) -> ExperimentState:
+    """An experiment of ``slot`` before its warm-up: workers about to arrive, battery full."""
+    sim = init_state(params, world, method.plan, jax.random.fold_in(key, 2**31 - 1))
+    w = sim.workers
+    w = w.replace(arrive_s=w.arrive_s / params.slot_length_s * cfg.arrival_spread_s,
+                  depart_s=jnp.full_like(w.depart_s, jnp.inf))
+    r = sim.robot.replace(battery_pct=jnp.float32(cfg.reset_battery_pct), speed_mps=jnp.float32(0.0))
+    t = world.robot_goals.shape[1]
+    f, i = jnp.zeros(t, jnp.float32), jnp.zeros(t, jnp.int32)
+    log = TaskLog(outcome=jnp.full(t, NOT_RUN, jnp.int32), refused=jnp.zeros(t, bool), time_s=f,
+                  stalled_s=f, distance_m=f, planned_m=f, battery_used_pct=f, collisions=i,
+                  start_wp=i, goal_wp=i)
+    slot = jnp.asarray(slot, jnp.int32)
+    return ExperimentState(
+        sim=sim.replace(workers=w, robot=r), slot=slot, task=jnp.int32(0),
+        n_tasks=world.robot_goal_count[slot], leg_open=jnp.bool_(False), hop_elapsed_s=jnp.float32(0.0),
+        leg_stalled_s=jnp.float32(0.0),
+        leg_battery_used_pct=jnp.float32(0.0), leg_collisions=jnp.int32(0),
+        in_contact=jnp.zeros(params.n_workers, bool), log=log,
+        distance_hist=jnp.zeros(cfg.distance_bins, jnp.int32), end_step=jnp.int32(-1))
+
+
+def task_endpoints(world: World, slot, k):
+    """(start, goal) waypoints of task ``k`` of ``slot``."""
+    goal = world.robot_goals[slot, k]
+    start = jnp.where(k > 0, world.robot_goals[slot, jnp.maximum(k - 1, 0)], world.robot_start)
+    return start.astype(jnp.int32), goal.astype(jnp.int32)
+
+
+def _begin_task(params: SimParams, cfg: ProtocolConfig, world: World, method: Method,
+                xs: ExperimentState, seed_u32) -> ExperimentState:
+    """Start task ``xs.task``: the refusal check of Eq. (10), then the leg with its obstacle draw."""
+    k, slot, r = xs.task, xs.slot, xs.sim.robot
+    start, goal = task_endpoints(world, slot, k)
+    cost = method.battery_cost_pct[slot, start, goal]
+    refuse = method.may_refuse & (r.battery_pct - cost < cfg.min_battery_pct)
+    r = r.replace(battery_pct=jnp.where(refuse, jnp.float32(cfg.reset_battery_pct), r.battery_pct),
+                  x_m=world.waypoint_x_m[start], y_m=world.waypoint_y_m[start])
+    u = hash_uniform16(seed_u32 ^ _OBSTACLE_STREAM, k, (3, 1))[:, 0]
+    r = robot_lib.begin_leg(params, method.plan, r, slot, start, goal, True, u)
+    log = xs.log.replace(refused=xs.log.refused.at[k].set(refuse), start_wp=xs.log.start_wp.at[k].set(start),
+                         goal_wp=xs.log.goal_wp.at[k].set(goal),
+                         planned_m=xs.log.planned_m.at[k].set(method.plan.length_m[slot, start, goal]))
+    return xs.replace(sim=xs.sim.replace(robot=r), log=log, leg_open=jnp.bool_(True), hop_elapsed_s=jnp.float32(0.0),
+                      leg_stalled_s=jnp.float32(0.0), leg_battery_used_pct=jnp.float32(0.0),
+                      leg_collisions=jnp.int32(0))
+
+
+def _select(cond, a, b):
+    return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
+
+
+def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method: Method,
+                    xs: ExperimentState, seed_u32) -> ExperimentState:
+    """Advance one experiment by one step (workers as in :func:`jaxsim.step.step`, slot frozen)."""
+    sim = xs.sim
+    n = params.n_workers
+    time_s = sim.step.astype(jnp.float32) * params.dt_s
+    started = sim.step >= cfg.warmup_steps(params)
+    xs = _select(started & ~xs.done & ~xs.leg_open, _begin_task(params, cfg, world, method, xs, seed_u32), xs)
+    running = started & ~xs.done
+
+    u = hash_uniform16(seed_u32, sim.step, (6, n + 1))
+    w, r = sim.workers, xs.sim.robot
+    present = w.present
+    w = workers_lib.update_context(params, world, w, time_s, xs.slot, u[:, :n])
+    w = workers_lib.move(params, world, w, r.x_m, r.y_m, r.speed_mps * r.heading_x,
+                         r.speed_mps * r.heading_y, u[4, :n], u[5, :n])
+    driven, arrived = robot_lib.drive(params, world, r, sim.workers.x_m, sim.workers.y_m, present)
+    hop_elapsed = jnp.where(driven.route_pos != r.route_pos, 0.0, xs.hop_elapsed_s + params.dt_s)
+    r = _select(running, driven, r)
+    arrived = running & arrived
+    elapsed = hop_elapsed if cfg.deadline_per_hop else r.leg_elapsed_s
+
+    # Measurements of this step (new positions).
+    present = w.present
+    dist = jnp.sqrt((w.x_m - r.x_m) ** 2 + (w.y_m - r.y_m) ** 2)
+    touching = present & (dist < cfg.collision_radius_m)
+    held = present & xs.in_contact & (dist < cfg.collision_radius_m + cfg.collision_release_m)
+    new_encounters = jnp.sum(touching & ~xs.in_contact).astype(jnp.int32)
+    bins = jnp.clip((dist / cfg.distance_bin_m).astype(jnp.int32), 0, cfg.distance_bins - 1)
+    hist = xs.distance_hist.at[bins].add((present & running).astype(jnp.int32))
+    leg_collisions = xs.leg_collisions + jnp.where(running, new_encounters, 0)
+    leg_stalled = xs.leg_stalled_s + jnp.where(running & (r.speed_mps <= 0), params.dt_s, 0.0)
+    leg_battery = xs.leg_battery_used_pct + jnp.where(running, jnp.maximum(-r.battery_change_pct, 0.0), 0.0)
+
+    # Task end: success, battery failure, congestion failure.
+    battery_low = r.battery_pct < cfg.min_battery_pct
+    battery_fail = running & ~arrived & battery_low
+    congestion = running & ~arrived & ~battery_fail & (elapsed >= params.robot_leg_deadline_s)
+    failed = battery_fail | congestion
+    ended = arrived | failed
+    outcome = jnp.where(arrived, SUCCESS, jnp.where(battery_fail, BATTERY, CONGESTION))
+    k = jnp.minimum(xs.task, xs.log.outcome.shape[0] - 1)
+    log = xs.log
+
+    def put(column, value):
+        return column.at[k].set(jnp.where(ended, value, column[k]))
+
+    log = log.replace(outcome=put(log.outcome, outcome), time_s=put(log.time_s, r.leg_elapsed_s),
+                      stalled_s=put(log.stalled_s, leg_stalled), distance_m=put(log.distance_m, r.leg_dist_m),
+                      battery_used_pct=put(log.battery_used_pct, leg_battery),
+                      collisions=put(log.collisions, leg_collisions))
+    goal_x, goal_y = world.waypoint_x_m[r.goal_wp], world.waypoint_y_m[r.goal_wp]
+    r = r.replace(x_m=jnp.where(failed, goal_x, r.x_m), y_m=jnp.where(failed, goal_y, r.y_m),
+                  speed_mps=jnp.where(ended, 0.0, r.speed_mps),
+                  battery_pct=jnp.where(ended & battery_low, jnp.float32(cfg.reset_battery_pct), r.battery_pct))
+    task = xs.task + ended.astype(jnp.int32)
+    end_step = jnp.where(ended & (task >= xs.n_tasks), sim.step + 1, xs.end_step)
+    return xs.replace(
+        sim=SimState(workers=w, robot=r, step=sim.step + 1), task=task, leg_open=xs.leg_open & ~ended,
+        hop_elapsed_s=jnp.where(running, hop_elapsed, xs.hop_elapsed_s),
+        leg_stalled_s=leg_stalled, leg_battery_used_pct=leg_battery, leg_collisions=leg_collisions,
+        in_contact=touching | held, log=log, distance_hist=hist, end_step=end_step)
+
+
+def _advance_one(params, cfg, world, method, xs, key, n_steps):
+    seed = world_seed_u32(key)
+
+    def body(s, _):
+        return experiment_step(params, cfg, world, method, s, seed), None
+
+    return jax.lax.scan(body, xs, None, length=n_steps)[0]
+
+
+@functools.lru_cache(maxsize=8)
+def _compiled_advance(params, cfg, n_steps, world_chunk, n_dev):
+    def fn(world, method, states, keys):
+        run = functools.partial(_advance_one, params, cfg, world, method, n_steps=n_steps)
+        return rollout.map_worlds(run, (states, keys), world_chunk)
+
+    return rollout.shard_worlds(fn, 2, 2, n_dev)
+
+
+@functools.lru_cache(maxsize=8)
+def _compiled_init(params, cfg):
+    return jax.jit(jax.vmap(lambda w, m, s, k: init_experiment(params, cfg, w, m, s, k), in_axes=(None, None, 0, 0)))
+
+
+def experiment_keys(seed: int, slots: np.ndarray, replicas: np.ndarray) -> jax.Array:
+    """Keys for (slot, replica) pairs: ``fold_in(fold_in(key(seed), replica), slot)``.
+
+    Methods run with the same keys share their random numbers (common random numbers).
+    """
+    base = jax.random.key(seed)
+    return jax.vmap(lambda s, r: jax.random.fold_in(jax.random.fold_in(base, r), s))(
+        jnp.asarray(slots, jnp.int32), jnp.asarray(replicas, jnp.int32))
+
+
+def run_experiments(params: SimParams, world: World, method: Method, slots: np.ndarray, keys: jax.Array,
+                    cfg: ProtocolConfig | None = None, segment_s: float = 600.0,
+                    world_chunk: int = rollout.DEFAULT_WORLD_CHUNK, progress=None) -> ExperimentState:
+    """Run a batch of experiments until every one has ended all its tasks.
+
+    Args:
+      slots: (B,) slot of each experiment.
+      keys: (B,) keys (:func:`experiment_keys`); the same keys for two methods = common random numbers.
+      cfg: protocol settings (default :meth:`ProtocolConfig.for_params`).
+      segment_s: simulated time per compiled call; between calls the host checks whether all
+        experiments are done and updates ``progress``.
+      progress: optional callable ``(tasks_done, tasks_total)``.
+
+    Returns:
+      the final batched :class:`ExperimentState` (host numpy arrays).
+    """
+    cfg = ProtocolConfig.for_params(params) if cfg is None else cfg
+    slots = np.asarray(slots, np.int32)
+    if slots.ndim != 1 or len(slots) != keys.shape[0]:
+        raise ValueError(f"need one slot per key: slots {slots.shape}, keys {keys.shape}")
+    if len(slots) == 0:
+        raise ValueError("no experiments to run")
+    if slots.min() < 0 or slots.max() >= world.n_slots:
+        raise ValueError(f"slots must be in [0, {world.n_slots - 1}], got {sorted(set(slots.tolist()))}")
+    states = _compiled_init(params, cfg)(world, method, jnp.asarray(slots), keys)
+    total = int(np.asarray(states.n_tasks).sum())
+    n_steps = max(1, int(round(segment_s / params.dt_s)))
+    # Every task ends within the deadline, so this many segments always suffice.
+    hops = int(np.asarray(method.plan.hops).max()) if cfg.deadline_per_hop else 1
+    limit_s = cfg.warmup_s + float(np.asarray(states.n_tasks).max()) * hops * (params.robot_leg_deadline_s + params.dt_s)
+    n_dev = rollout.devices_for(len(slots))
+    advance = _compiled_advance(params, cfg, n_steps, world_chunk, n_dev)
+    shared, (states, keys) = rollout.place(n_dev, (world, method), (states, keys))
+    for _ in range(int(np.ceil(limit_s / segment_s)) + 1):
+        states = advance(*shared, states, keys)
+        tasks = np.asarray(states.task)
+        if progress is not None:
+            progress(int(tasks.sum()), total)
+        if (tasks >= np.asarray(states.n_tasks)).all():
+            break
+    else:  # pragma: no cover - the deadline bounds every task
+        raise RuntimeError("experiments did not finish within the protocol's time bound")
+    return rollout.to_numpy(states)

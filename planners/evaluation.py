@@ -1,0 +1,263 @@
+"""Seed 000's evaluation (Sec. 5.2-5.4): causal planner vs shortest-path baseline, many replicas.
+
+:func:`run_evaluation` plays every slot's experiment (:mod:`jaxsim.experiment`) for ``replicas``
+independent replicas with both methods, the same keys for both (common random numbers), and
+returns one row per task; :func:`write_report` writes the tables, tests and figures.
+
+    from jaxsim.scenario import load_scenario
+    from planners import evaluation
+    scenario = load_scenario()
+    tables = dict(np.load("runs/warehouse/causal/engine_tables.npz"))
+    result = evaluation.run_evaluation(scenario, tables, replicas=32)
+    evaluation.write_report(result, scenario, "runs/warehouse/evaluation")
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+import time
+
+import numpy as np
+import pandas as pd
+
+from jaxsim import experiment as ex
+from jaxsim.scenario import Scenario
+from jaxsim.world import build_world, shortest_path_plan
+from planners import metrics
+from planners.waypoint import CausalWeights, causal_plan
+
+METHODS = ("baseline", "causal")
+
+
+@dataclasses.dataclass
+class EvaluationResult:
+    """What :func:`run_evaluation` measured.
+
+    Attributes:
+      tasks: one row per task (columns in :mod:`planners.metrics`), with ``slot_name``,
+        ``start``, ``goal`` waypoint names.
+      distance_hist: method -> (n_slots, replicas, H) robot-person distance counts during tasks.
+      experiment_s: method -> (n_slots, replicas) simulated time from the first task to the last
+        task's end.
+      distance_bin_m: histogram bin width.
+      wall_s: method -> wall-clock seconds (compilation included).
+      plans: method -> :class:`~jaxsim.experiment.Method` (for pictures of routes).
+      density_ppm2: (S, W) the engine's E[D | do(S), W] the causal planner used.
+      config: the protocol settings and sizes, JSON-ready.
+    """
+
+    tasks: pd.DataFrame
+    distance_hist: dict[str, np.ndarray]
+    experiment_s: dict[str, np.ndarray]
+    distance_bin_m: float
+    wall_s: dict[str, float]
+    plans: dict
+    density_ppm2: np.ndarray
+    config: dict
+
+
+def build_methods(scenario: Scenario, tables: dict, weights: CausalWeights = CausalWeights(),
+                  speed_mps: float | None = None) -> dict[str, ex.Method]:
+    """The two methods: shortest path (never refuses) and causal (Eq. 8-10, refuses by Eq. 10)."""
+    speed = scenario.params.robot_max_speed_mps if speed_mps is None else speed_mps
+    plan, cost = causal_plan(scenario, tables, speed_mps=speed, weights=weights)
+    return {"baseline": ex.make_method(shortest_path_plan(scenario)),
+            "causal": ex.make_method(plan, cost, may_refuse=True)}
+
+
+def task_table(scenario: Scenario, state: ex.ExperimentState, method: str, slots: np.ndarray,
+               replicas: np.ndarray) -> pd.DataFrame:
+    """Rows of every task run in a batch of experiments (host arrays of :func:`run_experiments`)."""
+    log = state.log
+    ran = log.outcome >= 0
+    b_idx, k_idx = np.nonzero(ran)
+    ids = np.asarray(scenario.waypoint_ids)
+    names = {ex.SUCCESS: "success", ex.CONGESTION: "congestion", ex.BATTERY: "battery"}
+    return pd.DataFrame({
+        "method": method,
+        "slot": slots[b_idx].astype(np.int32),
+        "slot_name": np.asarray(scenario.slot_names)[slots[b_idx]],
+        "replica": replicas[b_idx].astype(np.int32),
+        "task": k_idx.astype(np.int32),
+        "start": ids[log.start_wp[b_idx, k_idx]],
+        "goal": ids[log.goal_wp[b_idx, k_idx]],
+        "outcome": pd.Categorical([names[o] for o in log.outcome[b_idx, k_idx]], categories=list(metrics.OUTCOMES)),
+        "refused": log.refused[b_idx, k_idx],
+        "time_s": log.time_s[b_idx, k_idx],
+        "stalled_s": log.stalled_s[b_idx, k_idx],
+        "distance_m": log.distance_m[b_idx, k_idx],
+        "planned_m": log.planned_m[b_idx, k_idx],
+        "battery_used_pct": log.battery_used_pct[b_idx, k_idx],
+        "collisions": log.collisions[b_idx, k_idx],
+    })
+
+
+def run_evaluation(scenario: Scenario, tables: dict, replicas: int = 32, slots=None, seed: int = 0,
+                   cfg: ex.ProtocolConfig | None = None, weights: CausalWeights = CausalWeights(),
+                   segment_s: float = 600.0, progress: bool = True) -> EvaluationResult:
+    """Both methods on every slot's experiment, ``replicas`` times, with common random numbers.
+
+    Args:
+      tables: the causal engine's tables (``engine_tables.npz``).
+      replicas: independent replicas of the whole protocol (>= 1).
+      slots: slot indices to run (default all).
+      cfg: protocol settings (default :meth:`~jaxsim.experiment.ProtocolConfig.for_params`).
+    """
+    if replicas < 1:
+        raise ValueError(f"replicas must be >= 1, got {replicas}")
+    p = scenario.params
+    cfg = ex.ProtocolConfig.for_params(p) if cfg is None else cfg
+    slot_ids = np.arange(scenario.n_slots) if slots is None else np.asarray(sorted(set(slots)), np.int32)
+    if slot_ids.size == 0 or slot_ids.min() < 0 or slot_ids.max() >= scenario.n_slots:
+        raise ValueError(f"slots must be in [0, {scenario.n_slots - 1}], got {slots}")
+    world = build_world(scenario)
+    methods = build_methods(scenario, tables, weights)
+    # Batch order: replica-major, so a slot's experiments spread over the devices evenly.
+    rep_grid, slot_grid = np.meshgrid(np.arange(replicas), slot_ids, indexing="ij")
+    b_slots, b_reps = slot_grid.ravel().astype(np.int32), rep_grid.ravel().astype(np.int32)
+    keys = ex.experiment_keys(seed, b_slots, b_reps)
+
+    frames, hists, spans, walls = [], {}, {}, {}
+    for name, method in methods.items():
+        bar = _progress_bar(name, progress)
+        start = time.perf_counter()
+        state = ex.run_experiments(p, world, method, b_slots, keys, cfg, segment_s=segment_s,
+                                   progress=bar.update if bar else None)
+        walls[name] = time.perf_counter() - start
+        if bar:
+            bar.close()
+        frames.append(task_table(scenario, state, name, b_slots, b_reps))
+        shape = (replicas, len(slot_ids))
+        hists[name] = state.distance_hist.reshape(shape + (-1,)).transpose(1, 0, 2)
+        spans[name] = ((state.end_step - cfg.warmup_steps(p)) * p.dt_s).reshape(shape).T
+    config = {"replicas": replicas, "slots": [scenario.slot_names[s] for s in slot_ids], "seed": seed,
+              "protocol": dataclasses.asdict(cfg), "weights": dataclasses.asdict(weights),
+              "deadline_s": p.robot_leg_deadline_s, "obstacle_probability": p.robot_obstacle_probability}
+    return EvaluationResult(tasks=pd.concat(frames, ignore_index=True), distance_hist=hists, experiment_s=spans,
+                            distance_bin_m=cfg.distance_bin_m, wall_s=walls, plans=methods,
+                            density_ppm2=np.asarray(tables["density_ppm2"]), config=config)
+
+
+def _progress_bar(name: str, enabled: bool):
+    if not enabled:
+        return None
+    from tqdm.auto import tqdm
+
+    class _Bar:
+        def __init__(self):
+            self.bar = None
+
+        def update(self, done: int, total: int):
+            if self.bar is None:
+                self.bar = tqdm(total=total, desc=f"{name:>8}", unit="task")
+            self.bar.update(done - self.bar.n)
+
+        def close(self):
+            if self.bar is not None:
+                self.bar.close()
+
+    return _Bar()
+
+
+def per_slot_table(result: EvaluationResult) -> pd.DataFrame:
+    """Per method and slot: means over replicas of the outcome counts, success %, collisions
+    (with 95 % intervals), time and distance components."""
+    runs = metrics.per_run(result.tasks, by=("method", "slot", "slot_name", "replica"))
+    rows = []
+    for (method, slot, slot_name), g in runs.groupby(["method", "slot", "slot_name"], sort=True):
+        row = {"slot": slot_name, "method": method, "tasks": g["tasks"].mean()}
+        for col in ("success_pct", "collisions"):
+            m, lo, hi = metrics.mean_ci(g[col])
+            row[col] = m
+            row[f"{col}_ci"] = f"[{lo:.1f}, {hi:.1f}]"
+        for col in ("congestion", "battery", "refused", "wasted_km", "wasted_h"):
+            row[col] = g[col].mean()
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    order = {name: i for i, name in enumerate(result.config["slots"])}
+    return table.sort_values(["slot", "method"], key=lambda s: s.map(order) if s.name == "slot" else s,
+                             ignore_index=True)
+
+
+def overall(result: EvaluationResult) -> dict:
+    """The headline per method (means and 95 % intervals over runs) and the statistical tests."""
+    runs = metrics.per_run(result.tasks)
+    ci = metrics.summary_with_ci(runs)
+    head = {}
+    for method, g in ci.groupby("method", sort=False):
+        head[method] = {r.metric: {"mean": r.mean, "ci95": [r.ci_low, r.ci_high]} for r in g.itertuples()}
+    hist = {m: h.sum(axis=(0, 1)) for m, h in result.distance_hist.items()}
+    for m, h in hist.items():
+        head[m]["distance_quantiles_m"] = dict(zip(["q05", "q25", "q50", "q75", "q95"],
+                                                   metrics.hist_quantiles(h, result.distance_bin_m).tolist()))
+        head[m]["hall_zone_shares"] = metrics.zone_shares(h, result.distance_bin_m)
+        head[m]["tasks_per_run"] = float(runs[runs["method"] == m]["tasks"].mean())
+    tests = metrics.compare(result.tasks, hist, result.distance_bin_m) if set(METHODS) <= set(hist) else {}
+    return {"per_method": head, "tests": tests, "config": result.config, "wall_s": result.wall_s}
+
+
+def write_report(result: EvaluationResult, scenario: Scenario, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
+    """Write tasks.parquet, distance_hist.npz, per_slot.csv, summary.json and the figures.
+
+    Files are written to a temporary name and renamed, so an interrupted report leaves no
+    half-written file.
+    """
+    from planners import plots
+
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+
+    def atomic(name, write):
+        tmp = out / f".tmp-{name}"  # keeps the suffix: matplotlib picks the format from it
+        write(tmp)
+        tmp.replace(out / name)
+        written.append(out / name)
+
+    atomic("tasks.parquet", lambda f: result.tasks.to_parquet(f, index=False))
+    atomic("distance_hist.npz", lambda f: np.savez(open(f, "wb"), bin_m=result.distance_bin_m,
+                                                   **{f"{m}": h for m, h in result.distance_hist.items()}))
+    table = per_slot_table(result)
+    atomic("per_slot.csv", lambda f: table.to_csv(f, index=False, float_format="%.3f"))
+    summary = overall(result)
+    atomic("summary.json", lambda f: f.write_text(json.dumps(summary, indent=1, default=_json_default)))
+    for name, draw in (("fig9_efficiency.png", plots.efficiency_figure),
+                       ("fig10_safety.png", plots.safety_figure)):
+        atomic(name, lambda f, d=draw: d(result, f))
+    atomic("fig11_routes.png", lambda f: plots.route_figure(result, scenario, f))
+    return written
+
+
+def _json_default(x):
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (np.floating,)):
+        return float(x)
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    raise TypeError(f"not JSON serialisable: {type(x)}")
+
+
+def format_overall(summary: dict) -> str:
+    """The headline as text (one line per metric, both methods side by side)."""
+    pm = summary["per_method"]
+    names = [m for m in METHODS if m in pm]
+    lines = [f"{'per run (mean [95% CI])':<22}" + "".join(f"{m:>28}" for m in names)]
+    for metric, fmt in (("success_pct", "{:.1f}"), ("congestion", "{:.1f}"), ("battery", "{:.2f}"),
+                        ("refused", "{:.2f}"), ("collisions", "{:.1f}"), ("wasted_distance_pct", "{:.1f}"),
+                        ("wasted_time_pct", "{:.1f}"), ("wasted_battery_pct", "{:.1f}"), ("wasted_km", "{:.2f}"),
+                        ("planned_km", "{:.2f}"), ("wasted_h", "{:.2f}"), ("effective_cycles", "{:.2f}"),
+                        ("wasted_cycles", "{:.2f}")):
+        cells = []
+        for m in names:
+            v = pm[m][metric]
+            cells.append(f"{fmt.format(v['mean'])} [{fmt.format(v['ci95'][0])}, {fmt.format(v['ci95'][1])}]")
+        lines.append(f"{metric:<22}" + "".join(f"{c:>28}" for c in cells))
+    for m in names:
+        q = pm[m]["distance_quantiles_m"]
+        lines.append(f"robot-person distance {m}: median {q['q50']:.2f} m, IQR [{q['q25']:.2f}, {q['q75']:.2f}] m")
+    for name, t in summary["tests"].items():
+        lines.append(f"test {name:<26} {t['test']:<24} p = {t['p_value']:.3g}")
+    return "\n".join(lines)
