@@ -217,6 +217,24 @@ def init_experiment(params: SimParams, cfg: ProtocolConfig, world: World, method
         distance_hist=jnp.zeros(cfg.distance_bins, jnp.int32), end_step=jnp.int32(-1))
 
 
+def collision_encounters(in_contact, dist_m, present, radius_m: float, release_m: float):
+    """Collisions counted once per encounter.
+
+    A present person closer than ``radius_m`` starts an encounter unless already in one; an
+    encounter lasts while they stay within ``radius_m + release_m``.
+
+    Args:
+      in_contact: (N,) bool, in an encounter before this step.
+      dist_m: (N,) robot-person centre distances now; present: (N,) bool.
+
+    Returns:
+      (in_contact now, number of encounters that started now).
+    """
+    touching = present & (dist_m < radius_m)
+    held = present & in_contact & (dist_m < radius_m + release_m)
+    return touching | held, jnp.sum(touching & ~in_contact).astype(jnp.int32)
+
+
 def task_endpoints(world: World, slot, k):
     """(start, goal) waypoints of task ``k`` of ``slot``."""
     goal = world.robot_goals[slot, k]
@@ -272,9 +290,8 @@ def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method
     # Measurements of this step (new positions).
     present = w.present
     dist = jnp.sqrt((w.x_m - r.x_m) ** 2 + (w.y_m - r.y_m) ** 2)
-    touching = present & (dist < cfg.collision_radius_m)
-    held = present & xs.in_contact & (dist < cfg.collision_radius_m + cfg.collision_release_m)
-    new_encounters = jnp.sum(touching & ~xs.in_contact).astype(jnp.int32)
+    in_contact, new_encounters = collision_encounters(xs.in_contact, dist, present, cfg.collision_radius_m,
+                                                      cfg.collision_release_m)
     bins = jnp.clip((dist / cfg.distance_bin_m).astype(jnp.int32), 0, cfg.distance_bins - 1)
     hist = xs.distance_hist.at[bins].add((present & running).astype(jnp.int32))
     leg_collisions = xs.leg_collisions + jnp.where(running, new_encounters, 0)
@@ -308,7 +325,7 @@ def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method
         sim=SimState(workers=w, robot=r, step=sim.step + 1), task=task, leg_open=xs.leg_open & ~ended,
         hop_elapsed_s=jnp.where(running, hop_elapsed, xs.hop_elapsed_s),
         leg_stalled_s=leg_stalled, leg_battery_used_pct=leg_battery, leg_collisions=leg_collisions,
-        in_contact=touching | held, log=log, distance_hist=hist, end_step=end_step)
+        in_contact=in_contact, log=log, distance_hist=hist, end_step=end_step)
 
 
 def _advance_one(params, cfg, world, method, xs, key, n_steps):
