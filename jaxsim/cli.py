@@ -4,8 +4,8 @@
     peopleflow simulate --slots 2 --slot-length-s 600 --out runs/quick
 
     peopleflow learn --logs runs/warehouse                          # causal graph + engine
-
-Later jobs (``evaluate``) join as subcommands.
+    peopleflow evaluate --tables runs/warehouse/causal/engine_tables.npz --replicas 32
+    peopleflow run --out runs/warehouse                             # all three, end to end
 """
 
 from __future__ import annotations
@@ -90,7 +90,108 @@ def build_parser() -> argparse.ArgumentParser:
                      default=[0.1, 0.2, 0.3, 0.4, 0.5], help="obstacle probabilities (default 0.1,...,0.5)")
     abl.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     abl.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    ev = sub.add_parser("evaluate", help="causal planner vs shortest-path baseline (seed 000 Sec. 5.2-5.4)",
+                        description="Every slot's experiment (200 tasks, S11 the 90-leg tour) with both methods "
+                                    "and common random numbers, for --replicas independent replicas; writes "
+                                    "tasks.parquet, per_slot.csv, summary.json and Fig. 9-11 to --out.")
+    ev.add_argument("--tables", type=pathlib.Path, default=pathlib.Path("runs/warehouse/causal/engine_tables.npz"),
+                    help="the causal engine's tables, written by 'peopleflow learn' "
+                         "(default runs/warehouse/causal/engine_tables.npz)")
+    _evaluation_options(ev, default_out=None)
+    ev.add_argument("--scenario", type=pathlib.Path, default=None, help="scenario folder (default: the warehouse)")
+
+    run = sub.add_parser("run", help="the whole pipeline: simulate a day, learn the engine, evaluate the planners",
+                         description="simulate -> learn -> evaluate on the built-in warehouse, into one folder: "
+                                     "logs and pictures, causal/ (graph, engine), evaluation/ (tables, figures).")
+    run.add_argument("--worlds", type=_positive_int, default=4, help="worlds simulated for learning (default 4)")
+    run.add_argument("--learn-worlds", type=lambda s: [int(w) for w in s.split(",")], default=[0],
+                     help="comma-separated worlds the engine learns from (default 0)")
+    _evaluation_options(run, default_out=pathlib.Path("runs/warehouse"), replicas=4)
     return parser
+
+
+def _evaluation_options(p: argparse.ArgumentParser, default_out, replicas: int = 32) -> None:
+    p.add_argument("--replicas", type=_positive_int, default=replicas,
+                   help=f"independent replicas of the whole protocol (default {replicas})")
+    p.add_argument("--slots", type=lambda s: s.split(","), default=None,
+                   help="comma-separated slot names to run, e.g. S1,S6,S11 (default: all)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--out", type=pathlib.Path, default=default_out,
+                   help="output folder" + (f" (default {default_out})" if default_out else
+                                           " (default: evaluation/ next to the tables' folder)"))
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+
+
+def _slot_ids(scenario, names):
+    if names is None:
+        return None
+    unknown = [n for n in names if n not in scenario.slot_names]
+    if unknown:
+        raise ValueError(f"unknown slot(s) {unknown}; the scenario has {list(scenario.slot_names)}")
+    return [scenario.slot_names.index(n) for n in names]
+
+
+def _evaluate(scenario, tables_file: pathlib.Path, out: pathlib.Path, args: argparse.Namespace) -> int:
+    import json
+
+    import numpy as np
+
+    from planners import evaluation
+
+    if not tables_file.is_file():
+        print(f"error: {tables_file} not found: run 'peopleflow learn' first (it writes engine_tables.npz)",
+              file=sys.stderr)
+        return 2
+    with np.load(tables_file) as f:
+        tables = dict(f)
+    missing = {"density_ppm2", "battery_pct_per_s", "speed_edges_mps"} - set(tables)
+    if missing:
+        print(f"error: {tables_file} lacks {sorted(missing)}", file=sys.stderr)
+        return 2
+    try:
+        result = evaluation.run_evaluation(scenario, tables, replicas=args.replicas,
+                                           slots=_slot_ids(scenario, args.slots), seed=args.seed,
+                                           progress=not args.no_progress)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    files = evaluation.write_report(result, scenario, out)
+    summary = json.loads((out / "summary.json").read_text())
+    print(f"\n{args.replicas} replica(s) x {len(result.config['slots'])} slot(s), both methods; wall time "
+          + ", ".join(f"{m} {s:.0f} s" for m, s in result.wall_s.items()))
+    print(evaluation.per_slot_table(result).to_string(index=False, float_format=lambda v: f"{v:.1f}"))
+    print(evaluation.format_overall(summary))
+    for f in files:
+        print(f"wrote {f}")
+    return 0
+
+
+def evaluate(args: argparse.Namespace) -> int:
+    from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
+
+    try:
+        scenario = load_scenario(args.scenario or WAREHOUSE_DIR)
+    except ScenarioError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return _evaluate(scenario, args.tables, args.out or args.tables.parent.parent / "evaluation", args)
+
+
+def run_pipeline(args: argparse.Namespace) -> int:
+    """simulate -> learn -> evaluate, each step's output the next one's input."""
+    from jaxsim.scenario import load_scenario
+
+    out = args.out
+    steps = [("simulate", ["simulate", "--worlds", str(args.worlds), "--seed", str(args.seed), "--out", str(out)]),
+             ("learn", ["learn", "--logs", str(out), "--worlds", ",".join(map(str, args.learn_worlds))])]
+    quiet = ["--no-progress"] if args.no_progress else []
+    for i, (name, argv) in enumerate(steps, 1):
+        print(f"\n=== [{i}/3] {name} ===", flush=True)
+        code = main(argv + quiet)
+        if code:
+            return code
+    print("\n=== [3/3] evaluate ===", flush=True)
+    return _evaluate(load_scenario(), out / "causal" / "engine_tables.npz", out / "evaluation", args)
 
 
 def ablation(args: argparse.Namespace) -> int:
@@ -195,6 +296,10 @@ def main(argv: list[str] | None = None) -> int:
         return learn(args)
     if args.command == "ablation":
         return ablation(args)
+    if args.command == "evaluate":
+        return evaluate(args)
+    if args.command == "run":
+        return run_pipeline(args)
     return 2  # pragma: no cover - argparse rejects unknown commands
 
 

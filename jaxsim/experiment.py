@@ -363,19 +363,28 @@ def experiment_keys(seed: int, slots: np.ndarray, replicas: np.ndarray) -> jax.A
 
 def run_experiments(params: SimParams, world: World, method: Method, slots: np.ndarray, keys: jax.Array,
                     cfg: ProtocolConfig | None = None, segment_s: float = 600.0,
-                    world_chunk: int = rollout.DEFAULT_WORLD_CHUNK, progress=None) -> ExperimentState:
+                    world_chunk: int = rollout.DEFAULT_WORLD_CHUNK, shrink_at: float = 0.5,
+                    progress=None) -> ExperimentState:
     """Run a batch of experiments until every one has ended all its tasks.
+
+    Experiments end at different times (S11 after ~15 min, a crowded slot after hours). After
+    each segment, once the unfinished ones are at most ``shrink_at`` of the batch, the finished
+    ones are retired and the rest continue in a smaller batch (rounded up to a multiple of 8 per
+    device, padded with copies whose results are dropped); each new size compiles once. Results
+    do not depend on this: an experiment's steps are the same whichever batch it is in (to float
+    rounding, see :mod:`jaxsim.rollout`).
 
     Args:
       slots: (B,) slot of each experiment.
       keys: (B,) keys (:func:`experiment_keys`); the same keys for two methods = common random numbers.
       cfg: protocol settings (default :meth:`ProtocolConfig.for_params`).
-      segment_s: simulated time per compiled call; between calls the host checks whether all
+      segment_s: simulated time per compiled call; between calls the host checks which
         experiments are done and updates ``progress``.
+      shrink_at: share of unfinished experiments below which the batch is compacted (0: never).
       progress: optional callable ``(tasks_done, tasks_total)``.
 
     Returns:
-      the final batched :class:`ExperimentState` (host numpy arrays).
+      the final batched :class:`ExperimentState` (host numpy arrays), in the order of ``slots``.
     """
     cfg = ProtocolConfig.for_params(params) if cfg is None else cfg
     slots = np.asarray(slots, np.int32)
@@ -386,21 +395,53 @@ def run_experiments(params: SimParams, world: World, method: Method, slots: np.n
     if slots.min() < 0 or slots.max() >= world.n_slots:
         raise ValueError(f"slots must be in [0, {world.n_slots - 1}], got {sorted(set(slots.tolist()))}")
     states = _compiled_init(params, cfg)(world, method, jnp.asarray(slots), keys)
-    total = int(np.asarray(states.n_tasks).sum())
+    final = jax.tree.map(np.array, jax.device_get(states))  # writable host copy
+    n_tasks = final.n_tasks
+    total = int(n_tasks.sum())
     n_steps = max(1, int(round(segment_s / params.dt_s)))
-    # Every task ends within the deadline, so this many segments always suffice.
+    # Every hop ends within the deadline, so this many segments always suffice.
     hops = int(np.asarray(method.plan.hops).max()) if cfg.deadline_per_hop else 1
-    limit_s = cfg.warmup_s + float(np.asarray(states.n_tasks).max()) * hops * (params.robot_leg_deadline_s + params.dt_s)
-    n_dev = rollout.devices_for(len(slots))
-    advance = _compiled_advance(params, cfg, n_steps, world_chunk, n_dev)
-    shared, (states, keys) = rollout.place(n_dev, (world, method), (states, keys))
+    limit_s = cfg.warmup_s + float(n_tasks.max()) * hops * (params.robot_leg_deadline_s + params.dt_s)
+    ids = np.arange(len(slots))  # experiment held by each batch entry (-1: padding)
+    retired_tasks = 0
+
+    def start(states, keys, ids):
+        n_dev = rollout.devices_for(len(ids))
+        advance = _compiled_advance(params, cfg, n_steps, world_chunk, n_dev)
+        shared, batched = rollout.place(n_dev, (world, method), (states, keys))
+        return advance, shared, batched
+
+    all_keys = keys
+    advance, shared, (states, keys) = start(states, keys, ids)
     for _ in range(int(np.ceil(limit_s / segment_s)) + 1):
         states = advance(*shared, states, keys)
         tasks = np.asarray(states.task)
+        real = ids >= 0
+        done = tasks >= n_tasks[np.maximum(ids, 0)]
         if progress is not None:
-            progress(int(tasks.sum()), total)
-        if (tasks >= np.asarray(states.n_tasks)).all():
+            progress(retired_tasks + int(tasks[real].sum()), total)
+        if done[real].all():
             break
-    else:  # pragma: no cover - the deadline bounds every task
+        left = np.flatnonzero(real & ~done)
+        if shrink_at > 0 and len(left) <= shrink_at * len(ids) and len(ids) > 8:
+            host = rollout.to_numpy(states)
+            _put(final, ids[real], jax.tree.map(lambda x: x[real], host))
+            retired_tasks += int(tasks[real & done].sum())
+            n_dev = jax.local_device_count()
+            size = -(-len(left) // (8 * n_dev)) * 8 * n_dev if len(left) > 8 * n_dev else len(left)
+            pick = np.concatenate([left, np.full(size - len(left), left[0])])
+            new_keys = all_keys[jnp.asarray(ids[pick])]
+            ids = np.concatenate([ids[left], np.full(size - len(left), -1)])
+            advance, shared, (states, keys) = start(jax.tree.map(lambda x: x[pick], host), new_keys, ids)
+    else:  # pragma: no cover - the deadline bounds every hop
         raise RuntimeError("experiments did not finish within the protocol's time bound")
-    return rollout.to_numpy(states)
+    host = rollout.to_numpy(states)
+    real = ids >= 0
+    _put(final, ids[real], jax.tree.map(lambda x: x[real], host))
+    return final
+
+
+def _put(dst, index, src) -> None:
+    """``dst[index] = src`` leaf by leaf (host numpy pytrees)."""
+    for d, v in zip(jax.tree.leaves(dst), jax.tree.leaves(src)):
+        d[index] = v

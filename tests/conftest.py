@@ -18,3 +18,20 @@ def short_day():
     """The warehouse with 60 s slots: a whole day is 6600 steps."""
     scenario = load_scenario(slot_length_s=60.0)
     return scenario, build_world(scenario), shortest_path_plan(scenario)
+
+
+@pytest.fixture(scope="session")
+def learned_run(tmp_path_factory):
+    """A short simulated day (60 s slots, 2 worlds) and the causal engine learnt from it.
+
+    The robot starts at 21 % battery so that it charges and C varies. Returns the run folder;
+    the engine's tables are in ``causal/engine_tables.npz``.
+    """
+    from causal.learn import learn
+    from jaxsim.logs import simulate_to_parquet
+
+    run = tmp_path_factory.mktemp("learned_run")
+    scenario = load_scenario(slot_length_s=60.0, battery_initial_pct=21.0)
+    simulate_to_parquet(scenario, run, n_worlds=2, duration_s=scenario.n_slots * 60.0, progress=False)
+    learn(run, run / "causal", max_samples=60_000, progress=False)
+    return run

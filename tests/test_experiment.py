@@ -137,3 +137,21 @@ def test_bad_input_is_rejected(setup):
     plan = methods["baseline"].plan
     with pytest.raises(ValueError, match="battery cost table shape"):
         ex.make_method(plan, np.zeros((2, 2)), may_refuse=True)
+
+
+def test_compacting_the_batch_keeps_every_experiment_in_its_place(warehouse):
+    """Seven short experiments end early; the three long ones go on in a smaller batch."""
+    world = build_world(warehouse).replace(robot_goal_count=jnp.array([2] * 10 + [30], jnp.int32))
+    method = ex.make_method(shortest_path_plan(warehouse))
+    slots = np.array([10, 0, 0, 10, 0, 0, 0, 10, 0, 0])
+    keys = ex.experiment_keys(0, slots, np.arange(len(slots)))
+    cfg = ex.ProtocolConfig.for_params(warehouse.params, **CFG)
+    runs = [ex.run_experiments(warehouse.params, world, method, slots, keys, cfg, segment_s=30.0, shrink_at=s)
+            for s in (0.0, 0.5)]
+    for state in runs:
+        np.testing.assert_array_equal(state.slot, slots)
+        np.testing.assert_array_equal(state.task, np.where(slots == 10, 30, 2))
+    # Without workers nothing depends on the batch: the moved experiments end bit for bit the same.
+    off = slots == 10
+    np.testing.assert_array_equal(runs[0].log.time_s[off], runs[1].log.time_s[off])
+    np.testing.assert_array_equal(runs[0].end_step, runs[1].end_step)
