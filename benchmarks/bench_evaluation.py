@@ -24,7 +24,6 @@ from jaxsim.devices import request_host_devices  # noqa: E402
 
 request_host_devices()
 
-import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
@@ -53,7 +52,7 @@ def main() -> int:
     args = ap.parse_args()
     scenario = load_scenario()
     tables = dict(np.load(args.tables)) if args.tables else schedule_tables(scenario)
-    print(f"machine: {machine()}, {jax.local_device_count()} host devices")
+    print(f"machine: {machine()}")
     print(f"protocol: 2 methods x {scenario.n_slots} slots x {args.replicas} replicas "
           f"({sum(len(g) for g in scenario.robot_goals)} tasks per method and replica), "
           f"tables: {args.tables or 'schedule-based'}")

@@ -116,6 +116,12 @@ def _evaluation_options(p: argparse.ArgumentParser, default_out, replicas: int =
     p.add_argument("--slots", type=lambda s: s.split(","), default=None,
                    help="comma-separated slot names to run, e.g. S1,S6,S11 (default: all)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--collision-radius-m", type=_positive_float, default=None,
+                   help="robot-person centre distance that counts as a collision (default: the robot's radius, "
+                        "0.275 m, as the paper; 0.475 counts any body contact)")
+    p.add_argument("--deadline-per-task", action="store_true",
+                   help="the 45 s deadline bounds the whole task (the paper's wording) instead of each route "
+                        "hop (the reference code)")
     p.add_argument("--out", type=pathlib.Path, default=default_out,
                    help="output folder" + (f" (default {default_out})" if default_out else
                                            " (default: evaluation/ next to the tables' folder)"))
@@ -148,9 +154,15 @@ def _evaluate(scenario, tables_file: pathlib.Path, out: pathlib.Path, args: argp
     if missing:
         print(f"error: {tables_file} lacks {sorted(missing)}", file=sys.stderr)
         return 2
+    from jaxsim.experiment import ProtocolConfig
+
+    settings = {"deadline_per_hop": not args.deadline_per_task}
+    if args.collision_radius_m is not None:
+        settings["collision_radius_m"] = args.collision_radius_m
     try:
         result = evaluation.run_evaluation(scenario, tables, replicas=args.replicas,
                                            slots=_slot_ids(scenario, args.slots), seed=args.seed,
+                                           cfg=ProtocolConfig.for_params(scenario.params, **settings),
                                            progress=not args.no_progress)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)

@@ -37,9 +37,10 @@ building (the paper's Gazebo runs started from spawned workers; it does not say 
 What is measured per task (:class:`TaskLog`): outcome, refusal, time, stalled time (speed 0),
 distance, planned route length, battery used, and collisions, counted once per encounter: a
 person whose centre comes within ``collision_radius_m`` of the robot's (default: the robot's
-circumscribed radius plus the person's radius, i.e. the person's body enters the robot's
-circumscribed region) starts an encounter, which ends when they are ``collision_release_m``
-further away. Robot-person distances during tasks are histogrammed per world for Hall's zones.
+circumscribed radius, 0.275 m, the paper's "a worker enters the robot's circumscribed region",
+with people as points as pedsim tracks them) starts an encounter, which ends when they are
+``collision_release_m`` further away. Robot-person distances during tasks are histogrammed per
+world for Hall's zones.
 """
 
 from __future__ import annotations
@@ -75,7 +76,7 @@ class ProtocolConfig:
       min_battery_pct: B_min, the critical battery level (Sec. 5.2: 20 %).
       reset_battery_pct: battery after a reset (100 %).
       collision_radius_m: centre distance that starts a collision encounter (default set by
-        :meth:`for_params`: robot radius + person radius).
+        :meth:`for_params`: the robot's radius; robot + person radius counts body contact).
       collision_release_m: extra distance that ends an encounter (hysteresis).
       deadline_per_hop: the deadline bounds each route hop (reference code) rather than the
         whole task (the paper's wording).
@@ -86,7 +87,7 @@ class ProtocolConfig:
 
     min_battery_pct: float = 20.0
     reset_battery_pct: float = 100.0
-    collision_radius_m: float = 0.475
+    collision_radius_m: float = 0.275
     collision_release_m: float = 0.05
     deadline_per_hop: bool = True
     warmup_s: float = 300.0
@@ -96,9 +97,8 @@ class ProtocolConfig:
 
     @classmethod
     def for_params(cls, params: SimParams, **overrides) -> "ProtocolConfig":
-        """Defaults with the collision radius of ``params``' robot and workers."""
-        radius = params.robot_radius_m + params.worker_radius_m
-        return cls(**{"collision_radius_m": radius, **overrides})
+        """Defaults with the collision radius of ``params``' robot."""
+        return cls(**{"collision_radius_m": params.robot_radius_m, **overrides})
 
     def warmup_steps(self, params: SimParams) -> int:
         return int(round(self.warmup_s / params.dt_s))

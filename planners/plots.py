@@ -21,14 +21,19 @@ def _stacked(ax, runs, methods, parts, colours, title, unit):
     means = runs.groupby("method")[[p for p, _ in parts]].mean()
     for i, m in enumerate(methods):
         bottom = 0.0
-        total = float(means.loc[m].sum())
+        total = float(means.loc[m].clip(lower=0).sum())
         for (col, label), colour in zip(parts, colours):
             v = float(means.loc[m, col])
+            if v < 0:  # e.g. extra distance when the robot cuts corners: written, not stacked
+                ax.text(i, -0.02, f"{label} {v:+.2f} {unit}", ha="center", va="top", fontsize=7,
+                        transform=ax.get_xaxis_transform(), color=colour)
+                v = 0.0
             ax.bar(i, v, bottom=bottom, color=colour, edgecolor="white", width=0.6, label=label if i == 0 else None)
             if total > 0 and v / total > 0.04:
                 ax.text(i, bottom + v / 2, f"{100 * v / total:.1f}%", ha="center", va="center", fontsize=8)
             bottom += v
     ax.set_xticks(range(len(methods)), methods)
+    ax.tick_params(axis="x", pad=12)
     ax.set_title(title)
     ax.set_ylabel(unit)
     ax.legend(fontsize=7, loc="upper left")
