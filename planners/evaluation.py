@@ -217,8 +217,11 @@ def write_report(result: EvaluationResult, scenario: Scenario, out_dir: str | pa
         written.append(out / name)
 
     atomic("tasks.parquet", lambda f: result.tasks.to_parquet(f, index=False))
-    atomic("distance_hist.npz", lambda f: np.savez(open(f, "wb"), bin_m=result.distance_bin_m,
-                                                   **{f"{m}": h for m, h in result.distance_hist.items()}))
+    def save_hist(f):
+        with open(f, "wb") as handle:  # a handle: np.savez would append ".npz" to the temporary name
+            np.savez(handle, bin_m=result.distance_bin_m, **result.distance_hist)
+
+    atomic("distance_hist.npz", save_hist)
     table = per_slot_table(result)
     atomic("per_slot.csv", lambda f: table.to_csv(f, index=False, float_format="%.3f"))
     summary = overall(result)
