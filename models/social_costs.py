@@ -1,0 +1,65 @@
+"""Target cost shapes of the GSCL dataset, on the grid of :mod:`models.grid`, values in [0, 1].
+
+The paper (seed 002 Sec. 4.1) describes the shapes but not their formulas; these are this
+project's rules:
+
+* **proxemics** (one person): the ROS social_navigation_layers proxemic Gaussian (sigma 0.5 m;
+  in the front half-plane stretched along the heading by ``1 + factor * speed``) combined with
+  the passing layer (a Gaussian on the person's right, stretched along the motion, so that the
+  robot passes on their left) into one layer by cell-wise max, as the paper does;
+* **interaction zone** of a group: a plateau over the disc the group faces, soft-edged;
+* **blind corner**: a Gaussian around the corner point on the free side, sigma 1 m (the paper's
+  "at least one metre from the corner").
+
+Costs combine by cell-wise max, as Nav2 layers do.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from models.grid import CELL_X_M, CELL_Y_M
+
+PROXEMIC_SIGMA_M = 0.5
+FRONT_STRETCH_PER_MPS = 2.0
+PASSING_AMPLITUDE = 0.6
+INTERACTION_COST = 0.8
+CORNER_SIGMA_M = 1.0
+
+
+def _wrap(a):
+    return (a + jnp.pi) % (2 * jnp.pi) - jnp.pi
+
+
+def proxemic_cost(x_m, y_m, heading_rad, speed_mps, sigma_m: float = PROXEMIC_SIGMA_M):
+    """(GRID, GRID) proxemic + passing cost of one person, peak 1 at the person."""
+    dx, dy = CELL_X_M - x_m, CELL_Y_M - y_m
+    c, s = jnp.cos(heading_rad), jnp.sin(heading_rad)
+    along, left = dx * c + dy * s, -dx * s + dy * c
+    stretch = 1.0 + FRONT_STRETCH_PER_MPS * speed_mps
+    var_along = jnp.where(along > 0, (sigma_m * stretch) ** 2, sigma_m ** 2)
+    body = jnp.exp(-(along ** 2 / (2 * var_along) + left ** 2 / (2 * sigma_m ** 2)))
+    # Passing layer: the robot should keep to the person's left, so cost on their right.
+    right = -left
+    passing = PASSING_AMPLITUDE * jnp.exp(-((along - 0.5 * stretch * sigma_m) ** 2 / (2 * (stretch * sigma_m) ** 2)
+                                            + (right - 2 * sigma_m) ** 2 / (2 * sigma_m ** 2)))
+    passing = jnp.where((right > 0) & (speed_mps > 0), passing, 0.0)
+    return jnp.maximum(body, passing)
+
+
+def people_cost(x_m, y_m, heading_rad, speed_mps, valid):
+    """Max of :func:`proxemic_cost` over the valid people ((P,) arrays)."""
+    costs = jnp.stack([proxemic_cost(x, y, h, v) for x, y, h, v in zip(x_m, y_m, heading_rad, speed_mps)])
+    return jnp.max(jnp.where(valid[:, None, None], costs, 0.0), axis=0)
+
+
+def disc_plateau(cx_m, cy_m, radius_m, level: float = INTERACTION_COST, edge_m: float = 0.25):
+    """A soft-edged plateau of ``level`` over the disc."""
+    d = jnp.sqrt((CELL_X_M - cx_m) ** 2 + (CELL_Y_M - cy_m) ** 2)
+    return level / (1.0 + jnp.exp((d - radius_m) / edge_m))
+
+
+def corner_cost(cx_m, cy_m, free_side, sigma_m: float = CORNER_SIGMA_M):
+    """Gaussian around a corner point, on the cells where ``free_side`` (GRID, GRID) is True."""
+    d2 = (CELL_X_M - cx_m) ** 2 + (CELL_Y_M - cy_m) ** 2
+    return jnp.where(free_side, jnp.exp(-d2 / (2 * sigma_m ** 2)), 0.0)

@@ -1,0 +1,82 @@
+"""GSCL dataset (seed 002 Sec. 4.1), the families built so far: each rule pinned on generated
+samples, plus the encoding, shapes, dtypes and determinism."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from models import dataset, grid
+
+N = 64
+
+
+@pytest.fixture(scope="module")
+def data():
+    return dataset.generate(0, {name: N for name in dataset.FAMILIES})
+
+
+def _family(data, name):
+    idx = np.flatnonzero(data["family"] == list(data["names"]).index(name))
+    return data["inputs"][idx], data["targets"][idx]
+
+
+def test_shapes_codes_and_range(data):
+    n = N * len(dataset.FAMILIES)
+    assert data["inputs"].shape == (n, 40, 40) and data["inputs"].dtype == np.uint8
+    assert data["targets"].shape == (n, 40, 40) and data["targets"].dtype == np.float32
+    assert set(np.unique(data["inputs"])) <= set(grid.INPUT_CODES)
+    assert data["targets"].min() >= 0.0 and data["targets"].max() <= 1.0
+
+
+def test_deterministic_by_seed_and_independent_of_other_counts():
+    a = dataset.generate(3, {"corner": 5, "group": 4})
+    b = dataset.generate(3, {"group": 4, "corner": 5, "proxemics": 2})
+    np.testing.assert_array_equal(a["inputs"][a["family"] == 0], b["inputs"][b["family"] == 0])
+    c = dataset.generate(4, {"corner": 5})
+    assert not np.array_equal(a["inputs"][:5], c["inputs"])
+    with pytest.raises(ValueError, match="unknown families"):
+        dataset.generate(0, {"corridor": 3})
+
+
+def test_every_person_carries_proxemic_cost_and_a_heading_pixel(data):
+    for name in ("proxemics", "group", "non_group"):
+        inputs, targets = _family(data, name)
+        person = inputs == grid.PERSON
+        assert person.any(axis=(1, 2)).all(), name
+        # High cost on every person (the cell centre is up to 0.28 m from them: >= exp(-0.28^2 / 0.5)).
+        assert (targets[person] > 0.85).all(), name
+        # Each person has its heading pixel among its 8 neighbours.
+        for img in inputs[:16]:
+            for r, c in zip(*np.nonzero(img == grid.PERSON)):
+                patch = img[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2]
+                assert (patch == grid.HEADING).any() or (patch == grid.PERSON).sum() > 1
+
+
+def test_the_interaction_zone_exists_only_when_people_face_inward():
+    """Same layouts (same keys) facing in and out: only facing in fills the circle's centre."""
+    keys = dataset.family_keys(0, "group", 32)
+    inward = np.asarray(dataset._batched("group")(keys)[1])
+    outward = np.asarray(dataset._batched("non_group")(keys)[1])
+    import jax
+
+    layout = jax.vmap(dataset._group_layout)(keys)
+    cx, cy = np.asarray(layout[4]), np.asarray(layout[5])
+    row, col = (np.asarray(v) for v in grid.cell_of(cx, cy))
+    centre_in = inward[np.arange(32), row, col]
+    centre_out = outward[np.arange(32), row, col]
+    assert (centre_in > 0.7).all()
+    assert (centre_in - centre_out > 0.3).mean() > 0.9  # out: only the people's tails reach it
+
+
+def test_blind_corner_cost_sits_at_the_corner_on_the_free_side(data):
+    inputs, targets = _family(data, "corner")
+    for img, cost in zip(inputs, targets):
+        wall = img == grid.WALL
+        assert wall.any() and not wall[19:21, 19:21].all()
+        assert (cost[wall] == 0).all()
+        peak = np.unravel_index(np.argmax(cost), cost.shape)
+        # The highest cost is next to a wall cell (the corner), and it is high.
+        r, c = peak
+        assert wall[max(r - 2, 0):r + 3, max(c - 2, 0):c + 3].any() and cost[peak] > 0.5
+        assert cost.sum() > 3.0  # a graded area, not a single cell
