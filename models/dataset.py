@@ -6,7 +6,7 @@ seed and fast enough to make fresh rather than read from disk. Inputs use the pa
 codes (:mod:`models.grid`); targets are costs in [0, 1] (x 255 for the paper's 0-255 images)
 built from :mod:`models.social_costs`.
 
-Families so far (the rest of Sec. 4.1 - hallways and queues - is still to come):
+Families (paper's Fig. 1 (a)-(h), the hallway split in its three configurations):
 
 * ``corner`` (2000): two walls meeting at a random point with a random orientation, the wall
   block's angle in [60, 120] degrees; cost around the corner on the free (reflex) side. The
@@ -17,6 +17,17 @@ Families so far (the rest of Sec. 4.1 - hallways and queues - is still to come):
   spread over an arc from half to all of the circle (from L-shaped and face-to-face pairs to
   circles, covering the F-formations), facing the centre (group: proxemics + the interaction
   zone) or facing out (non-group: proxemics only).
+* ``hallway_straight`` / ``hallway_l`` / ``hallway_people`` (5000 together): a corridor 1.6-4 m
+  wide through the robot, random orientation and wall lengths, the goal along it; cost on the
+  left half relative to the way to the goal (keep right), the L's blind inner corner, and
+  walkers' proxemics.
+* ``queue`` (3600) / ``non_queue`` (3600): 3-10 m of people facing the head, gaps between bodies
+  triangular in [0.3, 0.8] m (the paper's "distance between individuals", read as the gap:
+  centre spacing = gap + 0.4 m), up to two random walls kept 1.5 m away; goal 0.8 m ahead of the
+  head with the U-shaped cost (both sides and the front, open at the tail), or elsewhere beside
+  the queue with proxemics only.
+
+Still to come in this issue: a dataset file writer, the U-Net, training, evaluation, inference.
 """
 
 from __future__ import annotations
@@ -31,7 +42,8 @@ from models import grid
 from models import social_costs as sc
 
 # Paper's sample counts per family (Sec. 4.1).
-PAPER_COUNTS = {"corner": 2000, "proxemics": 1000, "group": 4500, "non_group": 4500}
+PAPER_COUNTS = {"corner": 2000, "proxemics": 1000, "group": 4500, "non_group": 4500, "hallway_straight": 1667,
+                "hallway_l": 1667, "hallway_people": 1666, "queue": 3600, "non_queue": 3600}
 WALL_LENGTH_M = 24.0  # long enough to cross the 16 m image from anywhere inside it
 
 
@@ -123,8 +135,150 @@ def _sample_circle(key, inward: bool):
 sample_group = functools.partial(_sample_circle, inward=True)
 sample_non_group = functools.partial(_sample_circle, inward=False)
 
+def _rotate(x, y, angle):
+    c, s = jnp.cos(angle), jnp.sin(angle)
+    return x * c - y * s, x * s + y * c
+
+
+def _local(angle, ox=0.0, oy=0.0):
+    """Cell centres in a frame rotated by ``angle`` with origin (ox, oy) (world frame)."""
+    return _rotate(grid.CELL_X_M - ox, grid.CELL_Y_M - oy, -angle)
+
+
+MAX_WALKERS = 4
+
+
+def _sample_hallway(key, kind: str):
+    """A hallway through the robot (``straight``, ``l_shaped``, ``people``); travel towards the goal.
+
+    Local frame: travel along +x through the origin (the robot). Straight: walls at y = +-h.
+    L-shaped: the corridor turns left (or right, mirrored) at x = a: leg 1 is y in [-h, h] up to
+    the outer wall x = a + h, leg 2 is x in [a - h, a + h] from there on; the inner corner
+    (a - h, h) is a blind corner. Cost: the left half of the corridor relative to the travel
+    direction (keep right), and for the L the blind corner's cost.
+    """
+    k_w, k_o, k_l, k_a, k_g, k_t, k_p = jax.random.split(key, 7)
+    h = 0.5 * jax.random.uniform(k_w, (), minval=1.6, maxval=4.0)
+    phi = jax.random.uniform(k_o, (), minval=-jnp.pi, maxval=jnp.pi)
+    back, front = -jax.random.uniform(k_l, (2,), minval=3.0, maxval=12.0) * jnp.array([1.0, -1.0])
+    lx, ly = _local(phi)
+    if kind == "l_shaped":
+        a = jax.random.uniform(k_a, (), minval=1.5, maxval=5.0)
+        side = jnp.where(jax.random.bernoulli(k_t), 1.0, -1.0)  # +1 turns left, -1 right
+        ly = ly * side  # mirror a right turn onto a left one
+        far = WALL_LENGTH_M
+        local_segments = jnp.array([
+            [back, -h, a + h, -h],          # leg 1 outer wall, up to the outer corner
+            [a + h, -h, a + h, far],        # outer wall of leg 2
+            [back, h, a - h, h],            # leg 1 inner wall, up to the inner corner
+            [a - h, h, a - h, far]])        # inner wall of leg 2
+        in_leg1 = (lx <= a + h) & (jnp.abs(ly) < h) & (lx >= back)
+        in_leg2 = (jnp.abs(lx - a) < h) & (ly >= -h)
+        inside = in_leg1 | in_leg2
+        left = (lx < a) & (ly > 0)  # left of leg 1 (y > 0) and of leg 2 (x < a)
+        goal_l = jnp.stack([a, jax.random.uniform(k_g, (), minval=2.0, maxval=5.0)])
+        corner_l = jnp.stack([a - h, h])
+    else:
+        local_segments = jnp.array([[back, -h, front, -h], [back, h, front, h]])
+        inside = (jnp.abs(ly) < h) & (lx >= back) & (lx <= front)
+        left = ly > 0
+        goal_l = jnp.stack([jnp.minimum(jax.random.uniform(k_g, (), minval=3.0, maxval=7.0), front - 0.5), 0.0])
+        side = 1.0
+    # Back to the world frame (undo the mirror first).
+    def to_world(x, y):
+        return _rotate(x, y * side, phi)
+
+    sx0, sy0 = to_world(local_segments[:, 0], local_segments[:, 1])
+    sx1, sy1 = to_world(local_segments[:, 2], local_segments[:, 3])
+    segments = jnp.stack([sx0, sy0, sx1, sy1], -1)
+    image = _walls_image(segments, jnp.ones(segments.shape[0], bool))
+    gx, gy = to_world(goal_l[0], goal_l[1])
+    lateral = jnp.where(left, jnp.abs(ly), 0.0)
+    cost = jnp.where(inside & left, sc.HALLWAY_LEFT_COST * (0.5 + 0.5 * jnp.clip(lateral / h, 0.0, 1.0)), 0.0)
+    if kind == "l_shaped":
+        cx, cy = to_world(corner_l[0], corner_l[1])
+        cost = jnp.maximum(cost, sc.corner_cost(cx, cy, inside))
+    if kind == "people":
+        k_n, k_x, k_y, k_d, k_v = jax.random.split(k_p, 5)
+        n = jax.random.randint(k_n, (), 1, MAX_WALKERS + 1)
+        px = jax.random.uniform(k_x, (MAX_WALKERS,), minval=-6.0, maxval=6.0)
+        py = jax.random.uniform(k_y, (MAX_WALKERS,), minval=-0.6, maxval=0.6) * h
+        heading_l = jnp.where(jax.random.bernoulli(k_d, shape=(MAX_WALKERS,)), 0.0, jnp.pi)
+        speed = jax.random.uniform(k_v, (MAX_WALKERS,), minval=0.5, maxval=1.5)
+        valid = (jnp.arange(MAX_WALKERS) < n) & (px >= back) & (px <= front)
+        wx, wy = to_world(px, py)
+        heading = heading_l + phi
+        image = grid.draw_people(image, wx, wy, heading, valid)
+        cost = jnp.maximum(cost, sc.people_cost(wx, wy, heading, speed, valid))
+    image = grid.draw_goal(image, gx, gy)
+    cost = jnp.where(image == grid.WALL, 0.0, cost)
+    return image, cost
+
+
+sample_hallway_straight = functools.partial(_sample_hallway, kind="straight")
+sample_hallway_l = functools.partial(_sample_hallway, kind="l_shaped")
+sample_hallway_people = functools.partial(_sample_hallway, kind="people")
+
+MAX_QUEUE = 16
+QUEUE_BODY_M = 0.4  # the triangular 0.3-0.8 m "distance between individuals" is read as the gap
+
+
+def queue_layout(key):
+    """A queue facing +phi: head position, people behind it, (P,) valid mask, and the goal at the head."""
+    k_h, k_o, k_len, k_gap, k_j = jax.random.split(key, 5)
+    hx, hy = jax.random.uniform(k_h, (2,), minval=-3.0, maxval=3.0)
+    phi = jax.random.uniform(k_o, (), minval=-jnp.pi, maxval=jnp.pi)
+    length = jax.random.uniform(k_len, (), minval=3.0, maxval=10.0)
+    gap = jax.random.triangular(k_gap, 0.3, 0.55, 0.8)
+    spacing = QUEUE_BODY_M + gap
+    i = jnp.arange(MAX_QUEUE)
+    jitter = jax.random.uniform(k_j, (2, MAX_QUEUE), minval=-1.0, maxval=1.0)
+    along = -(i * spacing + 0.15 * spacing * jitter[0] * (i > 0))
+    lateral = 0.05 * jitter[1]
+    valid = (i * spacing <= length)
+    px, py = _rotate(along, lateral, phi)
+    return hx + px, hy + py, phi, valid, hx, hy, spacing
+
+
+def _sample_queue(key, at_head: bool):
+    k_l, k_g, k_w = jax.random.split(key, 3)
+    x, y, phi, valid, hx, hy, spacing = queue_layout(k_l)
+    heading = jnp.full(MAX_QUEUE, phi)
+    tail = jnp.max(jnp.where(valid, jnp.arange(MAX_QUEUE), 0)) * spacing
+    if at_head:
+        gx, gy = hx + 0.8 * jnp.cos(phi), hy + 0.8 * jnp.sin(phi)
+    else:
+        # Elsewhere: a point on a circle 3-6 m from the queue's middle, not ahead of the head.
+        r_ang = jax.random.uniform(k_g, (2,))
+        ang = phi + jnp.pi / 2 + (r_ang[0] - 0.5) * jnp.pi  # to the side of the queue
+        mid_x, mid_y = hx - 0.5 * tail * jnp.cos(phi), hy - 0.5 * tail * jnp.sin(phi)
+        dist = 3.0 + 3.0 * r_ang[1]
+        side = jnp.where(r_ang[1] > 0.5, 1.0, -1.0)
+        gx, gy = mid_x + side * dist * jnp.cos(ang), mid_y + side * dist * jnp.sin(ang)
+    keep_x = jnp.concatenate([jnp.where(valid, x, jnp.nan), gx[None]])
+    keep_y = jnp.concatenate([jnp.where(valid, y, jnp.nan), gy[None]])
+    segments, wvalid = _random_walls(k_w, 2, keep_x, keep_y, clearance_m=1.5)
+    image = _walls_image(segments, wvalid)
+    image = grid.draw_people(image, x, y, heading, valid)
+    image = grid.draw_goal(image, gx, gy)
+    cost = sc.people_cost(x, y, heading, jnp.zeros(MAX_QUEUE), valid)
+    if at_head:
+        lx, ly = _local(phi, hx, hy)  # +x ahead of the head, the queue along -x
+        along_ok = (lx >= -tail) & (lx <= 1.6)
+        sides = jnp.where(along_ok, sc.soft_band(jnp.abs(ly), 0.6, 1.4, sc.QUEUE_U_COST), 0.0)
+        front = jnp.where(jnp.abs(ly) <= 1.4, sc.soft_band(lx, 1.4, 2.2, sc.QUEUE_U_COST), 0.0)
+        cost = jnp.maximum(cost, jnp.maximum(sides, front))
+    cost = jnp.where(image == grid.WALL, 0.0, cost)
+    return image, cost
+
+
+sample_queue = functools.partial(_sample_queue, at_head=True)
+sample_non_queue = functools.partial(_sample_queue, at_head=False)
+
 FAMILIES = {"corner": sample_corner, "proxemics": sample_proxemics, "group": sample_group,
-            "non_group": sample_non_group}
+            "non_group": sample_non_group, "hallway_straight": sample_hallway_straight,
+            "hallway_l": sample_hallway_l, "hallway_people": sample_hallway_people,
+            "queue": sample_queue, "non_queue": sample_non_queue}
 
 
 @functools.lru_cache(maxsize=None)

@@ -63,3 +63,14 @@ def corner_cost(cx_m, cy_m, free_side, sigma_m: float = CORNER_SIGMA_M):
     """Gaussian around a corner point, on the cells where ``free_side`` (GRID, GRID) is True."""
     d2 = (CELL_X_M - cx_m) ** 2 + (CELL_Y_M - cy_m) ** 2
     return jnp.where(free_side, jnp.exp(-d2 / (2 * sigma_m ** 2)), 0.0)
+
+
+HALLWAY_LEFT_COST = 0.6
+QUEUE_U_COST = 0.7
+
+
+def soft_band(distance_m, inner_m, outer_m, level: float, edge_m: float = 0.15):
+    """``level`` where ``inner <= distance <= outer``, soft-edged on both sides."""
+    rise = 1.0 / (1.0 + jnp.exp(-(distance_m - inner_m) / edge_m))
+    fall = 1.0 / (1.0 + jnp.exp((distance_m - outer_m) / edge_m))
+    return level * rise * fall

@@ -80,3 +80,53 @@ def test_blind_corner_cost_sits_at_the_corner_on_the_free_side(data):
         r, c = peak
         assert wall[max(r - 2, 0):r + 3, max(c - 2, 0):c + 3].any() and cost[peak] > 0.5
         assert cost.sum() > 3.0  # a graded area, not a single cell
+
+
+def _halves(inputs, targets):
+    """Mean cost left and right of the travel direction (robot at the centre -> goal pixel),
+    over the corridor around the robot, away (> 2 m) from any person."""
+    left, right = [], []
+    for img, cost in zip(inputs, targets):
+        rows, cols = np.nonzero(img == grid.PERSON)
+        clear = np.ones(img.shape, bool)
+        for r, c in zip(rows, cols):
+            clear &= np.hypot(grid.CELL_X_M - grid.CELL_X_M[r, c], grid.CELL_Y_M - grid.CELL_Y_M[r, c]) > 2.0
+        gr, gc = np.argwhere(img == grid.GOAL)[0]
+        gx, gy = grid.CELL_X_M[gr, gc], grid.CELL_Y_M[gr, gc]
+        side = gx * grid.CELL_Y_M - gy * grid.CELL_X_M  # > 0: left of the line centre -> goal
+        near = np.abs(side) / np.hypot(gx, gy) < 2.5  # the corridor around the robot
+        left.append(cost[clear & near & (side > 0.3)].mean())
+        right.append(cost[clear & near & (side < -0.3)].mean())
+    return np.array(left), np.array(right)
+
+
+def test_hallway_cost_is_higher_on_the_left_half(data):
+    for name in ("hallway_straight", "hallway_people"):
+        inputs, targets = _family(data, name)
+        assert ((inputs == grid.GOAL).sum(axis=(1, 2)) == 1).all()
+        left, right = _halves(inputs, targets)
+        assert (left > right).mean() > 0.95, name
+    inputs, targets = _family(data, "hallway_l")
+    assert ((inputs == grid.WALL).sum(axis=(1, 2)) > 40).all()
+    assert (targets.max(axis=(1, 2)) > 0.75).all()  # the blind inner corner, above the 0.6 of the left half
+
+
+def test_the_queue_u_shape_is_there_only_when_the_goal_is_at_the_head(data):
+    """Cost beside the queue, away from the people, is the U: present with the goal at the head."""
+    import jax
+
+    keys = dataset.family_keys(0, "queue", 32)
+    at_head = np.asarray(dataset._batched("queue")(keys)[1])
+    elsewhere = np.asarray(dataset._batched("non_queue")(keys)[1])
+    layout_keys = jax.vmap(lambda k: jax.random.split(k, 3)[0])(keys)  # as _sample_queue splits
+    x, y, phi, valid, hx, hy, spacing = (np.asarray(v) for v in jax.vmap(dataset.queue_layout)(layout_keys))
+    for b in range(32):
+        # A point 1 m to the side of the second person: in the U's arm, beyond their proxemics.
+        px, py = x[b, 1] - 1.1 * np.sin(phi[b]), y[b, 1] + 1.1 * np.cos(phi[b])
+        r, c = (int(v) for v in grid.cell_of(px, py))
+        if 0 <= r < 40 and 0 <= c < 40:
+            assert at_head[b, r, c] > 0.4 and at_head[b, r, c] - elsewhere[b, r, c] > 0.2
+    inputs, _ = _family(data, "non_queue")
+    assert ((inputs == grid.GOAL).sum(axis=(1, 2)) <= 1).all()
+    people = (_family(data, "queue")[0] == grid.PERSON).sum(axis=(1, 2))
+    assert people.min() >= 4 and people.max() <= dataset.MAX_QUEUE  # 3-10 m at 0.7-1.2 m spacing
