@@ -261,10 +261,6 @@ def _begin_task(params: SimParams, cfg: ProtocolConfig, world: World, method: Me
                       leg_collisions=jnp.int32(0))
 
 
-def _select(cond, a, b):
-    return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
-
-
 def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method: Method,
                     xs: ExperimentState, seed_u32) -> ExperimentState:
     """Advance one experiment by one step (workers as in :func:`jaxsim.step.step`, slot frozen)."""
@@ -272,7 +268,8 @@ def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method
     n = params.n_workers
     time_s = sim.step.astype(jnp.float32) * params.dt_s
     started = sim.step >= cfg.warmup_steps(params)
-    xs = _select(started & ~xs.done & ~xs.leg_open, _begin_task(params, cfg, world, method, xs, seed_u32), xs)
+    begin = started & ~xs.done & ~xs.leg_open
+    xs = robot_lib.select(begin, _begin_task(params, cfg, world, method, xs, seed_u32), xs)
     running = started & ~xs.done
 
     u = hash_uniform16(seed_u32, sim.step, (6, n + 1))
@@ -283,7 +280,7 @@ def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method
                          r.speed_mps * r.heading_y, u[4, :n], u[5, :n])
     driven, arrived = robot_lib.drive(params, world, r, sim.workers.x_m, sim.workers.y_m, present)
     hop_elapsed = jnp.where(driven.route_pos != r.route_pos, 0.0, xs.hop_elapsed_s + params.dt_s)
-    r = _select(running, driven, r)
+    r = robot_lib.select(running, driven, r)
     arrived = running & arrived
     elapsed = hop_elapsed if cfg.deadline_per_hop else r.leg_elapsed_s
 

@@ -33,7 +33,8 @@ from jaxsim.state import CHARGING, TASK, TO_CHARGER, RobotState
 from jaxsim.world import RobotPlan, World
 
 
-def _select(cond, a, b):
+def select(cond, a, b):
+    """``a`` where ``cond`` else ``b``, leaf by leaf (a pytree ``jnp.where``)."""
     return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
 
 
@@ -141,8 +142,8 @@ def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState
     need_charge = leg_over & (new.battery_pct < params.battery_recharge_below_pct)
     next_leg = start_leg(params, world, plan, new, slot, r.goal_wp, need_charge, u)
     resume = start_leg(params, world, plan, new, slot, jnp.int32(world.charging_station), False, u)
-    new = _select(leg_over, next_leg, new)
-    return _select(full, resume, new)
+    new = select(leg_over, next_leg, new)
+    return select(full, resume, new)
 
 
 def init_robot(params: SimParams, world: World, plan: RobotPlan, u) -> RobotState:

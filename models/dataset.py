@@ -160,7 +160,8 @@ def _sample_hallway(key, kind: str):
     k_w, k_o, k_l, k_a, k_g, k_t, k_p = jax.random.split(key, 7)
     h = 0.5 * jax.random.uniform(k_w, (), minval=1.6, maxval=4.0)
     phi = jax.random.uniform(k_o, (), minval=-jnp.pi, maxval=jnp.pi)
-    back, front = -jax.random.uniform(k_l, (2,), minval=3.0, maxval=12.0) * jnp.array([1.0, -1.0])
+    behind_m, ahead_m = jax.random.uniform(k_l, (2,), minval=3.0, maxval=12.0)  # wall extents
+    back, front = -behind_m, ahead_m
     lx, ly = _local(phi)
     if kind == "l_shaped":
         a = jax.random.uniform(k_a, (), minval=1.5, maxval=5.0)

@@ -8,6 +8,7 @@ Everything here is a pure function of arrays, so a family's generator vmaps over
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -51,9 +52,7 @@ def wall_mask(segments, valid, thickness_m: float = CELL_M):
     Args:
       segments: (K, 4) x0, y0, x1, y1 in metres; valid: (K,) bool (padding segments are off).
     """
-    d = jnp.stack([segment_distance_m(*s) for s in jnp.unstack(segments)]) if segments.shape[0] else None
-    if d is None:
-        return jnp.zeros((GRID, GRID), bool)
+    d = jax.vmap(segment_distance_m)(*segments.T)  # (K, GRID, GRID)
     return jnp.any((d <= thickness_m / 2 + 1e-6) & valid[:, None, None], axis=0)
 
 

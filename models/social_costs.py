@@ -16,6 +16,7 @@ Costs combine by cell-wise max, as Nav2 layers do.
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from models.grid import CELL_X_M, CELL_Y_M
@@ -49,7 +50,7 @@ def proxemic_cost(x_m, y_m, heading_rad, speed_mps, sigma_m: float = PROXEMIC_SI
 
 def people_cost(x_m, y_m, heading_rad, speed_mps, valid):
     """Max of :func:`proxemic_cost` over the valid people ((P,) arrays)."""
-    costs = jnp.stack([proxemic_cost(x, y, h, v) for x, y, h, v in zip(x_m, y_m, heading_rad, speed_mps)])
+    costs = jax.vmap(proxemic_cost)(x_m, y_m, heading_rad, speed_mps)  # (P, GRID, GRID)
     return jnp.max(jnp.where(valid[:, None, None], costs, 0.0), axis=0)
 
 

@@ -29,6 +29,9 @@ from planners import metrics
 from planners.waypoint import CausalWeights, causal_plan
 
 METHODS = ("baseline", "causal")
+# Outcome codes of jaxsim.experiment (0, 1, 2) -> the names planners.metrics uses.
+OUTCOME_CATEGORIES = [ex.OUTCOME_NAMES[code] for code in sorted(ex.OUTCOME_NAMES)]
+assert tuple(OUTCOME_CATEGORIES) == metrics.OUTCOMES
 
 
 @dataclasses.dataclass
@@ -74,7 +77,6 @@ def task_table(scenario: Scenario, state: ex.ExperimentState, method: str, slots
     ran = log.outcome >= 0
     b_idx, k_idx = np.nonzero(ran)
     ids = np.asarray(scenario.waypoint_ids)
-    names = {ex.SUCCESS: "success", ex.CONGESTION: "congestion", ex.BATTERY: "battery"}
     return pd.DataFrame({
         "method": method,
         "slot": slots[b_idx].astype(np.int32),
@@ -83,7 +85,7 @@ def task_table(scenario: Scenario, state: ex.ExperimentState, method: str, slots
         "task": k_idx.astype(np.int32),
         "start": ids[log.start_wp[b_idx, k_idx]],
         "goal": ids[log.goal_wp[b_idx, k_idx]],
-        "outcome": pd.Categorical([names[o] for o in log.outcome[b_idx, k_idx]], categories=list(metrics.OUTCOMES)),
+        "outcome": pd.Categorical.from_codes(log.outcome[b_idx, k_idx], categories=OUTCOME_CATEGORIES),
         "refused": log.refused[b_idx, k_idx],
         "time_s": log.time_s[b_idx, k_idx],
         "stalled_s": log.stalled_s[b_idx, k_idx],
