@@ -11,28 +11,38 @@ Families (paper's Fig. 1 (a)-(h), the hallway split in its three configurations)
 * ``corner`` (2000): two walls meeting at a random point with a random orientation, the wall
   block's angle in [60, 120] degrees; cost around the corner on the free (reflex) side. The
   robot (image centre) is always on the free side.
-* ``proxemics`` (1000): one person, standing (half) or walking at 0.5-1.5 m/s, with up to three
-  random walls kept 1.2 m from them; proxemic + passing cost.
+* ``proxemics`` (1000): one person with a random heading, with up to three random walls kept
+  1.2 m from them; proxemic + passing cost. The paper's "standing or walking" cannot be told
+  apart in its input encoding, so every person's cost has one shape (:mod:`models.social_costs`).
 * ``group`` (4500) / ``non_group`` (4500): 2-6 standing people on a circle of radius 1-1.5 m,
   spread over an arc from half to all of the circle (from L-shaped and face-to-face pairs to
   circles, covering the F-formations), facing the centre (group: proxemics + the interaction
   zone) or facing out (non-group: proxemics only).
 * ``hallway_straight`` / ``hallway_l`` / ``hallway_people`` (5000 together): a corridor 1.6-4 m
   wide through the robot, random orientation and wall lengths, the goal along it; cost on the
-  left half relative to the way to the goal (keep right), the L's blind inner corner, and
-  walkers' proxemics.
+  left half relative to the way to the goal (keep right; rising smoothly from 0 on the centre
+  line to 0.6 at the left wall), the L's blind inner corner, and walkers' proxemics.
 * ``queue`` (3600) / ``non_queue`` (3600): 3-10 m of people facing the head, gaps between bodies
   triangular in [0.3, 0.8] m (the paper's "distance between individuals", read as the gap:
   centre spacing = gap + 0.4 m), up to two random walls kept 1.5 m away; goal 0.8 m ahead of the
   head with the U-shaped cost (both sides and the front, open at the tail), or elsewhere beside
   the queue with proxemics only.
 
-Still to come in this issue: a dataset file writer, the U-Net, training, evaluation, inference.
+Every target is a function of what the input shows: people's costs are centred on the cell
+they are drawn in and point along the drawn heading (one of 8 directions), and the rules' edges
+are soft or lie on wall pixels. A target that depended on more than the input (a person's exact
+position within the 0.4 m cell, their exact heading or speed) would add an error no network can
+remove.
+
+A dataset can be written to one ``.npz`` file (:func:`save`, atomic) and read back (:func:`load`)
+for users who want a file; training makes its samples fresh instead (:mod:`models.train`).
 """
 
 from __future__ import annotations
 
 import functools
+import os
+import pathlib
 
 import jax
 import jax.numpy as jnp
@@ -91,17 +101,21 @@ def _random_walls(key, n_max: int, keep_from_x, keep_from_y, clearance_m: float)
     return segments, (jnp.arange(n_max) < n) & clear
 
 
+def _as_drawn(x_m, y_m, heading_rad):
+    """People as the input map shows them: at their cell's centre, heading one of 8 directions."""
+    x_m, y_m = grid.snap_to_cell(x_m, y_m)
+    return x_m, y_m, grid.quantise_heading(heading_rad)
+
+
 def sample_proxemics(key):
-    """One person (standing or walking) among random walls."""
-    k_p, k_h, k_m, k_v, k_w = jax.random.split(key, 5)
-    x, y = jax.random.uniform(k_p, (2,), minval=-5.0, maxval=5.0)
-    heading = jax.random.uniform(k_h, (), minval=-jnp.pi, maxval=jnp.pi)
-    walking = jax.random.bernoulli(k_m)
-    speed = jnp.where(walking, jax.random.uniform(k_v, (), minval=0.5, maxval=1.5), 0.0)
-    segments, valid = _random_walls(k_w, 3, x[None], y[None], clearance_m=1.2)
+    """One person among random walls."""
+    k_p, k_h, k_w = jax.random.split(key, 3)
+    x, y = jax.random.uniform(k_p, (2, 1), minval=-5.0, maxval=5.0)
+    x, y, heading = _as_drawn(x, y, jax.random.uniform(k_h, (1,), minval=-jnp.pi, maxval=jnp.pi))
+    segments, valid = _random_walls(k_w, 3, x, y, clearance_m=1.2)
     image = _walls_image(segments, valid)
-    image = grid.draw_people(image, x[None], y[None], heading[None], jnp.ones(1, bool))
-    return image, sc.proxemic_cost(x, y, heading, speed)
+    image = grid.draw_people(image, x, y, heading, jnp.ones(1, bool))
+    return image, sc.people_cost(x, y, heading, jnp.ones(1, bool))
 
 
 MAX_GROUP = 6
@@ -124,9 +138,9 @@ def _group_layout(key):
 
 def _sample_circle(key, inward: bool):
     x, y, angle, valid, cx, cy, radius = _group_layout(key)
-    heading = angle + (jnp.pi if inward else 0.0)
+    x, y, heading = _as_drawn(x, y, angle + (jnp.pi if inward else 0.0))
     image = grid.draw_people(_blank(), x, y, heading, valid)
-    cost = sc.people_cost(x, y, heading, jnp.zeros_like(x), valid)
+    cost = sc.people_cost(x, y, heading, valid)
     if inward:
         cost = jnp.maximum(cost, sc.disc_plateau(cx, cy, radius))
     return image, cost
@@ -176,13 +190,15 @@ def _sample_hallway(key, kind: str):
         in_leg1 = (lx <= a + h) & (jnp.abs(ly) < h) & (lx >= back)
         in_leg2 = (jnp.abs(lx - a) < h) & (ly >= -h)
         inside = in_leg1 | in_leg2
-        left = (lx < a) & (ly > 0)  # left of leg 1 (y > 0) and of leg 2 (x < a)
+        # Left of the way (leg 1's centre line up to x = a, then leg 2's): the distance to that
+        # path on its left, as a fraction of the half-width (continuous through the turn).
+        left = jnp.where((lx < a) & (ly > 0), jnp.minimum(ly, a - lx) / h, 0.0)
         goal_l = jnp.stack([a, jax.random.uniform(k_g, (), minval=2.0, maxval=5.0)])
         corner_l = jnp.stack([a - h, h])
     else:
         local_segments = jnp.array([[back, -h, front, -h], [back, h, front, h]])
         inside = (jnp.abs(ly) < h) & (lx >= back) & (lx <= front)
-        left = ly > 0
+        left = ly / h
         goal_l = jnp.stack([jnp.minimum(jax.random.uniform(k_g, (), minval=3.0, maxval=7.0), front - 0.5), 0.0])
         side = 1.0
     # Back to the world frame (undo the mirror first).
@@ -194,23 +210,20 @@ def _sample_hallway(key, kind: str):
     segments = jnp.stack([sx0, sy0, sx1, sy1], -1)
     image = _walls_image(segments, jnp.ones(segments.shape[0], bool))
     gx, gy = to_world(goal_l[0], goal_l[1])
-    lateral = jnp.where(left, jnp.abs(ly), 0.0)
-    cost = jnp.where(inside & left, sc.HALLWAY_LEFT_COST * (0.5 + 0.5 * jnp.clip(lateral / h, 0.0, 1.0)), 0.0)
+    cost = jnp.where(inside, sc.HALLWAY_LEFT_COST * sc.smoothstep(left), 0.0)
     if kind == "l_shaped":
         cx, cy = to_world(corner_l[0], corner_l[1])
         cost = jnp.maximum(cost, sc.corner_cost(cx, cy, inside))
     if kind == "people":
-        k_n, k_x, k_y, k_d, k_v = jax.random.split(k_p, 5)
+        k_n, k_x, k_y, k_d = jax.random.split(k_p, 4)
         n = jax.random.randint(k_n, (), 1, MAX_WALKERS + 1)
         px = jax.random.uniform(k_x, (MAX_WALKERS,), minval=-6.0, maxval=6.0)
         py = jax.random.uniform(k_y, (MAX_WALKERS,), minval=-0.6, maxval=0.6) * h
         heading_l = jnp.where(jax.random.bernoulli(k_d, shape=(MAX_WALKERS,)), 0.0, jnp.pi)
-        speed = jax.random.uniform(k_v, (MAX_WALKERS,), minval=0.5, maxval=1.5)
         valid = (jnp.arange(MAX_WALKERS) < n) & (px >= back) & (px <= front)
-        wx, wy = to_world(px, py)
-        heading = heading_l + phi
+        wx, wy, heading = _as_drawn(*to_world(px, py), heading_l * side + phi)
         image = grid.draw_people(image, wx, wy, heading, valid)
-        cost = jnp.maximum(cost, sc.people_cost(wx, wy, heading, speed, valid))
+        cost = jnp.maximum(cost, sc.people_cost(wx, wy, heading, valid))
     image = grid.draw_goal(image, gx, gy)
     cost = jnp.where(image == grid.WALL, 0.0, cost)
     return image, cost
@@ -244,7 +257,7 @@ def queue_layout(key):
 def _sample_queue(key, at_head: bool):
     k_l, k_g, k_w = jax.random.split(key, 3)
     x, y, phi, valid, hx, hy, spacing = queue_layout(k_l)
-    heading = jnp.full(MAX_QUEUE, phi)
+    x, y, heading = _as_drawn(x, y, jnp.full(MAX_QUEUE, phi))
     tail = jnp.max(jnp.where(valid, jnp.arange(MAX_QUEUE), 0)) * spacing
     if at_head:
         gx, gy = hx + 0.8 * jnp.cos(phi), hy + 0.8 * jnp.sin(phi)
@@ -262,12 +275,12 @@ def _sample_queue(key, at_head: bool):
     image = _walls_image(segments, wvalid)
     image = grid.draw_people(image, x, y, heading, valid)
     image = grid.draw_goal(image, gx, gy)
-    cost = sc.people_cost(x, y, heading, jnp.zeros(MAX_QUEUE), valid)
+    cost = sc.people_cost(x, y, heading, valid)
     if at_head:
         lx, ly = _local(phi, hx, hy)  # +x ahead of the head, the queue along -x
-        along_ok = (lx >= -tail) & (lx <= 1.6)
-        sides = jnp.where(along_ok, sc.soft_band(jnp.abs(ly), 0.6, 1.4, sc.QUEUE_U_COST), 0.0)
-        front = jnp.where(jnp.abs(ly) <= 1.4, sc.soft_band(lx, 1.4, 2.2, sc.QUEUE_U_COST), 0.0)
+        along = sc.soft_band(lx, -tail, 1.6, 1.0, edge_m=0.3)  # from the tail to the front bar
+        sides = along * sc.soft_band(jnp.abs(ly), 0.6, 1.4, sc.QUEUE_U_COST)
+        front = sc.soft_band(jnp.abs(ly), -1.0, 1.4, 1.0) * sc.soft_band(lx, 1.4, 2.2, sc.QUEUE_U_COST)
         cost = jnp.maximum(cost, jnp.maximum(sides, front))
     cost = jnp.where(image == grid.WALL, 0.0, cost)
     return image, cost
@@ -282,22 +295,41 @@ FAMILIES = {"corner": sample_corner, "proxemics": sample_proxemics, "group": sam
             "queue": sample_queue, "non_queue": sample_non_queue}
 
 
+CHUNK = 1024  # samples per generator call: one compilation per family serves every dataset size
+
+
 @functools.lru_cache(maxsize=None)
 def _batched(name: str):
     return jax.jit(jax.vmap(FAMILIES[name]))
 
 
-def family_keys(seed: int, family: str, n: int) -> jax.Array:
+def _as_key(seed) -> jax.Array:
+    """An int seed or a JAX key -> a typed JAX key."""
+    if isinstance(seed, (int, np.integer)):
+        return jax.random.key(int(seed))
+    if isinstance(seed, jax.Array) and jnp.issubdtype(seed.dtype, jax.dtypes.prng_key):
+        return seed
+    raise TypeError(f"seed must be an int or a jax.random.key, got {type(seed).__name__}")
+
+
+def family_keys(seed, family: str, n: int) -> jax.Array:
     """(n,) keys of a family: sample ``i`` of a family is the same whatever the other counts."""
-    base = jax.random.fold_in(jax.random.key(seed), list(FAMILIES).index(family))
+    base = jax.random.fold_in(_as_key(seed), list(FAMILIES).index(family))
     return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(n))
 
 
-def generate(seed: int, counts: dict[str, int] | None = None) -> dict[str, np.ndarray]:
+def scaled_counts(fraction: float, counts: dict[str, int] | None = None) -> dict[str, int]:
+    """``counts`` (default the paper's) times ``fraction``, rounded, per family (e.g. 0.7 / 0.3 splits)."""
+    counts = PAPER_COUNTS if counts is None else counts
+    return {name: int(round(n * fraction)) for name, n in counts.items()}
+
+
+def generate(seed, counts: dict[str, int] | None = None) -> dict[str, np.ndarray]:
     """A dataset: ``inputs`` (N, 40, 40) uint8, ``targets`` (N, 40, 40) float32 in [0, 1],
     ``family`` (N,) int8 index into ``names`` (the family names, in order).
 
     Args:
+      seed: an int or a ``jax.random.key``; the dataset is a pure function of it and ``counts``.
       counts: samples per family (default :data:`PAPER_COUNTS`); unknown names raise ValueError.
     """
     counts = dict(PAPER_COUNTS if counts is None else counts)
@@ -309,9 +341,15 @@ def generate(seed: int, counts: dict[str, int] | None = None) -> dict[str, np.nd
     names = [f for f in FAMILIES if counts.get(f, 0) > 0]
     inputs, targets, family = [], [], []
     for idx, name in enumerate(names):
-        x, y = _batched(name)(family_keys(seed, name, counts[name]))
-        inputs.append(np.asarray(x))
-        targets.append(np.asarray(y, np.float32))
+        keys = family_keys(seed, name, counts[name])
+        for start in range(0, counts[name], CHUNK):  # one compiled shape per family, whatever the count
+            chunk = keys[start:start + CHUNK]
+            n = chunk.shape[0]
+            if n < CHUNK:
+                chunk = jnp.concatenate([chunk, jnp.broadcast_to(chunk[:1], (CHUNK - n,))])
+            x, y = _batched(name)(chunk)
+            inputs.append(np.asarray(x[:n]))
+            targets.append(np.asarray(y[:n], np.float32))
         family.append(np.full(counts[name], idx, np.int8))
     if not names:
         empty = np.zeros((0, grid.GRID, grid.GRID))
@@ -319,3 +357,33 @@ def generate(seed: int, counts: dict[str, int] | None = None) -> dict[str, np.nd
                 "family": np.zeros(0, np.int8), "names": np.asarray([], str)}
     return {"inputs": np.concatenate(inputs), "targets": np.concatenate(targets),
             "family": np.concatenate(family), "names": np.asarray(names)}
+
+
+def save(path, data: dict[str, np.ndarray]) -> pathlib.Path:
+    """Write a dataset from :func:`generate` to ``path`` (``.npz``, compressed), atomically: the
+    file appears complete or not at all. Targets are stored as in memory (float32 in [0, 1])."""
+    path = pathlib.Path(path)
+    if path.suffix != ".npz":
+        raise ValueError(f"dataset files are .npz, got {path}")
+    missing = {"inputs", "targets", "family", "names"} - set(data)
+    if missing:
+        raise ValueError(f"not a dataset: missing {sorted(missing)}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".tmp-{path.name}")
+    try:
+        with open(tmp, "wb") as f:
+            np.savez_compressed(f, **{k: np.asarray(data[k]) for k in ("inputs", "targets", "family", "names")})
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def load(path) -> dict[str, np.ndarray]:
+    """Read a dataset written by :func:`save`."""
+    with np.load(pathlib.Path(path)) as f:
+        data = {k: f[k] for k in f.files}
+    missing = {"inputs", "targets", "family", "names"} - set(data)
+    if missing:
+        raise ValueError(f"{path} is not a GSCL dataset: missing {sorted(missing)}")
+    return data

@@ -61,6 +61,16 @@ def _offgrid(row, col, on):
     return jnp.where(on, row, GRID), jnp.where(on, col, GRID)
 
 
+def snap_to_cell(x_m, y_m):
+    """The centre of the cell holding (x, y): where the input map shows a thing at (x, y)."""
+    return (jnp.floor(x_m / CELL_M) + 0.5) * CELL_M, (jnp.floor(y_m / CELL_M) + 0.5) * CELL_M
+
+
+def quantise_heading(heading_rad):
+    """The heading the input map shows: the direction of the nearest of the 8 neighbours."""
+    return jnp.round(heading_rad / (jnp.pi / 4)) * (jnp.pi / 4)
+
+
 def heading_offset(heading_rad):
     """(drow, dcol) of the 8-neighbour closest to the heading direction."""
     k = jnp.round(heading_rad / (jnp.pi / 4))

@@ -1,0 +1,121 @@
+"""GSCL on this machine: dataset generation speed, training throughput, and the time for the
+U-Net to reach the quality bar (test MSE <= 0.0033 and <= 1/10 of the better trivial predictor
+in every family) on the held-out set.
+
+    python benchmarks/bench_gscl.py                          # all three, the default CPU recipe
+    python benchmarks/bench_gscl.py --skip-train             # generation and throughput only
+    python benchmarks/bench_gscl.py --features 32,64,128,256 --batch-size 32 --epochs 20 --learning-rate 1e-3 --schedule constant
+
+Time to target counts data generation and training (``wall_s`` of the metrics file), not the
+per-epoch test evaluations, which are measurement; the total wall time, evaluations and
+compilation included, is printed beside it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+
+from jaxsim.devices import request_host_devices  # noqa: E402
+
+request_host_devices()
+
+import jax  # noqa: E402
+import numpy as np  # noqa: E402
+
+from benchmarks.bench_simulator import machine  # noqa: E402
+from models import dataset, train, unet  # noqa: E402
+
+
+def bench_generation():
+    t0 = time.perf_counter()
+    dataset.generate(0)
+    cold = time.perf_counter() - t0
+    warm = []
+    for seed in (1, 2, 3):
+        t0 = time.perf_counter()
+        dataset.generate(seed)
+        warm.append(time.perf_counter() - t0)
+    n = sum(dataset.PAPER_COUNTS.values())
+    print(f"generation of {n:,} pairs: first call {cold:.1f} s (compilation of {len(dataset.FAMILIES)} families "
+          f"included), then {min(warm):.2f} s ({n / min(warm):,.0f} pairs/s)")
+
+
+def bench_throughput(widths, batch_sizes, steps: int = 15):
+    print("training throughput (samples/s, compile excluded):")
+    data = dataset.generate(0, dataset.scaled_counts(0.05))
+    for features in widths:
+        for bs in batch_sizes:
+            config = train.TrainConfig(features=features, batch_size=bs)
+            state = train.initial_state(config)
+            step = train.compiled(config)[2]
+            data_sharding, replicated = train._sharding(bs)
+            if replicated is not None:
+                state = jax.device_put(state, replicated)
+
+            def batch(i):
+                sl = slice((i * bs) % (len(data["family"]) - bs), None)
+                b = (data["inputs"][sl][:bs], data["targets"][sl][:bs], data["family"][sl][:bs].astype(np.int32))
+                return b if data_sharding is None else jax.device_put(b, data_sharding)
+
+            t0 = time.perf_counter()
+            state, loss = step(state, *batch(0))
+            loss.block_until_ready()
+            compile_s = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            for i in range(1, steps + 1):
+                state, loss = step(state, *batch(i))
+            loss.block_until_ready()
+            rate = steps * bs / (time.perf_counter() - t0)
+            params = unet.parameter_count(train.make_model(config))
+            print(f"  features {features!s:<22} {params:>10,} params  batch {bs:>4}: {rate:7.1f} samples/s "
+                  f"(compile {compile_s:.1f} s)")
+
+
+def bench_time_to_target(config: train.TrainConfig):
+    print(f"time to target: {config}")
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        line = train.train(config, pathlib.Path(tmp) / "run", progress=False, stop_when_good=True)
+        total = time.perf_counter() - t0
+        baselines = train.json.loads((pathlib.Path(tmp) / "run" / "baselines.json").read_text())
+    print(train.quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
+    if line["meets_quality"]:
+        print(f"quality bar reached at epoch {line['epoch']} ({line['samples_seen']:,} samples): "
+              f"{line['wall_s'] / 60:.1f} min of generation + training, {total / 60:.1f} min in all "
+              f"(test evaluations and compilation included)")
+    else:
+        print(f"quality bar NOT reached in {config.epochs} epochs ({line['wall_s'] / 60:.1f} min of training, "
+              f"{total / 60:.1f} min in all)")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--skip-train", action="store_true", help="only generation and throughput")
+    parser.add_argument("--skip-throughput", action="store_true")
+    parser.add_argument("--features", default=None, help="widths for the time-to-target run, e.g. 16,32,64,128")
+    parser.add_argument("--batch-size", type=int, default=None)
+    parser.add_argument("--epochs", type=int, default=None)
+    parser.add_argument("--learning-rate", type=float, default=None)
+    parser.add_argument("--schedule", default=None)
+    parser.add_argument("--no-fresh-samples", action="store_true")
+    args = parser.parse_args(argv)
+    print(machine())
+    bench_generation()
+    if not args.skip_throughput:
+        bench_throughput([unet.PAPER_FEATURES, (24, 48, 96, 192), unet.CPU_FEATURES, (8, 16, 32, 64)], [32, 64])
+    if args.skip_train:
+        return
+    given = {"features": tuple(int(v) for v in args.features.split(",")) if args.features else None,
+             "batch_size": args.batch_size, "epochs": args.epochs, "learning_rate": args.learning_rate,
+             "schedule": args.schedule, "fresh_samples": False if args.no_fresh_samples else None}
+    bench_time_to_target(train.TrainConfig(**{k: v for k, v in given.items() if v is not None}))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,185 @@
+"""``gscl``: GSCL's social cost-map learner on the command line (seed 002).
+
+    gscl generate --out data/gscl.npz                 # the paper's 24,200 pairs in one file
+    gscl train --out runs/gscl                        # the CPU recipe; run again to resume
+    gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
+    gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import time
+
+from jaxsim.devices import request_host_devices
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {value}")
+    return value
+
+
+def _features(text: str) -> tuple[int, ...]:
+    try:
+        values = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 4 comma-separated widths, got {text!r}") from None
+    if len(values) != 4 or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"expected 4 positive comma-separated widths, got {text!r}")
+    return values
+
+
+def _count(text: str) -> tuple[str, int]:
+    name, _, n = text.partition("=")
+    try:
+        value = int(n)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected FAMILY=N, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a count must be >= 0, got {text!r}")
+    return name, value
+
+
+# Training options that make up a TrainConfig (None = not given on the command line).
+_TRAIN_OPTIONS = ("features", "epochs", "batch_size", "learning_rate", "schedule", "fresh_samples", "seed", "coords")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="gscl", description=__doc__.split("\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    gen = sub.add_parser("generate", help="write a dataset of (input map, target cost map) pairs to a .npz file")
+    gen.add_argument("--out", type=pathlib.Path, required=True, help="the .npz file to write")
+    gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    gen.add_argument("--scale", type=_positive_float, default=1.0,
+                     help="multiply the paper's count of every family (default 1: 24,200 pairs)")
+    gen.add_argument("--count", type=_count, action="append", default=[], metavar="FAMILY=N",
+                     help="samples of one family (repeatable; overrides --scale for it)")
+    gen.add_argument("--preview", type=pathlib.Path, default=None, help="also write a PNG with one sample per family")
+
+    tr = sub.add_parser("train", help="train the U-Net (resumes the run in --out if there is one)")
+    tr.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)")
+    tr.add_argument("--paper", action="store_true",
+                    help="the paper's recipe: 32/64/128/256, batch 32, Adam 1e-3 constant, 20 epochs on one fixed split")
+    tr.add_argument("--features", type=_features, default=None, help="U-Net widths, e.g. 16,32,64,128")
+    tr.add_argument("--epochs", type=_positive_int, default=None)
+    tr.add_argument("--batch-size", type=_positive_int, default=None)
+    tr.add_argument("--learning-rate", type=_positive_float, default=None, help="Adam's peak learning rate")
+    tr.add_argument("--schedule", choices=("constant", "cosine"), default=None)
+    tr.add_argument("--fresh-samples", action=argparse.BooleanOptionalAction, default=None,
+                    help="new training samples every epoch (default on; --no-fresh-samples reuses one split)")
+    tr.add_argument("--coords", action=argparse.BooleanOptionalAction, default=None,
+                    help="coordinate input channels (default on)")
+    tr.add_argument("--seed", type=int, default=None)
+    tr.add_argument("--stop-when-good", action="store_true",
+                    help="stop at the first epoch that meets the quality bar (test MSE <= 0.0033 and <= 1/10 of "
+                         "the better trivial predictor in every family)")
+    tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    ev = sub.add_parser("evaluate", help="MSE per family of a run's checkpoint and a PNG of its predictions")
+    ev.add_argument("--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)")
+    ev.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
+    ev.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default RUN/evaluation)")
+    ev.add_argument("--examples", type=_positive_int, default=2, help="examples per family in the PNG (default 2)")
+    return parser
+
+
+def _generate(args) -> int:
+    from models import dataset
+
+    if args.out.suffix != ".npz":
+        raise SystemExit(f"gscl generate: --out must end in .npz, got {args.out}")
+    counts = dataset.scaled_counts(args.scale)
+    for name, n in args.count:
+        if name not in dataset.FAMILIES:
+            raise SystemExit(f"gscl generate: unknown family {name!r}; known: {', '.join(dataset.FAMILIES)}")
+        counts[name] = n
+    t0 = time.perf_counter()
+    data = dataset.generate(args.seed, counts)
+    dt = time.perf_counter() - t0
+    dataset.save(args.out, data)
+    print(f"{len(data['family'])} pairs in {dt:.1f} s (compilation included) -> {args.out}")
+    for i, name in enumerate(data["names"]):
+        print(f"  {name:<18}{int((data['family'] == i).sum()):>7}")
+    if args.preview is not None:
+        from models import plots
+
+        plots.family_grid(data["inputs"], data["targets"], data["family"], data["names"], args.preview)
+        print(f"preview -> {args.preview}")
+    return 0
+
+
+def _train_config(args):
+    from models import train
+
+    given = {k: getattr(args, k) for k in _TRAIN_OPTIONS if getattr(args, k) is not None}
+    if (args.out / "config.json").exists() and not given and not args.paper:
+        return train.load_config(args.out)  # resume with the stored settings
+    return train.TrainConfig.paper(**given) if args.paper else train.TrainConfig(**given)
+
+
+def _train(args) -> int:
+    from models import train
+
+    try:
+        config = _train_config(args)
+    except ValueError as err:
+        raise SystemExit(f"gscl train: {err}") from None
+    import jax
+
+    print(f"training on {jax.devices()[0].platform} x {len(jax.devices())}: features {config.features}, "
+          f"{config.epochs} epochs x {config.steps_per_epoch} steps of {config.batch_size}, "
+          f"{unet_parameters(config):,} parameters -> {args.out}")
+    t0 = time.perf_counter()
+    try:
+        line = train.train(config, args.out, progress=not args.no_progress, stop_when_good=args.stop_when_good)
+    except ValueError as err:
+        raise SystemExit(f"gscl train: {err}") from None
+    baselines = json.loads((args.out / "baselines.json").read_text())
+    if line:
+        print(train.quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
+        print(f"{'meets' if line['meets_quality'] else 'does not meet'} the quality bar; "
+              f"{time.perf_counter() - t0:.0f} s in this call, {line['wall_s']:.0f} s of training in all")
+    return 0
+
+
+def unet_parameters(config) -> int:
+    from models import unet
+    from models import train
+
+    return unet.parameter_count(train.make_model(config))
+
+
+def _evaluate(args) -> int:
+    from models import evaluation
+
+    try:
+        report = evaluation.evaluate_run(args.run, step=args.step, out=args.out, examples=args.examples)
+    except FileNotFoundError as err:
+        raise SystemExit(f"gscl evaluate: {err}") from None
+    print(report["table"])
+    print(f"step {report['step']}: {'meets' if report['meets_quality'] else 'does not meet'} the quality bar; "
+          f"-> {report['out']}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    request_host_devices()
+    return {"generate": _generate, "train": _train, "evaluate": _evaluate}[args.command](args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,42 @@
+"""Evaluation of a trained GSCL U-Net on its run's held-out test set: MSE per family beside the
+two trivial predictors, and a PNG of input / target / prediction for every family."""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+import numpy as np
+
+from models import plots, train
+
+
+def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> dict:
+    """Evaluate a run's checkpoint (the latest by default) on the run's held-out test set.
+
+    Writes ``evaluation.json`` (MSE overall and per family, the trivial predictors', the quality
+    verdict) and ``predictions.png`` to ``out`` (default ``run/evaluation``) and returns the same
+    dictionary plus ``table`` (text) and ``out``.
+    """
+    run = pathlib.Path(run)
+    config, graphdef, state, meta = train.restore(run, step)
+    test = train.test_data(config)
+    predict = train.compiled(config)[3]
+    mse = train.per_sample_mse(predict, state["params"], state["batch_stats"], test["inputs"], test["targets"])
+    by_family = train.by_family(mse, test["family"], test["names"])
+    baselines = meta["baselines"]
+    report = {"run": str(run), "step": int(meta["step"]), "epoch": int(meta["step"]) // config.steps_per_epoch,
+              "test_samples": int(len(mse)), "test_mse": float(mse.mean()), "test_mse_by_family": by_family,
+              "baselines": baselines,
+              "meets_quality": train.meets_quality(float(mse.mean()), by_family, baselines)}
+    out = run / "evaluation" if out is None else pathlib.Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    train._write_atomic(out / "evaluation.json", json.dumps(report, indent=1))
+    # The picture: the first ``examples`` test samples of each family.
+    pick = np.concatenate([np.flatnonzero(test["family"] == i)[:examples] for i in range(len(test["names"]))])
+    predictions = np.asarray(predict(state["params"], state["batch_stats"], test["inputs"][pick]))
+    plots.family_grid(test["inputs"][pick], test["targets"][pick], test["family"][pick], test["names"],
+                      out / "predictions.png", predictions=predictions, per_family=examples, mse=mse[pick])
+    report["table"] = train.quality_table(report["test_mse"], by_family, baselines)
+    report["out"] = str(out)
+    return report

@@ -1,0 +1,118 @@
+"""Using a trained GSCL U-Net (seed 002 Sec. 4.3): input maps from a robot's world, cost maps out.
+
+* :func:`input_map` builds the network's 40 x 40 input around the robot from an occupancy grid
+  (cells above 0.6 become walls, 255), people (100, with a heading pixel 25) and the goal (200),
+  as the paper's Sec. 4.3 does. Pure JAX: jit it, vmap it over robots or time steps.
+* :class:`SocialCostModel` loads a training run's checkpoint and maps a batch of input maps to
+  cost maps in [0, 1] with one jitted function (``model(maps)``), or hands out that function
+  (``model.function``) for use inside a planner's own ``jit``.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import nnx
+
+from models import grid
+
+OCCUPIED_ABOVE = 0.6  # the paper's threshold on occupancy values
+
+
+def input_map(occupancy, resolution_m: float, origin_xy_m, robot_xy_m, people_xy_m, people_heading_rad,
+              goal_xy_m, people_valid=None, robot_yaw_rad=0.0, occupied_above: float = OCCUPIED_ABOVE,
+              supersample: int | None = None):
+    """The U-Net's input map (40, 40) uint8 around the robot.
+
+    Args:
+      occupancy: (H, W) occupancy values in [0, 1] (unknown, e.g. ROS's -1, counts as free).
+        ROS OccupancyGrid layout: cell (i, j) covers ``x in origin_x + [j, j + 1) * resolution``,
+        ``y in origin_y + [i, i + 1) * resolution`` (row index grows with y).
+      resolution_m: the occupancy grid's cell size; origin_xy_m: (2,) world position of cell
+        (0, 0)'s corner.
+      robot_xy_m: (2,) robot position; robot_yaw_rad: the map's orientation: 0 (default) keeps the
+        world's axes (x right, y up), the robot's yaw turns the map into the robot's frame.
+      people_xy_m: (P, 2) positions; people_heading_rad: (P,) headings; people_valid: (P,) bool
+        (default all).
+      goal_xy_m: (2,) goal. A goal outside the 16 m window is drawn where the line from the robot to
+        it leaves the window (this project's choice; the paper does not say), so the direction to
+        it survives.
+      occupied_above: occupancy above which a cell is a wall (the paper: 0.6).
+      supersample: each 0.4 m cell tests ``supersample**2`` points of the occupancy grid and is a
+        wall if any is occupied; the default, ``ceil(0.4 / resolution_m)``, spaces the points one
+        occupancy cell apart so that a wall one cell thick is not missed. ``resolution_m`` and
+        ``supersample`` are static (Python numbers) under ``jit``.
+    """
+    if supersample is None:
+        supersample = max(1, math.ceil(grid.CELL_M / resolution_m - 1e-9))
+    occupancy = jnp.asarray(occupancy, jnp.float32)
+    people_xy_m = jnp.asarray(people_xy_m, jnp.float32).reshape(-1, 2)
+    people_heading_rad = jnp.asarray(people_heading_rad, jnp.float32).reshape(-1)
+    valid = jnp.ones(people_xy_m.shape[0], bool) if people_valid is None else jnp.asarray(people_valid, bool)
+    rx, ry = jnp.asarray(robot_xy_m, jnp.float32)
+    c, s = jnp.cos(robot_yaw_rad), jnp.sin(robot_yaw_rad)
+
+    # Walls: sample each cell at supersample x supersample points, in the world frame.
+    offsets = (jnp.arange(supersample) + 0.5) / supersample * grid.CELL_M - grid.CELL_M / 2
+    lx = grid.CELL_X_M[..., None, None] + offsets[None, None, None, :]
+    ly = grid.CELL_Y_M[..., None, None] - offsets[None, None, :, None]
+    wx, wy = rx + c * lx - s * ly, ry + s * lx + c * ly
+    j = jnp.floor((wx - origin_xy_m[0]) / resolution_m).astype(jnp.int32)
+    i = jnp.floor((wy - origin_xy_m[1]) / resolution_m).astype(jnp.int32)
+    on_map = (i >= 0) & (i < occupancy.shape[0]) & (j >= 0) & (j < occupancy.shape[1])
+    value = jnp.where(on_map, occupancy[jnp.clip(i, 0, occupancy.shape[0] - 1),
+                                        jnp.clip(j, 0, occupancy.shape[1] - 1)], 0.0)
+    walls = jnp.any(value > occupied_above, axis=(-2, -1))
+    image = jnp.where(walls, jnp.uint8(grid.WALL), jnp.uint8(grid.FREE))
+
+    def to_local(x, y):
+        dx, dy = x - rx, y - ry
+        return c * dx + s * dy, -s * dx + c * dy
+
+    px, py = to_local(people_xy_m[:, 0], people_xy_m[:, 1])
+    image = grid.draw_people(image, px, py, people_heading_rad - robot_yaw_rad, valid)
+    gx, gy = to_local(*jnp.asarray(goal_xy_m, jnp.float32))
+    reach = jnp.maximum(jnp.maximum(jnp.abs(gx), jnp.abs(gy)) / (grid.HALF_M - 1e-3), 1.0)
+    return grid.draw_goal(image, gx / reach, gy / reach)
+
+
+class SocialCostModel:
+    """A trained U-Net in evaluation mode: ``model(maps)`` (B, 40, 40) codes -> (B, 40, 40) costs.
+
+    Build it with :meth:`load` from a training run's folder (``gscl train --out``).
+    """
+
+    def __init__(self, graphdef, params, batch_stats):
+        self._graphdef, self._params, self._batch_stats = graphdef, params, batch_stats
+        self._jitted = jax.jit(self.function)
+
+    @classmethod
+    def load(cls, run_dir, step: int | None = None) -> "SocialCostModel":
+        """The model of a run's latest checkpoint (or of ``step``)."""
+        from models import train
+
+        _, graphdef, state, _ = train.restore(pathlib.Path(run_dir), step)
+        return cls(graphdef, state["params"], state["batch_stats"])
+
+    def function(self, maps):
+        """The pure prediction function (closes over the weights): use it inside your own jit."""
+        model = nnx.merge(self._graphdef, self._params, self._batch_stats, copy=True)
+        model.eval()
+        return model(maps)
+
+    def __call__(self, maps) -> jax.Array:
+        maps = jnp.asarray(maps)
+        if maps.ndim == 2:
+            return self._jitted(maps[None])[0]
+        if maps.ndim != 3 or maps.shape[1:] != (grid.GRID, grid.GRID):
+            raise ValueError(f"input maps must be (B, {grid.GRID}, {grid.GRID}) or ({grid.GRID}, {grid.GRID}), "
+                             f"got {maps.shape}")
+        return self._jitted(maps)
+
+    def cost_layer(self, maps) -> np.ndarray:
+        """Costs as the paper's 0-255 uint8 images."""
+        return np.asarray(jnp.round(self(maps) * 255)).astype(np.uint8)

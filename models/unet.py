@@ -1,0 +1,111 @@
+"""GSCL's U-Net (seed 002 Sec. 4.2) in Flax NNX: input map (40 x 40 pixel codes) -> cost map.
+
+The paper's structure: three encoder blocks of two 3x3 convolutions (padding 1) with batch norm
+and ReLU, each followed by 2x2 max-pooling; a bottleneck block; three decoder stages of a 2x2
+stride-2 transposed convolution, concatenation with the encoder's skip, and a block of two 3x3
+convolutions with batch norm and ReLU; a 1x1 convolution to one output channel.
+
+This project's choices (the paper gives neither):
+
+* **Input encoding.** The paper feeds the pixel-code image. The network here turns it into one
+  binary channel per non-free code (wall, person, heading, goal): the codes are categories, and
+  a scalar 0/25/100/200/255 would tell the first convolution that a heading pixel is "a quarter
+  of a person". Optionally (``coords``, on by default) two channels with the cell's x and y in
+  [-1, 1]: the robot always sits at the centre, and rules such as "keep right of the way to the
+  goal" are about where things are relative to it.
+* **Output.** A sigmoid, so costs stay in [0, 1] like the normalised targets; its bias starts
+  at -3 (a cost of 0.05), near the average target.
+* **Width.** ``features = (f1, f2, f3, bottleneck)``. :data:`PAPER_FEATURES` (32, 64, 128, 256)
+  has about 1.9 M parameters, near the paper's ~1.6 M; the default for CPU training is
+  :data:`CPU_FEATURES` (see the README's measurements for what it costs and buys).
+
+Linen would do the same; NNX is used because the Flax docs recommend it for new code. Training
+and inference go through :func:`nnx.split` / :func:`nnx.merge` and plain ``jax.jit`` so that the
+jitted functions see pure pytrees (no per-call graph traversal).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import nnx
+
+from models import grid
+
+PAPER_FEATURES = (32, 64, 128, 256)
+CPU_FEATURES = (16, 32, 64, 128)
+INPUT_CHANNEL_CODES = (grid.WALL, grid.PERSON, grid.HEADING, grid.GOAL)
+HEAD_BIAS = -3.0
+
+
+def encode_input(maps, coords: bool = True):
+    """(B, 40, 40) pixel-code maps (any int or float dtype) -> (B, 40, 40, C) float32 channels.
+
+    One binary channel per code in :data:`INPUT_CHANNEL_CODES`, plus x and y in [-1, 1] when
+    ``coords``.
+    """
+    maps = jnp.asarray(maps)
+    channels = [(maps == code).astype(jnp.float32) for code in INPUT_CHANNEL_CODES]
+    if coords:
+        ramp = jnp.linspace(-1.0, 1.0, grid.GRID, dtype=jnp.float32)
+        shape = maps.shape
+        channels.append(jnp.broadcast_to(ramp[None, None, :], shape))   # x, right
+        channels.append(jnp.broadcast_to(-ramp[None, :, None], shape))  # y, up
+    return jnp.stack(channels, axis=-1)
+
+
+class ConvBlock(nnx.Module):
+    """Two (3x3 conv, batch norm, ReLU) layers."""
+
+    def __init__(self, in_features: int, out_features: int, *, rngs: nnx.Rngs):
+        self.conv1 = nnx.Conv(in_features, out_features, (3, 3), padding=1, use_bias=False, rngs=rngs)
+        self.norm1 = nnx.BatchNorm(out_features, momentum=0.9, rngs=rngs)
+        self.conv2 = nnx.Conv(out_features, out_features, (3, 3), padding=1, use_bias=False, rngs=rngs)
+        self.norm2 = nnx.BatchNorm(out_features, momentum=0.9, rngs=rngs)
+
+    def __call__(self, x):
+        x = nnx.relu(self.norm1(self.conv1(x)))
+        return nnx.relu(self.norm2(self.conv2(x)))
+
+
+class UNet(nnx.Module):
+    """The GSCL U-Net. Call on (B, 40, 40) pixel-code maps; returns (B, 40, 40) costs in [0, 1].
+
+    Args:
+      features: channels of the three encoder blocks and the bottleneck.
+      coords: add the two coordinate channels to the input (see the module docstring).
+    """
+
+    def __init__(self, features=CPU_FEATURES, coords: bool = True, *, rngs: nnx.Rngs):
+        if len(features) != 4 or any(int(f) < 1 for f in features):
+            raise ValueError(f"features must be 4 positive widths (3 encoder blocks, bottleneck), got {features}")
+        self.features = tuple(int(f) for f in features)
+        self.coords = coords
+        f1, f2, f3, fb = self.features
+        in_ch = len(INPUT_CHANNEL_CODES) + (2 if coords else 0)
+        self.enc = nnx.List([ConvBlock(i, o, rngs=rngs) for i, o in ((in_ch, f1), (f1, f2), (f2, f3))])
+        self.bottleneck = ConvBlock(f3, fb, rngs=rngs)
+        self.up = nnx.List([nnx.ConvTranspose(i, o, (2, 2), strides=(2, 2), rngs=rngs)
+                            for i, o in ((fb, f3), (f3, f2), (f2, f1))])
+        self.dec = nnx.List([ConvBlock(2 * o, o, rngs=rngs) for o in (f3, f2, f1)])
+        # Output bias at the logit of a typical cost (sigmoid(-3) = 0.05): most pixels cost nothing,
+        # and starting from 0.5 everywhere spends the first hundreds of steps unlearning that.
+        self.head = nnx.Conv(f1, 1, (1, 1), bias_init=nnx.initializers.constant(HEAD_BIAS), rngs=rngs)
+
+    def __call__(self, maps):
+        x = encode_input(maps, self.coords)
+        skips = []
+        for block in self.enc:
+            x = block(x)
+            skips.append(x)
+            x = nnx.max_pool(x, (2, 2), strides=(2, 2))
+        x = self.bottleneck(x)
+        for up, block, skip in zip(self.up, self.dec, reversed(skips)):
+            x = block(jnp.concatenate([up(x), skip], axis=-1))
+        return nnx.sigmoid(self.head(x)[..., 0])
+
+
+def parameter_count(model: nnx.Module) -> int:
+    """Number of trainable parameters (batch-norm statistics excluded)."""
+    return int(sum(np.prod(p.shape) for p in jax.tree.leaves(nnx.state(model, nnx.Param))))

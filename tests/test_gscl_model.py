@@ -1,0 +1,162 @@
+"""GSCL's U-Net, training loop (resume after a kill), inference helpers and command line."""
+
+from __future__ import annotations
+
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from flax import nnx
+
+from models import cli, dataset, evaluation, grid, inference, train, unet
+
+TINY = dict(features=(4, 4, 8, 8), epochs=2, batch_size=16, train_fraction=0.01, test_fraction=0.004,
+            warmup_steps=2, checkpoint_every_steps=4, learning_rate=1e-2)
+
+
+def test_unet_shapes_range_and_paper_size():
+    model = unet.UNet((4, 8, 8, 16), rngs=nnx.Rngs(0))
+    maps = dataset.generate(0, {"group": 3})["inputs"]
+    model.eval()
+    out = model(maps)
+    assert out.shape == (3, 40, 40) and out.dtype == jnp.float32
+    assert float(out.min()) >= 0.0 and float(out.max()) <= 1.0
+    paper = nnx.eval_shape(lambda: unet.UNet(unet.PAPER_FEATURES, rngs=nnx.Rngs(0)))
+    assert 1.5e6 < unet.parameter_count(paper) < 2.0e6  # the paper: about 1.6 M
+    assert unet.parameter_count(unet.UNet(unet.CPU_FEATURES, rngs=nnx.Rngs(0))) < 0.3 * unet.parameter_count(paper)
+    with pytest.raises(ValueError, match="4 positive widths"):
+        unet.UNet((8, 8, 8), rngs=nnx.Rngs(0))
+
+
+def test_input_encoding_is_one_hot_per_code():
+    maps = np.zeros((1, 40, 40), np.uint8)
+    maps[0, 3, 4], maps[0, 3, 5], maps[0, 10, 10], maps[0, 0, :] = grid.PERSON, grid.HEADING, grid.GOAL, grid.WALL
+    x = np.asarray(unet.encode_input(maps, coords=True))
+    assert x.shape == (1, 40, 40, 6)
+    for c, code in enumerate(unet.INPUT_CHANNEL_CODES):
+        np.testing.assert_array_equal(x[0, ..., c], maps[0] == code)
+    assert x[0, 0, 0, 4] == -1 and x[0, 0, -1, 4] == 1   # x grows to the right
+    assert x[0, 0, 0, 5] == 1 and x[0, -1, 0, 5] == -1   # y grows upwards
+
+
+def _run(tmp_path, name, **kw):
+    config = train.TrainConfig(**{**TINY, **kw})
+    return config, train.train(config, tmp_path / name, progress=False, log=lambda *_: None)
+
+
+def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_path):
+    config, line = _run(tmp_path, "straight")
+    history = [json.loads(s) for s in (tmp_path / "straight" / "metrics.jsonl").read_text().splitlines()]
+    assert [h["epoch"] for h in history] == [1, 2]
+    # The loss goes down: first steps' batches against the end of training, and the test set
+    # against the untrained network.
+    _, graphdef, state, _ = train.restore(tmp_path / "straight")
+    s0 = train.initial_state(config)
+    test = train.test_data(config)
+    predict = train.compiled(config)[3]
+    untrained = train.per_sample_mse(predict, s0["params"], s0["batch_stats"], test["inputs"], test["targets"]).mean()
+    zeros = json.loads((tmp_path / "straight" / "baselines.json").read_text())["zeros"]["test_mse"]
+    assert line["test_mse"] < 0.8 * min(untrained, zeros)
+    assert history[1]["train_mse"] < history[0]["train_mse"]
+
+    # Killed at step 6, mid-epoch, before that step's checkpoint was committed (its folder
+    # removed): the run resumes from step 4 and ends with the same weights and metrics as the
+    # uninterrupted run.
+    killed = tmp_path / "killed"
+    cfg = train.TrainConfig(**TINY)
+    assert cfg.steps_per_epoch > 6
+    train.train(cfg, killed, progress=False, max_steps=6, log=lambda *_: None)
+    assert sorted(int(p.name) for p in (killed / "checkpoints").iterdir() if p.name.isdigit()) == [4, 6]
+    import shutil
+    shutil.rmtree(killed / "checkpoints" / "6")
+    assert not (killed / "metrics.jsonl").exists()
+    train.train(cfg, killed, progress=False, log=lambda *_: None)
+    _, _, resumed, _ = train.restore(killed)
+    for a, b in zip(jax.tree.leaves(resumed), jax.tree.leaves(state)):
+        np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
+    again = [json.loads(s) for s in (killed / "metrics.jsonl").read_text().splitlines()]
+    for h, g in zip(history, again):
+        assert h["test_mse"] == pytest.approx(g["test_mse"], rel=1e-4)
+        assert h["train_mse_by_family"].keys() == g["train_mse_by_family"].keys()
+        for k in h["train_mse_by_family"]:
+            assert h["train_mse_by_family"][k] == pytest.approx(g["train_mse_by_family"][k], rel=1e-4)
+
+    # The restored checkpoint predicts what the trained state predicts.
+    model = inference.SocialCostModel.load(tmp_path / "straight")
+    np.testing.assert_allclose(np.asarray(model(test["inputs"][:8])),
+                               np.asarray(predict(state["params"], state["batch_stats"], test["inputs"][:8])),
+                               rtol=1e-6, atol=1e-6)
+    assert model(test["inputs"][0]).shape == (40, 40)
+    with pytest.raises(ValueError, match="input maps must be"):
+        model(np.zeros((2, 20, 20)))
+
+    # Another configuration in the same folder is refused, nothing overwritten.
+    before = (tmp_path / "straight" / "config.json").read_text()
+    with pytest.raises(ValueError, match="another configuration"):
+        train.train(train.TrainConfig(**{**TINY, "batch_size": 8}), tmp_path / "straight", progress=False)
+    assert (tmp_path / "straight" / "config.json").read_text() == before
+
+    # Evaluation: the same test MSE as the last epoch, per family, and the picture.
+    report = evaluation.evaluate_run(tmp_path / "straight", examples=1)
+    assert report["test_mse"] == pytest.approx(line["test_mse"], rel=1e-5)
+    assert set(report["test_mse_by_family"]) == set(dataset.FAMILIES)
+    assert (tmp_path / "straight" / "evaluation" / "predictions.png").stat().st_size > 10_000
+
+
+def test_trivial_baselines_and_quality_bar():
+    rng = np.random.default_rng(0)
+    train_set = {"targets": rng.random((10, 40, 40)).astype(np.float32)}
+    test = {"targets": rng.random((4, 40, 40)).astype(np.float32), "family": np.array([0, 0, 1, 1]),
+            "names": np.array(["a", "b"])}
+    b = train.trivial_baselines(train_set, test)
+    np.testing.assert_allclose(b["zeros"]["test_mse"], np.mean(test["targets"] ** 2), rtol=1e-6)
+    mean_map = train_set["targets"].mean(0)
+    np.testing.assert_allclose(b["mean_map"]["by_family"]["b"], np.mean((test["targets"][2:] - mean_map) ** 2), rtol=1e-6)
+    best_a = min(b["zeros"]["by_family"]["a"], b["mean_map"]["by_family"]["a"])
+    assert train.meets_quality(0.001, {"a": 0.09 * best_a, "b": 0.001}, b)
+    assert not train.meets_quality(0.001, {"a": 0.11 * best_a, "b": 0.001}, b)
+    assert not train.meets_quality(0.004, {"a": 0.0, "b": 0.0}, b)
+
+
+def test_input_map_from_occupancy_people_and_goal():
+    occupancy = np.zeros((400, 400), np.float32)  # 0.05 m cells, origin (-10, -10)
+    occupancy[:, 300] = 1.0   # a thin wall at x = 5.0-5.05 m (one fine cell, an eighth of a GSCL cell)
+    occupancy[100, :] = 0.5   # below the 0.6 threshold: free
+    people = np.array([[2.0, 0.0], [0.0, -20.0]])
+    image = np.asarray(inference.input_map(occupancy, 0.05, np.array([-10.0, -10.0]), np.array([0.0, 0.0]),
+                                           people, np.array([np.pi / 2, 0.0]), np.array([100.0, 0.1])))
+    assert set(np.unique(image)) <= set(grid.INPUT_CODES)
+    wall_cols = np.flatnonzero((image == grid.WALL).all(axis=0))
+    np.testing.assert_array_equal(wall_cols, [32])  # x = 5.0 m lies in column 32 (4.8-5.2 m)
+    row, col = (int(v) for v in grid.cell_of(2.0, 0.0))
+    assert image[row, col] == grid.PERSON and image[row - 1, col] == grid.HEADING  # facing +y: the pixel above
+    assert (image == grid.PERSON).sum() == 1  # the second person is off the window
+    goal = np.argwhere(image == grid.GOAL)
+    np.testing.assert_array_equal(goal, [[19, 39]])  # far to the right: on the right edge, same row as the robot
+    # In the robot's frame (robot facing +y), a person 2 m ahead appears 2 m ahead of the robot.
+    image = np.asarray(inference.input_map(occupancy, 0.05, np.array([-10.0, -10.0]), np.array([0.0, 0.0]),
+                                           np.array([[0.0, 2.0]]), np.array([np.pi / 2]), np.array([0.0, 3.0]),
+                                           robot_yaw_rad=np.pi / 2))
+    row, col = (int(v) for v in grid.cell_of(2.0, 0.0))
+    assert image[row, col] == grid.PERSON and image[row, col + 1] == grid.HEADING
+
+
+def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path, capsys):
+    out = tmp_path / "d.npz"
+    assert cli.main(["generate", "--out", str(out), "--scale", "0.001", "--count", "queue=5", "--seed", "2"]) == 0
+    data = dataset.load(out)
+    expected = dataset.generate(2, {**dataset.scaled_counts(0.001), "queue": 5})
+    for k in ("inputs", "targets", "family", "names"):
+        np.testing.assert_array_equal(data[k], expected[k])
+    with pytest.raises(SystemExit, match="must end in .npz"):
+        cli.main(["generate", "--out", str(tmp_path / "d.csv")])
+    with pytest.raises(SystemExit, match="unknown family"):
+        cli.main(["generate", "--out", str(out), "--count", "corridor=3"])
+    with pytest.raises(SystemExit):
+        cli.main(["train", "--features", "8,8"])
+    with pytest.raises(SystemExit, match="no checkpoint|no training run"):
+        cli.main(["evaluate", "--run", str(tmp_path / "nothing")])
+    assert not (tmp_path / "d.csv").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.npz"]
