@@ -14,7 +14,7 @@ import pathlib
 import sys
 import time
 
-from jaxsim.devices import request_host_devices
+from jaxsim.devices import request_compilation_cache, request_host_devices
 
 
 def _positive_int(text: str) -> int:
@@ -178,6 +178,7 @@ def _evaluate(args) -> int:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     request_host_devices()
+    request_compilation_cache()
     return {"generate": _generate, "train": _train, "evaluate": _evaluate}[args.command](args)
 
 

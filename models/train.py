@@ -214,13 +214,20 @@ def make_predict(graphdef):
 def per_sample_mse(predict, params, batch_stats, inputs: np.ndarray, targets: np.ndarray,
                    batch_size: int = 512) -> np.ndarray:
     """(N,) pixel MSE of the model on a dataset, in fixed-size batches (the last one padded, so
-    one compilation serves every call)."""
+    one compilation serves every call), split over the local devices when there are several."""
+    n_devices = len(jax.devices())
+    batch_size = -(-batch_size // n_devices) * n_devices
+    data_sharding, replicated = _sharding(batch_size)
+    if replicated is not None:
+        params, batch_stats = jax.device_put((params, batch_stats), replicated)
     out = np.empty(len(inputs), np.float64)
     for start in range(0, len(inputs), batch_size):
         x = inputs[start:start + batch_size]
         n = len(x)
         if n < batch_size:
             x = np.concatenate([x, np.zeros((batch_size - n,) + x.shape[1:], x.dtype)])
+        if data_sharding is not None:
+            x = jax.device_put(x, data_sharding)
         pred = np.asarray(predict(params, batch_stats, x))[:n]
         out[start:start + n] = np.mean((pred - targets[start:start + n]) ** 2, axis=(1, 2))
     return out
@@ -261,6 +268,11 @@ def _write_atomic(path: pathlib.Path, text: str) -> None:
     tmp = path.with_name(f".tmp-{path.name}")
     tmp.write_text(text)
     os.replace(tmp, path)
+
+
+def _write_metrics(out: pathlib.Path, meta: dict) -> None:
+    if meta["history"]:
+        _write_atomic(out / "metrics.jsonl", "".join(json.dumps(h) + "\n" for h in meta["history"]))
 
 
 def _checkpoint_manager(out: pathlib.Path, config: TrainConfig, read_only: bool = False):
@@ -357,6 +369,7 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
             state=ocp.args.StandardRestore(_host(state)), meta=ocp.args.JsonRestore()))
         state, meta = restored["state"], restored["meta"]
         log(f"resuming {out} at step {latest} (epoch {latest // config.steps_per_epoch})")
+        _write_metrics(out, meta)  # a kill between a checkpoint and its metrics line loses nothing
     if meta["baselines"] is None:
         meta["baselines"] = trivial_baselines(epoch_data(config, 0), test)
         _write_atomic(out / "baselines.json", json.dumps(meta["baselines"], indent=1))
@@ -402,7 +415,7 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
                             state = jax.device_put(state, replicated)
                     save(step)
                     if epoch_done:
-                        _write_atomic(out / "metrics.jsonl", "".join(json.dumps(h) + "\n" for h in meta["history"]))
+                        _write_metrics(out, meta)
                         log(f"epoch {epoch + 1}/{config.epochs}: train {line['train_mse']:.5f} "
                             f"test {line['test_mse']:.5f} ({line['wall_s']:.0f} s)"
                             + ("  meets the quality bar" if line["meets_quality"] else ""))

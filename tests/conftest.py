@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
+
+# Tests do not write JAX's compilation cache into the user's home (the command lines turn it on).
+os.environ.setdefault("SOCIALNAV_JAX_CACHE", "off")
 
 from jaxsim.scenario import load_scenario
 from jaxsim.world import build_world, shortest_path_plan
