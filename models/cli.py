@@ -135,6 +135,9 @@ def _train(args) -> int:
 
     try:
         config = _train_config(args)
+        if (args.out / "config.json").exists() and train.load_config(args.out) != config:
+            raise ValueError(f"{args.out} holds a run with another configuration ({args.out / 'config.json'}); "
+                             "resume it with the same settings or choose another output folder")
     except ValueError as err:
         raise SystemExit(f"gscl train: {err}") from None
     import jax

@@ -160,3 +160,10 @@ def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path,
         cli.main(["evaluate", "--run", str(tmp_path / "nothing")])
     assert not (tmp_path / "d.csv").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.npz"]
+    # A run folder with other settings is refused before anything is written to it.
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "config.json").write_text(json.dumps(train.TrainConfig().to_json()))
+    with pytest.raises(SystemExit, match="another configuration"):
+        cli.main(["train", "--out", str(run), "--paper"])
+    assert sorted(p.name for p in run.iterdir()) == ["config.json"]
