@@ -14,6 +14,7 @@ compilation included, is printed beside it.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import pathlib
 import subprocess
@@ -99,7 +100,7 @@ def bench_time_to_target(config: train.TrainConfig):
         t0 = time.perf_counter()
         line = train.train(config, pathlib.Path(tmp) / "run", progress=False, stop_when_good=True)
         total = time.perf_counter() - t0
-        baselines = train.json.loads((pathlib.Path(tmp) / "run" / "baselines.json").read_text())
+        baselines = json.loads((pathlib.Path(tmp) / "run" / "baselines.json").read_text())
     print(train.quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
     if line["meets_quality"]:
         print(f"quality bar reached at epoch {line['epoch']} ({line['samples_seen']:,} samples): "

@@ -144,7 +144,7 @@ def _train(args) -> int:
 
     print(f"training on {jax.devices()[0].platform} x {len(jax.devices())}: features {config.features}, "
           f"{config.epochs} epochs x {config.steps_per_epoch} steps of {config.batch_size}, "
-          f"{unet_parameters(config):,} parameters -> {args.out}")
+          f"{_parameters(config):,} parameters -> {args.out}")
     t0 = time.perf_counter()
     try:
         line = train.train(config, args.out, progress=not args.no_progress, stop_when_good=args.stop_when_good)
@@ -158,9 +158,8 @@ def _train(args) -> int:
     return 0
 
 
-def unet_parameters(config) -> int:
-    from models import unet
-    from models import train
+def _parameters(config) -> int:
+    from models import train, unet
 
     return unet.parameter_count(train.make_model(config))
 

@@ -343,6 +343,7 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
     import orbax.checkpoint as ocp
     from tqdm.auto import tqdm
 
+    data_sharding, replicated = _sharding(config.batch_size)  # a bad batch size fails before any file
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     config_path = out / "config.json"
@@ -354,7 +355,6 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
     else:
         _write_atomic(config_path, json.dumps(config.to_json(), indent=1))
 
-    data_sharding, replicated = _sharding(config.batch_size)
     schedule = learning_rate_schedule(config)
     names = list(dataset.FAMILIES)
     _, _, train_step, predict = compiled(config)

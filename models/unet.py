@@ -5,7 +5,7 @@ and ReLU, each followed by 2x2 max-pooling; a bottleneck block; three decoder st
 stride-2 transposed convolution, concatenation with the encoder's skip, and a block of two 3x3
 convolutions with batch norm and ReLU; a 1x1 convolution to one output channel.
 
-This project's choices (the paper gives neither):
+This project's choices (the paper does not give them):
 
 * **Input encoding.** The paper feeds the pixel-code image. The network here turns it into one
   binary channel per non-free code (wall, person, heading, goal): the codes are categories, and
