@@ -14,21 +14,8 @@ import pathlib
 import sys
 import time
 
+from jaxsim.cli import _positive_float, _positive_int
 from jaxsim.devices import request_compilation_cache, request_host_devices
-
-
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {value}")
-    return value
 
 
 def _features(text: str) -> tuple[int, ...]:
@@ -135,9 +122,7 @@ def _train(args) -> int:
 
     try:
         config = _train_config(args)
-        if (args.out / "config.json").exists() and train.load_config(args.out) != config:
-            raise ValueError(f"{args.out} holds a run with another configuration ({args.out / 'config.json'}); "
-                             "resume it with the same settings or choose another output folder")
+        train.check_run_folder(args.out, config)
     except ValueError as err:
         raise SystemExit(f"gscl train: {err}") from None
     import jax

@@ -16,7 +16,6 @@ import pathlib
 import jax
 import jax.numpy as jnp
 import numpy as np
-from flax import nnx
 
 from models import grid
 
@@ -87,8 +86,10 @@ class SocialCostModel:
     """
 
     def __init__(self, graphdef, params, batch_stats):
-        self._graphdef, self._params, self._batch_stats = graphdef, params, batch_stats
-        self._jitted = jax.jit(self.function)
+        from models import train
+
+        self._predict = train.make_predict(graphdef)  # jitted, batch norm in eval mode
+        self._params, self._batch_stats = params, batch_stats
 
     @classmethod
     def load(cls, run_dir, step: int | None = None) -> "SocialCostModel":
@@ -99,19 +100,18 @@ class SocialCostModel:
         return cls(graphdef, state["params"], state["batch_stats"])
 
     def function(self, maps):
-        """The pure prediction function (closes over the weights): use it inside your own jit."""
-        model = nnx.merge(self._graphdef, self._params, self._batch_stats, copy=True)
-        model.eval()
-        return model(maps)
+        """The prediction as a function of the maps alone (closes over the weights): use it inside
+        your own jit."""
+        return self._predict(self._params, self._batch_stats, maps)
 
     def __call__(self, maps) -> jax.Array:
         maps = jnp.asarray(maps)
         if maps.ndim == 2:
-            return self._jitted(maps[None])[0]
+            return self.function(maps[None])[0]
         if maps.ndim != 3 or maps.shape[1:] != (grid.GRID, grid.GRID):
             raise ValueError(f"input maps must be (B, {grid.GRID}, {grid.GRID}) or ({grid.GRID}, {grid.GRID}), "
                              f"got {maps.shape}")
-        return self._jitted(maps)
+        return self.function(maps)
 
     def cost_layer(self, maps) -> np.ndarray:
         """Costs as the paper's 0-255 uint8 images."""

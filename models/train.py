@@ -147,6 +147,7 @@ def _stream_key(seed: int, stream: str, index: int = 0) -> jax.Array:
     return jax.random.fold_in(jax.random.fold_in(jax.random.key(seed), ("train", "test").index(stream)), index)
 
 
+@functools.lru_cache(maxsize=1)  # epoch 0 serves the trivial baselines and then the first epoch
 def epoch_data(config: TrainConfig, epoch: int) -> dict[str, np.ndarray]:
     """The shuffled training samples of ``epoch`` (epoch 0's for every epoch without fresh samples)."""
     e = epoch if config.fresh_samples else 0
@@ -311,6 +312,14 @@ def load_config(out) -> TrainConfig:
     return TrainConfig.from_json(json.loads(path.read_text()))
 
 
+def check_run_folder(out, config: TrainConfig) -> None:
+    """Raise ValueError if ``out`` holds a run with another configuration."""
+    path = pathlib.Path(out) / "config.json"
+    if path.exists() and load_config(out) != config:
+        raise ValueError(f"{out} holds a run with another configuration ({path}); "
+                         "resume it with the same settings or choose another output folder")
+
+
 def restore(out, step: int | None = None):
     """``(config, graphdef, state, meta)`` of a run's checkpoint (the latest by default)."""
     import orbax.checkpoint as ocp
@@ -347,12 +356,8 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     config_path = out / "config.json"
-    if config_path.exists():
-        existing = load_config(out)
-        if existing != config:
-            raise ValueError(f"{out} holds a run with another configuration ({config_path}); "
-                             "resume it with the same settings or choose another output folder")
-    else:
+    check_run_folder(out, config)
+    if not config_path.exists():
         _write_atomic(config_path, json.dumps(config.to_json(), indent=1))
 
     schedule = learning_rate_schedule(config)
