@@ -1,7 +1,7 @@
 """Time seed 000's whole evaluation protocol: 2 methods x 11 slots (2090 tasks each) x replicas.
 
-    python benchmarks/bench_evaluation.py                      # 32 replicas (the issue's size)
-    python benchmarks/bench_evaluation.py --replicas 4 --tables runs/warehouse/causal/engine_tables.npz
+    python benchmarks/bench_warehouse.py                      # 32 replicas (the issue's size)
+    python benchmarks/bench_warehouse.py --replicas 4 --tables runs/warehouse/causal/engine_tables.npz
 
 Prints the machine, wall time per method (compilation included, reported separately), simulated
 time and agent-steps per second, and the headline numbers, so the speed claim and the result
@@ -20,7 +20,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from jaxsim.devices import request_host_devices  # noqa: E402
+from socialnav.runtime import request_host_devices  # noqa: E402
 
 request_host_devices()
 
@@ -28,10 +28,11 @@ import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
 from jaxsim.scenario import load_scenario  # noqa: E402
-from planners import evaluation  # noqa: E402
+from evaluation import warehouse  # noqa: E402
+from planners.tables import CausalTables  # noqa: E402
 
 
-def schedule_tables(scenario) -> dict:
+def schedule_tables(scenario) -> CausalTables:
     """Stand-in engine tables: density proportional to the schedule's destination probability,
     the battery rate of Eq. (1) at full speed (what a well-learnt engine approaches)."""
     p = scenario.params
@@ -39,9 +40,9 @@ def schedule_tables(scenario) -> dict:
     density = scenario.destination_p * p.n_workers * 0.5 / area  # about half the workers at a station
     density[~scenario.slot_working] = 0.0
     rate = -(p.battery_static_pct_per_s + p.battery_dynamic_pct_per_m * p.robot_max_speed_mps)
-    return {"density_ppm2": density, "battery_pct_per_s": np.array([[-p.battery_static_pct_per_s, np.nan],
-                                                                     [rate, np.nan]]),
-            "speed_edges_mps": np.array([0.0, 0.25, p.robot_max_speed_mps])}
+    return CausalTables.from_arrays({
+        "density_ppm2": density, "battery_pct_per_s": np.array([[-p.battery_static_pct_per_s, np.nan], [rate, np.nan]]),
+        "speed_edges_mps": np.array([0.0, 0.25, p.robot_max_speed_mps])}, source="schedule-based tables")
 
 
 def main() -> int:
@@ -51,13 +52,13 @@ def main() -> int:
     ap.add_argument("--out", type=pathlib.Path, default=None, help="also write the report here")
     args = ap.parse_args()
     scenario = load_scenario()
-    tables = dict(np.load(args.tables)) if args.tables else schedule_tables(scenario)
+    tables = CausalTables.load(args.tables) if args.tables else schedule_tables(scenario)
     print(f"machine: {machine()}")
     print(f"protocol: 2 methods x {scenario.n_slots} slots x {args.replicas} replicas "
           f"({sum(len(g) for g in scenario.robot_goals)} tasks per method and replica), "
           f"tables: {args.tables or 'schedule-based'}")
     start = time.perf_counter()
-    result = evaluation.run_evaluation(scenario, tables, replicas=args.replicas, progress=False)
+    result = warehouse.run_evaluation(scenario, tables, replicas=args.replicas, progress=False)
     total = time.perf_counter() - start
     p = scenario.params
     for m, wall in result.wall_s.items():
@@ -66,10 +67,10 @@ def main() -> int:
               f"(longest {result.experiment_s[m].max() / 3600:.2f} h), "
               f"{sim_s / p.dt_s * (p.n_workers + 1) / wall / 1e6:.2f} M useful agent-steps/s")
     print(f"whole protocol: {total:.1f} s ({total / 60:.1f} min; goal < 5 min)")
-    summary = evaluation.overall(result)
-    print(evaluation.format_overall(summary))
+    summary = warehouse.overall(result)
+    print(warehouse.format_overall(summary))
     if args.out:
-        evaluation.write_report(result, scenario, args.out)
+        warehouse.write_report(result, scenario, args.out)
         print(f"wrote {args.out}")
     return 0
 

@@ -26,7 +26,7 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from jaxsim.devices import request_host_devices  # noqa: E402
+from socialnav.runtime import request_host_devices  # noqa: E402
 
 request_host_devices()
 
@@ -35,6 +35,9 @@ import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
 from models import dataset, train, unet  # noqa: E402
+from models.config import TrainConfig, make_model  # noqa: E402
+from models.quality import quality_table  # noqa: E402
+from models.steps import batch_sharding, compiled, initial_state  # noqa: E402
 
 
 def _generate_in_new_process(cache_dir: str | None) -> float:
@@ -61,7 +64,7 @@ def bench_generation():
         warm.append(time.perf_counter() - t0)
     print(f"generation of {n:,} pairs: {first:.1f} s in a new process (compilation of {len(dataset.FAMILIES)} "
           f"families included), {cached:.1f} s in a later process with JAX's compilation cache "
-          f"(on in the gscl command), {min(warm):.2f} s once compiled ({n / min(warm):,.0f} pairs/s)")
+          f"(on in the socialnav command), {min(warm):.2f} s once compiled ({n / min(warm):,.0f} pairs/s)")
 
 
 def bench_throughput(widths, batch_sizes, steps: int = 15):
@@ -69,10 +72,10 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
     data = dataset.generate(0, dataset.scaled_counts(0.05))
     for features in widths:
         for bs in batch_sizes:
-            config = train.TrainConfig(features=features, batch_size=bs)
-            state = train.initial_state(config)
-            step = train.compiled(config)[2]
-            data_sharding, replicated = train._sharding(bs)
+            config = TrainConfig(features=features, batch_size=bs)
+            state = initial_state(config)
+            step = compiled(config)[2]
+            data_sharding, replicated = batch_sharding(bs)
             if replicated is not None:
                 state = jax.device_put(state, replicated)
 
@@ -90,12 +93,12 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
                 state, loss = step(state, *batch(i))
             loss.block_until_ready()
             rate = steps * bs / (time.perf_counter() - t0)
-            params = unet.parameter_count(train.make_model(config))
+            params = unet.parameter_count(make_model(config))
             print(f"  features {features!s:<22} {params:>10,} params  batch {bs:>4}: {rate:7.1f} samples/s "
                   f"(compile {compile_s:.1f} s)")
 
 
-def bench_time_to_target(config: train.TrainConfig, stop_after_epochs: int | None = None):
+def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = None):
     print(f"time to target: {config}")
     max_steps = None if stop_after_epochs is None else stop_after_epochs * config.steps_per_epoch
     with tempfile.TemporaryDirectory() as tmp:
@@ -104,7 +107,7 @@ def bench_time_to_target(config: train.TrainConfig, stop_after_epochs: int | Non
                            stop_when_good=stop_after_epochs is None, max_steps=max_steps)
         total = time.perf_counter() - t0
         baselines = json.loads((pathlib.Path(tmp) / "run" / "baselines.json").read_text())
-    print(train.quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
+    print(quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
     if line["meets_quality"]:
         print(f"quality bar reached at epoch {line['epoch']} ({line['samples_seen']:,} samples): "
               f"{line['wall_s'] / 60:.1f} min of generation + training, {total / 60:.1f} min in all "
@@ -141,7 +144,7 @@ def main(argv=None):
              "schedule": args.schedule, "fresh_samples": False if args.no_fresh_samples else None,
              "coords": False if args.no_coords else None}
     given = {k: v for k, v in given.items() if v is not None}
-    config = train.TrainConfig.paper(**given) if args.paper else train.TrainConfig(**given)
+    config = TrainConfig.paper(**given) if args.paper else TrainConfig(**given)
     bench_time_to_target(config, args.stop_after_epochs)
 
 

@@ -26,7 +26,7 @@ import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
-from jaxsim.devices import request_host_devices  # noqa: E402
+from socialnav.runtime import request_host_devices  # noqa: E402
 
 request_host_devices()
 
@@ -35,7 +35,9 @@ import numpy as np  # noqa: E402
 
 from jaxsim.rollout import init_batch, run_samples, world_keys  # noqa: E402
 from jaxsim.scenario import load_scenario  # noqa: E402
-from jaxsim.world import build_world, shortest_path_plan  # noqa: E402
+from jaxsim.robot import RouteFollower  # noqa: E402
+from jaxsim.world import build_world  # noqa: E402
+from planners.routes import shortest_path_plan  # noqa: E402
 
 WARMUP_S = 200.0  # simulated seconds before timing: the workers have arrived
 
@@ -53,22 +55,22 @@ def machine() -> str:
 
 def bench_jaxsim(scenario, batches, seconds):
     p = scenario.params
-    world, plan = build_world(scenario), shortest_path_plan(scenario)
+    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
     agents = p.n_workers + 1
     every = int(round(1.0 / p.dt_s))
     rows = []
     for b in batches:
         keys = world_keys(0, b)
-        states = init_batch(p, world, plan, keys)
+        states = init_batch(p, world, controller, keys)
         chunk = 10  # samples per call: every call has the same shape, so only the first compiles
         t0 = time.perf_counter()
         for _ in range(int(WARMUP_S / (chunk * every * p.dt_s))):
-            states, _ = run_samples(p, world, plan, states, keys, chunk, every)
+            states, _ = run_samples(p, world, controller, states, keys, chunk, every)
         jax.block_until_ready(states)
         compile_s = time.perf_counter() - t0
         calls, t0 = 0, time.perf_counter()
         while time.perf_counter() - t0 < seconds:
-            states, rec = run_samples(p, world, plan, states, keys, chunk, every)
+            states, rec = run_samples(p, world, controller, states, keys, chunk, every)
             jax.block_until_ready((states, rec))
             calls += 1
         wall = time.perf_counter() - t0

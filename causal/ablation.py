@@ -12,6 +12,10 @@ The query is "what if I cover 60 m at my maximum speed (0.5 m/s)?", i.e. 120 s a
 
 Both come from the same discretised network O -> V, O -> L, V -> L (the structure J-PCMCI+
 recovers on these data, reported), learned by MLE with pyAgrum.
+
+This module estimates from given series (:func:`run` takes :class:`Series`); the simulation that
+makes them is the composition root's (``socialnav.pipelines.ablation_series``: every
+probability and seed in one batched rollout), so the causal code needs no simulator.
 """
 
 from __future__ import annotations
@@ -24,7 +28,10 @@ import numpy as np
 import pandas as pd
 
 from causal import discover
-from causal.engine import Binning, discretized_variable, learn_mle
+from causal.binning import Binning
+from causal.engine import discretized_variable, learn_mle
+from common import progress as progress_lib
+from common.atomic import write_atomic, write_text_atomic
 
 DISTANCE_M = 60.0
 SPEED_MPS = 0.5
@@ -61,21 +68,21 @@ class Estimate:
         return abs(self.reference - self.causal)
 
 
-def simulate(p: float, n_seeds: int, seed: int = 0, duration_s: float = 3600.0, sample_interval_s: float = 1.0,
-             obstacle_length_m: float = OBSTACLE_LENGTH_M):
-    """One hour of the simplified scenario per seed (one world each, batched): (V, L, O) arrays
-    of shape (seeds, samples) and the scenario's parameters."""
-    from jaxsim import rollout, scenario as scen, world as world_lib
+@dataclasses.dataclass(frozen=True)
+class Series:
+    """One obstacle probability's logged series, ``(seeds, samples)`` float64 arrays.
 
-    s = scen.load_scenario(n_workers=0, robot_obstacle_probability=float(p), robot_obstacle_length_m=obstacle_length_m)
-    prm = s.params
-    every = int(round(sample_interval_s / prm.dt_s))
-    _, rec = rollout.rollout(prm, world_lib.build_world(s), world_lib.shortest_path_plan(s), seed=seed,
-                             n_worlds=n_seeds, n_steps=int(round(duration_s / prm.dt_s)), sample_every_steps=every)
-    rec = rollout.to_numpy(rec)
-    battery = np.concatenate([np.full((n_seeds, 1), prm.battery_initial_pct), rec.battery_pct], axis=1)
-    l_pct = np.diff(battery.astype(np.float64), axis=1)
-    return rec.robot_speed_mps.astype(np.float64), l_pct, rec.obstacle.astype(np.float64), prm
+    Attributes:
+      speed_mps: V; battery_change_pct: L per sample; obstacle: O as 0/1.
+      battery: anything with the battery fields ``battery_static_pct_per_s`` (K_s),
+        ``battery_dynamic_pct_per_m`` (K_d) and ``battery_obstacle_factor`` (K_o), e.g. the
+        simulator's parameters.
+    """
+
+    speed_mps: np.ndarray
+    battery_change_pct: np.ndarray
+    obstacle: np.ndarray
+    battery: object
 
 
 def estimate(speed, l_pct, obstacle, params, period_s: float, p: float, seed: int,
@@ -107,54 +114,37 @@ def estimate(speed, l_pct, obstacle, params, period_s: float, p: float, seed: in
     return Estimate(p, seed, q, reference, per_sample_bn * samples, per_sample_cm * samples)
 
 
-def run(out_dir: str | pathlib.Path, probabilities=PROBABILITIES, n_seeds: int = 8, seed: int = 0,
+def run(out_dir: str | pathlib.Path, series: dict[float, Series], period_s: float = 1.0,
         progress: bool = True) -> list[Estimate]:
-    """The whole ablation: estimates per obstacle probability and seed, the discovered structure
-    at p = 0.3, a table (``ablation.csv``), ``ablation.json`` and the Fig. 13 bar chart."""
-    from tqdm.auto import tqdm
+    """The whole ablation from simulated series: estimates per obstacle probability and seed, the
+    structure J-PCMCI+ discovers at p = 0.3, ``ablation.csv``, ``ablation.json`` and the Fig. 13
+    bar chart ``ablation.png``.
+
+    Args:
+      series: obstacle probability -> its :class:`Series`.
+      period_s: sampling period of the series.
+    """
+    from causal import plots
 
     out = pathlib.Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     results, structure = [], None
-    for p in tqdm(probabilities, desc="obstacle probability", disable=not progress):
-        speed, l_pct, obstacle, params = simulate(p, n_seeds, seed)
-        for k in range(n_seeds):
-            results.append(estimate(speed[k], l_pct[k], obstacle[k], params, 1.0, p, k))
+    for p in progress_lib.iterate(sorted(series), "obstacle probability", progress):
+        s = series[p]
+        for k in range(len(s.speed_mps)):
+            results.append(estimate(s.speed_mps[k], s.battery_change_pct[k], s.obstacle[k], s.battery, period_s, p, k))
         if abs(p - 0.3) < 1e-9:
-            data = {k: np.stack([speed[k], l_pct[k], obstacle[k]], 1) for k in range(n_seeds)}
+            data = {k: np.stack([s.speed_mps[k], s.battery_change_pct[k], s.obstacle[k]], 1)
+                    for k in range(len(s.speed_mps))}
             found = discover.run_jpcmciplus(data, names=("V", "L", "O"), alpha=0.01)
             structure = [k.label for k in found.links]
     table = pd.DataFrame([dict(dataclasses.asdict(r), error_bayesian=r.error_bayesian, error_causal=r.error_causal)
                           for r in results])
-    table.to_csv(out / "ablation.csv", index=False)
+    write_atomic(out / "ablation.csv", lambda f: table.to_csv(f, index=False))
     summary = table.groupby("p").agg(mae_bayesian=("error_bayesian", "mean"), sd_bayesian=("error_bayesian", "std"),
                                      mae_causal=("error_causal", "mean"), sd_causal=("error_causal", "std"),
                                      reference=("reference", "mean"), bayesian=("bayesian", "mean"),
                                      causal=("causal", "mean")).reset_index()
-    (out / "ablation.json").write_text(json.dumps({"structure_at_p_0.3": structure,
-                                                   "summary": summary.to_dict(orient="records")}, indent=1))
-    bar_chart(summary, out / "ablation.png")
+    write_text_atomic(out / "ablation.json", json.dumps({"structure_at_p_0.3": structure,
+                                                         "summary": summary.to_dict(orient="records")}, indent=1))
+    plots.ablation_figure(summary, out / "ablation.png")
     return results
-
-
-def bar_chart(summary: pd.DataFrame, path: pathlib.Path) -> pathlib.Path:
-    """Mean absolute error with standard deviation per obstacle probability (seed 000 Fig. 13)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    x = np.arange(len(summary))
-    fig, ax = plt.subplots(figsize=(6.5, 3.6))
-    ax.bar(x - 0.18, summary.mae_bayesian, 0.36, yerr=summary.sd_bayesian, capsize=3, color="#4c72b0",
-           label="Bayesian, E[L | V]")
-    ax.bar(x + 0.18, summary.mae_causal, 0.36, yerr=summary.sd_causal, capsize=3, color="#dd8452",
-           label="causal, E[L | do(V)]")
-    ax.set_xticks(x, [f"{p:.0%}" for p in summary.p])
-    ax.set_xlabel("obstacle probability per leg")
-    ax.set_ylabel("|L_ref - L_hat| (battery %)")
-    ax.set_title(f"Battery use for {DISTANCE_M:.0f} m at {SPEED_MPS} m/s: estimation error")
-    ax.legend()
-    fig.savefig(path, dpi=130, bbox_inches="tight")
-    plt.close(fig)
-    return path

@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from common.atomic import write_text_atomic
 from causal.variables import CONTEXTS, GROUND_TRUTH, VARIABLES, node_classification
 
 TESTS = ("parcorr", "regression")
@@ -61,11 +62,9 @@ class Discovery:
 
     def save(self, path: str | pathlib.Path) -> pathlib.Path:
         """Write the links and settings as JSON (a plain file any tool reads)."""
-        path = pathlib.Path(path)
         obj = {"test": self.test, "alpha": self.alpha, "tau_max": self.tau_max, "n_samples": self.n_samples,
                "seconds": self.seconds, "links": [dataclasses.asdict(k) for k in self.links]}
-        path.write_text(json.dumps(obj, indent=1))
-        return path
+        return write_text_atomic(path, json.dumps(obj, indent=1))
 
     @classmethod
     def load(cls, path: str | pathlib.Path) -> "Discovery":
@@ -150,51 +149,3 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
             "shd": len(missing) + len(extra) + len(misoriented),
             "missing": [f"{c}(t-{lag})->{e}" if lag else f"{c}->{e}" for c, e, lag in sorted(missing)],
             "extra": [k.label for k in extra], "misoriented": [k.label for k in misoriented]}
-
-
-# Fig. 8 layout: battery subgraph left, density subgraph right; contexts on the outside.
-LAYOUT = {"O": (0.0, 1.0), "C": (0.0, 0.0), "V": (1.0, 1.0), "L": (1.0, 0.0),
-          "W": (2.6, 1.0), "S": (2.6, 0.0), "D": (3.6, 0.5)}
-
-
-def draw(discovery: Discovery, path: str | pathlib.Path, title: str | None = None) -> pathlib.Path:
-    """The graph as a PNG like seed 000 Fig. 8: contexts grey, system variables orange, arrow
-    width by strength, self-lags as the node border width, lags written on links."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.patches import Circle, FancyArrowPatch
-
-    names = sorted({k.cause for k in discovery.links} | {k.effect for k in discovery.links} | set(VARIABLES))
-    pos = {n: LAYOUT.get(n, (1.8, -0.8 - 0.4 * i)) for i, n in enumerate(names)}
-    strengths = [abs(k.strength) for k in discovery.links] or [1.0]
-    top = max(strengths)
-    fig, ax = plt.subplots(figsize=(7.5, 3.6))
-    self_lag = {k.effect: k for k in discovery.links if k.cause == k.effect}
-    for n in names:
-        x, y = pos[n]
-        colour = "#c8c8c8" if n in CONTEXTS else "#f4a259"
-        width = 1.0 + 5.0 * abs(self_lag[n].strength) / top if n in self_lag else 1.0
-        ax.add_patch(Circle((x, y), 0.22, facecolor=colour, edgecolor="#333", lw=width, zorder=3))
-        ax.text(x, y, n, ha="center", va="center", fontsize=12, zorder=4)
-        if n in self_lag:
-            ax.text(x, y + 0.3, str(self_lag[n].lag), ha="center", fontsize=8, color="#333")
-    for k in discovery.links:
-        if k.cause == k.effect:
-            continue
-        arrow = FancyArrowPatch(pos[k.cause], pos[k.effect], arrowstyle="-|>" if k.oriented else "-",
-                                mutation_scale=14, shrinkA=16, shrinkB=16, lw=0.8 + 4.0 * abs(k.strength) / top,
-                                color="#444", connectionstyle="arc3,rad=0.12" if k.lag else "arc3", zorder=2)
-        ax.add_patch(arrow)
-        mx, my = (np.add(pos[k.cause], pos[k.effect])) / 2
-        ax.text(mx, my + 0.06, str(k.lag), fontsize=8, color="#1f4e79", ha="center")
-    ax.set_xlim(-0.5, 4.1)
-    ax.set_ylim(-0.5, 1.5)
-    ax.set_aspect("equal")
-    ax.axis("off")
-    ax.set_title(title or f"J-PCMCI+ ({discovery.test}, alpha {discovery.alpha}, tau_max {discovery.tau_max})")
-    path = pathlib.Path(path)
-    fig.savefig(path, dpi=130, bbox_inches="tight")
-    plt.close(fig)
-    return path

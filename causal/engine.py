@@ -9,7 +9,10 @@ discovered structure, maximum likelihood parameters, and the do-queries of seed 
   convention of ``pyagrum.lib.dynamicBN``. A discovered link ``X -> Y`` at lag 0 becomes
   ``Xt -> Yt`` and ``X0 -> Y0``; at lag 1 ``X0 -> Yt``. Contexts carry over (``W0 -> Wt`` ...),
   since J-PCMCI+ never reports context-context links. An unoriented same-time link is oriented
-  in the order V, L, D (a choice, written into the report).
+  in the order V, L, D (a choice, written into the report), unless that order closes a directed
+  cycle with the oriented same-time links (V -> L and D -> V found with L - D, say), in which
+  case it takes the other direction; a same-time link that closes a cycle either way is dropped
+  (J-PCMCI+ reports such conflicts as 'x-x').
 * Parameters: MLE with a negligible smoothing prior (1e-6) so unseen parent combinations do
   not stop the learner.
 * Queries: ``E[L | do(V = v), C = c]`` (backdoor over O) and ``E[D | do(S = s), W = w]`` as a
@@ -25,95 +28,17 @@ import pathlib
 import numpy as np
 import pandas as pd
 
+from causal.binning import Binning
 from causal.discover import Discovery
 from causal.extract import Datasets
 from causal.variables import CONTEXTS, VARIABLES
+from common.atomic import write_atomic, write_text_atomic
 
 CONTINUOUS = ("V", "L", "D")
 SMOOTHING = 1e-6
 BN_FILE = "engine.bifxml"
 META_FILE = "engine.json"
 TABLES_FILE = "engine_tables.npz"
-
-
-def quantile_edges(x: np.ndarray, k: int) -> np.ndarray:
-    """Quantile bin edges (``k`` bins, fewer where ties merge them), with every atom isolated.
-
-    An atom is a value holding more than ``1/k`` of the data (a robot cruising at exactly its
-    top speed, a waypoint that is empty most of the time). Plain quantiles would bury it in a
-    wide bin; it gets a bin of its own, between the mid-points to its neighbouring values, as
-    in the paper's networks (top speed bin [0.499; 0.509)). At least two bins when ``x`` varies.
-    """
-    x = np.asarray(x, np.float64)
-    edges = np.quantile(x, np.linspace(0, 1, k + 1))
-    values, counts = np.unique(x, return_counts=True)
-    for i in np.flatnonzero(counts > len(x) / k):
-        if i > 0:
-            edges = np.append(edges, (values[i - 1] + values[i]) / 2)
-        if i + 1 < len(values):
-            edges = np.append(edges, (values[i] + values[i + 1]) / 2)
-    edges = np.unique(edges)
-    if len(edges) < 3:  # a spike (e.g. many zeros): split the distinct values in two
-        lo, hi = float(x.min()), float(x.max())
-        if lo == hi:
-            raise ValueError("cannot bin a constant series")
-        above = x[x > lo]
-        mid = float(above.min()) if above.size else (lo + hi) / 2
-        edges = np.array([lo, (lo + mid) / 2 if mid > lo else (lo + hi) / 2, hi])
-        edges = np.unique(edges)
-    return edges
-
-
-def within_bin_sse(x: np.ndarray, edges: np.ndarray) -> float:
-    """Sum of squared deviations from each bin's mean (the elbow's cost)."""
-    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
-    sums = np.bincount(idx, weights=x, minlength=len(edges) - 1)
-    counts = np.bincount(idx, minlength=len(edges) - 1)
-    means = np.divide(sums, counts, out=np.zeros_like(sums), where=counts > 0)
-    return float(np.sum((x - means[idx]) ** 2))
-
-
-def elbow_bins(x: np.ndarray, k_min: int = 2, k_max: int = 8) -> int:
-    """Number of quantile bins at the elbow of the within-bin SSE curve.
-
-    The elbow is the ``k`` farthest from the straight line joining the curve's end points
-    (both axes scaled to [0, 1]), the usual "knee" rule.
-    """
-    ks = np.arange(k_min, k_max + 1)
-    sse = np.array([within_bin_sse(x, quantile_edges(x, k)) for k in ks])
-    if sse[0] <= sse[-1] + 1e-12:
-        return int(k_min)
-    xs = (ks - ks[0]) / (ks[-1] - ks[0])
-    ys = (sse - sse[-1]) / (sse[0] - sse[-1])
-    dist = np.abs(ys - (1 - xs))  # distance (up to a constant) from the chord y = 1 - x
-    return int(ks[np.argmax(dist)])
-
-
-@dataclasses.dataclass
-class Binning:
-    """Edges and per-bin data means of one continuous variable."""
-
-    edges: np.ndarray
-    means: np.ndarray
-
-    @classmethod
-    def fit(cls, x: np.ndarray, k: int | None = None) -> "Binning":
-        x = np.asarray(x, np.float64)
-        return cls.from_edges(x, quantile_edges(x, k or elbow_bins(x)))
-
-    @classmethod
-    def from_edges(cls, x: np.ndarray, edges) -> "Binning":
-        """Given ("expert") edges; the per-bin means come from ``x``."""
-        x = np.asarray(x, np.float64)
-        edges = np.asarray(edges, np.float64)
-        idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
-        counts = np.bincount(idx, minlength=len(edges) - 1)
-        sums = np.bincount(idx, weights=x, minlength=len(edges) - 1)
-        mids = (edges[:-1] + edges[1:]) / 2
-        return cls(edges, np.where(counts > 0, sums / np.maximum(counts, 1), mids))
-
-    def index(self, x) -> np.ndarray:
-        return np.clip(np.searchsorted(self.edges, x, side="right") - 1, 0, len(self.edges) - 2)
 
 
 def discretized_variable(name: str, binning: Binning):
@@ -136,19 +61,47 @@ def learn_mle(bn, data: pd.DataFrame):
     return learner.learnParameters(bn.dag())
 
 
-def dag_arcs(discovery: Discovery) -> list[tuple[str, str]]:
-    """Arcs of the two-slice network from the discovered links (see the module docstring)."""
+def _reaches(edges: set[tuple[str, str]], start: str, goal: str) -> bool:
+    """Whether a directed path leads from ``start`` to ``goal`` over ``edges``."""
+    todo, seen = [start], {start}
+    while todo:
+        here = todo.pop()
+        if here == goal:
+            return True
+        for a, b in edges:
+            if a == here and b not in seen:
+                seen.add(b)
+                todo.append(b)
+    return False
+
+
+def same_time_order(discovery: Discovery) -> set[tuple[str, str]]:
+    """The directed same-time links, acyclic: oriented links first, then the unoriented ones in
+    the order V, L, D where that keeps the graph acyclic, else reversed, else dropped."""
     order = {v: i for i, v in enumerate(VARIABLES)}
-    arcs = set()
-    for k in discovery.links:
+    same = [k for k in discovery.links if k.lag == 0]
+    edges: set[tuple[str, str]] = set()
+    for k in sorted(same, key=lambda k: not k.oriented):  # oriented links take precedence
         cause, effect = k.cause, k.effect
         if not k.oriented and order[cause] > order[effect]:
             cause, effect = effect, cause
-        if k.lag == 0:
-            arcs.add((f"{cause}t", f"{effect}t"))
-            arcs.add((f"{cause}0", f"{effect}0"))
-        elif k.lag == 1:
-            arcs.add((f"{cause}0", f"{effect}t"))
+        candidates = [(cause, effect)] if k.oriented else [(cause, effect), (effect, cause)]
+        for a, b in candidates:
+            if not _reaches(edges, b, a):
+                edges.add((a, b))
+                break
+    return edges
+
+
+def dag_arcs(discovery: Discovery) -> list[tuple[str, str]]:
+    """Arcs of the two-slice network from the discovered links (see the module docstring)."""
+    arcs = set()
+    for cause, effect in same_time_order(discovery):
+        arcs.add((f"{cause}t", f"{effect}t"))
+        arcs.add((f"{cause}0", f"{effect}0"))
+    for k in discovery.links:
+        if k.lag == 1:
+            arcs.add((f"{k.cause}0", f"{k.effect}t"))
     for c in CONTEXTS:
         arcs.add((f"{c}0", f"{c}t"))
     return sorted(arcs)
@@ -339,11 +292,11 @@ class CausalEngine:
 
         folder = pathlib.Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        gum.saveBN(self.bn, str(folder / BN_FILE))
+        write_atomic(folder / BN_FILE, lambda tmp: gum.saveBN(self.bn, str(tmp)))
         meta = {"period_s": self.period_s, "labels": self.labels, "arcs": self.arcs,
                 "support_vc": self.support_vc.tolist(), "support_sw": self.support_sw.tolist(),
                 "bins": {k: {"edges": b.edges.tolist(), "means": b.means.tolist()} for k, b in self.bins.items()}}
-        (folder / META_FILE).write_text(json.dumps(meta, indent=1))
+        write_text_atomic(folder / META_FILE, json.dumps(meta, indent=1))
         return folder
 
     @classmethod

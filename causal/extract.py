@@ -1,4 +1,7 @@
-"""From simulator logs (``logs.parquet``) to the per-waypoint datasets J-PCMCI+ expects.
+"""From simulator logs to the per-waypoint datasets J-PCMCI+ expects.
+
+The logs are read through their written contract (:mod:`common.logschema`: file and column
+names), not through the simulator, which this package never imports.
 
 For every world and every kept waypoint ``w`` one dataset (T, 7) holds, sample by sample,
 ``V`` (robot speed), ``L`` (battery change since the previous kept sample), ``D`` (Eq. 3
@@ -13,12 +16,17 @@ frequency over the series sets the rate. Waypoints where nobody ever stands carr
 from __future__ import annotations
 
 import dataclasses
+import json
+import pathlib
 
 import numpy as np
 import pandas as pd
 
 from causal.variables import VARIABLES
+from common import logschema
+from common.logschema import density_column
 
+# The log columns the causal variables come from (all in the schema: the contract test checks it).
 ROBOT_COLUMNS = ("world", "time_s", "slot", "robot_speed_mps", "battery_pct", "charging", "obstacle")
 # Share of a series' spectral energy (DC excluded) below its "highest significant frequency".
 SIGNIFICANT_ENERGY = 0.95
@@ -63,7 +71,7 @@ def check_logs(df: pd.DataFrame, waypoints: list[str]) -> None:
     if df.empty:
         raise LogError("the logs have no rows")
     missing = [c for c in ROBOT_COLUMNS if c not in df.columns]
-    missing += [f"density_{w}" for w in waypoints if f"density_{w}" not in df.columns]
+    missing += [density_column(w) for w in waypoints if density_column(w) not in df.columns]
     if missing:
         raise LogError(f"the logs lack column(s) {', '.join(missing[:5])}"
                        f"{' ...' if len(missing) > 5 else ''}: were they written by 'peopleflow simulate'?")
@@ -131,7 +139,7 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
         raise LogError(f"unknown waypoint(s) {unknown}")
     check_logs(df, wanted)
     df = df.sort_values(["world", "time_s"], kind="stable")
-    dropped = [w for w in wanted if df[f"density_{w}"].nunique() < 2]
+    dropped = [w for w in wanted if df[density_column(w)].nunique() < 2]
     if waypoints is not None and dropped:
         raise LogError(f"waypoint(s) {dropped} are empty: their density D never changes in the logs")
     kept = [w for w in wanted if w not in dropped]
@@ -144,8 +152,8 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
     robot_l = np.diff(first.battery_pct.to_numpy(np.float64), prepend=first.battery_pct.iloc[0])
     probe = {"V": first.robot_speed_mps.to_numpy(), "L": robot_l, "C": first.charging.to_numpy(float),
              "O": first.obstacle.to_numpy(float)}
-    densest = max(kept, key=lambda w: first[f"density_{w}"].var())
-    probe["D"] = first[f"density_{densest}"].to_numpy()
+    densest = max(kept, key=lambda w: first[density_column(w)].var())
+    probe["D"] = first[density_column(densest)].to_numpy()
     auto_step, freqs = nyquist_step(probe, dt, energy)
     if step is None:
         step = auto_step
@@ -168,9 +176,44 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
             "O": g.obstacle.to_numpy(np.float64)[1:],
         }
         for w in kept:
-            cols = dict(base, D=g[f"density_{w}"].to_numpy(np.float64)[1:], W=np.full(len(l_pct), float(index[w])))
+            cols = dict(base, D=g[density_column(w)].to_numpy(np.float64)[1:], W=np.full(len(l_pct), float(index[w])))
             k = len(data)
             data[k] = np.stack([cols[v] for v in VARIABLES], axis=1)
             names[k] = w
             world_of[k] = int(world)
     return Datasets(data, names, world_of, step, auto_step, dt, tuple(dropped), freqs)
+
+
+def read_run(logs_dir: str | pathlib.Path, waypoints: list[str] | None = None) -> tuple[pd.DataFrame, dict]:
+    """The columns the causal variables need from a run folder, and its metadata.
+
+    Args:
+      logs_dir: a folder written by ``socialnav simulate`` (:data:`common.logschema.LOG_FILE` and
+        :data:`~common.logschema.META_FILE`).
+      waypoints: the waypoints whose density is read (default: every waypoint of the run).
+
+    Raises:
+      LogError: a file or a needed column or metadata key is missing, naming it.
+    """
+    logs_dir = pathlib.Path(logs_dir)
+    log_file, meta_file = logs_dir / logschema.LOG_FILE, logs_dir / logschema.META_FILE
+    for f in (log_file, meta_file):
+        if not f.is_file():
+            raise LogError(f"{f} is missing: point --logs at a folder written by 'socialnav simulate'")
+    try:
+        meta = json.loads(meta_file.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise LogError(f"{meta_file}: not valid JSON ({e})") from None
+    if not isinstance(meta, dict) or not meta.get("waypoints") or not meta.get("slots"):
+        raise LogError(f"{meta_file} lacks the waypoint or slot names")
+    columns = list(ROBOT_COLUMNS) + [density_column(w) for w in (waypoints or meta["waypoints"])]
+    import pyarrow.parquet as pq
+
+    try:
+        present = set(pq.read_schema(log_file).names)
+    except Exception as e:  # pyarrow's errors for an unreadable file have no common base
+        raise LogError(f"{log_file}: not a readable Parquet file ({e})") from None
+    missing = [c for c in columns if c not in present]
+    if missing:
+        raise LogError(f"{log_file} lacks column(s) {missing[:5]}{' ...' if len(missing) > 5 else ''}")
+    return pd.read_parquet(log_file, columns=columns), meta

@@ -1,6 +1,6 @@
 """The ``learn`` job: simulator logs in; causal graph, inference engine and a report out.
 
-    peopleflow learn --logs runs/warehouse --out runs/warehouse/causal
+    socialnav learn --logs runs/warehouse --out runs/warehouse/causal
 
 Writes to ``--out``: ``discovery.json`` (links with lag, direction, strength, p-value),
 ``causal_graph.png`` (like seed 000 Fig. 8), ``engine.bifxml`` + ``engine.json`` (the network),
@@ -16,9 +16,19 @@ import pathlib
 import time
 
 import numpy as np
-import pandas as pd
 
-from causal import discover, engine as engine_lib, extract
+from causal import discover, extract, plots
+from causal import engine as engine_lib
+from common.atomic import write_bytes_atomic, write_text_atomic
+
+
+def write_tables(path: str | pathlib.Path, waypoints: list[str], slots: list[str],
+                 tables: dict[str, np.ndarray]) -> pathlib.Path:
+    """Write the engine's tables (:meth:`causal.engine.CausalEngine.tables`) with the waypoint and
+    slot names they belong to, atomically: ``engine_tables.npz``, the file the planners read with
+    their own reader (``planners.tables.CausalTables``; ``tests/test_contracts.py`` checks both ends)."""
+    return write_bytes_atomic(path, lambda h: np.savez(h, waypoints=np.array(waypoints), slots=np.array(slots),
+                                                       **tables))
 
 
 @dataclasses.dataclass
@@ -34,7 +44,7 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
     """Run extraction, discovery, parameter learning and the do-queries on a run's logs.
 
     Args:
-      logs_dir: a folder written by ``peopleflow simulate`` (``logs.parquet`` + ``run.json``).
+      logs_dir: a folder written by ``socialnav simulate`` (:mod:`common.logschema`).
       test, alpha: J-PCMCI+ settings (see :func:`causal.discover.run_jpcmciplus`).
       step: subsampling step in logged samples (default: the Nyquist rule, coarsened if needed
         to keep ``max_samples`` samples over all datasets).
@@ -47,27 +57,13 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
       extract.LogError: the logs lack a column, a variable is constant, a waypoint is empty.
     """
     logs_dir, out = pathlib.Path(logs_dir), pathlib.Path(out_dir)
-    log_file, meta_file = logs_dir / "logs.parquet", logs_dir / "run.json"
-    for f in (log_file, meta_file):
-        if not f.is_file():
-            raise extract.LogError(f"{f} is missing: point --logs at a folder written by 'peopleflow simulate'")
-    meta = json.loads(meta_file.read_text())
-    names, slots = meta.get("waypoints"), meta.get("slots")
-    if not names or not slots:
-        raise extract.LogError(f"{meta_file} lacks the waypoint or slot names")
     timings = {}
     t0 = time.perf_counter()
     say = print if progress else (lambda *a, **k: None)
 
     say("reading logs ...", flush=True)
-    wanted = waypoints or names
-    columns = list(extract.ROBOT_COLUMNS) + [f"density_{w}" for w in wanted]
-    try:
-        df = pd.read_parquet(log_file, columns=columns)
-    except Exception as e:  # pyarrow names the missing column
-        if "density_" in str(e) or any(c in str(e) for c in extract.ROBOT_COLUMNS):
-            raise extract.LogError(f"the logs lack a needed column: {e}") from None
-        raise
+    df, meta = extract.read_run(logs_dir, waypoints)
+    names, slots = meta["waypoints"], meta["slots"]
     datasets = extract.build_datasets(df, names, waypoints=waypoints, step=step, max_samples=max_samples,
                                       worlds=worlds)
     timings["extract_s"] = time.perf_counter() - t0
@@ -105,9 +101,9 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
 
     out.mkdir(parents=True, exist_ok=True)
     found.save(out / "discovery.json")
-    discover.draw(found, out / "causal_graph.png")
+    plots.graph_figure(found, out / "causal_graph.png")
     eng.save(out)
-    np.savez(out / engine_lib.TABLES_FILE, waypoints=np.array(names), slots=np.array(slots), **tables)
+    write_tables(out / engine_lib.TABLES_FILE, names, slots, tables)
     timings["total_s"] = time.perf_counter() - t0
     report = {
         "logs": str(logs_dir), "test": test, "alpha": alpha, "subsampling_step": datasets.step,
@@ -119,7 +115,7 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
         "battery_pct_per_s": tables["battery_pct_per_s"].tolist(), "speed_mps": tables["speed_mps"].tolist(),
         "timings": timings,
     }
-    (out / "report.json").write_text(json.dumps(report, indent=1))
+    write_text_atomic(out / "report.json", json.dumps(report, indent=1))
     say(f"learn finished in {timings['total_s']:.1f} s (extract {timings['extract_s']:.1f}, discover "
         f"{timings['discover_s']:.1f}, fit {timings['fit_s']:.1f}, queries {timings['queries_s']:.1f}); "
         f"wrote {out}/{{discovery.json, causal_graph.png, engine.bifxml, engine.json, engine_tables.npz, "

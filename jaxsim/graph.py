@@ -1,7 +1,8 @@
 """Shortest routes over the waypoint graph (host side, numpy; 73 nodes, so all pairs at once).
 
-The simulator never searches a graph inside ``jit``: workers look up ``next_hop[here, goal]``
-and the robot follows a route taken from a table. Both tables are built here once.
+The simulator never searches a graph inside ``jit``: workers look up ``next_hop[here, goal]``,
+built here once; the robot follows a route table that a planner builds with the same search
+(``planners.routes``).
 """
 
 from __future__ import annotations
@@ -62,45 +63,3 @@ def floyd_warshall(cost: np.ndarray, allowed: np.ndarray | None = None) -> tuple
         dist = np.where(better, via, dist)
         next_hop = np.where(better, next_hop[:, k:k + 1], next_hop)
     return dist, next_hop
-
-
-def route(next_hop: np.ndarray, start: int, goal: int) -> list[int]:
-    """Waypoints from ``start`` (excluded) to ``goal`` (included); empty if start == goal.
-
-    Raises:
-      ValueError: when ``goal`` cannot be reached from ``start``.
-    """
-    path, here = [], start
-    while here != goal:
-        here = int(next_hop[here, goal])
-        if here == UNREACHABLE or len(path) > len(next_hop):
-            raise ValueError(f"waypoint {goal} is unreachable from {start}")
-        path.append(here)
-    return path
-
-
-def route_table(next_hop: np.ndarray, dist: np.ndarray, max_len: int | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Every shortest route as a padded table, the robot's plan format.
-
-    Returns:
-      routes: (n, n, L) int32; ``routes[i, j, :k]`` are the waypoints after ``i`` up to ``j``,
-        padded with ``j`` (so a route can be followed without a length check).
-      lengths: (n, n) int32 number of real hops ``k`` (0 for unreachable pairs or ``i == j``).
-    """
-    n = len(next_hop)
-    paths = {}
-    for i in range(n):
-        for j in range(n):
-            if np.isfinite(dist[i, j]):
-                paths[i, j] = route(next_hop, i, j)
-    longest = max((len(p) for p in paths.values()), default=1)
-    max_len = max(longest, 1) if max_len is None else max_len
-    if longest > max_len:
-        raise ValueError(f"a route has {longest} hops, more than max_len={max_len}")
-    routes = np.repeat(np.arange(n, dtype=np.int32)[None, :, None], n, 0).repeat(max_len, 2)
-    lengths = np.zeros((n, n), np.int32)
-    for (i, j), p in paths.items():
-        routes[i, j, :len(p)] = p
-        lengths[i, j] = len(p)
-    return routes, lengths

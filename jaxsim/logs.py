@@ -1,7 +1,8 @@
 """Rollouts written to Parquet, in chunks, atomically.
 
 One row per logged sample per world; rows come in time chunks, world by world within a chunk
-(sort by ``world, time_s`` for one series per world). Columns:
+(sort by ``world, time_s`` for one series per world). The files and columns are the written
+contract of :mod:`common.logschema` (the causal pipeline reads them through it):
 
 * ``world``, ``seed``, and the settings ``dt_s``, ``slot_length_s``, ``n_workers``,
   ``obstacle_probability``: so runs can be concatenated and still told apart;
@@ -15,15 +16,14 @@ One row per logged sample per world; rows come in time chunks, world by world wi
 * ``dist_worker_<i>``: robot-worker centre distance in m, NaN while worker i is absent;
 * with ``log_positions``: ``worker_x_<i>``, ``worker_y_<i>``, ``worker_status_<i>``.
 
-The file is written as ``logs.parquet.tmp`` and renamed when complete, so a killed run leaves
-no half file under the final name; ``run.json`` (settings, names, timings) is written the same way.
+The log is written to a temporary file and renamed when complete, so a killed run leaves no half
+file under the final name; ``run.json`` (settings, names, timings) is written the same way.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import pathlib
 import time
 
@@ -31,23 +31,15 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from common import logschema
+from common import progress as progress_lib
+from common.atomic import atomic_path, write_text_atomic
+from common.logschema import LOG_FILE, META_FILE, density_column, distance_column, position_columns
 from jaxsim.scenario import Scenario
+from jaxsim.step import Controller
 
-LOG_FILE = "logs.parquet"
-META_FILE = "run.json"
 # Device memory for one time chunk of records (all worlds); bounds the host memory too.
 CHUNK_BUDGET_BYTES = 256 * 2**20
-
-ROBOT_COLUMNS = [
-    ("robot_x_m", "robot_x_m", pa.float32()), ("robot_y_m", "robot_y_m", pa.float32()),
-    ("robot_speed_mps", "robot_speed_mps", pa.float32()), ("battery_pct", "battery_pct", pa.float32()),
-    ("battery_change_pct", "battery_change_pct", pa.float32()), ("charging", "charging", pa.bool_()),
-    ("obstacle", "obstacle", pa.bool_()), ("robot_mode", "robot_mode", pa.int8()),
-    ("robot_waypoint", "robot_waypoint", pa.int16()), ("goal_wp", "goal_wp", pa.int16()),
-    ("leg_elapsed_s", "leg_elapsed_s", pa.float32()), ("tasks_started", "tasks_started", pa.int32()),
-    ("tasks_succeeded", "tasks_succeeded", pa.int32()), ("tasks_failed", "tasks_failed", pa.int32()),
-    ("stalled_s", "stalled_s", pa.float32()), ("n_present", "n_present", pa.int16()),
-]
 
 
 @dataclasses.dataclass
@@ -91,17 +83,18 @@ def record_table(rec, world_ids: np.ndarray, scenario: Scenario, seed: int, log_
         "time_s": pa.array(rec.time_s.reshape(-1).astype(np.float64)),
         "slot": pa.array(rec.slot.reshape(-1).astype(np.int8)),
     }
-    for name, field, typ in ROBOT_COLUMNS:
-        cols[name] = pa.array(np.asarray(getattr(rec, field)).reshape(-1).astype(typ.to_pandas_dtype()))
+    for name, dtype in logschema.ROBOT_COLUMNS:
+        cols[name] = pa.array(np.asarray(getattr(rec, name)).reshape(-1).astype(dtype))
     for k, wp in enumerate(scenario.waypoint_ids):
-        cols[f"density_{wp}"] = pa.array(rec.density_ppm2[:, :, k].reshape(-1))
+        cols[density_column(wp)] = pa.array(rec.density_ppm2[:, :, k].reshape(-1))
     for i in range(p.n_workers):
-        cols[f"dist_worker_{i}"] = pa.array(rec.worker_dist_m[:, :, i].reshape(-1))
+        cols[distance_column(i)] = pa.array(rec.worker_dist_m[:, :, i].reshape(-1))
     if log_positions:
         for i in range(p.n_workers):
-            cols[f"worker_x_{i}"] = pa.array(rec.worker_x_m[:, :, i].reshape(-1))
-            cols[f"worker_y_{i}"] = pa.array(rec.worker_y_m[:, :, i].reshape(-1))
-            cols[f"worker_status_{i}"] = pa.array(rec.worker_status[:, :, i].reshape(-1).astype(np.int8))
+            x, y, status = position_columns(i)
+            cols[x] = pa.array(rec.worker_x_m[:, :, i].reshape(-1))
+            cols[y] = pa.array(rec.worker_y_m[:, :, i].reshape(-1))
+            cols[status] = pa.array(rec.worker_status[:, :, i].reshape(-1).astype(np.int8))
     return pa.table(cols)
 
 
@@ -119,15 +112,16 @@ def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUD
     return best
 
 
-def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, *, n_worlds: int, duration_s: float,
-                        seed: int = 0, sample_interval_s: float = 1.0, log_positions: bool = False,
-                        snapshot_time_s: float | None = None, progress: bool = True,
-                        chunk_budget_bytes: int = CHUNK_BUDGET_BYTES, plan=None) -> RunSummary:
+def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, controller: Controller, *, n_worlds: int,
+                        duration_s: float, seed: int = 0, sample_interval_s: float = 1.0,
+                        log_positions: bool = False, snapshot_time_s: float | None = None, progress: bool = True,
+                        chunk_budget_bytes: int = CHUNK_BUDGET_BYTES) -> RunSummary:
     """Simulate ``n_worlds`` worlds for ``duration_s`` and write ``logs.parquet`` + ``run.json``.
 
     Args:
       scenario: the validated scenario (its params included).
-      out_dir: output folder (created). Existing files of a previous run are replaced only when
+      out_dir: output folder (created).
+      controller: the robot's controller, e.g. ``RouteFollower(planners.routes.shortest_path_plan(s))``. Existing files of a previous run are replaced only when
         this run completes.
       n_worlds: batch size; world ``b`` is the same world for a given seed whatever ``n_worlds``
         (bit for bit for the same ``n_worlds``, to float rounding across batch sizes).
@@ -135,15 +129,14 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, *, n_wo
       sample_interval_s: logging interval, a multiple of ``dt_s``.
       log_positions: also log every worker's position and status.
       snapshot_time_s: keep world 0's positions at this time for a picture.
-      plan: the robot's :class:`~jaxsim.world.RobotPlan` (default: shortest paths).
 
     Raises:
       ValueError: on inconsistent sizes, before anything is written.
     """
     import jax
-    from tqdm.auto import tqdm
 
-    from jaxsim import rollout, world as world_lib
+    from jaxsim import rollout
+    from jaxsim import world as world_lib
 
     p = scenario.params
     every = sample_interval_s / p.dt_s
@@ -162,9 +155,8 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, *, n_wo
 
     start = time.perf_counter()
     world = world_lib.build_world(scenario)
-    plan = world_lib.shortest_path_plan(scenario) if plan is None else plan
     keys = rollout.world_keys(seed, n_worlds)
-    states = rollout.init_batch(p, world, plan, keys)
+    states = rollout.init_batch(p, world, controller, keys)
     per_sample = 4 * (scenario.n_waypoints + p.n_workers * (4 if log_positions else 2) + 32)
     chunk = chunk_samples(n_samples, per_sample * n_worlds, chunk_budget_bytes)
     n_chunks = n_samples // chunk
@@ -174,61 +166,52 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, *, n_wo
     dens_n = np.zeros(n_slots)
     snapshot = None
     final = {}
-    tmp = out / (LOG_FILE + ".tmp")
     writer = None
     rows = 0
     compile_s = 0.0
-    bar = tqdm(total=n_samples * every * p.dt_s, unit="sim s", disable=not progress,
-               desc=f"simulate {n_worlds} world(s)")
-    try:
-        pending = rollout.run_samples(p, world, plan, states, keys, chunk, every)
-        for c in range(n_chunks):
-            states, rec = pending
-            if c + 1 < n_chunks:  # dispatch the next chunk before converting this one
-                pending = rollout.run_samples(p, world, plan, states, keys, chunk, every)
-            rec = rollout.to_numpy(rec)
-            if c == 0:
-                compile_s = time.perf_counter() - start
-            table = record_table(rec, np.arange(n_worlds), scenario, seed, log_positions)
-            if writer is None:
-                writer = pq.ParquetWriter(tmp, table.schema, compression="zstd")
-            writer.write_table(table)
-            rows += table.num_rows
-            np.add.at(dens_sum, rec.slot.reshape(-1), rec.density_ppm2.reshape(-1, scenario.n_waypoints))
-            np.add.at(dens_n, rec.slot.reshape(-1), 1)
-            if snapshot_time_s is not None and snapshot is None:
-                hit = np.flatnonzero(rec.time_s[0] >= snapshot_time_s - 1e-6)
-                if hit.size:
-                    k = hit[0]
-                    snapshot = {"time_s": float(rec.time_s[0, k]), "slot": int(rec.slot[0, k]),
-                                "worker_x_m": rec.worker_x_m[0, k], "worker_y_m": rec.worker_y_m[0, k],
-                                "worker_status": rec.worker_status[0, k],
-                                "robot_x_m": float(rec.robot_x_m[0, k]), "robot_y_m": float(rec.robot_y_m[0, k])}
-            final = {f: getattr(rec, f)[:, -1].tolist() for f in
-                     ("tasks_started", "tasks_succeeded", "tasks_failed", "battery_pct", "stalled_s")}
-            bar.update(chunk * every * p.dt_s)
-        writer.close()
-        writer = None
+    with atomic_path(out / LOG_FILE) as tmp, \
+            progress_lib.bar(f"simulate {n_worlds} world(s)", unit="sim s", enabled=progress) as bar:
+        try:
+            pending = rollout.run_samples(p, world, controller, states, keys, chunk, every)
+            for c in range(n_chunks):
+                states, rec = pending
+                if c + 1 < n_chunks:  # dispatch the next chunk before converting this one
+                    pending = rollout.run_samples(p, world, controller, states, keys, chunk, every)
+                rec = rollout.to_numpy(rec)
+                if c == 0:
+                    compile_s = time.perf_counter() - start
+                table = record_table(rec, np.arange(n_worlds), scenario, seed, log_positions)
+                if writer is None:
+                    writer = pq.ParquetWriter(tmp, table.schema, compression="zstd")
+                writer.write_table(table)
+                rows += table.num_rows
+                np.add.at(dens_sum, rec.slot.reshape(-1), rec.density_ppm2.reshape(-1, scenario.n_waypoints))
+                np.add.at(dens_n, rec.slot.reshape(-1), 1)
+                if snapshot_time_s is not None and snapshot is None:
+                    hit = np.flatnonzero(rec.time_s[0] >= snapshot_time_s - 1e-6)
+                    if hit.size:
+                        k = hit[0]
+                        snapshot = {"time_s": float(rec.time_s[0, k]), "slot": int(rec.slot[0, k]),
+                                    "worker_x_m": rec.worker_x_m[0, k], "worker_y_m": rec.worker_y_m[0, k],
+                                    "worker_status": rec.worker_status[0, k], "robot_x_m": float(rec.robot_x_m[0, k]),
+                                    "robot_y_m": float(rec.robot_y_m[0, k])}
+                final = {f: getattr(rec, f)[:, -1].tolist() for f in
+                         ("tasks_started", "tasks_succeeded", "tasks_failed", "battery_pct", "stalled_s")}
+                bar.update((c + 1) * chunk * every * p.dt_s, n_samples * every * p.dt_s)
+        finally:
+            if writer is not None:
+                writer.close()
         wall = time.perf_counter() - start
-        os.replace(tmp, out / LOG_FILE)
-    finally:
-        bar.close()
-        if writer is not None:
-            writer.close()
-        if tmp.exists():
-            tmp.unlink()
 
     agent_steps = n_worlds * n_samples * every * (p.n_workers + 1)
     meta = {
-        "seed": seed, "n_worlds": n_worlds, "duration_s": duration_s, "sample_interval_s": sample_interval_s,
+        "schema_version": logschema.SCHEMA_VERSION, "seed": seed, "n_worlds": n_worlds, "duration_s": duration_s, "sample_interval_s": sample_interval_s,
         "rows": rows, "wall_s": wall, "compile_s": compile_s, "agent_steps_per_s": agent_steps / wall,
         "jax_devices": [str(d) for d in jax.devices()], "scenario": scenario.name,
         "waypoints": list(scenario.waypoint_ids), "slots": list(scenario.slot_names),
         "slot_clock": list(scenario.slot_clock), "params": dataclasses.asdict(p), "final": final,
     }
-    meta_tmp = out / (META_FILE + ".tmp")
-    meta_tmp.write_text(json.dumps(meta, indent=1))
-    os.replace(meta_tmp, out / META_FILE)
+    write_text_atomic(out / META_FILE, json.dumps(meta, indent=1))
     with np.errstate(invalid="ignore"):
         mean_density = dens_sum / dens_n[:, None]
     return RunSummary(out / LOG_FILE, out / META_FILE, rows, wall, compile_s, agent_steps / wall,

@@ -1,4 +1,12 @@
-"""Static simulation parameters (hashable, so they can be a static argument of ``jax.jit``).
+"""Simulation parameters: a few static sizes and flags, and a pytree of dynamic floats.
+
+:class:`SimParams` is a pytree (``flax.struct``). Its *static* fields (:data:`STATIC_FIELDS`:
+the time step, the slot length, the number of workers, the teleport flag) change the compiled
+program (array shapes, step counts, branches) and live in the tree's structure; every other
+field is a float leaf, an ordinary traced input of ``jax.jit``. So a new value of a dynamic
+parameter reuses the compiled step, and a sweep over one is a ``vmap`` over stacked params
+(:meth:`SimParams.stack`) in one compilation. Host code (validation, JSON) reads the fields as
+plain Python numbers.
 
 The values live in ``data/<scenario>/params.json`` in four sections (``sim``, ``workers``,
 ``robot``, ``battery``); a field here is the JSON key with the section as prefix
@@ -12,11 +20,22 @@ import dataclasses
 import json
 import math
 import pathlib
+from collections.abc import Sequence
+
+import jax
+import jax.numpy as jnp
+from flax import struct
 
 SECTION_PREFIX = {"sim": "", "workers": "worker_", "robot": "robot_", "battery": "battery_"}
+# Fields that shape the compiled program; every other field is a dynamic float.
+STATIC_FIELDS = ("dt_s", "slot_length_s", "n_workers", "robot_teleport_on_failure")
 
 
-@dataclasses.dataclass(frozen=True)
+def _static():
+    return struct.field(pytree_node=False)
+
+
+@struct.dataclass
 class SimParams:
     """Every number of the warehouse simulation. Units are in the names.
 
@@ -27,10 +46,10 @@ class SimParams:
     Battery (seed 000 Eq. 1): ``L = -dt (K_s + K_d V) [x K_o if O]`` or ``+dt K_c`` when charging.
     """
 
-    # sim
-    dt_s: float
-    slot_length_s: float
-    n_workers: int
+    # sim (static)
+    dt_s: float = _static()
+    slot_length_s: float = _static()
+    n_workers: int = _static()
     # workers
     worker_radius_m: float
     worker_desired_speed_mean_mps: float
@@ -68,7 +87,7 @@ class SimParams:
     robot_obstacle_probability: float
     robot_obstacle_length_m: float
     robot_obstacle_speed_factor_min: float  # per obstacle, speed factor ~ U(min, 1)
-    robot_teleport_on_failure: bool
+    robot_teleport_on_failure: bool = _static()
     # battery (seed 000 Eq. 1-2)
     battery_initial_pct: float
     battery_static_pct_per_s: float  # K_s
@@ -84,7 +103,29 @@ class SimParams:
         return int(round(self.slot_length_s / self.dt_s))
 
     @classmethod
-    def from_json(cls, file: pathlib.Path, error: type[Exception] = ValueError) -> "SimParams":
+    def dynamic_names(cls) -> tuple[str, ...]:
+        """The dynamic (float leaf) fields, in declaration order."""
+        return tuple(f.name for f in dataclasses.fields(cls) if f.name not in STATIC_FIELDS)
+
+    @classmethod
+    def stack(cls, params: Sequence[SimParams]) -> SimParams:
+        """Params with a leading axis on every dynamic field, for a ``vmap`` over settings.
+
+        Raises:
+          ValueError: the static fields differ (they would need another compiled program).
+        """
+        if not params:
+            raise ValueError("need at least one SimParams to stack")
+        first = params[0]
+        for other in params[1:]:
+            for name in STATIC_FIELDS:
+                if getattr(other, name) != getattr(first, name):
+                    raise ValueError(f"cannot stack params with different static field {name!r}: "
+                                     f"{getattr(first, name)} vs {getattr(other, name)}")
+        return jax.tree.map(lambda *xs: jnp.asarray(xs, jnp.float32), *params)
+
+    @classmethod
+    def from_json(cls, file: pathlib.Path, error: type[Exception] = ValueError) -> SimParams:
         """Read ``params.json``; ``error(file, field, message)`` is raised on a bad field."""
         if not file.is_file():
             raise error(file, "<file>", "file is missing")

@@ -1,5 +1,7 @@
-"""The robot: follows the route given by a :class:`~jaxsim.world.RobotPlan`, slows and stalls
-behind people, meets static obstacles, runs its slot's task list and recharges. Pure JAX.
+"""The robot of the day simulation: follows the route given by a :class:`~jaxsim.world.RobotPlan`,
+slows and stalls behind people, meets static obstacles, runs its slot's task list and recharges.
+Pure JAX. :class:`RouteFollower` is this behaviour as the controller the step takes; protocols
+reuse :func:`drive` and :func:`begin_leg` with task logic of their own.
 
 * Motion: straight towards the next route waypoint at up to ``robot_max_speed_mps``, speeding
   up at ``robot_accel_mps2`` (braking is immediate). A waypoint is reached within
@@ -26,20 +28,17 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+from flax import struct
 
+from common.pytree import select
 from jaxsim import battery
 from jaxsim.params import SimParams
 from jaxsim.state import CHARGING, TASK, TO_CHARGER, RobotState
 from jaxsim.world import RobotPlan, World
 
 
-def select(cond, a, b):
-    """``a`` where ``cond`` else ``b``, leaf by leaf (a pytree ``jnp.where``)."""
-    return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
-
-
-def begin_leg(params: SimParams, plan: RobotPlan, r: RobotState, slot, start_wp, goal_wp, is_task,
-              u) -> RobotState:
+def begin_leg(params: SimParams, plan: RobotPlan, r: RobotState, slot: jax.Array, start_wp: jax.Array,
+              goal_wp: jax.Array, is_task: jax.Array | bool, u: jax.Array) -> RobotState:
     """Put the robot on the planned route ``start_wp -> goal_wp`` of ``slot`` (leg counters reset).
 
     ``is_task``: a task leg (obstacles may appear; mode TASK) rather than the way to the charger.
@@ -85,7 +84,8 @@ def crowd_speed_factor(params: SimParams, r: RobotState, hx, hy, wx, wy, present
     return jnp.clip((gap - stop) / (slow - stop), 0.0, 1.0)
 
 
-def drive(params: SimParams, world: World, r: RobotState, wx, wy, present) -> tuple[RobotState, jnp.ndarray]:
+def drive(params: SimParams, world: World, r: RobotState, wx: jax.Array, wy: jax.Array, present: jax.Array
+          ) -> tuple[RobotState, jax.Array]:
     """One step of motion along the current route: crowds, obstacle, battery, route progress.
 
     ``wx, wy, present``: (N,) workers. Returns the moved robot and ``arrived`` (the last route
@@ -160,3 +160,23 @@ def init_robot(params: SimParams, world: World, plan: RobotPlan, u) -> RobotStat
         obstacle_at_m=f(jnp.inf), obstacle_left_m=f(0.0), obstacle_speed_factor=f(1.0), tasks_started=i(0),
         tasks_succeeded=i(0), tasks_failed=i(0), stalled_s=f(0.0))
     return start_leg(params, world, plan, r, jnp.int32(0), jnp.int32(start), False, u)
+
+
+@struct.dataclass
+class RouteFollower:
+    """The day simulation's controller: the robot follows ``plan``'s routes through its slots'
+    task lists and recharges (:func:`update_robot`). A pytree, so a rollout compiled for one
+    plan serves every plan of the same shape.
+
+    Attributes:
+      plan: the routes per slot (a planner's output, e.g. ``planners.routes.shortest_path_plan``).
+    """
+
+    plan: RobotPlan
+
+    def init(self, params: SimParams, world: World, u: jax.Array) -> RobotState:
+        return init_robot(params, world, self.plan, u)
+
+    def step(self, params: SimParams, world: World, robot: RobotState, slot: jax.Array, workers_x_m: jax.Array,
+             workers_y_m: jax.Array, present: jax.Array, u: jax.Array) -> RobotState:
+        return update_robot(params, world, self.plan, robot, slot, workers_x_m, workers_y_m, present, u)

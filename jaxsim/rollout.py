@@ -9,28 +9,41 @@ Layout of the compiled program for a batch of ``B`` worlds and ``n_samples`` sam
           scan over samples -> measure()                  (one Record per sample)
             scan over steps_per_sample -> step()
 
-Randomness is counter-based: the draws of world ``b`` at step ``t`` are a hash of the world's
-seed (from ``world_key[b]``) and ``t`` (:func:`jaxsim.step.hash_uniform16`), so results do not
-depend on how time or worlds are chunked, and the same seed gives the same logs bit for bit.
+The robot's controller (:class:`jaxsim.step.Controller`, e.g. :class:`jaxsim.robot.RouteFollower`)
+and the dynamic parameters are ordinary inputs of the compiled program: another plan of the
+same shape or another value of a float parameter reuses it. With ``params_batched`` every world
+has its own parameters (a sweep: :meth:`jaxsim.params.SimParams.stack`), still one compilation.
 
-Two host devices are what lets XLA use both cores of a CPU: call
-:func:`jaxsim.devices.request_host_devices` before JAX is imported (the command line and benchmark do).
+Randomness is counter-based (:mod:`jaxsim.rng`): results do not depend on how time or worlds are
+chunked, and the same seed gives the same logs bit for bit.
+
+:func:`run_until_done` runs any batched step until every world is done, retiring finished
+worlds as it goes (batch compaction); the evaluation protocols use it.
+
+Two host devices are what lets XLA use both cores of a CPU: the ``socialnav`` command asks XLA
+for one per core before JAX is imported.
 """
 
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from common.pytree import put, take
+from common.pytree import to_numpy as _to_numpy
 from jaxsim.params import SimParams
+from jaxsim.rng import world_seed_u32
 from jaxsim.state import Record, SimState
-from jaxsim.step import init_state, measure, step, world_seed_u32
-from jaxsim.world import RobotPlan, World
+from jaxsim.step import Controller, init_state, measure, step
+from jaxsim.world import World
 
 DEFAULT_WORLD_CHUNK = 64
+# Key folded into a world's key for its initial state (kept apart from its step seed).
+INIT_FOLD = 2**31 - 1
 
 
 def world_keys(seed: int, n_worlds: int) -> jax.Array:
@@ -39,18 +52,26 @@ def world_keys(seed: int, n_worlds: int) -> jax.Array:
     return jax.vmap(lambda b: jax.random.fold_in(base, b))(jnp.arange(n_worlds))
 
 
-def init_batch(params: SimParams, world: World, plan: RobotPlan, keys: jax.Array) -> SimState:
-    """Initial states of a batch of worlds, one per key (init key = ``fold_in(key, 2**31 - 1)``)."""
-    init = lambda k: init_state(params, world, plan, jax.random.fold_in(k, 2**31 - 1))  # noqa: E731
-    return jax.jit(jax.vmap(init))(keys)
+@functools.lru_cache(maxsize=4)
+def _init_fn(params_batched: bool):
+    def init(params, world, controller, key):
+        return init_state(params, world, controller, jax.random.fold_in(key, INIT_FOLD))
+
+    return jax.jit(jax.vmap(init, in_axes=(0 if params_batched else None, None, None, 0)))
 
 
-def _run_one(params: SimParams, world: World, plan: RobotPlan, state: SimState, key,
-             n_samples: int, steps_per_sample: int):
+def init_batch(params: SimParams, world: World, controller: Controller, keys: jax.Array,
+               params_batched: bool = False) -> SimState:
+    """Initial states of a batch of worlds, one per key (init key = ``fold_in(key, INIT_FOLD)``)."""
+    return _init_fn(params_batched)(params, world, controller, keys)
+
+
+def _run_one(params: SimParams, world: World, controller: Controller, state: SimState, key: jax.Array,
+             n_samples: int, steps_per_sample: int) -> tuple[SimState, Record]:
     seed = world_seed_u32(key)
 
     def inner(s, _):
-        return step(params, world, plan, s, seed), None
+        return step(params, world, controller, s, seed), None
 
     def outer(s, _):
         s, _ = jax.lax.scan(inner, s, None, length=steps_per_sample)
@@ -59,7 +80,7 @@ def _run_one(params: SimParams, world: World, plan: RobotPlan, state: SimState, 
     return jax.lax.scan(outer, state, None, length=n_samples)
 
 
-def map_worlds(run_one, batched, world_chunk: int):
+def map_worlds(run_one: Callable, batched: tuple, world_chunk: int):
     """``vmap(run_one)`` over the leading (world) axis of the pytree tuple ``batched``, chunked.
 
     ``lax.map`` runs chunks of ``world_chunk`` worlds (the largest divisor of the batch not above
@@ -88,7 +109,7 @@ def devices_for(n_worlds: int) -> int:
     return n_dev
 
 
-def shard_worlds(fn, n_shared: int, n_batched: int, n_dev: int):
+def shard_worlds(fn: Callable, n_shared: int, n_batched: int, n_dev: int) -> Callable:
     """``jit(fn)``, split over ``n_dev`` host devices along the world axis.
 
     ``fn(*shared, *batched)``: the first ``n_shared`` arguments are replicated (world, plans),
@@ -114,21 +135,27 @@ def place(n_dev: int, shared: tuple, batched: tuple) -> tuple[tuple, tuple]:
 
 
 @functools.lru_cache(maxsize=16)
-def _compiled(params: SimParams, n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: int):
-    def fn(world, plan, states, keys):
-        run = functools.partial(_run_one, params, world, plan, n_samples=n_samples,
-                                steps_per_sample=steps_per_sample)
-        return map_worlds(run, (states, keys), world_chunk)
+def _compiled(n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: int, params_batched: bool):
+    def run(params, world, controller, states, keys):
+        one = lambda p, s, k: _run_one(p, world, controller, s, k, n_samples, steps_per_sample)  # noqa: E731
+        if params_batched:
+            return map_worlds(one, (params, states, keys), world_chunk)
+        return map_worlds(lambda s, k: one(params, s, k), (states, keys), world_chunk)
 
-    return shard_worlds(fn, 2, 2, n_dev)
+    if params_batched:
+        return shard_worlds(lambda w, c, p, s, k: run(p, w, c, s, k), 2, 3, n_dev)
+    return shard_worlds(run, 3, 2, n_dev)
 
 
-def run_samples(params: SimParams, world: World, plan: RobotPlan, states: SimState, keys: jax.Array,
-                n_samples: int, steps_per_sample: int, world_chunk: int = DEFAULT_WORLD_CHUNK
-                ) -> tuple[SimState, Record]:
+def run_samples(params: SimParams, world: World, controller: Controller, states: SimState, keys: jax.Array,
+                n_samples: int, steps_per_sample: int, world_chunk: int = DEFAULT_WORLD_CHUNK,
+                params_batched: bool = False) -> tuple[SimState, Record]:
     """Advance a batch of worlds by ``n_samples * steps_per_sample`` steps.
 
     Args:
+      params: the parameters of every world, or with ``params_batched`` one set per world
+        (leading axis B on every dynamic field).
+      controller: the robot's controller (replicated over the batch).
       states: batched :class:`SimState` with leading axis B.
       keys: (B,) world keys (see :func:`world_keys`).
       n_samples: records to return per world.
@@ -139,21 +166,94 @@ def run_samples(params: SimParams, world: World, plan: RobotPlan, states: SimSta
       (final states, records) with records shaped (B, n_samples, ...).
     """
     n_dev = devices_for(keys.shape[0])
-    fn = _compiled(params, n_samples, steps_per_sample, world_chunk, n_dev)
-    shared, batched = place(n_dev, (world, plan), (states, keys))
+    fn = _compiled(n_samples, steps_per_sample, world_chunk, n_dev, params_batched)
+    if params_batched:
+        shared, batched = place(n_dev, (world, controller), (params, states, keys))
+    else:
+        shared, batched = place(n_dev, (params, world, controller), (states, keys))
     return fn(*shared, *batched)
 
 
-def rollout(params: SimParams, world: World, plan: RobotPlan, seed: int, n_worlds: int,
-            n_steps: int, sample_every_steps: int = 1) -> tuple[SimState, Record]:
-    """Convenience: a whole rollout in memory (use :mod:`jaxsim.logs` for long runs)."""
+def rollout(params: SimParams, world: World, controller: Controller, seed: int, n_worlds: int,
+            n_steps: int, sample_every_steps: int = 1, params_batched: bool = False) -> tuple[SimState, Record]:
+    """Convenience: a whole rollout in memory (use :mod:`jaxsim.logs` for long runs).
+
+    With ``params_batched``, ``params`` carries one set per world (``n_worlds`` of them).
+    """
     if n_steps % sample_every_steps:
         raise ValueError(f"n_steps={n_steps} is not a multiple of sample_every_steps={sample_every_steps}")
     keys = world_keys(seed, n_worlds)
-    states = init_batch(params, world, plan, keys)
-    return run_samples(params, world, plan, states, keys, n_steps // sample_every_steps, sample_every_steps)
+    states = init_batch(params, world, controller, keys, params_batched)
+    return run_samples(params, world, controller, states, keys, n_steps // sample_every_steps, sample_every_steps,
+                       params_batched=params_batched)
 
 
 def to_numpy(tree):
     """Device arrays -> host numpy (one transfer)."""
-    return jax.tree.map(np.asarray, jax.device_get(tree))
+    return _to_numpy(tree, copy=False)
+
+
+def run_until_done(advance_for: Callable[[int], Callable], shared: tuple, states, keys: jax.Array, *,
+                   is_done: Callable[[object], np.ndarray], max_segments: int,
+                   work_done: Callable[[object], np.ndarray] | None = None,
+                   progress: Callable[[int, int], None] | None = None, total_work: int = 0,
+                   shrink_at: float = 0.5, pad_multiple: int = 8):
+    """Advance a batch segment by segment until every world is done, retiring finished ones.
+
+    After each segment, once the unfinished worlds are at most ``shrink_at`` of the batch, the
+    finished ones are copied out and the rest continue in a smaller batch (rounded up to a
+    multiple of ``pad_multiple`` per device, padded with copies whose results are dropped);
+    each new size compiles once. A world's steps are the same whichever batch it is in (to
+    float rounding: XLA may vectorise another batch shape differently).
+
+    Args:
+      advance_for: ``n_dev -> fn`` where ``fn(*shared, states, keys)`` advances a batch by one
+        segment (compiled for a batch split over ``n_dev`` devices, see :func:`shard_worlds`).
+      shared: arguments replicated over the batch.
+      states: batched states (leading axis B); keys: (B,) keys, passed along with them.
+      is_done: host function of a batch of states -> (B,) bool.
+      max_segments: a bound on the segments needed (exceeding it is an error).
+      work_done, progress, total_work: optional progress report ``progress(done, total_work)``
+        with ``done`` the sum of ``work_done(states)`` over retired and running worlds.
+      shrink_at: share of unfinished worlds below which the batch is compacted (0: never).
+
+    Returns:
+      the final states as host numpy arrays, in the order of the input batch.
+
+    Raises:
+      RuntimeError: some world is not done after ``max_segments`` segments.
+    """
+    final = _to_numpy(states, copy=True)
+    all_keys = keys
+    ids = np.arange(jax.tree.leaves(states)[0].shape[0])  # world held by each batch entry (-1: padding)
+    retired_work = 0
+
+    def start(states, keys, ids):
+        n_dev = devices_for(len(ids))
+        placed_shared, (states, keys) = place(n_dev, shared, (states, keys))
+        return advance_for(n_dev), placed_shared, states, keys
+
+    advance, placed, states, keys = start(states, keys, ids)
+    for _ in range(max_segments):
+        states = advance(*placed, states, keys)
+        real = ids >= 0
+        done = np.asarray(is_done(states))
+        if progress is not None and work_done is not None:
+            progress(retired_work + int(np.asarray(work_done(states))[real].sum()), total_work)
+        if done[real].all():
+            put(final, ids[real], take(_to_numpy(states), real))
+            return final
+        left = np.flatnonzero(real & ~done)
+        if shrink_at > 0 and len(left) <= shrink_at * len(ids) and len(ids) > pad_multiple:
+            host = _to_numpy(states)
+            put(final, ids[real], take(host, real))
+            if work_done is not None:
+                retired_work += int(np.asarray(work_done(host))[real & done].sum())
+            n_dev = jax.local_device_count()
+            block = pad_multiple * n_dev
+            size = -(-len(left) // block) * block if len(left) > block else len(left)
+            pick = np.concatenate([left, np.full(size - len(left), left[0])])
+            new_keys = all_keys[jnp.asarray(ids[pick])]
+            ids = np.concatenate([ids[left], np.full(size - len(left), -1)])
+            advance, placed, states, keys = start(take(host, pick), new_keys, ids)
+    raise RuntimeError(f"not every world was done after {max_segments} segments")

@@ -1,91 +1,88 @@
 """One simulation step and one measurement, pure functions of a single world.
 
-``step(params, world, plan, state, key) -> state`` advances time by ``params.dt_s``;
-``measure(params, world, state) -> Record`` computes what is logged. The rollout
-(:mod:`jaxsim.rollout`) calls ``measure`` only at sampling instants, so the per-step cost is the
-dynamics alone. Batching is the caller's business (``vmap`` over ``state`` and ``key``).
+* :func:`crowd_step` moves the workers one step given the robot's previous pose: the one crowd
+  step the day simulation and every protocol (``evaluation.protocol``) call.
+* :func:`step` is the day simulation's step: the crowd step, then the robot's ``controller``
+  (passed in, as waymax passes its actor: :class:`jaxsim.robot.RouteFollower` by default). Workers
+  and robot see each other's previous pose.
+* :func:`measure` computes what is logged; the rollout (:mod:`jaxsim.rollout`) calls it only at
+  sampling instants, so the per-step cost is the dynamics alone.
+
+Batching is the caller's business (``vmap`` over ``state`` and the seed).
 """
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import jax
 import jax.numpy as jnp
 
-from jaxsim import robot as robot_lib
+from jaxsim import rng
 from jaxsim import workers as workers_lib
 from jaxsim.params import SimParams
-from jaxsim.state import Record, SimState
-from jaxsim.world import RobotPlan, World
+from jaxsim.state import Record, RobotState, SimState, WorkerState
+from jaxsim.world import World
 
 
-def _fmix32(h):
-    """murmur3's 32-bit finaliser: a bijective avalanche mix of uint32 words."""
-    h = h ^ (h >> 16)
-    h = h * jnp.uint32(0x85EBCA6B)
-    h = h ^ (h >> 13)
-    h = h * jnp.uint32(0xC2B2AE35)
-    return h ^ (h >> 16)
+class Controller(Protocol):
+    """What drives the robot: a pytree (its tables are leaves) with two pure methods.
 
-
-def hash_uniform16(seed_u32, step, shape):
-    """Counter-based uniform draws in (0, 1), 16-bit resolution, two per 32-bit hash.
-
-    ``u[r, i] = fmix32(fmix32(seed ^ step * K1) ^ (r * A + i) * K2)``: a stateless hash of
-    (world seed, step, stream, agent), so like ``fold_in`` it does not depend on how time or
-    worlds are chunked. About ten integer operations per word against threefry's hundred;
-    threefry was 40% of a step. Statistical quality is ample for noise and discrete choices
-    (the test checks moments and independence of neighbours); not for cryptography.
-
-    Args:
-      seed_u32: () uint32 world seed.
-      step: () int32 step counter.
-      shape: (R, A) draws wanted.
+    ``init(params, world, u)`` gives the robot at time 0 (``u``: (3,) uniforms);
+    ``step(params, world, robot, slot, workers_x_m, workers_y_m, present, u)`` advances it one
+    step from the workers' previous positions ((N,) arrays) and the slot index.
     """
-    rows, cols = shape
-    half = (rows + 1) // 2
-    base = _fmix32(seed_u32 ^ (step.astype(jnp.uint32) * jnp.uint32(0x9E3779B9)))
-    counter = jnp.arange(half * cols, dtype=jnp.uint32).reshape(half, cols)
-    bits = _fmix32(base ^ (counter * jnp.uint32(0x632BE5AB) + jnp.uint32(0x7F4A7C15)))
-    words = jnp.concatenate([bits >> 16, bits & 0xFFFF])[:rows]
-    return (words.astype(jnp.float32) + 0.5) * (1.0 / 65536.0)
+
+    def init(self, params: SimParams, world: World, u: jax.Array) -> RobotState: ...
+
+    def step(self, params: SimParams, world: World, robot: RobotState, slot: jax.Array,
+             workers_x_m: jax.Array, workers_y_m: jax.Array, present: jax.Array, u: jax.Array
+             ) -> RobotState: ...
 
 
-def world_seed_u32(key) -> jnp.ndarray:
-    """A uint32 seed from a JAX key (for :func:`hash_uniform16`)."""
-    return jax.random.bits(key, (), jnp.uint32)
-
-
-def current_slot(params: SimParams, world: World, step):
+def current_slot(params: SimParams, world: World, step: jax.Array) -> jax.Array:
     """Slot index of ``step`` (the last slot goes on after the day's end)."""
     return jnp.minimum(step // params.steps_per_slot, world.n_slots - 1).astype(jnp.int32)
 
 
-def init_state(params: SimParams, world: World, plan: RobotPlan, key) -> SimState:
-    """A world at time 0: workers waiting to arrive, the robot starting slot 0's first task."""
+def init_state(params: SimParams, world: World, controller: Controller, key: jax.Array) -> SimState:
+    """A world at time 0: workers waiting to arrive, the robot as the controller starts it."""
     kw, kr = jax.random.split(key)
     workers = workers_lib.init_workers(params, world, jax.random.uniform(kw, (5, params.n_workers)))
-    robot = robot_lib.init_robot(params, world, plan, jax.random.uniform(kr, (3,)))
+    robot = controller.init(params, world, jax.random.uniform(kr, (3,)))
     return SimState(workers=workers, robot=robot, step=jnp.int32(0))
 
 
-def step(params: SimParams, world: World, plan: RobotPlan, state: SimState, seed_u32) -> SimState:
-    """Advance one world by one step. Workers and robot see each other's previous pose.
+def crowd_step(params: SimParams, world: World, workers: WorkerState, robot: RobotState, time_s: jax.Array,
+               slot: jax.Array, u: jax.Array) -> WorkerState:
+    """Advance the workers one step: their context (arrivals, routes, activities), then the
+    social force with the robot as an agent they avoid.
 
-    ``seed_u32``: the world's uint32 seed (:func:`world_seed_u32`); the step's random draws
-    are hashed from it and the step counter.
+    Args:
+      workers: (N,) workers before the step.
+      robot: the robot's previous pose and speed (it is not moved here).
+      time_s, slot: () the clock and the slot whose destination probabilities apply.
+      u: (6, N) uniforms (:func:`jaxsim.rng.step_uniforms`).
+    """
+    w = workers_lib.update_context(params, world, workers, time_s, slot, u)
+    return workers_lib.move(params, world, w, robot.x_m, robot.y_m, robot.speed_mps * robot.heading_x,
+                            robot.speed_mps * robot.heading_y, u[4], u[5])
+
+
+def step(params: SimParams, world: World, controller: Controller, state: SimState, seed_u32: jax.Array
+         ) -> SimState:
+    """Advance one world by one step (the crowd, then the robot's controller).
+
+    ``seed_u32``: the world's uint32 seed (:func:`jaxsim.rng.world_seed_u32`); the step's random
+    draws are hashed from it and the step counter.
     """
     time_s = state.step.astype(jnp.float32) * params.dt_s
     slot = current_slot(params, world, state.step)
-    n = params.n_workers
-    u = hash_uniform16(seed_u32, state.step, (6, n + 1))
+    u_workers, u_robot = rng.step_uniforms(seed_u32, state.step, params.n_workers)
     w, r = state.workers, state.robot
-    present = w.present
-    w = workers_lib.update_context(params, world, w, time_s, slot, u[:, :n])
-    w = workers_lib.move(params, world, w, r.x_m, r.y_m, r.speed_mps * r.heading_x,
-                         r.speed_mps * r.heading_y, u[4, :n], u[5, :n])
-    r = robot_lib.update_robot(params, world, plan, r, slot, state.workers.x_m, state.workers.y_m,
-                               present, u[:3, n])
-    return SimState(workers=w, robot=r, step=state.step + 1)
+    workers = crowd_step(params, world, w, r, time_s, slot, u_workers)
+    robot = controller.step(params, world, r, slot, w.x_m, w.y_m, w.present, u_robot)
+    return SimState(workers=workers, robot=robot, step=state.step + 1)
 
 
 def measure(params: SimParams, world: World, state: SimState) -> Record:

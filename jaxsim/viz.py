@@ -5,15 +5,13 @@ from __future__ import annotations
 import pathlib
 
 import matplotlib
+import numpy as np
+from matplotlib.collections import LineCollection, PatchCollection
+from matplotlib.patches import Circle, Rectangle
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import LineCollection, PatchCollection  # noqa: E402
-from matplotlib.patches import Circle, Rectangle  # noqa: E402
-
-from jaxsim.scenario import Scenario  # noqa: E402
-from jaxsim.state import ACTIVITY, WALKING  # noqa: E402
+from common import figures
+from jaxsim.scenario import Scenario
+from jaxsim.state import ACTIVITY, WALKING
 
 BOX_COLOURS = {"wall": "#333333", "shelf": "#8c6d46", "table": "#b08850", "tray": "#3a7d44"}
 
@@ -41,7 +39,8 @@ def draw_map(ax, scenario: Scenario, *, edges: bool = True, labels: bool = False
 
 def snapshot_png(scenario: Scenario, snapshot: dict, path: str | pathlib.Path) -> pathlib.Path:
     """Workers (walking / at an activity) and the robot at one instant, on the map."""
-    fig, ax = plt.subplots(figsize=(9, 6.5))
+    fig = figures.figure(figsize=(9, 6.5))
+    ax = fig.subplots()
     draw_map(ax, scenario)
     status = np.asarray(snapshot["worker_status"])
     for code, colour, label in [(WALKING, "#d62728", "walking"), (ACTIVITY, "#ff9f1c", "at an activity")]:
@@ -54,7 +53,7 @@ def snapshot_png(scenario: Scenario, snapshot: dict, path: str | pathlib.Path) -
     slot = snapshot["slot"]
     ax.set_title(f"{scenario.name}: t = {t:.0f} s, slot {scenario.slot_names[slot]} ({scenario.slot_clock[slot]})")
     ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
-    return _save(fig, path)
+    return figures.save(fig, path)
 
 
 def density_by_slot_png(scenario: Scenario, mean_density: np.ndarray, path: str | pathlib.Path,
@@ -68,9 +67,10 @@ def density_by_slot_png(scenario: Scenario, mean_density: np.ndarray, path: str 
     s = scenario.n_slots
     cols = 4
     rows = int(np.ceil(s / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.1 * rows))
+    fig = figures.figure(figsize=(4.2 * cols, 3.1 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False)
     vmax = float(np.nanmax(mean_density)) if np.isfinite(mean_density).any() else 1.0
-    cmap = plt.get_cmap("inferno_r")
+    cmap = matplotlib.colormaps["inferno_r"]
     xy = scenario.waypoint_xy_m
     for k, ax in enumerate(axes.ravel()):
         if k >= s:
@@ -89,15 +89,7 @@ def density_by_slot_png(scenario: Scenario, mean_density: np.ndarray, path: str 
                     ax.text(xy[i, 0], xy[i, 1] + scenario.waypoint_radius_m[i] + 0.4, scenario.waypoint_ids[i],
                             fontsize=6, ha="center", color="#0b3d91", zorder=4)
         ax.set_title(f"{scenario.slot_names[k]} {scenario.slot_clock[k]}", fontsize=9)
-    sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(0, vmax))
+    sm = matplotlib.cm.ScalarMappable(cmap=cmap, norm=matplotlib.colors.Normalize(0, vmax))
     fig.colorbar(sm, ax=axes.ravel().tolist(), shrink=0.6, label="mean people density D (people / m$^2$)")
     fig.suptitle("Mean people density per waypoint and time slot")
-    return _save(fig, path)
-
-
-def _save(fig, path) -> pathlib.Path:
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    return figures.save(fig, path)

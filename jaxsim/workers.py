@@ -210,7 +210,7 @@ def init_workers(params: SimParams, world: World, u) -> WorkerState:
                   params.worker_desired_speed_min_mps, params.worker_max_speed_mps)
     slot = params.slot_length_s
     last_working = world.n_slots - 1 - jnp.argmax(world.slot_working[::-1])
-    margin = min(params.worker_exit_margin_s, 0.5 * slot)
+    margin = jnp.minimum(params.worker_exit_margin_s, 0.5 * slot)
     arrive = u[1] * slot
     depart = last_working * slot + u[2] * (slot - margin)
     x = world.parking_x_m + (u[3] - 0.5) * params.worker_spawn_dx_m

@@ -2,8 +2,8 @@
 
 :func:`build_world` turns a validated :class:`~jaxsim.scenario.Scenario` into a :class:`World`
 pytree once per scenario; every rollout then takes it as an ordinary (unbatched) argument.
-:func:`shortest_path_plan` builds the robot's route table for the shortest-path baseline; other
-planners produce a :class:`RobotPlan` of the same shape.
+:class:`RobotPlan` is the format of the robot's route table, an input the planners produce
+(``planners.routes``); the simulator only follows it.
 """
 
 from __future__ import annotations
@@ -172,19 +172,4 @@ def build_world(scenario: Scenario) -> World:
         parking=scenario.parking,
         charging_station=scenario.charging_station,
         robot_start=scenario.robot_start,
-    )
-
-
-def shortest_path_plan(scenario: Scenario) -> RobotPlan:
-    """The baseline plan: Euclidean shortest routes over the robot's graph, the same every slot."""
-    lengths = graph.edge_lengths_m(scenario.waypoint_xy_m, scenario.edges)
-    dist, next_hop = graph.all_pairs_shortest(scenario.n_waypoints, scenario.edges, lengths,
-                                              scenario.robot_allowed)
-    routes, hops = graph.route_table(next_hop, dist)
-    length_m = np.where(np.isfinite(dist), dist, 0.0)
-    s = scenario.n_slots
-    return RobotPlan(
-        routes=jnp.asarray(np.broadcast_to(routes, (s, *routes.shape))),
-        hops=jnp.asarray(np.broadcast_to(hops, (s, *hops.shape))),
-        length_m=jnp.asarray(np.broadcast_to(length_m, (s, *length_m.shape)), jnp.float32),
     )

@@ -1,1 +1,7 @@
-"""models: see README (later issues)."""
+"""models: GSCL (seed 002), the learned social cost map.
+
+The procedural dataset (:mod:`models.families`, :mod:`models.dataset`, on :mod:`models.grid` and
+:mod:`models.social_costs`), the U-Net (:mod:`models.unet`), training (:mod:`models.config`,
+:mod:`models.streams`, :mod:`models.steps`, :mod:`models.quality`, :mod:`models.checkpoints`,
+:mod:`models.train`), evaluation and inference. Imports none of the toolkit's other parts.
+"""

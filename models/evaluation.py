@@ -8,7 +8,13 @@ import pathlib
 
 import numpy as np
 
-from models import plots, train
+from common.atomic import write_text_atomic
+from models import plots
+from models.checkpoints import restore
+from models.quality import by_family as mse_by_family
+from models.quality import meets_quality, quality_table
+from models.steps import compiled, per_sample_mse
+from models.streams import test_data
 
 
 def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> dict:
@@ -19,24 +25,24 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
     dictionary plus ``table`` (text) and ``out``.
     """
     run = pathlib.Path(run)
-    config, graphdef, state, meta = train.restore(run, step)
-    test = train.test_data(config)
-    predict = train.compiled(config)[3]
-    mse = train.per_sample_mse(predict, state["params"], state["batch_stats"], test["inputs"], test["targets"])
-    by_family = train.by_family(mse, test["family"], test["names"])
+    config, graphdef, state, meta = restore(run, step)
+    test = test_data(config)
+    predict = compiled(config)[3]
+    mse = per_sample_mse(predict, state["params"], state["batch_stats"], test["inputs"], test["targets"])
+    by_family = mse_by_family(mse, test["family"], test["names"])
     baselines = meta["baselines"]
     report = {"run": str(run), "step": int(meta["step"]), "epoch": int(meta["step"]) // config.steps_per_epoch,
               "test_samples": int(len(mse)), "test_mse": float(mse.mean()), "test_mse_by_family": by_family,
               "baselines": baselines,
-              "meets_quality": train.meets_quality(float(mse.mean()), by_family, baselines)}
+              "meets_quality": meets_quality(float(mse.mean()), by_family, baselines)}
     out = run / "evaluation" if out is None else pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    train._write_atomic(out / "evaluation.json", json.dumps(report, indent=1))
+    write_text_atomic(out / "evaluation.json", json.dumps(report, indent=1))
     # The picture: the first ``examples`` test samples of each family.
     pick = np.concatenate([np.flatnonzero(test["family"] == i)[:examples] for i in range(len(test["names"]))])
     predictions = np.asarray(predict(state["params"], state["batch_stats"], test["inputs"][pick]))
     plots.family_grid(test["inputs"][pick], test["targets"][pick], test["family"][pick], test["names"],
                       out / "predictions.png", predictions=predictions, per_family=examples, mse=mse[pick])
-    report["table"] = train.quality_table(report["test_mse"], by_family, baselines)
+    report["table"] = quality_table(report["test_mse"], by_family, baselines)
     report["out"] = str(out)
     return report

@@ -82,21 +82,21 @@ def input_map(occupancy, resolution_m: float, origin_xy_m, robot_xy_m, people_xy
 class SocialCostModel:
     """A trained U-Net in evaluation mode: ``model(maps)`` (B, 40, 40) codes -> (B, 40, 40) costs.
 
-    Build it with :meth:`load` from a training run's folder (``gscl train --out``).
+    Build it with :meth:`load` from a training run's folder (``socialnav gscl train --out``).
     """
 
     def __init__(self, graphdef, params, batch_stats):
-        from models import train
+        from models.steps import make_predict
 
-        self._predict = train.make_predict(graphdef)  # jitted, batch norm in eval mode
+        self._predict = make_predict(graphdef)  # jitted, batch norm in eval mode
         self._params, self._batch_stats = params, batch_stats
 
     @classmethod
-    def load(cls, run_dir, step: int | None = None) -> "SocialCostModel":
+    def load(cls, run_dir, step: int | None = None) -> SocialCostModel:
         """The model of a run's latest checkpoint (or of ``step``)."""
-        from models import train
+        from models.checkpoints import restore
 
-        _, graphdef, state, _ = train.restore(pathlib.Path(run_dir), step)
+        _, graphdef, state, _ = restore(pathlib.Path(run_dir), step)
         return cls(graphdef, state["params"], state["batch_stats"])
 
     def function(self, maps):

@@ -6,6 +6,8 @@ import pathlib
 
 import numpy as np
 
+from common import figures
+from common.atomic import write_atomic
 from models import grid
 
 _CODE_COLOURS = {grid.FREE: (1.0, 1.0, 1.0), grid.HEADING: (0.98, 0.6, 0.1), grid.PERSON: (0.85, 0.1, 0.1),
@@ -32,15 +34,10 @@ def family_grid(inputs, targets, family, names, path, predictions=None, per_fami
       inputs / targets / predictions: (N, 40, 40); family: (N,) index into ``names``.
       mse: optional (N,) per-sample MSE written over each prediction.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     present = [i for i in range(len(names)) if np.any(family == i)]
     cols = 2 if predictions is None else 3
-    fig, axes = plt.subplots(len(present), cols * per_family,
-                             figsize=(1.9 * cols * per_family, 1.9 * len(present)), squeeze=False)
+    fig = figures.figure(figsize=(1.9 * cols * per_family, 1.9 * len(present)))
+    axes = fig.subplots(len(present), cols * per_family, squeeze=False)
     for row, fam in enumerate(present):
         idx = np.flatnonzero(family == fam)[:per_family]
         for k in range(per_family):
@@ -64,10 +61,4 @@ def family_grid(inputs, targets, family, names, path, predictions=None, per_fami
                     ax.set_title(title, fontsize=8)
         axes[row, 0].set_ylabel(str(names[fam]).replace("_", " "), fontsize=8)
     fig.tight_layout()
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".tmp-{path.name}")
-    fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))

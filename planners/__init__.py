@@ -1,4 +1,7 @@
-"""planners: waypoint planners of seed 000 (shortest path, causal A* with the abort decision).
+"""planners: planning alone.
 
-Grid planners and social cost layers (seeds 001, 002, 004) join in later issues.
+Seed 000's waypoint planners: route tables (:mod:`planners.routes`: shortest path and any arc
+costs, one function), the causal costs, A* and the abort decision (:mod:`planners.waypoint`,
+Eq. 8-10), and the typed reader of the causal engine's tables (:mod:`planners.tables`). Cost
+layers, grid and local planners (seeds 001, 002, 004) join here in later issues.
 """

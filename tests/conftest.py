@@ -6,11 +6,13 @@ import os
 
 import pytest
 
-# Tests do not write JAX's compilation cache into the user's home (the command lines turn it on).
+# Tests do not write JAX's compilation cache into the user's home (the command line turns it on).
 os.environ.setdefault("SOCIALNAV_JAX_CACHE", "off")
 
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world, shortest_path_plan
+from jaxsim.robot import RouteFollower  # noqa: E402
+from jaxsim.scenario import load_scenario  # noqa: E402
+from jaxsim.world import build_world  # noqa: E402
+from plans import scipy_shortest_plan  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -20,9 +22,9 @@ def warehouse():
 
 @pytest.fixture(scope="session")
 def short_day():
-    """The warehouse with 60 s slots: a whole day is 6600 steps."""
+    """The warehouse with 60 s slots (a whole day is 6600 steps), its world and a route follower."""
     scenario = load_scenario(slot_length_s=60.0)
-    return scenario, build_world(scenario), shortest_path_plan(scenario)
+    return scenario, build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
 
 
 @pytest.fixture(scope="session")
@@ -34,9 +36,11 @@ def learned_run(tmp_path_factory):
     """
     from causal.learn import learn
     from jaxsim.logs import simulate_to_parquet
+    from planners.routes import shortest_path_plan
 
     run = tmp_path_factory.mktemp("learned_run")
     scenario = load_scenario(slot_length_s=60.0, battery_initial_pct=21.0)
-    simulate_to_parquet(scenario, run, n_worlds=2, duration_s=scenario.n_slots * 60.0, progress=False)
+    simulate_to_parquet(scenario, run, RouteFollower(shortest_path_plan(scenario)), n_worlds=2,
+                        duration_s=scenario.n_slots * 60.0, progress=False)
     learn(run, run / "causal", max_samples=60_000, progress=False)
     return run

@@ -7,7 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from causal import discover, engine as engine_lib, extract
+from causal import binning, discover, extract
+from causal import engine as engine_lib
 from causal.variables import GROUND_TRUTH, VARIABLES
 from synthetic import seed000_datasets
 
@@ -95,12 +96,12 @@ def test_engine_density_query_and_persistence(tmp_path):
 def test_elbow_finds_three_clusters_and_bins_cover_the_data():
     rng = np.random.default_rng(0)
     x = np.concatenate([rng.normal(c, 0.05, 3000) for c in (0.0, 1.0, 2.0)])
-    assert engine_lib.elbow_bins(x) == 3
-    b = engine_lib.Binning.fit(x)
+    assert binning.elbow_bins(x) == 3
+    b = binning.Binning.fit(x)
     assert b.edges[0] == x.min() and b.edges[-1] == x.max()
     np.testing.assert_allclose(b.means, [0, 1, 2], atol=0.05)
     spiky = np.concatenate([np.zeros(900), rng.random(100)])  # mostly empty waypoint
-    assert len(engine_lib.quantile_edges(spiky, 5)) >= 3
+    assert len(binning.quantile_edges(spiky, 5)) >= 3
 
 
 def test_nyquist_step_from_a_known_frequency():
@@ -142,22 +143,19 @@ def test_extraction_shapes_and_bad_input():
 
 
 @pytest.mark.slow
-def test_learn_job_end_to_end(tmp_path):
+def test_learn_job_end_to_end(tmp_path, monkeypatch):
     import json
 
-    from jaxsim import cli
+    from jaxsim.scenario import load_scenario
+    from socialnav import cli
+    from socialnav import simulate as simulate_command
 
     logs = tmp_path / "run"
     # A short day in which the robot starts low on battery, so that it charges (C varies).
     args = ["simulate", "--worlds", "2", "--slot-length-s", "60", "--out", str(logs), "--no-progress"]
-    import jaxsim.scenario as scen
-
-    original = scen.load_scenario
-    scen.load_scenario = lambda *a, **k: original(*a, **{**k, "battery_initial_pct": 21.0})
-    try:
-        assert cli.main(args) == 0
-    finally:
-        scen.load_scenario = original
+    monkeypatch.setattr(simulate_command, "load_scenario",
+                        lambda *a, **k: load_scenario(*a, **{**k, "battery_initial_pct": 21.0}))
+    assert cli.main(args) == 0
     assert cli.main(["learn", "--logs", str(logs), "--no-progress", "--max-samples", "60000"]) == 0
     out = logs / "causal"
     for name in ("discovery.json", "causal_graph.png", "engine.bifxml", "engine.json", "engine_tables.npz",
@@ -171,21 +169,28 @@ def test_learn_job_end_to_end(tmp_path):
     assert cli.main(["learn", "--logs", str(tmp_path / "nothing"), "--no-progress"]) == 2
 
 
-def test_ablation_causal_beats_bayesian_on_the_simulator():
-    """Seed 000 Sec. 6 on a short run: conditioning on a fast robot hides obstacles, do() does not."""
-    from causal import ablation
-
-    speed, l_pct, obstacle, params = ablation.simulate(0.4, n_seeds=2, duration_s=1800.0)
-    for k in range(2):
-        est = ablation.estimate(speed[k], l_pct[k], obstacle[k], params, 1.0, 0.4, k)
-        assert est.reference < est.causal < 0 and est.reference < est.bayesian < 0
-        assert est.error_causal < est.error_bayesian
-        assert est.bayesian > est.causal  # the Bayesian answer underestimates the consumption
-
-
 def test_quantile_edges_isolate_an_atom():
     x = np.concatenate([np.full(800, 0.5), np.linspace(0.0, 0.45, 200)])  # cruising at top speed
-    edges = engine_lib.quantile_edges(x, 3)
-    b = engine_lib.Binning.from_edges(x, edges)
+    edges = binning.quantile_edges(x, 3)
+    b = binning.Binning.from_edges(x, edges)
     top = b.index(np.array([0.5]))[0]
     assert b.index(np.array([0.45]))[0] != top and b.means[top] == 0.5
+
+
+def test_unoriented_links_are_oriented_without_closing_a_cycle():
+    """V -> L and D -> V found with an unoriented L - D: the V, L, D order would give L -> D and the
+    cycle V -> L -> D -> V, so the link is taken as D -> L; the network builds."""
+    import pyagrum as gum
+
+    link = lambda c, e, oriented=True, lag=0: discover.Link(c, e, lag, 0.5, 0.001, oriented)  # noqa: E731
+    found = discover.Discovery([link("V", "L"), link("L", "D", False), link("D", "V"), link("V", "V", lag=1)],
+                               "parcorr", 0.01, 1, 100, 0.0)
+    arcs = engine_lib.dag_arcs(found)
+    assert ("Dt", "Lt") in arcs and ("Lt", "Dt") not in arcs and ("V0", "Vt") in arcs
+    bn = gum.BayesNet()
+    for name in {n for arc in arcs for n in arc}:
+        bn.add(gum.LabelizedVariable(name, name, 2))
+    for a, b in arcs:
+        bn.addArc(a, b)  # raises on a directed cycle
+    plain = discover.Discovery([link("L", "D", False)], "parcorr", 0.01, 1, 100, 0.0)
+    assert ("Lt", "Dt") in engine_lib.dag_arcs(plain)  # no conflict: the V, L, D order

@@ -1,4 +1,4 @@
-"""``peopleflow evaluate``: the report it writes, and clear errors for bad input."""
+"""``socialnav evaluate``: the report it writes, and clear errors for bad input."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from jaxsim import cli
+from socialnav import cli
 
 
 @pytest.mark.slow
@@ -33,11 +33,17 @@ def test_evaluate_writes_the_report(learned_run, tmp_path, capsys):
 def test_evaluate_rejects_bad_input(tmp_path, capsys):
     missing = tmp_path / "none.npz"
     assert cli.main(["evaluate", "--tables", str(missing), "--out", str(tmp_path / "o")]) == 2
-    assert "run 'peopleflow learn' first" in capsys.readouterr().err
+    assert "run 'socialnav learn' first" in capsys.readouterr().err
     partial = tmp_path / "partial.npz"
     np.savez(partial, density_ppm2=np.zeros((11, 73)))
     assert cli.main(["evaluate", "--tables", str(partial), "--out", str(tmp_path / "o")]) == 2
-    assert "lacks" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "missing key" in err and str(partial) in err
+    other = tmp_path / "other.npz"  # tables of another scenario (3 waypoints)
+    np.savez(other, density_ppm2=np.zeros((11, 3)), battery_pct_per_s=np.array([[-0.006, 0.01], [-0.007, 0.0]]),
+             speed_edges_mps=np.array([0.0, 0.3, 0.5]))
+    assert cli.main(["evaluate", "--tables", str(other), "--out", str(tmp_path / "o")]) == 2
+    assert "the scenario has 11 slots and 73 waypoints" in capsys.readouterr().err
     full = tmp_path / "full.npz"
     np.savez(full, density_ppm2=np.zeros((11, 73)), battery_pct_per_s=np.array([[-0.006, 0.01], [-0.007, 0.0]]),
              speed_edges_mps=np.array([0.0, 0.3, 0.5]))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from models import dataset, grid
+from models import dataset, families, grid
 
 N = 64
 
@@ -56,11 +56,11 @@ def test_every_person_carries_proxemic_cost_and_a_heading_pixel(data):
 def test_the_interaction_zone_exists_only_when_people_face_inward():
     """Same layouts (same keys) facing in and out: only facing in fills the circle's centre."""
     keys = dataset.family_keys(0, "group", 32)
-    inward = np.asarray(dataset._batched("group")(keys)[1])
-    outward = np.asarray(dataset._batched("non_group")(keys)[1])
+    inward = np.asarray(dataset.batched_sampler("group")(keys)[1])
+    outward = np.asarray(dataset.batched_sampler("non_group")(keys)[1])
     import jax
 
-    layout = jax.vmap(dataset._group_layout)(keys)
+    layout = jax.vmap(families.group_layout)(keys)
     cx, cy = np.asarray(layout[4]), np.asarray(layout[5])
     row, col = (np.asarray(v) for v in grid.cell_of(cx, cy))
     centre_in = inward[np.arange(32), row, col]
@@ -116,10 +116,10 @@ def test_the_queue_u_shape_is_there_only_when_the_goal_is_at_the_head(data):
     import jax
 
     keys = dataset.family_keys(0, "queue", 32)
-    at_head = np.asarray(dataset._batched("queue")(keys)[1])
-    elsewhere = np.asarray(dataset._batched("non_queue")(keys)[1])
+    at_head = np.asarray(dataset.batched_sampler("queue")(keys)[1])
+    elsewhere = np.asarray(dataset.batched_sampler("non_queue")(keys)[1])
     layout_keys = jax.vmap(lambda k: jax.random.split(k, 3)[0])(keys)  # as _sample_queue splits
-    x, y, phi, valid, hx, hy, spacing = (np.asarray(v) for v in jax.vmap(dataset.queue_layout)(layout_keys))
+    x, y, phi, valid, hx, hy, spacing = (np.asarray(v) for v in jax.vmap(families.queue_layout)(layout_keys))
     for b in range(32):
         # A point 1 m to the side of the second person: in the U's arm, beyond their proxemics.
         px, py = x[b, 1] - 1.1 * np.sin(phi[b]), y[b, 1] + 1.1 * np.cos(phi[b])
@@ -129,4 +129,4 @@ def test_the_queue_u_shape_is_there_only_when_the_goal_is_at_the_head(data):
     inputs, _ = _family(data, "non_queue")
     assert ((inputs == grid.GOAL).sum(axis=(1, 2)) <= 1).all()
     people = (_family(data, "queue")[0] == grid.PERSON).sum(axis=(1, 2))
-    assert people.min() >= 4 and people.max() <= dataset.MAX_QUEUE  # 3-10 m at 0.7-1.2 m spacing
+    assert people.min() >= 4 and people.max() <= families.MAX_QUEUE  # 3-10 m at 0.7-1.2 m spacing

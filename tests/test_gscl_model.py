@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 from flax import nnx
 
-from models import cli, dataset, evaluation, grid, inference, train, unet
+from models import checkpoints, dataset, evaluation, grid, inference, quality, steps, streams, train, unet
+from models.config import TrainConfig
+from socialnav import cli
 
 TINY = dict(features=(4, 4, 8, 8), epochs=2, batch_size=16, train_fraction=0.01, test_fraction=0.004,
             warmup_steps=2, checkpoint_every_steps=4, learning_rate=1e-2)
@@ -42,7 +44,7 @@ def test_input_encoding_is_one_hot_per_code():
 
 
 def _run(tmp_path, name, **kw):
-    config = train.TrainConfig(**{**TINY, **kw})
+    config = TrainConfig(**{**TINY, **kw})
     return config, train.train(config, tmp_path / name, progress=False, log=lambda *_: None)
 
 
@@ -52,11 +54,11 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     assert [h["epoch"] for h in history] == [1, 2]
     # The loss goes down: first steps' batches against the end of training, and the test set
     # against the untrained network.
-    _, graphdef, state, _ = train.restore(tmp_path / "straight")
-    s0 = train.initial_state(config)
-    test = train.test_data(config)
-    predict = train.compiled(config)[3]
-    untrained = train.per_sample_mse(predict, s0["params"], s0["batch_stats"], test["inputs"], test["targets"]).mean()
+    _, graphdef, state, _ = checkpoints.restore(tmp_path / "straight")
+    s0 = steps.initial_state(config)
+    test = streams.test_data(config)
+    predict = steps.compiled(config)[3]
+    untrained = steps.per_sample_mse(predict, s0["params"], s0["batch_stats"], test["inputs"], test["targets"]).mean()
     zeros = json.loads((tmp_path / "straight" / "baselines.json").read_text())["zeros"]["test_mse"]
     assert line["test_mse"] < 0.8 * min(untrained, zeros)
     assert history[1]["train_mse"] < history[0]["train_mse"]
@@ -65,7 +67,7 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     # removed): the run resumes from step 4 and ends with the same weights and metrics as the
     # uninterrupted run.
     killed = tmp_path / "killed"
-    cfg = train.TrainConfig(**TINY)
+    cfg = TrainConfig(**TINY)
     assert cfg.steps_per_epoch > 6
     train.train(cfg, killed, progress=False, max_steps=6, log=lambda *_: None)
     assert sorted(int(p.name) for p in (killed / "checkpoints").iterdir() if p.name.isdigit()) == [4, 6]
@@ -73,7 +75,7 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     shutil.rmtree(killed / "checkpoints" / "6")
     assert not (killed / "metrics.jsonl").exists()
     train.train(cfg, killed, progress=False, log=lambda *_: None)
-    _, _, resumed, _ = train.restore(killed)
+    _, _, resumed, _ = checkpoints.restore(killed)
     for a, b in zip(jax.tree.leaves(resumed), jax.tree.leaves(state)):
         np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
     again = [json.loads(s) for s in (killed / "metrics.jsonl").read_text().splitlines()]
@@ -95,7 +97,7 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     # Another configuration in the same folder is refused, nothing overwritten.
     before = (tmp_path / "straight" / "config.json").read_text()
     with pytest.raises(ValueError, match="another configuration"):
-        train.train(train.TrainConfig(**{**TINY, "batch_size": 8}), tmp_path / "straight", progress=False)
+        train.train(TrainConfig(**{**TINY, "batch_size": 8}), tmp_path / "straight", progress=False)
     assert (tmp_path / "straight" / "config.json").read_text() == before
 
     # Evaluation: the same test MSE as the last epoch, per family, and the picture.
@@ -110,14 +112,14 @@ def test_trivial_baselines_and_quality_bar():
     train_set = {"targets": rng.random((10, 40, 40)).astype(np.float32)}
     test = {"targets": rng.random((4, 40, 40)).astype(np.float32), "family": np.array([0, 0, 1, 1]),
             "names": np.array(["a", "b"])}
-    b = train.trivial_baselines(train_set, test)
+    b = quality.trivial_baselines(train_set, test)
     np.testing.assert_allclose(b["zeros"]["test_mse"], np.mean(test["targets"] ** 2), rtol=1e-6)
     mean_map = train_set["targets"].mean(0)
     np.testing.assert_allclose(b["mean_map"]["by_family"]["b"], np.mean((test["targets"][2:] - mean_map) ** 2), rtol=1e-6)
     best_a = min(b["zeros"]["by_family"]["a"], b["mean_map"]["by_family"]["a"])
-    assert train.meets_quality(0.001, {"a": 0.09 * best_a, "b": 0.001}, b)
-    assert not train.meets_quality(0.001, {"a": 0.11 * best_a, "b": 0.001}, b)
-    assert not train.meets_quality(0.004, {"a": 0.0, "b": 0.0}, b)
+    assert quality.meets_quality(0.001, {"a": 0.09 * best_a, "b": 0.001}, b)
+    assert not quality.meets_quality(0.001, {"a": 0.11 * best_a, "b": 0.001}, b)
+    assert not quality.meets_quality(0.004, {"a": 0.0, "b": 0.0}, b)
 
 
 def test_input_map_from_occupancy_people_and_goal():
@@ -145,25 +147,25 @@ def test_input_map_from_occupancy_people_and_goal():
 
 def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path, capsys):
     out = tmp_path / "d.npz"
-    assert cli.main(["generate", "--out", str(out), "--scale", "0.001", "--count", "queue=5", "--seed", "2"]) == 0
+    assert cli.main(["gscl", "generate", "--out", str(out), "--scale", "0.001", "--count", "queue=5", "--seed", "2"]) == 0
     data = dataset.load(out)
     expected = dataset.generate(2, {**dataset.scaled_counts(0.001), "queue": 5})
     for k in ("inputs", "targets", "family", "names"):
         np.testing.assert_array_equal(data[k], expected[k])
     with pytest.raises(SystemExit, match="must end in .npz"):
-        cli.main(["generate", "--out", str(tmp_path / "d.csv")])
+        cli.main(["gscl", "generate", "--out", str(tmp_path / "d.csv")])
     with pytest.raises(SystemExit, match="unknown family"):
-        cli.main(["generate", "--out", str(out), "--count", "corridor=3"])
+        cli.main(["gscl", "generate", "--out", str(out), "--count", "corridor=3"])
     with pytest.raises(SystemExit):
-        cli.main(["train", "--features", "8,8"])
+        cli.main(["gscl", "train", "--features", "8,8"])
     with pytest.raises(SystemExit, match="no checkpoint|no training run"):
-        cli.main(["evaluate", "--run", str(tmp_path / "nothing")])
+        cli.main(["gscl", "evaluate", "--run", str(tmp_path / "nothing")])
     assert not (tmp_path / "d.csv").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.npz"]
     # A run folder with other settings is refused before anything is written to it.
     run = tmp_path / "run"
     run.mkdir()
-    (run / "config.json").write_text(json.dumps(train.TrainConfig().to_json()))
+    (run / "config.json").write_text(json.dumps(TrainConfig().to_json()))
     with pytest.raises(SystemExit, match="another configuration"):
-        cli.main(["train", "--out", str(run), "--paper"])
+        cli.main(["gscl", "train", "--out", str(run), "--paper"])
     assert sorted(p.name for p in run.iterdir()) == ["config.json"]

@@ -8,8 +8,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from jaxsim import cli, logs
+from jaxsim import logs
+from jaxsim.robot import RouteFollower
 from jaxsim.scenario import load_scenario
+from plans import scipy_shortest_plan
+from socialnav import cli
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +23,7 @@ def small():
 def _run(scenario, out, **kw):
     args = dict(n_worlds=2, duration_s=40.0, seed=5, sample_interval_s=0.5, progress=False)
     args.update(kw)
-    return logs.simulate_to_parquet(scenario, out, **args)
+    return logs.simulate_to_parquet(scenario, out, RouteFollower(scipy_shortest_plan(scenario)), **args)
 
 
 def test_logs_open_in_pandas_with_the_documented_columns(small, tmp_path):
@@ -86,7 +89,7 @@ def test_killed_run_leaves_no_half_file(small, tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         _run(small, out, chunk_budget_bytes=1, seed=9)
     assert (out / logs.LOG_FILE).read_bytes() == before  # the previous complete run is intact
-    assert not list(out.glob("*.tmp"))
+    assert sorted(f.name for f in out.iterdir()) == [logs.LOG_FILE, logs.META_FILE]  # no temporary left
 
 
 def test_cli_simulate_writes_logs_pictures_and_summary(tmp_path, capsys):
@@ -109,3 +112,8 @@ def test_cli_rejects_bad_input(tmp_path, capsys):
     assert "does not exist" in capsys.readouterr().err
     assert cli.main(["simulate", "--slots", "1", "--slot-length-s", "20", "--sample-interval-s", "0.15",
                      "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    for option, value in (("--slot-length-s", "inf"), ("--sample-interval-s", "nan"),
+                          ("--obstacle-probability", "1.5"), ("--worlds", "2.7")):
+        with pytest.raises(SystemExit):
+            cli.main(["simulate", option, value, "--out", str(tmp_path / "o")])
+        assert value in capsys.readouterr().err

@@ -1,14 +1,15 @@
-"""Sec. 5.3 metrics and statistics: components add up, tests agree with scipy on raw data and
-detect a difference that is there (and not one that is not)."""
+"""Metrics and statistics: collisions counted once per encounter, Sec. 5.3's components add up,
+tests agree with scipy on raw data and detect a difference that is there (and not one that is not)."""
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 import pytest
 from scipy import stats
 
-from planners import metrics
+from evaluation import metrics, statistics
 
 
 def _tasks(rng, n=400):
@@ -41,7 +42,7 @@ def test_components_add_up_to_the_totals():
 def test_binned_mann_whitney_matches_scipy_on_the_raw_samples():
     rng = np.random.default_rng(1)
     a, b = rng.integers(0, 30, 500), rng.integers(2, 32, 700)  # integer values: many ties
-    res = metrics.mann_whitney_binned(np.bincount(a, minlength=40), np.bincount(b, minlength=40))
+    res = statistics.mann_whitney_binned(np.bincount(a, minlength=40), np.bincount(b, minlength=40))
     ref = stats.mannwhitneyu(a, b, alternative="two-sided", method="asymptotic")
     assert res["statistic"] == pytest.approx(ref.statistic)
     assert res["p_value"] == pytest.approx(ref.pvalue, rel=1e-6)
@@ -51,26 +52,26 @@ def test_negative_binomial_test_finds_a_real_difference_and_not_a_fake_one():
     rng = np.random.default_rng(2)
     # Overdispersed counts (NB with mean 6 and 2, dispersion 1), as collisions per run are.
     many, few = rng.negative_binomial(1, 1 / 7, 60), rng.negative_binomial(1, 1 / 3, 60)
-    res = metrics.negative_binomial_test(many, few)
+    res = statistics.negative_binomial_test(many, few)
     assert res["p_value"] < 1e-3 and res["rate_ratio"] < 1 and res["dispersion_alpha"] > 0.3
-    same = metrics.negative_binomial_test(many[:30], many[30:])
+    same = statistics.negative_binomial_test(many[:30], many[30:])
     assert same["p_value"] > 0.01
     with pytest.raises(ValueError, match=">= 0"):
-        metrics.negative_binomial_test([1, -1], [2])
+        statistics.negative_binomial_test([1, -1], [2])
 
 
 def test_chi_square_and_intervals():
     rng = np.random.default_rng(3)
     tasks = _tasks(rng)
-    res = metrics.chi_square_success(tasks, "baseline", "causal")
+    res = statistics.chi_square_success(tasks, "baseline", "causal")
     table = np.array(res["table"])
     assert table.sum() == len(tasks)
     assert res["p_value"] == pytest.approx(stats.chi2_contingency(table)[1])
     all_ok = tasks.assign(outcome="success")
-    assert metrics.chi_square_success(all_ok, "baseline", "causal")["p_value"] == 1.0
-    mean, lo, hi = metrics.mean_ci([1.0, 2.0, 3.0, 4.0])
+    assert statistics.chi_square_success(all_ok, "baseline", "causal")["p_value"] == 1.0
+    mean, lo, hi = statistics.mean_ci([1.0, 2.0, 3.0, 4.0])
     assert mean == 2.5 and lo < 2.5 < hi and hi - 2.5 == pytest.approx(2.5 - lo)
-    assert metrics.mean_ci([7.0]) == (7.0, 7.0, 7.0)
+    assert statistics.mean_ci([7.0]) == (7.0, 7.0, 7.0)
 
 
 def test_hall_zone_shares_and_quantiles_of_binned_distances():
@@ -81,3 +82,15 @@ def test_hall_zone_shares_and_quantiles_of_binned_distances():
     assert shares == {"intimate": 0.2, "personal": 0.2, "social": 0.2, "public": 0.2, "beyond": 0.2}
     uniform = np.ones(100)
     np.testing.assert_allclose(metrics.hist_quantiles(uniform, bin_m, (0.25, 0.5)), [2.5, 5.0])
+
+
+def test_a_collision_is_counted_once_per_encounter():
+    present = jnp.array([True])
+    in_contact, total = jnp.array([False]), 0
+    for d in [1.0, 0.4, 0.3, 0.5, 0.6, 0.3, 0.3]:  # radius 0.475, released beyond 0.525
+        in_contact, new = metrics.collision_encounters(in_contact, jnp.array([d]), present, 0.475, 0.05)
+        total += int(new)
+    assert total == 2
+    in_contact, new = metrics.collision_encounters(jnp.array([False]), jnp.array([0.1]), jnp.array([False]),
+                                                   0.475, 0.05)
+    assert int(new) == 0 and not bool(in_contact[0])

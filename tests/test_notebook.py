@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import pathlib
 
 import nbformat
@@ -14,10 +13,10 @@ NOTEBOOKS = pathlib.Path(__file__).resolve().parent.parent / "notebooks"
 
 @pytest.mark.slow
 def test_evaluation_notebook_executes(learned_run, tmp_path, monkeypatch):
-    monkeypatch.setenv("PEOPLEFLOW_TABLES", str(learned_run / "causal" / "engine_tables.npz"))
-    monkeypatch.setenv("PEOPLEFLOW_REPLICAS", "2")
-    monkeypatch.setenv("PEOPLEFLOW_SLOTS", "S1,S11")
-    monkeypatch.setenv("PEOPLEFLOW_OUT", str(tmp_path / "out"))
+    monkeypatch.setenv("SOCIALNAV_TABLES", str(learned_run / "causal" / "engine_tables.npz"))
+    monkeypatch.setenv("SOCIALNAV_REPLICAS", "2")
+    monkeypatch.setenv("SOCIALNAV_SLOTS", "S1,S11")
+    monkeypatch.setenv("SOCIALNAV_OUT", str(tmp_path / "out"))
     nb = nbformat.read(NOTEBOOKS / "evaluation.ipynb", as_version=4)
     NotebookClient(nb, timeout=600, kernel_name="python3",
                    resources={"metadata": {"path": str(NOTEBOOKS)}}).execute()  # raises if a cell fails

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from jaxsim import geometry
+from jaxsim.robot import RouteFollower
 from jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_keys
 from jaxsim.scenario import load_scenario
 from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING
-from jaxsim.world import build_world, shortest_path_plan
+from jaxsim.world import build_world
+from plans import scipy_shortest_plan
 
 WALL_TOLERANCE_M = 0.02
 
@@ -19,10 +20,10 @@ WALL_TOLERANCE_M = 0.02
 @pytest.fixture(scope="module")
 def day_rollout(short_day):
     """24 random worlds through a whole day of 60 s slots, sampled every 0.5 s."""
-    scenario, world, plan = short_day
+    scenario, world, controller = short_day
     p = scenario.params
     n_steps = scenario.n_slots * p.steps_per_slot
-    final, rec = rollout(p, world, plan, seed=3, n_worlds=24, n_steps=n_steps, sample_every_steps=5)
+    final, rec = rollout(p, world, controller, seed=3, n_worlds=24, n_steps=n_steps, sample_every_steps=5)
     return scenario, to_numpy(final), to_numpy(rec)
 
 
@@ -77,32 +78,75 @@ def test_workers_conserved_and_off_slot_empty(day_rollout):
     assert (rec.worker_status[was_left] == LEFT).all()
 
 
-def test_robot_works_and_charges_only_at_the_station(day_rollout):
-    scenario, _, rec = day_rollout
+def test_robot_works(day_rollout):
+    _, _, rec = day_rollout
     assert (rec.tasks_succeeded[:, -1] > 0).all()
     assert (np.diff(rec.tasks_started, axis=1) >= 0).all()
+
+
+def test_robot_charges_only_at_the_station_and_standing_still():
+    """A robot that starts at 21 % must go and charge (below 20 % after its first legs)."""
+    scenario = load_scenario(slot_length_s=60.0, n_workers=4, battery_initial_pct=21.0)
+    world, controller = build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
+    _, rec = rollout(scenario.params, world, controller, seed=1, n_worlds=4, n_steps=6000, sample_every_steps=5)
+    rec = to_numpy(rec)
     charging = rec.charging
-    if charging.any():
-        xy = scenario.waypoint_xy_m[scenario.charging_station]
-        assert np.hypot(rec.robot_x_m[charging] - xy[0], rec.robot_y_m[charging] - xy[1]).max() < 0.3
-        assert (rec.robot_speed_mps[charging] == 0).all()
+    assert charging.any(axis=1).all(), "every world's robot should have charged"
+    xy = scenario.waypoint_xy_m[scenario.charging_station]
+    assert np.hypot(rec.robot_x_m[charging] - xy[0], rec.robot_y_m[charging] - xy[1]).max() < 0.3
+    assert (rec.robot_speed_mps[charging] == 0).all()
+    assert (np.diff(rec.battery_pct, axis=1)[charging[:, 1:] & charging[:, :-1]] >= 0).all()  # it charges
+
+
+def test_the_robot_follows_the_plan_it_is_given():
+    """Any route table drives the robot: a plan whose first leg detours through a waypoint off
+    the shortest route makes the robot pass there, and the task still succeeds."""
+    scenario = load_scenario(slot_length_s=30.0, n_workers=0, robot_obstacle_probability=0.0,
+                             robot_leg_deadline_s=200.0)  # the first leg (27.7 m) must not time out
+    base = scipy_shortest_plan(scenario)
+    routes, hops = np.array(base.routes), np.array(base.hops)
+    start, via = scenario.robot_start, scenario.waypoint("target-5")
+    goal = int(scenario.robot_goals[0][0])
+    first, second = routes[0, start, via, :hops[0, start, via]], routes[0, via, goal, :hops[0, via, goal]]
+    detour = np.concatenate([first, second])
+    assert len(detour) <= routes.shape[-1] + hops[0, via, goal]
+    width = max(routes.shape[-1], len(detour))
+    routes = np.concatenate([routes, np.repeat(routes[..., -1:], width - routes.shape[-1], -1)], -1)
+    routes[:, start, goal, :len(detour)] = detour
+    routes[:, start, goal, len(detour):] = goal
+    hops[:, start, goal] = len(detour)
+    plan = base.replace(routes=routes, hops=hops)
+    _, rec = rollout(scenario.params, build_world(scenario), RouteFollower(plan), seed=0, n_worlds=2,
+                     n_steps=1500, sample_every_steps=5)
+    rec = to_numpy(rec)
+    vx, vy = scenario.waypoint_xy_m[via]
+    first_leg = rec.tasks_started == 1
+    near = np.hypot(rec.robot_x_m - vx, rec.robot_y_m - vy) < 0.5
+    assert (near & first_leg).any(axis=1).all(), "the robot never passed the detour's waypoint"
+    assert (rec.tasks_succeeded[:, -1] >= 1).all()
+    # The shortest plan does not pass there.
+    _, direct = rollout(scenario.params, build_world(scenario), RouteFollower(base), seed=0, n_worlds=2,
+                        n_steps=1500, sample_every_steps=5)
+    direct = to_numpy(direct)
+    assert not (np.hypot(direct.robot_x_m - vx, direct.robot_y_m - vy)[direct.tasks_started == 1] < 0.5).any()
 
 
 def test_same_seed_same_rollout_and_chunk_invariance(short_day):
-    scenario, world, plan = short_day
+    scenario, world, controller = short_day
     p = scenario.params
     keys = world_keys(7, 4)
-    s0 = init_batch(p, world, plan, keys)
-    _, a = run_samples(p, world, plan, s0, keys, 20, 10)
-    s1, b1 = run_samples(p, world, plan, s0, keys, 10, 10)
-    _, b2 = run_samples(p, world, plan, s1, keys, 10, 10)
+    s0 = init_batch(p, world, controller, keys)
+    _, a = run_samples(p, world, controller, s0, keys, 20, 10)
+    s1, b1 = run_samples(p, world, controller, s0, keys, 10, 10)
+    _, b2 = run_samples(p, world, controller, s1, keys, 10, 10)
     a = to_numpy(a)
     b = jax.tree.map(lambda x, y: np.concatenate([x, y], axis=1), to_numpy(b1), to_numpy(b2))
     for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)):
         np.testing.assert_array_equal(x, y)
     # World b is the same world whatever the batch size (to float rounding: XLA may vectorise a
     # reduction differently for another batch shape).
-    _, c = run_samples(p, world, plan, init_batch(p, world, plan, world_keys(7, 2)), world_keys(7, 2), 20, 10)
+    _, c = run_samples(p, world, controller, init_batch(p, world, controller, world_keys(7, 2)), world_keys(7, 2),
+                       20, 10)
     np.testing.assert_allclose(to_numpy(c).worker_x_m, a.worker_x_m[:2], rtol=0, atol=1e-4)
 
 
@@ -110,9 +154,9 @@ def test_same_seed_same_rollout_and_chunk_invariance(short_day):
 def test_reduced_day_reproduces_the_schedule():
     """Each working slot's crowded waypoints are its high-probability ones (seed 000 Fig. 7)."""
     scenario = load_scenario(slot_length_s=300.0)
-    world, plan = build_world(scenario), shortest_path_plan(scenario)
+    world, controller = build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
     p = scenario.params
-    _, rec = rollout(p, world, plan, seed=11, n_worlds=4, n_steps=scenario.n_slots * p.steps_per_slot,
+    _, rec = rollout(p, world, controller, seed=11, n_worlds=4, n_steps=scenario.n_slots * p.steps_per_slot,
                      sample_every_steps=10)
     rec = to_numpy(rec)
     people = rec.density_ppm2 * np.pi * scenario.waypoint_radius_m ** 2  # people in each disc
@@ -133,8 +177,8 @@ def test_reduced_day_reproduces_the_schedule():
 def test_world_without_workers_runs():
     """The off slot and the Sec. 6 ablation use worlds with nobody in them."""
     scenario = load_scenario(n_workers=0, slot_length_s=30.0)
-    world, plan = build_world(scenario), shortest_path_plan(scenario)
-    final, rec = rollout(scenario.params, world, plan, seed=0, n_worlds=4, n_steps=600, sample_every_steps=10)
+    world, controller = build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
+    final, rec = rollout(scenario.params, world, controller, seed=0, n_worlds=4, n_steps=600, sample_every_steps=10)
     rec = to_numpy(rec)
     assert rec.worker_dist_m.shape == (4, 60, 0) and (rec.n_present == 0).all()
     assert (rec.robot_speed_mps.max(axis=1) > 0.4).all()  # the robot drives

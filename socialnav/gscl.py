@@ -1,9 +1,9 @@
-"""``gscl``: GSCL's social cost-map learner on the command line (seed 002).
+"""``socialnav gscl``: GSCL's social cost-map learner on the command line (seed 002).
 
-    gscl generate --out data/gscl.npz                 # the paper's 24,200 pairs in one file
-    gscl train --out runs/gscl                        # the CPU recipe; run again to resume
-    gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
-    gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
+    socialnav gscl generate --out runs/gscl.npz                 # the paper's 24,200 pairs in one file
+    socialnav gscl train --out runs/gscl                        # the CPU recipe; run again to resume
+    socialnav gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
+    socialnav gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
 """
 
 from __future__ import annotations
@@ -11,11 +11,9 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import sys
 import time
 
-from jaxsim.cli import _positive_float, _positive_int
-from jaxsim.devices import request_compilation_cache, request_host_devices
+from socialnav.argtypes import positive_float, positive_int
 
 
 def _features(text: str) -> tuple[int, ...]:
@@ -43,14 +41,15 @@ def _count(text: str) -> tuple[str, int]:
 _TRAIN_OPTIONS = ("features", "epochs", "batch_size", "learning_rate", "schedule", "fresh_samples", "seed", "coords")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="gscl", description=__doc__.split("\n")[0])
-    sub = parser.add_subparsers(dest="command", required=True)
+def add_parser(top) -> None:
+    parser = top.add_parser("gscl", help="GSCL's learned social cost maps: generate data, train, evaluate (seed 002)",
+                            description=__doc__.split("\n")[0])
+    sub = parser.add_subparsers(dest="gscl_command", required=True)
 
     gen = sub.add_parser("generate", help="write a dataset of (input map, target cost map) pairs to a .npz file")
     gen.add_argument("--out", type=pathlib.Path, required=True, help="the .npz file to write")
     gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    gen.add_argument("--scale", type=_positive_float, default=1.0,
+    gen.add_argument("--scale", type=positive_float, default=1.0,
                      help="multiply the paper's count of every family (default 1: 24,200 pairs)")
     gen.add_argument("--count", type=_count, action="append", default=[], metavar="FAMILY=N",
                      help="samples of one family (repeatable; overrides --scale for it)")
@@ -61,9 +60,9 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--paper", action="store_true",
                     help="the paper's recipe: 32/64/128/256, batch 32, Adam 1e-3 constant, 20 epochs on one fixed split")
     tr.add_argument("--features", type=_features, default=None, help="U-Net widths, e.g. 16,32,64,128")
-    tr.add_argument("--epochs", type=_positive_int, default=None)
-    tr.add_argument("--batch-size", type=_positive_int, default=None)
-    tr.add_argument("--learning-rate", type=_positive_float, default=None, help="Adam's peak learning rate")
+    tr.add_argument("--epochs", type=positive_int, default=None)
+    tr.add_argument("--batch-size", type=positive_int, default=None)
+    tr.add_argument("--learning-rate", type=positive_float, default=None, help="Adam's peak learning rate")
     tr.add_argument("--schedule", choices=("constant", "cosine"), default=None)
     tr.add_argument("--fresh-samples", action=argparse.BooleanOptionalAction, default=None,
                     help="new training samples every epoch (default on; --no-fresh-samples reuses one split)")
@@ -79,19 +78,21 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)")
     ev.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
     ev.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default RUN/evaluation)")
-    ev.add_argument("--examples", type=_positive_int, default=2, help="examples per family in the PNG (default 2)")
-    return parser
+    ev.add_argument("--examples", type=positive_int, default=2, help="examples per family in the PNG (default 2)")
+    gen.set_defaults(handler=_generate)
+    tr.set_defaults(handler=_train)
+    ev.set_defaults(handler=_evaluate)
 
 
 def _generate(args) -> int:
     from models import dataset
 
     if args.out.suffix != ".npz":
-        raise SystemExit(f"gscl generate: --out must end in .npz, got {args.out}")
+        raise SystemExit(f"socialnav gscl generate: --out must end in .npz, got {args.out}")
     counts = dataset.scaled_counts(args.scale)
     for name, n in args.count:
         if name not in dataset.FAMILIES:
-            raise SystemExit(f"gscl generate: unknown family {name!r}; known: {', '.join(dataset.FAMILIES)}")
+            raise SystemExit(f"socialnav gscl generate: unknown family {name!r}; known: {', '.join(dataset.FAMILIES)}")
         counts[name] = n
     t0 = time.perf_counter()
     data = dataset.generate(args.seed, counts)
@@ -109,22 +110,25 @@ def _generate(args) -> int:
 
 
 def _train_config(args):
-    from models import train
+    from models.checkpoints import load_config
+    from models.config import TrainConfig
 
     given = {k: getattr(args, k) for k in _TRAIN_OPTIONS if getattr(args, k) is not None}
     if (args.out / "config.json").exists() and not given and not args.paper:
-        return train.load_config(args.out)  # resume with the stored settings
-    return train.TrainConfig.paper(**given) if args.paper else train.TrainConfig(**given)
+        return load_config(args.out)  # resume with the stored settings
+    return TrainConfig.paper(**given) if args.paper else TrainConfig(**given)
 
 
 def _train(args) -> int:
     from models import train
+    from models.checkpoints import check_run_folder
+    from models.quality import quality_table
 
     try:
         config = _train_config(args)
-        train.check_run_folder(args.out, config)
+        check_run_folder(args.out, config)
     except ValueError as err:
-        raise SystemExit(f"gscl train: {err}") from None
+        raise SystemExit(f"socialnav gscl train: {err}") from None
     import jax
 
     print(f"training on {jax.devices()[0].platform} x {len(jax.devices())}: features {config.features}, "
@@ -134,19 +138,20 @@ def _train(args) -> int:
     try:
         line = train.train(config, args.out, progress=not args.no_progress, stop_when_good=args.stop_when_good)
     except ValueError as err:
-        raise SystemExit(f"gscl train: {err}") from None
+        raise SystemExit(f"socialnav gscl train: {err}") from None
     baselines = json.loads((args.out / "baselines.json").read_text())
     if line:
-        print(train.quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
+        print(quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
         print(f"{'meets' if line['meets_quality'] else 'does not meet'} the quality bar; "
               f"{time.perf_counter() - t0:.0f} s in this call, {line['wall_s']:.0f} s of training in all")
     return 0
 
 
 def _parameters(config) -> int:
-    from models import train, unet
+    from models import unet
+    from models.config import make_model
 
-    return unet.parameter_count(train.make_model(config))
+    return unet.parameter_count(make_model(config))
 
 
 def _evaluate(args) -> int:
@@ -155,19 +160,8 @@ def _evaluate(args) -> int:
     try:
         report = evaluation.evaluate_run(args.run, step=args.step, out=args.out, examples=args.examples)
     except FileNotFoundError as err:
-        raise SystemExit(f"gscl evaluate: {err}") from None
+        raise SystemExit(f"socialnav gscl evaluate: {err}") from None
     print(report["table"])
     print(f"step {report['step']}: {'meets' if report['meets_quality'] else 'does not meet'} the quality bar; "
           f"-> {report['out']}")
     return 0
-
-
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    request_host_devices()
-    request_compilation_cache()
-    return {"generate": _generate, "train": _train, "evaluate": _evaluate}[args.command](args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

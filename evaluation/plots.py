@@ -4,14 +4,11 @@ from __future__ import annotations
 
 import pathlib
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from jaxsim import viz  # noqa: E402
-from planners import metrics  # noqa: E402
+from common import figures
+from evaluation import metrics
+from jaxsim import viz
 
 METHOD_COLOURS = {"baseline": "#1f77b4", "causal": "#ff7f0e"}
 ZONE_COLOURS = {"intimate": "#f4a3a3", "personal": "#fbe3a0", "social": "#b9d3f0", "public": "#c6e8c1"}
@@ -43,7 +40,8 @@ def efficiency_figure(result, path) -> pathlib.Path:
     """Fig. 9: stacked bars per method (means per run): outcomes, distance, time, battery."""
     runs = metrics.per_run(result.tasks)
     methods = [m for m in ("baseline", "causal") if m in set(runs["method"])]
-    fig, axes = plt.subplots(2, 2, figsize=(9, 7.5))
+    fig = figures.figure(figsize=(9, 7.5))
+    axes = fig.subplots(2, 2)
     red, blue, orange = "#d62728", "#1f77b4", "#ff7f0e"
     _stacked(axes[0, 0], runs, methods, [("success", "success"), ("congestion", "failure: congestion"),
                                          ("battery", "failure: battery")], [blue, orange, red], "Task outcomes", "tasks")
@@ -56,7 +54,7 @@ def efficiency_figure(result, path) -> pathlib.Path:
     n = result.config["replicas"]
     fig.suptitle(f"Efficiency, all slots (mean of {n} run{'s' if n > 1 else ''} of {runs['tasks'].iloc[0]} tasks)")
     fig.tight_layout()
-    return viz._save(fig, path)
+    return figures.save(fig, path)
 
 
 def _bxp_stats(hist, bin_m, label):
@@ -71,7 +69,8 @@ def safety_figure(result, path) -> pathlib.Path:
     """Fig. 10: collisions per run (mean, 95 % CI) and robot-person distances over Hall's zones."""
     runs = metrics.per_run(result.tasks)
     methods = [m for m in ("baseline", "causal") if m in set(runs["method"])]
-    fig, (a0, a1) = plt.subplots(1, 2, figsize=(10, 4.5), gridspec_kw={"width_ratios": [1, 1.6]})
+    fig = figures.figure(figsize=(10, 4.5))
+    a0, a1 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.6]})
     for i, m in enumerate(methods):
         mean, lo, hi = metrics.mean_ci(runs[runs["method"] == m]["collisions"])
         a0.bar(i, mean, color=METHOD_COLOURS[m], width=0.6, yerr=[[mean - lo], [hi - mean]], capsize=6)
@@ -92,7 +91,7 @@ def safety_figure(result, path) -> pathlib.Path:
     a1.set_title("Proxemic compliance (whiskers 1.5 IQR)")
     a1.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
-    return viz._save(fig, path)
+    return figures.save(fig, path)
 
 
 def pick_route_example(result, waypoint_ids):
@@ -120,11 +119,12 @@ def pick_route_example(result, waypoint_ids):
 def route_figure(result, scenario, path) -> pathlib.Path:
     """Fig. 11: one task where the methods chose different routes, over the slot's predicted density."""
     pick = pick_route_example(result, scenario.waypoint_ids)
-    fig, ax = plt.subplots(figsize=(9, 6.5))
+    fig = figures.figure(figsize=(9, 6.5))
+    ax = fig.subplots()
     viz.draw_map(ax, scenario)
     if pick is None:
         ax.set_title("the two methods chose the same route for every task")
-        return viz._save(fig, path)
+        return figures.save(fig, path)
     slot, start, goal = pick
     ids = {n: i for i, n in enumerate(scenario.waypoint_ids)}
     i, j = ids[start], ids[goal]
@@ -146,4 +146,4 @@ def route_figure(result, scenario, path) -> pathlib.Path:
     ax.annotate("goal", xy[j], fontsize=9, weight="bold")
     ax.legend(loc="upper right", fontsize=8)
     ax.set_title(f"{scenario.slot_names[slot]}: {start} -> {goal}")
-    return viz._save(fig, path)
+    return figures.save(fig, path)

@@ -1,15 +1,16 @@
 """Seed 000's evaluation (Sec. 5.2-5.4): causal planner vs shortest-path baseline, many replicas.
 
-:func:`run_evaluation` plays every slot's experiment (:mod:`jaxsim.experiment`) for ``replicas``
-independent replicas with both methods, the same keys for both (common random numbers), and
-returns one row per task; :func:`write_report` writes the tables, tests and figures.
+:func:`run_evaluation` plays every slot's experiment (:mod:`evaluation.protocol`) for
+``replicas`` independent replicas with both methods, the same keys for both (common random
+numbers), and returns one row per task; :func:`write_report` writes the tables, tests and figures.
 
     from jaxsim.scenario import load_scenario
-    from planners import evaluation
+    from evaluation import warehouse
+    from planners.tables import CausalTables
     scenario = load_scenario()
-    tables = dict(np.load("runs/warehouse/causal/engine_tables.npz"))
-    result = evaluation.run_evaluation(scenario, tables, replicas=32)
-    evaluation.write_report(result, scenario, "runs/warehouse/evaluation")
+    tables = CausalTables.load("runs/warehouse/causal/engine_tables.npz")
+    result = warehouse.run_evaluation(scenario, tables, replicas=32)
+    warehouse.write_report(result, scenario, "runs/warehouse/evaluation")
 """
 
 from __future__ import annotations
@@ -22,16 +23,18 @@ import time
 import numpy as np
 import pandas as pd
 
-from jaxsim import experiment as ex
+from common import progress as progress_lib
+from common.atomic import write_atomic, write_bytes_atomic, write_text_atomic
+from evaluation import metrics
+from evaluation import protocol as ex
+from evaluation.outcomes import OUTCOMES
 from jaxsim.scenario import Scenario
-from jaxsim.world import build_world, shortest_path_plan
-from planners import metrics
+from jaxsim.world import build_world
+from planners.routes import shortest_path_plan
+from planners.tables import CausalTables
 from planners.waypoint import CausalWeights, causal_plan
 
 METHODS = ("baseline", "causal")
-# Outcome codes of jaxsim.experiment (0, 1, 2) -> the names planners.metrics uses.
-OUTCOME_CATEGORIES = [ex.OUTCOME_NAMES[code] for code in sorted(ex.OUTCOME_NAMES)]
-assert tuple(OUTCOME_CATEGORIES) == metrics.OUTCOMES
 
 
 @dataclasses.dataclass
@@ -46,7 +49,7 @@ class EvaluationResult:
         task's end.
       distance_bin_m: histogram bin width.
       wall_s: method -> wall-clock seconds (compilation included).
-      plans: method -> :class:`~jaxsim.experiment.Method` (for pictures of routes).
+      plans: method -> :class:`~evaluation.protocol.Method` (for pictures of routes).
       density_ppm2: (S, W) the engine's E[D | do(S), W] the causal planner used.
       config: the protocol settings and sizes, JSON-ready.
     """
@@ -61,7 +64,7 @@ class EvaluationResult:
     config: dict
 
 
-def build_methods(scenario: Scenario, tables: dict, weights: CausalWeights = CausalWeights(),
+def build_methods(scenario: Scenario, tables: CausalTables, weights: CausalWeights = CausalWeights(),
                   speed_mps: float | None = None) -> dict[str, ex.Method]:
     """The two methods: shortest path (never refuses) and causal (Eq. 8-10, refuses by Eq. 10)."""
     speed = scenario.params.robot_max_speed_mps if speed_mps is None else speed_mps
@@ -85,7 +88,7 @@ def task_table(scenario: Scenario, state: ex.ExperimentState, method: str, slots
         "task": k_idx.astype(np.int32),
         "start": ids[log.start_wp[b_idx, k_idx]],
         "goal": ids[log.goal_wp[b_idx, k_idx]],
-        "outcome": pd.Categorical.from_codes(log.outcome[b_idx, k_idx], categories=OUTCOME_CATEGORIES),
+        "outcome": pd.Categorical.from_codes(log.outcome[b_idx, k_idx], categories=list(OUTCOMES)),
         "refused": log.refused[b_idx, k_idx],
         "time_s": log.time_s[b_idx, k_idx],
         "stalled_s": log.stalled_s[b_idx, k_idx],
@@ -96,16 +99,16 @@ def task_table(scenario: Scenario, state: ex.ExperimentState, method: str, slots
     })
 
 
-def run_evaluation(scenario: Scenario, tables: dict, replicas: int = 32, slots=None, seed: int = 0,
+def run_evaluation(scenario: Scenario, tables: CausalTables, replicas: int = 32, slots=None, seed: int = 0,
                    cfg: ex.ProtocolConfig | None = None, weights: CausalWeights = CausalWeights(),
                    segment_s: float = 600.0, progress: bool = True) -> EvaluationResult:
     """Both methods on every slot's experiment, ``replicas`` times, with common random numbers.
 
     Args:
-      tables: the causal engine's tables (``engine_tables.npz``).
+      tables: the causal engine's tables (:meth:`CausalTables.load` of ``engine_tables.npz``).
       replicas: independent replicas of the whole protocol (>= 1).
       slots: slot indices to run (default all).
-      cfg: protocol settings (default :meth:`~jaxsim.experiment.ProtocolConfig.for_params`).
+      cfg: protocol settings (default :meth:`~evaluation.protocol.ProtocolConfig.for_params`).
     """
     if replicas < 1:
         raise ValueError(f"replicas must be >= 1, got {replicas}")
@@ -123,13 +126,11 @@ def run_evaluation(scenario: Scenario, tables: dict, replicas: int = 32, slots=N
 
     frames, hists, spans, walls = [], {}, {}, {}
     for name, method in methods.items():
-        bar = _progress_bar(name, progress)
         start = time.perf_counter()
-        state = ex.run_experiments(p, world, method, b_slots, keys, cfg, segment_s=segment_s,
-                                   progress=bar.update if bar else None)
+        with progress_lib.bar(f"{name:>8}", unit="task", enabled=progress) as bar:
+            state = ex.run_experiments(p, world, method, b_slots, keys, cfg, segment_s=segment_s,
+                                       progress=bar.update)
         walls[name] = time.perf_counter() - start
-        if bar:
-            bar.close()
         frames.append(task_table(scenario, state, name, b_slots, b_reps))
         shape = (replicas, len(slot_ids))
         hists[name] = state.distance_hist.reshape(shape + (-1,)).transpose(1, 0, 2)
@@ -139,28 +140,7 @@ def run_evaluation(scenario: Scenario, tables: dict, replicas: int = 32, slots=N
               "deadline_s": p.robot_leg_deadline_s, "obstacle_probability": p.robot_obstacle_probability}
     return EvaluationResult(tasks=pd.concat(frames, ignore_index=True), distance_hist=hists, experiment_s=spans,
                             distance_bin_m=cfg.distance_bin_m, wall_s=walls, plans=methods,
-                            density_ppm2=np.asarray(tables["density_ppm2"]), config=config)
-
-
-def _progress_bar(name: str, enabled: bool):
-    if not enabled:
-        return None
-    from tqdm.auto import tqdm
-
-    class _Bar:
-        def __init__(self):
-            self.bar = None
-
-        def update(self, done: int, total: int):
-            if self.bar is None:
-                self.bar = tqdm(total=total, desc=f"{name:>8}", unit="task")
-            self.bar.update(done - self.bar.n)
-
-        def close(self):
-            if self.bar is not None:
-                self.bar.close()
-
-    return _Bar()
+                            density_ppm2=tables.density_ppm2, config=config)
 
 
 def per_slot_table(result: EvaluationResult) -> pd.DataFrame:
@@ -203,36 +183,24 @@ def overall(result: EvaluationResult) -> dict:
 def write_report(result: EvaluationResult, scenario: Scenario, out_dir: str | pathlib.Path) -> list[pathlib.Path]:
     """Write tasks.parquet, distance_hist.npz, per_slot.csv, summary.json and the figures.
 
-    Files are written to a temporary name and renamed, so an interrupted report leaves no
+    Every file is written to a temporary name and renamed, so an interrupted report leaves no
     half-written file.
     """
-    from planners import plots
+    from evaluation import plots
 
     out = pathlib.Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-
-    def atomic(name, write):
-        tmp = out / f".tmp-{name}"  # keeps the suffix: matplotlib picks the format from it
-        write(tmp)
-        tmp.replace(out / name)
-        written.append(out / name)
-
-    atomic("tasks.parquet", lambda f: result.tasks.to_parquet(f, index=False))
-    def save_hist(f):
-        with open(f, "wb") as handle:  # a handle: np.savez would append ".npz" to the temporary name
-            np.savez(handle, bin_m=result.distance_bin_m, **result.distance_hist)
-
-    atomic("distance_hist.npz", save_hist)
     table = per_slot_table(result)
-    atomic("per_slot.csv", lambda f: table.to_csv(f, index=False, float_format="%.3f"))
     summary = overall(result)
-    atomic("summary.json", lambda f: f.write_text(json.dumps(summary, indent=1, default=_json_default)))
-    for name, draw in (("fig9_efficiency.png", plots.efficiency_figure),
-                       ("fig10_safety.png", plots.safety_figure)):
-        atomic(name, lambda f, d=draw: d(result, f))
-    atomic("fig11_routes.png", lambda f: plots.route_figure(result, scenario, f))
-    return written
+    return [
+        write_atomic(out / "tasks.parquet", lambda f: result.tasks.to_parquet(f, index=False)),
+        write_bytes_atomic(out / "distance_hist.npz",
+                           lambda h: np.savez(h, bin_m=result.distance_bin_m, **result.distance_hist)),
+        write_atomic(out / "per_slot.csv", lambda f: table.to_csv(f, index=False, float_format="%.3f")),
+        write_text_atomic(out / "summary.json", json.dumps(summary, indent=1, default=_json_default)),
+        plots.efficiency_figure(result, out / "fig9_efficiency.png"),
+        plots.safety_figure(result, out / "fig10_safety.png"),
+        plots.route_figure(result, scenario, out / "fig11_routes.png"),
+    ]
 
 
 def _json_default(x):

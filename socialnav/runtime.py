@@ -1,4 +1,8 @@
-"""Host-device setup that must happen before JAX is imported (this module does not import it)."""
+"""Runtime set-up of the ``socialnav`` command: XLA host devices and JAX's compilation cache.
+
+Both must happen before JAX is imported to take full effect, which is why only the composition
+root does them (this module does not import JAX): library code never changes the process's
+devices or caches behind a user's back."""
 
 from __future__ import annotations
 

@@ -7,10 +7,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxsim import experiment as ex
+from evaluation import protocol as ex
+from evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
+from evaluation.warehouse import build_methods
 from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world, shortest_path_plan
-from planners.evaluation import build_methods
+from jaxsim.world import build_world
+from planners.routes import shortest_path_plan
+from planners.tables import CausalTables
 
 N_TASKS = 8
 CFG = dict(warmup_s=20.0, arrival_spread_s=10.0)
@@ -33,8 +36,9 @@ def _tables(scenario):
     rng = np.random.default_rng(0)
     density = rng.uniform(0.0, 1.0, (scenario.n_slots, scenario.n_waypoints))
     density[~scenario.slot_working] = 0.0  # what the engine learns: nobody there off hours
-    return {"density_ppm2": density, "battery_pct_per_s": np.array([[-0.0056, 0.014], [-0.0069, np.nan]]),
-            "speed_edges_mps": np.array([0.0, 0.3, 0.5])}
+    return CausalTables.from_arrays({"density_ppm2": density,
+                                     "battery_pct_per_s": np.array([[-0.0056, 0.014], [-0.0069, np.nan]]),
+                                     "speed_edges_mps": np.array([0.0, 0.3, 0.5])})
 
 
 @pytest.fixture(scope="module")
@@ -53,8 +57,8 @@ def test_off_slot_both_methods_take_the_same_routes_and_get_the_same_results(set
     logs = {name: _run(scenario, world, m, [off, off]).log for name, m in methods.items()}
     for field in ("outcome", "time_s", "stalled_s", "distance_m", "battery_used_pct", "collisions", "goal_wp"):
         np.testing.assert_array_equal(getattr(logs["baseline"], field), getattr(logs["causal"], field), field)
-    assert (logs["baseline"].outcome[:, :N_TASKS] == ex.SUCCESS).all()
-    assert (logs["baseline"].outcome[:, N_TASKS:] == ex.NOT_RUN).all()
+    assert (logs["baseline"].outcome[:, :N_TASKS] == SUCCESS).all()
+    assert (logs["baseline"].outcome[:, N_TASKS:] == NOT_RUN).all()
 
 
 def test_protocol_invariants_in_working_slots(setup):
@@ -62,17 +66,17 @@ def test_protocol_invariants_in_working_slots(setup):
     p = scenario.params
     state = _run(scenario, world, methods["baseline"], [0, 5])
     log = state.log
-    ran = log.outcome != ex.NOT_RUN
+    ran = log.outcome != NOT_RUN
     assert ran.sum(axis=1).tolist() == [N_TASKS, N_TASKS]
-    assert np.isin(log.outcome[ran], [ex.SUCCESS, ex.CONGESTION, ex.BATTERY]).all()
+    assert np.isin(log.outcome[ran], [SUCCESS, CONGESTION, BATTERY]).all()
     assert (log.stalled_s <= log.time_s + 1e-4).all()
     assert (log.distance_m <= p.robot_max_speed_mps * log.time_s + 1e-3).all()
-    ok = log.outcome == ex.SUCCESS
+    ok = log.outcome == SUCCESS
     # A success drives the planned route, short by at most the tolerance at each waypoint.
     hops = np.asarray(methods["baseline"].plan.hops)[state.slot[:, None], log.start_wp, log.goal_wp]
     assert (log.distance_m[ok] >= log.planned_m[ok] - p.robot_goal_tolerance_m * hops[ok] - 1e-3).all()
     assert (log.distance_m[ok] <= log.planned_m[ok] + 1e-3).all()
-    failed = log.outcome == ex.CONGESTION
+    failed = log.outcome == CONGESTION
     assert (log.time_s[failed] >= p.robot_leg_deadline_s - 1e-3).all()
     # Task k starts where task k - 1 was to end, whatever happened to it.
     np.testing.assert_array_equal(log.start_wp[:, 1:N_TASKS], log.goal_wp[:, :N_TASKS - 1])
@@ -86,7 +90,7 @@ def test_missed_deadlines_are_congestion_failures_and_the_robot_moves_on():
     world = _short(build_world(scenario), 4)
     state = _run(scenario, world, ex.make_method(shortest_path_plan(scenario)), [1, 1])
     log = state.log
-    assert (log.outcome[:, :4] == ex.CONGESTION).all()
+    assert (log.outcome[:, :4] == CONGESTION).all()
     np.testing.assert_allclose(log.time_s[:, :4], 1.0, atol=scenario.params.dt_s + 1e-4)
     assert (log.distance_m[:, :4] <= 0.5 + 1e-4).all()
 
@@ -98,7 +102,7 @@ def test_battery_failures_reset_the_battery_and_refusals_prevent_them():
     plan = shortest_path_plan(scenario)
     state = _run(scenario, world, ex.make_method(plan), [10, 10])
     log = state.log
-    battery = log.outcome == ex.BATTERY
+    battery = log.outcome == BATTERY
     assert battery.any()
     # A task never drains more than from a full battery to just under 20 %; one that starts
     # full after a reset and fails drains exactly that.
@@ -111,20 +115,11 @@ def test_battery_failures_reset_the_battery_and_refusals_prevent_them():
     refusing = ex.make_method(plan, np.full(plan.hops.shape, 85.0), may_refuse=True)
     log = _run(scenario, world, refusing, [10, 10]).log
     assert log.refused[:, :6].all()
-    assert (log.outcome[:, :6] != ex.NOT_RUN).all()
+    assert (log.outcome[:, :6] != NOT_RUN).all()
     never = ex.make_method(plan, np.zeros(plan.hops.shape), may_refuse=True)
     assert not _run(scenario, world, never, [10, 10]).log.refused.any()
-
-
-def test_a_collision_is_counted_once_per_encounter():
-    present = jnp.array([True])
-    in_contact, total = jnp.array([False]), 0
-    for d in [1.0, 0.4, 0.3, 0.5, 0.6, 0.3, 0.3]:  # radius 0.475, released beyond 0.525
-        in_contact, new = ex.collision_encounters(in_contact, jnp.array([d]), present, 0.475, 0.05)
-        total += int(new)
-    assert total == 2
-    in_contact, new = ex.collision_encounters(jnp.array([False]), jnp.array([0.1]), jnp.array([False]), 0.475, 0.05)
-    assert int(new) == 0 and not bool(in_contact[0])
+    # The threshold that runs is the one planners.waypoint.refuse_task applies: B_min = 20 % by default.
+    assert ex.ProtocolConfig().min_battery_pct == 20.0
 
 
 def test_bad_input_is_rejected(setup):

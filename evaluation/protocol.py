@@ -1,4 +1,9 @@
-"""Seed 000's decision-making experiment (Sec. 5.2) in the batched simulator.
+"""Seed 000's decision-making experiment (Sec. 5.2): a protocol wrapped around the simulator.
+
+The physics is the simulator's: every step calls :func:`jaxsim.step.crowd_step` with the draws
+of :func:`jaxsim.rng.step_uniforms`, exactly as the day simulation does, and moves the robot
+with :func:`jaxsim.robot.drive`; this module adds only the protocol (tasks, deadlines, battery
+resets, the Eq. 10 refusal of :func:`planners.waypoint.refuse_task`) and its measurements.
 
 One *experiment* is one time slot played with its context frozen: the workers draw their
 destinations from that slot's probabilities for as long as it takes, and the robot runs the
@@ -47,23 +52,25 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
+from common.pytree import select
+from evaluation.metrics import collision_encounters
+from evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
 from jaxsim import robot as robot_lib
 from jaxsim import rollout
-from jaxsim import workers as workers_lib
 from jaxsim.params import SimParams
+from jaxsim.rng import hash_uniform16, step_uniforms, world_seed_u32
 from jaxsim.state import SimState
-from jaxsim.step import hash_uniform16, init_state, world_seed_u32
+from jaxsim.step import crowd_step, init_state
 from jaxsim.world import RobotPlan, World
+from planners.waypoint import MIN_BATTERY_PCT, refuse_task
 
-# Task outcomes in TaskLog.outcome.
-NOT_RUN, SUCCESS, CONGESTION, BATTERY = -1, 0, 1, 2
-OUTCOME_NAMES = {SUCCESS: "success", CONGESTION: "congestion", BATTERY: "battery"}
 # Stream constant that separates the per-task obstacle draws from the per-step ones.
 _OBSTACLE_STREAM = np.uint32(0x5BD1E995)
 
@@ -85,7 +92,7 @@ class ProtocolConfig:
       distance_bin_m, distance_bins: robot-person distance histogram (the last bin holds the rest).
     """
 
-    min_battery_pct: float = 20.0
+    min_battery_pct: float = MIN_BATTERY_PCT
     reset_battery_pct: float = 100.0
     collision_radius_m: float = 0.275
     collision_release_m: float = 0.05
@@ -96,9 +103,9 @@ class ProtocolConfig:
     distance_bins: int = 200
 
     @classmethod
-    def for_params(cls, params: SimParams, **overrides) -> "ProtocolConfig":
+    def for_params(cls, params: SimParams, **overrides) -> ProtocolConfig:
         """Defaults with the collision radius of ``params``' robot."""
-        return cls(**{"collision_radius_m": params.robot_radius_m, **overrides})
+        return cls(**{"collision_radius_m": float(params.robot_radius_m), **overrides})
 
     def warmup_steps(self, params: SimParams) -> int:
         return int(round(self.warmup_s / params.dt_s))
@@ -197,7 +204,7 @@ class ExperimentState:
 def init_experiment(params: SimParams, cfg: ProtocolConfig, world: World, method: Method, slot, key
                     ) -> ExperimentState:
     """An experiment of ``slot`` before its warm-up: workers about to arrive, battery full."""
-    sim = init_state(params, world, method.plan, jax.random.fold_in(key, 2**31 - 1))
+    sim = init_state(params, world, robot_lib.RouteFollower(method.plan), jax.random.fold_in(key, rollout.INIT_FOLD))
     w = sim.workers
     w = w.replace(arrive_s=w.arrive_s / params.slot_length_s * cfg.arrival_spread_s,
                   depart_s=jnp.full_like(w.depart_s, jnp.inf))
@@ -217,24 +224,6 @@ def init_experiment(params: SimParams, cfg: ProtocolConfig, world: World, method
         distance_hist=jnp.zeros(cfg.distance_bins, jnp.int32), end_step=jnp.int32(-1))
 
 
-def collision_encounters(in_contact, dist_m, present, radius_m: float, release_m: float):
-    """Collisions counted once per encounter.
-
-    A present person closer than ``radius_m`` starts an encounter unless already in one; an
-    encounter lasts while they stay within ``radius_m + release_m``.
-
-    Args:
-      in_contact: (N,) bool, in an encounter before this step.
-      dist_m: (N,) robot-person centre distances now; present: (N,) bool.
-
-    Returns:
-      (in_contact now, number of encounters that started now).
-    """
-    touching = present & (dist_m < radius_m)
-    held = present & in_contact & (dist_m < radius_m + release_m)
-    return touching | held, jnp.sum(touching & ~in_contact).astype(jnp.int32)
-
-
 def task_endpoints(world: World, slot, k):
     """(start, goal) waypoints of task ``k`` of ``slot``."""
     goal = world.robot_goals[slot, k]
@@ -248,7 +237,7 @@ def _begin_task(params: SimParams, cfg: ProtocolConfig, world: World, method: Me
     k, slot, r = xs.task, xs.slot, xs.sim.robot
     start, goal = task_endpoints(world, slot, k)
     cost = method.battery_cost_pct[slot, start, goal]
-    refuse = method.may_refuse & (r.battery_pct - cost < cfg.min_battery_pct)
+    refuse = method.may_refuse & refuse_task(r.battery_pct, cost, cfg.min_battery_pct)
     r = r.replace(battery_pct=jnp.where(refuse, jnp.float32(cfg.reset_battery_pct), r.battery_pct),
                   x_m=world.waypoint_x_m[start], y_m=world.waypoint_y_m[start])
     u = hash_uniform16(seed_u32 ^ _OBSTACLE_STREAM, k, (3, 1))[:, 0]
@@ -263,24 +252,22 @@ def _begin_task(params: SimParams, cfg: ProtocolConfig, world: World, method: Me
 
 def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method: Method,
                     xs: ExperimentState, seed_u32) -> ExperimentState:
-    """Advance one experiment by one step (workers as in :func:`jaxsim.step.step`, slot frozen)."""
+    """Advance one experiment by one step: the simulator's crowd step with the slot frozen, the
+    robot driven along the current task's route, then the protocol's bookkeeping."""
     sim = xs.sim
-    n = params.n_workers
     time_s = sim.step.astype(jnp.float32) * params.dt_s
     started = sim.step >= cfg.warmup_steps(params)
     begin = started & ~xs.done & ~xs.leg_open
-    xs = robot_lib.select(begin, _begin_task(params, cfg, world, method, xs, seed_u32), xs)
+    xs = select(begin, _begin_task(params, cfg, world, method, xs, seed_u32), xs)
     running = started & ~xs.done
 
-    u = hash_uniform16(seed_u32, sim.step, (6, n + 1))
+    u_workers, _ = step_uniforms(seed_u32, sim.step, params.n_workers)
     w, r = sim.workers, xs.sim.robot
     present = w.present
-    w = workers_lib.update_context(params, world, w, time_s, xs.slot, u[:, :n])
-    w = workers_lib.move(params, world, w, r.x_m, r.y_m, r.speed_mps * r.heading_x,
-                         r.speed_mps * r.heading_y, u[4, :n], u[5, :n])
+    w = crowd_step(params, world, w, r, time_s, xs.slot, u_workers)
     driven, arrived = robot_lib.drive(params, world, r, sim.workers.x_m, sim.workers.y_m, present)
     hop_elapsed = jnp.where(driven.route_pos != r.route_pos, 0.0, xs.hop_elapsed_s + params.dt_s)
-    r = robot_lib.select(running, driven, r)
+    r = select(running, driven, r)
     arrived = running & arrived
     elapsed = hop_elapsed if cfg.deadline_per_hop else r.leg_elapsed_s
 
@@ -335,17 +322,18 @@ def _advance_one(params, cfg, world, method, xs, key, n_steps):
 
 
 @functools.lru_cache(maxsize=8)
-def _compiled_advance(params, cfg, n_steps, world_chunk, n_dev):
-    def fn(world, method, states, keys):
+def _compiled_advance(cfg: ProtocolConfig, n_steps: int, world_chunk: int, n_dev: int) -> Callable:
+    def fn(params, world, method, states, keys):
         run = functools.partial(_advance_one, params, cfg, world, method, n_steps=n_steps)
         return rollout.map_worlds(run, (states, keys), world_chunk)
 
-    return rollout.shard_worlds(fn, 2, 2, n_dev)
+    return rollout.shard_worlds(fn, 3, 2, n_dev)
 
 
 @functools.lru_cache(maxsize=8)
-def _compiled_init(params, cfg):
-    return jax.jit(jax.vmap(lambda w, m, s, k: init_experiment(params, cfg, w, m, s, k), in_axes=(None, None, 0, 0)))
+def _compiled_init(cfg: ProtocolConfig) -> Callable:
+    init = lambda p, w, m, s, k: init_experiment(p, cfg, w, m, s, k)  # noqa: E731
+    return jax.jit(jax.vmap(init, in_axes=(None, None, None, 0, 0)))
 
 
 def experiment_keys(seed: int, slots: np.ndarray, replicas: np.ndarray) -> jax.Array:
@@ -391,54 +379,13 @@ def run_experiments(params: SimParams, world: World, method: Method, slots: np.n
         raise ValueError("no experiments to run")
     if slots.min() < 0 or slots.max() >= world.n_slots:
         raise ValueError(f"slots must be in [0, {world.n_slots - 1}], got {sorted(set(slots.tolist()))}")
-    states = _compiled_init(params, cfg)(world, method, jnp.asarray(slots), keys)
-    final = jax.tree.map(np.array, jax.device_get(states))  # writable host copy
-    n_tasks = final.n_tasks
-    total = int(n_tasks.sum())
+    states = _compiled_init(cfg)(params, world, method, jnp.asarray(slots), keys)
+    n_tasks = np.asarray(states.n_tasks)
     n_steps = max(1, int(round(segment_s / params.dt_s)))
     # Every hop ends within the deadline, so this many segments always suffice.
     hops = int(np.asarray(method.plan.hops).max()) if cfg.deadline_per_hop else 1
-    limit_s = cfg.warmup_s + float(n_tasks.max()) * hops * (params.robot_leg_deadline_s + params.dt_s)
-    ids = np.arange(len(slots))  # experiment held by each batch entry (-1: padding)
-    retired_tasks = 0
-
-    def start(states, keys, ids):
-        n_dev = rollout.devices_for(len(ids))
-        advance = _compiled_advance(params, cfg, n_steps, world_chunk, n_dev)
-        shared, batched = rollout.place(n_dev, (world, method), (states, keys))
-        return advance, shared, batched
-
-    all_keys = keys
-    advance, shared, (states, keys) = start(states, keys, ids)
-    for _ in range(int(np.ceil(limit_s / segment_s)) + 1):
-        states = advance(*shared, states, keys)
-        tasks = np.asarray(states.task)
-        real = ids >= 0
-        done = tasks >= n_tasks[np.maximum(ids, 0)]
-        if progress is not None:
-            progress(retired_tasks + int(tasks[real].sum()), total)
-        if done[real].all():
-            break
-        left = np.flatnonzero(real & ~done)
-        if shrink_at > 0 and len(left) <= shrink_at * len(ids) and len(ids) > 8:
-            host = rollout.to_numpy(states)
-            _put(final, ids[real], jax.tree.map(lambda x: x[real], host))
-            retired_tasks += int(tasks[real & done].sum())
-            n_dev = jax.local_device_count()
-            size = -(-len(left) // (8 * n_dev)) * 8 * n_dev if len(left) > 8 * n_dev else len(left)
-            pick = np.concatenate([left, np.full(size - len(left), left[0])])
-            new_keys = all_keys[jnp.asarray(ids[pick])]
-            ids = np.concatenate([ids[left], np.full(size - len(left), -1)])
-            advance, shared, (states, keys) = start(jax.tree.map(lambda x: x[pick], host), new_keys, ids)
-    else:  # pragma: no cover - the deadline bounds every hop
-        raise RuntimeError("experiments did not finish within the protocol's time bound")
-    host = rollout.to_numpy(states)
-    real = ids >= 0
-    _put(final, ids[real], jax.tree.map(lambda x: x[real], host))
-    return final
-
-
-def _put(dst, index, src) -> None:
-    """``dst[index] = src`` leaf by leaf (host numpy pytrees)."""
-    for d, v in zip(jax.tree.leaves(dst), jax.tree.leaves(src)):
-        d[index] = v
+    limit_s = cfg.warmup_s + float(n_tasks.max()) * hops * (float(params.robot_leg_deadline_s) + params.dt_s)
+    return rollout.run_until_done(
+        lambda n_dev: _compiled_advance(cfg, n_steps, world_chunk, n_dev), (params, world, method), states, keys,
+        is_done=lambda s: np.asarray(s.task) >= np.asarray(s.n_tasks), max_segments=int(np.ceil(limit_s / segment_s)) + 1,
+        work_done=lambda s: np.asarray(s.task), progress=progress, total_work=int(n_tasks.sum()), shrink_at=shrink_at)

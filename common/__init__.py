@@ -1,0 +1,14 @@
+"""common: the leaf every part may import, importing no part itself.
+
+One home each for what several parts need and none owns: atomic file writes
+(:mod:`common.atomic`), progress reporting (:mod:`common.progress`), pytree helpers
+(:mod:`common.pytree`) and the simulator log's file contract (:mod:`common.logschema`), which
+the simulator writes and the causal pipeline reads without importing each other.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("socialnav-jax")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree that is not installed
+    __version__ = "0+unknown"

@@ -1,0 +1,57 @@
+"""Progress reporting: one way for every long job to show a bar, or nothing.
+
+Library code reports through a plain callable ``report(done, total)`` (or takes ``progress:
+bool`` and asks :func:`bar` for one), so it never depends on how the caller displays progress;
+:func:`bar` makes the tqdm bar the command line shows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+Report = Callable[[int, int], None]
+
+
+class Bar:
+    """A tqdm bar driven by absolute counts (``update(done, total)``), created on first use.
+
+    Disabled bars do nothing, so callers need no ``if progress`` around every update.
+    """
+
+    def __init__(self, desc: str, unit: str = "it", enabled: bool = True):
+        self.desc, self.unit, self.enabled = desc, unit, enabled
+        self._bar = None
+
+    def update(self, done: float, total: float) -> None:
+        if not self.enabled:
+            return
+        if self._bar is None:
+            from tqdm.auto import tqdm
+
+            self._bar = tqdm(total=total, desc=self.desc, unit=self.unit)
+        self._bar.update(done - self._bar.n)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def __enter__(self) -> Bar:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def bar(desc: str, unit: str = "it", enabled: bool = True) -> Bar:
+    """A :class:`Bar`; ``enabled=False`` gives one that shows nothing."""
+    return Bar(desc, unit, enabled)
+
+
+def iterate(iterable, desc: str, enabled: bool = True, **kwargs):
+    """``tqdm(iterable)`` when enabled, else the iterable itself."""
+    if not enabled:
+        return iterable
+    from tqdm.auto import tqdm
+
+    return tqdm(iterable, desc=desc, **kwargs)

@@ -1,0 +1,58 @@
+"""Typed reads of JSON fields, each failure a :class:`ScenarioError` naming file and field."""
+
+from __future__ import annotations
+
+import json
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from jaxsim.scenario.errors import ScenarioError
+
+
+def read_json(file: pathlib.Path) -> dict:
+    """The top-level object of ``file``."""
+    if not file.is_file():
+        raise ScenarioError(file, "<file>", "file is missing")
+    try:
+        obj = json.loads(file.read_text())
+    except json.JSONDecodeError as e:
+        raise ScenarioError(file, "<file>", f"invalid JSON: {e}") from None
+    if not isinstance(obj, dict):
+        raise ScenarioError(file, "<file>", "top level must be a JSON object")
+    return obj
+
+
+def field(obj: Any, file: pathlib.Path, where: str, key: str, kind: type) -> Any:
+    """``obj[key]``, which must be of type ``kind`` (a bool is not a number)."""
+    if not isinstance(obj, dict) or key not in obj:
+        raise ScenarioError(file, f"{where}.{key}" if where else key, "missing field")
+    value = obj[key]
+    if not isinstance(value, kind) or (kind is not bool and isinstance(value, bool)):
+        raise ScenarioError(file, f"{where}.{key}" if where else key,
+                            f"expected {kind.__name__}, got {type(value).__name__}")
+    return value
+
+
+def number(obj: Any, file: pathlib.Path, where: str, key: str) -> float:
+    """``obj[key]`` as a finite float."""
+    if not isinstance(obj, dict) or key not in obj:
+        raise ScenarioError(file, f"{where}.{key}", "missing field")
+    value = obj[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+        raise ScenarioError(file, f"{where}.{key}", f"expected a finite number, got {value!r}")
+    return float(value)
+
+
+def list_field(obj: dict, file: pathlib.Path, key: str) -> list:
+    """A top-level list."""
+    return field(obj, file, "", key, list)
+
+
+def waypoint_field(obj: dict, file: pathlib.Path, key: str, index: dict[str, int]) -> int:
+    """A top-level waypoint name, as its index."""
+    name = field(obj, file, "", key, str)
+    if name not in index:
+        raise ScenarioError(file, key, f"unknown waypoint {name!r}")
+    return index[name]

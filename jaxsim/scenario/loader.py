@@ -1,0 +1,146 @@
+"""Load and validate a warehouse scenario from a folder of six JSON files (host side, numpy).
+
+One loader per file (this package's modules, each named after its file):
+
+* ``waypoints.json`` (:mod:`.waypoints`), ``walls.json`` (:mod:`.walls`), ``graph.json``
+  (:mod:`.graph`), ``schedule.json`` (:mod:`.schedule`), ``tasks.json`` (:mod:`.tasks`),
+  ``params.json`` (:meth:`jaxsim.params.SimParams.from_json`).
+
+:func:`load_scenario` checks everything a simulation relies on and raises
+:class:`ScenarioError` naming the file and the field at the first problem, before any array
+reaches JAX.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from data import DATA_DIR, WAREHOUSE_DIR
+from jaxsim.params import SimParams
+from jaxsim.scenario.errors import ScenarioError
+from jaxsim.scenario.graph import load_graph
+from jaxsim.scenario.schedule import load_schedule
+from jaxsim.scenario.tasks import load_tasks
+from jaxsim.scenario.walls import load_walls
+from jaxsim.scenario.waypoints import load_waypoints
+
+DATA_ROOT = DATA_DIR
+
+
+@dataclasses.dataclass(frozen=True)
+class Scenario:
+    """A validated scenario as host-side numpy arrays.
+
+    Attributes:
+      name: folder name of the scenario.
+      waypoint_ids: (W,) waypoint names, index = waypoint id used everywhere else.
+      waypoint_xy_m: (W, 2) waypoint centres.
+      waypoint_radius_m: (W,) waypoint radii (the density disc of Eq. 3).
+      waypoint_kind: (W,) semantic kinds (``work_area``, ``toilet``, ``canteen`` ...).
+      edges: (E, 2) int undirected edges.
+      human_allowed: (W,) bool, waypoints humans may route through.
+      robot_allowed: (W,) bool, waypoints the robot may route through.
+      boxes_m: (B, 4) wall boxes as ``xmin, xmax, ymin, ymax``.
+      box_kinds: (B,) kinds (wall, shelf, table, tray).
+      slot_names: (S,) slot names ``S1``..``S11``.
+      slot_clock: (S,) clock labels.
+      slot_working: (S,) bool, False for the off slot.
+      destination_p: (S, W) destination probabilities per slot (rows sum to 1).
+      robot_goals: list of S int arrays, the robot's goal waypoints per slot.
+      robot_start: waypoint id where the robot starts.
+      charging_station: waypoint id of the charger.
+      parking: waypoint id where workers arrive and leave.
+      params: numeric parameters.
+    """
+
+    name: str
+    waypoint_ids: tuple[str, ...]
+    waypoint_xy_m: np.ndarray
+    waypoint_radius_m: np.ndarray
+    waypoint_kind: tuple[str, ...]
+    edges: np.ndarray
+    human_allowed: np.ndarray
+    robot_allowed: np.ndarray
+    boxes_m: np.ndarray
+    box_kinds: tuple[str, ...]
+    slot_names: tuple[str, ...]
+    slot_clock: tuple[str, ...]
+    slot_working: np.ndarray
+    destination_p: np.ndarray
+    robot_goals: tuple[np.ndarray, ...]
+    robot_start: int
+    charging_station: int
+    parking: int
+    params: SimParams
+
+    @property
+    def n_waypoints(self) -> int:
+        return len(self.waypoint_ids)
+
+    @property
+    def n_slots(self) -> int:
+        return len(self.slot_names)
+
+    def waypoint(self, name: str) -> int:
+        """Index of the waypoint called ``name``."""
+        try:
+            return self.waypoint_ids.index(name)
+        except ValueError:
+            raise KeyError(f"no waypoint {name!r} in scenario {self.name!r}") from None
+
+    def replace_params(self, **changes: Any) -> Scenario:
+        """A copy with some :class:`SimParams` fields changed (e.g. ``slot_length_s=60``)."""
+        return dataclasses.replace(self, params=self.params.replace(**changes))
+
+
+def load_scenario(path: str | pathlib.Path = WAREHOUSE_DIR, **param_overrides: Any) -> Scenario:
+    """Load and validate the scenario in folder ``path`` (default: the built-in warehouse).
+
+    Args:
+      path: folder with the six scenario files.
+      **param_overrides: :class:`SimParams` fields to override after loading.
+
+    Raises:
+      ScenarioError: naming the file and field of the first problem found.
+    """
+    folder = pathlib.Path(path)
+    if not folder.is_dir():
+        raise ScenarioError(folder, "<folder>", "scenario folder does not exist")
+    waypoints = load_waypoints(folder)
+    index = waypoints.index
+    boxes_m, box_kinds = load_walls(folder, waypoints)
+    edges, human_allowed, robot_allowed = load_graph(folder, index)
+    schedule = load_schedule(folder, index, human_allowed)
+    tasks = load_tasks(folder, index, robot_allowed, schedule.names)
+    params = SimParams.from_json(folder / "params.json", ScenarioError)
+    if param_overrides:
+        unknown = sorted(set(param_overrides) - {f.name for f in dataclasses.fields(SimParams)})
+        if unknown:
+            raise ScenarioError(folder / "params.json", unknown[0], "unknown parameter (override)")
+        params = params.replace(**param_overrides)
+    params.validate(ScenarioError)
+    return Scenario(
+        name=folder.name,
+        waypoint_ids=waypoints.ids,
+        waypoint_xy_m=waypoints.xy_m,
+        waypoint_radius_m=waypoints.radius_m,
+        waypoint_kind=waypoints.kinds,
+        edges=edges,
+        human_allowed=human_allowed,
+        robot_allowed=robot_allowed,
+        boxes_m=boxes_m,
+        box_kinds=box_kinds,
+        slot_names=schedule.names,
+        slot_clock=schedule.clock,
+        slot_working=schedule.working,
+        destination_p=schedule.destination_p,
+        robot_goals=tasks.goals,
+        robot_start=tasks.robot_start,
+        charging_station=tasks.charging_station,
+        parking=index["parking"],
+        params=params,
+    )

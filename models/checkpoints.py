@@ -1,0 +1,72 @@
+"""The files of a training run: ``config.json``, orbax checkpoints, ``metrics.jsonl``.
+
+* ``config.json`` - the :class:`~models.config.TrainConfig` (a resumed run must match it);
+* ``checkpoints/<step>/`` - orbax checkpoints (model, optimiser, accumulators, metrics so far);
+  orbax commits a checkpoint by renaming it, so a kill loses at most the steps since the last;
+* ``metrics.jsonl`` - one line per epoch, rewritten atomically from the checkpoint, so it never
+  disagrees with it; ``baselines.json`` - the trivial predictors' test MSE.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+import jax
+import numpy as np
+
+from common.atomic import write_text_atomic
+from models.config import TrainConfig
+from models.steps import compiled, initial_state
+
+
+def write_metrics(out: pathlib.Path, meta: dict) -> None:
+    """Rewrite ``metrics.jsonl`` from the history in a checkpoint's metadata."""
+    if meta["history"]:
+        write_text_atomic(out / "metrics.jsonl", "".join(json.dumps(h) + "\n" for h in meta["history"]))
+
+
+def checkpoint_manager(out: pathlib.Path, config: TrainConfig, read_only: bool = False):
+    import orbax.checkpoint as ocp
+
+    options = ocp.CheckpointManagerOptions(max_to_keep=config.keep_checkpoints, create=not read_only,
+                                           enable_async_checkpointing=False, read_only=read_only)
+    return ocp.CheckpointManager((out / "checkpoints").absolute(), options=options)
+
+
+def host(tree):
+    """A pytree of device arrays as host numpy arrays (what orbax saves)."""
+    return jax.tree.map(np.asarray, tree)
+
+
+def load_config(out) -> TrainConfig:
+    """The configuration stored in run folder ``out``."""
+    path = pathlib.Path(out) / "config.json"
+    if not path.exists():
+        raise FileNotFoundError(f"{out} holds no training run (no config.json)")
+    return TrainConfig.from_json(json.loads(path.read_text()))
+
+
+def check_run_folder(out, config: TrainConfig) -> None:
+    """Raise ValueError if ``out`` holds a run with another configuration."""
+    path = pathlib.Path(out) / "config.json"
+    if path.exists() and load_config(out) != config:
+        raise ValueError(f"{out} holds a run with another configuration ({path}); "
+                         "resume it with the same settings or choose another output folder")
+
+
+def restore(out, step: int | None = None):
+    """``(config, graphdef, state, meta)`` of a run's checkpoint (the latest by default)."""
+    import orbax.checkpoint as ocp
+
+    out = pathlib.Path(out)
+    config = load_config(out)
+    graphdef = compiled(config)[0]
+    template = initial_state(config)
+    with checkpoint_manager(out, config, read_only=True) as manager:
+        step = manager.latest_step() if step is None else step
+        if step is None:
+            raise FileNotFoundError(f"{out} has no checkpoint yet")
+        restored = manager.restore(step, args=ocp.args.Composite(
+            state=ocp.args.StandardRestore(host(template)), meta=ocp.args.JsonRestore()))
+    return config, graphdef, restored["state"], restored["meta"]

@@ -1,0 +1,113 @@
+"""The configuration of a GSCL training run (seed 002 Sec. 4.2): widths, schedule, data sizes.
+
+A frozen, hashable dataclass validated on construction; the paper's recipe is
+:meth:`TrainConfig.paper`. ``config.json`` in a run folder is its :meth:`TrainConfig.to_json`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import optax
+from flax import nnx
+
+from models import dataset, unet
+
+
+@dataclasses.dataclass(frozen=True)
+class TrainConfig:
+    """Static configuration of a training run.
+
+    Attributes:
+      features: U-Net widths (3 encoder blocks, bottleneck); :data:`models.unet.CPU_FEATURES` by
+        default, :data:`models.unet.PAPER_FEATURES` for the paper's size.
+      coords: add the coordinate channels to the input (:mod:`models.unet`).
+      epochs: number of epochs (the paper: 20).
+      batch_size: samples per step (split over the devices; a multiple of their number).
+      learning_rate: Adam's peak learning rate (the paper: 1e-3, constant).
+      schedule: ``"constant"`` (the paper) or ``"cosine"`` (linear warm-up, cosine decay to
+        ``final_lr_fraction`` of the peak at the last step).
+      warmup_steps / final_lr_fraction: of the cosine schedule.
+      train_fraction / test_fraction: epoch and test-set sizes as fractions of the paper's
+        24,200 samples, family by family (the paper's 70 / 30 split).
+      fresh_samples: new training samples every epoch (True) or epoch 0's reused (the paper).
+      seed: seeds the data streams and the initialisation.
+      checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
+      keep_checkpoints: how many checkpoints orbax keeps.
+    """
+
+    features: tuple[int, int, int, int] = unet.CPU_FEATURES
+    coords: bool = True
+    epochs: int = 10
+    batch_size: int = 32
+    learning_rate: float = 3e-3
+    schedule: str = "cosine"
+    warmup_steps: int = 200
+    final_lr_fraction: float = 0.02
+    train_fraction: float = 0.7
+    test_fraction: float = 0.3
+    fresh_samples: bool = True
+    seed: int = 0
+    checkpoint_every_steps: int = 500
+    keep_checkpoints: int = 2
+
+    def __post_init__(self):
+        object.__setattr__(self, "features", tuple(int(f) for f in self.features))
+        if self.schedule not in ("constant", "cosine"):
+            raise ValueError(f"schedule must be 'constant' or 'cosine', got {self.schedule!r}")
+        for name in ("epochs", "batch_size", "checkpoint_every_steps", "keep_checkpoints"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if not (0 < self.train_fraction and 0 < self.test_fraction):
+            raise ValueError("train_fraction and test_fraction must be > 0")
+        if not self.learning_rate > 0:
+            raise ValueError(f"learning_rate must be > 0, got {self.learning_rate}")
+
+    @classmethod
+    def paper(cls, **overrides) -> TrainConfig:
+        """The paper's recipe: 32/64/128/256, batch 32, Adam 1e-3 constant, 20 epochs over one
+        fixed 70 % split (batch size not given in the paper; 32 assumed)."""
+        base = dict(features=unet.PAPER_FEATURES, batch_size=32, learning_rate=1e-3, schedule="constant",
+                    fresh_samples=False, epochs=20)
+        return cls(**{**base, **overrides})
+
+    @property
+    def train_counts(self) -> dict[str, int]:
+        return dataset.scaled_counts(self.train_fraction)
+
+    @property
+    def test_counts(self) -> dict[str, int]:
+        return dataset.scaled_counts(self.test_fraction)
+
+    @property
+    def steps_per_epoch(self) -> int:
+        return max(1, sum(self.train_counts.values()) // self.batch_size)
+
+    @property
+    def total_steps(self) -> int:
+        return self.epochs * self.steps_per_epoch
+
+    def to_json(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d["features"] = list(self.features)
+        return d
+
+    @classmethod
+    def from_json(cls, d: dict[str, Any]) -> TrainConfig:
+        return cls(**{**d, "features": tuple(d["features"])})
+
+
+def learning_rate_schedule(config: TrainConfig) -> optax.Schedule:
+    """Adam's learning rate per step: constant, or linear warm-up then cosine decay."""
+    if config.schedule == "constant":
+        return optax.constant_schedule(config.learning_rate)
+    warmup = min(config.warmup_steps, max(config.total_steps - 1, 0))
+    return optax.warmup_cosine_decay_schedule(
+        0.0, config.learning_rate, warmup, max(config.total_steps, warmup + 1),
+        end_value=config.learning_rate * config.final_lr_fraction)
+
+
+def make_model(config: TrainConfig) -> unet.UNet:
+    """A freshly initialised U-Net of ``config``'s widths (seeded by ``config.seed``)."""
+    return unet.UNet(config.features, config.coords, rngs=nnx.Rngs(config.seed))

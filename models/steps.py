@@ -1,0 +1,111 @@
+"""The pure, jitted pieces of training: train step, prediction, per-sample error, sharding.
+
+Pure ``jax.jit`` train and predict steps over ``nnx.split`` states; the batch is sharded over the
+local devices when there are several (the ``socialnav`` command asks XLA for one CPU device per
+core; a GPU is used when JAX sees one). Per-family train MSE is accumulated on the device.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from flax import nnx
+
+from models import dataset
+from models.config import TrainConfig, learning_rate_schedule, make_model
+
+
+def batch_sharding(batch_size: int):
+    """``(data sharding, replicated sharding)`` over the local devices, or ``(None, None)`` on one.
+
+    Raises:
+      ValueError: ``batch_size`` is not a multiple of the device count.
+    """
+    devices = jax.devices()
+    n = len(devices)
+    if n == 1:
+        return None, None
+    if batch_size % n:
+        raise ValueError(f"batch_size {batch_size} must be a multiple of the {n} devices")
+    mesh = jax.sharding.Mesh(np.array(devices), ("batch",))
+    return (jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("batch")),
+            jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec()))
+
+
+def make_train_step(graphdef, tx: optax.GradientTransformation, n_families: int):
+    """``step(state, inputs, targets, family) -> (state, loss)``; ``state`` is a dict with
+    ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and ``family_count`` (F,)."""
+
+    def loss_fn(params, batch_stats, inputs, targets):
+        model = nnx.merge(graphdef, params, batch_stats, copy=True)
+        model.train()
+        per_sample = jnp.mean((model(inputs) - targets) ** 2, axis=(1, 2))
+        return jnp.mean(per_sample), (per_sample, nnx.state(model, nnx.BatchStat))
+
+    @jax.jit
+    def step(state, inputs, targets, family):
+        (loss, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
+            state["params"], state["batch_stats"], inputs, targets)
+        updates, opt_state = tx.update(grads, state["opt_state"], state["params"])
+        onehot = jax.nn.one_hot(family, n_families, dtype=jnp.float32)
+        return {"params": optax.apply_updates(state["params"], updates), "batch_stats": batch_stats,
+                "opt_state": opt_state,
+                "family_sse": state["family_sse"] + onehot.T @ per_sample,
+                "family_count": state["family_count"] + onehot.sum(0)}, loss
+
+    return step
+
+
+def make_predict(graphdef):
+    """``predict(params, batch_stats, maps) -> costs`` (B, 40, 40), jitted, batch norm in eval mode."""
+
+    @jax.jit
+    def predict(params, batch_stats, maps):
+        model = nnx.merge(graphdef, params, batch_stats, copy=True)
+        model.eval()
+        return model(maps)
+
+    return predict
+
+
+def per_sample_mse(predict, params, batch_stats, inputs: np.ndarray, targets: np.ndarray,
+                   batch_size: int = 512) -> np.ndarray:
+    """(N,) pixel MSE of the model on a dataset, in fixed-size batches (the last one padded, so
+    one compilation serves every call), split over the local devices when there are several."""
+    n_devices = len(jax.devices())
+    batch_size = -(-batch_size // n_devices) * n_devices
+    data_sharding, replicated = batch_sharding(batch_size)
+    if replicated is not None:
+        params, batch_stats = jax.device_put((params, batch_stats), replicated)
+    out = np.empty(len(inputs), np.float64)
+    for start in range(0, len(inputs), batch_size):
+        x = inputs[start:start + batch_size]
+        n = len(x)
+        if n < batch_size:
+            x = np.concatenate([x, np.zeros((batch_size - n,) + x.shape[1:], x.dtype)])
+        if data_sharding is not None:
+            x = jax.device_put(x, data_sharding)
+        pred = np.asarray(predict(params, batch_stats, x))[:n]
+        out[start:start + n] = np.mean((pred - targets[start:start + n]) ** 2, axis=(1, 2))
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def compiled(config: TrainConfig):
+    """``(graphdef, tx, train_step, predict)`` of a configuration, built once per process so that
+    resuming, restoring and evaluating in one process do not compile again."""
+    graphdef = nnx.graphdef(make_model(config))
+    tx = optax.adam(learning_rate_schedule(config))
+    return graphdef, tx, make_train_step(graphdef, tx, len(dataset.FAMILIES)), make_predict(graphdef)
+
+
+def initial_state(config: TrainConfig) -> dict:
+    """The training state before the first step: fresh weights, Adam's state, zero accumulators."""
+    _, params, batch_stats = nnx.split(make_model(config), nnx.Param, nnx.BatchStat)
+    n = len(dataset.FAMILIES)
+    return {"params": params, "batch_stats": batch_stats, "opt_state": compiled(config)[1].init(params),
+            "family_sse": jnp.zeros(n), "family_count": jnp.zeros(n)}

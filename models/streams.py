@@ -1,0 +1,36 @@
+"""The data streams of training: every epoch's samples and the held-out test set, drawn by key.
+
+Every epoch draws its training samples from :func:`models.dataset.generate` with a key folded
+from ``(seed, "train", epoch)`` (:attr:`TrainConfig.fresh_samples`; with it off, epoch 0's samples
+are reused every epoch, the paper's fixed 70 % split). The test set comes from ``(seed, "test")``,
+a key no training epoch uses, in the proportions of the paper's 30 %. Making an epoch of 16,940
+pairs takes about a second, less than reading it from disk would.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import numpy as np
+
+from models import dataset
+from models.config import TrainConfig
+
+
+def _stream_key(seed: int, stream: str, index: int = 0) -> jax.Array:
+    return jax.random.fold_in(jax.random.fold_in(jax.random.key(seed), ("train", "test").index(stream)), index)
+
+
+@functools.lru_cache(maxsize=1)  # epoch 0 serves the trivial baselines and then the first epoch
+def epoch_data(config: TrainConfig, epoch: int) -> dict[str, np.ndarray]:
+    """The shuffled training samples of ``epoch`` (epoch 0's for every epoch without fresh samples)."""
+    e = epoch if config.fresh_samples else 0
+    data = dataset.generate(_stream_key(config.seed, "train", e), config.train_counts)
+    order = np.random.default_rng([config.seed, epoch]).permutation(len(data["family"]))
+    return {**{k: data[k][order] for k in ("inputs", "targets", "family")}, "names": data["names"]}
+
+
+def test_data(config: TrainConfig) -> dict[str, np.ndarray]:
+    """The held-out test set (a key no training epoch uses)."""
+    return dataset.generate(_stream_key(config.seed, "test"), config.test_counts)

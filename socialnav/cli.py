@@ -1,0 +1,47 @@
+"""``socialnav``: the toolkit's command line. One command, one subcommand per job.
+
+    socialnav run --out runs/warehouse                              # simulate, learn, evaluate
+    socialnav simulate --worlds 8 --out runs/warehouse              # a full day, 8 worlds
+    socialnav learn --logs runs/warehouse                           # causal graph + engine
+    socialnav evaluate --tables runs/warehouse/causal/engine_tables.npz --replicas 32
+    socialnav ablation --out runs/ablation                          # seed 000 Sec. 6
+    socialnav gscl generate|train|evaluate ...                      # GSCL (seed 002)
+
+Runtime set-up (one XLA host device per core, JAX's persistent compilation cache) happens here,
+before JAX is imported; the subcommands' modules are imported after it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from socialnav import runtime
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
+    from socialnav import evaluate, gscl, learn, pipelines, simulate
+
+    parser = argparse.ArgumentParser(prog="socialnav", description=__doc__.split("\n")[0])
+    from common import __version__
+
+    parser.add_argument("--version", action="version", version=f"socialnav-jax {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    pipelines.add_parsers(sub)
+    simulate.add_parser(sub)
+    learn.add_parser(sub)
+    evaluate.add_parser(sub)
+    gscl.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    runtime.request_host_devices()
+    runtime.request_compilation_cache()
+    args = build_parser().parse_args(argv)
+    return args.handler(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,95 @@
+"""``socialnav evaluate``: seed 000's causal planner against the shortest-path baseline."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+
+from evaluation import warehouse
+from evaluation.protocol import ProtocolConfig
+from jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
+from planners.tables import TABLES_FILE, CausalTables, TablesError
+from socialnav.argtypes import comma_names, positive_float, positive_int
+
+
+def add_parser(sub) -> None:
+    ev = sub.add_parser("evaluate", help="causal planner vs shortest-path baseline (seed 000 Sec. 5.2-5.4)",
+                        description="Every slot's experiment (200 tasks, S11 the 90-leg tour) with both methods "
+                                    "and common random numbers, for --replicas independent replicas; writes "
+                                    "tasks.parquet, per_slot.csv, summary.json and Fig. 9-11 to --out.")
+    ev.add_argument("--tables", type=pathlib.Path, default=pathlib.Path("runs/warehouse/causal") / TABLES_FILE,
+                    help="the causal engine's tables, written by 'socialnav learn' "
+                         f"(default runs/warehouse/causal/{TABLES_FILE})")
+    add_evaluation_options(ev, default_out=None)
+    ev.add_argument("--scenario", type=pathlib.Path, default=None, help="scenario folder (default: the warehouse)")
+    ev.set_defaults(handler=run)
+
+
+def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: int = 32) -> None:
+    """The options ``evaluate`` and ``run`` share."""
+    p.add_argument("--replicas", type=positive_int, default=replicas,
+                   help=f"independent replicas of the whole protocol (default {replicas})")
+    p.add_argument("--slots", type=comma_names, default=None,
+                   help="comma-separated slot names to run, e.g. S1,S6,S11 (default: all)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--collision-radius-m", type=positive_float, default=None,
+                   help="robot-person centre distance that counts as a collision (default: the robot's radius, "
+                        "0.275 m, as the paper; 0.475 counts any body contact)")
+    p.add_argument("--deadline-per-task", action="store_true",
+                   help="the 45 s deadline bounds the whole task (the paper's wording) instead of each route "
+                        "hop (the reference code)")
+    p.add_argument("--out", type=pathlib.Path, default=default_out,
+                   help="output folder" + (f" (default {default_out})" if default_out else
+                                           " (default: evaluation/ next to the tables' folder)"))
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+
+
+def _slot_ids(scenario: Scenario, names: list[str] | None) -> list[int] | None:
+    if names is None:
+        return None
+    unknown = [n for n in names if n not in scenario.slot_names]
+    if unknown:
+        raise ValueError(f"--slots: unknown slot(s) {unknown}; the scenario has {list(scenario.slot_names)}")
+    return [scenario.slot_names.index(n) for n in names]
+
+
+def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Path, args: argparse.Namespace) -> int:
+    """Run the evaluation with the tables in ``tables_file``; report to ``out``. Exit code."""
+    try:
+        tables = CausalTables.load(tables_file)
+        tables.check_against(scenario.waypoint_ids, scenario.slot_names)
+        slots = _slot_ids(scenario, args.slots)
+    except (TablesError, ValueError) as e:
+        hint = " (run 'socialnav learn' first)" if not tables_file.is_file() else ""
+        print(f"error: {e}{hint}", file=sys.stderr)
+        return 2
+    settings = {"deadline_per_hop": not args.deadline_per_task}
+    if args.collision_radius_m is not None:
+        settings["collision_radius_m"] = args.collision_radius_m
+    try:
+        result = warehouse.run_evaluation(scenario, tables, replicas=args.replicas, slots=slots, seed=args.seed,
+                                          cfg=ProtocolConfig.for_params(scenario.params, **settings),
+                                          progress=not args.no_progress)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    files = warehouse.write_report(result, scenario, out)
+    summary = json.loads((out / "summary.json").read_text())
+    print(f"\n{args.replicas} replica(s) x {len(result.config['slots'])} slot(s), both methods; wall time "
+          + ", ".join(f"{m} {s:.0f} s" for m, s in result.wall_s.items()))
+    print(warehouse.per_slot_table(result).to_string(index=False, float_format=lambda v: f"{v:.1f}"))
+    print(warehouse.format_overall(summary))
+    for f in files:
+        print(f"wrote {f}")
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        scenario = load_scenario(args.scenario or WAREHOUSE_DIR)
+    except ScenarioError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return evaluate_with(scenario, args.tables, args.out or args.tables.parent.parent / "evaluation", args)

@@ -1,0 +1,77 @@
+"""The arrows between the parts run one way: a test that reads every import of every module.
+
+Allowed (DESIGN.md): ``socialnav`` may import everything and nothing imports it; ``evaluation``
+imports jaxsim, planners, models; ``planners`` may import jaxsim (the plan format) and models
+(inference); ``jaxsim``, ``models`` and ``causal`` import none of the other parts; ``causal`` and
+``planners`` never import each other; ``common`` and ``data`` are leaves every part may use.
+"""
+
+from __future__ import annotations
+
+import ast
+import pathlib
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+PARTS = ("common", "data", "jaxsim", "models", "causal", "planners", "evaluation", "socialnav")
+LEAVES = {"common", "data"}
+ALLOWED = {
+    "common": set(),
+    "data": set(),
+    "jaxsim": LEAVES,
+    "models": LEAVES,
+    "causal": LEAVES,
+    "planners": LEAVES | {"jaxsim", "models"},
+    "evaluation": LEAVES | {"jaxsim", "planners", "models"},
+    "socialnav": set(PARTS) - {"socialnav"},
+}
+
+
+def imported_parts(file: pathlib.Path) -> dict[str, int]:
+    """Top-level project packages imported anywhere in ``file`` (also inside functions): part -> line."""
+    found = {}
+    for node in ast.walk(ast.parse(file.read_text(), str(file))):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names = [node.module]
+        else:
+            continue
+        for name in names:
+            top = name.split(".")[0]
+            if top in PARTS:
+                found.setdefault(top, node.lineno)
+    return found
+
+
+def forbidden_arrows(root: pathlib.Path = ROOT) -> list[str]:
+    """Every import of a part by a part that may not import it, as ``file:line imports part``."""
+    bad = []
+    for part in PARTS:
+        for file in sorted((root / part).rglob("*.py")):
+            for other, line in imported_parts(file).items():
+                if other != part and other not in ALLOWED[part]:
+                    bad.append(f"{file.relative_to(root)}:{line} imports {other}")
+    return bad
+
+
+def test_no_forbidden_arrow():
+    assert forbidden_arrows() == []
+
+
+def test_nothing_outside_the_root_imports_socialnav():
+    users = [f for part in PARTS if part != "socialnav" for f in (ROOT / part).rglob("*.py")
+             if "socialnav" in imported_parts(f)]
+    assert users == []
+
+
+@pytest.mark.parametrize("part,other", [("jaxsim", "planners"), ("causal", "planners"), ("planners", "causal"),
+                                        ("models", "jaxsim"), ("jaxsim", "socialnav")])
+def test_the_check_catches_a_forbidden_import(tmp_path, part, other):
+    """The checker itself: a module that imports a forbidden part, even inside a function, is reported."""
+    for p in PARTS:
+        (tmp_path / p).mkdir()
+    (tmp_path / part / "bad.py").write_text(f"import numpy\n\n\ndef f():\n    from {other} import something\n")
+    (tmp_path / part / "good.py").write_text("from common import pytree\n")
+    assert forbidden_arrows(tmp_path) == [f"{part}/bad.py:5 imports {other}"]
