@@ -130,13 +130,14 @@ class CausalEngine:
     support_sw: np.ndarray
 
     @classmethod
-    def fit(cls, datasets: Datasets, discovery: Discovery, n_slots: int, bins: dict[str, int] | None = None
-            ) -> "CausalEngine":
+    def fit(
+        cls, datasets: Datasets, discovery: Discovery, n_slots: int, bins: dict[str, int] | None = None
+    ) -> CausalEngine:
         """Discretise the datasets and learn the network's parameters by MLE."""
         import pyagrum as gum
 
         rows = []
-        for k, arr in datasets.data.items():
+        for arr in datasets.data.values():
             prev, cur = arr[:-1], arr[1:]
             frame = {}
             for j, v in enumerate(VARIABLES):
@@ -152,15 +153,22 @@ class CausalEngine:
         }
         w_codes = sorted({int(a[0, VARIABLES.index("W")]) for a in datasets.data.values()})
         code_to_name = {int(datasets.data[k][0, VARIABLES.index("W")]): datasets.waypoints[k] for k in datasets.data}
-        labels = {"W": [code_to_name[c] for c in w_codes], "S": [str(s) for s in range(n_slots)],
-                  "C": ["0", "1"], "O": ["0", "1"]}
+        labels = {
+            "W": [code_to_name[c] for c in w_codes],
+            "S": [str(s) for s in range(n_slots)],
+            "C": ["0", "1"],
+            "O": ["0", "1"],
+        }
 
         bn = gum.BayesNet("causal_engine")
         for slice_ in ("0", "t"):
             for v in VARIABLES:
                 name = f"{v}{slice_}"
-                bn.add(discretized_variable(name, binning[v]) if v in CONTINUOUS
-                       else gum.LabelizedVariable(name, name, labels[v]))
+                bn.add(
+                    discretized_variable(name, binning[v])
+                    if v in CONTINUOUS
+                    else gum.LabelizedVariable(name, name, labels[v])
+                )
         arcs = dag_arcs(discovery)
         for a, b in arcs:
             bn.addArc(a, b)
@@ -177,11 +185,17 @@ class CausalEngine:
         learned = learn_mle(bn, data)
         n_v = len(binning["V"].means)
         support_vc = np.zeros((n_v, 2), np.int64)
-        np.add.at(support_vc, (binning["V"].index(robot[:, VARIABLES.index("V")]),
-                               robot[:, VARIABLES.index("C")].astype(int)), 1)
+        np.add.at(
+            support_vc,
+            (binning["V"].index(robot[:, VARIABLES.index("V")]), robot[:, VARIABLES.index("C")].astype(int)),
+            1,
+        )
         support_sw = np.zeros((n_slots, len(w_codes)), np.int64)
-        np.add.at(support_sw, (table["St"].to_numpy().astype(int),
-                               np.searchsorted(w_codes, table["Wt"].to_numpy().astype(int))), 1)
+        np.add.at(
+            support_sw,
+            (table["St"].to_numpy().astype(int), np.searchsorted(w_codes, table["Wt"].to_numpy().astype(int))),
+            1,
+        )
         return cls(learned, binning, labels, datasets.period_s, arcs, support_vc, support_sw)
 
     # -- queries ---------------------------------------------------------------------------
@@ -193,13 +207,64 @@ class CausalEngine:
         return self.bn.variable(node).label(int(index))
 
     def expected_battery_do(self, speed_bin: int, charging: int) -> float:
-        """E[L | do(V = v), C = c] per sampling period (Eq. 5-6, backdoor over O)."""
+        """E[L | do(V = v), C = c] per sampling period (Eq. 5-6, backdoor over O).
+
+        pyAgrum's ``causalImpact`` identifies the query; on some learned graphs (density links
+        into V and L, whose parents include the 69-state W) its formula does not fit in memory
+        (``std::bad_alloc``), and the same quantity is computed by the parent adjustment
+        (:meth:`expected_battery_do_by_parents`) instead.
+        """
         import pyagrum as gum
 
         cm = gum.CausalModel(self.bn)
-        _, tensor, _ = gum.causalImpact(cm, on="Lt", doing="Vt", knowing={"Ct"},
-                                        values={"Vt": self._label("Vt", speed_bin), "Ct": str(charging)})
+        try:
+            _, tensor, _ = gum.causalImpact(
+                cm,
+                on="Lt",
+                doing="Vt",
+                knowing={"Ct"},
+                values={"Vt": self._label("Vt", speed_bin), "Ct": str(charging)},
+            )
+        except (MemoryError, Exception) as e:  # pyAgrum raises a bare Exception("std::bad_alloc")
+            if "bad_alloc" not in str(e) and not isinstance(e, MemoryError):
+                raise
+            return self.expected_battery_do_by_parents(speed_bin, charging)
         return self._expect(tensor, "L")
+
+    def expected_battery_do_by_parents(self, speed_bin: int, charging: int, max_cells: int = 20_000_000) -> float:
+        """E[L | do(V = v), C = c] by the backdoor adjustment over V's parents Z:
+        ``sum_z E[L | v, z, c] P(z | c)``, from one joint posterior P(L, V, Z | C = c).
+
+        Valid because the parents of the treatment block every backdoor path, and C (a context
+        whose only parent is its previous slice) is neither a descendant of V nor a collider.
+
+        Raises:
+          MemoryError: the joint over L, V and Z has more than ``max_cells`` cells.
+        """
+        import pyagrum as gum
+
+        parents = sorted(self.bn.variable(p).name() for p in self.bn.parents("Vt"))
+        z = [n for n in parents if n != "Ct"]
+        target = ["Lt", "Vt", *z]
+        cells = int(np.prod([self.bn.variable(n).domainSize() for n in target]))
+        if cells > max_cells:
+            raise MemoryError(f"E[L | do(V), C]: the joint over {target} has {cells} cells (more than {max_cells})")
+        ie = gum.LazyPropagation(self.bn)
+        ie.addJointTarget(set(target))
+        ie.setEvidence({"Ct": str(charging)})
+        ie.makeInference()
+        tensor = ie.jointPosterior(set(target))
+        names = list(tensor.names)
+        arr = np.asarray(tensor.tolist(), np.float64)  # axes in the reverse order of tensor.names
+        arr = np.moveaxis(arr, [len(names) - 1 - names.index(n) for n in ("Lt", "Vt")], [0, 1])
+        arr = arr / arr.sum()
+        p_vz = arr.sum(axis=0)  # (V, Z...)
+        p_z = p_vz.sum(axis=0)  # (Z...)
+        joint_v = arr[:, speed_bin]  # (L, Z...): P(L, v, z | c)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            p_l = np.where(p_vz[speed_bin] > 0, joint_v / p_vz[speed_bin], 0.0)  # P(L | v, z, c)
+        p_l = (p_l * p_z).reshape(len(self.bins["L"].means), -1).sum(axis=1)
+        return float(np.dot(p_l / p_l.sum(), self.bins["L"].means))
 
     def expected_battery_given(self, speed_bin: int, evidence: dict[str, int] | None = None) -> float:
         """E[L | V = v, ...] by plain conditioning (the Bayesian estimate of seed 000 Eq. 11)."""
@@ -218,13 +283,18 @@ class CausalEngine:
 
         cm = gum.CausalModel(self.bn)
         s = str(slot)
-        _, tensor, _ = gum.causalImpact(cm, on="Dt", doing={"S0", "St"}, knowing={"W0", "Wt"},
-                                        values={"S0": s, "St": s, "W0": waypoint, "Wt": waypoint})
+        _, tensor, _ = gum.causalImpact(
+            cm,
+            on="Dt",
+            doing={"S0", "St"},
+            knowing={"W0", "Wt"},
+            values={"S0": s, "St": s, "W0": waypoint, "Wt": waypoint},
+        )
         return self._expect(tensor, "D")
 
     def _slot_is_exogenous(self) -> bool:
         """S0 has no parents and St only S0: then do(S0 = s, St = s) is plain conditioning."""
-        parents = lambda n: {self.bn.variable(p).name() for p in self.bn.parents(n)}  # noqa: E731
+        parents = lambda n: {self.bn.variable(p).name() for p in self.bn.parents(n)}
         return not parents("S0") and parents("St") <= {"S0"}
 
     def expected_density_do_all(self, slot: int) -> np.ndarray:
@@ -247,8 +317,9 @@ class CausalEngine:
             tensor = ie.jointPosterior({"Dt", "W0", "Wt"})
         else:
             cm = gum.CausalModel(self.bn)
-            _, tensor, _ = gum.causalImpact(cm, on="Dt", doing={"S0", "St"}, knowing={"W0", "Wt"},
-                                            values={"S0": s, "St": s})
+            _, tensor, _ = gum.causalImpact(
+                cm, on="Dt", doing={"S0", "St"}, knowing={"W0", "Wt"}, values={"S0": s, "St": s}
+            )
         names = list(tensor.names)
         arr = np.asarray(tensor.tolist(), np.float64)  # axes in the reverse order of tensor.names
         arr = np.moveaxis(arr, [len(names) - 1 - names.index(n) for n in ("W0", "Wt", "Dt")], [0, 1, 2])
@@ -280,10 +351,21 @@ class CausalEngine:
                 if w in learned and self.support_sw[s, col[w]] > 0:
                     density[s, i] = per_waypoint[col[w]]
         n_v = len(self.bins["V"].means)
-        battery = np.array([[self.expected_battery_do(v, c) if self.support_vc[v, c] else np.nan for c in (0, 1)]
-                            for v in range(n_v)]) / self.period_s
-        return {"density_ppm2": density, "battery_pct_per_s": battery, "speed_mps": self.bins["V"].means,
-                "speed_edges_mps": self.bins["V"].edges}
+        battery = (
+            np.array(
+                [
+                    [self.expected_battery_do(v, c) if self.support_vc[v, c] else np.nan for c in (0, 1)]
+                    for v in range(n_v)
+                ]
+            )
+            / self.period_s
+        )
+        return {
+            "density_ppm2": density,
+            "battery_pct_per_s": battery,
+            "speed_mps": self.bins["V"].means,
+            "speed_edges_mps": self.bins["V"].edges,
+        }
 
     # -- persistence -----------------------------------------------------------------------
     def save(self, folder: str | pathlib.Path) -> pathlib.Path:
@@ -293,19 +375,31 @@ class CausalEngine:
         folder = pathlib.Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         write_atomic(folder / BN_FILE, lambda tmp: gum.saveBN(self.bn, str(tmp)))
-        meta = {"period_s": self.period_s, "labels": self.labels, "arcs": self.arcs,
-                "support_vc": self.support_vc.tolist(), "support_sw": self.support_sw.tolist(),
-                "bins": {k: {"edges": b.edges.tolist(), "means": b.means.tolist()} for k, b in self.bins.items()}}
+        meta = {
+            "period_s": self.period_s,
+            "labels": self.labels,
+            "arcs": self.arcs,
+            "support_vc": self.support_vc.tolist(),
+            "support_sw": self.support_sw.tolist(),
+            "bins": {k: {"edges": b.edges.tolist(), "means": b.means.tolist()} for k, b in self.bins.items()},
+        }
         write_text_atomic(folder / META_FILE, json.dumps(meta, indent=1))
         return folder
 
     @classmethod
-    def load(cls, folder: str | pathlib.Path) -> "CausalEngine":
+    def load(cls, folder: str | pathlib.Path) -> CausalEngine:
         import pyagrum as gum
 
         folder = pathlib.Path(folder)
         meta = json.loads((folder / META_FILE).read_text())
         bn = gum.loadBN(str(folder / BN_FILE))
         bins = {k: Binning(np.asarray(v["edges"]), np.asarray(v["means"])) for k, v in meta["bins"].items()}
-        return cls(bn, bins, meta["labels"], meta["period_s"], [tuple(a) for a in meta["arcs"]],
-                   np.asarray(meta["support_vc"]), np.asarray(meta["support_sw"]))
+        return cls(
+            bn,
+            bins,
+            meta["labels"],
+            meta["period_s"],
+            [tuple(a) for a in meta["arcs"]],
+            np.asarray(meta["support_vc"]),
+            np.asarray(meta["support_sw"]),
+        )

@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from synthetic import seed000_datasets
 
 from causal import binning, discover, extract
 from causal import engine as engine_lib
 from causal.variables import GROUND_TRUTH, VARIABLES
-from synthetic import seed000_datasets
 
 
 def _datasets(data, names=None):
@@ -33,8 +33,11 @@ def test_alpha_must_be_one_float():
 
 
 def test_score_counts_missing_extra_and_misoriented():
-    links = [discover.Link("O", "V", 0, 0.5, 0.0), discover.Link("L", "V", 0, 0.5, 0.0),  # reversed
-             discover.Link("S", "V", 0, 0.1, 0.0)]  # extra
+    links = [
+        discover.Link("O", "V", 0, 0.5, 0.0),
+        discover.Link("L", "V", 0, 0.5, 0.0),  # reversed
+        discover.Link("S", "V", 0, 0.1, 0.0),
+    ]  # extra
     s = discover.score(links)
     assert s["shd"] == len(GROUND_TRUTH) - 2 + 1 + 1
     assert s["precision"] == pytest.approx(1 / 3) and s["recall"] == pytest.approx(1 / len(GROUND_TRUTH))
@@ -68,6 +71,11 @@ def test_do_differs_from_conditioning_and_matches_the_backdoor():
     assert do == pytest.approx(backdoor, abs=1e-5)
     assert given == pytest.approx(conditional, abs=1e-5)
     assert abs(do - given) > 0.005  # conditioning on "fast" hides the obstacles' cost
+    # The parent adjustment (the fallback when causalImpact runs out of memory) gives the same answer.
+    for v in range(len(eng.bins["V"].means)):
+        assert eng.expected_battery_do_by_parents(v, 0) == pytest.approx(eng.expected_battery_do(v, 0), abs=1e-9)
+    with pytest.raises(MemoryError, match="cells"):
+        eng.expected_battery_do_by_parents(int(fast), 0, max_cells=10)
 
 
 def test_engine_density_query_and_persistence(tmp_path):
@@ -114,12 +122,19 @@ def test_nyquist_step_from_a_known_frequency():
 
 def _fake_logs(n=400):
     rng = np.random.default_rng(0)
-    return pd.DataFrame({
-        "world": np.zeros(n, int), "time_s": np.arange(n, dtype=float), "slot": np.arange(n) * 11 // n,
-        "robot_speed_mps": rng.random(n) * 0.5, "battery_pct": 100 - np.arange(n) * 0.01,
-        "charging": np.arange(n) % 100 < 10, "obstacle": rng.random(n) < 0.1,
-        "density_a": rng.integers(0, 3, n) / 3.0, "density_b": np.zeros(n),
-    })
+    return pd.DataFrame(
+        {
+            "world": np.zeros(n, int),
+            "time_s": np.arange(n, dtype=float),
+            "slot": np.arange(n) * 11 // n,
+            "robot_speed_mps": rng.random(n) * 0.5,
+            "battery_pct": 100 - np.arange(n) * 0.01,
+            "charging": np.arange(n) % 100 < 10,
+            "obstacle": rng.random(n) < 0.1,
+            "density_a": rng.integers(0, 3, n) / 3.0,
+            "density_b": np.zeros(n),
+        }
+    )
 
 
 def test_extraction_shapes_and_bad_input():
@@ -153,13 +168,20 @@ def test_learn_job_end_to_end(tmp_path, monkeypatch):
     logs = tmp_path / "run"
     # A short day in which the robot starts low on battery, so that it charges (C varies).
     args = ["simulate", "--worlds", "2", "--slot-length-s", "60", "--out", str(logs), "--no-progress"]
-    monkeypatch.setattr(simulate_command, "load_scenario",
-                        lambda *a, **k: load_scenario(*a, **{**k, "battery_initial_pct": 21.0}))
+    monkeypatch.setattr(
+        simulate_command, "load_scenario", lambda *a, **k: load_scenario(*a, **{**k, "battery_initial_pct": 21.0})
+    )
     assert cli.main(args) == 0
     assert cli.main(["learn", "--logs", str(logs), "--no-progress", "--max-samples", "60000"]) == 0
     out = logs / "causal"
-    for name in ("discovery.json", "causal_graph.png", "engine.bifxml", "engine.json", "engine_tables.npz",
-                 "report.json"):
+    for name in (
+        "discovery.json",
+        "causal_graph.png",
+        "engine.bifxml",
+        "engine.json",
+        "engine_tables.npz",
+        "report.json",
+    ):
         assert (out / name).stat().st_size > 0
     report = json.loads((out / "report.json").read_text())
     assert report["timings"]["total_s"] > 0 and 0 <= report["score"]["recall"] <= 1
@@ -182,9 +204,10 @@ def test_unoriented_links_are_oriented_without_closing_a_cycle():
     cycle V -> L -> D -> V, so the link is taken as D -> L; the network builds."""
     import pyagrum as gum
 
-    link = lambda c, e, oriented=True, lag=0: discover.Link(c, e, lag, 0.5, 0.001, oriented)  # noqa: E731
-    found = discover.Discovery([link("V", "L"), link("L", "D", False), link("D", "V"), link("V", "V", lag=1)],
-                               "parcorr", 0.01, 1, 100, 0.0)
+    link = lambda c, e, oriented=True, lag=0: discover.Link(c, e, lag, 0.5, 0.001, oriented)
+    found = discover.Discovery(
+        [link("V", "L"), link("L", "D", False), link("D", "V"), link("V", "V", lag=1)], "parcorr", 0.01, 1, 100, 0.0
+    )
     arcs = engine_lib.dag_arcs(found)
     assert ("Dt", "Lt") in arcs and ("Lt", "Dt") not in arcs and ("V0", "Vt") in arcs
     bn = gum.BayesNet()
