@@ -42,8 +42,10 @@ from models.steps import batch_sharding, compiled, initial_state  # noqa: E402
 
 def _generate_in_new_process(cache_dir: str | None) -> float:
     """Seconds for ``dataset.generate(0)`` in a fresh Python process (imports not counted)."""
-    code = ("import sys, time; sys.path.insert(0, %r); from models import dataset; "
-            "t = time.perf_counter(); dataset.generate(0); print(time.perf_counter() - t)" % str(ROOT))
+    code = (
+        f"import sys, time; sys.path.insert(0, {str(ROOT)!r}); from models import dataset; "
+        "t = time.perf_counter(); dataset.generate(0); print(time.perf_counter() - t)"
+    )
     env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
     if cache_dir is not None:
         env["JAX_COMPILATION_CACHE_DIR"] = cache_dir
@@ -54,7 +56,7 @@ def _generate_in_new_process(cache_dir: str | None) -> float:
 def bench_generation():
     n = sum(dataset.PAPER_COUNTS.values())
     with tempfile.TemporaryDirectory() as cache:
-        first = _generate_in_new_process(cache)   # compiles, fills the empty cache
+        first = _generate_in_new_process(cache)  # compiles, fills the empty cache
         cached = _generate_in_new_process(cache)  # a later process: compiled programs from the cache
     dataset.generate(0)
     warm = []
@@ -62,9 +64,11 @@ def bench_generation():
         t0 = time.perf_counter()
         dataset.generate(seed)
         warm.append(time.perf_counter() - t0)
-    print(f"generation of {n:,} pairs: {first:.1f} s in a new process (compilation of {len(dataset.FAMILIES)} "
-          f"families included), {cached:.1f} s in a later process with JAX's compilation cache "
-          f"(on in the socialnav command), {min(warm):.2f} s once compiled ({n / min(warm):,.0f} pairs/s)")
+    print(
+        f"generation of {n:,} pairs: {first:.1f} s in a new process (compilation of {len(dataset.FAMILIES)} "
+        f"families included), {cached:.1f} s in a later process with JAX's compilation cache "
+        f"(on in the socialnav command), {min(warm):.2f} s once compiled ({n / min(warm):,.0f} pairs/s)"
+    )
 
 
 def bench_throughput(widths, batch_sizes, steps: int = 15):
@@ -79,7 +83,7 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
             if replicated is not None:
                 state = jax.device_put(state, replicated)
 
-            def batch(i):
+            def batch(i, bs=bs, data_sharding=data_sharding):
                 sl = slice((i * bs) % (len(data["family"]) - bs), None)
                 b = (data["inputs"][sl][:bs], data["targets"][sl][:bs], data["family"][sl][:bs].astype(np.int32))
                 return b if data_sharding is None else jax.device_put(b, data_sharding)
@@ -94,8 +98,10 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
             loss.block_until_ready()
             rate = steps * bs / (time.perf_counter() - t0)
             params = unet.parameter_count(make_model(config))
-            print(f"  features {features!s:<22} {params:>10,} params  batch {bs:>4}: {rate:7.1f} samples/s "
-                  f"(compile {compile_s:.1f} s)")
+            print(
+                f"  features {features!s:<22} {params:>10,} params  batch {bs:>4}: {rate:7.1f} samples/s "
+                f"(compile {compile_s:.1f} s)"
+            )
 
 
 def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = None):
@@ -103,18 +109,27 @@ def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = No
     max_steps = None if stop_after_epochs is None else stop_after_epochs * config.steps_per_epoch
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        line = train.train(config, pathlib.Path(tmp) / "run", progress=False,
-                           stop_when_good=stop_after_epochs is None, max_steps=max_steps)
+        line = train.train(
+            config,
+            pathlib.Path(tmp) / "run",
+            progress=False,
+            stop_when_good=stop_after_epochs is None,
+            max_steps=max_steps,
+        )
         total = time.perf_counter() - t0
         baselines = json.loads((pathlib.Path(tmp) / "run" / "baselines.json").read_text())
     print(quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
     if line["meets_quality"]:
-        print(f"quality bar reached at epoch {line['epoch']} ({line['samples_seen']:,} samples): "
-              f"{line['wall_s'] / 60:.1f} min of generation + training, {total / 60:.1f} min in all "
-              f"(test evaluations and compilation included)")
+        print(
+            f"quality bar reached at epoch {line['epoch']} ({line['samples_seen']:,} samples): "
+            f"{line['wall_s'] / 60:.1f} min of generation + training, {total / 60:.1f} min in all "
+            f"(test evaluations and compilation included)"
+        )
     else:
-        print(f"quality bar NOT reached in {line['epoch']} epochs ({line['wall_s'] / 60:.1f} min of training, "
-              f"{total / 60:.1f} min in all)")
+        print(
+            f"quality bar NOT reached in {line['epoch']} epochs ({line['wall_s'] / 60:.1f} min of training, "
+            f"{total / 60:.1f} min in all)"
+        )
 
 
 def main(argv=None):
@@ -129,9 +144,13 @@ def main(argv=None):
     parser.add_argument("--no-fresh-samples", action="store_true")
     parser.add_argument("--no-coords", action="store_true", help="no coordinate input channels")
     parser.add_argument("--paper", action="store_true", help="the paper's recipe (TrainConfig.paper())")
-    parser.add_argument("--stop-after-epochs", type=int, default=None,
-                        help="run exactly this many epochs of the schedule and report them (for ablations), "
-                             "instead of stopping at the quality bar")
+    parser.add_argument(
+        "--stop-after-epochs",
+        type=int,
+        default=None,
+        help="run exactly this many epochs of the schedule and report them (for ablations), "
+        "instead of stopping at the quality bar",
+    )
     args = parser.parse_args(argv)
     print(machine())
     bench_generation()
@@ -139,10 +158,15 @@ def main(argv=None):
         bench_throughput([unet.PAPER_FEATURES, (24, 48, 96, 192), unet.CPU_FEATURES, (8, 16, 32, 64)], [32, 64])
     if args.skip_train:
         return
-    given = {"features": tuple(int(v) for v in args.features.split(",")) if args.features else None,
-             "batch_size": args.batch_size, "epochs": args.epochs, "learning_rate": args.learning_rate,
-             "schedule": args.schedule, "fresh_samples": False if args.no_fresh_samples else None,
-             "coords": False if args.no_coords else None}
+    given = {
+        "features": tuple(int(v) for v in args.features.split(",")) if args.features else None,
+        "batch_size": args.batch_size,
+        "epochs": args.epochs,
+        "learning_rate": args.learning_rate,
+        "schedule": args.schedule,
+        "fresh_samples": False if args.no_fresh_samples else None,
+        "coords": False if args.no_coords else None,
+    }
     given = {k: v for k, v in given.items() if v is not None}
     config = TrainConfig.paper(**given) if args.paper else TrainConfig(**given)
     bench_time_to_target(config, args.stop_after_epochs)

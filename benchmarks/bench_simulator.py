@@ -26,16 +26,16 @@ import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
-from socialnav.runtime import request_host_devices  # noqa: E402
+from socialnav.runtime import request_host_devices
 
 request_host_devices()
 
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
+from jaxsim.robot import RouteFollower  # noqa: E402
 from jaxsim.rollout import init_batch, run_samples, world_keys  # noqa: E402
 from jaxsim.scenario import load_scenario  # noqa: E402
-from jaxsim.robot import RouteFollower  # noqa: E402
 from jaxsim.world import build_world  # noqa: E402
 from planners.routes import shortest_path_plan  # noqa: E402
 
@@ -49,8 +49,10 @@ def machine() -> str:
             cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
     except (OSError, StopIteration):
         pass
-    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, jax {jax.__version__}, "
-            f"{jax.local_device_count()} host device(s)")
+    return (
+        f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, jax {jax.__version__}, "
+        f"{jax.local_device_count()} host device(s)"
+    )
 
 
 def bench_jaxsim(scenario, batches, seconds):
@@ -77,8 +79,11 @@ def bench_jaxsim(scenario, batches, seconds):
         steps = calls * chunk * every
         rate = agents * b * steps / wall
         rows.append((b, rate, compile_s))
-        print(f"  jaxsim  batch {b:5d}: {rate / 1e6:7.2f} M agent-steps/s  "
-              f"({steps} steps, {wall:.1f} s; compile + {WARMUP_S:.0f} s warm-up {compile_s:.1f} s)", flush=True)
+        print(
+            f"  jaxsim  batch {b:5d}: {rate / 1e6:7.2f} M agent-steps/s  "
+            f"({steps} steps, {wall:.1f} s; compile + {WARMUP_S:.0f} s warm-up {compile_s:.1f} s)",
+            flush=True,
+        )
     return rows
 
 
@@ -99,8 +104,11 @@ def peer_geometry(scenario):
 def cycle_waypoints(scenario, area):
     from shapely.geometry import Point
 
-    names = [n for n, k, h in zip(scenario.waypoint_ids, scenario.waypoint_kind, scenario.human_allowed)
-             if h and k in ("work_area", "office", "toilet", "canteen")]
+    names = [
+        n
+        for n, k, h in zip(scenario.waypoint_ids, scenario.waypoint_kind, scenario.human_allowed)
+        if h and k in ("work_area", "office", "toilet", "canteen")
+    ]
     pts = [tuple(scenario.waypoint_xy_m[scenario.waypoint(n)]) for n in names]
     return [pt for pt in pts if area.contains(Point(pt).buffer(0.5))]
 
@@ -122,11 +130,18 @@ def bench_jupedsim(scenario, n_agents, seconds):
         k = int(rng.integers(len(pts)))
         pos = (pts[k][0] + rng.uniform(-1, 1), pts[k][1] + rng.uniform(-1, 1))
         try:
-            sim.add_agent(jps.SocialForceModelAgentParameters(
-                position=pos, orientation=(1.0, 0.0), journey_id=jid, stage_id=stages[(k + 1) % len(stages)],
-                desired_speed=1.34, radius=0.2))
+            sim.add_agent(
+                jps.SocialForceModelAgentParameters(
+                    position=pos,
+                    orientation=(1.0, 0.0),
+                    journey_id=jid,
+                    stage_id=stages[(k + 1) % len(stages)],
+                    desired_speed=1.34,
+                    radius=0.2,
+                )
+            )
             placed += 1
-        except Exception:  # noqa: BLE001 - position not walkable or too close: draw again
+        except Exception:
             continue
     for _ in range(100):
         sim.iterate()
@@ -136,8 +151,11 @@ def bench_jupedsim(scenario, n_agents, seconds):
         steps += 100
     wall = time.perf_counter() - t0
     rate = sim.agent_count() * steps / wall
-    print(f"  JuPedSim SocialForceModel: {rate / 1e6:7.3f} M agent-steps/s ({sim.agent_count()} agents, "
-          f"{steps} steps, {wall:.1f} s)", flush=True)
+    print(
+        f"  JuPedSim SocialForceModel: {rate / 1e6:7.3f} M agent-steps/s ({sim.agent_count()} agents, "
+        f"{steps} steps, {wall:.1f} s)",
+        flush=True,
+    )
     return rate
 
 
@@ -171,8 +189,10 @@ def bench_pysocialforce(scenario, n_agents, seconds):
         steps += 1
     wall = time.perf_counter() - t0
     rate = n_agents * steps / wall
-    print(f"  pysocialforce: {rate / 1e3:9.2f} k agent-steps/s ({n_agents} agents, {steps} steps, {wall:.1f} s)",
-          flush=True)
+    print(
+        f"  pysocialforce: {rate / 1e3:9.2f} k agent-steps/s ({n_agents} agents, {steps} steps, {wall:.1f} s)",
+        flush=True,
+    )
     return rate
 
 

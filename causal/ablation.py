@@ -85,8 +85,17 @@ class Series:
     battery: object
 
 
-def estimate(speed, l_pct, obstacle, params, period_s: float, p: float, seed: int,
-             distance_m: float = DISTANCE_M, speed_mps: float = SPEED_MPS) -> Estimate:
+def estimate(
+    speed,
+    l_pct,
+    obstacle,
+    params,
+    period_s: float,
+    p: float,
+    seed: int,
+    distance_m: float = DISTANCE_M,
+    speed_mps: float = SPEED_MPS,
+) -> Estimate:
     """Bayesian and causal answers to the query from one seed's series."""
     import pyagrum as gum
 
@@ -103,8 +112,7 @@ def estimate(speed, l_pct, obstacle, params, period_s: float, p: float, seed: in
     ie.setEvidence({"V": fast})
     ie.makeInference()
     per_sample_bn = float(np.dot(np.asarray(ie.posterior("L").tolist()), l_bins.means))
-    _, tensor, _ = gum.causalImpact(gum.CausalModel(bn), on="L", doing="V",
-                                    values={"V": bn.variable("V").label(fast)})
+    _, tensor, _ = gum.causalImpact(gum.CausalModel(bn), on="L", doing="V", values={"V": bn.variable("V").label(fast)})
     probs = np.asarray(tensor.tolist(), np.float64).ravel()
     per_sample_cm = float(np.dot(probs / probs.sum(), l_bins.means))
     samples = distance_m / speed_mps / period_s
@@ -114,8 +122,9 @@ def estimate(speed, l_pct, obstacle, params, period_s: float, p: float, seed: in
     return Estimate(p, seed, q, reference, per_sample_bn * samples, per_sample_cm * samples)
 
 
-def run(out_dir: str | pathlib.Path, series: dict[float, Series], period_s: float = 1.0,
-        progress: bool = True) -> list[Estimate]:
+def run(
+    out_dir: str | pathlib.Path, series: dict[float, Series], period_s: float = 1.0, progress: bool = True
+) -> list[Estimate]:
     """The whole ablation from simulated series: estimates per obstacle probability and seed, the
     structure J-PCMCI+ discovers at p = 0.3, ``ablation.csv``, ``ablation.json`` and the Fig. 13
     bar chart ``ablation.png``.
@@ -133,18 +142,32 @@ def run(out_dir: str | pathlib.Path, series: dict[float, Series], period_s: floa
         for k in range(len(s.speed_mps)):
             results.append(estimate(s.speed_mps[k], s.battery_change_pct[k], s.obstacle[k], s.battery, period_s, p, k))
         if abs(p - 0.3) < 1e-9:
-            data = {k: np.stack([s.speed_mps[k], s.battery_change_pct[k], s.obstacle[k]], 1)
-                    for k in range(len(s.speed_mps))}
+            data = {
+                k: np.stack([s.speed_mps[k], s.battery_change_pct[k], s.obstacle[k]], 1)
+                for k in range(len(s.speed_mps))
+            }
             found = discover.run_jpcmciplus(data, names=("V", "L", "O"), alpha=0.01)
             structure = [k.label for k in found.links]
-    table = pd.DataFrame([dict(dataclasses.asdict(r), error_bayesian=r.error_bayesian, error_causal=r.error_causal)
-                          for r in results])
+    table = pd.DataFrame(
+        [dict(dataclasses.asdict(r), error_bayesian=r.error_bayesian, error_causal=r.error_causal) for r in results]
+    )
     write_atomic(out / "ablation.csv", lambda f: table.to_csv(f, index=False))
-    summary = table.groupby("p").agg(mae_bayesian=("error_bayesian", "mean"), sd_bayesian=("error_bayesian", "std"),
-                                     mae_causal=("error_causal", "mean"), sd_causal=("error_causal", "std"),
-                                     reference=("reference", "mean"), bayesian=("bayesian", "mean"),
-                                     causal=("causal", "mean")).reset_index()
-    write_text_atomic(out / "ablation.json", json.dumps({"structure_at_p_0.3": structure,
-                                                         "summary": summary.to_dict(orient="records")}, indent=1))
+    summary = (
+        table.groupby("p")
+        .agg(
+            mae_bayesian=("error_bayesian", "mean"),
+            sd_bayesian=("error_bayesian", "std"),
+            mae_causal=("error_causal", "mean"),
+            sd_causal=("error_causal", "std"),
+            reference=("reference", "mean"),
+            bayesian=("bayesian", "mean"),
+            causal=("causal", "mean"),
+        )
+        .reset_index()
+    )
+    write_text_atomic(
+        out / "ablation.json",
+        json.dumps({"structure_at_p_0.3": structure, "summary": summary.to_dict(orient="records")}, indent=1),
+    )
     plots.ablation_figure(summary, out / "ablation.png")
     return results

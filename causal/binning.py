@@ -73,12 +73,12 @@ class Binning:
     means: np.ndarray
 
     @classmethod
-    def fit(cls, x: np.ndarray, k: int | None = None) -> "Binning":
+    def fit(cls, x: np.ndarray, k: int | None = None) -> Binning:
         x = np.asarray(x, np.float64)
         return cls.from_edges(x, quantile_edges(x, k or elbow_bins(x)))
 
     @classmethod
-    def from_edges(cls, x: np.ndarray, edges) -> "Binning":
+    def from_edges(cls, x: np.ndarray, edges) -> Binning:
         """Given ("expert") edges; the per-bin means come from ``x``."""
         x = np.asarray(x, np.float64)
         edges = np.asarray(edges, np.float64)
@@ -90,4 +90,3 @@ class Binning:
 
     def index(self, x) -> np.ndarray:
         return np.clip(np.searchsorted(self.edges, x, side="right") - 1, 0, len(self.edges) - 2)
-

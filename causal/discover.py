@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from common.atomic import write_text_atomic
 from causal.variables import CONTEXTS, GROUND_TRUTH, VARIABLES, node_classification
+from common.atomic import write_text_atomic
 
 TESTS = ("parcorr", "regression")
 
@@ -62,19 +62,32 @@ class Discovery:
 
     def save(self, path: str | pathlib.Path) -> pathlib.Path:
         """Write the links and settings as JSON (a plain file any tool reads)."""
-        obj = {"test": self.test, "alpha": self.alpha, "tau_max": self.tau_max, "n_samples": self.n_samples,
-               "seconds": self.seconds, "links": [dataclasses.asdict(k) for k in self.links]}
+        obj = {
+            "test": self.test,
+            "alpha": self.alpha,
+            "tau_max": self.tau_max,
+            "n_samples": self.n_samples,
+            "seconds": self.seconds,
+            "links": [dataclasses.asdict(k) for k in self.links],
+        }
         return write_text_atomic(path, json.dumps(obj, indent=1))
 
     @classmethod
-    def load(cls, path: str | pathlib.Path) -> "Discovery":
+    def load(cls, path: str | pathlib.Path) -> Discovery:
         obj = json.loads(pathlib.Path(path).read_text())
-        return cls([Link(**k) for k in obj["links"]], obj["test"], obj["alpha"], obj["tau_max"],
-                   obj["n_samples"], obj["seconds"])
+        return cls(
+            [Link(**k) for k in obj["links"]],
+            obj["test"],
+            obj["alpha"],
+            obj["tau_max"],
+            obj["n_samples"],
+            obj["seconds"],
+        )
 
 
-def run_jpcmciplus(data: dict[int, np.ndarray], *, names=VARIABLES, test: str = "parcorr", alpha: float = 0.01,
-                   tau_max: int = 1) -> Discovery:
+def run_jpcmciplus(
+    data: dict[int, np.ndarray], *, names=VARIABLES, test: str = "parcorr", alpha: float = 0.01, tau_max: int = 1
+) -> Discovery:
     """J-PCMCI+ over several datasets with the contexts declared as space contexts.
 
     Args:
@@ -103,13 +116,15 @@ def run_jpcmciplus(data: dict[int, np.ndarray], *, names=VARIABLES, test: str = 
         discrete = np.array([n in CONTEXTS for n in names], int)
         kwargs["data_type"] = {k: np.broadcast_to(discrete, v.shape).copy() for k, v in data.items()}
     start = time.perf_counter()
-    frame = pp.DataFrame({k: np.asarray(v, np.float64) for k, v in data.items()}, analysis_mode="multiple",
-                         var_names=names, **kwargs)
+    frame = pp.DataFrame(
+        {k: np.asarray(v, np.float64) for k, v in data.items()}, analysis_mode="multiple", var_names=names, **kwargs
+    )
     jp = JPCMCIplus(dataframe=frame, cond_ind_test=ci, node_classification=node_classification(names), verbosity=0)
     res = jp.run_jpcmciplus(tau_min=0, tau_max=tau_max, pc_alpha=float(alpha))
     seconds = time.perf_counter() - start
-    return Discovery(parse_graph(res, names), test, float(alpha), tau_max,
-                     int(sum(len(v) for v in data.values())), seconds)
+    return Discovery(
+        parse_graph(res, names), test, float(alpha), tau_max, int(sum(len(v) for v in data.values())), seconds
+    )
 
 
 def parse_graph(res: dict, names) -> list[Link]:
@@ -135,7 +150,7 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
     one per missing adjacency, one per extra adjacency and one per adjacency with the wrong or
     no orientation.
     """
-    adj = lambda a, b, lag: (frozenset((a, b)), lag) if lag == 0 else ((a, b), lag)  # noqa: E731
+    adj = lambda a, b, lag: (frozenset((a, b)), lag) if lag == 0 else ((a, b), lag)
     truth_adj = {adj(*t): t for t in truth}
     found_adj = {}
     for k in links:
@@ -143,9 +158,14 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
     right = sum(1 for k in links if k.oriented and (k.cause, k.effect, k.lag) in truth)
     missing = [t for a, t in truth_adj.items() if a not in found_adj]
     extra = [k for a, k in found_adj.items() if a not in truth_adj]
-    misoriented = [k for a, k in found_adj.items() if a in truth_adj and
-                   not (k.oriented and (k.cause, k.effect, k.lag) in truth)]
-    return {"precision": right / max(len(links), 1), "recall": right / max(len(truth), 1),
-            "shd": len(missing) + len(extra) + len(misoriented),
-            "missing": [f"{c}(t-{lag})->{e}" if lag else f"{c}->{e}" for c, e, lag in sorted(missing)],
-            "extra": [k.label for k in extra], "misoriented": [k.label for k in misoriented]}
+    misoriented = [
+        k for a, k in found_adj.items() if a in truth_adj and not (k.oriented and (k.cause, k.effect, k.lag) in truth)
+    ]
+    return {
+        "precision": right / max(len(links), 1),
+        "recall": right / max(len(truth), 1),
+        "shd": len(missing) + len(extra) + len(misoriented),
+        "missing": [f"{c}(t-{lag})->{e}" if lag else f"{c}->{e}" for c, e, lag in sorted(missing)],
+        "extra": [k.label for k in extra],
+        "misoriented": [k.label for k in misoriented],
+    }

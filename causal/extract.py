@@ -73,16 +73,20 @@ def check_logs(df: pd.DataFrame, waypoints: list[str]) -> None:
     missing = [c for c in ROBOT_COLUMNS if c not in df.columns]
     missing += [density_column(w) for w in waypoints if density_column(w) not in df.columns]
     if missing:
-        raise LogError(f"the logs lack column(s) {', '.join(missing[:5])}"
-                       f"{' ...' if len(missing) > 5 else ''}: were they written by 'peopleflow simulate'?")
+        raise LogError(
+            f"the logs lack column(s) {', '.join(missing[:5])}"
+            f"{' ...' if len(missing) > 5 else ''}: were they written by 'peopleflow simulate'?"
+        )
     for col, name in [("robot_speed_mps", "V (robot_speed_mps)"), ("battery_pct", "L (from battery_pct)")]:
         if df[col].nunique() < 2:
             raise LogError(f"{name} is constant over the whole log: nothing to learn from it")
     for col, name in [("charging", "C (charging)"), ("obstacle", "O (obstacle)")]:
         if df[col].nunique() < 2:
-            raise LogError(f"context {name} is constant over the whole log (the robot never "
-                           f"{'charged' if col == 'charging' else 'met an obstacle'}): simulate longer or "
-                           f"drop the variable")
+            raise LogError(
+                f"context {name} is constant over the whole log (the robot never "
+                f"{'charged' if col == 'charging' else 'met an obstacle'}): simulate longer or "
+                f"drop the variable"
+            )
 
 
 def highest_frequency_hz(x: np.ndarray, dt_s: float, energy: float = SIGNIFICANT_ENERGY) -> float:
@@ -99,8 +103,9 @@ def highest_frequency_hz(x: np.ndarray, dt_s: float, energy: float = SIGNIFICANT
     return float(freqs[min(k, len(freqs) - 1)])
 
 
-def nyquist_step(series: dict[str, np.ndarray], dt_s: float, energy: float = SIGNIFICANT_ENERGY
-                 ) -> tuple[int, dict[str, float]]:
+def nyquist_step(
+    series: dict[str, np.ndarray], dt_s: float, energy: float = SIGNIFICANT_ENERGY
+) -> tuple[int, dict[str, float]]:
     """Subsampling step by the paper's rule: sample at ``>= 2 x`` the highest significant frequency.
 
     Returns:
@@ -114,9 +119,16 @@ def nyquist_step(series: dict[str, np.ndarray], dt_s: float, energy: float = SIG
     return max(step, 1), freqs
 
 
-def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: list[str] | None = None,
-                   step: int | None = None, max_samples: int | None = None, worlds: list[int] | None = None,
-                   energy: float = SIGNIFICANT_ENERGY) -> Datasets:
+def build_datasets(
+    df: pd.DataFrame,
+    waypoint_names: list[str],
+    *,
+    waypoints: list[str] | None = None,
+    step: int | None = None,
+    max_samples: int | None = None,
+    worlds: list[int] | None = None,
+    energy: float = SIGNIFICANT_ENERGY,
+) -> Datasets:
     """Per-(world, waypoint) datasets from a log table.
 
     Args:
@@ -150,8 +162,12 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
 
     first = df[df.world == df.world.iloc[0]]
     robot_l = np.diff(first.battery_pct.to_numpy(np.float64), prepend=first.battery_pct.iloc[0])
-    probe = {"V": first.robot_speed_mps.to_numpy(), "L": robot_l, "C": first.charging.to_numpy(float),
-             "O": first.obstacle.to_numpy(float)}
+    probe = {
+        "V": first.robot_speed_mps.to_numpy(),
+        "L": robot_l,
+        "C": first.charging.to_numpy(float),
+        "O": first.obstacle.to_numpy(float),
+    }
     densest = max(kept, key=lambda w: first[density_column(w)].var())
     probe["D"] = first[density_column(densest)].to_numpy()
     auto_step, freqs = nyquist_step(probe, dt, energy)
@@ -171,8 +187,10 @@ def build_datasets(df: pd.DataFrame, waypoint_names: list[str], *, waypoints: li
         battery = g.battery_pct.to_numpy(np.float64)
         l_pct = np.diff(battery)  # L_t = B_t - B_{t-1}: the change over the period ending at t
         base = {
-            "V": g.robot_speed_mps.to_numpy(np.float64)[1:], "L": l_pct,
-            "S": g.slot.to_numpy(np.float64)[1:], "C": g.charging.to_numpy(np.float64)[1:],
+            "V": g.robot_speed_mps.to_numpy(np.float64)[1:],
+            "L": l_pct,
+            "S": g.slot.to_numpy(np.float64)[1:],
+            "C": g.charging.to_numpy(np.float64)[1:],
             "O": g.obstacle.to_numpy(np.float64)[1:],
         }
         for w in kept:

@@ -22,13 +22,15 @@ from causal import engine as engine_lib
 from common.atomic import write_bytes_atomic, write_text_atomic
 
 
-def write_tables(path: str | pathlib.Path, waypoints: list[str], slots: list[str],
-                 tables: dict[str, np.ndarray]) -> pathlib.Path:
+def write_tables(
+    path: str | pathlib.Path, waypoints: list[str], slots: list[str], tables: dict[str, np.ndarray]
+) -> pathlib.Path:
     """Write the engine's tables (:meth:`causal.engine.CausalEngine.tables`) with the waypoint and
     slot names they belong to, atomically: ``engine_tables.npz``, the file the planners read with
     their own reader (``planners.tables.CausalTables``; ``tests/test_contracts.py`` checks both ends)."""
-    return write_bytes_atomic(path, lambda h: np.savez(h, waypoints=np.array(waypoints), slots=np.array(slots),
-                                                       **tables))
+    return write_bytes_atomic(
+        path, lambda h: np.savez(h, waypoints=np.array(waypoints), slots=np.array(slots), **tables)
+    )
 
 
 @dataclasses.dataclass
@@ -37,10 +39,19 @@ class LearnReport:
     report: dict
 
 
-def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: str = "parcorr", alpha: float = 0.01,
-          step: int | None = None, max_samples: int = 200_000, worlds: list[int] | None = None,
-          waypoints: list[str] | None = None, compare_subsampling: bool = False,
-          progress: bool = True) -> LearnReport:
+def learn(
+    logs_dir: str | pathlib.Path,
+    out_dir: str | pathlib.Path,
+    *,
+    test: str = "parcorr",
+    alpha: float = 0.01,
+    step: int | None = None,
+    max_samples: int = 200_000,
+    worlds: list[int] | None = None,
+    waypoints: list[str] | None = None,
+    compare_subsampling: bool = False,
+    progress: bool = True,
+) -> LearnReport:
     """Run extraction, discovery, parameter learning and the do-queries on a run's logs.
 
     Args:
@@ -64,32 +75,40 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
     say("reading logs ...", flush=True)
     df, meta = extract.read_run(logs_dir, waypoints)
     names, slots = meta["waypoints"], meta["slots"]
-    datasets = extract.build_datasets(df, names, waypoints=waypoints, step=step, max_samples=max_samples,
-                                      worlds=worlds)
+    datasets = extract.build_datasets(df, names, waypoints=waypoints, step=step, max_samples=max_samples, worlds=worlds)
     timings["extract_s"] = time.perf_counter() - t0
     n_samples = sum(len(a) for a in datasets.data.values())
-    say(f"  {len(datasets.data)} datasets ({len(set(datasets.waypoints.values()))} waypoints x "
+    say(
+        f"  {len(datasets.data)} datasets ({len(set(datasets.waypoints.values()))} waypoints x "
         f"{len(set(datasets.worlds.values()))} worlds), {n_samples} samples after subsampling every "
         f"{datasets.step} sample(s) ({datasets.period_s:g} s; the Nyquist rule asked for "
         f"{datasets.nyquist_step}); dropped empty waypoints: "
-        f"{', '.join(datasets.dropped_waypoints) or 'none'}", flush=True)
+        f"{', '.join(datasets.dropped_waypoints) or 'none'}",
+        flush=True,
+    )
 
     say(f"J-PCMCI+ ({test}, alpha {alpha}) ...", flush=True)
     t = time.perf_counter()
     found = discover.run_jpcmciplus(datasets.data, test=test, alpha=alpha)
     timings["discover_s"] = time.perf_counter() - t
     quality = discover.score(found.links)
-    say(f"  {len(found.links)} links in {found.seconds:.1f} s: precision {quality['precision']:.2f}, "
-        f"recall {quality['recall']:.2f}, SHD {quality['shd']}", flush=True)
+    say(
+        f"  {len(found.links)} links in {found.seconds:.1f} s: precision {quality['precision']:.2f}, "
+        f"recall {quality['recall']:.2f}, SHD {quality['shd']}",
+        flush=True,
+    )
 
     comparison = None
     if compare_subsampling and datasets.step > datasets.nyquist_step:
         say(f"J-PCMCI+ at the Nyquist step {datasets.nyquist_step}, for comparison ...", flush=True)
-        full = extract.build_datasets(df, names, waypoints=waypoints, step=datasets.nyquist_step,
-                                      worlds=worlds)
+        full = extract.build_datasets(df, names, waypoints=waypoints, step=datasets.nyquist_step, worlds=worlds)
         found_full = discover.run_jpcmciplus(full.data, test=test, alpha=alpha)
-        comparison = {"step": datasets.nyquist_step, "links": [k.label for k in found_full.links],
-                      "score": discover.score(found_full.links), "seconds": found_full.seconds}
+        comparison = {
+            "step": datasets.nyquist_step,
+            "links": [k.label for k in found_full.links],
+            "score": discover.score(found_full.links),
+            "seconds": found_full.seconds,
+        }
 
     say("learning the inference engine ...", flush=True)
     t = time.perf_counter()
@@ -106,18 +125,30 @@ def learn(logs_dir: str | pathlib.Path, out_dir: str | pathlib.Path, *, test: st
     write_tables(out / engine_lib.TABLES_FILE, names, slots, tables)
     timings["total_s"] = time.perf_counter() - t0
     report = {
-        "logs": str(logs_dir), "test": test, "alpha": alpha, "subsampling_step": datasets.step,
+        "logs": str(logs_dir),
+        "test": test,
+        "alpha": alpha,
+        "subsampling_step": datasets.step,
         "nyquist_step": datasets.nyquist_step,
-        "period_s": datasets.period_s, "highest_frequency_hz": datasets.frequencies_hz,
-        "dropped_waypoints": list(datasets.dropped_waypoints), "datasets": len(datasets.data),
-        "samples": n_samples, "links": [k.label for k in found.links], "score": quality,
-        "at_nyquist_step": comparison, "bins": {k: len(b.means) for k, b in eng.bins.items()},
-        "battery_pct_per_s": tables["battery_pct_per_s"].tolist(), "speed_mps": tables["speed_mps"].tolist(),
+        "period_s": datasets.period_s,
+        "highest_frequency_hz": datasets.frequencies_hz,
+        "dropped_waypoints": list(datasets.dropped_waypoints),
+        "datasets": len(datasets.data),
+        "samples": n_samples,
+        "links": [k.label for k in found.links],
+        "score": quality,
+        "at_nyquist_step": comparison,
+        "bins": {k: len(b.means) for k, b in eng.bins.items()},
+        "battery_pct_per_s": tables["battery_pct_per_s"].tolist(),
+        "speed_mps": tables["speed_mps"].tolist(),
         "timings": timings,
     }
     write_text_atomic(out / "report.json", json.dumps(report, indent=1))
-    say(f"learn finished in {timings['total_s']:.1f} s (extract {timings['extract_s']:.1f}, discover "
+    say(
+        f"learn finished in {timings['total_s']:.1f} s (extract {timings['extract_s']:.1f}, discover "
         f"{timings['discover_s']:.1f}, fit {timings['fit_s']:.1f}, queries {timings['queries_s']:.1f}); "
         f"wrote {out}/{{discovery.json, causal_graph.png, engine.bifxml, engine.json, engine_tables.npz, "
-        f"report.json}}", flush=True)
+        f"report.json}}",
+        flush=True,
+    )
     return LearnReport(out, report)

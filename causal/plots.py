@@ -15,8 +15,15 @@ from causal.variables import CONTEXTS, VARIABLES
 from common import figures
 
 # Fig. 8 layout: battery subgraph left, density subgraph right; contexts on the outside.
-LAYOUT = {"O": (0.0, 1.0), "C": (0.0, 0.0), "V": (1.0, 1.0), "L": (1.0, 0.0),
-          "W": (2.6, 1.0), "S": (2.6, 0.0), "D": (3.6, 0.5)}
+LAYOUT = {
+    "O": (0.0, 1.0),
+    "C": (0.0, 0.0),
+    "V": (1.0, 1.0),
+    "L": (1.0, 0.0),
+    "W": (2.6, 1.0),
+    "S": (2.6, 0.0),
+    "D": (3.6, 0.5),
+}
 
 
 def graph_figure(discovery: Discovery, path: str | pathlib.Path, title: str | None = None) -> pathlib.Path:
@@ -40,9 +47,18 @@ def graph_figure(discovery: Discovery, path: str | pathlib.Path, title: str | No
     for k in discovery.links:
         if k.cause == k.effect:
             continue
-        arrow = FancyArrowPatch(pos[k.cause], pos[k.effect], arrowstyle="-|>" if k.oriented else "-",
-                                mutation_scale=14, shrinkA=16, shrinkB=16, lw=0.8 + 4.0 * abs(k.strength) / top,
-                                color="#444", connectionstyle="arc3,rad=0.12" if k.lag else "arc3", zorder=2)
+        arrow = FancyArrowPatch(
+            pos[k.cause],
+            pos[k.effect],
+            arrowstyle="-|>" if k.oriented else "-",
+            mutation_scale=14,
+            shrinkA=16,
+            shrinkB=16,
+            lw=0.8 + 4.0 * abs(k.strength) / top,
+            color="#444",
+            connectionstyle="arc3,rad=0.12" if k.lag else "arc3",
+            zorder=2,
+        )
         ax.add_patch(arrow)
         mx, my = (np.add(pos[k.cause], pos[k.effect])) / 2
         ax.text(mx, my + 0.06, str(k.lag), fontsize=8, color="#1f4e79", ha="center")
@@ -59,10 +75,24 @@ def ablation_figure(summary: pd.DataFrame, path: str | pathlib.Path) -> pathlib.
     x = np.arange(len(summary))
     fig = figures.figure(figsize=(6.5, 3.6))
     ax = fig.subplots()
-    ax.bar(x - 0.18, summary.mae_bayesian, 0.36, yerr=summary.sd_bayesian, capsize=3, color="#4c72b0",
-           label="Bayesian, E[L | V]")
-    ax.bar(x + 0.18, summary.mae_causal, 0.36, yerr=summary.sd_causal, capsize=3, color="#dd8452",
-           label="causal, E[L | do(V)]")
+    ax.bar(
+        x - 0.18,
+        summary.mae_bayesian,
+        0.36,
+        yerr=summary.sd_bayesian,
+        capsize=3,
+        color="#4c72b0",
+        label="Bayesian, E[L | V]",
+    )
+    ax.bar(
+        x + 0.18,
+        summary.mae_causal,
+        0.36,
+        yerr=summary.sd_causal,
+        capsize=3,
+        color="#dd8452",
+        label="causal, E[L | do(V)]",
+    )
     ax.set_xticks(x, [f"{p:.0%}" for p in summary.p])
     ax.set_xlabel("obstacle probability per leg")
     ax.set_ylabel("|L_ref - L_hat| (battery %)")

@@ -13,11 +13,19 @@ SYSTEM = ("V", "L", "D")
 CONTEXTS = ("W", "S", "C", "O")
 
 # (cause, effect, lag): lag 0 is contemporaneous, lag 1 is cause(t-1) -> effect(t).
-GROUND_TRUTH = frozenset({
-    ("O", "V", 0), ("C", "V", 0), ("V", "V", 1),
-    ("O", "L", 0), ("C", "L", 0), ("V", "L", 0),
-    ("W", "D", 0), ("S", "D", 0), ("D", "D", 1),
-})
+GROUND_TRUTH = frozenset(
+    {
+        ("O", "V", 0),
+        ("C", "V", 0),
+        ("V", "V", 1),
+        ("O", "L", 0),
+        ("C", "L", 0),
+        ("V", "L", 0),
+        ("W", "D", 0),
+        ("S", "D", 0),
+        ("D", "D", 1),
+    }
+)
 
 
 def node_classification(names=VARIABLES) -> dict[int, str]:

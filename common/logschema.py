@@ -23,15 +23,30 @@ SCHEMA_VERSION = 1
 
 # (column, numpy dtype) in the order written.
 ID_COLUMNS = (("world", "int32"), ("seed", "int64"))
-SETTING_COLUMNS = (("dt_s", "float32"), ("slot_length_s", "float32"), ("n_workers", "int16"),
-                   ("obstacle_probability", "float32"))
+SETTING_COLUMNS = (
+    ("dt_s", "float32"),
+    ("slot_length_s", "float32"),
+    ("n_workers", "int16"),
+    ("obstacle_probability", "float32"),
+)
 CLOCK_COLUMNS = (("time_s", "float64"), ("slot", "int8"))
 ROBOT_COLUMNS = (
-    ("robot_x_m", "float32"), ("robot_y_m", "float32"), ("robot_speed_mps", "float32"),
-    ("battery_pct", "float32"), ("battery_change_pct", "float32"), ("charging", "bool"),
-    ("obstacle", "bool"), ("robot_mode", "int8"), ("robot_waypoint", "int16"), ("goal_wp", "int16"),
-    ("leg_elapsed_s", "float32"), ("tasks_started", "int32"), ("tasks_succeeded", "int32"),
-    ("tasks_failed", "int32"), ("stalled_s", "float32"), ("n_present", "int16"),
+    ("robot_x_m", "float32"),
+    ("robot_y_m", "float32"),
+    ("robot_speed_mps", "float32"),
+    ("battery_pct", "float32"),
+    ("battery_change_pct", "float32"),
+    ("charging", "bool"),
+    ("obstacle", "bool"),
+    ("robot_mode", "int8"),
+    ("robot_waypoint", "int16"),
+    ("goal_wp", "int16"),
+    ("leg_elapsed_s", "float32"),
+    ("tasks_started", "int32"),
+    ("tasks_succeeded", "int32"),
+    ("tasks_failed", "int32"),
+    ("stalled_s", "float32"),
+    ("n_present", "int16"),
 )
 # Keys of META_FILE that a reader relies on.
 META_KEYS = ("seed", "n_worlds", "waypoints", "slots", "params")

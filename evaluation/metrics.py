@@ -40,8 +40,9 @@ from evaluation.statistics import mean_ci
 HALL_ZONES_M = {"intimate": 0.5, "personal": 1.2, "social": 3.6, "public": 7.6}
 
 
-def collision_encounters(in_contact: jax.Array, dist_m: jax.Array, present: jax.Array, radius_m: float,
-                         release_m: float) -> tuple[jax.Array, jax.Array]:
+def collision_encounters(
+    in_contact: jax.Array, dist_m: jax.Array, present: jax.Array, radius_m: float, release_m: float
+) -> tuple[jax.Array, jax.Array]:
     """Collisions counted once per encounter (JAX, one step of one world).
 
     A present person closer than ``radius_m`` starts an encounter unless already in one; an
@@ -105,10 +106,25 @@ def per_run(tasks: pd.DataFrame, by: tuple[str, ...] = ("method", "replica")) ->
 
 def summary_with_ci(runs: pd.DataFrame, columns=None) -> pd.DataFrame:
     """Per method: mean and 95 % interval over runs of each column of :func:`per_run`."""
-    columns = columns or ["success_pct", "success", "congestion", "battery", "refused", "collisions",
-                          "active_h", "stalled_h", "wasted_h", "planned_km", "extra_km", "wasted_km",
-                          "effective_cycles", "wasted_cycles", "wasted_distance_pct", "wasted_time_pct",
-                          "wasted_battery_pct"]
+    columns = columns or [
+        "success_pct",
+        "success",
+        "congestion",
+        "battery",
+        "refused",
+        "collisions",
+        "active_h",
+        "stalled_h",
+        "wasted_h",
+        "planned_km",
+        "extra_km",
+        "wasted_km",
+        "effective_cycles",
+        "wasted_cycles",
+        "wasted_distance_pct",
+        "wasted_time_pct",
+        "wasted_battery_pct",
+    ]
     rows = []
     for method, g in runs.groupby("method", sort=False):
         for col in columns:
@@ -141,8 +157,9 @@ def zone_shares(hist, bin_m: float) -> dict[str, float]:
     return shares
 
 
-def compare(tasks: pd.DataFrame, hists: dict[str, np.ndarray], bin_m: float, a: str = "baseline",
-            b: str = "causal") -> dict:
+def compare(
+    tasks: pd.DataFrame, hists: dict[str, np.ndarray], bin_m: float, a: str = "baseline", b: str = "causal"
+) -> dict:
     """The paper's tests between methods ``a`` and ``b`` (Sec. 5.3) plus interval estimates.
 
     ``hists``: method -> summed robot-person distance histogram.

@@ -22,8 +22,16 @@ def _stacked(ax, runs, methods, parts, colours, title, unit):
         for (col, label), colour in zip(parts, colours):
             v = float(means.loc[m, col])
             if v < 0:  # e.g. extra distance when the robot cuts corners: written, not stacked
-                ax.text(i, -0.02, f"{label} {v:+.2f} {unit}", ha="center", va="top", fontsize=7,
-                        transform=ax.get_xaxis_transform(), color=colour)
+                ax.text(
+                    i,
+                    -0.02,
+                    f"{label} {v:+.2f} {unit}",
+                    ha="center",
+                    va="top",
+                    fontsize=7,
+                    transform=ax.get_xaxis_transform(),
+                    color=colour,
+                )
                 v = 0.0
             ax.bar(i, v, bottom=bottom, color=colour, edgecolor="white", width=0.6, label=label if i == 0 else None)
             if total > 0 and v / total > 0.04:
@@ -43,14 +51,42 @@ def efficiency_figure(result, path) -> pathlib.Path:
     fig = figures.figure(figsize=(9, 7.5))
     axes = fig.subplots(2, 2)
     red, blue, orange = "#d62728", "#1f77b4", "#ff7f0e"
-    _stacked(axes[0, 0], runs, methods, [("success", "success"), ("congestion", "failure: congestion"),
-                                         ("battery", "failure: battery")], [blue, orange, red], "Task outcomes", "tasks")
-    _stacked(axes[0, 1], runs, methods, [("planned_km", "planned"), ("extra_km", "extra"), ("wasted_km", "wasted")],
-             [blue, orange, red], "Travelled distance", "km")
-    _stacked(axes[1, 0], runs, methods, [("active_h", "active"), ("stalled_h", "stalled"), ("wasted_h", "wasted")],
-             [blue, orange, red], "Task time", "h")
-    _stacked(axes[1, 1], runs, methods, [("effective_cycles", "effective"), ("wasted_cycles", "wasted")],
-             [blue, red], "Battery usage", "cycles")
+    _stacked(
+        axes[0, 0],
+        runs,
+        methods,
+        [("success", "success"), ("congestion", "failure: congestion"), ("battery", "failure: battery")],
+        [blue, orange, red],
+        "Task outcomes",
+        "tasks",
+    )
+    _stacked(
+        axes[0, 1],
+        runs,
+        methods,
+        [("planned_km", "planned"), ("extra_km", "extra"), ("wasted_km", "wasted")],
+        [blue, orange, red],
+        "Travelled distance",
+        "km",
+    )
+    _stacked(
+        axes[1, 0],
+        runs,
+        methods,
+        [("active_h", "active"), ("stalled_h", "stalled"), ("wasted_h", "wasted")],
+        [blue, orange, red],
+        "Task time",
+        "h",
+    )
+    _stacked(
+        axes[1, 1],
+        runs,
+        methods,
+        [("effective_cycles", "effective"), ("wasted_cycles", "wasted")],
+        [blue, red],
+        "Battery usage",
+        "cycles",
+    )
     n = result.config["replicas"]
     fig.suptitle(f"Efficiency, all slots (mean of {n} run{'s' if n > 1 else ''} of {runs['tasks'].iloc[0]} tasks)")
     fig.tight_layout()
@@ -61,8 +97,15 @@ def _bxp_stats(hist, bin_m, label):
     q = metrics.hist_quantiles(hist, bin_m, (0.25, 0.5, 0.75))
     iqr = q[2] - q[0]
     lo_q, hi_q = metrics.hist_quantiles(hist, bin_m, (0.0, 1.0))
-    return {"label": label, "q1": q[0], "med": q[1], "q3": q[2], "whislo": max(lo_q, q[0] - 1.5 * iqr),
-            "whishi": min(hi_q, q[2] + 1.5 * iqr), "fliers": []}
+    return {
+        "label": label,
+        "q1": q[0],
+        "med": q[1],
+        "q3": q[2],
+        "whislo": max(lo_q, q[0] - 1.5 * iqr),
+        "whishi": min(hi_q, q[2] + 1.5 * iqr),
+        "fliers": [],
+    }
 
 
 def safety_figure(result, path) -> pathlib.Path:
@@ -98,8 +141,12 @@ def pick_route_example(result, waypoint_ids):
     """(slot, start, goal) of the task whose two routes differ and whose baseline fails most
     often relative to the causal planner; None when the routes never differ."""
     t = result.tasks
-    rate = (t.assign(failed=t["outcome"] != "success")
-            .groupby(["slot", "start", "goal", "method"], observed=True)["failed"].mean().unstack("method"))
+    rate = (
+        t.assign(failed=t["outcome"] != "success")
+        .groupby(["slot", "start", "goal", "method"], observed=True)["failed"]
+        .mean()
+        .unstack("method")
+    )
     if not {"baseline", "causal"} <= set(rate.columns):
         return None
     rate = rate.dropna()
@@ -130,8 +177,16 @@ def route_figure(result, scenario, path) -> pathlib.Path:
     i, j = ids[start], ids[goal]
     xy = scenario.waypoint_xy_m
     dens = np.nan_to_num(result.density_ppm2[slot])
-    sc = ax.scatter(xy[:, 0], xy[:, 1], c=dens, s=25 + 400 * dens / max(dens.max(), 1e-9), cmap="Reds",
-                    edgecolors="k", linewidths=0.3, zorder=2)
+    sc = ax.scatter(
+        xy[:, 0],
+        xy[:, 1],
+        c=dens,
+        s=25 + 400 * dens / max(dens.max(), 1e-9),
+        cmap="Reds",
+        edgecolors="k",
+        linewidths=0.3,
+        zorder=2,
+    )
     fig.colorbar(sc, ax=ax, shrink=0.6, label="E[D | do(S), W] (people/m²)")
     t = result.tasks[(result.tasks["slot"] == slot) & (result.tasks["start"] == start) & (result.tasks["goal"] == goal)]
     for name, offset in (("baseline", -0.12), ("causal", 0.12)):
@@ -139,9 +194,17 @@ def route_figure(result, scenario, path) -> pathlib.Path:
         hops = int(plan.hops[slot, i, j])
         route = [i] + [int(k) for k in np.asarray(plan.routes[slot, i, j])[:hops]]
         share = 100 * (t[t["method"] == name]["outcome"] == "success").mean()
-        ax.plot(xy[route, 0] + offset, xy[route, 1] + offset, "-o", lw=2.5, ms=3, color=METHOD_COLOURS[name],
-                zorder=3, label=f"{name}: {float(plan.length_m[slot, i, j]):.1f} m, success {share:.0f}% "
-                                f"of {len(t[t['method'] == name])} runs")
+        ax.plot(
+            xy[route, 0] + offset,
+            xy[route, 1] + offset,
+            "-o",
+            lw=2.5,
+            ms=3,
+            color=METHOD_COLOURS[name],
+            zorder=3,
+            label=f"{name}: {float(plan.length_m[slot, i, j]):.1f} m, success {share:.0f}% "
+            f"of {len(t[t['method'] == name])} runs",
+        )
     ax.annotate("start", xy[i], fontsize=9, weight="bold")
     ax.annotate("goal", xy[j], fontsize=9, weight="bold")
     ax.legend(loc="upper right", fontsize=8)

@@ -122,11 +122,11 @@ class Method:
     """
 
     plan: RobotPlan
-    battery_cost_pct: jnp.ndarray
-    may_refuse: jnp.ndarray
+    battery_cost_pct: jax.Array
+    may_refuse: jax.Array
 
 
-def make_method(plan: RobotPlan, battery_cost_pct=None, may_refuse: bool = False) -> Method:
+def make_method(plan: RobotPlan, battery_cost_pct: np.ndarray | None = None, may_refuse: bool = False) -> Method:
     """A :class:`Method`; without a cost table it never refuses."""
     if battery_cost_pct is None:
         battery_cost_pct = np.zeros(plan.hops.shape, np.float32)
@@ -152,16 +152,16 @@ class TaskLog:
       start_wp, goal_wp: (T,) int32.
     """
 
-    outcome: jnp.ndarray
-    refused: jnp.ndarray
-    time_s: jnp.ndarray
-    stalled_s: jnp.ndarray
-    distance_m: jnp.ndarray
-    planned_m: jnp.ndarray
-    battery_used_pct: jnp.ndarray
-    collisions: jnp.ndarray
-    start_wp: jnp.ndarray
-    goal_wp: jnp.ndarray
+    outcome: jax.Array
+    refused: jax.Array
+    time_s: jax.Array
+    stalled_s: jax.Array
+    distance_m: jax.Array
+    planned_m: jax.Array
+    battery_used_pct: jax.Array
+    collisions: jax.Array
+    start_wp: jax.Array
+    goal_wp: jax.Array
 
 
 @struct.dataclass
@@ -183,75 +183,108 @@ class ExperimentState:
     """
 
     sim: SimState
-    slot: jnp.ndarray
-    task: jnp.ndarray
-    n_tasks: jnp.ndarray
-    leg_open: jnp.ndarray
-    hop_elapsed_s: jnp.ndarray
-    leg_stalled_s: jnp.ndarray
-    leg_battery_used_pct: jnp.ndarray
-    leg_collisions: jnp.ndarray
-    in_contact: jnp.ndarray
+    slot: jax.Array
+    task: jax.Array
+    n_tasks: jax.Array
+    leg_open: jax.Array
+    hop_elapsed_s: jax.Array
+    leg_stalled_s: jax.Array
+    leg_battery_used_pct: jax.Array
+    leg_collisions: jax.Array
+    in_contact: jax.Array
     log: TaskLog
-    distance_hist: jnp.ndarray
-    end_step: jnp.ndarray
+    distance_hist: jax.Array
+    end_step: jax.Array
 
     @property
-    def done(self) -> jnp.ndarray:
+    def done(self) -> jax.Array:
         return self.task >= self.n_tasks
 
 
-def init_experiment(params: SimParams, cfg: ProtocolConfig, world: World, method: Method, slot, key
-                    ) -> ExperimentState:
+def init_experiment(
+    params: SimParams, cfg: ProtocolConfig, world: World, method: Method, slot: jax.Array, key: jax.Array
+) -> ExperimentState:
     """An experiment of ``slot`` before its warm-up: workers about to arrive, battery full."""
     sim = init_state(params, world, robot_lib.RouteFollower(method.plan), jax.random.fold_in(key, rollout.INIT_FOLD))
     w = sim.workers
-    w = w.replace(arrive_s=w.arrive_s / params.slot_length_s * cfg.arrival_spread_s,
-                  depart_s=jnp.full_like(w.depart_s, jnp.inf))
+    w = w.replace(
+        arrive_s=w.arrive_s / params.slot_length_s * cfg.arrival_spread_s, depart_s=jnp.full_like(w.depart_s, jnp.inf)
+    )
     r = sim.robot.replace(battery_pct=jnp.float32(cfg.reset_battery_pct), speed_mps=jnp.float32(0.0))
     t = world.robot_goals.shape[1]
     f, i = jnp.zeros(t, jnp.float32), jnp.zeros(t, jnp.int32)
-    log = TaskLog(outcome=jnp.full(t, NOT_RUN, jnp.int32), refused=jnp.zeros(t, bool), time_s=f,
-                  stalled_s=f, distance_m=f, planned_m=f, battery_used_pct=f, collisions=i,
-                  start_wp=i, goal_wp=i)
+    log = TaskLog(
+        outcome=jnp.full(t, NOT_RUN, jnp.int32),
+        refused=jnp.zeros(t, bool),
+        time_s=f,
+        stalled_s=f,
+        distance_m=f,
+        planned_m=f,
+        battery_used_pct=f,
+        collisions=i,
+        start_wp=i,
+        goal_wp=i,
+    )
     slot = jnp.asarray(slot, jnp.int32)
     return ExperimentState(
-        sim=sim.replace(workers=w, robot=r), slot=slot, task=jnp.int32(0),
-        n_tasks=world.robot_goal_count[slot], leg_open=jnp.bool_(False), hop_elapsed_s=jnp.float32(0.0),
+        sim=sim.replace(workers=w, robot=r),
+        slot=slot,
+        task=jnp.int32(0),
+        n_tasks=world.robot_goal_count[slot],
+        leg_open=jnp.bool_(False),
+        hop_elapsed_s=jnp.float32(0.0),
         leg_stalled_s=jnp.float32(0.0),
-        leg_battery_used_pct=jnp.float32(0.0), leg_collisions=jnp.int32(0),
-        in_contact=jnp.zeros(params.n_workers, bool), log=log,
-        distance_hist=jnp.zeros(cfg.distance_bins, jnp.int32), end_step=jnp.int32(-1))
+        leg_battery_used_pct=jnp.float32(0.0),
+        leg_collisions=jnp.int32(0),
+        in_contact=jnp.zeros(params.n_workers, bool),
+        log=log,
+        distance_hist=jnp.zeros(cfg.distance_bins, jnp.int32),
+        end_step=jnp.int32(-1),
+    )
 
 
-def task_endpoints(world: World, slot, k):
+def task_endpoints(world: World, slot: jax.Array, k: jax.Array) -> tuple[jax.Array, jax.Array]:
     """(start, goal) waypoints of task ``k`` of ``slot``."""
     goal = world.robot_goals[slot, k]
     start = jnp.where(k > 0, world.robot_goals[slot, jnp.maximum(k - 1, 0)], world.robot_start)
     return start.astype(jnp.int32), goal.astype(jnp.int32)
 
 
-def _begin_task(params: SimParams, cfg: ProtocolConfig, world: World, method: Method,
-                xs: ExperimentState, seed_u32) -> ExperimentState:
+def _begin_task(
+    params: SimParams, cfg: ProtocolConfig, world: World, method: Method, xs: ExperimentState, seed_u32
+) -> ExperimentState:
     """Start task ``xs.task``: the refusal check of Eq. (10), then the leg with its obstacle draw."""
     k, slot, r = xs.task, xs.slot, xs.sim.robot
     start, goal = task_endpoints(world, slot, k)
     cost = method.battery_cost_pct[slot, start, goal]
     refuse = method.may_refuse & refuse_task(r.battery_pct, cost, cfg.min_battery_pct)
-    r = r.replace(battery_pct=jnp.where(refuse, jnp.float32(cfg.reset_battery_pct), r.battery_pct),
-                  x_m=world.waypoint_x_m[start], y_m=world.waypoint_y_m[start])
+    r = r.replace(
+        battery_pct=jnp.where(refuse, jnp.float32(cfg.reset_battery_pct), r.battery_pct),
+        x_m=world.waypoint_x_m[start],
+        y_m=world.waypoint_y_m[start],
+    )
     u = hash_uniform16(seed_u32 ^ _OBSTACLE_STREAM, k, (3, 1))[:, 0]
     r = robot_lib.begin_leg(params, method.plan, r, slot, start, goal, True, u)
-    log = xs.log.replace(refused=xs.log.refused.at[k].set(refuse), start_wp=xs.log.start_wp.at[k].set(start),
-                         goal_wp=xs.log.goal_wp.at[k].set(goal),
-                         planned_m=xs.log.planned_m.at[k].set(method.plan.length_m[slot, start, goal]))
-    return xs.replace(sim=xs.sim.replace(robot=r), log=log, leg_open=jnp.bool_(True), hop_elapsed_s=jnp.float32(0.0),
-                      leg_stalled_s=jnp.float32(0.0), leg_battery_used_pct=jnp.float32(0.0),
-                      leg_collisions=jnp.int32(0))
+    log = xs.log.replace(
+        refused=xs.log.refused.at[k].set(refuse),
+        start_wp=xs.log.start_wp.at[k].set(start),
+        goal_wp=xs.log.goal_wp.at[k].set(goal),
+        planned_m=xs.log.planned_m.at[k].set(method.plan.length_m[slot, start, goal]),
+    )
+    return xs.replace(
+        sim=xs.sim.replace(robot=r),
+        log=log,
+        leg_open=jnp.bool_(True),
+        hop_elapsed_s=jnp.float32(0.0),
+        leg_stalled_s=jnp.float32(0.0),
+        leg_battery_used_pct=jnp.float32(0.0),
+        leg_collisions=jnp.int32(0),
+    )
 
 
-def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method: Method,
-                    xs: ExperimentState, seed_u32) -> ExperimentState:
+def experiment_step(
+    params: SimParams, cfg: ProtocolConfig, world: World, method: Method, xs: ExperimentState, seed_u32: jax.Array
+) -> ExperimentState:
     """Advance one experiment by one step: the simulator's crowd step with the slot frozen, the
     robot driven along the current task's route, then the protocol's bookkeeping."""
     sim = xs.sim
@@ -274,8 +307,9 @@ def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method
     # Measurements of this step (new positions).
     present = w.present
     dist = jnp.sqrt((w.x_m - r.x_m) ** 2 + (w.y_m - r.y_m) ** 2)
-    in_contact, new_encounters = collision_encounters(xs.in_contact, dist, present, cfg.collision_radius_m,
-                                                      cfg.collision_release_m)
+    in_contact, new_encounters = collision_encounters(
+        xs.in_contact, dist, present, cfg.collision_radius_m, cfg.collision_release_m
+    )
     bins = jnp.clip((dist / cfg.distance_bin_m).astype(jnp.int32), 0, cfg.distance_bins - 1)
     hist = xs.distance_hist.at[bins].add((present & running).astype(jnp.int32))
     leg_collisions = xs.leg_collisions + jnp.where(running, new_encounters, 0)
@@ -295,21 +329,36 @@ def experiment_step(params: SimParams, cfg: ProtocolConfig, world: World, method
     def put(column, value):
         return column.at[k].set(jnp.where(ended, value, column[k]))
 
-    log = log.replace(outcome=put(log.outcome, outcome), time_s=put(log.time_s, r.leg_elapsed_s),
-                      stalled_s=put(log.stalled_s, leg_stalled), distance_m=put(log.distance_m, r.leg_dist_m),
-                      battery_used_pct=put(log.battery_used_pct, leg_battery),
-                      collisions=put(log.collisions, leg_collisions))
+    log = log.replace(
+        outcome=put(log.outcome, outcome),
+        time_s=put(log.time_s, r.leg_elapsed_s),
+        stalled_s=put(log.stalled_s, leg_stalled),
+        distance_m=put(log.distance_m, r.leg_dist_m),
+        battery_used_pct=put(log.battery_used_pct, leg_battery),
+        collisions=put(log.collisions, leg_collisions),
+    )
     goal_x, goal_y = world.waypoint_x_m[r.goal_wp], world.waypoint_y_m[r.goal_wp]
-    r = r.replace(x_m=jnp.where(failed, goal_x, r.x_m), y_m=jnp.where(failed, goal_y, r.y_m),
-                  speed_mps=jnp.where(ended, 0.0, r.speed_mps),
-                  battery_pct=jnp.where(ended & battery_low, jnp.float32(cfg.reset_battery_pct), r.battery_pct))
+    r = r.replace(
+        x_m=jnp.where(failed, goal_x, r.x_m),
+        y_m=jnp.where(failed, goal_y, r.y_m),
+        speed_mps=jnp.where(ended, 0.0, r.speed_mps),
+        battery_pct=jnp.where(ended & battery_low, jnp.float32(cfg.reset_battery_pct), r.battery_pct),
+    )
     task = xs.task + ended.astype(jnp.int32)
     end_step = jnp.where(ended & (task >= xs.n_tasks), sim.step + 1, xs.end_step)
     return xs.replace(
-        sim=SimState(workers=w, robot=r, step=sim.step + 1), task=task, leg_open=xs.leg_open & ~ended,
+        sim=SimState(workers=w, robot=r, step=sim.step + 1),
+        task=task,
+        leg_open=xs.leg_open & ~ended,
         hop_elapsed_s=jnp.where(running, hop_elapsed, xs.hop_elapsed_s),
-        leg_stalled_s=leg_stalled, leg_battery_used_pct=leg_battery, leg_collisions=leg_collisions,
-        in_contact=in_contact, log=log, distance_hist=hist, end_step=end_step)
+        leg_stalled_s=leg_stalled,
+        leg_battery_used_pct=leg_battery,
+        leg_collisions=leg_collisions,
+        in_contact=in_contact,
+        log=log,
+        distance_hist=hist,
+        end_step=end_step,
+    )
 
 
 def _advance_one(params, cfg, world, method, xs, key, n_steps):
@@ -332,7 +381,7 @@ def _compiled_advance(cfg: ProtocolConfig, n_steps: int, world_chunk: int, n_dev
 
 @functools.lru_cache(maxsize=8)
 def _compiled_init(cfg: ProtocolConfig) -> Callable:
-    init = lambda p, w, m, s, k: init_experiment(p, cfg, w, m, s, k)  # noqa: E731
+    init = lambda p, w, m, s, k: init_experiment(p, cfg, w, m, s, k)
     return jax.jit(jax.vmap(init, in_axes=(None, None, None, 0, 0)))
 
 
@@ -343,13 +392,22 @@ def experiment_keys(seed: int, slots: np.ndarray, replicas: np.ndarray) -> jax.A
     """
     base = jax.random.key(seed)
     return jax.vmap(lambda s, r: jax.random.fold_in(jax.random.fold_in(base, r), s))(
-        jnp.asarray(slots, jnp.int32), jnp.asarray(replicas, jnp.int32))
+        jnp.asarray(slots, jnp.int32), jnp.asarray(replicas, jnp.int32)
+    )
 
 
-def run_experiments(params: SimParams, world: World, method: Method, slots: np.ndarray, keys: jax.Array,
-                    cfg: ProtocolConfig | None = None, segment_s: float = 600.0,
-                    world_chunk: int = rollout.DEFAULT_WORLD_CHUNK, shrink_at: float = 0.5,
-                    progress=None) -> ExperimentState:
+def run_experiments(
+    params: SimParams,
+    world: World,
+    method: Method,
+    slots: np.ndarray,
+    keys: jax.Array,
+    cfg: ProtocolConfig | None = None,
+    segment_s: float = 600.0,
+    world_chunk: int = rollout.DEFAULT_WORLD_CHUNK,
+    shrink_at: float = 0.5,
+    progress=None,
+) -> ExperimentState:
     """Run a batch of experiments until every one has ended all its tasks.
 
     Experiments end at different times (S11 after ~15 min, a crowded slot after hours). After
@@ -386,6 +444,14 @@ def run_experiments(params: SimParams, world: World, method: Method, slots: np.n
     hops = int(np.asarray(method.plan.hops).max()) if cfg.deadline_per_hop else 1
     limit_s = cfg.warmup_s + float(n_tasks.max()) * hops * (float(params.robot_leg_deadline_s) + params.dt_s)
     return rollout.run_until_done(
-        lambda n_dev: _compiled_advance(cfg, n_steps, world_chunk, n_dev), (params, world, method), states, keys,
-        is_done=lambda s: np.asarray(s.task) >= np.asarray(s.n_tasks), max_segments=int(np.ceil(limit_s / segment_s)) + 1,
-        work_done=lambda s: np.asarray(s.task), progress=progress, total_work=int(n_tasks.sum()), shrink_at=shrink_at)
+        lambda n_dev: _compiled_advance(cfg, n_steps, world_chunk, n_dev),
+        (params, world, method),
+        states,
+        keys,
+        is_done=lambda s: np.asarray(s.task) >= np.asarray(s.n_tasks),
+        max_segments=int(np.ceil(limit_s / segment_s)) + 1,
+        work_done=lambda s: np.asarray(s.task),
+        progress=progress,
+        total_work=int(n_tasks.sum()),
+        shrink_at=shrink_at,
+    )

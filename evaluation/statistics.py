@@ -13,7 +13,8 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
 
-from evaluation.outcomes import SUCCESS, OUTCOME_NAMES
+from evaluation.outcomes import OUTCOME_NAMES, SUCCESS
+
 
 def mean_ci(values, confidence: float = 0.95) -> tuple[float, float, float]:
     """(mean, low, high): Student-t interval of the mean (the mean alone for one value)."""
@@ -29,20 +30,39 @@ def mean_ci(values, confidence: float = 0.95) -> tuple[float, float, float]:
 
 def chi_square_success(tasks: pd.DataFrame, a: str, b: str) -> dict:
     """Chi-square test of independence of method and success/failure (2 x 2, Yates-corrected)."""
-    table = np.array([[((tasks["method"] == m) & (tasks["outcome"] == OUTCOME_NAMES[SUCCESS])).sum(),
-                       ((tasks["method"] == m) & (tasks["outcome"] != OUTCOME_NAMES[SUCCESS])).sum()] for m in (a, b)])
+    table = np.array(
+        [
+            [
+                ((tasks["method"] == m) & (tasks["outcome"] == OUTCOME_NAMES[SUCCESS])).sum(),
+                ((tasks["method"] == m) & (tasks["outcome"] != OUTCOME_NAMES[SUCCESS])).sum(),
+            ]
+            for m in (a, b)
+        ]
+    )
     if (table.sum(axis=0) == 0).any():  # all succeed (or all fail): no difference to test
         return {"test": "chi-square", "statistic": 0.0, "p_value": 1.0, "table": table.tolist()}
     chi2, p, dof, _ = stats.chi2_contingency(table)
-    return {"test": "chi-square", "statistic": float(chi2), "p_value": float(p), "dof": int(dof),
-            "table": table.tolist()}
+    return {
+        "test": "chi-square",
+        "statistic": float(chi2),
+        "p_value": float(p),
+        "dof": int(dof),
+        "table": table.tolist(),
+    }
 
 
 def _nb_loglik(y: np.ndarray, mu: np.ndarray, alpha: float) -> float:
     """NB2 log-likelihood (variance mu + alpha mu^2)."""
     r = 1.0 / alpha
-    return float(np.sum(special.gammaln(y + r) - special.gammaln(r) - special.gammaln(y + 1)
-                        + r * np.log(r / (r + mu)) + y * np.log(np.where(mu > 0, mu / (r + mu), 1.0))))
+    return float(
+        np.sum(
+            special.gammaln(y + r)
+            - special.gammaln(r)
+            - special.gammaln(y + 1)
+            + r * np.log(r / (r + mu))
+            + y * np.log(np.where(mu > 0, mu / (r + mu), 1.0))
+        )
+    )
 
 
 def _nb_profile(y: np.ndarray, mu: np.ndarray) -> tuple[float, float]:
@@ -71,8 +91,13 @@ def negative_binomial_test(counts_a, counts_b) -> dict:
     ll0, _ = _nb_profile(y, np.full(y.size, y.mean()))
     lr = max(0.0, 2.0 * (ll1 - ll0))
     ratio = float(yb.mean() / ya.mean()) if ya.mean() > 0 else float("inf")
-    return {"test": "negative binomial LR", "statistic": lr, "p_value": float(stats.chi2.sf(lr, 1)),
-            "dispersion_alpha": alpha, "rate_ratio": ratio}
+    return {
+        "test": "negative binomial LR",
+        "statistic": lr,
+        "p_value": float(stats.chi2.sf(lr, 1)),
+        "dispersion_alpha": alpha,
+        "rate_ratio": ratio,
+    }
 
 
 def mann_whitney(x, y) -> dict:
@@ -81,8 +106,13 @@ def mann_whitney(x, y) -> dict:
     if x.size == 0 or y.size == 0:
         return {"test": "Mann-Whitney U", "statistic": float("nan"), "p_value": float("nan")}
     res = stats.mannwhitneyu(x, y, alternative="two-sided", method="asymptotic")
-    return {"test": "Mann-Whitney U", "statistic": float(res.statistic), "p_value": float(res.pvalue),
-            "median_a": float(np.median(x)), "median_b": float(np.median(y))}
+    return {
+        "test": "Mann-Whitney U",
+        "statistic": float(res.statistic),
+        "p_value": float(res.pvalue),
+        "median_a": float(np.median(x)),
+        "median_b": float(np.median(y)),
+    }
 
 
 def mann_whitney_binned(hist_a, hist_b) -> dict:
@@ -103,9 +133,8 @@ def mann_whitney_binned(hist_a, hist_b) -> dict:
     t = a + b
     n = n1 + n2
     mu = n1 * n2 / 2.0
-    var = n1 * n2 / 12.0 * ((n + 1) - np.sum(t ** 3 - t) / (n * (n - 1)))
+    var = n1 * n2 / 12.0 * ((n + 1) - np.sum(t**3 - t) / (n * (n - 1)))
     if var <= 0:
         return {"test": "Mann-Whitney U (binned)", "statistic": u1, "p_value": 1.0}
     z = (abs(u1 - mu) - 0.5) / np.sqrt(var)
     return {"test": "Mann-Whitney U (binned)", "statistic": u1, "p_value": float(min(1.0, 2 * stats.norm.sf(z)))}
-

@@ -64,44 +64,58 @@ class EvaluationResult:
     config: dict
 
 
-def build_methods(scenario: Scenario, tables: CausalTables, weights: CausalWeights = CausalWeights(),
-                  speed_mps: float | None = None) -> dict[str, ex.Method]:
+def build_methods(
+    scenario: Scenario, tables: CausalTables, weights: CausalWeights = CausalWeights(), speed_mps: float | None = None
+) -> dict[str, ex.Method]:
     """The two methods: shortest path (never refuses) and causal (Eq. 8-10, refuses by Eq. 10)."""
     speed = scenario.params.robot_max_speed_mps if speed_mps is None else speed_mps
     plan, cost = causal_plan(scenario, tables, speed_mps=speed, weights=weights)
-    return {"baseline": ex.make_method(shortest_path_plan(scenario)),
-            "causal": ex.make_method(plan, cost, may_refuse=True)}
+    return {
+        "baseline": ex.make_method(shortest_path_plan(scenario)),
+        "causal": ex.make_method(plan, cost, may_refuse=True),
+    }
 
 
-def task_table(scenario: Scenario, state: ex.ExperimentState, method: str, slots: np.ndarray,
-               replicas: np.ndarray) -> pd.DataFrame:
+def task_table(
+    scenario: Scenario, state: ex.ExperimentState, method: str, slots: np.ndarray, replicas: np.ndarray
+) -> pd.DataFrame:
     """Rows of every task run in a batch of experiments (host arrays of :func:`run_experiments`)."""
     log = state.log
     ran = log.outcome >= 0
     b_idx, k_idx = np.nonzero(ran)
     ids = np.asarray(scenario.waypoint_ids)
-    return pd.DataFrame({
-        "method": method,
-        "slot": slots[b_idx].astype(np.int32),
-        "slot_name": np.asarray(scenario.slot_names)[slots[b_idx]],
-        "replica": replicas[b_idx].astype(np.int32),
-        "task": k_idx.astype(np.int32),
-        "start": ids[log.start_wp[b_idx, k_idx]],
-        "goal": ids[log.goal_wp[b_idx, k_idx]],
-        "outcome": pd.Categorical.from_codes(log.outcome[b_idx, k_idx], categories=list(OUTCOMES)),
-        "refused": log.refused[b_idx, k_idx],
-        "time_s": log.time_s[b_idx, k_idx],
-        "stalled_s": log.stalled_s[b_idx, k_idx],
-        "distance_m": log.distance_m[b_idx, k_idx],
-        "planned_m": log.planned_m[b_idx, k_idx],
-        "battery_used_pct": log.battery_used_pct[b_idx, k_idx],
-        "collisions": log.collisions[b_idx, k_idx],
-    })
+    return pd.DataFrame(
+        {
+            "method": method,
+            "slot": slots[b_idx].astype(np.int32),
+            "slot_name": np.asarray(scenario.slot_names)[slots[b_idx]],
+            "replica": replicas[b_idx].astype(np.int32),
+            "task": k_idx.astype(np.int32),
+            "start": ids[log.start_wp[b_idx, k_idx]],
+            "goal": ids[log.goal_wp[b_idx, k_idx]],
+            "outcome": pd.Categorical.from_codes(log.outcome[b_idx, k_idx], categories=list(OUTCOMES)),
+            "refused": log.refused[b_idx, k_idx],
+            "time_s": log.time_s[b_idx, k_idx],
+            "stalled_s": log.stalled_s[b_idx, k_idx],
+            "distance_m": log.distance_m[b_idx, k_idx],
+            "planned_m": log.planned_m[b_idx, k_idx],
+            "battery_used_pct": log.battery_used_pct[b_idx, k_idx],
+            "collisions": log.collisions[b_idx, k_idx],
+        }
+    )
 
 
-def run_evaluation(scenario: Scenario, tables: CausalTables, replicas: int = 32, slots=None, seed: int = 0,
-                   cfg: ex.ProtocolConfig | None = None, weights: CausalWeights = CausalWeights(),
-                   segment_s: float = 600.0, progress: bool = True) -> EvaluationResult:
+def run_evaluation(
+    scenario: Scenario,
+    tables: CausalTables,
+    replicas: int = 32,
+    slots=None,
+    seed: int = 0,
+    cfg: ex.ProtocolConfig | None = None,
+    weights: CausalWeights = CausalWeights(),
+    segment_s: float = 600.0,
+    progress: bool = True,
+) -> EvaluationResult:
     """Both methods on every slot's experiment, ``replicas`` times, with common random numbers.
 
     Args:
@@ -128,19 +142,31 @@ def run_evaluation(scenario: Scenario, tables: CausalTables, replicas: int = 32,
     for name, method in methods.items():
         start = time.perf_counter()
         with progress_lib.bar(f"{name:>8}", unit="task", enabled=progress) as bar:
-            state = ex.run_experiments(p, world, method, b_slots, keys, cfg, segment_s=segment_s,
-                                       progress=bar.update)
+            state = ex.run_experiments(p, world, method, b_slots, keys, cfg, segment_s=segment_s, progress=bar.update)
         walls[name] = time.perf_counter() - start
         frames.append(task_table(scenario, state, name, b_slots, b_reps))
         shape = (replicas, len(slot_ids))
         hists[name] = state.distance_hist.reshape(shape + (-1,)).transpose(1, 0, 2)
         spans[name] = ((state.end_step - cfg.warmup_steps(p)) * p.dt_s).reshape(shape).T
-    config = {"replicas": replicas, "slots": [scenario.slot_names[s] for s in slot_ids], "seed": seed,
-              "protocol": dataclasses.asdict(cfg), "weights": dataclasses.asdict(weights),
-              "deadline_s": p.robot_leg_deadline_s, "obstacle_probability": p.robot_obstacle_probability}
-    return EvaluationResult(tasks=pd.concat(frames, ignore_index=True), distance_hist=hists, experiment_s=spans,
-                            distance_bin_m=cfg.distance_bin_m, wall_s=walls, plans=methods,
-                            density_ppm2=tables.density_ppm2, config=config)
+    config = {
+        "replicas": replicas,
+        "slots": [scenario.slot_names[s] for s in slot_ids],
+        "seed": seed,
+        "protocol": dataclasses.asdict(cfg),
+        "weights": dataclasses.asdict(weights),
+        "deadline_s": p.robot_leg_deadline_s,
+        "obstacle_probability": p.robot_obstacle_probability,
+    }
+    return EvaluationResult(
+        tasks=pd.concat(frames, ignore_index=True),
+        distance_hist=hists,
+        experiment_s=spans,
+        distance_bin_m=cfg.distance_bin_m,
+        wall_s=walls,
+        plans=methods,
+        density_ppm2=tables.density_ppm2,
+        config=config,
+    )
 
 
 def per_slot_table(result: EvaluationResult) -> pd.DataFrame:
@@ -148,7 +174,7 @@ def per_slot_table(result: EvaluationResult) -> pd.DataFrame:
     (with 95 % intervals), time and distance components."""
     runs = metrics.per_run(result.tasks, by=("method", "slot", "slot_name", "replica"))
     rows = []
-    for (method, slot, slot_name), g in runs.groupby(["method", "slot", "slot_name"], sort=True):
+    for (method, _slot, slot_name), g in runs.groupby(["method", "slot", "slot_name"], sort=True):
         row = {"slot": slot_name, "method": method, "tasks": g["tasks"].mean()}
         for col in ("success_pct", "collisions"):
             m, lo, hi = metrics.mean_ci(g[col])
@@ -159,8 +185,9 @@ def per_slot_table(result: EvaluationResult) -> pd.DataFrame:
         rows.append(row)
     table = pd.DataFrame(rows)
     order = {name: i for i, name in enumerate(result.config["slots"])}
-    return table.sort_values(["slot", "method"], key=lambda s: s.map(order) if s.name == "slot" else s,
-                             ignore_index=True)
+    return table.sort_values(
+        ["slot", "method"], key=lambda s: s.map(order) if s.name == "slot" else s, ignore_index=True
+    )
 
 
 def overall(result: EvaluationResult) -> dict:
@@ -172,8 +199,9 @@ def overall(result: EvaluationResult) -> dict:
         head[method] = {r.metric: {"mean": r.mean, "ci95": [r.ci_low, r.ci_high]} for r in g.itertuples()}
     hist = {m: h.sum(axis=(0, 1)) for m, h in result.distance_hist.items()}
     for m, h in hist.items():
-        head[m]["distance_quantiles_m"] = dict(zip(["q05", "q25", "q50", "q75", "q95"],
-                                                   metrics.hist_quantiles(h, result.distance_bin_m).tolist()))
+        head[m]["distance_quantiles_m"] = dict(
+            zip(["q05", "q25", "q50", "q75", "q95"], metrics.hist_quantiles(h, result.distance_bin_m).tolist())
+        )
         head[m]["hall_zone_shares"] = metrics.zone_shares(h, result.distance_bin_m)
         head[m]["tasks_per_run"] = float(runs[runs["method"] == m]["tasks"].mean())
     tests = metrics.compare(result.tasks, hist, result.distance_bin_m) if set(METHODS) <= set(hist) else {}
@@ -193,8 +221,9 @@ def write_report(result: EvaluationResult, scenario: Scenario, out_dir: str | pa
     summary = overall(result)
     return [
         write_atomic(out / "tasks.parquet", lambda f: result.tasks.to_parquet(f, index=False)),
-        write_bytes_atomic(out / "distance_hist.npz",
-                           lambda h: np.savez(h, bin_m=result.distance_bin_m, **result.distance_hist)),
+        write_bytes_atomic(
+            out / "distance_hist.npz", lambda h: np.savez(h, bin_m=result.distance_bin_m, **result.distance_hist)
+        ),
         write_atomic(out / "per_slot.csv", lambda f: table.to_csv(f, index=False, float_format="%.3f")),
         write_text_atomic(out / "summary.json", json.dumps(summary, indent=1, default=_json_default)),
         plots.efficiency_figure(result, out / "fig9_efficiency.png"),
@@ -218,11 +247,21 @@ def format_overall(summary: dict) -> str:
     pm = summary["per_method"]
     names = [m for m in METHODS if m in pm]
     lines = [f"{'per run (mean [95% CI])':<22}" + "".join(f"{m:>28}" for m in names)]
-    for metric, fmt in (("success_pct", "{:.1f}"), ("congestion", "{:.1f}"), ("battery", "{:.2f}"),
-                        ("refused", "{:.2f}"), ("collisions", "{:.1f}"), ("wasted_distance_pct", "{:.1f}"),
-                        ("wasted_time_pct", "{:.1f}"), ("wasted_battery_pct", "{:.1f}"), ("wasted_km", "{:.2f}"),
-                        ("planned_km", "{:.2f}"), ("wasted_h", "{:.2f}"), ("effective_cycles", "{:.2f}"),
-                        ("wasted_cycles", "{:.2f}")):
+    for metric, fmt in (
+        ("success_pct", "{:.1f}"),
+        ("congestion", "{:.1f}"),
+        ("battery", "{:.2f}"),
+        ("refused", "{:.2f}"),
+        ("collisions", "{:.1f}"),
+        ("wasted_distance_pct", "{:.1f}"),
+        ("wasted_time_pct", "{:.1f}"),
+        ("wasted_battery_pct", "{:.1f}"),
+        ("wasted_km", "{:.2f}"),
+        ("planned_km", "{:.2f}"),
+        ("wasted_h", "{:.2f}"),
+        ("effective_cycles", "{:.2f}"),
+        ("wasted_cycles", "{:.2f}"),
+    ):
         cells = []
         for m in names:
             v = pm[m][metric]

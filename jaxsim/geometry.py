@@ -64,12 +64,13 @@ def box_signed_distance(px: np.ndarray, py: np.ndarray, boxes_m: np.ndarray):
     nx = np.where(outside > 0, sx * ox / safe, np.where(x_face, sx, 0.0))
     ny = np.where(outside > 0, sy * oy / safe, np.where(x_face, 0.0, sy))
     best = np.argmin(sd, axis=-1)[..., None]
-    take = lambda a: np.take_along_axis(a, best, axis=-1)[..., 0]  # noqa: E731
+    take = lambda a: np.take_along_axis(a, best, axis=-1)[..., 0]
     return take(sd), take(nx), take(ny)
 
 
-def build_distance_field(boxes_m: np.ndarray, bounds_m: tuple[float, float, float, float],
-                         resolution_m: float = 0.05) -> DistanceField:
+def build_distance_field(
+    boxes_m: np.ndarray, bounds_m: tuple[float, float, float, float], resolution_m: float = 0.05
+) -> DistanceField:
     """Precompute the signed distance field over ``bounds_m = (xmin, xmax, ymin, ymax)``."""
     xmin, xmax, ymin, ymax = bounds_m
     xs = np.arange(xmin, xmax + resolution_m / 2, resolution_m)
@@ -77,10 +78,11 @@ def build_distance_field(boxes_m: np.ndarray, bounds_m: tuple[float, float, floa
     sd = np.empty((len(ys), len(xs)))
     nx, ny = np.empty_like(sd), np.empty_like(sd)
     for row in range(0, len(ys), 64):  # bounded memory: 64 rows x W cells x B boxes at a time
-        gx, gy = np.meshgrid(xs, ys[row:row + 64])
-        sd[row:row + 64], nx[row:row + 64], ny[row:row + 64] = box_signed_distance(gx, gy, boxes_m)
-    return DistanceField(np.array([xmin, ymin]), resolution_m, sd.astype(np.float32),
-                         nx.astype(np.float32), ny.astype(np.float32))
+        gx, gy = np.meshgrid(xs, ys[row : row + 64])
+        sd[row : row + 64], nx[row : row + 64], ny[row : row + 64] = box_signed_distance(gx, gy, boxes_m)
+    return DistanceField(
+        np.array([xmin, ymin]), resolution_m, sd.astype(np.float32), nx.astype(np.float32), ny.astype(np.float32)
+    )
 
 
 def segment_hits_boxes(p0: np.ndarray, p1: np.ndarray, boxes_m: np.ndarray) -> np.ndarray:
@@ -128,9 +130,14 @@ class WaypointGrid:
     nearest: np.ndarray
 
 
-def build_waypoint_grid(waypoint_xy_m: np.ndarray, allowed: np.ndarray, boxes_m: np.ndarray,
-                        bounds_m: tuple[float, float, float, float], resolution_m: float = 0.25,
-                        candidates: int = 8) -> WaypointGrid:
+def build_waypoint_grid(
+    waypoint_xy_m: np.ndarray,
+    allowed: np.ndarray,
+    boxes_m: np.ndarray,
+    bounds_m: tuple[float, float, float, float],
+    resolution_m: float = 0.25,
+    candidates: int = 8,
+) -> WaypointGrid:
     """Nearest visible allowed waypoint per cell, checking the ``candidates`` nearest ones."""
     xmin, xmax, ymin, ymax = bounds_m
     xs = np.arange(xmin, xmax + resolution_m / 2, resolution_m)
@@ -150,4 +157,3 @@ def build_waypoint_grid(waypoint_xy_m: np.ndarray, allowed: np.ndarray, boxes_m:
     # Cells with no waypoint in sight (inside walls, behind shelves): fall back to the nearest.
     nearest[nearest < 0] = idx[order[nearest < 0, 0]]
     return WaypointGrid(np.array([xmin, ymin]), resolution_m, nearest.reshape(gy.shape))
-

@@ -17,8 +17,9 @@ def edge_lengths_m(waypoint_xy_m: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return np.linalg.norm(waypoint_xy_m[edges[:, 0]] - waypoint_xy_m[edges[:, 1]], axis=-1)
 
 
-def all_pairs_shortest(n: int, edges: np.ndarray, weights: np.ndarray,
-                       allowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def all_pairs_shortest(
+    n: int, edges: np.ndarray, weights: np.ndarray, allowed: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Floyd-Warshall over an undirected graph.
 
     Args:
@@ -58,8 +59,8 @@ def floyd_warshall(cost: np.ndarray, allowed: np.ndarray | None = None) -> tuple
     dist[idx, idx] = 0.0
     next_hop[idx, idx] = idx
     for k in range(n):
-        via = dist[:, k:k + 1] + dist[k:k + 1, :]
+        via = dist[:, k : k + 1] + dist[k : k + 1, :]
         better = via < dist - 1e-12
         dist = np.where(better, via, dist)
-        next_hop = np.where(better, next_hop[:, k:k + 1], next_hop)
+        next_hop = np.where(better, next_hop[:, k : k + 1], next_hop)
     return dist, next_hop

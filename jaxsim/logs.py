@@ -98,8 +98,7 @@ def record_table(rec, world_ids: np.ndarray, scenario: Scenario, seed: int, log_
     return pa.table(cols)
 
 
-def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUDGET_BYTES,
-                  min_chunks: int = 20) -> int:
+def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUDGET_BYTES, min_chunks: int = 20) -> int:
     """Largest divisor of ``n_samples`` whose chunk fits ``budget`` and leaves at least
     ``min_chunks`` chunks for the progress bar (equal chunks: one compile)."""
     cap = max(1, min(budget // max(bytes_per_sample, 1), n_samples // min_chunks))
@@ -112,17 +111,27 @@ def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUD
     return best
 
 
-def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, controller: Controller, *, n_worlds: int,
-                        duration_s: float, seed: int = 0, sample_interval_s: float = 1.0,
-                        log_positions: bool = False, snapshot_time_s: float | None = None, progress: bool = True,
-                        chunk_budget_bytes: int = CHUNK_BUDGET_BYTES) -> RunSummary:
+def simulate_to_parquet(
+    scenario: Scenario,
+    out_dir: str | pathlib.Path,
+    controller: Controller,
+    *,
+    n_worlds: int,
+    duration_s: float,
+    seed: int = 0,
+    sample_interval_s: float = 1.0,
+    log_positions: bool = False,
+    snapshot_time_s: float | None = None,
+    progress: bool = True,
+    chunk_budget_bytes: int = CHUNK_BUDGET_BYTES,
+) -> RunSummary:
     """Simulate ``n_worlds`` worlds for ``duration_s`` and write ``logs.parquet`` + ``run.json``.
 
     Args:
       scenario: the validated scenario (its params included).
-      out_dir: output folder (created).
-      controller: the robot's controller, e.g. ``RouteFollower(planners.routes.shortest_path_plan(s))``. Existing files of a previous run are replaced only when
+      out_dir: output folder (created). Existing files of a previous run are replaced only when
         this run completes.
+      controller: the robot's controller, e.g. ``RouteFollower(planners.routes.shortest_path_plan(s))``.
       n_worlds: batch size; world ``b`` is the same world for a given seed whatever ``n_worlds``
         (bit for bit for the same ``n_worlds``, to float rounding across batch sizes).
       duration_s: simulated time, a multiple of ``sample_interval_s``.
@@ -147,8 +156,9 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, control
     every = int(round(every))
     n_samples = duration_s / (every * p.dt_s)
     if duration_s <= 0 or abs(n_samples - round(n_samples)) > 1e-6:
-        raise ValueError(f"duration_s={duration_s} must be a positive multiple of "
-                         f"sample_interval_s={sample_interval_s}")
+        raise ValueError(
+            f"duration_s={duration_s} must be a positive multiple of sample_interval_s={sample_interval_s}"
+        )
     n_samples = int(round(n_samples))
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -169,8 +179,10 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, control
     writer = None
     rows = 0
     compile_s = 0.0
-    with atomic_path(out / LOG_FILE) as tmp, \
-            progress_lib.bar(f"simulate {n_worlds} world(s)", unit="sim s", enabled=progress) as bar:
+    with (
+        atomic_path(out / LOG_FILE) as tmp,
+        progress_lib.bar(f"simulate {n_worlds} world(s)", unit="sim s", enabled=progress) as bar,
+    ):
         try:
             pending = rollout.run_samples(p, world, controller, states, keys, chunk, every)
             for c in range(n_chunks):
@@ -191,12 +203,19 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, control
                     hit = np.flatnonzero(rec.time_s[0] >= snapshot_time_s - 1e-6)
                     if hit.size:
                         k = hit[0]
-                        snapshot = {"time_s": float(rec.time_s[0, k]), "slot": int(rec.slot[0, k]),
-                                    "worker_x_m": rec.worker_x_m[0, k], "worker_y_m": rec.worker_y_m[0, k],
-                                    "worker_status": rec.worker_status[0, k], "robot_x_m": float(rec.robot_x_m[0, k]),
-                                    "robot_y_m": float(rec.robot_y_m[0, k])}
-                final = {f: getattr(rec, f)[:, -1].tolist() for f in
-                         ("tasks_started", "tasks_succeeded", "tasks_failed", "battery_pct", "stalled_s")}
+                        snapshot = {
+                            "time_s": float(rec.time_s[0, k]),
+                            "slot": int(rec.slot[0, k]),
+                            "worker_x_m": rec.worker_x_m[0, k],
+                            "worker_y_m": rec.worker_y_m[0, k],
+                            "worker_status": rec.worker_status[0, k],
+                            "robot_x_m": float(rec.robot_x_m[0, k]),
+                            "robot_y_m": float(rec.robot_y_m[0, k]),
+                        }
+                final = {
+                    f: getattr(rec, f)[:, -1].tolist()
+                    for f in ("tasks_started", "tasks_succeeded", "tasks_failed", "battery_pct", "stalled_s")
+                }
                 bar.update((c + 1) * chunk * every * p.dt_s, n_samples * every * p.dt_s)
         finally:
             if writer is not None:
@@ -205,14 +224,35 @@ def simulate_to_parquet(scenario: Scenario, out_dir: str | pathlib.Path, control
 
     agent_steps = n_worlds * n_samples * every * (p.n_workers + 1)
     meta = {
-        "schema_version": logschema.SCHEMA_VERSION, "seed": seed, "n_worlds": n_worlds, "duration_s": duration_s, "sample_interval_s": sample_interval_s,
-        "rows": rows, "wall_s": wall, "compile_s": compile_s, "agent_steps_per_s": agent_steps / wall,
-        "jax_devices": [str(d) for d in jax.devices()], "scenario": scenario.name,
-        "waypoints": list(scenario.waypoint_ids), "slots": list(scenario.slot_names),
-        "slot_clock": list(scenario.slot_clock), "params": dataclasses.asdict(p), "final": final,
+        "schema_version": logschema.SCHEMA_VERSION,
+        "seed": seed,
+        "n_worlds": n_worlds,
+        "duration_s": duration_s,
+        "sample_interval_s": sample_interval_s,
+        "rows": rows,
+        "wall_s": wall,
+        "compile_s": compile_s,
+        "agent_steps_per_s": agent_steps / wall,
+        "jax_devices": [str(d) for d in jax.devices()],
+        "scenario": scenario.name,
+        "waypoints": list(scenario.waypoint_ids),
+        "slots": list(scenario.slot_names),
+        "slot_clock": list(scenario.slot_clock),
+        "params": dataclasses.asdict(p),
+        "final": final,
     }
     write_text_atomic(out / META_FILE, json.dumps(meta, indent=1))
     with np.errstate(invalid="ignore"):
         mean_density = dens_sum / dens_n[:, None]
-    return RunSummary(out / LOG_FILE, out / META_FILE, rows, wall, compile_s, agent_steps / wall,
-                      mean_density, dens_n, snapshot, final)
+    return RunSummary(
+        out / LOG_FILE,
+        out / META_FILE,
+        rows,
+        wall,
+        compile_s,
+        agent_steps / wall,
+        mean_density,
+        dens_n,
+        snapshot,
+        final,
+    )

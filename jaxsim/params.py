@@ -120,8 +120,10 @@ class SimParams:
         for other in params[1:]:
             for name in STATIC_FIELDS:
                 if getattr(other, name) != getattr(first, name):
-                    raise ValueError(f"cannot stack params with different static field {name!r}: "
-                                     f"{getattr(first, name)} vs {getattr(other, name)}")
+                    raise ValueError(
+                        f"cannot stack params with different static field {name!r}: "
+                        f"{getattr(first, name)} vs {getattr(other, name)}"
+                    )
         return jax.tree.map(lambda *xs: jnp.asarray(xs, jnp.float32), *params)
 
     @classmethod
@@ -153,17 +155,29 @@ class SimParams:
         missing = sorted(set(types) - set(values))
         if missing:
             name = missing[0]
-            section = next(s for s, p in SECTION_PREFIX.items() if p and name.startswith(p)) if any(
-                p and name.startswith(p) for p in SECTION_PREFIX.values()) else "sim"
-            key = name[len(SECTION_PREFIX[section]):]
+            section = (
+                next(s for s, p in SECTION_PREFIX.items() if p and name.startswith(p))
+                if any(p and name.startswith(p) for p in SECTION_PREFIX.values())
+                else "sim"
+            )
+            key = name[len(SECTION_PREFIX[section]) :]
             raise error(file, f"{section}.{key}", "missing field")
         return cls(**values)
 
     def validate(self, error: type[Exception] = ValueError, file: str = "params.json") -> None:
         """Check ranges; raise ``error(file, field, message)`` on the first bad value."""
-        positive = ["dt_s", "slot_length_s", "worker_radius_m", "worker_max_speed_mps",
-                    "worker_relaxation_time_s", "worker_obstacle_sigma_m", "robot_radius_m",
-                    "robot_max_speed_mps", "robot_leg_deadline_s", "battery_charge_pct_per_s"]
+        positive = [
+            "dt_s",
+            "slot_length_s",
+            "worker_radius_m",
+            "worker_max_speed_mps",
+            "worker_relaxation_time_s",
+            "worker_obstacle_sigma_m",
+            "robot_radius_m",
+            "robot_max_speed_mps",
+            "robot_leg_deadline_s",
+            "battery_charge_pct_per_s",
+        ]
         for name in positive:
             if not getattr(self, name) > 0:
                 raise error(file, name, f"must be > 0, got {getattr(self, name)}")
@@ -171,8 +185,10 @@ class SimParams:
             raise error(file, "n_workers", f"must be >= 0, got {self.n_workers}")
         if not 0 <= self.robot_obstacle_probability <= 1:
             raise error(file, "robot_obstacle_probability", "must be a probability")
-        if self.steps_per_slot * self.dt_s != self.slot_length_s and abs(
-                self.steps_per_slot * self.dt_s - self.slot_length_s) > 1e-6 * self.slot_length_s:
+        if (
+            self.steps_per_slot * self.dt_s != self.slot_length_s
+            and abs(self.steps_per_slot * self.dt_s - self.slot_length_s) > 1e-6 * self.slot_length_s
+        ):
             raise error(file, "slot_length_s", f"must be a multiple of dt_s={self.dt_s}")
         if self.worker_activity_min_s > self.worker_activity_max_s:
             raise error(file, "worker_activity_min_s", "greater than worker_activity_max_s")

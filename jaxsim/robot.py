@@ -37,8 +37,16 @@ from jaxsim.state import CHARGING, TASK, TO_CHARGER, RobotState
 from jaxsim.world import RobotPlan, World
 
 
-def begin_leg(params: SimParams, plan: RobotPlan, r: RobotState, slot: jax.Array, start_wp: jax.Array,
-              goal_wp: jax.Array, is_task: jax.Array | bool, u: jax.Array) -> RobotState:
+def begin_leg(
+    params: SimParams,
+    plan: RobotPlan,
+    r: RobotState,
+    slot: jax.Array,
+    start_wp: jax.Array,
+    goal_wp: jax.Array,
+    is_task: jax.Array | bool,
+    u: jax.Array,
+) -> RobotState:
     """Put the robot on the planned route ``start_wp -> goal_wp`` of ``slot`` (leg counters reset).
 
     ``is_task``: a task leg (obstacles may appear; mode TASK) rather than the way to the charger.
@@ -48,19 +56,34 @@ def begin_leg(params: SimParams, plan: RobotPlan, r: RobotState, slot: jax.Array
     has_obstacle = is_task & (u_obs < params.robot_obstacle_probability)
     return r.replace(
         mode=jnp.where(is_task, TASK, TO_CHARGER).astype(jnp.int32),
-        route=plan.routes[slot, start_wp, goal_wp], route_pos=jnp.int32(0),
-        route_hops=plan.hops[slot, start_wp, goal_wp], leg_start_wp=jnp.asarray(start_wp, jnp.int32),
-        goal_wp=jnp.asarray(goal_wp, jnp.int32), leg_elapsed_s=jnp.float32(0.0), leg_dist_m=jnp.float32(0.0),
-        obstacle_at_m=jnp.where(has_obstacle, u_at * plan.length_m[slot, start_wp, goal_wp],
-                                jnp.inf).astype(jnp.float32),
+        route=plan.routes[slot, start_wp, goal_wp],
+        route_pos=jnp.int32(0),
+        route_hops=plan.hops[slot, start_wp, goal_wp],
+        leg_start_wp=jnp.asarray(start_wp, jnp.int32),
+        goal_wp=jnp.asarray(goal_wp, jnp.int32),
+        leg_elapsed_s=jnp.float32(0.0),
+        leg_dist_m=jnp.float32(0.0),
+        obstacle_at_m=jnp.where(has_obstacle, u_at * plan.length_m[slot, start_wp, goal_wp], jnp.inf).astype(
+            jnp.float32
+        ),
         obstacle_left_m=jnp.float32(params.robot_obstacle_length_m),
-        obstacle_speed_factor=(params.robot_obstacle_speed_factor_min
-                               + u_speed * (1.0 - params.robot_obstacle_speed_factor_min)).astype(jnp.float32),
-        tasks_started=r.tasks_started + jnp.where(is_task, 1, 0).astype(jnp.int32))
+        obstacle_speed_factor=(
+            params.robot_obstacle_speed_factor_min + u_speed * (1.0 - params.robot_obstacle_speed_factor_min)
+        ).astype(jnp.float32),
+        tasks_started=r.tasks_started + jnp.where(is_task, 1, 0).astype(jnp.int32),
+    )
 
 
-def start_leg(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot, start_wp,
-              to_charger, u) -> RobotState:
+def start_leg(
+    params: SimParams,
+    world: World,
+    plan: RobotPlan,
+    r: RobotState,
+    slot: jax.Array,
+    start_wp: jax.Array,
+    to_charger: jax.Array | bool,
+    u: jax.Array,
+) -> RobotState:
     """Begin the next leg from ``start_wp``: the next task of ``slot``, or the way to the charger.
 
     ``u``: (3,) uniforms: obstacle or not, where on the path, how much it slows the robot.
@@ -68,11 +91,15 @@ def start_leg(params: SimParams, world: World, plan: RobotPlan, r: RobotState, s
     idx = jnp.where(r.task_slot == slot, r.task_idx + 1, 0) % world.robot_goal_count[slot]
     goal = jnp.where(to_charger, world.charging_station, world.robot_goals[slot, idx])
     r = begin_leg(params, plan, r, slot, start_wp, goal, ~jnp.asarray(to_charger), u)
-    return r.replace(task_idx=jnp.where(to_charger, r.task_idx, idx).astype(jnp.int32),
-                     task_slot=jnp.where(to_charger, r.task_slot, slot).astype(jnp.int32))
+    return r.replace(
+        task_idx=jnp.where(to_charger, r.task_idx, idx).astype(jnp.int32),
+        task_slot=jnp.where(to_charger, r.task_slot, slot).astype(jnp.int32),
+    )
 
 
-def crowd_speed_factor(params: SimParams, r: RobotState, hx, hy, wx, wy, present):
+def crowd_speed_factor(
+    params: SimParams, r: RobotState, hx: jax.Array, hy: jax.Array, wx: jax.Array, wy: jax.Array, present: jax.Array
+) -> jax.Array:
     """The blocking rule: speed factor in [0, 1] from the people in the robot's lane."""
     rel_x, rel_y = wx - r.x_m, wy - r.y_m
     along = rel_x * hx + rel_y * hy
@@ -84,8 +111,9 @@ def crowd_speed_factor(params: SimParams, r: RobotState, hx, hy, wx, wy, present
     return jnp.clip((gap - stop) / (slow - stop), 0.0, 1.0)
 
 
-def drive(params: SimParams, world: World, r: RobotState, wx: jax.Array, wy: jax.Array, present: jax.Array
-          ) -> tuple[RobotState, jax.Array]:
+def drive(
+    params: SimParams, world: World, r: RobotState, wx: jax.Array, wy: jax.Array, present: jax.Array
+) -> tuple[RobotState, jax.Array]:
     """One step of motion along the current route: crowds, obstacle, battery, route progress.
 
     ``wx, wy, present``: (N,) workers. Returns the moved robot and ``arrived`` (the last route
@@ -108,12 +136,20 @@ def drive(params: SimParams, world: World, r: RobotState, wx: jax.Array, wy: jax
     charging = r.mode == CHARGING
     change = battery.battery_change_pct(params, speed, charging, in_obstacle)
     new = r.replace(
-        x_m=r.x_m + travel * hx, y_m=r.y_m + travel * hy, heading_x=hx, heading_y=hy,
-        speed_mps=speed, battery_pct=battery.next_battery_pct(r.battery_pct, change),
-        battery_change_pct=change, charging=charging, obstacle=in_obstacle,
-        leg_elapsed_s=r.leg_elapsed_s + params.dt_s, leg_dist_m=r.leg_dist_m + travel,
+        x_m=r.x_m + travel * hx,
+        y_m=r.y_m + travel * hy,
+        heading_x=hx,
+        heading_y=hy,
+        speed_mps=speed,
+        battery_pct=battery.next_battery_pct(r.battery_pct, change),
+        battery_change_pct=change,
+        charging=charging,
+        obstacle=in_obstacle,
+        leg_elapsed_s=r.leg_elapsed_s + params.dt_s,
+        leg_dist_m=r.leg_dist_m + travel,
         obstacle_left_m=jnp.where(in_obstacle, r.obstacle_left_m - travel, r.obstacle_left_m),
-        stalled_s=r.stalled_s + jnp.where(moving & (speed <= 0), params.dt_s, 0.0))
+        stalled_s=r.stalled_s + jnp.where(moving & (speed <= 0), params.dt_s, 0.0),
+    )
 
     reached = moving & (dist - travel <= params.robot_goal_tolerance_m)
     last = r.route_pos + 1 >= jnp.maximum(r.route_hops, 1)
@@ -121,8 +157,17 @@ def drive(params: SimParams, world: World, r: RobotState, wx: jax.Array, wy: jax
     return new, reached & last
 
 
-def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState, slot,
-                 wx, wy, present, u) -> RobotState:
+def update_robot(
+    params: SimParams,
+    world: World,
+    plan: RobotPlan,
+    r: RobotState,
+    slot: jax.Array,
+    wx: jax.Array,
+    wy: jax.Array,
+    present: jax.Array,
+    u: jax.Array,
+) -> RobotState:
     """One step of the robot's working day. ``wx, wy, present``: (N,) workers; ``u``: (3,) uniforms."""
     new, arrived = drive(params, world, r, wx, wy, present)
     task_mode = r.mode == TASK
@@ -134,8 +179,11 @@ def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState
     new = new.replace(tasks_succeeded=r.tasks_succeeded + success, tasks_failed=r.tasks_failed + failure)
     teleport = failure & params.robot_teleport_on_failure
     goal_x, goal_y = world.waypoint_x_m[r.goal_wp], world.waypoint_y_m[r.goal_wp]
-    new = new.replace(x_m=jnp.where(teleport, goal_x, new.x_m), y_m=jnp.where(teleport, goal_y, new.y_m),
-                      speed_mps=jnp.where(failure | at_charger, 0.0, new.speed_mps))
+    new = new.replace(
+        x_m=jnp.where(teleport, goal_x, new.x_m),
+        y_m=jnp.where(teleport, goal_y, new.y_m),
+        speed_mps=jnp.where(failure | at_charger, 0.0, new.speed_mps),
+    )
     new = new.replace(mode=jnp.where(at_charger, CHARGING, new.mode).astype(jnp.int32))
 
     leg_over = success | failure
@@ -146,19 +194,39 @@ def update_robot(params: SimParams, world: World, plan: RobotPlan, r: RobotState
     return select(full, resume, new)
 
 
-def init_robot(params: SimParams, world: World, plan: RobotPlan, u) -> RobotState:
+def init_robot(params: SimParams, world: World, plan: RobotPlan, u: jax.Array) -> RobotState:
     """The robot at its start waypoint with a full battery, starting slot 0's first task."""
     f = jnp.float32
     i = jnp.int32
     start = world.robot_start
     r = RobotState(
-        x_m=world.waypoint_x_m[start], y_m=world.waypoint_y_m[start], heading_x=f(1.0), heading_y=f(0.0),
-        speed_mps=f(0.0), battery_pct=f(params.battery_initial_pct), battery_change_pct=f(0.0),
-        mode=i(TASK), charging=jnp.bool_(False), obstacle=jnp.bool_(False),
-        route=plan.routes[0, start, start], route_pos=i(0), route_hops=i(0), leg_start_wp=i(start),
-        goal_wp=i(start), task_idx=i(-1), task_slot=i(0), leg_elapsed_s=f(0.0), leg_dist_m=f(0.0),
-        obstacle_at_m=f(jnp.inf), obstacle_left_m=f(0.0), obstacle_speed_factor=f(1.0), tasks_started=i(0),
-        tasks_succeeded=i(0), tasks_failed=i(0), stalled_s=f(0.0))
+        x_m=world.waypoint_x_m[start],
+        y_m=world.waypoint_y_m[start],
+        heading_x=f(1.0),
+        heading_y=f(0.0),
+        speed_mps=f(0.0),
+        battery_pct=f(params.battery_initial_pct),
+        battery_change_pct=f(0.0),
+        mode=i(TASK),
+        charging=jnp.bool_(False),
+        obstacle=jnp.bool_(False),
+        route=plan.routes[0, start, start],
+        route_pos=i(0),
+        route_hops=i(0),
+        leg_start_wp=i(start),
+        goal_wp=i(start),
+        task_idx=i(-1),
+        task_slot=i(0),
+        leg_elapsed_s=f(0.0),
+        leg_dist_m=f(0.0),
+        obstacle_at_m=f(jnp.inf),
+        obstacle_left_m=f(0.0),
+        obstacle_speed_factor=f(1.0),
+        tasks_started=i(0),
+        tasks_succeeded=i(0),
+        tasks_failed=i(0),
+        stalled_s=f(0.0),
+    )
     return start_leg(params, world, plan, r, jnp.int32(0), jnp.int32(start), False, u)
 
 
@@ -177,6 +245,15 @@ class RouteFollower:
     def init(self, params: SimParams, world: World, u: jax.Array) -> RobotState:
         return init_robot(params, world, self.plan, u)
 
-    def step(self, params: SimParams, world: World, robot: RobotState, slot: jax.Array, workers_x_m: jax.Array,
-             workers_y_m: jax.Array, present: jax.Array, u: jax.Array) -> RobotState:
+    def step(
+        self,
+        params: SimParams,
+        world: World,
+        robot: RobotState,
+        slot: jax.Array,
+        workers_x_m: jax.Array,
+        workers_y_m: jax.Array,
+        present: jax.Array,
+        u: jax.Array,
+    ) -> RobotState:
         return update_robot(params, world, self.plan, robot, slot, workers_x_m, workers_y_m, present, u)

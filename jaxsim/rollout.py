@@ -60,14 +60,22 @@ def _init_fn(params_batched: bool):
     return jax.jit(jax.vmap(init, in_axes=(0 if params_batched else None, None, None, 0)))
 
 
-def init_batch(params: SimParams, world: World, controller: Controller, keys: jax.Array,
-               params_batched: bool = False) -> SimState:
+def init_batch(
+    params: SimParams, world: World, controller: Controller, keys: jax.Array, params_batched: bool = False
+) -> SimState:
     """Initial states of a batch of worlds, one per key (init key = ``fold_in(key, INIT_FOLD)``)."""
     return _init_fn(params_batched)(params, world, controller, keys)
 
 
-def _run_one(params: SimParams, world: World, controller: Controller, state: SimState, key: jax.Array,
-             n_samples: int, steps_per_sample: int) -> tuple[SimState, Record]:
+def _run_one(
+    params: SimParams,
+    world: World,
+    controller: Controller,
+    state: SimState,
+    key: jax.Array,
+    n_samples: int,
+    steps_per_sample: int,
+) -> tuple[SimState, Record]:
     seed = world_seed_u32(key)
 
     def inner(s, _):
@@ -90,8 +98,8 @@ def map_worlds(run_one: Callable, batched: tuple, world_chunk: int):
     """
     b = jax.tree.leaves(batched)[0].shape[0]
     chunk = max(c for c in range(1, min(world_chunk, b) + 1) if b % c == 0)
-    split = lambda x: x.reshape((b // chunk, chunk) + x.shape[1:])  # noqa: E731
-    merge = lambda x: x.reshape((b,) + x.shape[2:])  # noqa: E731
+    split = lambda x: x.reshape((b // chunk, chunk) + x.shape[1:])
+    merge = lambda x: x.reshape((b,) + x.shape[2:])
     out = jax.lax.map(lambda args: jax.vmap(run_one)(*args), jax.tree.map(split, batched))
     return jax.tree.map(merge, out)
 
@@ -120,8 +128,11 @@ def shard_worlds(fn: Callable, n_shared: int, n_batched: int, n_dev: int) -> Cal
     spec, rep = jax.sharding.PartitionSpec("worlds"), jax.sharding.PartitionSpec()
     # check_vma off: every shard is independent (no collectives), and the check rejects the
     # zero-size worker arrays of a world without workers (their varying-axis type is dropped).
-    return jax.jit(jax.shard_map(fn, mesh=_mesh(n_dev), in_specs=(rep,) * n_shared + (spec,) * n_batched,
-                                 out_specs=spec, check_vma=False))
+    return jax.jit(
+        jax.shard_map(
+            fn, mesh=_mesh(n_dev), in_specs=(rep,) * n_shared + (spec,) * n_batched, out_specs=spec, check_vma=False
+        )
+    )
 
 
 def place(n_dev: int, shared: tuple, batched: tuple) -> tuple[tuple, tuple]:
@@ -137,7 +148,7 @@ def place(n_dev: int, shared: tuple, batched: tuple) -> tuple[tuple, tuple]:
 @functools.lru_cache(maxsize=16)
 def _compiled(n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: int, params_batched: bool):
     def run(params, world, controller, states, keys):
-        one = lambda p, s, k: _run_one(p, world, controller, s, k, n_samples, steps_per_sample)  # noqa: E731
+        one = lambda p, s, k: _run_one(p, world, controller, s, k, n_samples, steps_per_sample)
         if params_batched:
             return map_worlds(one, (params, states, keys), world_chunk)
         return map_worlds(lambda s, k: one(params, s, k), (states, keys), world_chunk)
@@ -147,9 +158,17 @@ def _compiled(n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: in
     return shard_worlds(run, 3, 2, n_dev)
 
 
-def run_samples(params: SimParams, world: World, controller: Controller, states: SimState, keys: jax.Array,
-                n_samples: int, steps_per_sample: int, world_chunk: int = DEFAULT_WORLD_CHUNK,
-                params_batched: bool = False) -> tuple[SimState, Record]:
+def run_samples(
+    params: SimParams,
+    world: World,
+    controller: Controller,
+    states: SimState,
+    keys: jax.Array,
+    n_samples: int,
+    steps_per_sample: int,
+    world_chunk: int = DEFAULT_WORLD_CHUNK,
+    params_batched: bool = False,
+) -> tuple[SimState, Record]:
     """Advance a batch of worlds by ``n_samples * steps_per_sample`` steps.
 
     Args:
@@ -174,8 +193,16 @@ def run_samples(params: SimParams, world: World, controller: Controller, states:
     return fn(*shared, *batched)
 
 
-def rollout(params: SimParams, world: World, controller: Controller, seed: int, n_worlds: int,
-            n_steps: int, sample_every_steps: int = 1, params_batched: bool = False) -> tuple[SimState, Record]:
+def rollout(
+    params: SimParams,
+    world: World,
+    controller: Controller,
+    seed: int,
+    n_worlds: int,
+    n_steps: int,
+    sample_every_steps: int = 1,
+    params_batched: bool = False,
+) -> tuple[SimState, Record]:
     """Convenience: a whole rollout in memory (use :mod:`jaxsim.logs` for long runs).
 
     With ``params_batched``, ``params`` carries one set per world (``n_worlds`` of them).
@@ -184,8 +211,16 @@ def rollout(params: SimParams, world: World, controller: Controller, seed: int, 
         raise ValueError(f"n_steps={n_steps} is not a multiple of sample_every_steps={sample_every_steps}")
     keys = world_keys(seed, n_worlds)
     states = init_batch(params, world, controller, keys, params_batched)
-    return run_samples(params, world, controller, states, keys, n_steps // sample_every_steps, sample_every_steps,
-                       params_batched=params_batched)
+    return run_samples(
+        params,
+        world,
+        controller,
+        states,
+        keys,
+        n_steps // sample_every_steps,
+        sample_every_steps,
+        params_batched=params_batched,
+    )
 
 
 def to_numpy(tree):
@@ -193,11 +228,20 @@ def to_numpy(tree):
     return _to_numpy(tree, copy=False)
 
 
-def run_until_done(advance_for: Callable[[int], Callable], shared: tuple, states, keys: jax.Array, *,
-                   is_done: Callable[[object], np.ndarray], max_segments: int,
-                   work_done: Callable[[object], np.ndarray] | None = None,
-                   progress: Callable[[int, int], None] | None = None, total_work: int = 0,
-                   shrink_at: float = 0.5, pad_multiple: int = 8):
+def run_until_done(
+    advance_for: Callable[[int], Callable],
+    shared: tuple,
+    states,
+    keys: jax.Array,
+    *,
+    is_done: Callable[[object], np.ndarray],
+    max_segments: int,
+    work_done: Callable[[object], np.ndarray] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    total_work: int = 0,
+    shrink_at: float = 0.5,
+    pad_multiple: int = 8,
+):
     """Advance a batch segment by segment until every world is done, retiring finished ones.
 
     After each segment, once the unfinished worlds are at most ``shrink_at`` of the batch, the

@@ -15,6 +15,7 @@ signed angle from ``D`` to ``e_ij``, and
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from jaxsim.params import SimParams
@@ -22,7 +23,7 @@ from jaxsim.params import SimParams
 _EPS = 1e-6
 
 
-def fast_atan2(y, x):
+def fast_atan2(y: jax.Array, x: jax.Array) -> jax.Array:
     """``arctan2`` by a 7th-order minimax polynomial (max error 2e-4 rad).
 
     XLA's CPU ``atan2`` was three quarters of the social force's time; this is 4x faster
@@ -37,7 +38,9 @@ def fast_atan2(y, x):
     return jnp.where(y < 0, -r, r)
 
 
-def desired_force(params: SimParams, dx_m, dy_m, vx, vy, speed_mps):
+def desired_force(
+    params: SimParams, dx_m: jax.Array, dy_m: jax.Array, vx: jax.Array, vy: jax.Array, speed_mps: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """Relaxation towards ``speed_mps`` along ``(dx, dy)``: returns (ax, ay), shapes of ``vx``."""
     dist = jnp.sqrt(dx_m * dx_m + dy_m * dy_m) + _EPS
     inv_tau = 1.0 / params.worker_relaxation_time_s
@@ -68,7 +71,9 @@ def _moussaid_pair(params: SimParams, dx, dy, dvx, dvy):
     return f_vel * ix - f_ang * iy, f_vel * iy + f_ang * ix
 
 
-def social_force(params: SimParams, x, y, vx, vy, weight):
+def social_force(
+    params: SimParams, x: jax.Array, y: jax.Array, vx: jax.Array, vy: jax.Array, weight: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """Moussaid interaction on every agent from every other one, each pair computed once.
 
     Pairs ``(i, i + k mod A)`` for ``k = 1 .. A // 2`` cover every unordered pair once when
@@ -92,7 +97,7 @@ def social_force(params: SimParams, x, y, vx, vy, weight):
     shifts = range(1, half + 1)
     both = jnp.stack([x, y, vx, vy, weight])
     both = jnp.concatenate([both, both], axis=1)  # element i + k of a roll is a static slice
-    xj, yj, vxj, vyj, wj = jnp.stack([both[:, k:k + a] for k in shifts], axis=1)  # (5, half, A)
+    xj, yj, vxj, vyj, wj = jnp.stack([both[:, k : k + a] for k in shifts], axis=1)  # (5, half, A)
     fx, fy = _moussaid_pair(params, xj - x, yj - y, vx - vxj, vy - vyj)  # (half, A): on i from i+k
     ax = jnp.sum(wj * fx, axis=0)
     ay = jnp.sum(wj * fy, axis=0)
@@ -106,7 +111,9 @@ def social_force(params: SimParams, x, y, vx, vy, weight):
     return scale * ax, scale * ay
 
 
-def social_force_dense(params: SimParams, x, y, vx, vy, weight):
+def social_force_dense(
+    params: SimParams, x: jax.Array, y: jax.Array, vx: jax.Array, vy: jax.Array, weight: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """Reference for :func:`social_force`: the full ``(A, A)`` matrix of pair forces.
 
     Args:
@@ -116,20 +123,24 @@ def social_force_dense(params: SimParams, x, y, vx, vy, weight):
     Returns:
       (ax, ay): (A,) summed social acceleration, already scaled by ``social_force_factor``.
     """
-    fx, fy = _moussaid_pair(params, x[None, :] - x[:, None], y[None, :] - y[:, None],
-                            vx[:, None] - vx[None, :], vy[:, None] - vy[None, :])  # (i, j): on i from j
+    fx, fy = _moussaid_pair(
+        params, x[None, :] - x[:, None], y[None, :] - y[:, None], vx[:, None] - vx[None, :], vy[:, None] - vy[None, :]
+    )  # (i, j): on i from j
     w = weight[None, :] * (1.0 - jnp.eye(x.shape[0], dtype=x.dtype)) * params.worker_social_force_factor
     return jnp.sum(w * fx, axis=1), jnp.sum(w * fy, axis=1)
 
 
-def obstacle_force(params: SimParams, wall_dist_m, normal_x, normal_y):
+def obstacle_force(
+    params: SimParams, wall_dist_m: jax.Array, normal_x: jax.Array, normal_y: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """pedsim's wall repulsion from the nearest wall point: returns (ax, ay)."""
     amount = params.worker_obstacle_force_factor * jnp.exp(
-        -(wall_dist_m - params.worker_radius_m) / params.worker_obstacle_sigma_m)
+        -(wall_dist_m - params.worker_radius_m) / params.worker_obstacle_sigma_m
+    )
     return amount * normal_x, amount * normal_y
 
 
-def random_force(params: SimParams, u1, u2):
+def random_force(params: SimParams, u1: jax.Array, u2: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Gaussian random force from two uniform draws in (0, 1] (Box-Muller): returns (ax, ay)."""
     r = params.worker_random_force_std_mps2 * jnp.sqrt(-2.0 * jnp.log(jnp.maximum(u1, 1e-12)))
     angle = 2.0 * jnp.pi * u2

@@ -5,7 +5,7 @@ Batching adds leading axes to every leaf; nothing here knows about batches.
 
 from __future__ import annotations
 
-import jax.numpy as jnp
+import jax
 from flax import struct
 
 # Worker status codes.
@@ -31,25 +31,25 @@ class WorkerState:
       stuck_s: (N,) time without progress towards ``target_wp``.
     """
 
-    x_m: jnp.ndarray
-    y_m: jnp.ndarray
-    vx_mps: jnp.ndarray
-    vy_mps: jnp.ndarray
-    desired_speed_mps: jnp.ndarray
-    status: jnp.ndarray
-    leaving: jnp.ndarray
-    target_wp: jnp.ndarray
-    dest_wp: jnp.ndarray
-    spot_dx_m: jnp.ndarray
-    spot_dy_m: jnp.ndarray
-    activity_end_s: jnp.ndarray
-    arrive_s: jnp.ndarray
-    depart_s: jnp.ndarray
-    best_dist_m: jnp.ndarray
-    stuck_s: jnp.ndarray
+    x_m: jax.Array
+    y_m: jax.Array
+    vx_mps: jax.Array
+    vy_mps: jax.Array
+    desired_speed_mps: jax.Array
+    status: jax.Array
+    leaving: jax.Array
+    target_wp: jax.Array
+    dest_wp: jax.Array
+    spot_dx_m: jax.Array
+    spot_dy_m: jax.Array
+    activity_end_s: jax.Array
+    arrive_s: jax.Array
+    depart_s: jax.Array
+    best_dist_m: jax.Array
+    stuck_s: jax.Array
 
     @property
-    def present(self) -> jnp.ndarray:
+    def present(self) -> jax.Array:
         """(N,) bool, inside the simulated area (arrived and not left)."""
         return (self.status == WALKING) | (self.status == ACTIVITY)
 
@@ -78,32 +78,32 @@ class RobotState:
       stalled_s: total time the robot stood still while it had somewhere to go.
     """
 
-    x_m: jnp.ndarray
-    y_m: jnp.ndarray
-    heading_x: jnp.ndarray
-    heading_y: jnp.ndarray
-    speed_mps: jnp.ndarray
-    battery_pct: jnp.ndarray
-    battery_change_pct: jnp.ndarray
-    mode: jnp.ndarray
-    charging: jnp.ndarray
-    obstacle: jnp.ndarray
-    route: jnp.ndarray
-    route_pos: jnp.ndarray
-    route_hops: jnp.ndarray
-    leg_start_wp: jnp.ndarray
-    goal_wp: jnp.ndarray
-    task_idx: jnp.ndarray
-    task_slot: jnp.ndarray
-    leg_elapsed_s: jnp.ndarray
-    leg_dist_m: jnp.ndarray
-    obstacle_at_m: jnp.ndarray
-    obstacle_left_m: jnp.ndarray
-    obstacle_speed_factor: jnp.ndarray
-    tasks_started: jnp.ndarray
-    tasks_succeeded: jnp.ndarray
-    tasks_failed: jnp.ndarray
-    stalled_s: jnp.ndarray
+    x_m: jax.Array
+    y_m: jax.Array
+    heading_x: jax.Array
+    heading_y: jax.Array
+    speed_mps: jax.Array
+    battery_pct: jax.Array
+    battery_change_pct: jax.Array
+    mode: jax.Array
+    charging: jax.Array
+    obstacle: jax.Array
+    route: jax.Array
+    route_pos: jax.Array
+    route_hops: jax.Array
+    leg_start_wp: jax.Array
+    goal_wp: jax.Array
+    task_idx: jax.Array
+    task_slot: jax.Array
+    leg_elapsed_s: jax.Array
+    leg_dist_m: jax.Array
+    obstacle_at_m: jax.Array
+    obstacle_left_m: jax.Array
+    obstacle_speed_factor: jax.Array
+    tasks_started: jax.Array
+    tasks_succeeded: jax.Array
+    tasks_failed: jax.Array
+    stalled_s: jax.Array
 
 
 @struct.dataclass
@@ -112,7 +112,7 @@ class SimState:
 
     workers: WorkerState
     robot: RobotState
-    step: jnp.ndarray  # () int32
+    step: jax.Array  # () int32
 
 
 @struct.dataclass
@@ -131,26 +131,26 @@ class Record:
       worker_x_m, worker_y_m, worker_status: (N,) positions and status.
     """
 
-    time_s: jnp.ndarray
-    slot: jnp.ndarray
-    robot_x_m: jnp.ndarray
-    robot_y_m: jnp.ndarray
-    robot_speed_mps: jnp.ndarray
-    battery_pct: jnp.ndarray
-    battery_change_pct: jnp.ndarray
-    charging: jnp.ndarray
-    obstacle: jnp.ndarray
-    robot_mode: jnp.ndarray
-    robot_waypoint: jnp.ndarray
-    goal_wp: jnp.ndarray
-    leg_elapsed_s: jnp.ndarray
-    tasks_started: jnp.ndarray
-    tasks_succeeded: jnp.ndarray
-    tasks_failed: jnp.ndarray
-    stalled_s: jnp.ndarray
-    n_present: jnp.ndarray
-    density_ppm2: jnp.ndarray
-    worker_dist_m: jnp.ndarray
-    worker_x_m: jnp.ndarray
-    worker_y_m: jnp.ndarray
-    worker_status: jnp.ndarray
+    time_s: jax.Array
+    slot: jax.Array
+    robot_x_m: jax.Array
+    robot_y_m: jax.Array
+    robot_speed_mps: jax.Array
+    battery_pct: jax.Array
+    battery_change_pct: jax.Array
+    charging: jax.Array
+    obstacle: jax.Array
+    robot_mode: jax.Array
+    robot_waypoint: jax.Array
+    goal_wp: jax.Array
+    leg_elapsed_s: jax.Array
+    tasks_started: jax.Array
+    tasks_succeeded: jax.Array
+    tasks_failed: jax.Array
+    stalled_s: jax.Array
+    n_present: jax.Array
+    density_ppm2: jax.Array
+    worker_dist_m: jax.Array
+    worker_x_m: jax.Array
+    worker_y_m: jax.Array
+    worker_status: jax.Array

@@ -35,9 +35,17 @@ class Controller(Protocol):
 
     def init(self, params: SimParams, world: World, u: jax.Array) -> RobotState: ...
 
-    def step(self, params: SimParams, world: World, robot: RobotState, slot: jax.Array,
-             workers_x_m: jax.Array, workers_y_m: jax.Array, present: jax.Array, u: jax.Array
-             ) -> RobotState: ...
+    def step(
+        self,
+        params: SimParams,
+        world: World,
+        robot: RobotState,
+        slot: jax.Array,
+        workers_x_m: jax.Array,
+        workers_y_m: jax.Array,
+        present: jax.Array,
+        u: jax.Array,
+    ) -> RobotState: ...
 
 
 def current_slot(params: SimParams, world: World, step: jax.Array) -> jax.Array:
@@ -53,8 +61,15 @@ def init_state(params: SimParams, world: World, controller: Controller, key: jax
     return SimState(workers=workers, robot=robot, step=jnp.int32(0))
 
 
-def crowd_step(params: SimParams, world: World, workers: WorkerState, robot: RobotState, time_s: jax.Array,
-               slot: jax.Array, u: jax.Array) -> WorkerState:
+def crowd_step(
+    params: SimParams,
+    world: World,
+    workers: WorkerState,
+    robot: RobotState,
+    time_s: jax.Array,
+    slot: jax.Array,
+    u: jax.Array,
+) -> WorkerState:
     """Advance the workers one step: their context (arrivals, routes, activities), then the
     social force with the robot as an agent they avoid.
 
@@ -65,12 +80,20 @@ def crowd_step(params: SimParams, world: World, workers: WorkerState, robot: Rob
       u: (6, N) uniforms (:func:`jaxsim.rng.step_uniforms`).
     """
     w = workers_lib.update_context(params, world, workers, time_s, slot, u)
-    return workers_lib.move(params, world, w, robot.x_m, robot.y_m, robot.speed_mps * robot.heading_x,
-                            robot.speed_mps * robot.heading_y, u[4], u[5])
+    return workers_lib.move(
+        params,
+        world,
+        w,
+        robot.x_m,
+        robot.y_m,
+        robot.speed_mps * robot.heading_x,
+        robot.speed_mps * robot.heading_y,
+        u[4],
+        u[5],
+    )
 
 
-def step(params: SimParams, world: World, controller: Controller, state: SimState, seed_u32: jax.Array
-         ) -> SimState:
+def step(params: SimParams, world: World, controller: Controller, state: SimState, seed_u32: jax.Array) -> SimState:
     """Advance one world by one step (the crowd, then the robot's controller).
 
     ``seed_u32``: the world's uint32 seed (:func:`jaxsim.rng.world_seed_u32`); the step's random
@@ -92,17 +115,31 @@ def measure(params: SimParams, world: World, state: SimState) -> Record:
     dx = w.x_m[:, None] - world.waypoint_x_m[None, :]
     dy = w.y_m[:, None] - world.waypoint_y_m[None, :]
     inside = present[:, None] & (dx * dx + dy * dy < world.waypoint_radius_m[None, :] ** 2)
-    area = jnp.pi * world.waypoint_radius_m ** 2
+    area = jnp.pi * world.waypoint_radius_m**2
     density = jnp.sum(inside, axis=0).astype(jnp.float32) / area
     dist = jnp.sqrt((w.x_m - r.x_m) ** 2 + (w.y_m - r.y_m) ** 2)
     return Record(
         time_s=state.step.astype(jnp.float32) * params.dt_s,
         slot=current_slot(params, world, jnp.maximum(state.step - 1, 0)),
-        robot_x_m=r.x_m, robot_y_m=r.y_m, robot_speed_mps=r.speed_mps, battery_pct=r.battery_pct,
-        battery_change_pct=r.battery_change_pct, charging=r.charging, obstacle=r.obstacle,
-        robot_mode=r.mode, robot_waypoint=world.robot_waypoint_grid.lookup(r.x_m, r.y_m),
-        goal_wp=r.goal_wp, leg_elapsed_s=r.leg_elapsed_s, tasks_started=r.tasks_started,
-        tasks_succeeded=r.tasks_succeeded, tasks_failed=r.tasks_failed, stalled_s=r.stalled_s,
-        n_present=jnp.sum(present).astype(jnp.int32), density_ppm2=density,
-        worker_dist_m=jnp.where(present, dist, jnp.nan), worker_x_m=w.x_m, worker_y_m=w.y_m,
-        worker_status=w.status)
+        robot_x_m=r.x_m,
+        robot_y_m=r.y_m,
+        robot_speed_mps=r.speed_mps,
+        battery_pct=r.battery_pct,
+        battery_change_pct=r.battery_change_pct,
+        charging=r.charging,
+        obstacle=r.obstacle,
+        robot_mode=r.mode,
+        robot_waypoint=world.robot_waypoint_grid.lookup(r.x_m, r.y_m),
+        goal_wp=r.goal_wp,
+        leg_elapsed_s=r.leg_elapsed_s,
+        tasks_started=r.tasks_started,
+        tasks_succeeded=r.tasks_succeeded,
+        tasks_failed=r.tasks_failed,
+        stalled_s=r.stalled_s,
+        n_present=jnp.sum(present).astype(jnp.int32),
+        density_ppm2=density,
+        worker_dist_m=jnp.where(present, dist, jnp.nan),
+        worker_x_m=w.x_m,
+        worker_y_m=w.y_m,
+        worker_status=w.status,
+    )

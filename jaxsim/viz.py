@@ -45,8 +45,16 @@ def snapshot_png(scenario: Scenario, snapshot: dict, path: str | pathlib.Path) -
     status = np.asarray(snapshot["worker_status"])
     for code, colour, label in [(WALKING, "#d62728", "walking"), (ACTIVITY, "#ff9f1c", "at an activity")]:
         m = status == code
-        ax.scatter(np.asarray(snapshot["worker_x_m"])[m], np.asarray(snapshot["worker_y_m"])[m], s=22,
-                   c=colour, edgecolors="k", linewidths=0.3, zorder=3, label=f"{label} ({m.sum()})")
+        ax.scatter(
+            np.asarray(snapshot["worker_x_m"])[m],
+            np.asarray(snapshot["worker_y_m"])[m],
+            s=22,
+            c=colour,
+            edgecolors="k",
+            linewidths=0.3,
+            zorder=3,
+            label=f"{label} ({m.sum()})",
+        )
     r = scenario.params.robot_radius_m
     ax.add_patch(Circle((snapshot["robot_x_m"], snapshot["robot_y_m"]), r, color="#1f77b4", zorder=4, label="robot"))
     t = snapshot["time_s"]
@@ -56,8 +64,9 @@ def snapshot_png(scenario: Scenario, snapshot: dict, path: str | pathlib.Path) -
     return figures.save(fig, path)
 
 
-def density_by_slot_png(scenario: Scenario, mean_density: np.ndarray, path: str | pathlib.Path,
-                        top: int = 3) -> pathlib.Path:
+def density_by_slot_png(
+    scenario: Scenario, mean_density: np.ndarray, path: str | pathlib.Path, top: int = 3
+) -> pathlib.Path:
     """One panel per slot, waypoint discs shaded by mean people density (seed 000 Fig. 6/7).
 
     Args:
@@ -86,8 +95,15 @@ def density_by_slot_png(scenario: Scenario, mean_density: np.ndarray, path: str 
             ax.add_collection(pc)
             for i in np.argsort(-np.nan_to_num(d))[:top]:
                 if d[i] > 0:
-                    ax.text(xy[i, 0], xy[i, 1] + scenario.waypoint_radius_m[i] + 0.4, scenario.waypoint_ids[i],
-                            fontsize=6, ha="center", color="#0b3d91", zorder=4)
+                    ax.text(
+                        xy[i, 0],
+                        xy[i, 1] + scenario.waypoint_radius_m[i] + 0.4,
+                        scenario.waypoint_ids[i],
+                        fontsize=6,
+                        ha="center",
+                        color="#0b3d91",
+                        zorder=4,
+                    )
         ax.set_title(f"{scenario.slot_names[k]} {scenario.slot_clock[k]}", fontsize=9)
     sm = matplotlib.cm.ScalarMappable(cmap=cmap, norm=matplotlib.colors.Normalize(0, vmax))
     fig.colorbar(sm, ax=axes.ravel().tolist(), shrink=0.6, label="mean people density D (people / m$^2$)")

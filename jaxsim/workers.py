@@ -20,6 +20,7 @@ Rules (seed 000 Sec. 4.2.3 and the issue; the parameters are in :class:`~jaxsim.
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import jax.scipy.special as jss
 
@@ -38,27 +39,29 @@ WALL_CLEARANCE_M = 0.1
 PROGRESS_M = 0.25
 
 
-def draw_destination(world: World, slot, u):
+def draw_destination(world: World, slot: jax.Array, u: jax.Array) -> jax.Array:
     """Waypoint drawn from the slot's destination probabilities by inverse CDF (u in [0, 1))."""
     idx = jnp.searchsorted(world.destination_cdf[slot], u, side="right")
     return jnp.minimum(idx, world.n_waypoints - 1).astype(jnp.int32)
 
 
-def activity_duration_s(params: SimParams, world: World, dest, u):
+def activity_duration_s(params: SimParams, world: World, dest: jax.Array, u: jax.Array) -> jax.Array:
     """Activity duration at ``dest``: uniform, shorter for toilets."""
     lo = jnp.where(world.is_toilet[dest], params.worker_toilet_activity_min_s, params.worker_activity_min_s)
     hi = jnp.where(world.is_toilet[dest], params.worker_toilet_activity_max_s, params.worker_activity_max_s)
     return lo + u * (hi - lo)
 
 
-def draw_spot(world: World, dest, u_radius, u_angle):
+def draw_spot(world: World, dest: jax.Array, u_radius: jax.Array, u_angle: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Offset of a point drawn uniformly in the inner part of the destination disc."""
     r = SPOT_RADIUS_FRACTION * world.waypoint_radius_m[dest] * jnp.sqrt(u_radius)
     a = 2.0 * jnp.pi * u_angle
     return r * jnp.cos(a), r * jnp.sin(a)
 
 
-def update_context(params: SimParams, world: World, w: WorkerState, time_s, slot, u) -> WorkerState:
+def update_context(
+    params: SimParams, world: World, w: WorkerState, time_s: jax.Array, slot: jax.Array, u: jax.Array
+) -> WorkerState:
     """Arrivals, departures, waypoint progress, activities and replanning for one step.
 
     Args:
@@ -141,13 +144,30 @@ def update_context(params: SimParams, world: World, w: WorkerState, time_s, slot
     present = (status == WALKING) | (status == ACTIVITY)
     status = jnp.where(present & ~world.slot_working[slot], LEFT, status)
 
-    return w.replace(status=status, leaving=leaving, target_wp=target.astype(jnp.int32),
-                     dest_wp=dest.astype(jnp.int32), spot_dx_m=sdx, spot_dy_m=sdy,
-                     activity_end_s=activity_end, best_dist_m=best, stuck_s=stuck)
+    return w.replace(
+        status=status,
+        leaving=leaving,
+        target_wp=target.astype(jnp.int32),
+        dest_wp=dest.astype(jnp.int32),
+        spot_dx_m=sdx,
+        spot_dy_m=sdy,
+        activity_end_s=activity_end,
+        best_dist_m=best,
+        stuck_s=stuck,
+    )
 
 
-def move(params: SimParams, world: World, w: WorkerState, robot_x, robot_y, robot_vx, robot_vy,
-         u1, u2) -> WorkerState:
+def move(
+    params: SimParams,
+    world: World,
+    w: WorkerState,
+    robot_x: jax.Array,
+    robot_y: jax.Array,
+    robot_vx: jax.Array,
+    robot_vy: jax.Array,
+    u1: jax.Array,
+    u2: jax.Array,
+) -> WorkerState:
     """One social-force step of every present worker (semi-implicit Euler, pedsim speed cap).
 
     The robot is an agent the workers avoid (its Moussaid force is scaled by
@@ -197,17 +217,24 @@ def move(params: SimParams, world: World, w: WorkerState, robot_x, robot_y, robo
     vx, vy = vx - into * nx, vy - into * ny
 
     zero = jnp.zeros_like(vx)
-    return w.replace(x_m=jnp.where(present, x_new, w.x_m), y_m=jnp.where(present, y_new, w.y_m),
-                     vx_mps=jnp.where(present, vx, zero), vy_mps=jnp.where(present, vy, zero))
+    return w.replace(
+        x_m=jnp.where(present, x_new, w.x_m),
+        y_m=jnp.where(present, y_new, w.y_m),
+        vx_mps=jnp.where(present, vx, zero),
+        vy_mps=jnp.where(present, vy, zero),
+    )
 
 
-def init_workers(params: SimParams, world: World, u) -> WorkerState:
+def init_workers(params: SimParams, world: World, u: jax.Array) -> WorkerState:
     """Workers waiting to arrive. ``u``: (5, N) uniforms (speed, arrival, departure, spawn x, y)."""
     n = params.n_workers
     # Desired speed ~ N(mean, std) clipped, by inverse CDF of the uniform draw.
     z = jnp.sqrt(2.0) * jss.erfinv(2.0 * jnp.clip(u[0], 1e-6, 1 - 1e-6) - 1.0)
-    v0 = jnp.clip(params.worker_desired_speed_mean_mps + params.worker_desired_speed_std_mps * z,
-                  params.worker_desired_speed_min_mps, params.worker_max_speed_mps)
+    v0 = jnp.clip(
+        params.worker_desired_speed_mean_mps + params.worker_desired_speed_std_mps * z,
+        params.worker_desired_speed_min_mps,
+        params.worker_max_speed_mps,
+    )
     slot = params.slot_length_s
     last_working = world.n_slots - 1 - jnp.argmax(world.slot_working[::-1])
     margin = jnp.minimum(params.worker_exit_margin_s, 0.5 * slot)
@@ -218,9 +245,20 @@ def init_workers(params: SimParams, world: World, u) -> WorkerState:
     zeros = jnp.zeros(n, jnp.float32)
     park = jnp.full(n, world.parking, jnp.int32)
     return WorkerState(
-        x_m=x.astype(jnp.float32), y_m=y.astype(jnp.float32), vx_mps=zeros, vy_mps=zeros,
-        desired_speed_mps=v0.astype(jnp.float32), status=jnp.full(n, WAITING, jnp.int32),
-        leaving=jnp.zeros(n, bool), target_wp=park, dest_wp=park, spot_dx_m=zeros, spot_dy_m=zeros,
-        activity_end_s=zeros, arrive_s=arrive.astype(jnp.float32), depart_s=depart.astype(jnp.float32),
-        best_dist_m=jnp.full(n, jnp.inf, jnp.float32), stuck_s=zeros)
-
+        x_m=x.astype(jnp.float32),
+        y_m=y.astype(jnp.float32),
+        vx_mps=zeros,
+        vy_mps=zeros,
+        desired_speed_mps=v0.astype(jnp.float32),
+        status=jnp.full(n, WAITING, jnp.int32),
+        leaving=jnp.zeros(n, bool),
+        target_wp=park,
+        dest_wp=park,
+        spot_dx_m=zeros,
+        spot_dy_m=zeros,
+        activity_end_s=zeros,
+        arrive_s=arrive.astype(jnp.float32),
+        depart_s=depart.astype(jnp.float32),
+        best_dist_m=jnp.full(n, jnp.inf, jnp.float32),
+        stuck_s=zeros,
+    )

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from flax import struct
@@ -27,7 +28,7 @@ WAYPOINT_GRID_RESOLUTION_M = 0.25
 class Grid:
     """A value grid over the world: cell (row, col) has its centre at origin + (col, row) * res."""
 
-    values: jnp.ndarray  # (H, W, ...)
+    values: jax.Array  # (H, W, ...)
     origin_x_m: float = struct.field(pytree_node=False)
     origin_y_m: float = struct.field(pytree_node=False)
     resolution_m: float = struct.field(pytree_node=False)
@@ -64,21 +65,21 @@ class World:
       parking: parking waypoint index; charging_station: charger index; robot_start: start index.
     """
 
-    waypoint_x_m: jnp.ndarray
-    waypoint_y_m: jnp.ndarray
-    waypoint_radius_m: jnp.ndarray
-    reach_radius_m: jnp.ndarray
-    is_toilet: jnp.ndarray
-    human_next_hop: jnp.ndarray
-    destination_cdf: jnp.ndarray
-    slot_working: jnp.ndarray
+    waypoint_x_m: jax.Array
+    waypoint_y_m: jax.Array
+    waypoint_radius_m: jax.Array
+    reach_radius_m: jax.Array
+    is_toilet: jax.Array
+    human_next_hop: jax.Array
+    destination_cdf: jax.Array
+    slot_working: jax.Array
     wall_field: Grid
     human_waypoint_grid: Grid
     robot_waypoint_grid: Grid
-    robot_goals: jnp.ndarray
-    robot_goal_count: jnp.ndarray
-    parking_x_m: jnp.ndarray
-    parking_y_m: jnp.ndarray
+    robot_goals: jax.Array
+    robot_goal_count: jax.Array
+    parking_x_m: jax.Array
+    parking_y_m: jax.Array
     parking: int = struct.field(pytree_node=False)
     charging_station: int = struct.field(pytree_node=False)
     robot_start: int = struct.field(pytree_node=False)
@@ -103,9 +104,9 @@ class RobotPlan:
       length_m: (S, W, W) float32 route length in metres (for placing obstacles).
     """
 
-    routes: jnp.ndarray
-    hops: jnp.ndarray
-    length_m: jnp.ndarray
+    routes: jax.Array
+    hops: jax.Array
+    length_m: jax.Array
 
 
 def world_bounds(scenario: Scenario) -> tuple[float, float, float, float]:
@@ -116,13 +117,18 @@ def world_bounds(scenario: Scenario) -> tuple[float, float, float, float]:
     park = scenario.waypoint_xy_m[scenario.parking]
     xs = np.concatenate([xs, park[:1] + np.array([-1, 1]) * (p.worker_spawn_dx_m / 2 + 1)])
     ys = np.concatenate([ys, park[1:] + np.array([-1, 1]) * (p.worker_spawn_dy_m / 2 + 1)])
-    return (float(xs.min() - MARGIN_M), float(xs.max() + MARGIN_M),
-            float(ys.min() - MARGIN_M), float(ys.max() + MARGIN_M))
+    return (
+        float(xs.min() - MARGIN_M),
+        float(xs.max() + MARGIN_M),
+        float(ys.min() - MARGIN_M),
+        float(ys.max() + MARGIN_M),
+    )
 
 
 @functools.lru_cache(maxsize=4)
-def _geometry(boxes_key: bytes, wp_key: bytes, human_key: bytes, robot_key: bytes,
-              bounds: tuple[float, float, float, float]):
+def _geometry(
+    boxes_key: bytes, wp_key: bytes, human_key: bytes, robot_key: bytes, bounds: tuple[float, float, float, float]
+):
     boxes = np.frombuffer(boxes_key).reshape(-1, 4)
     wp = np.frombuffer(wp_key).reshape(-1, 2)
     human = np.frombuffer(human_key, bool)
@@ -137,12 +143,15 @@ def build_world(scenario: Scenario) -> World:
     """Precompute the static arrays of ``scenario`` (distance field, routes, schedule)."""
     p = scenario.params
     bounds = world_bounds(scenario)
-    field, hgrid, rgrid = _geometry(scenario.boxes_m.tobytes(), scenario.waypoint_xy_m.tobytes(),
-                                    scenario.human_allowed.tobytes(), scenario.robot_allowed.tobytes(),
-                                    bounds)
+    field, hgrid, rgrid = _geometry(
+        scenario.boxes_m.tobytes(),
+        scenario.waypoint_xy_m.tobytes(),
+        scenario.human_allowed.tobytes(),
+        scenario.robot_allowed.tobytes(),
+        bounds,
+    )
     lengths = graph.edge_lengths_m(scenario.waypoint_xy_m, scenario.edges)
-    _, next_hop = graph.all_pairs_shortest(scenario.n_waypoints, scenario.edges, lengths,
-                                           scenario.human_allowed)
+    _, next_hop = graph.all_pairs_shortest(scenario.n_waypoints, scenario.edges, lengths, scenario.human_allowed)
     cdf = np.cumsum(scenario.destination_p, axis=1)
     cdf[:, -1] = 1.0 + 1e-6  # a draw of u < 1 always lands on a waypoint with p > 0
     max_goals = max(len(g) for g in scenario.robot_goals)
@@ -156,8 +165,7 @@ def build_world(scenario: Scenario) -> World:
         waypoint_x_m=jnp.asarray(scenario.waypoint_xy_m[:, 0], jnp.float32),
         waypoint_y_m=jnp.asarray(scenario.waypoint_xy_m[:, 1], jnp.float32),
         waypoint_radius_m=jnp.asarray(scenario.waypoint_radius_m, jnp.float32),
-        reach_radius_m=jnp.asarray(np.maximum(scenario.waypoint_radius_m, p.worker_min_reach_radius_m),
-                                   jnp.float32),
+        reach_radius_m=jnp.asarray(np.maximum(scenario.waypoint_radius_m, p.worker_min_reach_radius_m), jnp.float32),
         is_toilet=jnp.asarray([k == "toilet" for k in scenario.waypoint_kind]),
         human_next_hop=jnp.asarray(next_hop),
         destination_cdf=jnp.asarray(cdf, jnp.float32),

@@ -29,8 +29,9 @@ def write_metrics(out: pathlib.Path, meta: dict) -> None:
 def checkpoint_manager(out: pathlib.Path, config: TrainConfig, read_only: bool = False):
     import orbax.checkpoint as ocp
 
-    options = ocp.CheckpointManagerOptions(max_to_keep=config.keep_checkpoints, create=not read_only,
-                                           enable_async_checkpointing=False, read_only=read_only)
+    options = ocp.CheckpointManagerOptions(
+        max_to_keep=config.keep_checkpoints, create=not read_only, enable_async_checkpointing=False, read_only=read_only
+    )
     return ocp.CheckpointManager((out / "checkpoints").absolute(), options=options)
 
 
@@ -51,8 +52,10 @@ def check_run_folder(out, config: TrainConfig) -> None:
     """Raise ValueError if ``out`` holds a run with another configuration."""
     path = pathlib.Path(out) / "config.json"
     if path.exists() and load_config(out) != config:
-        raise ValueError(f"{out} holds a run with another configuration ({path}); "
-                         "resume it with the same settings or choose another output folder")
+        raise ValueError(
+            f"{out} holds a run with another configuration ({path}); "
+            "resume it with the same settings or choose another output folder"
+        )
 
 
 def restore(out, step: int | None = None):
@@ -67,6 +70,7 @@ def restore(out, step: int | None = None):
         step = manager.latest_step() if step is None else step
         if step is None:
             raise FileNotFoundError(f"{out} has no checkpoint yet")
-        restored = manager.restore(step, args=ocp.args.Composite(
-            state=ocp.args.StandardRestore(host(template)), meta=ocp.args.JsonRestore()))
+        restored = manager.restore(
+            step, args=ocp.args.Composite(state=ocp.args.StandardRestore(host(template)), meta=ocp.args.JsonRestore())
+        )
     return config, graphdef, restored["state"], restored["meta"]

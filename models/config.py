@@ -68,8 +68,14 @@ class TrainConfig:
     def paper(cls, **overrides) -> TrainConfig:
         """The paper's recipe: 32/64/128/256, batch 32, Adam 1e-3 constant, 20 epochs over one
         fixed 70 % split (batch size not given in the paper; 32 assumed)."""
-        base = dict(features=unet.PAPER_FEATURES, batch_size=32, learning_rate=1e-3, schedule="constant",
-                    fresh_samples=False, epochs=20)
+        base = dict(
+            features=unet.PAPER_FEATURES,
+            batch_size=32,
+            learning_rate=1e-3,
+            schedule="constant",
+            fresh_samples=False,
+            epochs=20,
+        )
         return cls(**{**base, **overrides})
 
     @property
@@ -104,8 +110,12 @@ def learning_rate_schedule(config: TrainConfig) -> optax.Schedule:
         return optax.constant_schedule(config.learning_rate)
     warmup = min(config.warmup_steps, max(config.total_steps - 1, 0))
     return optax.warmup_cosine_decay_schedule(
-        0.0, config.learning_rate, warmup, max(config.total_steps, warmup + 1),
-        end_value=config.learning_rate * config.final_lr_fraction)
+        0.0,
+        config.learning_rate,
+        warmup,
+        max(config.total_steps, warmup + 1),
+        end_value=config.learning_rate * config.final_lr_fraction,
+    )
 
 
 def make_model(config: TrainConfig) -> unet.UNet:

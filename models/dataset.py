@@ -21,15 +21,24 @@ from models import grid
 from models.families import FAMILIES
 
 # Paper's sample counts per family (Sec. 4.1; the hallway's 5000 split over its three kinds).
-PAPER_COUNTS = {"corner": 2000, "proxemics": 1000, "group": 4500, "non_group": 4500, "hallway_straight": 1667,
-                "hallway_l": 1667, "hallway_people": 1666, "queue": 3600, "non_queue": 3600}
+PAPER_COUNTS = {
+    "corner": 2000,
+    "proxemics": 1000,
+    "group": 4500,
+    "non_group": 4500,
+    "hallway_straight": 1667,
+    "hallway_l": 1667,
+    "hallway_people": 1666,
+    "queue": 3600,
+    "non_queue": 3600,
+}
 KEYS = ("inputs", "targets", "family", "names")
 
 
 CHUNK = 1024  # samples per generator call: one compilation per family serves every dataset size
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def batched_sampler(name: str):
     """``keys (B,) -> (inputs (B, 40, 40), targets (B, 40, 40))`` of family ``name``, jitted."""
     return jax.jit(jax.vmap(FAMILIES[name]))
@@ -75,7 +84,7 @@ def generate(seed, counts: dict[str, int] | None = None) -> dict[str, np.ndarray
     for idx, name in enumerate(names):
         keys = family_keys(seed, name, counts[name])
         for start in range(0, counts[name], CHUNK):  # one compiled shape per family, whatever the count
-            chunk = keys[start:start + CHUNK]
+            chunk = keys[start : start + CHUNK]
             n = chunk.shape[0]
             if n < CHUNK:
                 chunk = jnp.concatenate([chunk, jnp.broadcast_to(chunk[:1], (CHUNK - n,))])
@@ -85,10 +94,18 @@ def generate(seed, counts: dict[str, int] | None = None) -> dict[str, np.ndarray
         family.append(np.full(counts[name], idx, np.int8))
     if not names:
         empty = np.zeros((0, grid.GRID, grid.GRID))
-        return {"inputs": empty.astype(np.uint8), "targets": empty.astype(np.float32),
-                "family": np.zeros(0, np.int8), "names": np.asarray([], str)}
-    return {"inputs": np.concatenate(inputs), "targets": np.concatenate(targets),
-            "family": np.concatenate(family), "names": np.asarray(names)}
+        return {
+            "inputs": empty.astype(np.uint8),
+            "targets": empty.astype(np.float32),
+            "family": np.zeros(0, np.int8),
+            "names": np.asarray([], str),
+        }
+    return {
+        "inputs": np.concatenate(inputs),
+        "targets": np.concatenate(targets),
+        "family": np.concatenate(family),
+        "names": np.asarray(names),
+    }
 
 
 def save(path, data: dict[str, np.ndarray]) -> pathlib.Path:

@@ -31,18 +31,32 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
     mse = per_sample_mse(predict, state["params"], state["batch_stats"], test["inputs"], test["targets"])
     by_family = mse_by_family(mse, test["family"], test["names"])
     baselines = meta["baselines"]
-    report = {"run": str(run), "step": int(meta["step"]), "epoch": int(meta["step"]) // config.steps_per_epoch,
-              "test_samples": int(len(mse)), "test_mse": float(mse.mean()), "test_mse_by_family": by_family,
-              "baselines": baselines,
-              "meets_quality": meets_quality(float(mse.mean()), by_family, baselines)}
+    report = {
+        "run": str(run),
+        "step": int(meta["step"]),
+        "epoch": int(meta["step"]) // config.steps_per_epoch,
+        "test_samples": int(len(mse)),
+        "test_mse": float(mse.mean()),
+        "test_mse_by_family": by_family,
+        "baselines": baselines,
+        "meets_quality": meets_quality(float(mse.mean()), by_family, baselines),
+    }
     out = run / "evaluation" if out is None else pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "evaluation.json", json.dumps(report, indent=1))
     # The picture: the first ``examples`` test samples of each family.
     pick = np.concatenate([np.flatnonzero(test["family"] == i)[:examples] for i in range(len(test["names"]))])
     predictions = np.asarray(predict(state["params"], state["batch_stats"], test["inputs"][pick]))
-    plots.family_grid(test["inputs"][pick], test["targets"][pick], test["family"][pick], test["names"],
-                      out / "predictions.png", predictions=predictions, per_family=examples, mse=mse[pick])
+    plots.family_grid(
+        test["inputs"][pick],
+        test["targets"][pick],
+        test["family"][pick],
+        test["names"],
+        out / "predictions.png",
+        predictions=predictions,
+        per_family=examples,
+        mse=mse[pick],
+    )
     report["table"] = quality_table(report["test_mse"], by_family, baselines)
     report["out"] = str(out)
     return report

@@ -139,6 +139,7 @@ def _sample_circle(key, inward: bool):
 sample_group = functools.partial(_sample_circle, inward=True)
 sample_non_group = functools.partial(_sample_circle, inward=False)
 
+
 def _rotate(x, y, angle):
     c, s = jnp.cos(angle), jnp.sin(angle)
     return x * c - y * s, x * s + y * c
@@ -172,11 +173,14 @@ def _sample_hallway(key, kind: str):
         side = jnp.where(jax.random.bernoulli(k_t), 1.0, -1.0)  # +1 turns left, -1 right
         ly = ly * side  # mirror a right turn onto a left one
         far = WALL_LENGTH_M
-        local_segments = jnp.array([
-            [back, -h, a + h, -h],          # leg 1 outer wall, up to the outer corner
-            [a + h, -h, a + h, far],        # outer wall of leg 2
-            [back, h, a - h, h],            # leg 1 inner wall, up to the inner corner
-            [a - h, h, a - h, far]])        # inner wall of leg 2
+        local_segments = jnp.array(
+            [
+                [back, -h, a + h, -h],  # leg 1 outer wall, up to the outer corner
+                [a + h, -h, a + h, far],  # outer wall of leg 2
+                [back, h, a - h, h],  # leg 1 inner wall, up to the inner corner
+                [a - h, h, a - h, far],
+            ]
+        )  # inner wall of leg 2
         in_leg1 = (lx <= a + h) & (jnp.abs(ly) < h) & (lx >= back)
         in_leg2 = (jnp.abs(lx - a) < h) & (ly >= -h)
         inside = in_leg1 | in_leg2
@@ -191,6 +195,7 @@ def _sample_hallway(key, kind: str):
         left = ly / h
         goal_l = jnp.stack([jnp.minimum(jax.random.uniform(k_g, (), minval=3.0, maxval=7.0), front - 0.5), 0.0])
         side = 1.0
+
     # Back to the world frame (undo the mirror first).
     def to_world(x, y):
         return _rotate(x, y * side, phi)
@@ -239,7 +244,7 @@ def queue_layout(key):
     jitter = jax.random.uniform(k_j, (2, MAX_QUEUE), minval=-1.0, maxval=1.0)
     along = -(i * spacing + 0.15 * spacing * jitter[0] * (i > 0))
     lateral = 0.05 * jitter[1]
-    valid = (i * spacing <= length)
+    valid = i * spacing <= length
     px, py = _rotate(along, lateral, phi)
     return hx + px, hy + py, phi, valid, hx, hy, spacing
 
@@ -279,7 +284,14 @@ def _sample_queue(key, at_head: bool):
 sample_queue = functools.partial(_sample_queue, at_head=True)
 sample_non_queue = functools.partial(_sample_queue, at_head=False)
 
-FAMILIES = {"corner": sample_corner, "proxemics": sample_proxemics, "group": sample_group,
-            "non_group": sample_non_group, "hallway_straight": sample_hallway_straight,
-            "hallway_l": sample_hallway_l, "hallway_people": sample_hallway_people,
-            "queue": sample_queue, "non_queue": sample_non_queue}
+FAMILIES = {
+    "corner": sample_corner,
+    "proxemics": sample_proxemics,
+    "group": sample_group,
+    "non_group": sample_non_group,
+    "hallway_straight": sample_hallway_straight,
+    "hallway_l": sample_hallway_l,
+    "hallway_people": sample_hallway_people,
+    "queue": sample_queue,
+    "non_queue": sample_non_queue,
+}

@@ -22,9 +22,19 @@ from models import grid
 OCCUPIED_ABOVE = 0.6  # the paper's threshold on occupancy values
 
 
-def input_map(occupancy, resolution_m: float, origin_xy_m, robot_xy_m, people_xy_m, people_heading_rad,
-              goal_xy_m, people_valid=None, robot_yaw_rad=0.0, occupied_above: float = OCCUPIED_ABOVE,
-              supersample: int | None = None):
+def input_map(
+    occupancy,
+    resolution_m: float,
+    origin_xy_m,
+    robot_xy_m,
+    people_xy_m,
+    people_heading_rad,
+    goal_xy_m,
+    people_valid=None,
+    robot_yaw_rad=0.0,
+    occupied_above: float = OCCUPIED_ABOVE,
+    supersample: int | None = None,
+):
     """The U-Net's input map (40, 40) uint8 around the robot.
 
     Args:
@@ -63,8 +73,9 @@ def input_map(occupancy, resolution_m: float, origin_xy_m, robot_xy_m, people_xy
     j = jnp.floor((wx - origin_xy_m[0]) / resolution_m).astype(jnp.int32)
     i = jnp.floor((wy - origin_xy_m[1]) / resolution_m).astype(jnp.int32)
     on_map = (i >= 0) & (i < occupancy.shape[0]) & (j >= 0) & (j < occupancy.shape[1])
-    value = jnp.where(on_map, occupancy[jnp.clip(i, 0, occupancy.shape[0] - 1),
-                                        jnp.clip(j, 0, occupancy.shape[1] - 1)], 0.0)
+    value = jnp.where(
+        on_map, occupancy[jnp.clip(i, 0, occupancy.shape[0] - 1), jnp.clip(j, 0, occupancy.shape[1] - 1)], 0.0
+    )
     walls = jnp.any(value > occupied_above, axis=(-2, -1))
     image = jnp.where(walls, jnp.uint8(grid.WALL), jnp.uint8(grid.FREE))
 
@@ -109,8 +120,9 @@ class SocialCostModel:
         if maps.ndim == 2:
             return self.function(maps[None])[0]
         if maps.ndim != 3 or maps.shape[1:] != (grid.GRID, grid.GRID):
-            raise ValueError(f"input maps must be (B, {grid.GRID}, {grid.GRID}) or ({grid.GRID}, {grid.GRID}), "
-                             f"got {maps.shape}")
+            raise ValueError(
+                f"input maps must be (B, {grid.GRID}, {grid.GRID}) or ({grid.GRID}, {grid.GRID}), got {maps.shape}"
+            )
         return self.function(maps)
 
     def cost_layer(self, maps) -> np.ndarray:

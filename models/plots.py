@@ -10,8 +10,13 @@ from common import figures
 from common.atomic import write_atomic
 from models import grid
 
-_CODE_COLOURS = {grid.FREE: (1.0, 1.0, 1.0), grid.HEADING: (0.98, 0.6, 0.1), grid.PERSON: (0.85, 0.1, 0.1),
-                 grid.GOAL: (0.1, 0.6, 0.1), grid.WALL: (0.15, 0.15, 0.15)}
+_CODE_COLOURS = {
+    grid.FREE: (1.0, 1.0, 1.0),
+    grid.HEADING: (0.98, 0.6, 0.1),
+    grid.PERSON: (0.85, 0.1, 0.1),
+    grid.GOAL: (0.1, 0.6, 0.1),
+    grid.WALL: (0.15, 0.15, 0.15),
+}
 
 
 def input_rgb(image: np.ndarray) -> np.ndarray:
@@ -21,13 +26,15 @@ def input_rgb(image: np.ndarray) -> np.ndarray:
     for code, colour in _CODE_COLOURS.items():
         rgb[image == code] = colour
     c = grid.GRID // 2
-    rgb[c - 1:c + 1, c - 1:c + 1] = np.where(image[c - 1:c + 1, c - 1:c + 1, None] == grid.FREE,
-                                             np.array([0.2, 0.4, 1.0]), rgb[c - 1:c + 1, c - 1:c + 1])
+    rgb[c - 1 : c + 1, c - 1 : c + 1] = np.where(
+        image[c - 1 : c + 1, c - 1 : c + 1, None] == grid.FREE,
+        np.array([0.2, 0.4, 1.0]),
+        rgb[c - 1 : c + 1, c - 1 : c + 1],
+    )
     return rgb
 
 
-def family_grid(inputs, targets, family, names, path, predictions=None, per_family: int = 1,
-                mse=None) -> pathlib.Path:
+def family_grid(inputs, targets, family, names, path, predictions=None, per_family: int = 1, mse=None) -> pathlib.Path:
     """Write a PNG with, for each family, ``per_family`` examples as input / target (/ prediction).
 
     Args:
@@ -41,7 +48,7 @@ def family_grid(inputs, targets, family, names, path, predictions=None, per_fami
     for row, fam in enumerate(present):
         idx = np.flatnonzero(family == fam)[:per_family]
         for k in range(per_family):
-            panels = [ax for ax in axes[row, k * cols:(k + 1) * cols]]
+            panels = [ax for ax in axes[row, k * cols : (k + 1) * cols]]
             for ax in panels:
                 ax.set_xticks([])
                 ax.set_yticks([])

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-
 PAPER_TEST_MSE = 0.0033
 
 
@@ -30,8 +29,13 @@ def trivial_baselines(train: dict, test: dict) -> dict[str, dict]:
     return result
 
 
-def meets_quality(test_mse: float, test_by_family: dict[str, float], baselines: dict[str, dict],
-                  target_mse: float = PAPER_TEST_MSE, ratio: float = TRIVIAL_RATIO) -> bool:
+def meets_quality(
+    test_mse: float,
+    test_by_family: dict[str, float],
+    baselines: dict[str, dict],
+    target_mse: float = PAPER_TEST_MSE,
+    ratio: float = TRIVIAL_RATIO,
+) -> bool:
     """The issue's bar: overall test MSE <= ``target_mse`` and, in every family, at most ``ratio``
     times the better trivial predictor's MSE."""
     if not test_mse <= target_mse:

@@ -42,12 +42,16 @@ def proxemic_cost(x_m, y_m, heading_rad, speed_mps, sigma_m: float = PROXEMIC_SI
     c, s = jnp.cos(heading_rad), jnp.sin(heading_rad)
     along, left = dx * c + dy * s, -dx * s + dy * c
     stretch = 1.0 + FRONT_STRETCH_PER_MPS * speed_mps
-    var_along = jnp.where(along > 0, (sigma_m * stretch) ** 2, sigma_m ** 2)
-    body = jnp.exp(-(along ** 2 / (2 * var_along) + left ** 2 / (2 * sigma_m ** 2)))
+    var_along = jnp.where(along > 0, (sigma_m * stretch) ** 2, sigma_m**2)
+    body = jnp.exp(-(along**2 / (2 * var_along) + left**2 / (2 * sigma_m**2)))
     # Passing layer: the robot should keep to the person's left, so cost on their right.
     right = -left
-    passing = PASSING_AMPLITUDE * jnp.exp(-((along - 0.5 * stretch * sigma_m) ** 2 / (2 * (stretch * sigma_m) ** 2)
-                                            + (right - 2 * sigma_m) ** 2 / (2 * sigma_m ** 2)))
+    passing = PASSING_AMPLITUDE * jnp.exp(
+        -(
+            (along - 0.5 * stretch * sigma_m) ** 2 / (2 * (stretch * sigma_m) ** 2)
+            + (right - 2 * sigma_m) ** 2 / (2 * sigma_m**2)
+        )
+    )
     passing = jnp.where((right > 0) & (speed_mps > 0), passing, 0.0)
     return jnp.maximum(body, passing)
 
@@ -70,7 +74,7 @@ def disc_plateau(cx_m, cy_m, radius_m, level: float = INTERACTION_COST, edge_m: 
 def corner_cost(cx_m, cy_m, free_side, sigma_m: float = CORNER_SIGMA_M):
     """Gaussian around a corner point, on the cells where ``free_side`` (GRID, GRID) is True."""
     d2 = (CELL_X_M - cx_m) ** 2 + (CELL_Y_M - cy_m) ** 2
-    return jnp.where(free_side, jnp.exp(-d2 / (2 * sigma_m ** 2)), 0.0)
+    return jnp.where(free_side, jnp.exp(-d2 / (2 * sigma_m**2)), 0.0)
 
 
 HALLWAY_LEFT_COST = 0.6

@@ -32,8 +32,10 @@ def batch_sharding(batch_size: int):
     if batch_size % n:
         raise ValueError(f"batch_size {batch_size} must be a multiple of the {n} devices")
     mesh = jax.sharding.Mesh(np.array(devices), ("batch",))
-    return (jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("batch")),
-            jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec()))
+    return (
+        jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("batch")),
+        jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec()),
+    )
 
 
 def make_train_step(graphdef, tx: optax.GradientTransformation, n_families: int):
@@ -49,13 +51,17 @@ def make_train_step(graphdef, tx: optax.GradientTransformation, n_families: int)
     @jax.jit
     def step(state, inputs, targets, family):
         (loss, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
-            state["params"], state["batch_stats"], inputs, targets)
+            state["params"], state["batch_stats"], inputs, targets
+        )
         updates, opt_state = tx.update(grads, state["opt_state"], state["params"])
         onehot = jax.nn.one_hot(family, n_families, dtype=jnp.float32)
-        return {"params": optax.apply_updates(state["params"], updates), "batch_stats": batch_stats,
-                "opt_state": opt_state,
-                "family_sse": state["family_sse"] + onehot.T @ per_sample,
-                "family_count": state["family_count"] + onehot.sum(0)}, loss
+        return {
+            "params": optax.apply_updates(state["params"], updates),
+            "batch_stats": batch_stats,
+            "opt_state": opt_state,
+            "family_sse": state["family_sse"] + onehot.T @ per_sample,
+            "family_count": state["family_count"] + onehot.sum(0),
+        }, loss
 
     return step
 
@@ -72,8 +78,9 @@ def make_predict(graphdef):
     return predict
 
 
-def per_sample_mse(predict, params, batch_stats, inputs: np.ndarray, targets: np.ndarray,
-                   batch_size: int = 512) -> np.ndarray:
+def per_sample_mse(
+    predict, params, batch_stats, inputs: np.ndarray, targets: np.ndarray, batch_size: int = 512
+) -> np.ndarray:
     """(N,) pixel MSE of the model on a dataset, in fixed-size batches (the last one padded, so
     one compilation serves every call), split over the local devices when there are several."""
     n_devices = len(jax.devices())
@@ -83,14 +90,14 @@ def per_sample_mse(predict, params, batch_stats, inputs: np.ndarray, targets: np
         params, batch_stats = jax.device_put((params, batch_stats), replicated)
     out = np.empty(len(inputs), np.float64)
     for start in range(0, len(inputs), batch_size):
-        x = inputs[start:start + batch_size]
+        x = inputs[start : start + batch_size]
         n = len(x)
         if n < batch_size:
             x = np.concatenate([x, np.zeros((batch_size - n,) + x.shape[1:], x.dtype)])
         if data_sharding is not None:
             x = jax.device_put(x, data_sharding)
         pred = np.asarray(predict(params, batch_stats, x))[:n]
-        out[start:start + n] = np.mean((pred - targets[start:start + n]) ** 2, axis=(1, 2))
+        out[start : start + n] = np.mean((pred - targets[start : start + n]) ** 2, axis=(1, 2))
     return out
 
 
@@ -107,5 +114,10 @@ def initial_state(config: TrainConfig) -> dict:
     """The training state before the first step: fresh weights, Adam's state, zero accumulators."""
     _, params, batch_stats = nnx.split(make_model(config), nnx.Param, nnx.BatchStat)
     n = len(dataset.FAMILIES)
-    return {"params": params, "batch_stats": batch_stats, "opt_state": compiled(config)[1].init(params),
-            "family_sse": jnp.zeros(n), "family_count": jnp.zeros(n)}
+    return {
+        "params": params,
+        "batch_stats": batch_stats,
+        "opt_state": compiled(config)[1].init(params),
+        "family_sse": jnp.zeros(n),
+        "family_count": jnp.zeros(n),
+    }

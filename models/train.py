@@ -36,8 +36,15 @@ from models.steps import batch_sharding, compiled, initial_state, per_sample_mse
 from models.streams import epoch_data, test_data
 
 
-def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bool = False,
-          max_steps: int | None = None, log=print) -> dict[str, Any]:
+def train(
+    config: TrainConfig,
+    out,
+    *,
+    progress: bool = True,
+    stop_when_good: bool = False,
+    max_steps: int | None = None,
+    log=print,
+) -> dict[str, Any]:
     """Train (or resume) a run in ``out``; returns the last epoch's metrics line.
 
     Args:
@@ -66,8 +73,9 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
     manager = checkpoint_manager(out, config)
     latest = manager.latest_step()
     if latest is not None:
-        restored = manager.restore(latest, args=ocp.args.Composite(
-            state=ocp.args.StandardRestore(host(state)), meta=ocp.args.JsonRestore()))
+        restored = manager.restore(
+            latest, args=ocp.args.Composite(state=ocp.args.StandardRestore(host(state)), meta=ocp.args.JsonRestore())
+        )
         state, meta = restored["state"], restored["meta"]
         log(f"resuming {out} at step {latest} (epoch {latest // config.steps_per_epoch})")
         write_metrics(out, meta)  # a kill between a checkpoint and its metrics line loses nothing
@@ -83,8 +91,11 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
 
     def save(step):
         meta["step"] = step
-        manager.save(step, args=ocp.args.Composite(state=ocp.args.StandardSave(host(state)),
-                                                   meta=ocp.args.JsonSave(meta)), force=True)
+        manager.save(
+            step,
+            args=ocp.args.Composite(state=ocp.args.StandardSave(host(state)), meta=ocp.args.JsonSave(meta)),
+            force=True,
+        )
         manager.wait_until_finished()
 
     bar = tqdm(total=config.total_steps, initial=step, unit="step", disable=not progress, desc="train")
@@ -110,16 +121,21 @@ def train(config: TrainConfig, out, *, progress: bool = True, stop_when_good: bo
                     t_start = time.perf_counter()
                     if epoch_done:
                         line = _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule)
-                        state = {**state, "family_sse": jnp.zeros_like(state["family_sse"]),
-                                 "family_count": jnp.zeros_like(state["family_count"])}
+                        state = {
+                            **state,
+                            "family_sse": jnp.zeros_like(state["family_sse"]),
+                            "family_count": jnp.zeros_like(state["family_count"]),
+                        }
                         if replicated is not None:
                             state = jax.device_put(state, replicated)
                     save(step)
                     if epoch_done:
                         write_metrics(out, meta)
-                        log(f"epoch {epoch + 1}/{config.epochs}: train {line['train_mse']:.5f} "
+                        log(
+                            f"epoch {epoch + 1}/{config.epochs}: train {line['train_mse']:.5f} "
                             f"test {line['test_mse']:.5f} ({line['wall_s']:.0f} s)"
-                            + ("  meets the quality bar" if line["meets_quality"] else ""))
+                            + ("  meets the quality bar" if line["meets_quality"] else "")
+                        )
                         if stop_when_good and line["meets_quality"]:
                             return line
                     t_start = time.perf_counter()
@@ -137,11 +153,18 @@ def _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule)
     t0 = time.perf_counter()
     mse = per_sample_mse(predict, state["params"], state["batch_stats"], test["inputs"], test["targets"])
     test_by_family = by_family(mse, test["family"], test["names"])
-    line = {"epoch": epoch + 1, "step": step, "samples_seen": step * config.batch_size,
-            "wall_s": round(meta["wall_s"], 2), "eval_s": round(time.perf_counter() - t0, 2),
-            "learning_rate": float(schedule(step)),
-            "train_mse": float(sse.sum() / max(count.sum(), 1)), "test_mse": float(mse.mean()),
-            "train_mse_by_family": train_by_family, "test_mse_by_family": test_by_family}
+    line = {
+        "epoch": epoch + 1,
+        "step": step,
+        "samples_seen": step * config.batch_size,
+        "wall_s": round(meta["wall_s"], 2),
+        "eval_s": round(time.perf_counter() - t0, 2),
+        "learning_rate": float(schedule(step)),
+        "train_mse": float(sse.sum() / max(count.sum(), 1)),
+        "test_mse": float(mse.mean()),
+        "train_mse_by_family": train_by_family,
+        "test_mse_by_family": test_by_family,
+    }
     line["meets_quality"] = meets_quality(line["test_mse"], test_by_family, meta["baselines"])
     meta["history"].append(line)
     return line

@@ -50,7 +50,7 @@ def encode_input(maps, coords: bool = True):
     if coords:
         ramp = jnp.linspace(-1.0, 1.0, grid.GRID, dtype=jnp.float32)
         shape = maps.shape
-        channels.append(jnp.broadcast_to(ramp[None, None, :], shape))   # x, right
+        channels.append(jnp.broadcast_to(ramp[None, None, :], shape))  # x, right
         channels.append(jnp.broadcast_to(-ramp[None, :, None], shape))  # y, up
     return jnp.stack(channels, axis=-1)
 
@@ -86,8 +86,9 @@ class UNet(nnx.Module):
         in_ch = len(INPUT_CHANNEL_CODES) + (2 if coords else 0)
         self.enc = nnx.List([ConvBlock(i, o, rngs=rngs) for i, o in ((in_ch, f1), (f1, f2), (f2, f3))])
         self.bottleneck = ConvBlock(f3, fb, rngs=rngs)
-        self.up = nnx.List([nnx.ConvTranspose(i, o, (2, 2), strides=(2, 2), rngs=rngs)
-                            for i, o in ((fb, f3), (f3, f2), (f2, f1))])
+        self.up = nnx.List(
+            [nnx.ConvTranspose(i, o, (2, 2), strides=(2, 2), rngs=rngs) for i, o in ((fb, f3), (f3, f2), (f2, f1))]
+        )
         self.dec = nnx.List([ConvBlock(2 * o, o, rngs=rngs) for o in (f3, f2, f1)])
         # Output bias at the logit of a typical cost (sigmoid(-3) = 0.05): most pixels cost nothing,
         # and starting from 0.5 everywhere spends the first hundreds of steps unlearning that.

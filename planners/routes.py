@@ -45,8 +45,7 @@ def route(next_hop: np.ndarray, start: int, goal: int) -> list[int]:
     return path
 
 
-def route_table(next_hop: np.ndarray, dist: np.ndarray, max_len: int | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
+def route_table(next_hop: np.ndarray, dist: np.ndarray, max_len: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Every shortest route as a padded table, the robot's plan format.
 
     Returns:
@@ -67,7 +66,7 @@ def route_table(next_hop: np.ndarray, dist: np.ndarray, max_len: int | None = No
     routes = np.repeat(np.arange(n, dtype=np.int32)[None, :, None], n, 0).repeat(max_len, 2)
     hops = np.zeros((n, n), np.int32)
     for (i, j), p in paths.items():
-        routes[i, j, :len(p)] = p
+        routes[i, j, : len(p)] = p
         hops[i, j] = len(p)
     return routes, hops
 
@@ -117,8 +116,11 @@ def plan_from_costs(scenario: Scenario, costs: np.ndarray, allowed: np.ndarray |
         metres.append(m)
     width = max(r.shape[-1] for r in routes)
     routes = [np.concatenate([r, np.repeat(r[..., -1:], width - r.shape[-1], -1)], -1) for r in routes]
-    return RobotPlan(routes=jnp.asarray(np.stack(routes)), hops=jnp.asarray(np.stack(hops)),
-                     length_m=jnp.asarray(np.stack(metres), jnp.float32))
+    return RobotPlan(
+        routes=jnp.asarray(np.stack(routes)),
+        hops=jnp.asarray(np.stack(hops)),
+        length_m=jnp.asarray(np.stack(metres), jnp.float32),
+    )
 
 
 def shortest_path_plan(scenario: Scenario) -> RobotPlan:

@@ -63,8 +63,9 @@ class CausalTables:
         if b.ndim != 2 or b.shape[1] != 2:
             raise self._fail(f"'battery_pct_per_s' must be (speed bins, 2), got shape {b.shape}")
         if e.ndim != 1 or len(e) != b.shape[0] + 1:
-            raise self._fail(f"'speed_edges_mps' must have {b.shape[0] + 1} edges for {b.shape[0]} speed bins, "
-                             f"got shape {e.shape}")
+            raise self._fail(
+                f"'speed_edges_mps' must have {b.shape[0] + 1} edges for {b.shape[0]} speed bins, got shape {e.shape}"
+            )
         if not np.isfinite(e).all() or (np.diff(e) <= 0).any():
             raise self._fail("'speed_edges_mps' must be finite and strictly increasing")
         if (np.isinf(d)).any() or (d[np.isfinite(d)] < 0).any():
@@ -82,12 +83,16 @@ class CausalTables:
         """Raise :class:`TablesError` unless the tables are for these waypoints and slots, in order."""
         n_s, n_w = self.density_ppm2.shape
         if (n_s, n_w) != (len(slot_names), len(waypoint_ids)):
-            raise self._fail(f"'density_ppm2' has shape {(n_s, n_w)}, the scenario has {len(slot_names)} slots "
-                             f"and {len(waypoint_ids)} waypoints")
+            raise self._fail(
+                f"'density_ppm2' has shape {(n_s, n_w)}, the scenario has {len(slot_names)} slots "
+                f"and {len(waypoint_ids)} waypoints"
+            )
         if self.waypoints is not None and tuple(self.waypoints) != tuple(waypoint_ids):
             first = next(i for i, (a, b) in enumerate(zip(self.waypoints, waypoint_ids, strict=True)) if a != b)
-            raise self._fail(f"'waypoints' differ from the scenario's at index {first}: "
-                             f"{self.waypoints[first]!r} vs {waypoint_ids[first]!r}")
+            raise self._fail(
+                f"'waypoints' differ from the scenario's at index {first}: "
+                f"{self.waypoints[first]!r} vs {waypoint_ids[first]!r}"
+            )
         if self.slots is not None and tuple(self.slots) != tuple(slot_names):
             raise self._fail(f"'slots' {list(self.slots)} differ from the scenario's {list(slot_names)}")
 
@@ -104,11 +109,16 @@ class CausalTables:
             except (TypeError, ValueError):
                 raise TablesError(f"{source or 'engine tables'}: '{key}' is not numeric") from None
 
-        names = lambda key: tuple(str(v) for v in np.asarray(arrays[key]).tolist()) if key in arrays else None  # noqa: E731
-        return cls(density_ppm2=floats("density_ppm2"), battery_pct_per_s=floats("battery_pct_per_s"),
-                   speed_edges_mps=floats("speed_edges_mps"),
-                   speed_mps=floats("speed_mps") if "speed_mps" in arrays else None,
-                   waypoints=names("waypoints"), slots=names("slots"), source=source)
+        names = lambda key: tuple(str(v) for v in np.asarray(arrays[key]).tolist()) if key in arrays else None
+        return cls(
+            density_ppm2=floats("density_ppm2"),
+            battery_pct_per_s=floats("battery_pct_per_s"),
+            speed_edges_mps=floats("speed_edges_mps"),
+            speed_mps=floats("speed_mps") if "speed_mps" in arrays else None,
+            waypoints=names("waypoints"),
+            slots=names("slots"),
+            source=source,
+        )
 
     @classmethod
     def load(cls, path: str | pathlib.Path) -> CausalTables:

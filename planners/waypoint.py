@@ -61,8 +61,13 @@ def battery_rate_pct_per_s(battery_pct_per_s: np.ndarray, speed_edges_mps: np.nd
     return rate
 
 
-def causal_arc_costs(scenario: Scenario, density_ppm2: np.ndarray, battery_pct_per_s: float,
-                     speed_mps: float = 0.5, weights: CausalWeights = CausalWeights()) -> np.ndarray:
+def causal_arc_costs(
+    scenario: Scenario,
+    density_ppm2: np.ndarray,
+    battery_pct_per_s: float,
+    speed_mps: float = 0.5,
+    weights: CausalWeights = CausalWeights(),
+) -> np.ndarray:
     """(S, W, W) directed arc costs of Eq. (9) per slot (inf where there is no arc).
 
     Args:
@@ -78,8 +83,9 @@ def causal_arc_costs(scenario: Scenario, density_ppm2: np.ndarray, battery_pct_p
     return base[None] + weights.density * density[:, :, None]  # density at the arc's source waypoint
 
 
-def causal_plan(scenario: Scenario, tables: CausalTables, speed_mps: float = 0.5,
-                weights: CausalWeights = CausalWeights()) -> tuple[RobotPlan, np.ndarray]:
+def causal_plan(
+    scenario: Scenario, tables: CausalTables, speed_mps: float = 0.5, weights: CausalWeights = CausalWeights()
+) -> tuple[RobotPlan, np.ndarray]:
     """The causal planner's routes and their battery cost, from the engine's tables.
 
     Args:
@@ -101,8 +107,11 @@ def battery_cost_table(plan: RobotPlan, battery_pct_per_s: float, speed_mps: flo
     return np.asarray(plan.length_m, np.float64) / speed_mps * abs(battery_pct_per_s)
 
 
-def refuse_task(battery_pct: jax.Array | np.ndarray | float, path_cost_pct: jax.Array | np.ndarray | float,
-                min_battery_pct: float = MIN_BATTERY_PCT):
+def refuse_task(
+    battery_pct: jax.Array | np.ndarray | float,
+    path_cost_pct: jax.Array | np.ndarray | float,
+    min_battery_pct: float = MIN_BATTERY_PCT,
+):
     """Eq. (10): refuse when the battery left after the path would fall below ``B_min``.
 
     Elementwise on JAX or numpy arrays of any broadcastable shapes (a bool for two floats); the

@@ -20,10 +20,18 @@ OUT = ROOT / "data" / "warehouse"
 def waypoint_kind(name: str) -> str:
     """Semantic kind of a waypoint from its PeopleFlow name."""
     for prefix, kind in [
-        ("door-", "door"), ("corridor-canteen", "canteen"), ("corridor", "corridor"),
-        ("support", "support"), ("office", "office"), ("toilet", "toilet"), ("table", "canteen"),
-        ("wa-", "work_area"), ("target", "robot_target"), ("charging", "charging_station"),
-        ("parking", "parking"), ("entrance", "entrance"),
+        ("door-", "door"),
+        ("corridor-canteen", "canteen"),
+        ("corridor", "corridor"),
+        ("support", "support"),
+        ("office", "office"),
+        ("toilet", "toilet"),
+        ("table", "canteen"),
+        ("wa-", "work_area"),
+        ("target", "robot_target"),
+        ("charging", "charging_station"),
+        ("parking", "parking"),
+        ("entrance", "entrance"),
     ]:
         if name.startswith(prefix):
             return kind
@@ -38,51 +46,85 @@ def main() -> int:
     OUT.mkdir(parents=True, exist_ok=True)
 
     waypoints = [
-        {"id": n["id"], "x_m": n["x"], "y_m": n["y"], "radius_m": n["r"], "kind": waypoint_kind(n["id"]),
-         "human_destination": bool(n["human_destination"])}
+        {
+            "id": n["id"],
+            "x_m": n["x"],
+            "y_m": n["y"],
+            "radius_m": n["r"],
+            "kind": waypoint_kind(n["id"]),
+            "human_destination": bool(n["human_destination"]),
+        }
         for n in graph["nodes"]
     ]
-    write("waypoints.json", {
-        "_source": "reference/peopleflow/derived_waypoint_graph.json (nodes); kind derived from the name",
-        "waypoints": waypoints,
-    })
-    write("graph.json", {
-        "_source": "reference/peopleflow/derived_waypoint_graph.json (184 undirected edges, line-of-sight rule"
-                   " of PeopleFlow WaypointGraph.py); edge length is recomputed from the waypoints on load",
-        "humans_exclude": graph["humans_exclude"],
-        "robot_exclude": graph["robot_exclude"],
-        "edges": [[e["u"], e["v"]] for e in graph["edges"]],
-    })
+    write(
+        "waypoints.json",
+        {
+            "_source": "reference/peopleflow/derived_waypoint_graph.json (nodes); kind derived from the name",
+            "waypoints": waypoints,
+        },
+    )
+    write(
+        "graph.json",
+        {
+            "_source": "reference/peopleflow/derived_waypoint_graph.json (184 undirected edges, line-of-sight rule"
+            " of PeopleFlow WaypointGraph.py); edge length is recomputed from the waypoints on load",
+            "humans_exclude": graph["humans_exclude"],
+            "robot_exclude": graph["robot_exclude"],
+            "edges": [[e["u"], e["v"]] for e in graph["edges"]],
+        },
+    )
     walls = []
     for b in boxes:
         yaw_quarters = b["yaw"] / (math.pi / 2)
         if abs(yaw_quarters - round(yaw_quarters)) > 1e-3:
             raise ValueError(f"box {b['link']} is not axis aligned")
         kind = b["kind"].split(" ")[0]
-        walls.append({"kind": {"delivery": "tray"}.get(kind, kind), "name": f"{b['model']}/{b['link']}",
-                      "xmin_m": b["xmin"], "xmax_m": b["xmax"], "ymin_m": b["ymin"], "ymax_m": b["ymax"]})
-    write("walls.json", {
-        "_source": "reference/peopleflow/derived_world_boxes.json (collision boxes of warehouse.world; all are"
-                   " axis aligned, so the extents are exact)",
-        "boxes": walls,
-    })
+        walls.append(
+            {
+                "kind": {"delivery": "tray"}.get(kind, kind),
+                "name": f"{b['model']}/{b['link']}",
+                "xmin_m": b["xmin"],
+                "xmax_m": b["xmax"],
+                "ymin_m": b["ymin"],
+                "ymax_m": b["ymax"],
+            }
+        )
+    write(
+        "walls.json",
+        {
+            "_source": "reference/peopleflow/derived_world_boxes.json (collision boxes of warehouse.world; all are"
+            " axis aligned, so the extents are exact)",
+            "boxes": walls,
+        },
+    )
     slot_names = ["H1", "H2", "H3", "H4", "H5", "H6", "H7", "H8", "H9", "H10", "off"]
-    write("schedule.json", {
-        "_source": "reference/peopleflow/derived_schedule.json (<schedule> of warehouse.xml; p>0 only)",
-        "slots": [
-            {"name": f"S{i + 1}", "pedsim_name": s, "clock": schedule[s]["clock"],
-             "working": s != "off", "destinations": schedule[s]["p"]}
-            for i, s in enumerate(slot_names)
-        ],
-    })
-    write("tasks.json", {
-        "_source": "reference/peopleflow/task_list_experiment.json (the randomized goal lists of the paper's"
-                   " experiments: bottom/top targets alternate; S6 target-7/entrance; S11 the 90-leg cleaning"
-                   " tour)",
-        "robot_start": "charging-station",
-        "charging_station": "charging-station",
-        "slots": [{"name": f"S{i + 1}", "goals": tasks[s]} for i, s in enumerate(slot_names)],
-    })
+    write(
+        "schedule.json",
+        {
+            "_source": "reference/peopleflow/derived_schedule.json (<schedule> of warehouse.xml; p>0 only)",
+            "slots": [
+                {
+                    "name": f"S{i + 1}",
+                    "pedsim_name": s,
+                    "clock": schedule[s]["clock"],
+                    "working": s != "off",
+                    "destinations": schedule[s]["p"],
+                }
+                for i, s in enumerate(slot_names)
+            ],
+        },
+    )
+    write(
+        "tasks.json",
+        {
+            "_source": "reference/peopleflow/task_list_experiment.json (the randomized goal lists of the paper's"
+            " experiments: bottom/top targets alternate; S6 target-7/entrance; S11 the 90-leg cleaning"
+            " tour)",
+            "robot_start": "charging-station",
+            "charging_station": "charging-station",
+            "slots": [{"name": f"S{i + 1}", "goals": tasks[s]} for i, s in enumerate(slot_names)],
+        },
+    )
     return 0
 
 

@@ -15,13 +15,19 @@ from socialnav.argtypes import comma_names, positive_float, positive_int
 
 
 def add_parser(sub) -> None:
-    ev = sub.add_parser("evaluate", help="causal planner vs shortest-path baseline (seed 000 Sec. 5.2-5.4)",
-                        description="Every slot's experiment (200 tasks, S11 the 90-leg tour) with both methods "
-                                    "and common random numbers, for --replicas independent replicas; writes "
-                                    "tasks.parquet, per_slot.csv, summary.json and Fig. 9-11 to --out.")
-    ev.add_argument("--tables", type=pathlib.Path, default=pathlib.Path("runs/warehouse/causal") / TABLES_FILE,
-                    help="the causal engine's tables, written by 'socialnav learn' "
-                         f"(default runs/warehouse/causal/{TABLES_FILE})")
+    ev = sub.add_parser(
+        "evaluate",
+        help="causal planner vs shortest-path baseline (seed 000 Sec. 5.2-5.4)",
+        description="Every slot's experiment (200 tasks, S11 the 90-leg tour) with both methods "
+        "and common random numbers, for --replicas independent replicas; writes "
+        "tasks.parquet, per_slot.csv, summary.json and Fig. 9-11 to --out.",
+    )
+    ev.add_argument(
+        "--tables",
+        type=pathlib.Path,
+        default=pathlib.Path("runs/warehouse/causal") / TABLES_FILE,
+        help=f"the causal engine's tables, written by 'socialnav learn' (default runs/warehouse/causal/{TABLES_FILE})",
+    )
     add_evaluation_options(ev, default_out=None)
     ev.add_argument("--scenario", type=pathlib.Path, default=None, help="scenario folder (default: the warehouse)")
     ev.set_defaults(handler=run)
@@ -29,20 +35,39 @@ def add_parser(sub) -> None:
 
 def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: int = 32) -> None:
     """The options ``evaluate`` and ``run`` share."""
-    p.add_argument("--replicas", type=positive_int, default=replicas,
-                   help=f"independent replicas of the whole protocol (default {replicas})")
-    p.add_argument("--slots", type=comma_names, default=None,
-                   help="comma-separated slot names to run, e.g. S1,S6,S11 (default: all)")
+    p.add_argument(
+        "--replicas",
+        type=positive_int,
+        default=replicas,
+        help=f"independent replicas of the whole protocol (default {replicas})",
+    )
+    p.add_argument(
+        "--slots",
+        type=comma_names,
+        default=None,
+        help="comma-separated slot names to run, e.g. S1,S6,S11 (default: all)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--collision-radius-m", type=positive_float, default=None,
-                   help="robot-person centre distance that counts as a collision (default: the robot's radius, "
-                        "0.275 m, as the paper; 0.475 counts any body contact)")
-    p.add_argument("--deadline-per-task", action="store_true",
-                   help="the 45 s deadline bounds the whole task (the paper's wording) instead of each route "
-                        "hop (the reference code)")
-    p.add_argument("--out", type=pathlib.Path, default=default_out,
-                   help="output folder" + (f" (default {default_out})" if default_out else
-                                           " (default: evaluation/ next to the tables' folder)"))
+    p.add_argument(
+        "--collision-radius-m",
+        type=positive_float,
+        default=None,
+        help="robot-person centre distance that counts as a collision (default: the robot's radius, "
+        "0.275 m, as the paper; 0.475 counts any body contact)",
+    )
+    p.add_argument(
+        "--deadline-per-task",
+        action="store_true",
+        help="the 45 s deadline bounds the whole task (the paper's wording) instead of each route "
+        "hop (the reference code)",
+    )
+    p.add_argument(
+        "--out",
+        type=pathlib.Path,
+        default=default_out,
+        help="output folder"
+        + (f" (default {default_out})" if default_out else " (default: evaluation/ next to the tables' folder)"),
+    )
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
 
 
@@ -69,16 +94,24 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     if args.collision_radius_m is not None:
         settings["collision_radius_m"] = args.collision_radius_m
     try:
-        result = warehouse.run_evaluation(scenario, tables, replicas=args.replicas, slots=slots, seed=args.seed,
-                                          cfg=ProtocolConfig.for_params(scenario.params, **settings),
-                                          progress=not args.no_progress)
+        result = warehouse.run_evaluation(
+            scenario,
+            tables,
+            replicas=args.replicas,
+            slots=slots,
+            seed=args.seed,
+            cfg=ProtocolConfig.for_params(scenario.params, **settings),
+            progress=not args.no_progress,
+        )
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     files = warehouse.write_report(result, scenario, out)
     summary = json.loads((out / "summary.json").read_text())
-    print(f"\n{args.replicas} replica(s) x {len(result.config['slots'])} slot(s), both methods; wall time "
-          + ", ".join(f"{m} {s:.0f} s" for m, s in result.wall_s.items()))
+    print(
+        f"\n{args.replicas} replica(s) x {len(result.config['slots'])} slot(s), both methods; wall time "
+        + ", ".join(f"{m} {s:.0f} s" for m, s in result.wall_s.items())
+    )
     print(warehouse.per_slot_table(result).to_string(index=False, float_format=lambda v: f"{v:.1f}"))
     print(warehouse.format_overall(summary))
     for f in files:

@@ -1,9 +1,9 @@
 """``socialnav gscl``: GSCL's social cost-map learner on the command line (seed 002).
 
-    socialnav gscl generate --out runs/gscl.npz                 # the paper's 24,200 pairs in one file
-    socialnav gscl train --out runs/gscl                        # the CPU recipe; run again to resume
-    socialnav gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
-    socialnav gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
+socialnav gscl generate --out runs/gscl.npz                 # the paper's 24,200 pairs in one file
+socialnav gscl train --out runs/gscl                        # the CPU recipe; run again to resume
+socialnav gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
+socialnav gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
 """
 
 from __future__ import annotations
@@ -42,40 +42,68 @@ _TRAIN_OPTIONS = ("features", "epochs", "batch_size", "learning_rate", "schedule
 
 
 def add_parser(top) -> None:
-    parser = top.add_parser("gscl", help="GSCL's learned social cost maps: generate data, train, evaluate (seed 002)",
-                            description=__doc__.split("\n")[0])
+    parser = top.add_parser(
+        "gscl",
+        help="GSCL's learned social cost maps: generate data, train, evaluate (seed 002)",
+        description=__doc__.split("\n")[0],
+    )
     sub = parser.add_subparsers(dest="gscl_command", required=True)
 
     gen = sub.add_parser("generate", help="write a dataset of (input map, target cost map) pairs to a .npz file")
     gen.add_argument("--out", type=pathlib.Path, required=True, help="the .npz file to write")
     gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    gen.add_argument("--scale", type=positive_float, default=1.0,
-                     help="multiply the paper's count of every family (default 1: 24,200 pairs)")
-    gen.add_argument("--count", type=_count, action="append", default=[], metavar="FAMILY=N",
-                     help="samples of one family (repeatable; overrides --scale for it)")
+    gen.add_argument(
+        "--scale",
+        type=positive_float,
+        default=1.0,
+        help="multiply the paper's count of every family (default 1: 24,200 pairs)",
+    )
+    gen.add_argument(
+        "--count",
+        type=_count,
+        action="append",
+        default=[],
+        metavar="FAMILY=N",
+        help="samples of one family (repeatable; overrides --scale for it)",
+    )
     gen.add_argument("--preview", type=pathlib.Path, default=None, help="also write a PNG with one sample per family")
 
     tr = sub.add_parser("train", help="train the U-Net (resumes the run in --out if there is one)")
-    tr.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)")
-    tr.add_argument("--paper", action="store_true",
-                    help="the paper's recipe: 32/64/128/256, batch 32, Adam 1e-3 constant, 20 epochs on one fixed split")
+    tr.add_argument(
+        "--out", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
+    )
+    tr.add_argument(
+        "--paper",
+        action="store_true",
+        help="the paper's recipe: 32/64/128/256, batch 32, Adam 1e-3 constant, 20 epochs on one fixed split",
+    )
     tr.add_argument("--features", type=_features, default=None, help="U-Net widths, e.g. 16,32,64,128")
     tr.add_argument("--epochs", type=positive_int, default=None)
     tr.add_argument("--batch-size", type=positive_int, default=None)
     tr.add_argument("--learning-rate", type=positive_float, default=None, help="Adam's peak learning rate")
     tr.add_argument("--schedule", choices=("constant", "cosine"), default=None)
-    tr.add_argument("--fresh-samples", action=argparse.BooleanOptionalAction, default=None,
-                    help="new training samples every epoch (default on; --no-fresh-samples reuses one split)")
-    tr.add_argument("--coords", action=argparse.BooleanOptionalAction, default=None,
-                    help="coordinate input channels (default on)")
+    tr.add_argument(
+        "--fresh-samples",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="new training samples every epoch (default on; --no-fresh-samples reuses one split)",
+    )
+    tr.add_argument(
+        "--coords", action=argparse.BooleanOptionalAction, default=None, help="coordinate input channels (default on)"
+    )
     tr.add_argument("--seed", type=int, default=None)
-    tr.add_argument("--stop-when-good", action="store_true",
-                    help="stop at the first epoch that meets the quality bar (test MSE <= 0.0033 and <= 1/10 of "
-                         "the better trivial predictor in every family)")
+    tr.add_argument(
+        "--stop-when-good",
+        action="store_true",
+        help="stop at the first epoch that meets the quality bar (test MSE <= 0.0033 and <= 1/10 of "
+        "the better trivial predictor in every family)",
+    )
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     ev = sub.add_parser("evaluate", help="MSE per family of a run's checkpoint and a PNG of its predictions")
-    ev.add_argument("--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)")
+    ev.add_argument(
+        "--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
+    )
     ev.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
     ev.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default RUN/evaluation)")
     ev.add_argument("--examples", type=positive_int, default=2, help="examples per family in the PNG (default 2)")
@@ -131,9 +159,11 @@ def _train(args) -> int:
         raise SystemExit(f"socialnav gscl train: {err}") from None
     import jax
 
-    print(f"training on {jax.devices()[0].platform} x {len(jax.devices())}: features {config.features}, "
-          f"{config.epochs} epochs x {config.steps_per_epoch} steps of {config.batch_size}, "
-          f"{_parameters(config):,} parameters -> {args.out}")
+    print(
+        f"training on {jax.devices()[0].platform} x {len(jax.devices())}: features {config.features}, "
+        f"{config.epochs} epochs x {config.steps_per_epoch} steps of {config.batch_size}, "
+        f"{_parameters(config):,} parameters -> {args.out}"
+    )
     t0 = time.perf_counter()
     try:
         line = train.train(config, args.out, progress=not args.no_progress, stop_when_good=args.stop_when_good)
@@ -142,8 +172,10 @@ def _train(args) -> int:
     baselines = json.loads((args.out / "baselines.json").read_text())
     if line:
         print(quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
-        print(f"{'meets' if line['meets_quality'] else 'does not meet'} the quality bar; "
-              f"{time.perf_counter() - t0:.0f} s in this call, {line['wall_s']:.0f} s of training in all")
+        print(
+            f"{'meets' if line['meets_quality'] else 'does not meet'} the quality bar; "
+            f"{time.perf_counter() - t0:.0f} s in this call, {line['wall_s']:.0f} s of training in all"
+        )
     return 0
 
 
@@ -162,6 +194,8 @@ def _evaluate(args) -> int:
     except FileNotFoundError as err:
         raise SystemExit(f"socialnav gscl evaluate: {err}") from None
     print(report["table"])
-    print(f"step {report['step']}: {'meets' if report['meets_quality'] else 'does not meet'} the quality bar; "
-          f"-> {report['out']}")
+    print(
+        f"step {report['step']}: {'meets' if report['meets_quality'] else 'does not meet'} the quality bar; "
+        f"-> {report['out']}"
+    )
     return 0

@@ -12,34 +12,67 @@ from socialnav.argtypes import comma_ints, comma_names, positive_int
 
 
 def add_parser(sub) -> None:
-    lrn = sub.add_parser("learn", help="learn the causal graph and inference engine from simulator logs",
-                         description="J-PCMCI+ discovery and a pyAgrum inference engine from the logs of "
-                                     "'socialnav simulate'; writes the graph, the engine, its tables and a report.")
-    lrn.add_argument("--logs", type=pathlib.Path, default=pathlib.Path("runs/warehouse"),
-                     help="folder written by 'socialnav simulate' (default runs/warehouse)")
+    lrn = sub.add_parser(
+        "learn",
+        help="learn the causal graph and inference engine from simulator logs",
+        description="J-PCMCI+ discovery and a pyAgrum inference engine from the logs of "
+        "'socialnav simulate'; writes the graph, the engine, its tables and a report.",
+    )
+    lrn.add_argument(
+        "--logs",
+        type=pathlib.Path,
+        default=pathlib.Path("runs/warehouse"),
+        help="folder written by 'socialnav simulate' (default runs/warehouse)",
+    )
     lrn.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: LOGS/causal)")
-    lrn.add_argument("--test", choices=["parcorr", "regression"], default="parcorr",
-                     help="conditional independence test: parcorr (fast) or regression (RegressionCI, mixed data)")
+    lrn.add_argument(
+        "--test",
+        choices=["parcorr", "regression"],
+        default="parcorr",
+        help="conditional independence test: parcorr (fast) or regression (RegressionCI, mixed data)",
+    )
     lrn.add_argument("--alpha", type=float, default=0.01, help="significance level (default 0.01)")
-    lrn.add_argument("--step", type=positive_int, default=None,
-                     help="subsampling step in logged samples (default: the Nyquist rule)")
-    lrn.add_argument("--max-samples", type=positive_int, default=200_000,
-                     help="discovery's sample budget over all datasets (default 200000); coarsens the step")
-    lrn.add_argument("--worlds", type=comma_ints, default=None,
-                     help="comma-separated world ids to learn from (default: all)")
-    lrn.add_argument("--waypoints", type=comma_names, default=None,
-                     help="comma-separated waypoints to learn (default: every non-empty one)")
-    lrn.add_argument("--compare-subsampling", action="store_true",
-                     help="also run discovery at the Nyquist step (no sample budget) and report both")
+    lrn.add_argument(
+        "--step", type=positive_int, default=None, help="subsampling step in logged samples (default: the Nyquist rule)"
+    )
+    lrn.add_argument(
+        "--max-samples",
+        type=positive_int,
+        default=200_000,
+        help="discovery's sample budget over all datasets (default 200000); coarsens the step",
+    )
+    lrn.add_argument(
+        "--worlds", type=comma_ints, default=None, help="comma-separated world ids to learn from (default: all)"
+    )
+    lrn.add_argument(
+        "--waypoints",
+        type=comma_names,
+        default=None,
+        help="comma-separated waypoints to learn (default: every non-empty one)",
+    )
+    lrn.add_argument(
+        "--compare-subsampling",
+        action="store_true",
+        help="also run discovery at the Nyquist step (no sample budget) and report both",
+    )
     lrn.add_argument("--no-progress", action="store_true", help="print nothing but errors")
     lrn.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     try:
-        learn(args.logs, args.out or args.logs / "causal", test=args.test, alpha=args.alpha, step=args.step,
-              max_samples=args.max_samples, worlds=args.worlds, waypoints=args.waypoints,
-              compare_subsampling=args.compare_subsampling, progress=not args.no_progress)
+        learn(
+            args.logs,
+            args.out or args.logs / "causal",
+            test=args.test,
+            alpha=args.alpha,
+            step=args.step,
+            max_samples=args.max_samples,
+            worlds=args.worlds,
+            waypoints=args.waypoints,
+            compare_subsampling=args.compare_subsampling,
+            progress=not args.no_progress,
+        )
     except (LogError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

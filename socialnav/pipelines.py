@@ -29,26 +29,34 @@ from socialnav.argtypes import comma_ints, comma_probabilities, positive_int
 
 
 def add_parsers(sub) -> None:
-    run = sub.add_parser("run", help="the whole pipeline: simulate a day, learn the engine, evaluate the planners",
-                         description="simulate -> learn -> evaluate on the built-in warehouse, into one folder: "
-                                     "logs and pictures, causal/ (graph, engine), evaluation/ (tables, figures).")
+    run = sub.add_parser(
+        "run",
+        help="the whole pipeline: simulate a day, learn the engine, evaluate the planners",
+        description="simulate -> learn -> evaluate on the built-in warehouse, into one folder: "
+        "logs and pictures, causal/ (graph, engine), evaluation/ (tables, figures).",
+    )
     run.add_argument("--worlds", type=positive_int, default=4, help="worlds simulated for learning (default 4)")
-    run.add_argument("--learn-worlds", type=comma_ints, default=[0],
-                     help="comma-separated worlds the engine learns from (default 0)")
-    run.add_argument("--slots-simulated", type=positive_int, default=None,
-                     help="simulate only this many slots for learning (default: the whole day; a smaller value "
-                          "makes a quick smoke run whose engine has seen fewer slots)")
+    run.add_argument(
+        "--learn-worlds", type=comma_ints, default=[0], help="comma-separated worlds the engine learns from (default 0)"
+    )
     evaluate.add_evaluation_options(run, default_out=pathlib.Path("runs/warehouse"), replicas=4)
     run.set_defaults(handler=run_pipeline)
 
-    abl = sub.add_parser("ablation", help="causal vs Bayesian battery estimates (seed 000 Sec. 6)",
-                         description="The simplified scenario (no workers, obstacles with probability p) for "
-                                     "each p and seed, all in one batched rollout; E[L | V] against E[L | do(V)] "
-                                     "for 60 m at 0.5 m/s; writes ablation.csv, ablation.json and ablation.png.")
+    abl = sub.add_parser(
+        "ablation",
+        help="causal vs Bayesian battery estimates (seed 000 Sec. 6)",
+        description="The simplified scenario (no workers, obstacles with probability p) for "
+        "each p and seed, all in one batched rollout; E[L | V] against E[L | do(V)] "
+        "for 60 m at 0.5 m/s; writes ablation.csv, ablation.json and ablation.png.",
+    )
     abl.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/ablation"), help="output folder")
     abl.add_argument("--seeds", type=positive_int, default=8, help="seeds (worlds) per probability (default 8)")
-    abl.add_argument("--probabilities", type=comma_probabilities, default=list(causal_ablation.PROBABILITIES),
-                     help="obstacle probabilities (default 0.1,...,0.5)")
+    abl.add_argument(
+        "--probabilities",
+        type=comma_probabilities,
+        default=list(causal_ablation.PROBABILITIES),
+        help="obstacle probabilities (default 0.1,...,0.5)",
+    )
     abl.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     abl.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     abl.set_defaults(handler=run_ablation)
@@ -61,10 +69,10 @@ def run_pipeline(args: argparse.Namespace) -> int:
     out = args.out
     quiet = ["--no-progress"] if args.no_progress else []
     sim_argv = ["simulate", "--worlds", str(args.worlds), "--seed", str(args.seed), "--out", str(out)]
-    if args.slots_simulated is not None:
-        sim_argv += ["--slots", str(args.slots_simulated)]
-    steps = [("simulate", simulate.run, sim_argv),
-             ("learn", learn.run, ["learn", "--logs", str(out), "--worlds", ",".join(map(str, args.learn_worlds))])]
+    steps = [
+        ("simulate", simulate.run, sim_argv),
+        ("learn", learn.run, ["learn", "--logs", str(out), "--worlds", ",".join(map(str, args.learn_worlds))]),
+    ]
     parser = build_parser()
     for i, (name, handler, argv) in enumerate(steps, 1):
         print(f"\n=== [{i}/3] {name} ===", flush=True)
@@ -75,9 +83,14 @@ def run_pipeline(args: argparse.Namespace) -> int:
     return evaluate.evaluate_with(load_scenario(), out / "causal" / TABLES_FILE, out / "evaluation", args)
 
 
-def ablation_series(probabilities, n_seeds: int, seed: int = 0, duration_s: float = 3600.0,
-                    sample_interval_s: float = 1.0,
-                    obstacle_length_m: float = causal_ablation.OBSTACLE_LENGTH_M) -> dict[float, causal_ablation.Series]:
+def ablation_series(
+    probabilities,
+    n_seeds: int,
+    seed: int = 0,
+    duration_s: float = 3600.0,
+    sample_interval_s: float = 1.0,
+    obstacle_length_m: float = causal_ablation.OBSTACLE_LENGTH_M,
+) -> dict[float, causal_ablation.Series]:
     """The simplified scenario (no workers) for every obstacle probability and seed, in one
     batched rollout: the probability is a dynamic parameter, so the whole sweep is one ``vmap``
     over stacked params and one compilation. Seed ``k`` has the same world key for every
@@ -104,7 +117,9 @@ def ablation_series(probabilities, n_seeds: int, seed: int = 0, duration_s: floa
         series[float(p)] = causal_ablation.Series(
             speed_mps=rec.robot_speed_mps[rows].astype(np.float64),
             battery_change_pct=np.diff(battery.astype(np.float64), axis=1),
-            obstacle=rec.obstacle[rows].astype(np.float64), battery=prm)
+            obstacle=rec.obstacle[rows].astype(np.float64),
+            battery=prm,
+        )
     return series
 
 
@@ -114,10 +129,13 @@ def run_ablation(args: argparse.Namespace) -> int:
     causal_ablation.run(args.out, series, progress=not args.no_progress)
     summary = json.loads((args.out / "ablation.json").read_text())
     print(f"structure found by J-PCMCI+ at p = 0.3: {summary['structure_at_p_0.3']}")
-    print(f"{'p':>5} {'L_ref':>8} {'L_BN':>8} {'L_CM':>8} {'MAE BN':>14} {'MAE CM':>14}"
-          "   (battery % for 60 m at 0.5 m/s)")
+    print(
+        f"{'p':>5} {'L_ref':>8} {'L_BN':>8} {'L_CM':>8} {'MAE BN':>14} {'MAE CM':>14}   (battery % for 60 m at 0.5 m/s)"
+    )
     for r in summary["summary"]:
-        print(f"{r['p']:>5.1f} {r['reference']:>8.3f} {r['bayesian']:>8.3f} {r['causal']:>8.3f} "
-              f"{r['mae_bayesian']:>7.3f}+-{r['sd_bayesian']:.3f} {r['mae_causal']:>7.3f}+-{r['sd_causal']:.3f}")
+        print(
+            f"{r['p']:>5.1f} {r['reference']:>8.3f} {r['bayesian']:>8.3f} {r['causal']:>8.3f} "
+            f"{r['mae_bayesian']:>7.3f}+-{r['sd_bayesian']:.3f} {r['mae_causal']:>7.3f}+-{r['sd_causal']:.3f}"
+        )
     print(f"wrote {args.out}/ablation.csv, ablation.json, ablation.png", file=sys.stdout)
     return 0

@@ -14,29 +14,58 @@ from socialnav.argtypes import positive_float, positive_int, probability
 
 
 def add_parser(sub) -> None:
-    sim = sub.add_parser("simulate", help="simulate the warehouse; write Parquet logs and pictures",
-                         description="Simulate worlds of the warehouse in parallel (the robot on shortest-path "
-                                     "routes) and write logs.parquet, run.json, snapshot.png and "
-                                     "density_by_slot.png to --out.")
-    sim.add_argument("--scenario", type=pathlib.Path, default=None,
-                     help="scenario folder (default: the built-in warehouse)")
+    sim = sub.add_parser(
+        "simulate",
+        help="simulate the warehouse; write Parquet logs and pictures",
+        description="Simulate worlds of the warehouse in parallel (the robot on shortest-path "
+        "routes) and write logs.parquet, run.json, snapshot.png and "
+        "density_by_slot.png to --out.",
+    )
+    sim.add_argument(
+        "--scenario", type=pathlib.Path, default=None, help="scenario folder (default: the built-in warehouse)"
+    )
     sim.add_argument("--worlds", type=positive_int, default=8, help="worlds simulated in parallel (default 8)")
     length = sim.add_mutually_exclusive_group()
-    length.add_argument("--slots", type=positive_int, default=None,
-                        help="simulated time slots from 08:00 (default: the whole day, 11 slots)")
-    length.add_argument("--hours", type=positive_float, default=None,
-                        help="simulated hours from 08:00 (alternative to --slots)")
-    sim.add_argument("--slot-length-s", type=positive_float, default=None,
-                     help="length of a time slot in s (default from params.json: 3600)")
+    length.add_argument(
+        "--slots",
+        type=positive_int,
+        default=None,
+        help="simulated time slots from 08:00 (default: the whole day, 11 slots)",
+    )
+    length.add_argument(
+        "--hours", type=positive_float, default=None, help="simulated hours from 08:00 (alternative to --slots)"
+    )
+    sim.add_argument(
+        "--slot-length-s",
+        type=positive_float,
+        default=None,
+        help="length of a time slot in s (default from params.json: 3600)",
+    )
     sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    sim.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/warehouse"),
-                     help="output folder (default runs/warehouse)")
-    sim.add_argument("--sample-interval-s", type=positive_float, default=1.0,
-                     help="logging interval in s, a multiple of dt (default 1.0)")
-    sim.add_argument("--obstacle-probability", type=probability, default=None,
-                     help="probability of a static obstacle on a robot leg (default 0.25)")
-    sim.add_argument("--snapshot-time-s", type=float, default=None,
-                     help="time of the snapshot picture (default: the middle of the lunch slot S6, or of the run)")
+    sim.add_argument(
+        "--out",
+        type=pathlib.Path,
+        default=pathlib.Path("runs/warehouse"),
+        help="output folder (default runs/warehouse)",
+    )
+    sim.add_argument(
+        "--sample-interval-s",
+        type=positive_float,
+        default=1.0,
+        help="logging interval in s, a multiple of dt (default 1.0)",
+    )
+    sim.add_argument(
+        "--obstacle-probability",
+        type=probability,
+        default=None,
+        help="probability of a static obstacle on a robot leg (default 0.25)",
+    )
+    sim.add_argument(
+        "--snapshot-time-s",
+        type=float,
+        default=None,
+        help="time of the snapshot picture (default: the middle of the lunch slot S6, or of the run)",
+    )
     sim.add_argument("--log-positions", action="store_true", help="also log every worker's position and status")
     sim.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     sim.set_defaults(handler=run)
@@ -66,10 +95,18 @@ def run(args: argparse.Namespace) -> int:
         snap_t = duration_s / 2
     snap_t = round(snap_t / args.sample_interval_s) * args.sample_interval_s
     try:
-        run = logs.simulate_to_parquet(scenario, args.out, RouteFollower(shortest_path_plan(scenario)),
-                                       n_worlds=args.worlds, duration_s=duration_s, seed=args.seed,
-                                       sample_interval_s=args.sample_interval_s, log_positions=args.log_positions,
-                                       snapshot_time_s=snap_t, progress=not args.no_progress)
+        run = logs.simulate_to_parquet(
+            scenario,
+            args.out,
+            RouteFollower(shortest_path_plan(scenario)),
+            n_worlds=args.worlds,
+            duration_s=duration_s,
+            seed=args.seed,
+            sample_interval_s=args.sample_interval_s,
+            log_positions=args.log_positions,
+            snapshot_time_s=snap_t,
+            progress=not args.no_progress,
+        )
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -80,13 +117,19 @@ def run(args: argparse.Namespace) -> int:
 
     f = run.final
     n = len(f["tasks_started"])
-    mean = lambda k: sum(f[k]) / n  # noqa: E731
-    print(f"\nsimulated {args.worlds} world(s) x {duration_s:.0f} s ({duration_s / p.slot_length_s:.2f} slots of "
-          f"{p.slot_length_s:.0f} s), {p.n_workers} workers + robot, seed {args.seed}")
-    print(f"wall time {run.wall_s:.1f} s (until the first chunk, compile included: {run.compile_s:.1f} s), "
-          f"{run.agent_steps_per_s / 1e6:.2f} M agent-steps/s")
-    print(f"robot per world: {mean('tasks_succeeded'):.1f} tasks succeeded, {mean('tasks_failed'):.1f} failed, "
-          f"stalled {mean('stalled_s'):.0f} s, final battery {mean('battery_pct'):.1f} %")
+    mean = lambda k: sum(f[k]) / n
+    print(
+        f"\nsimulated {args.worlds} world(s) x {duration_s:.0f} s ({duration_s / p.slot_length_s:.2f} slots of "
+        f"{p.slot_length_s:.0f} s), {p.n_workers} workers + robot, seed {args.seed}"
+    )
+    print(
+        f"wall time {run.wall_s:.1f} s (until the first chunk, compile included: {run.compile_s:.1f} s), "
+        f"{run.agent_steps_per_s / 1e6:.2f} M agent-steps/s"
+    )
+    print(
+        f"robot per world: {mean('tasks_succeeded'):.1f} tasks succeeded, {mean('tasks_failed'):.1f} failed, "
+        f"stalled {mean('stalled_s'):.0f} s, final battery {mean('battery_pct'):.1f} %"
+    )
     for k in range(scenario.n_slots):
         if run.slot_samples[k]:
             d = run.mean_density_by_slot[k]

@@ -9,10 +9,11 @@ import pytest
 # Tests do not write JAX's compilation cache into the user's home (the command line turns it on).
 os.environ.setdefault("SOCIALNAV_JAX_CACHE", "off")
 
-from jaxsim.robot import RouteFollower  # noqa: E402
-from jaxsim.scenario import load_scenario  # noqa: E402
-from jaxsim.world import build_world  # noqa: E402
-from plans import scipy_shortest_plan  # noqa: E402
+from plans import scipy_shortest_plan
+
+from jaxsim.robot import RouteFollower
+from jaxsim.scenario import load_scenario
+from jaxsim.world import build_world
 
 
 @pytest.fixture(scope="session")
@@ -40,7 +41,13 @@ def learned_run(tmp_path_factory):
 
     run = tmp_path_factory.mktemp("learned_run")
     scenario = load_scenario(slot_length_s=60.0, battery_initial_pct=21.0)
-    simulate_to_parquet(scenario, run, RouteFollower(shortest_path_plan(scenario)), n_worlds=2,
-                        duration_s=scenario.n_slots * 60.0, progress=False)
+    simulate_to_parquet(
+        scenario,
+        run,
+        RouteFollower(shortest_path_plan(scenario)),
+        n_worlds=2,
+        duration_s=scenario.n_slots * 60.0,
+        progress=False,
+    )
     learn(run, run / "causal", max_samples=60_000, progress=False)
     return run

@@ -36,10 +36,12 @@ def scipy_shortest_plan(scenario) -> RobotPlan:
     routes = np.repeat(np.arange(n, dtype=np.int32)[None, :, None], n, 0).repeat(width, 2)
     hops = np.zeros((n, n), np.int32)
     for (i, j), p in paths.items():
-        routes[i, j, :len(p)] = p
+        routes[i, j, : len(p)] = p
         hops[i, j] = len(p)
     length = np.where(np.isfinite(dist), dist, 0.0)
     s = scenario.n_slots
-    return RobotPlan(routes=jnp.asarray(np.broadcast_to(routes, (s, *routes.shape))),
-                     hops=jnp.asarray(np.broadcast_to(hops, (s, n, n))),
-                     length_m=jnp.asarray(np.broadcast_to(length, (s, n, n)), jnp.float32))
+    return RobotPlan(
+        routes=jnp.asarray(np.broadcast_to(routes, (s, *routes.shape))),
+        hops=jnp.asarray(np.broadcast_to(hops, (s, n, n))),
+        length_m=jnp.asarray(np.broadcast_to(length, (s, n, n)), jnp.float32),
+    )

@@ -14,7 +14,7 @@ def episodes(rng, n, p_start, length):
     t = 0
     while t < n:
         if rng.random() < p_start:
-            x[t:t + length] = 1.0
+            x[t : t + length] = 1.0
             t += length
         t += 1
     return x

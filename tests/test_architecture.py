@@ -61,13 +61,26 @@ def test_no_forbidden_arrow():
 
 
 def test_nothing_outside_the_root_imports_socialnav():
-    users = [f for part in PARTS if part != "socialnav" for f in (ROOT / part).rglob("*.py")
-             if "socialnav" in imported_parts(f)]
+    users = [
+        f
+        for part in PARTS
+        if part != "socialnav"
+        for f in (ROOT / part).rglob("*.py")
+        if "socialnav" in imported_parts(f)
+    ]
     assert users == []
 
 
-@pytest.mark.parametrize("part,other", [("jaxsim", "planners"), ("causal", "planners"), ("planners", "causal"),
-                                        ("models", "jaxsim"), ("jaxsim", "socialnav")])
+@pytest.mark.parametrize(
+    "part,other",
+    [
+        ("jaxsim", "planners"),
+        ("causal", "planners"),
+        ("planners", "causal"),
+        ("models", "jaxsim"),
+        ("jaxsim", "socialnav"),
+    ],
+)
 def test_the_check_catches_a_forbidden_import(tmp_path, part, other):
     """The checker itself: a module that imports a forbidden part, even inside a function, is reported."""
     for p in PARTS:

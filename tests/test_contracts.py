@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 import pytest
+from plans import scipy_shortest_plan
 
 from causal import extract
 from causal.learn import write_tables
@@ -19,15 +20,15 @@ from jaxsim import logs
 from jaxsim.robot import RouteFollower
 from jaxsim.scenario import load_scenario
 from planners.tables import CausalTables, TablesError
-from plans import scipy_shortest_plan
 
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     scenario = load_scenario(slot_length_s=20.0, n_workers=5)
     out = tmp_path_factory.mktemp("run")
-    logs.simulate_to_parquet(scenario, out, RouteFollower(scipy_shortest_plan(scenario)), n_worlds=2,
-                             duration_s=40.0, progress=False)
+    logs.simulate_to_parquet(
+        scenario, out, RouteFollower(scipy_shortest_plan(scenario)), n_worlds=2, duration_s=40.0, progress=False
+    )
     return scenario, out
 
 
@@ -37,8 +38,9 @@ def test_the_log_has_every_schema_column_with_its_dtype(run):
     want = logschema.required_columns(scenario.waypoint_ids, scenario.params.n_workers)
     assert schema.names == want  # the documented order, nothing else
     df = pd.read_parquet(out / logschema.LOG_FILE)
-    for name, dtype in (logschema.ID_COLUMNS + logschema.SETTING_COLUMNS + logschema.CLOCK_COLUMNS
-                        + logschema.ROBOT_COLUMNS):
+    for name, dtype in (
+        logschema.ID_COLUMNS + logschema.SETTING_COLUMNS + logschema.CLOCK_COLUMNS + logschema.ROBOT_COLUMNS
+    ):
         assert df[name].dtype == np.dtype(dtype), name
     meta = json.loads((out / logschema.META_FILE).read_text())
     assert set(logschema.META_KEYS) <= set(meta) and meta["schema_version"] == logschema.SCHEMA_VERSION
@@ -66,11 +68,15 @@ def test_the_causal_reader_names_what_is_missing(run, tmp_path):
 
 
 def test_tables_written_by_causal_are_read_by_the_planners(tmp_path, warehouse):
-    tables = {"density_ppm2": np.random.default_rng(0).random((11, 73)),
-              "battery_pct_per_s": np.array([[-0.005, 0.014], [-0.0069, np.nan]]),
-              "speed_mps": np.array([0.1, 0.5]), "speed_edges_mps": np.array([0.0, 0.3, 0.51])}
-    path = write_tables(tmp_path / "engine_tables.npz", list(warehouse.waypoint_ids), list(warehouse.slot_names),
-                        tables)
+    tables = {
+        "density_ppm2": np.random.default_rng(0).random((11, 73)),
+        "battery_pct_per_s": np.array([[-0.005, 0.014], [-0.0069, np.nan]]),
+        "speed_mps": np.array([0.1, 0.5]),
+        "speed_edges_mps": np.array([0.0, 0.3, 0.51]),
+    }
+    path = write_tables(
+        tmp_path / "engine_tables.npz", list(warehouse.waypoint_ids), list(warehouse.slot_names), tables
+    )
     read = CausalTables.load(path)
     read.check_against(warehouse.waypoint_ids, warehouse.slot_names)
     np.testing.assert_array_equal(read.density_ppm2, tables["density_ppm2"])

@@ -15,8 +15,9 @@ from socialnav import cli
 def test_evaluate_writes_the_report(learned_run, tmp_path, capsys):
     tables = learned_run / "causal" / "engine_tables.npz"
     out = tmp_path / "eval"
-    code = cli.main(["evaluate", "--tables", str(tables), "--replicas", "2", "--slots", "S11", "--out", str(out),
-                     "--no-progress"])
+    code = cli.main(
+        ["evaluate", "--tables", str(tables), "--replicas", "2", "--slots", "S11", "--out", str(out), "--no-progress"]
+    )
     assert code == 0
     tasks = pd.read_parquet(out / "tasks.parquet")
     assert len(tasks) == 2 * 2 * 90 and set(tasks["method"]) == {"baseline", "causal"}
@@ -40,13 +41,21 @@ def test_evaluate_rejects_bad_input(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "missing key" in err and str(partial) in err
     other = tmp_path / "other.npz"  # tables of another scenario (3 waypoints)
-    np.savez(other, density_ppm2=np.zeros((11, 3)), battery_pct_per_s=np.array([[-0.006, 0.01], [-0.007, 0.0]]),
-             speed_edges_mps=np.array([0.0, 0.3, 0.5]))
+    np.savez(
+        other,
+        density_ppm2=np.zeros((11, 3)),
+        battery_pct_per_s=np.array([[-0.006, 0.01], [-0.007, 0.0]]),
+        speed_edges_mps=np.array([0.0, 0.3, 0.5]),
+    )
     assert cli.main(["evaluate", "--tables", str(other), "--out", str(tmp_path / "o")]) == 2
     assert "the scenario has 11 slots and 73 waypoints" in capsys.readouterr().err
     full = tmp_path / "full.npz"
-    np.savez(full, density_ppm2=np.zeros((11, 73)), battery_pct_per_s=np.array([[-0.006, 0.01], [-0.007, 0.0]]),
-             speed_edges_mps=np.array([0.0, 0.3, 0.5]))
+    np.savez(
+        full,
+        density_ppm2=np.zeros((11, 73)),
+        battery_pct_per_s=np.array([[-0.006, 0.01], [-0.007, 0.0]]),
+        speed_edges_mps=np.array([0.0, 0.3, 0.5]),
+    )
     assert cli.main(["evaluate", "--tables", str(full), "--slots", "S99", "--out", str(tmp_path / "o")]) == 2
     assert "unknown slot" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()  # nothing written on bad input

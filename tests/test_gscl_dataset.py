@@ -49,7 +49,7 @@ def test_every_person_carries_proxemic_cost_and_a_heading_pixel(data):
         # Each person has its heading pixel among its 8 neighbours.
         for img in inputs[:16]:
             for r, c in zip(*np.nonzero(img == grid.PERSON)):
-                patch = img[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2]
+                patch = img[max(r - 1, 0) : r + 2, max(c - 1, 0) : c + 2]
                 assert (patch == grid.HEADING).any() or (patch == grid.PERSON).sum() > 1
 
 
@@ -78,7 +78,7 @@ def test_blind_corner_cost_sits_at_the_corner_on_the_free_side(data):
         peak = np.unravel_index(np.argmax(cost), cost.shape)
         # The highest cost is next to a wall cell (the corner), and it is high.
         r, c = peak
-        assert wall[max(r - 2, 0):r + 3, max(c - 2, 0):c + 3].any() and cost[peak] > 0.5
+        assert wall[max(r - 2, 0) : r + 3, max(c - 2, 0) : c + 3].any() and cost[peak] > 0.5
         assert cost.sum() > 3.0  # a graded area, not a single cell
 
 

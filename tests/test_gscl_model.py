@@ -14,8 +14,16 @@ from models import checkpoints, dataset, evaluation, grid, inference, quality, s
 from models.config import TrainConfig
 from socialnav import cli
 
-TINY = dict(features=(4, 4, 8, 8), epochs=2, batch_size=16, train_fraction=0.01, test_fraction=0.004,
-            warmup_steps=2, checkpoint_every_steps=4, learning_rate=1e-2)
+TINY = dict(
+    features=(4, 4, 8, 8),
+    epochs=2,
+    batch_size=16,
+    train_fraction=0.01,
+    test_fraction=0.004,
+    warmup_steps=2,
+    checkpoint_every_steps=4,
+    learning_rate=1e-2,
+)
 
 
 def test_unet_shapes_range_and_paper_size():
@@ -39,8 +47,8 @@ def test_input_encoding_is_one_hot_per_code():
     assert x.shape == (1, 40, 40, 6)
     for c, code in enumerate(unet.INPUT_CHANNEL_CODES):
         np.testing.assert_array_equal(x[0, ..., c], maps[0] == code)
-    assert x[0, 0, 0, 4] == -1 and x[0, 0, -1, 4] == 1   # x grows to the right
-    assert x[0, 0, 0, 5] == 1 and x[0, -1, 0, 5] == -1   # y grows upwards
+    assert x[0, 0, 0, 4] == -1 and x[0, 0, -1, 4] == 1  # x grows to the right
+    assert x[0, 0, 0, 5] == 1 and x[0, -1, 0, 5] == -1  # y grows upwards
 
 
 def _run(tmp_path, name, **kw):
@@ -72,6 +80,7 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     train.train(cfg, killed, progress=False, max_steps=6, log=lambda *_: None)
     assert sorted(int(p.name) for p in (killed / "checkpoints").iterdir() if p.name.isdigit()) == [4, 6]
     import shutil
+
     shutil.rmtree(killed / "checkpoints" / "6")
     assert not (killed / "metrics.jsonl").exists()
     train.train(cfg, killed, progress=False, log=lambda *_: None)
@@ -87,9 +96,12 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
 
     # The restored checkpoint predicts what the trained state predicts.
     model = inference.SocialCostModel.load(tmp_path / "straight")
-    np.testing.assert_allclose(np.asarray(model(test["inputs"][:8])),
-                               np.asarray(predict(state["params"], state["batch_stats"], test["inputs"][:8])),
-                               rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(
+        np.asarray(model(test["inputs"][:8])),
+        np.asarray(predict(state["params"], state["batch_stats"], test["inputs"][:8])),
+        rtol=1e-6,
+        atol=1e-6,
+    )
     assert model(test["inputs"][0]).shape == (40, 40)
     with pytest.raises(ValueError, match="input maps must be"):
         model(np.zeros((2, 20, 20)))
@@ -110,12 +122,17 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
 def test_trivial_baselines_and_quality_bar():
     rng = np.random.default_rng(0)
     train_set = {"targets": rng.random((10, 40, 40)).astype(np.float32)}
-    test = {"targets": rng.random((4, 40, 40)).astype(np.float32), "family": np.array([0, 0, 1, 1]),
-            "names": np.array(["a", "b"])}
+    test = {
+        "targets": rng.random((4, 40, 40)).astype(np.float32),
+        "family": np.array([0, 0, 1, 1]),
+        "names": np.array(["a", "b"]),
+    }
     b = quality.trivial_baselines(train_set, test)
     np.testing.assert_allclose(b["zeros"]["test_mse"], np.mean(test["targets"] ** 2), rtol=1e-6)
     mean_map = train_set["targets"].mean(0)
-    np.testing.assert_allclose(b["mean_map"]["by_family"]["b"], np.mean((test["targets"][2:] - mean_map) ** 2), rtol=1e-6)
+    np.testing.assert_allclose(
+        b["mean_map"]["by_family"]["b"], np.mean((test["targets"][2:] - mean_map) ** 2), rtol=1e-6
+    )
     best_a = min(b["zeros"]["by_family"]["a"], b["mean_map"]["by_family"]["a"])
     assert quality.meets_quality(0.001, {"a": 0.09 * best_a, "b": 0.001}, b)
     assert not quality.meets_quality(0.001, {"a": 0.11 * best_a, "b": 0.001}, b)
@@ -124,11 +141,20 @@ def test_trivial_baselines_and_quality_bar():
 
 def test_input_map_from_occupancy_people_and_goal():
     occupancy = np.zeros((400, 400), np.float32)  # 0.05 m cells, origin (-10, -10)
-    occupancy[:, 300] = 1.0   # a thin wall at x = 5.0-5.05 m (one fine cell, an eighth of a GSCL cell)
-    occupancy[100, :] = 0.5   # below the 0.6 threshold: free
+    occupancy[:, 300] = 1.0  # a thin wall at x = 5.0-5.05 m (one fine cell, an eighth of a GSCL cell)
+    occupancy[100, :] = 0.5  # below the 0.6 threshold: free
     people = np.array([[2.0, 0.0], [0.0, -20.0]])
-    image = np.asarray(inference.input_map(occupancy, 0.05, np.array([-10.0, -10.0]), np.array([0.0, 0.0]),
-                                           people, np.array([np.pi / 2, 0.0]), np.array([100.0, 0.1])))
+    image = np.asarray(
+        inference.input_map(
+            occupancy,
+            0.05,
+            np.array([-10.0, -10.0]),
+            np.array([0.0, 0.0]),
+            people,
+            np.array([np.pi / 2, 0.0]),
+            np.array([100.0, 0.1]),
+        )
+    )
     assert set(np.unique(image)) <= set(grid.INPUT_CODES)
     wall_cols = np.flatnonzero((image == grid.WALL).all(axis=0))
     np.testing.assert_array_equal(wall_cols, [32])  # x = 5.0 m lies in column 32 (4.8-5.2 m)
@@ -138,16 +164,27 @@ def test_input_map_from_occupancy_people_and_goal():
     goal = np.argwhere(image == grid.GOAL)
     np.testing.assert_array_equal(goal, [[19, 39]])  # far to the right: on the right edge, same row as the robot
     # In the robot's frame (robot facing +y), a person 2 m ahead appears 2 m ahead of the robot.
-    image = np.asarray(inference.input_map(occupancy, 0.05, np.array([-10.0, -10.0]), np.array([0.0, 0.0]),
-                                           np.array([[0.0, 2.0]]), np.array([np.pi / 2]), np.array([0.0, 3.0]),
-                                           robot_yaw_rad=np.pi / 2))
+    image = np.asarray(
+        inference.input_map(
+            occupancy,
+            0.05,
+            np.array([-10.0, -10.0]),
+            np.array([0.0, 0.0]),
+            np.array([[0.0, 2.0]]),
+            np.array([np.pi / 2]),
+            np.array([0.0, 3.0]),
+            robot_yaw_rad=np.pi / 2,
+        )
+    )
     row, col = (int(v) for v in grid.cell_of(2.0, 0.0))
     assert image[row, col] == grid.PERSON and image[row, col + 1] == grid.HEADING
 
 
 def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path, capsys):
     out = tmp_path / "d.npz"
-    assert cli.main(["gscl", "generate", "--out", str(out), "--scale", "0.001", "--count", "queue=5", "--seed", "2"]) == 0
+    assert (
+        cli.main(["gscl", "generate", "--out", str(out), "--scale", "0.001", "--count", "queue=5", "--seed", "2"]) == 0
+    )
     data = dataset.load(out)
     expected = dataset.generate(2, {**dataset.scaled_counts(0.001), "queue": 5})
     for k in ("inputs", "targets", "family", "names"):

@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from plans import scipy_shortest_plan
 
 from jaxsim import logs
 from jaxsim.robot import RouteFollower
 from jaxsim.scenario import load_scenario
-from plans import scipy_shortest_plan
 from socialnav import cli
 
 
@@ -32,8 +32,18 @@ def test_logs_open_in_pandas_with_the_documented_columns(small, tmp_path):
     assert len(df) == run.rows == 2 * 80
     assert sorted(df.world.unique()) == [0, 1] and (df.seed == 5).all()
     assert (df.slot_length_s == 20.0).all() and (df.n_workers == 8).all()
-    for col in ("time_s", "slot", "robot_speed_mps", "battery_pct", "charging", "obstacle", "robot_waypoint",
-                "tasks_succeeded", "density_wa-2-l", "dist_worker_7"):
+    for col in (
+        "time_s",
+        "slot",
+        "robot_speed_mps",
+        "battery_pct",
+        "charging",
+        "obstacle",
+        "robot_waypoint",
+        "tasks_succeeded",
+        "density_wa-2-l",
+        "dist_worker_7",
+    ):
         assert col in df.columns
     assert not any(c.startswith("worker_x_") for c in df.columns)
     t = df[df.world == 0].time_s.to_numpy()
@@ -94,8 +104,22 @@ def test_killed_run_leaves_no_half_file(small, tmp_path, monkeypatch):
 
 def test_cli_simulate_writes_logs_pictures_and_summary(tmp_path, capsys):
     out = tmp_path / "cli"
-    code = cli.main(["simulate", "--worlds", "2", "--slots", "2", "--slot-length-s", "20", "--out", str(out),
-                     "--sample-interval-s", "1", "--no-progress"])
+    code = cli.main(
+        [
+            "simulate",
+            "--worlds",
+            "2",
+            "--slots",
+            "2",
+            "--slot-length-s",
+            "20",
+            "--out",
+            str(out),
+            "--sample-interval-s",
+            "1",
+            "--no-progress",
+        ]
+    )
     assert code == 0
     for name in ("logs.parquet", "run.json", "snapshot.png", "density_by_slot.png"):
         assert (out / name).stat().st_size > 0
@@ -110,10 +134,29 @@ def test_cli_rejects_bad_input(tmp_path, capsys):
         cli.main(["simulate", "--worlds", "0"])
     assert cli.main(["simulate", "--scenario", str(tmp_path / "nope"), "--out", str(tmp_path / "o")]) == 2
     assert "does not exist" in capsys.readouterr().err
-    assert cli.main(["simulate", "--slots", "1", "--slot-length-s", "20", "--sample-interval-s", "0.15",
-                     "--out", str(tmp_path / "o"), "--no-progress"]) == 2
-    for option, value in (("--slot-length-s", "inf"), ("--sample-interval-s", "nan"),
-                          ("--obstacle-probability", "1.5"), ("--worlds", "2.7")):
+    assert (
+        cli.main(
+            [
+                "simulate",
+                "--slots",
+                "1",
+                "--slot-length-s",
+                "20",
+                "--sample-interval-s",
+                "0.15",
+                "--out",
+                str(tmp_path / "o"),
+                "--no-progress",
+            ]
+        )
+        == 2
+    )
+    for option, value in (
+        ("--slot-length-s", "inf"),
+        ("--sample-interval-s", "nan"),
+        ("--obstacle-probability", "1.5"),
+        ("--worlds", "2.7"),
+    ):
         with pytest.raises(SystemExit):
             cli.main(["simulate", option, value, "--out", str(tmp_path / "o")])
         assert value in capsys.readouterr().err

@@ -15,26 +15,39 @@ from evaluation import metrics, statistics
 def _tasks(rng, n=400):
     outcome = rng.choice(["success", "congestion", "battery"], n, p=[0.7, 0.25, 0.05])
     time_s = rng.uniform(10, 60, n)
-    return pd.DataFrame({
-        "method": rng.choice(["baseline", "causal"], n), "slot": rng.integers(0, 3, n),
-        "replica": rng.integers(0, 4, n), "outcome": outcome, "refused": rng.random(n) < 0.05,
-        "time_s": time_s, "stalled_s": time_s * rng.uniform(0, 0.5, n), "distance_m": rng.uniform(5, 25, n),
-        "planned_m": rng.uniform(5, 25, n), "battery_used_pct": rng.uniform(0.1, 1.0, n),
-        "collisions": rng.poisson(0.3, n)})
+    return pd.DataFrame(
+        {
+            "method": rng.choice(["baseline", "causal"], n),
+            "slot": rng.integers(0, 3, n),
+            "replica": rng.integers(0, 4, n),
+            "outcome": outcome,
+            "refused": rng.random(n) < 0.05,
+            "time_s": time_s,
+            "stalled_s": time_s * rng.uniform(0, 0.5, n),
+            "distance_m": rng.uniform(5, 25, n),
+            "planned_m": rng.uniform(5, 25, n),
+            "battery_used_pct": rng.uniform(0.1, 1.0, n),
+            "collisions": rng.poisson(0.3, n),
+        }
+    )
 
 
 def test_components_add_up_to_the_totals():
     tasks = _tasks(np.random.default_rng(0))
     runs = metrics.per_run(tasks)
     total = tasks.groupby(["method", "replica"])
-    np.testing.assert_allclose(runs["active_h"] + runs["stalled_h"] + runs["wasted_h"],
-                               total["time_s"].sum().to_numpy() / 3600)
+    np.testing.assert_allclose(
+        runs["active_h"] + runs["stalled_h"] + runs["wasted_h"], total["time_s"].sum().to_numpy() / 3600
+    )
     ok = tasks["outcome"] == "success"
     driven = tasks.assign(d=np.where(ok, tasks["distance_m"], 0) + np.where(ok, 0, tasks["distance_m"]))
-    np.testing.assert_allclose(runs["planned_km"] + runs["extra_km"] + runs["wasted_km"],
-                               driven.groupby(["method", "replica"])["d"].sum().to_numpy() / 1000)
-    np.testing.assert_allclose(runs["effective_cycles"] + runs["wasted_cycles"],
-                               total["battery_used_pct"].sum().to_numpy() / 100)
+    np.testing.assert_allclose(
+        runs["planned_km"] + runs["extra_km"] + runs["wasted_km"],
+        driven.groupby(["method", "replica"])["d"].sum().to_numpy() / 1000,
+    )
+    np.testing.assert_allclose(
+        runs["effective_cycles"] + runs["wasted_cycles"], total["battery_used_pct"].sum().to_numpy() / 100
+    )
     assert (runs["success"] + runs["congestion"] + runs["battery"] == runs["tasks"]).all()
     assert runs["collisions"].sum() == tasks["collisions"].sum()
 
@@ -91,6 +104,7 @@ def test_a_collision_is_counted_once_per_encounter():
         in_contact, new = metrics.collision_encounters(in_contact, jnp.array([d]), present, 0.475, 0.05)
         total += int(new)
     assert total == 2
-    in_contact, new = metrics.collision_encounters(jnp.array([False]), jnp.array([0.1]), jnp.array([False]),
-                                                   0.475, 0.05)
+    in_contact, new = metrics.collision_encounters(
+        jnp.array([False]), jnp.array([0.1]), jnp.array([False]), 0.475, 0.05
+    )
     assert int(new) == 0 and not bool(in_contact[0])

@@ -18,10 +18,17 @@ def test_evaluation_notebook_executes(learned_run, tmp_path, monkeypatch):
     monkeypatch.setenv("SOCIALNAV_SLOTS", "S1,S11")
     monkeypatch.setenv("SOCIALNAV_OUT", str(tmp_path / "out"))
     nb = nbformat.read(NOTEBOOKS / "evaluation.ipynb", as_version=4)
-    NotebookClient(nb, timeout=600, kernel_name="python3",
-                   resources={"metadata": {"path": str(NOTEBOOKS)}}).execute()  # raises if a cell fails
+    NotebookClient(
+        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(NOTEBOOKS)}}
+    ).execute()  # raises if a cell fails
     outputs = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []))
     assert "checks passed" in outputs
-    for name in ("tasks.parquet", "summary.json", "per_slot.csv", "fig9_efficiency.png", "fig10_safety.png",
-                 "fig11_routes.png"):
+    for name in (
+        "tasks.parquet",
+        "summary.json",
+        "per_slot.csv",
+        "fig9_efficiency.png",
+        "fig10_safety.png",
+        "fig11_routes.png",
+    ):
         assert (tmp_path / "out" / name).stat().st_size > 0

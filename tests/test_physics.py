@@ -30,8 +30,9 @@ def test_two_walkers_head_on_repel(warehouse):
 def test_desired_force_relaxes_to_desired_velocity(warehouse):
     p = warehouse.params
     ax, ay = sf.desired_force(p, jnp.float32(3.0), jnp.float32(4.0), jnp.float32(0.0), jnp.float32(0.0), 1.0)
-    np.testing.assert_allclose([ax, ay], [0.6 / p.worker_relaxation_time_s, 0.8 / p.worker_relaxation_time_s],
-                               rtol=1e-5)
+    np.testing.assert_allclose(
+        [ax, ay], [0.6 / p.worker_relaxation_time_s, 0.8 / p.worker_relaxation_time_s], rtol=1e-5
+    )
 
 
 def test_wall_field_and_obstacle_force(warehouse):
@@ -57,14 +58,19 @@ def test_segment_hits_boxes():
 def test_battery_hand_computed(warehouse):
     """120 s at 0.5 m/s without and with an obstacle, then 120 s charging (Eq. 1-2)."""
     p = warehouse.params
-    ks, kd, ko, kc = (p.battery_static_pct_per_s, p.battery_dynamic_pct_per_m, p.battery_obstacle_factor,
-                      p.battery_charge_pct_per_s)
+    ks, kd, ko, kc = (
+        p.battery_static_pct_per_s,
+        p.battery_dynamic_pct_per_m,
+        p.battery_obstacle_factor,
+        p.battery_charge_pct_per_s,
+    )
     steps = int(round(120 / p.dt_s))
 
     def run(b0, speed, charging, obstacle):
         def body(b, _):
             change = battery.battery_change_pct(p, jnp.float32(speed), charging, obstacle)
             return battery.next_battery_pct(b, change), change
+
         return jax.lax.scan(body, jnp.float32(b0), None, length=steps)
 
     b1, l1 = run(100.0, 0.5, False, False)

@@ -21,10 +21,16 @@ def test_one_batched_sweep_equals_separate_runs():
     probabilities, n_seeds, duration_s = (0.2, 0.6), 2, 300.0
     swept = ablation_series(probabilities, n_seeds, seed=3, duration_s=duration_s)
     for p in probabilities:
-        s = load_scenario(n_workers=0, robot_obstacle_probability=p,
-                          robot_obstacle_length_m=ablation.OBSTACLE_LENGTH_M)
-        _, rec = rollout.rollout(s.params, build_world(s), RouteFollower(shortest_path_plan(s)), seed=3,
-                                 n_worlds=n_seeds, n_steps=int(duration_s / s.params.dt_s), sample_every_steps=10)
+        s = load_scenario(n_workers=0, robot_obstacle_probability=p, robot_obstacle_length_m=ablation.OBSTACLE_LENGTH_M)
+        _, rec = rollout.rollout(
+            s.params,
+            build_world(s),
+            RouteFollower(shortest_path_plan(s)),
+            seed=3,
+            n_worlds=n_seeds,
+            n_steps=int(duration_s / s.params.dt_s),
+            sample_every_steps=10,
+        )
         rec = rollout.to_numpy(rec)
         np.testing.assert_allclose(swept[p].speed_mps, rec.robot_speed_mps, atol=1e-5)
         np.testing.assert_array_equal(swept[p].obstacle, rec.obstacle)
@@ -37,8 +43,9 @@ def test_ablation_causal_beats_bayesian_on_the_simulator():
     """Seed 000 Sec. 6 on a short run: conditioning on a fast robot hides obstacles, do() does not."""
     series = ablation_series([0.4], n_seeds=2, duration_s=1800.0)[0.4]
     for k in range(2):
-        est = ablation.estimate(series.speed_mps[k], series.battery_change_pct[k], series.obstacle[k],
-                                series.battery, 1.0, 0.4, k)
+        est = ablation.estimate(
+            series.speed_mps[k], series.battery_change_pct[k], series.obstacle[k], series.battery, 1.0, 0.4, k
+        )
         assert est.reference < est.causal < 0 and est.reference < est.bayesian < 0
         assert est.error_causal < est.error_bayesian
         assert est.bayesian > est.causal  # the Bayesian answer underestimates the consumption

@@ -17,10 +17,14 @@ RATE = -0.0069  # % per s at 0.5 m/s, about the simulator's
 
 
 def _tables(scenario, density=None, **extra):
-    return CausalTables.from_arrays({
-        "density_ppm2": np.zeros((scenario.n_slots, scenario.n_waypoints)) if density is None else density,
-        "battery_pct_per_s": np.array([[-0.0056, 0.014], [RATE, np.nan]]),
-        "speed_edges_mps": np.array([0.0, 0.3, 0.5]), **extra})
+    return CausalTables.from_arrays(
+        {
+            "density_ppm2": np.zeros((scenario.n_slots, scenario.n_waypoints)) if density is None else density,
+            "battery_pct_per_s": np.array([[-0.0056, 0.014], [RATE, np.nan]]),
+            "speed_edges_mps": np.array([0.0, 0.3, 0.5]),
+            **extra,
+        }
+    )
 
 
 def test_shortest_routes_match_scipy(warehouse):
@@ -35,10 +39,10 @@ def test_shortest_routes_match_scipy(warehouse):
     routes, hops = np.asarray(plan.routes[0]), np.asarray(plan.hops[0])
     rng = np.random.default_rng(0)
     for i, j in rng.choice(keep, size=(200, 2)):
-        path = [i] + routes[i, j, :hops[i, j]].tolist()
+        path = [i] + routes[i, j, : hops[i, j]].tolist()
         assert path[-1] == j and all((a, b) in edge_set for a, b in zip(path, path[1:], strict=False))
         assert s.parking not in path  # excluded for the robot
-        assert (routes[i, j, hops[i, j]:] == j).all()  # padded with the goal
+        assert (routes[i, j, hops[i, j] :] == j).all()  # padded with the goal
     assert (np.asarray(plan.routes) == routes[None]).all()  # the same every slot
 
 
@@ -118,9 +122,13 @@ def test_bad_tables_are_rejected(warehouse):
 
 
 def test_tables_file_errors_name_the_file_and_key(warehouse, tmp_path):
-    good = {"density_ppm2": np.zeros((11, 73)), "battery_pct_per_s": np.array([[-0.006, 0.01], [-0.007, 0.0]]),
-            "speed_edges_mps": np.array([0.0, 0.3, 0.5]), "waypoints": np.array(warehouse.waypoint_ids),
-            "slots": np.array(warehouse.slot_names)}
+    good = {
+        "density_ppm2": np.zeros((11, 73)),
+        "battery_pct_per_s": np.array([[-0.006, 0.01], [-0.007, 0.0]]),
+        "speed_edges_mps": np.array([0.0, 0.3, 0.5]),
+        "waypoints": np.array(warehouse.waypoint_ids),
+        "slots": np.array(warehouse.slot_names),
+    }
     f = tmp_path / "t.npz"
     np.savez(f, **good)
     tables = CausalTables.load(f)

@@ -36,9 +36,13 @@ def _tables(scenario):
     rng = np.random.default_rng(0)
     density = rng.uniform(0.0, 1.0, (scenario.n_slots, scenario.n_waypoints))
     density[~scenario.slot_working] = 0.0  # what the engine learns: nobody there off hours
-    return CausalTables.from_arrays({"density_ppm2": density,
-                                     "battery_pct_per_s": np.array([[-0.0056, 0.014], [-0.0069, np.nan]]),
-                                     "speed_edges_mps": np.array([0.0, 0.3, 0.5])})
+    return CausalTables.from_arrays(
+        {
+            "density_ppm2": density,
+            "battery_pct_per_s": np.array([[-0.0056, 0.014], [-0.0069, np.nan]]),
+            "speed_edges_mps": np.array([0.0, 0.3, 0.5]),
+        }
+    )
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +83,7 @@ def test_protocol_invariants_in_working_slots(setup):
     failed = log.outcome == CONGESTION
     assert (log.time_s[failed] >= p.robot_leg_deadline_s - 1e-3).all()
     # Task k starts where task k - 1 was to end, whatever happened to it.
-    np.testing.assert_array_equal(log.start_wp[:, 1:N_TASKS], log.goal_wp[:, :N_TASKS - 1])
+    np.testing.assert_array_equal(log.start_wp[:, 1:N_TASKS], log.goal_wp[:, : N_TASKS - 1])
     assert (state.task == N_TASKS).all() and (state.end_step > 0).all()
     assert (log.collisions >= 0).all() and (state.distance_hist.sum(axis=1) > 0).all()
     assert not log.refused.any()
@@ -141,8 +145,10 @@ def test_compacting_the_batch_keeps_every_experiment_in_its_place(warehouse):
     slots = np.array([10, 0, 0, 10, 0, 0, 0, 10, 0, 0])
     keys = ex.experiment_keys(0, slots, np.arange(len(slots)))
     cfg = ex.ProtocolConfig.for_params(warehouse.params, **CFG)
-    runs = [ex.run_experiments(warehouse.params, world, method, slots, keys, cfg, segment_s=30.0, shrink_at=s)
-            for s in (0.0, 0.5)]
+    runs = [
+        ex.run_experiments(warehouse.params, world, method, slots, keys, cfg, segment_s=30.0, shrink_at=s)
+        for s in (0.0, 0.5)
+    ]
     for state in runs:
         np.testing.assert_array_equal(state.slot, slots)
         np.testing.assert_array_equal(state.task, np.where(slots == 10, 30, 2))

@@ -24,17 +24,24 @@ class Countdown:
     trace: jax.Array
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _advance(n_dev: int):
     def fn(scale, states, keys):
         def one(s, k):
             noise = jax.random.uniform(k)
+
             def body(s, _):
                 running = s.left > 0
-                return s.replace(left=s.left - running, steps=s.steps + running,
-                                 trace=s.trace + jnp.where(running, scale * noise, 0.0)), None
+                return s.replace(
+                    left=s.left - running,
+                    steps=s.steps + running,
+                    trace=s.trace + jnp.where(running, scale * noise, 0.0),
+                ), None
+
             return jax.lax.scan(body, s, None, length=3)[0]
+
         return rollout.map_worlds(one, (states, keys), 4)
+
     return rollout.shard_worlds(fn, 1, 2, n_dev)
 
 
@@ -48,11 +55,19 @@ def test_compaction_keeps_every_world_in_its_place(shrink_at):
     lengths = [1, 40, 2, 3, 25, 1, 2, 7, 60, 2, 1, 4, 3, 33, 2, 1, 9, 2, 5, 1]
     keys = rollout.world_keys(0, len(lengths))
     seen = []
-    final = rollout.run_until_done(_advance, (jnp.float32(0.5),), _countdowns(lengths), keys,
-                                   is_done=lambda s: np.asarray(s.left) == 0, max_segments=30,
-                                   work_done=lambda s: np.asarray(s.steps), total_work=sum(lengths),
-                                   progress=lambda done, total: seen.append((done, total)), shrink_at=shrink_at,
-                                   pad_multiple=2)
+    final = rollout.run_until_done(
+        _advance,
+        (jnp.float32(0.5),),
+        _countdowns(lengths),
+        keys,
+        is_done=lambda s: np.asarray(s.left) == 0,
+        max_segments=30,
+        work_done=lambda s: np.asarray(s.steps),
+        total_work=sum(lengths),
+        progress=lambda done, total: seen.append((done, total)),
+        shrink_at=shrink_at,
+        pad_multiple=2,
+    )
     np.testing.assert_array_equal(final.left, 0)
     np.testing.assert_array_equal(final.steps, lengths)  # each world ran exactly its own length
     noise = np.asarray(jax.vmap(jax.random.uniform)(keys))
@@ -63,8 +78,14 @@ def test_compaction_keeps_every_world_in_its_place(shrink_at):
 
 def test_run_until_done_reports_worlds_that_never_finish():
     with pytest.raises(RuntimeError, match="not every world was done after 2 segments"):
-        rollout.run_until_done(_advance, (jnp.float32(1.0),), _countdowns([1, 100]), rollout.world_keys(0, 2),
-                               is_done=lambda s: np.asarray(s.left) == 0, max_segments=2)
+        rollout.run_until_done(
+            _advance,
+            (jnp.float32(1.0),),
+            _countdowns([1, 100]),
+            rollout.world_keys(0, 2),
+            is_done=lambda s: np.asarray(s.left) == 0,
+            max_segments=2,
+        )
 
 
 def test_params_stack_to_a_leading_axis_and_refuse_other_statics(warehouse):
@@ -79,9 +100,10 @@ def test_params_stack_to_a_leading_axis_and_refuse_other_statics(warehouse):
 
 def test_a_new_dynamic_value_reuses_the_compiled_rollout(warehouse):
     """Dynamic parameters are inputs of the compiled program: another value compiles nothing new."""
+    from plans import scipy_shortest_plan
+
     from jaxsim.robot import RouteFollower
     from jaxsim.world import build_world
-    from plans import scipy_shortest_plan
 
     s = warehouse.replace_params(n_workers=2, slot_length_s=20.0)
     world, controller = build_world(s), RouteFollower(scipy_shortest_plan(s))

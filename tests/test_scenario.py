@@ -78,6 +78,7 @@ def test_waypoint_inside_a_wall(scenario_copy):
     def move(o):
         wp = next(w for w in o["waypoints"] if w["id"] == "office-1")
         wp["x_m"], wp["y_m"] = -12.0, 4.0  # inside a shelf
+
     _edit(scenario_copy, "waypoints.json", move)
     err = _expect(scenario_copy, "waypoints.json", "waypoints[29]")
     assert "inside wall" in str(err)

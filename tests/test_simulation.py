@@ -5,6 +5,7 @@ from __future__ import annotations
 import jax
 import numpy as np
 import pytest
+from plans import scipy_shortest_plan
 
 from jaxsim import geometry
 from jaxsim.robot import RouteFollower
@@ -12,7 +13,6 @@ from jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_key
 from jaxsim.scenario import load_scenario
 from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING
 from jaxsim.world import build_world
-from plans import scipy_shortest_plan
 
 WALL_TOLERANCE_M = 0.02
 
@@ -101,23 +101,31 @@ def test_robot_charges_only_at_the_station_and_standing_still():
 def test_the_robot_follows_the_plan_it_is_given():
     """Any route table drives the robot: a plan whose first leg detours through a waypoint off
     the shortest route makes the robot pass there, and the task still succeeds."""
-    scenario = load_scenario(slot_length_s=30.0, n_workers=0, robot_obstacle_probability=0.0,
-                             robot_leg_deadline_s=200.0)  # the first leg (27.7 m) must not time out
+    scenario = load_scenario(
+        slot_length_s=30.0, n_workers=0, robot_obstacle_probability=0.0, robot_leg_deadline_s=200.0
+    )  # the first leg (27.7 m) must not time out
     base = scipy_shortest_plan(scenario)
     routes, hops = np.array(base.routes), np.array(base.hops)
     start, via = scenario.robot_start, scenario.waypoint("target-5")
     goal = int(scenario.robot_goals[0][0])
-    first, second = routes[0, start, via, :hops[0, start, via]], routes[0, via, goal, :hops[0, via, goal]]
+    first, second = routes[0, start, via, : hops[0, start, via]], routes[0, via, goal, : hops[0, via, goal]]
     detour = np.concatenate([first, second])
     assert len(detour) <= routes.shape[-1] + hops[0, via, goal]
     width = max(routes.shape[-1], len(detour))
     routes = np.concatenate([routes, np.repeat(routes[..., -1:], width - routes.shape[-1], -1)], -1)
-    routes[:, start, goal, :len(detour)] = detour
-    routes[:, start, goal, len(detour):] = goal
+    routes[:, start, goal, : len(detour)] = detour
+    routes[:, start, goal, len(detour) :] = goal
     hops[:, start, goal] = len(detour)
     plan = base.replace(routes=routes, hops=hops)
-    _, rec = rollout(scenario.params, build_world(scenario), RouteFollower(plan), seed=0, n_worlds=2,
-                     n_steps=1500, sample_every_steps=5)
+    _, rec = rollout(
+        scenario.params,
+        build_world(scenario),
+        RouteFollower(plan),
+        seed=0,
+        n_worlds=2,
+        n_steps=1500,
+        sample_every_steps=5,
+    )
     rec = to_numpy(rec)
     vx, vy = scenario.waypoint_xy_m[via]
     first_leg = rec.tasks_started == 1
@@ -125,8 +133,15 @@ def test_the_robot_follows_the_plan_it_is_given():
     assert (near & first_leg).any(axis=1).all(), "the robot never passed the detour's waypoint"
     assert (rec.tasks_succeeded[:, -1] >= 1).all()
     # The shortest plan does not pass there.
-    _, direct = rollout(scenario.params, build_world(scenario), RouteFollower(base), seed=0, n_worlds=2,
-                        n_steps=1500, sample_every_steps=5)
+    _, direct = rollout(
+        scenario.params,
+        build_world(scenario),
+        RouteFollower(base),
+        seed=0,
+        n_worlds=2,
+        n_steps=1500,
+        sample_every_steps=5,
+    )
     direct = to_numpy(direct)
     assert not (np.hypot(direct.robot_x_m - vx, direct.robot_y_m - vy)[direct.tasks_started == 1] < 0.5).any()
 
@@ -145,8 +160,9 @@ def test_same_seed_same_rollout_and_chunk_invariance(short_day):
         np.testing.assert_array_equal(x, y)
     # World b is the same world whatever the batch size (to float rounding: XLA may vectorise a
     # reduction differently for another batch shape).
-    _, c = run_samples(p, world, controller, init_batch(p, world, controller, world_keys(7, 2)), world_keys(7, 2),
-                       20, 10)
+    _, c = run_samples(
+        p, world, controller, init_batch(p, world, controller, world_keys(7, 2)), world_keys(7, 2), 20, 10
+    )
     np.testing.assert_allclose(to_numpy(c).worker_x_m, a.worker_x_m[:2], rtol=0, atol=1e-4)
 
 
@@ -156,10 +172,11 @@ def test_reduced_day_reproduces_the_schedule():
     scenario = load_scenario(slot_length_s=300.0)
     world, controller = build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
     p = scenario.params
-    _, rec = rollout(p, world, controller, seed=11, n_worlds=4, n_steps=scenario.n_slots * p.steps_per_slot,
-                     sample_every_steps=10)
+    _, rec = rollout(
+        p, world, controller, seed=11, n_worlds=4, n_steps=scenario.n_slots * p.steps_per_slot, sample_every_steps=10
+    )
     rec = to_numpy(rec)
-    people = rec.density_ppm2 * np.pi * scenario.waypoint_radius_m ** 2  # people in each disc
+    people = rec.density_ppm2 * np.pi * scenario.waypoint_radius_m**2  # people in each disc
     t_in_slot = rec.time_s % p.slot_length_s
     canteen = {scenario.waypoint(n) for n in ("table-12", "table-23", "corridor-canteen-2", "corridor-canteen-3")}
     for s in range(scenario.n_slots - 1):
@@ -167,7 +184,7 @@ def test_reduced_day_reproduces_the_schedule():
         late = (rec.slot == s) & ((t_in_slot > p.slot_length_s / 2) | (s == scenario.n_slots - 2))
         mean = people[late].mean(axis=0)
         high = set(np.flatnonzero(scenario.destination_p[s] >= 0.2))
-        top = set(np.argsort(-mean)[:len(high)])
+        top = set(np.argsort(-mean)[: len(high)])
         assert top == high, (scenario.slot_names[s], [scenario.waypoint_ids[i] for i in top])
         if s == 5:  # lunch: the canteen holds most of the workers
             assert mean[list(canteen)].sum() > 0.5 * rec.n_present[late].mean()

@@ -30,8 +30,9 @@ def field(obj: Any, file: pathlib.Path, where: str, key: str, kind: type) -> Any
         raise ScenarioError(file, f"{where}.{key}" if where else key, "missing field")
     value = obj[key]
     if not isinstance(value, kind) or (kind is not bool and isinstance(value, bool)):
-        raise ScenarioError(file, f"{where}.{key}" if where else key,
-                            f"expected {kind.__name__}, got {type(value).__name__}")
+        raise ScenarioError(
+            file, f"{where}.{key}" if where else key, f"expected {kind.__name__}, got {type(value).__name__}"
+        )
     return value
 
 

@@ -23,8 +23,9 @@ class Tasks:
     charging_station: int
 
 
-def load_tasks(folder: pathlib.Path, index: dict[str, int], robot_allowed: np.ndarray,
-               slot_names: tuple[str, ...]) -> Tasks:
+def load_tasks(
+    folder: pathlib.Path, index: dict[str, int], robot_allowed: np.ndarray, slot_names: tuple[str, ...]
+) -> Tasks:
     file = folder / FILE
     tasks = read_json(file)
     task_slots = list_field(tasks, file, "slots")
@@ -39,5 +40,8 @@ def load_tasks(folder: pathlib.Path, index: dict[str, int], robot_allowed: np.nd
             if not isinstance(name, str) or name not in index or not robot_allowed[index[name]]:
                 raise ScenarioError(file, f"slots[{s}].goals[{g}]", f"unknown or robot-excluded waypoint {name!r}")
         goals.append(np.asarray([index[n] for n in names], np.int32))
-    return Tasks(tuple(goals), waypoint_field(tasks, file, "robot_start", index),
-                 waypoint_field(tasks, file, "charging_station", index))
+    return Tasks(
+        tuple(goals),
+        waypoint_field(tasks, file, "robot_start", index),
+        waypoint_field(tasks, file, "charging_station", index),
+    )

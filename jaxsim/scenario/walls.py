@@ -31,7 +31,10 @@ def load_walls(folder: pathlib.Path, waypoints: Waypoints) -> tuple[np.ndarray, 
         inside = (boxes_m[:, 0] < x) & (x < boxes_m[:, 1]) & (boxes_m[:, 2] < y) & (y < boxes_m[:, 3])
         if inside.any():
             j = int(np.argmax(inside))
-            raise ScenarioError(folder / WAYPOINTS_FILE, f"waypoints[{i}]",
-                                f"waypoint {waypoints.ids[i]!r} at ({x}, {y}) lies inside wall box {j} "
-                                f"({raw[j].get('name', '?')}) of {FILE}")
+            raise ScenarioError(
+                folder / WAYPOINTS_FILE,
+                f"waypoints[{i}]",
+                f"waypoint {waypoints.ids[i]!r} at ({x}, {y}) lies inside wall box {j} "
+                f"({raw[j].get('name', '?')}) of {FILE}",
+            )
     return boxes_m, tuple(kinds)

@@ -47,5 +47,10 @@ def load_waypoints(folder: pathlib.Path) -> Waypoints:
         human_dest.append(field(wp, file, where, "human_destination", bool))
     if "parking" not in ids:
         raise ScenarioError(file, "waypoints", "needs a 'parking' waypoint where workers arrive and leave")
-    return Waypoints(tuple(ids), np.asarray(xy, np.float64).reshape(-1, 2), np.asarray(radius, np.float64),
-                     tuple(kinds), np.asarray(human_dest, bool))
+    return Waypoints(
+        tuple(ids),
+        np.asarray(xy, np.float64).reshape(-1, 2),
+        np.asarray(radius, np.float64),
+        tuple(kinds),
+        np.asarray(human_dest, bool),
+    )
