@@ -339,13 +339,13 @@ class CausalEngine:
           battery_pct_per_s: (V bins, 2) E[L | do(V), C] divided by the sampling period.
           speed_mps: (V bins,) mean speed in each bin; speed_edges_mps: (V bins + 1,).
         """
-        from tqdm.auto import tqdm
+        from common import progress as progress_lib
 
         n_s = len(self.labels["S"])
         density = np.full((n_s, len(all_waypoints)), np.nan)
         learned = set(self.labels["W"])
         col = {w: j for j, w in enumerate(self.labels["W"])}
-        for s in tqdm(range(n_s), desc="E[D | do(S), W]", disable=not progress):
+        for s in progress_lib.iterate(range(n_s), "E[D | do(S), W]", progress):
             per_waypoint = self.expected_density_do_all(s)
             for i, w in enumerate(all_waypoints):
                 if w in learned and self.support_sw[s, col[w]] > 0:

@@ -75,7 +75,7 @@ def check_logs(df: pd.DataFrame, waypoints: list[str]) -> None:
     if missing:
         raise LogError(
             f"the logs lack column(s) {', '.join(missing[:5])}"
-            f"{' ...' if len(missing) > 5 else ''}: were they written by 'peopleflow simulate'?"
+            f"{' ...' if len(missing) > 5 else ''}: were they written by 'socialnav simulate'?"
         )
     for col, name in [("robot_speed_mps", "V (robot_speed_mps)"), ("battery_pct", "L (from battery_pct)")]:
         if df[col].nunique() < 2:

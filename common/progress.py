@@ -31,6 +31,11 @@ class Bar:
             self._bar = tqdm(total=total, desc=self.desc, unit=self.unit)
         self._bar.update(done - self._bar.n)
 
+    def set_postfix(self, **values) -> None:
+        """Show ``key=value`` pairs after the bar (e.g. the current loss)."""
+        if self._bar is not None:
+            self._bar.set_postfix(**values)
+
     def close(self) -> None:
         if self._bar is not None:
             self._bar.close()

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from collections.abc import Callable
 
 import jax
@@ -101,6 +102,22 @@ class ProtocolConfig:
     arrival_spread_s: float = 60.0
     distance_bin_m: float = 0.1
     distance_bins: int = 200
+
+    def __post_init__(self) -> None:
+        """Validated on construction: one ValueError naming the field."""
+        checks = {
+            "min_battery_pct": 0 <= self.min_battery_pct < 100,
+            "reset_battery_pct": self.min_battery_pct < self.reset_battery_pct <= 100,
+            "collision_radius_m": math.isfinite(self.collision_radius_m) and self.collision_radius_m > 0,
+            "collision_release_m": math.isfinite(self.collision_release_m) and self.collision_release_m >= 0,
+            "warmup_s": math.isfinite(self.warmup_s) and self.warmup_s >= 0,
+            "arrival_spread_s": math.isfinite(self.arrival_spread_s) and self.arrival_spread_s > 0,
+            "distance_bin_m": math.isfinite(self.distance_bin_m) and self.distance_bin_m > 0,
+            "distance_bins": self.distance_bins >= 1,
+        }
+        for name, ok in checks.items():
+            if not ok:
+                raise ValueError(f"ProtocolConfig.{name}: invalid value {getattr(self, name)!r}")
 
     @classmethod
     def for_params(cls, params: SimParams, **overrides) -> ProtocolConfig:

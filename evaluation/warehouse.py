@@ -42,7 +42,7 @@ class EvaluationResult:
     """What :func:`run_evaluation` measured.
 
     Attributes:
-      tasks: one row per task (columns in :mod:`planners.metrics`), with ``slot_name``,
+      tasks: one row per task (columns in :mod:`evaluation.metrics`), with ``slot_name``,
         ``start``, ``goal`` waypoint names.
       distance_hist: method -> (n_slots, replicas, H) robot-person distance counts during tasks.
       experiment_s: method -> (n_slots, replicas) simulated time from the first task to the last

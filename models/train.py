@@ -27,6 +27,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from common import progress as progress_lib
 from common.atomic import write_text_atomic
 from models import dataset
 from models.checkpoints import check_run_folder, checkpoint_manager, host, write_metrics
@@ -53,7 +54,6 @@ def train(
         test resuming; the run resumes from it when called again.
     """
     import orbax.checkpoint as ocp
-    from tqdm.auto import tqdm
 
     data_sharding, replicated = batch_sharding(config.batch_size)  # a bad batch size fails before any file
     out = pathlib.Path(out)
@@ -98,7 +98,7 @@ def train(
         )
         manager.wait_until_finished()
 
-    bar = tqdm(total=config.total_steps, initial=step, unit="step", disable=not progress, desc="train")
+    bar = progress_lib.bar("train", unit="step", enabled=progress)
     line = meta["history"][-1] if meta["history"] else {}
     try:
         while step < last_step:
@@ -112,7 +112,7 @@ def train(
                     batch = jax.device_put(batch, data_sharding)
                 state, loss = train_step(state, *batch)
                 step += 1
-                bar.update(1)
+                bar.update(step, config.total_steps)
                 if step % 20 == 0:
                     bar.set_postfix(loss=f"{float(loss):.5f}", epoch=epoch + 1)
                 epoch_done = step % spe == 0

@@ -21,11 +21,13 @@ from socialnav import runtime
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
+    from common import __version__
     from socialnav import evaluate, gscl, learn, pipelines, simulate
 
-    parser = argparse.ArgumentParser(prog="socialnav", description=__doc__.split("\n")[0])
-    from common import __version__
-
+    parser = argparse.ArgumentParser(
+        prog="socialnav",
+        description="The social-navigation toolkit: one subcommand per job (socialnav COMMAND --help).",
+    )
     parser.add_argument("--version", action="version", version=f"socialnav-jax {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     pipelines.add_parsers(sub)

@@ -45,7 +45,7 @@ def add_parser(top) -> None:
     parser = top.add_parser(
         "gscl",
         help="GSCL's learned social cost maps: generate data, train, evaluate (seed 002)",
-        description=__doc__.split("\n")[0],
+        description="GSCL (seed 002): generate the procedural dataset, train the U-Net, evaluate a run.",
     )
     sub = parser.add_subparsers(dest="gscl_command", required=True)
 

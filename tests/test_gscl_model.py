@@ -26,6 +26,7 @@ TINY = dict(
 )
 
 
+@pytest.mark.slow
 def test_unet_shapes_range_and_paper_size():
     model = unet.UNet((4, 8, 8, 16), rngs=nnx.Rngs(0))
     maps = dataset.generate(0, {"group": 3})["inputs"]
@@ -56,6 +57,7 @@ def _run(tmp_path, name, **kw):
     return config, train.train(config, tmp_path / name, progress=False, log=lambda *_: None)
 
 
+@pytest.mark.slow
 def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_path):
     config, line = _run(tmp_path, "straight")
     history = [json.loads(s) for s in (tmp_path / "straight" / "metrics.jsonl").read_text().splitlines()]

@@ -136,8 +136,17 @@ def test_bad_input_is_rejected(setup):
     plan = methods["baseline"].plan
     with pytest.raises(ValueError, match="battery cost table shape"):
         ex.make_method(plan, np.zeros((2, 2)), may_refuse=True)
+    for field, value in (
+        ("collision_radius_m", 0.0),
+        ("min_battery_pct", 120.0),
+        ("warmup_s", float("nan")),
+        ("distance_bins", 0),
+    ):
+        with pytest.raises(ValueError, match=f"ProtocolConfig.{field}"):
+            ex.ProtocolConfig(**{field: value})
 
 
+@pytest.mark.slow
 def test_compacting_the_batch_keeps_every_experiment_in_its_place(warehouse):
     """Seven short experiments end early; the three long ones go on in a smaller batch."""
     world = build_world(warehouse).replace(robot_goal_count=jnp.array([2] * 10 + [30], jnp.int32))

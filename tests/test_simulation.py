@@ -38,6 +38,7 @@ def test_no_nan_and_battery_in_range(day_rollout):
     assert (np.diff(rec.battery_pct, axis=1) < 0).any()  # it does discharge
 
 
+@pytest.mark.slow
 def test_nobody_inside_walls(day_rollout):
     scenario, _, rec = day_rollout
     present = (rec.worker_status == WALKING) | (rec.worker_status == ACTIVITY)
@@ -146,6 +147,7 @@ def test_the_robot_follows_the_plan_it_is_given():
     assert not (np.hypot(direct.robot_x_m - vx, direct.robot_y_m - vy)[direct.tasks_started == 1] < 0.5).any()
 
 
+@pytest.mark.slow
 def test_same_seed_same_rollout_and_chunk_invariance(short_day):
     scenario, world, controller = short_day
     p = scenario.params
