@@ -3,7 +3,7 @@
 * :func:`crowd_step` moves the workers one step given the robot's previous pose: the one crowd
   step the day simulation and every protocol (``evaluation.protocol``) call.
 * :func:`step` is the day simulation's step: the crowd step, then the robot's ``controller``
-  (passed in, as waymax passes its actor: :class:`jaxsim.robot.RouteFollower` by default). Workers
+  (passed in, as waymax passes its actor; :class:`jaxsim.robot.RouteFollower` follows a plan). Workers
   and robot see each other's previous pose.
 * :func:`measure` computes what is logged; the rollout (:mod:`jaxsim.rollout`) calls it only at
   sampling instants, so the per-step cost is the dynamics alone.
