@@ -169,5 +169,5 @@ def run(
         out / "ablation.json",
         json.dumps({"structure_at_p_0.3": structure, "summary": summary.to_dict(orient="records")}, indent=1),
     )
-    plots.ablation_figure(summary, out / "ablation.png")
+    plots.ablation_figure(summary, out / "ablation.png", DISTANCE_M, SPEED_MPS)
     return results

@@ -9,7 +9,6 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Circle, FancyArrowPatch
 
-from causal import ablation
 from causal.discover import Discovery
 from causal.variables import CONTEXTS, VARIABLES
 from common import figures
@@ -70,7 +69,9 @@ def graph_figure(discovery: Discovery, path: str | pathlib.Path, title: str | No
     return figures.save(fig, path)
 
 
-def ablation_figure(summary: pd.DataFrame, path: str | pathlib.Path) -> pathlib.Path:
+def ablation_figure(
+    summary: pd.DataFrame, path: str | pathlib.Path, distance_m: float, speed_mps: float
+) -> pathlib.Path:
     """Mean absolute error with standard deviation per obstacle probability (seed 000 Fig. 13)."""
     x = np.arange(len(summary))
     fig = figures.figure(figsize=(6.5, 3.6))
@@ -96,6 +97,6 @@ def ablation_figure(summary: pd.DataFrame, path: str | pathlib.Path) -> pathlib.
     ax.set_xticks(x, [f"{p:.0%}" for p in summary.p])
     ax.set_xlabel("obstacle probability per leg")
     ax.set_ylabel("|L_ref - L_hat| (battery %)")
-    ax.set_title(f"Battery use for {ablation.DISTANCE_M:.0f} m at {ablation.SPEED_MPS} m/s: estimation error")
+    ax.set_title(f"Battery use for {distance_m:.0f} m at {speed_mps} m/s: estimation error")
     ax.legend()
     return figures.save(fig, path)

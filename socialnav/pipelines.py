@@ -64,8 +64,6 @@ def add_parsers(sub) -> None:
 
 def run_pipeline(args: argparse.Namespace) -> int:
     """simulate -> learn -> evaluate, each step's output the next one's input."""
-    from socialnav.cli import build_parser
-
     out = args.out
     quiet = ["--no-progress"] if args.no_progress else []
     sim_argv = ["simulate", "--worlds", str(args.worlds), "--seed", str(args.seed), "--out", str(out)]
@@ -73,7 +71,10 @@ def run_pipeline(args: argparse.Namespace) -> int:
         ("simulate", simulate.run, sim_argv),
         ("learn", learn.run, ["learn", "--logs", str(out), "--worlds", ",".join(map(str, args.learn_worlds))]),
     ]
-    parser = build_parser()
+    parser = argparse.ArgumentParser(prog="socialnav run")  # the steps' own parsers, defaults included
+    steps_sub = parser.add_subparsers(dest="command", required=True)
+    simulate.add_parser(steps_sub)
+    learn.add_parser(steps_sub)
     for i, (name, handler, argv) in enumerate(steps, 1):
         print(f"\n=== [{i}/3] {name} ===", flush=True)
         code = handler(parser.parse_args(argv + quiet))
