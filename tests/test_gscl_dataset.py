@@ -21,6 +21,7 @@ def _family(data, name):
     return data["inputs"][idx], data["targets"][idx]
 
 
+@pytest.mark.slow
 def test_shapes_codes_and_range(data):
     n = N * len(dataset.FAMILIES)
     assert data["inputs"].shape == (n, 40, 40) and data["inputs"].dtype == np.uint8
@@ -39,6 +40,7 @@ def test_deterministic_by_seed_and_independent_of_other_counts():
         dataset.generate(0, {"corridor": 3})
 
 
+@pytest.mark.slow
 def test_every_person_carries_proxemic_cost_and_a_heading_pixel(data):
     for name in ("proxemics", "group", "non_group"):
         inputs, targets = _family(data, name)
@@ -69,6 +71,7 @@ def test_the_interaction_zone_exists_only_when_people_face_inward():
     assert (centre_in - centre_out > 0.3).mean() > 0.9  # out: only the people's tails reach it
 
 
+@pytest.mark.slow
 def test_blind_corner_cost_sits_at_the_corner_on_the_free_side(data):
     inputs, targets = _family(data, "corner")
     for img, cost in zip(inputs, targets):
@@ -100,6 +103,7 @@ def _halves(inputs, targets):
     return np.array(left), np.array(right)
 
 
+@pytest.mark.slow
 def test_hallway_cost_is_higher_on_the_left_half(data):
     for name in ("hallway_straight", "hallway_people"):
         inputs, targets = _family(data, name)
@@ -111,6 +115,7 @@ def test_hallway_cost_is_higher_on_the_left_half(data):
     assert (targets.max(axis=(1, 2)) > 0.75).all()  # the blind inner corner, above the 0.6 of the left half
 
 
+@pytest.mark.slow
 def test_the_queue_u_shape_is_there_only_when_the_goal_is_at_the_head(data):
     """Cost beside the queue, away from the people, is the U: present with the goal at the head."""
     import jax

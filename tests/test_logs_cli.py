@@ -102,6 +102,7 @@ def test_killed_run_leaves_no_half_file(small, tmp_path, monkeypatch):
     assert sorted(f.name for f in out.iterdir()) == [logs.LOG_FILE, logs.META_FILE]  # no temporary left
 
 
+@pytest.mark.slow
 def test_cli_simulate_writes_logs_pictures_and_summary(tmp_path, capsys):
     out = tmp_path / "cli"
     code = cli.main(
