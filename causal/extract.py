@@ -27,7 +27,7 @@ from common import logschema
 from common.logschema import density_column
 
 # The log columns the causal variables come from (all in the schema: the contract test checks it).
-ROBOT_COLUMNS = ("world", "time_s", "slot", "robot_speed_mps", "battery_pct", "charging", "obstacle")
+LOG_COLUMNS = ("world", "time_s", "slot", "robot_speed_mps", "battery_pct", "charging", "obstacle")
 # Share of a series' spectral energy (DC excluded) below its "highest significant frequency".
 SIGNIFICANT_ENERGY = 0.95
 
@@ -70,7 +70,7 @@ def check_logs(df: pd.DataFrame, waypoints: list[str]) -> None:
     """Raise :class:`LogError` naming the first missing column or unusable series."""
     if df.empty:
         raise LogError("the logs have no rows")
-    missing = [c for c in ROBOT_COLUMNS if c not in df.columns]
+    missing = [c for c in LOG_COLUMNS if c not in df.columns]
     missing += [density_column(w) for w in waypoints if density_column(w) not in df.columns]
     if missing:
         raise LogError(
@@ -224,7 +224,7 @@ def read_run(logs_dir: str | pathlib.Path, waypoints: list[str] | None = None) -
         raise LogError(f"{meta_file}: not valid JSON ({e})") from None
     if not isinstance(meta, dict) or not meta.get("waypoints") or not meta.get("slots"):
         raise LogError(f"{meta_file} lacks the waypoint or slot names")
-    columns = list(ROBOT_COLUMNS) + [density_column(w) for w in (waypoints or meta["waypoints"])]
+    columns = list(LOG_COLUMNS) + [density_column(w) for w in (waypoints or meta["waypoints"])]
     import pyarrow.parquet as pq
 
     try:

@@ -7,10 +7,6 @@ bool`` and asks :func:`bar` for one), so it never depends on how the caller disp
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
-Report = Callable[[int, int], None]
-
 
 class Bar:
     """A tqdm bar driven by absolute counts (``update(done, total)``), created on first use.

@@ -73,18 +73,20 @@ def record_table(rec, world_ids: np.ndarray, scenario: Scenario, seed: int, log_
     """Flatten batched numpy records (B, T, ...) into a table of B*T rows."""
     p = scenario.params
     b, t = rec.time_s.shape
-    cols: dict[str, pa.Array] = {
-        "world": pa.array(np.repeat(world_ids.astype(np.int32), t)),
-        "seed": pa.array(np.full(b * t, seed, np.int64)),
-        "dt_s": pa.array(np.full(b * t, p.dt_s, np.float32)),
-        "slot_length_s": pa.array(np.full(b * t, p.slot_length_s, np.float32)),
-        "n_workers": pa.array(np.full(b * t, p.n_workers, np.int16)),
-        "obstacle_probability": pa.array(np.full(b * t, p.robot_obstacle_probability, np.float32)),
-        "time_s": pa.array(rec.time_s.reshape(-1).astype(np.float64)),
-        "slot": pa.array(rec.slot.reshape(-1).astype(np.int8)),
+    fixed = {
+        "world": np.repeat(world_ids, t),
+        "seed": np.full(b * t, seed),
+        "dt_s": np.full(b * t, p.dt_s),
+        "slot_length_s": np.full(b * t, p.slot_length_s),
+        "n_workers": np.full(b * t, p.n_workers),
+        "obstacle_probability": np.full(b * t, p.robot_obstacle_probability),
+        **{
+            name: np.asarray(getattr(rec, name)).reshape(-1)
+            for name, _ in logschema.CLOCK_COLUMNS + logschema.ROBOT_COLUMNS
+        },
     }
-    for name, dtype in logschema.ROBOT_COLUMNS:
-        cols[name] = pa.array(np.asarray(getattr(rec, name)).reshape(-1).astype(dtype))
+    columns = logschema.ID_COLUMNS + logschema.SETTING_COLUMNS + logschema.CLOCK_COLUMNS + logschema.ROBOT_COLUMNS
+    cols: dict[str, pa.Array] = {name: pa.array(fixed[name].astype(dtype)) for name, dtype in columns}
     for k, wp in enumerate(scenario.waypoint_ids):
         cols[density_column(wp)] = pa.array(rec.density_ppm2[:, :, k].reshape(-1))
     for i in range(p.n_workers):

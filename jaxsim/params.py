@@ -22,9 +22,9 @@ import math
 import pathlib
 from collections.abc import Sequence
 
-import jax
-import jax.numpy as jnp
 from flax import struct
+
+from common.pytree import stack
 
 SECTION_PREFIX = {"sim": "", "workers": "worker_", "robot": "robot_", "battery": "battery_"}
 # Fields that shape the compiled program; every other field is a dynamic float.
@@ -124,7 +124,7 @@ class SimParams:
                         f"cannot stack params with different static field {name!r}: "
                         f"{getattr(first, name)} vs {getattr(other, name)}"
                     )
-        return jax.tree.map(lambda *xs: jnp.asarray(xs, jnp.float32), *params)
+        return stack(params)
 
     @classmethod
     def from_json(cls, file: pathlib.Path, error: type[Exception] = ValueError) -> SimParams:

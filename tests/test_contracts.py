@@ -50,7 +50,7 @@ def test_the_causal_reader_reads_what_the_simulator_writes(run):
     scenario, out = run
     df, meta = extract.read_run(out)
     assert meta["waypoints"] == list(scenario.waypoint_ids) and meta["slots"] == list(scenario.slot_names)
-    assert set(extract.ROBOT_COLUMNS) <= set(logschema.required_columns([]))  # only schema columns are read
+    assert set(extract.LOG_COLUMNS) <= set(logschema.required_columns([]))  # only schema columns are read
     assert len(df) == 2 * 40 and logschema.density_column("wa-2-l") in df.columns
     full = pd.read_parquet(out / logschema.LOG_FILE)
     pd.testing.assert_frame_equal(df, full[df.columns.tolist()])  # the same values, read through the contract
