@@ -6,6 +6,7 @@
     socialnav evaluate --tables runs/warehouse/causal/engine_tables.npz --replicas 32
     socialnav ablation --out runs/ablation                          # seed 000 Sec. 6
     socialnav gscl generate|train|evaluate ...                      # GSCL (seed 002)
+    socialnav layers --out docs/img                                 # the social cost layers, pictured
 
 Runtime set-up (one XLA host device per core, JAX's persistent compilation cache) happens here,
 before JAX is imported; the subcommands' modules are imported after it.
@@ -22,7 +23,7 @@ from socialnav import runtime
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
     from common import __version__
-    from socialnav import evaluate, gscl, learn, pipelines, simulate
+    from socialnav import evaluate, gscl, layers, learn, pipelines, simulate
 
     parser = argparse.ArgumentParser(
         prog="socialnav",
@@ -35,6 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     learn.add_parser(sub)
     evaluate.add_parser(sub)
     gscl.add_parser(sub)
+    layers.add_parser(sub)
     return parser
 
 

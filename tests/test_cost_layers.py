@@ -126,14 +126,17 @@ def circle(n, radius, inward=True, centre=(0.0, 0.0)):
     return xy, heading
 
 
+detect_groups = jax.jit(casn.detect_groups)
+
+
 @pytest.mark.parametrize("n", [2, 3, 4, 5, 6])
 def test_casn_finds_a_group_facing_inward_and_none_facing_outward(n):
     xy, heading = circle(n, 1.2)
-    labels = np.asarray(casn.detect_groups(make_scene(xy, heading, max_people=8)))
+    labels = np.asarray(detect_groups(make_scene(xy, heading, max_people=8)))
     assert np.all(labels[:n] == labels[0]) and labels[0] >= 0
     assert np.all(labels[n:] == -1)
     xy, heading = circle(n, 1.2, inward=False)
-    assert np.all(np.asarray(casn.detect_groups(make_scene(xy, heading))) == -1)
+    assert np.all(np.asarray(detect_groups(make_scene(xy, heading, max_people=8))) == -1)
 
 
 def test_casn_no_group_beyond_three_metres_or_while_walking():
@@ -147,11 +150,10 @@ def test_casn_no_group_beyond_three_metres_or_while_walking():
 
 def test_casn_group_spaces_cover_the_inside_of_the_formation():
     xy, heading = circle(4, 1.5, centre=(1.0, 0.0))
-    scene = make_scene(xy, heading)
-    layer, _ = casn.casn_layer(scene, X, Y)
-    assert value_at(np.asarray(layer), 1.0, 0.0)[0] == costmap.MAX_GRADED  # o-space centre
-    lone = make_scene(xy[:1], heading[:1])
-    assert value_at(np.asarray(casn.casn_layer(lone, X, Y)[0]), 1.0, 0.0)[0] == 0.0
+    layer = jax.jit(lambda s: casn.casn_layer(s, X, Y)[0])
+    assert value_at(np.asarray(layer(make_scene(xy, heading))), 1.0, 0.0)[0] == costmap.MAX_GRADED  # o-space centre
+    lone = make_scene(xy[:1], heading[:1], max_people=4)
+    assert value_at(np.asarray(layer(lone)), 1.0, 0.0)[0] == 0.0
 
 
 def test_casn_static_person_discs():
@@ -233,6 +235,7 @@ def small_unet_predict():
     return lambda maps: model(maps)
 
 
+@pytest.mark.slow
 def test_gscl_layer_reproduces_the_model_where_window_and_grid_align():
     predict = small_unet_predict()
     robot = np.array([3.0, 2.0], np.float32)
@@ -246,6 +249,7 @@ def test_gscl_layer_reproduces_the_model_where_window_and_grid_align():
     np.testing.assert_allclose(layer, 252.0 * np.flipud(window), rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_gscl_layers_batch_equals_one_by_one():
     predict = small_unet_predict()
     scenes = [
@@ -264,6 +268,7 @@ def test_gscl_layers_batch_equals_one_by_one():
 # ---------------------------------------------------------------- batching
 
 
+@pytest.mark.slow
 def test_layers_vmap_over_scenes():
     rng = np.random.default_rng(3)
     scenes = [
@@ -280,3 +285,36 @@ def test_layers_vmap_over_scenes():
         together = jax.jit(jax.vmap(fn))(batch)
         for k, scene in enumerate(scenes):
             np.testing.assert_allclose(together[k], fn(scene), atol=1e-4, err_msg=name)
+
+
+# ---------------------------------------------------------------- the pictures' command
+
+
+def test_layers_command_rejects_a_run_without_checkpoints(tmp_path, capsys):
+    from socialnav import cli
+
+    assert cli.main(["layers", "--out", str(tmp_path / "img"), "--gscl-run", str(tmp_path)]) == 2
+    assert "no checkpoints/ folder" in capsys.readouterr().out
+    assert not (tmp_path / "img").exists()
+
+
+@pytest.mark.slow
+def test_layers_command_writes_one_picture_per_scene_type(tmp_path):
+    from planners import plots
+    from socialnav import cli
+
+    assert cli.main(["layers", "--out", str(tmp_path)]) == 0
+    written = sorted(p.name for p in tmp_path.glob("*.png"))
+    assert written == sorted(f"layers_{name}.png" for name in plots.demo_scenes())
+    assert not list(tmp_path.glob(".tmp-*"))
+
+
+@pytest.mark.slow
+def test_demo_paths_reach_the_goal_and_keep_off_lethal_cells():
+    from planners import plots
+
+    demo = plots.demo_scenes()["group_facing_in"]
+    for name, costs, path, reached in plots.plan_panels(demo, plots.layer_functions()):
+        assert reached, name
+        ij = np.asarray(plots.SPEC.cell_of(path))
+        assert np.all(costs[ij[1:, 0], ij[1:, 1]] < costmap.INSCRIBED), name
