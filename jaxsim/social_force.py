@@ -71,6 +71,13 @@ def _moussaid_pair(params: SimParams, dx, dy, dvx, dvy):
     return f_vel * ix - f_ang * iy, f_vel * iy + f_ang * ix
 
 
+def pair_force(params: SimParams, dx, dy, dvx, dvy):
+    """The Moussaid force on agents at offsets ``-(dx, dy)`` from one source (``dx, dy = p_src -
+    p_i``, ``dvx, dvy = v_i - v_src``), before ``social_force_factor``: for a single extra agent
+    such as the arena's robot."""
+    return _moussaid_pair(params, dx, dy, dvx, dvy)
+
+
 def social_force(
     params: SimParams, x: jax.Array, y: jax.Array, vx: jax.Array, vy: jax.Array, weight: jax.Array
 ) -> tuple[jax.Array, jax.Array]:

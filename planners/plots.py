@@ -88,9 +88,7 @@ def demo_scenes() -> dict[str, DemoScene]:
         "crossing": DemoScene(room, make_scene([[-1.0, 2.0]], people_velocity_mps=[[0.0, -0.4]], **across)),
         "l_hallway": DemoScene(
             _l_hallway(),
-            make_scene(
-                [[2.4, 0.2]], [-np.pi / 2], robot_xy_m=(-5.0, -2.0), goal_xy_m=(2.0, 3.3), max_people=4
-            ),
+            make_scene([[2.4, 0.2]], [-np.pi / 2], robot_xy_m=(-5.0, -2.0), goal_xy_m=(2.0, 3.3), max_people=4),
         ),
         "queue": DemoScene(
             _desk_room(),

@@ -1,0 +1,333 @@
+"""Social-navigation scenes as data: the file format, its validation, and variants drawn from it.
+
+A scene file (``data/scenes/<name>.json``) holds the walls, objects with their interaction
+spaces, people each with a behaviour, the robot's start and goal, a timeout, the scene's social
+rule, and a range for every number that varies: one scene and a seed give one variant
+(:func:`sample_variants`). Every error is a :class:`~jaxsim.scenario.errors.ScenarioError`
+naming the file and the field.
+
+Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[N, N]``, a point)::
+
+    {"name": "...", "source": "seed 001 Sec. 4.1",
+     "bounds_m": [xmin, xmax, ymin, ymax],
+     "walls": [[xmin, xmax, ymin, ymax], ...],                  # boxes
+     "objects": [{"name": "table", "polygon": [[x, y], ...], "cost": 30}],   # convex, counter-clockwise
+     "robot": {"start": P, "yaw_deg": N, "goal": P},
+     "timeout_s": 40,
+     "people": [
+       {"behaviour": "standing", "position": P, "heading_deg": N},
+       {"behaviour": "walk", "from": P, "to": P, "speed_mps": N, "start_s": N,
+        "back_and_forth": false, "ignore_robot": true},
+       {"behaviour": "group", "centre": P, "size": N, "radius_m": N, "facing": "in" | "out",
+        "rotation_deg": N, "turn_inward_at_s": N},
+       {"behaviour": "queue", "head": P, "towards_deg": N, "length": N, "spacing_m": N,
+        "advance_every_s": N, "exit": P},
+       {"behaviour": "stream", "from": P, "to": P, "count": 2, "start_s": N, "interval_s": N, "speed_mps": N}
+     ],
+     "rule": {"type": "min_distance", "distance_m": 1.2}}
+
+Behaviours: a **standing** person stays put; a **walker** goes from ``from`` to ``to`` at
+``speed_mps`` from ``start_s`` on (back and forth if asked), by the social force; a **group** is
+``size`` (2-6) standing people on a circle facing its centre (``in``) or away (``out``), turning
+inward at ``turn_inward_at_s`` if given (seed 002's lab scene); a **queue** is ``length`` people
+behind ``head`` facing ``towards_deg``, spaced ``spacing_m``: every ``advance_every_s`` its first
+person leaves for ``exit`` and the rest step up; a **stream** is ``count`` walkers entering at
+``from`` every ``interval_s`` from ``start_s``, leaving the scene at ``to``. ``ignore_robot``
+(walkers, streams): the person does not avoid the robot, as the seeds' test subjects walked their
+course.
+
+Rules (what "socially successful" means in the scene, checked on the trajectory by
+:mod:`evaluation.social_metrics`): ``min_distance`` (never closer than ``distance_m`` to anyone,
+centre to centre), ``avoid_group`` (never inside group ``group``'s circle), ``avoid_circle`` (never
+within ``radius_m`` of ``centre``: a corner taken wide), ``keep_right``
+(inside ``box``, travelling along ``direction_deg``, at least ``min_share`` of the time on the right
+half of the box), ``visit`` (pass through ``box`` before the goal), ``pass_behind`` (cross walker
+``person``'s line behind them), ``all`` (every rule in ``rules``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from jaxsim.scenario.errors import ScenarioError
+
+BEHAVIOURS = ("standing", "walk", "group", "queue", "stream")
+KIND = {"standing": 0, "walk": 1, "queue": 2, "stream": 3}  # a group's members are standing
+RULES = ("min_distance", "avoid_group", "avoid_circle", "keep_right", "visit", "pass_behind", "all")
+MAX_GROUP = 6
+MAX_OBJECT_VERTICES = 8
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneSpec:
+    """A validated scene file (the raw numbers and ranges; :func:`sample_variants` draws from it)."""
+
+    file: pathlib.Path
+    name: str
+    source: str
+    bounds_m: tuple[float, float, float, float]
+    walls_m: np.ndarray  # (K, 4)
+    objects: tuple[tuple[str, np.ndarray, float], ...]
+    robot: dict
+    timeout_s: float
+    people: tuple[dict, ...]
+    rule: dict
+    n_people_slots: int
+
+
+# ------------------------------------------------------------------ typed reads
+
+
+class _Reader:
+    def __init__(self, file: pathlib.Path):
+        self.file = file
+
+    def fail(self, where: str, message: str):
+        raise ScenarioError(self.file, where, message)
+
+    def get(self, obj: dict, where: str, key: str, default: Any = ...):
+        if not isinstance(obj, dict):
+            self.fail(where, f"expected an object, got {type(obj).__name__}")
+        if key not in obj:
+            if default is ...:
+                self.fail(f"{where}.{key}" if where else key, "missing field")
+            return default
+        return obj[key]
+
+    def number(self, value: Any, where: str, low: float = -math.inf, high: float = math.inf, integer=False):
+        """A number or a [lo, hi] range within [low, high]: returns (lo, hi)."""
+        if isinstance(value, list) and len(value) == 2:
+            lo, hi = (self.number(v, f"{where}[{i}]", low, high, integer)[0] for i, v in enumerate(value))
+            if lo > hi:
+                self.fail(where, f"range [lo, hi] needs lo <= hi, got [{lo}, {hi}]")
+            return lo, hi
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.fail(where, f"expected a finite number or a [lo, hi] range, got {value!r}")
+        if integer and int(value) != value:
+            self.fail(where, f"expected a whole number, got {value!r}")
+        if not low <= value <= high:
+            self.fail(where, f"expected a value in [{low}, {high}], got {value!r}")
+        return float(value), float(value)
+
+    def point(self, value: Any, where: str):
+        if not isinstance(value, list) or len(value) != 2:
+            self.fail(where, f"expected a point [x, y], got {value!r}")
+        return tuple(self.number(v, f"{where}[{i}]") for i, v in enumerate(value))
+
+    def box(self, value: Any, where: str) -> np.ndarray:
+        if not isinstance(value, list) or len(value) != 4:
+            self.fail(where, f"expected [xmin, xmax, ymin, ymax], got {value!r}")
+        b = np.array([self.number(v, f"{where}[{i}]")[0] for i, v in enumerate(value)])
+        if b[0] >= b[1] or b[2] >= b[3]:
+            self.fail(where, f"expected xmin < xmax and ymin < ymax, got {value!r}")
+        return b
+
+    def flag(self, obj: dict, where: str, key: str, default: bool) -> bool:
+        value = self.get(obj, where, key, default)
+        if not isinstance(value, bool):
+            self.fail(f"{where}.{key}", f"expected true or false, got {value!r}")
+        return value
+
+
+def _inside_bounds(r: _Reader, bounds, point, where):
+    xmin, xmax, ymin, ymax = bounds
+    (x0, x1), (y0, y1) = point
+    if x0 < xmin or x1 > xmax or y0 < ymin or y1 > ymax:
+        r.fail(where, f"lies outside bounds_m {list(bounds)}")
+
+
+def _person(r: _Reader, p: dict, where: str, bounds) -> tuple[dict, int]:
+    behaviour = r.get(p, where, "behaviour")
+    if behaviour not in BEHAVIOURS:
+        r.fail(f"{where}.behaviour", f"expected one of {', '.join(BEHAVIOURS)}, got {behaviour!r}")
+    out: dict = {"behaviour": behaviour}
+
+    def pt(key):
+        value = r.point(r.get(p, where, key), f"{where}.{key}")
+        _inside_bounds(r, bounds, value, f"{where}.{key}")
+        return value
+
+    def num(key, low=-math.inf, high=math.inf, default=..., integer=False):
+        value = r.get(p, where, key, default)
+        return value if value is None else r.number(value, f"{where}.{key}", low, high, integer)
+
+    if behaviour == "standing":
+        out.update(position=pt("position"), heading_deg=num("heading_deg"))
+        return out, 1
+    if behaviour == "walk":
+        out.update(
+            start=pt("from"),
+            end=pt("to"),
+            speed_mps=num("speed_mps", 0.05, 3.0),
+            start_s=num("start_s", 0.0, default=0.0),
+            back_and_forth=r.flag(p, where, "back_and_forth", False),
+            ignore_robot=r.flag(p, where, "ignore_robot", False),
+        )
+        return out, 1
+    if behaviour == "group":
+        facing = r.get(p, where, "facing")
+        if facing not in ("in", "out"):
+            r.fail(f"{where}.facing", f"expected 'in' or 'out', got {facing!r}")
+        size = num("size", 2, MAX_GROUP, integer=True)
+        turn = r.get(p, where, "turn_inward_at_s", None)
+        out.update(
+            centre=pt("centre"),
+            size=size,
+            radius_m=num("radius_m", 0.3, 5.0),
+            facing=facing,
+            rotation_deg=num("rotation_deg", default=0.0),
+            turn_inward_at_s=None if turn is None else r.number(turn, f"{where}.turn_inward_at_s", 0.0),
+        )
+        return out, int(size[1])
+    if behaviour == "queue":
+        length = num("length", 1, 20, integer=True)
+        out.update(
+            head=pt("head"),
+            towards_deg=num("towards_deg"),
+            length=length,
+            spacing_m=num("spacing_m", 0.3, 3.0),
+            advance_every_s=num("advance_every_s", 1.0),
+            exit=pt("exit"),
+        )
+        return out, int(length[1])
+    # stream
+    count = r.get(p, where, "count")
+    if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= 20:
+        r.fail(f"{where}.count", f"expected a whole number in [1, 20], got {count!r}")
+    out.update(
+        start=pt("from"),
+        end=pt("to"),
+        count=count,
+        start_s=num("start_s", 0.0, default=0.0),
+        interval_s=num("interval_s", 0.1),
+        speed_mps=num("speed_mps", 0.05, 3.0),
+        ignore_robot=r.flag(p, where, "ignore_robot", False),
+    )
+    return out, count
+
+
+def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
+    kind = r.get(rule, where, "type")
+    if kind not in RULES:
+        r.fail(f"{where}.type", f"expected one of {', '.join(RULES)}, got {kind!r}")
+    if kind == "min_distance":
+        return {"type": kind, "distance_m": r.number(r.get(rule, where, "distance_m"), f"{where}.distance_m", 0.0)[0]}
+    if kind == "avoid_group":
+        g = r.get(rule, where, "group", 0)
+        groups = [p for p in people if p["behaviour"] == "group"]
+        if isinstance(g, bool) or not isinstance(g, int) or not 0 <= g < len(groups):
+            r.fail(f"{where}.group", f"expected the index of one of the scene's {len(groups)} group(s), got {g!r}")
+        return {"type": kind, "group": g}
+    if kind == "avoid_circle":
+        centre = r.get(rule, where, "centre")
+        if not isinstance(centre, list) or len(centre) != 2:
+            r.fail(f"{where}.centre", f"expected [x, y], got {centre!r}")
+        return {
+            "type": kind,
+            "centre": np.array([r.number(c, f"{where}.centre[{i}]")[0] for i, c in enumerate(centre)]),
+            "radius_m": r.number(r.get(rule, where, "radius_m"), f"{where}.radius_m", 0.0)[0],
+        }
+    if kind == "keep_right":
+        return {
+            "type": kind,
+            "box": r.box(r.get(rule, where, "box"), f"{where}.box"),
+            "direction_deg": r.number(r.get(rule, where, "direction_deg"), f"{where}.direction_deg")[0],
+            "min_share": r.number(r.get(rule, where, "min_share", 0.5), f"{where}.min_share", 0.0, 1.0)[0],
+        }
+    if kind == "visit":
+        return {"type": kind, "box": r.box(r.get(rule, where, "box"), f"{where}.box")}
+    if kind == "pass_behind":
+        i = r.get(rule, where, "person")
+        if isinstance(i, bool) or not isinstance(i, int) or not 0 <= i < len(people):
+            r.fail(f"{where}.person", f"expected a person index in [0, {len(people)}), got {i!r}")
+        if people[i]["behaviour"] != "walk":
+            r.fail(f"{where}.person", f"person {i} is a {people[i]['behaviour']!r}, not a walker")
+        return {"type": kind, "person": i}
+    rules = r.get(rule, where, "rules")
+    if not isinstance(rules, list) or not rules:
+        r.fail(f"{where}.rules", "expected a non-empty list of rules")
+    return {"type": kind, "rules": [_rule(r, sub, f"{where}.rules[{i}]", people) for i, sub in enumerate(rules)]}
+
+
+def load_scene(file: str | pathlib.Path) -> SceneSpec:
+    """Read and validate a scene file (one :class:`ScenarioError` naming file and field on error)."""
+    file = pathlib.Path(file)
+    r = _Reader(file)
+    if not file.is_file():
+        r.fail("<file>", "file is missing")
+    try:
+        obj = json.loads(file.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        r.fail("<file>", f"invalid JSON: {e}")
+    if not isinstance(obj, dict):
+        r.fail("<file>", "top level must be a JSON object")
+    name = r.get(obj, "", "name")
+    if not isinstance(name, str) or not name:
+        r.fail("name", f"expected a non-empty string, got {name!r}")
+    bounds = tuple(r.box(r.get(obj, "", "bounds_m"), "bounds_m"))
+    if (bounds[1] - bounds[0]) * (bounds[3] - bounds[2]) > 2500:
+        r.fail(
+            "bounds_m",
+            f"the scene is {(bounds[1] - bounds[0]):.0f} x {(bounds[3] - bounds[2]):.0f} m: at most 2500 m^2",
+        )
+    walls = r.get(obj, "", "walls")
+    if not isinstance(walls, list):
+        r.fail("walls", "expected a list of boxes")
+    walls_m = np.array([r.box(w, f"walls[{i}]") for i, w in enumerate(walls)]).reshape(-1, 4)
+    objects = []
+    for i, o in enumerate(r.get(obj, "", "objects", [])):
+        where = f"objects[{i}]"
+        polygon = r.get(o, where, "polygon")
+        if not isinstance(polygon, list) or not 3 <= len(polygon) <= MAX_OBJECT_VERTICES:
+            r.fail(f"{where}.polygon", f"expected 3 to {MAX_OBJECT_VERTICES} points")
+        vertices = []
+        for k, v in enumerate(polygon):
+            if not isinstance(v, list) or len(v) != 2:
+                r.fail(f"{where}.polygon[{k}]", f"expected [x, y], got {v!r}")
+            vertices.append([r.number(c, f"{where}.polygon[{k}]")[0] for c in v])
+        poly = np.array(vertices)
+        edges = np.roll(poly, -1, axis=0) - poly
+        cross = edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1] - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
+        if np.any(cross <= 0):
+            r.fail(f"{where}.polygon", "expected a convex polygon listed counter-clockwise")
+        cost = r.number(r.get(o, where, "cost"), f"{where}.cost", 0.0, 252.0)[0]
+        objects.append((str(r.get(o, where, "name", f"object{i}")), poly.astype(np.float32), cost))
+    robot_obj = r.get(obj, "", "robot")
+    robot = {
+        "start": r.point(r.get(robot_obj, "robot", "start"), "robot.start"),
+        "goal": r.point(r.get(robot_obj, "robot", "goal"), "robot.goal"),
+        "yaw_deg": r.number(r.get(robot_obj, "robot", "yaw_deg", 0.0), "robot.yaw_deg"),
+    }
+    _inside_bounds(r, bounds, robot["start"], "robot.start")
+    _inside_bounds(r, bounds, robot["goal"], "robot.goal")
+    timeout = r.number(r.get(obj, "", "timeout_s"), "timeout_s", 1.0, 3600.0)[0]
+    people_obj = r.get(obj, "", "people")
+    if not isinstance(people_obj, list):
+        r.fail("people", "expected a list")
+    people, slots = [], 0
+    for i, p in enumerate(people_obj):
+        person, n = _person(r, p, f"people[{i}]", bounds)
+        people.append(person)
+        slots += n
+    if slots > 64:
+        r.fail("people", f"{slots} people at most: 64 allowed")
+    rule = _rule(r, r.get(obj, "", "rule"), "rule", people)
+    return SceneSpec(
+        file=file,
+        name=name,
+        source=str(r.get(obj, "", "source", "")),
+        bounds_m=bounds,
+        walls_m=walls_m.astype(np.float32),
+        objects=tuple(objects),
+        robot=robot,
+        timeout_s=timeout,
+        people=tuple(people),
+        rule=rule,
+        n_people_slots=max(slots, 1),
+    )

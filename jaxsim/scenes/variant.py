@@ -1,0 +1,187 @@
+"""Variants of a scene: every range of a :class:`~jaxsim.scenes.spec.SceneSpec` drawn, the people
+expanded into fixed-size, masked arrays (:class:`Variant`), a batch stacked on a leading axis.
+
+Variant ``k`` of a scene under seed ``s`` is drawn from ``numpy.random.default_rng((s, k,
+crc32(name)))``: the same for every method (common random numbers) and independent of how many
+variants are drawn.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import zlib
+
+import numpy as np
+from flax import struct
+
+from jaxsim.scenes.spec import KIND, SceneSpec
+
+
+@struct.dataclass
+class Variant:
+    """One drawn variant (P people slots; float32 unless said; a batch adds a leading axis).
+
+    Attributes:
+      kind: (P,) int32 behaviour (:data:`jaxsim.scenes.spec.KIND`; group members are standing).
+      valid: (P,) bool, the slot holds a person of this variant.
+      xy0: (P, 2) initial position (a stream's entry point); heading0: (P,) initial heading.
+      start_xy, end_xy: (P, 2) a walker's or stream member's legs.
+      speed_mps: (P,) desired speed; start_s: (P,) when a walker sets off or a stream member enters.
+      back_and_forth, ignore_robot: (P,) bool.
+      turn_at_s: (P,) when a group member turns inward (``inf``: never); heading_turned: (P,) after.
+      queue_place: (P,) int32 place in the queue (0 at the head); queue_head: (P, 2); queue_step:
+        (P, 2) from one place to the next one back; queue_interval_s: (P,); exit_xy: (P, 2).
+      group: (P,) int32 group index (-1: none).
+      robot_xy: (2,) start; robot_yaw: (); goal_xy: (2,).
+      seed_u32: () uint32 seed of the people's random force.
+    """
+
+    kind: np.ndarray
+    valid: np.ndarray
+    xy0: np.ndarray
+    heading0: np.ndarray
+    start_xy: np.ndarray
+    end_xy: np.ndarray
+    speed_mps: np.ndarray
+    start_s: np.ndarray
+    back_and_forth: np.ndarray
+    ignore_robot: np.ndarray
+    turn_at_s: np.ndarray
+    heading_turned: np.ndarray
+    queue_place: np.ndarray
+    queue_head: np.ndarray
+    queue_step: np.ndarray
+    queue_interval_s: np.ndarray
+    exit_xy: np.ndarray
+    group: np.ndarray
+    robot_xy: np.ndarray
+    robot_yaw: np.ndarray
+    goal_xy: np.ndarray
+    seed_u32: np.ndarray
+
+
+def _draw(rng: np.random.Generator, value) -> float:
+    lo, hi = value
+    return float(lo) if lo == hi else float(rng.uniform(lo, hi))
+
+
+def _draw_int(rng: np.random.Generator, value) -> int:
+    lo, hi = int(value[0]), int(value[1])
+    return lo if lo == hi else int(rng.integers(lo, hi + 1))
+
+
+def _point(rng, value) -> np.ndarray:
+    return np.array([_draw(rng, value[0]), _draw(rng, value[1])], np.float32)
+
+
+def sample_variant(spec: SceneSpec, seed: int, k: int) -> Variant:
+    """Variant ``k`` of ``spec`` under ``seed`` (numpy arrays)."""
+    rng = np.random.default_rng((int(seed), int(k), zlib.crc32(spec.name.encode())))
+    n = spec.n_people_slots
+    f32 = lambda shape=(): np.zeros(shape, np.float32)
+    a = dict(
+        kind=np.zeros(n, np.int32),
+        valid=np.zeros(n, bool),
+        xy0=f32((n, 2)),
+        heading0=f32(n),
+        start_xy=f32((n, 2)),
+        end_xy=f32((n, 2)),
+        speed_mps=f32(n),
+        start_s=f32(n),
+        back_and_forth=np.zeros(n, bool),
+        ignore_robot=np.zeros(n, bool),
+        turn_at_s=np.full(n, np.inf, np.float32),
+        heading_turned=f32(n),
+        queue_place=np.zeros(n, np.int32),
+        queue_head=f32((n, 2)),
+        queue_step=f32((n, 2)),
+        queue_interval_s=np.ones(n, np.float32),
+        exit_xy=f32((n, 2)),
+        group=np.full(n, -1, np.int32),
+    )
+    slot, group_index = 0, 0
+    for person in spec.people:
+        b = person["behaviour"]
+        if b == "standing":
+            xy = _point(rng, person["position"])
+            a["xy0"][slot], a["start_xy"][slot], a["end_xy"][slot] = xy, xy, xy
+            a["heading0"][slot] = math.radians(_draw(rng, person["heading_deg"]))
+            a["valid"][slot] = True
+            slot += 1
+        elif b == "walk":
+            start, end = _point(rng, person["start"]), _point(rng, person["end"])
+            a["kind"][slot] = KIND["walk"]
+            a["xy0"][slot], a["start_xy"][slot], a["end_xy"][slot] = start, start, end
+            a["heading0"][slot] = math.atan2(end[1] - start[1], end[0] - start[0])
+            a["speed_mps"][slot] = _draw(rng, person["speed_mps"])
+            a["start_s"][slot] = _draw(rng, person["start_s"])
+            a["back_and_forth"][slot] = person["back_and_forth"]
+            a["ignore_robot"][slot] = person["ignore_robot"]
+            a["valid"][slot] = True
+            slot += 1
+        elif b == "group":
+            size = _draw_int(rng, person["size"])
+            centre, radius = _point(rng, person["centre"]), _draw(rng, person["radius_m"])
+            rotation = math.radians(_draw(rng, person["rotation_deg"]))
+            turn = None if person["turn_inward_at_s"] is None else _draw(rng, person["turn_inward_at_s"])
+            slots = int(person["size"][1])
+            for m in range(size):
+                angle = rotation + 2 * math.pi * m / size
+                xy = centre + radius * np.array([math.cos(angle), math.sin(angle)], np.float32)
+                inward = angle + math.pi
+                a["xy0"][slot + m], a["start_xy"][slot + m], a["end_xy"][slot + m] = xy, xy, xy
+                a["heading0"][slot + m] = inward if person["facing"] == "in" else angle
+                a["heading_turned"][slot + m] = inward
+                a["turn_at_s"][slot + m] = np.inf if turn is None else turn
+                a["group"][slot + m] = group_index
+                a["valid"][slot + m] = True
+            slot += slots
+            group_index += 1
+        elif b == "queue":
+            length = _draw_int(rng, person["length"])
+            head = _point(rng, person["head"])
+            towards = math.radians(_draw(rng, person["towards_deg"]))
+            spacing = _draw(rng, person["spacing_m"])
+            back = -spacing * np.array([math.cos(towards), math.sin(towards)], np.float32)
+            interval = _draw(rng, person["advance_every_s"])
+            exit_xy = _point(rng, person["exit"])
+            for m in range(length):
+                xy = head + m * back
+                a["kind"][slot + m] = KIND["queue"]
+                a["xy0"][slot + m], a["start_xy"][slot + m], a["end_xy"][slot + m] = xy, xy, exit_xy
+                a["heading0"][slot + m] = towards
+                a["speed_mps"][slot + m] = 1.0
+                a["queue_place"][slot + m] = m
+                a["queue_head"][slot + m], a["queue_step"][slot + m] = head, back
+                a["queue_interval_s"][slot + m] = interval
+                a["exit_xy"][slot + m] = exit_xy
+                a["valid"][slot + m] = True
+            slot += int(person["length"][1])
+        else:  # stream
+            start0 = _draw(rng, person["start_s"])
+            interval = _draw(rng, person["interval_s"])
+            for m in range(person["count"]):
+                start, end = _point(rng, person["start"]), _point(rng, person["end"])
+                a["kind"][slot + m] = KIND["stream"]
+                a["xy0"][slot + m], a["start_xy"][slot + m], a["end_xy"][slot + m] = start, start, end
+                a["heading0"][slot + m] = math.atan2(end[1] - start[1], end[0] - start[0])
+                a["speed_mps"][slot + m] = _draw(rng, person["speed_mps"])
+                a["start_s"][slot + m] = start0 + m * interval
+                a["ignore_robot"][slot + m] = person["ignore_robot"]
+                a["valid"][slot + m] = True
+            slot += person["count"]
+    robot = spec.robot
+    return Variant(
+        **a,
+        robot_xy=_point(rng, robot["start"]),
+        robot_yaw=np.float32(math.radians(_draw(rng, robot["yaw_deg"]))),
+        goal_xy=_point(rng, robot["goal"]),
+        seed_u32=np.uint32(rng.integers(0, 2**32, dtype=np.uint64)),
+    )
+
+
+def sample_variants(spec: SceneSpec, seed: int, n: int, first: int = 0) -> Variant:
+    """Variants ``first .. first + n - 1``, stacked on a leading axis."""
+    variants = [sample_variant(spec, seed, k) for k in range(first, first + n)]
+    return Variant(**{f.name: np.stack([getattr(v, f.name) for v in variants]) for f in dataclasses.fields(Variant)})

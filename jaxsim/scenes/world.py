@@ -1,0 +1,97 @@
+"""The static arrays of a scene: walls as boxes (line of sight) and as a distance field (the
+people's wall force, the robot's contact), and the occupancy grid a planner rasterises from."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from jaxsim import geometry
+from jaxsim.scenes.spec import SceneSpec
+from jaxsim.world import Grid
+
+FIELD_RESOLUTION_M = 0.05
+
+
+@struct.dataclass
+class SceneWorld:
+    """Attributes: walls_m (K, 4) boxes (at least one, padded far away); wall_field: (H, W, 3)
+    signed distance and outward normal (:class:`jaxsim.world.Grid`)."""
+
+    walls_m: jnp.ndarray
+    wall_field: Grid
+
+
+def _boxes(spec: SceneSpec) -> np.ndarray:
+    if len(spec.walls_m):
+        return spec.walls_m
+    xmin, xmax, ymin, ymax = spec.bounds_m  # no walls: one box far outside keeps shapes fixed
+    return np.array([[xmax + 100.0, xmax + 101.0, ymax + 100.0, ymax + 101.0]], np.float32)
+
+
+def build_scene_world(spec: SceneSpec) -> SceneWorld:
+    """Precompute a scene's walls (host side, numpy; the result is a pytree of arrays)."""
+    boxes = _boxes(spec)
+    field = geometry.build_distance_field(boxes, spec.bounds_m, FIELD_RESOLUTION_M)
+    values = np.stack([field.sdf_m, field.normal_x, field.normal_y], axis=-1)
+    grid = Grid(
+        jnp.asarray(values),
+        origin_x_m=float(field.origin_m[0]),
+        origin_y_m=float(field.origin_m[1]),
+        resolution_m=FIELD_RESOLUTION_M,
+    )
+    return SceneWorld(walls_m=jnp.asarray(boxes), wall_field=grid)
+
+
+def occupancy(spec: SceneSpec, resolution_m: float) -> tuple[np.ndarray, tuple[float, float]]:
+    """(H, W) float32 occupancy (1 where a cell centre lies in a wall or off the scene's bounds'
+    border cells) over ``spec.bounds_m``, and its origin (x, y)."""
+    xmin, xmax, ymin, ymax = spec.bounds_m
+    width = int(np.ceil((xmax - xmin) / resolution_m))
+    height = int(np.ceil((ymax - ymin) / resolution_m))
+    xs = xmin + (np.arange(width) + 0.5) * resolution_m
+    ys = ymin + (np.arange(height) + 0.5) * resolution_m
+    gx, gy = np.meshgrid(xs, ys)
+    sd, _, _ = geometry.box_signed_distance(gx, gy, _boxes(spec))
+    occ = (sd <= resolution_m / 2).astype(np.float32)
+    occ[[0, -1], :] = 1.0  # the scene's edge is a wall for the planner
+    occ[:, [0, -1]] = 1.0
+    return occ, (xmin, ymin)
+
+
+def wall_distance(xy, walls_m):
+    """Exact signed distance from points (..., 2) to the nearest wall box, and the unit normal
+    pointing away from it: ((...,), (..., 2)). Pure JAX (the robot and its band use it: the
+    0.05 m distance field's rounding lets a body creep into corners)."""
+    centre = jnp.stack([(walls_m[:, 0] + walls_m[:, 1]) / 2, (walls_m[:, 2] + walls_m[:, 3]) / 2], axis=-1)
+    half = jnp.stack([(walls_m[:, 1] - walls_m[:, 0]) / 2, (walls_m[:, 3] - walls_m[:, 2]) / 2], axis=-1)
+    offset = xy[..., None, :] - centre  # (..., K, 2)
+    q = jnp.abs(offset) - half
+    outside = jnp.linalg.norm(jnp.maximum(q, 0.0), axis=-1)
+    inside = jnp.minimum(jnp.max(q, axis=-1), 0.0)
+    sd = outside + inside
+    sign = jnp.where(offset >= 0, 1.0, -1.0)
+    out_dir = sign * jnp.maximum(q, 0.0) / jnp.maximum(outside, 1e-9)[..., None]
+    face_x = q[..., 0] >= q[..., 1]
+    in_dir = jnp.where(
+        face_x[..., None],
+        jnp.stack([sign[..., 0], 0.0 * sign[..., 0]], -1),
+        jnp.stack([0.0 * sign[..., 1], sign[..., 1]], -1),
+    )
+    normal = jnp.where((outside > 0)[..., None], out_dir, in_dir)
+    k = jnp.argmin(sd, axis=-1)
+    nearest = jnp.take_along_axis(sd, k[..., None], axis=-1)[..., 0]
+    n = jnp.take_along_axis(normal, k[..., None, None], axis=-2)[..., 0, :]
+    return nearest, n
+
+
+def segment_blocked(p0, p1, walls_m):
+    """(...,) bool: the segments p0 -> p1 (..., 2) cross a wall box (slab test, pure JAX)."""
+    d = p1 - p0
+    safe = jnp.where(jnp.abs(d) < 1e-9, 1e-9, d)
+    lo = (walls_m[:, [0, 2]] - p0[..., None, :]) / safe[..., None, :]
+    hi = (walls_m[:, [1, 3]] - p0[..., None, :]) / safe[..., None, :]
+    t_enter = jnp.max(jnp.minimum(lo, hi), axis=-1)
+    t_exit = jnp.min(jnp.maximum(lo, hi), axis=-1)
+    return jnp.any((t_enter <= t_exit) & (t_exit >= 0.0) & (t_enter <= 1.0), axis=-1)

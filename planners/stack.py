@@ -1,0 +1,147 @@
+"""Navigation stacks composed from parts, and the seeds' methods as named configurations.
+
+A stack is a cost layer (none, SNL small or large, CASN, SNAPE's social map, GSCL), a global grid
+planner replanning at a rate (NavFn-like or SNAPE's weighted Dijkstra) and a local planner at the
+control rate (pure pursuit, the classic elastic band, or SNAPE's social band with its speed
+gain). :data:`METHODS` names the seeds' configurations; any other combination is one
+``StackConfig(...)``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax.numpy as jnp
+
+from planners import casn, costmap, elastic_band, grid_planner, pure_pursuit, snape, snl
+from planners.scene import Scene
+
+LAYERS = ("none", "snl_small", "snl_large", "casn", "snape", "gscl")
+GLOBAL_PLANNERS = ("navfn", "weighted")
+LOCAL_PLANNERS = ("pursuit", "eband", "social_eband")
+
+
+@dataclasses.dataclass(frozen=True)
+class StackConfig:
+    """A navigation stack (static: hashable).
+
+    Attributes:
+      layer: the social cost layer (:data:`LAYERS`).
+      global_planner: ``navfn`` (cells 50 + 0.8 c) or ``weighted`` (SNAPE's 1 + c).
+      local_planner: ``pursuit``, ``eband`` (classic: ``k_s = 0``, no speed gain) or
+        ``social_eband`` (SNAPE's social band and speed gain).
+      band_points, band_horizon_m, band_iterations: the elastic band's size and relaxations per
+        control step.
+      replan: replan at the arena's rate (1 Hz, seed 002's behaviour tree) or plan once and let
+        the local planner adapt (SNAPE, seed 004 Sec. 3.3: the global path is computed once
+        between two distant points, the social band deforms it in real time).
+    """
+
+    layer: str
+    global_planner: str = "navfn"
+    local_planner: str = "pursuit"
+    band_points: int = 16
+    band_horizon_m: float = 4.0
+    band_iterations: int = 10
+    replan: bool = True
+
+    def __post_init__(self):
+        for value, allowed, what in (
+            (self.layer, LAYERS, "layer"),
+            (self.global_planner, GLOBAL_PLANNERS, "global_planner"),
+            (self.local_planner, LOCAL_PLANNERS, "local_planner"),
+        ):
+            if value not in allowed:
+                raise ValueError(f"StackConfig: {what} must be one of {', '.join(allowed)}, got {value!r}")
+
+
+METHODS: dict[str, StackConfig] = {
+    "navfn": StackConfig("none"),
+    "snl_small": StackConfig("snl_small"),
+    "snl_large": StackConfig("snl_large"),
+    "casn": StackConfig("casn"),
+    "gscl": StackConfig("gscl"),
+    "snape_eband": StackConfig("snape", "weighted", "eband", replan=False),
+    "snape_social_eband": StackConfig("snape", "weighted", "social_eband", replan=False),
+}
+
+
+def social_layer(config: StackConfig, scene: Scene, x_m, y_m, casn_state, gscl_layer_fn=None):
+    """(H, W) the stack's social layer of a perceived scene, and CASN's next state."""
+    zeros = jnp.zeros(x_m.shape, jnp.float32)
+    if config.layer == "none":
+        return zeros, casn_state
+    if config.layer == "snl_small":
+        return snl.snl_layer(scene, x_m, y_m, snl.SIGMA_SMALL), casn_state
+    if config.layer == "snl_large":
+        return snl.snl_layer(scene, x_m, y_m, snl.SIGMA_LARGE), casn_state
+    if config.layer == "casn":
+        return casn.casn_layer(scene, x_m, y_m, casn_state)
+    if config.layer == "snape":
+        return snape.snape_layer(scene, x_m, y_m), casn_state
+    if gscl_layer_fn is None:
+        raise ValueError("the gscl layer needs a trained model (gscl_layer_fn)")
+    return gscl_layer_fn(scene), casn_state
+
+
+def global_plan(config: StackConfig, costs, start_xy, goal_xy, spec: costmap.GridSpec, max_steps: int = 0):
+    """The global path: ((max_steps + 1, 2) metres, () valid points, () reached)."""
+    plan_fn = grid_planner.navfn_plans if config.global_planner == "navfn" else grid_planner.weighted_plans
+    plan = plan_fn(costs[None], start_xy[None], goal_xy[None], spec, max_steps=max_steps)
+    path = grid_planner.path_xy_m(plan, spec)[0]
+    path = path.at[0].set(start_xy)  # from the robot itself, not its cell's centre
+    length = plan.path_length[0]
+    path = path.at[jnp.maximum(length - 1, 1)].set(
+        jnp.where(plan.reached[0], goal_xy, path[jnp.maximum(length - 1, 1)])
+    )
+    return path, length, plan.reached[0]
+
+
+def local_command(
+    config: StackConfig,
+    path_xy,
+    path_len,
+    robot_xy,
+    robot_yaw,
+    robot_speed,
+    max_speed_mps,
+    people: Scene,
+    clearance_fn,
+    band_params: elastic_band.BandParams = elastic_band.BandParams(),
+    pursuit: pure_pursuit.PursuitParams = pure_pursuit.PursuitParams(),
+    snape_params: snape.SNAPEParams = snape.SNAPEParams(),
+):
+    """``(v, omega, band (band_points, 2), speed gain ())`` for one control step (the gain is 1
+    except for the social band)."""
+    if config.local_planner == "pursuit":
+        target = pure_pursuit.lookahead_point(path_xy, path_len, robot_xy, pursuit.lookahead_m)
+        v, w = pure_pursuit.pursue(target, robot_xy, robot_yaw, max_speed_mps, pursuit)
+        band = jnp.broadcast_to(target, (config.band_points, 2))
+        return v, w, band, jnp.float32(1.0)
+    social = config.local_planner == "social_eband"
+    params = band_params if social else band_params.replace(k_s=0.0)
+    band = elastic_band.band_from_path(path_xy, path_len, robot_xy, config.band_horizon_m, config.band_points)
+    predicted = people.people_xy_m + params.predict_s * people.people_velocity_mps
+    band = elastic_band.relax(
+        band,
+        clearance_fn,
+        predicted,
+        people.people_heading_rad,
+        people.people_valid,
+        params,
+        snape_params,
+        config.band_iterations,
+    )
+    target = pure_pursuit.lookahead_point(band, config.band_points, robot_xy, pursuit.lookahead_m)
+    v, w = pure_pursuit.pursue(target, robot_xy, robot_yaw, max_speed_mps, pursuit)
+    gain = jnp.float32(1.0)
+    if social:
+        gain = elastic_band.speed_gain(
+            band,
+            jnp.maximum(robot_speed, 0.1),
+            people.people_xy_m,
+            people.people_velocity_mps,
+            people.people_valid,
+            params,
+        )
+    return v * gain, w, band, gain
