@@ -7,6 +7,7 @@
     socialnav ablation --out runs/ablation                          # seed 000 Sec. 6
     socialnav gscl generate|train|evaluate ...                      # GSCL (seed 002)
     socialnav layers --out docs/img                                 # the social cost layers, pictured
+    socialnav arena --out runs/arena                                # methods x scenes x variants, closed loop
 
 Runtime set-up (one XLA host device per core, JAX's persistent compilation cache) happens here,
 before JAX is imported; the subcommands' modules are imported after it.
@@ -23,7 +24,7 @@ from socialnav import runtime
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
     from common import __version__
-    from socialnav import evaluate, gscl, layers, learn, pipelines, simulate
+    from socialnav import arena, evaluate, gscl, layers, learn, pipelines, simulate
 
     parser = argparse.ArgumentParser(
         prog="socialnav",
@@ -37,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_parser(sub)
     gscl.add_parser(sub)
     layers.add_parser(sub)
+    arena.add_parser(sub)
     return parser
 
 

@@ -1,0 +1,152 @@
+"""Pictures of arena runs, from the trajectories frame (:func:`evaluation.arena_report.trajectory_frame`):
+each method's path with the people's tracks (as seed 002 Fig. 9-10), the distance to the nearest
+person over time (seed 001 Fig. 7-8), the speed profile with the speed gain (seed 004 Fig. 13),
+and an animation of one episode."""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+import pandas as pd
+
+from common import figures
+from common.atomic import write_atomic
+from jaxsim.scenes.spec import SceneSpec
+
+
+def _people_columns(frame: pd.DataFrame) -> int:
+    return sum(1 for c in frame.columns if c.startswith("p") and c.endswith("_present"))
+
+
+def _draw_scene(ax, spec: SceneSpec):
+    from matplotlib.patches import Polygon, Rectangle
+
+    for x0, x1, y0, y1 in spec.walls_m:
+        ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, color="0.3"))
+    for _, poly, _ in spec.objects:
+        ax.add_patch(Polygon(poly, closed=True, color="tab:olive", alpha=0.3))
+    xmin, xmax, ymin, ymax = spec.bounds_m
+    ax.set_xlim(xmin, xmax)
+    ax.set_ylim(ymin, ymax)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def paths_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0) -> pathlib.Path:
+    """One panel per method: the robot's path (blue, black dot at the start), the people's tracks
+    (red, a dot where they end), for one variant."""
+    frame = frame[frame["variant"] == variant]
+    methods = list(dict.fromkeys(frame["method"]))
+    n_people = _people_columns(frame)
+    fig = figures.figure(figsize=(2.6 * len(methods), 2.4))
+    axes = fig.subplots(1, len(methods), squeeze=False)[0]
+    for ax, method in zip(axes, methods, strict=True):
+        g = frame[frame["method"] == method]
+        _draw_scene(ax, spec)
+        for p in range(n_people):
+            here = g[f"p{p}_present"].to_numpy()
+            if here.any():
+                x, y = g[f"p{p}_x"].to_numpy()[here], g[f"p{p}_y"].to_numpy()[here]
+                ax.plot(x, y, color="tab:red", lw=1, alpha=0.7)
+                ax.plot(x[-1], y[-1], "o", color="tab:red", ms=3)
+        upto = g["reached"].to_numpy()
+        stop = int(np.argmax(upto)) + 1 if upto.any() else len(g)
+        ax.plot(g["robot_x"].to_numpy()[:stop], g["robot_y"].to_numpy()[:stop], color="tab:blue", lw=1.5)
+        ax.plot(g["robot_x"].iloc[0], g["robot_y"].iloc[0], "o", color="black", ms=3)
+        ax.set_title(method + ("" if upto.any() else " (no goal)"), fontsize=8)
+    fig.suptitle(f"{spec.name}, variant {variant}", fontsize=9)
+    return figures.save(fig, path, dpi=80)
+
+
+def nearest_distance(frame: pd.DataFrame) -> np.ndarray:
+    """(T,) distance from the robot to the nearest present person, per row of ``frame``."""
+    n_people = _people_columns(frame)
+    if n_people == 0:
+        return np.full(len(frame), np.inf)
+    rx, ry = frame["robot_x"].to_numpy()[:, None], frame["robot_y"].to_numpy()[:, None]
+    px = np.stack([frame[f"p{p}_x"].to_numpy() for p in range(n_people)], axis=1)
+    py = np.stack([frame[f"p{p}_y"].to_numpy() for p in range(n_people)], axis=1)
+    present = np.stack([frame[f"p{p}_present"].to_numpy() for p in range(n_people)], axis=1)
+    return np.where(present, np.hypot(px - rx, py - ry), np.inf).min(axis=1)
+
+
+def distance_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0) -> pathlib.Path:
+    """Distance to the nearest person over time, one line per method, Hall's zones shaded."""
+    frame = frame[frame["variant"] == variant]
+    fig = figures.figure(figsize=(5.0, 2.6))
+    ax = fig.subplots()
+    for edge, name in ((0.45, "intimate"), (1.2, "personal")):
+        ax.axhline(edge, color="0.6", lw=0.8, ls="--")
+        ax.text(0.2, edge + 0.05, name, fontsize=7, color="0.4")
+    for method, g in frame.groupby("method", sort=False):
+        d = nearest_distance(g)
+        reached = g["reached"].to_numpy()
+        stop = int(np.argmax(reached)) + 1 if reached.any() else len(g)
+        ax.plot(g["t_s"].to_numpy()[:stop], np.where(np.isfinite(d), d, np.nan)[:stop], lw=1.2, label=method)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("nearest person (m)")
+    ax.set_ylim(0, 6)
+    ax.legend(fontsize=6, ncol=2)
+    ax.set_title(f"{spec.name}, variant {variant}", fontsize=9)
+    return figures.save(fig, path, dpi=90)
+
+
+def speed_figure(spec: SceneSpec, frame: pd.DataFrame, method: str, path, variant: int = 0) -> pathlib.Path:
+    """The robot's speed and the local planner's speed gain over time, with the distance to the
+    nearest person (seed 004 Fig. 13)."""
+    g = frame[(frame["variant"] == variant) & (frame["method"] == method)]
+    fig = figures.figure(figsize=(5.0, 2.6))
+    ax = fig.subplots()
+    t = g["t_s"].to_numpy()
+    ax.plot(t, g["robot_speed"].to_numpy(), label="speed (m/s)", color="tab:blue")
+    ax.plot(t, g["speed_gain"].to_numpy(), label="speed gain", color="tab:green", lw=0.8)
+    ax.set_xlabel("time (s)")
+    ax.set_ylim(0, 1.05)
+    twin = ax.twinx()
+    d = nearest_distance(g)
+    twin.plot(t, np.where(np.isfinite(d), d, np.nan), color="tab:red", lw=0.8, label="nearest person (m)")
+    twin.set_ylabel("nearest person (m)", color="tab:red")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title(f"{spec.name}: {method}, variant {variant}", fontsize=9)
+    return figures.save(fig, path, dpi=90)
+
+
+def animation(
+    spec: SceneSpec, frame: pd.DataFrame, method: str, path, variant: int = 0, every: int = 5
+) -> pathlib.Path:
+    """A GIF of one episode (every ``every``-th step): robot (blue disc), people (red)."""
+    from matplotlib.animation import FuncAnimation, PillowWriter
+    from matplotlib.patches import Circle
+
+    g = frame[(frame["variant"] == variant) & (frame["method"] == method)].reset_index(drop=True)
+    reached = g["reached"].to_numpy()
+    stop = int(np.argmax(reached)) + 1 if reached.any() else len(g)
+    steps = list(range(0, stop, every))
+    n_people = _people_columns(g)
+    fig = figures.figure(
+        figsize=(3.6, 3.6 * (spec.bounds_m[3] - spec.bounds_m[2]) / (spec.bounds_m[1] - spec.bounds_m[0]))
+    )
+    ax = fig.subplots()
+    _draw_scene(ax, spec)
+    trail = ax.plot([], [], color="tab:blue", lw=1)[0]
+    robot = Circle((0, 0), 0.275, color="tab:blue")
+    ax.add_patch(robot)
+    people = [Circle((0, 0), 0.25, color="tab:red") for _ in range(n_people)]
+    for c in people:
+        ax.add_patch(c)
+    title = ax.set_title("", fontsize=8)
+
+    def draw(k):
+        i = steps[k]
+        trail.set_data(g["robot_x"].to_numpy()[: i + 1], g["robot_y"].to_numpy()[: i + 1])
+        robot.center = (g["robot_x"].iloc[i], g["robot_y"].iloc[i])
+        for p, c in enumerate(people):
+            c.center = (g[f"p{p}_x"].iloc[i], g[f"p{p}_y"].iloc[i])
+            c.set_visible(bool(g[f"p{p}_present"].iloc[i]))
+        title.set_text(f"{spec.name}: {method}, t = {g['t_s'].iloc[i]:.1f} s")
+        return [trail, robot, title, *people]
+
+    anim = FuncAnimation(fig, draw, frames=len(steps), blit=False)
+    return write_atomic(path, lambda tmp: anim.save(tmp, writer=PillowWriter(fps=10), dpi=60))

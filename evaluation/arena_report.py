@@ -1,0 +1,187 @@
+"""The arena's tables: per-episode metrics and trajectories as pandas frames, the per-scene summary.
+
+``run_scene`` runs every method on a scene's variants (common random numbers: variant k is the
+same for every method) and returns the per-episode metrics frame and the trajectories it keeps;
+:func:`summary` reduces episodes to one row per scene and method, success rates with Wilson 95 %
+intervals (``scipy.stats.binomtest``), the rest as means.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from evaluation import arena, nav_metrics
+from jaxsim.scenes.robot import RobotParams
+from jaxsim.scenes.spec import SceneSpec
+from jaxsim.scenes.variant import Variant, sample_variants
+from planners.stack import METHODS
+
+SUMMARY_MEANS = (
+    "collisions",
+    "intrusions",
+    "d_min_m",
+    "d_h_m",
+    "time_s",
+    "path_length_m",
+    "chc_rad",
+    "stalled_s",
+    "spl",
+    "zone_intimate",
+    "zone_personal",
+    "zone_social",
+    "zone_public",
+    "group_share",
+    "wall_contacts",
+)
+
+
+def _velocities(people_xy, present, dt_s):
+    """(T, P, 2) people's velocities by finite differences (0 where a person is absent)."""
+    v = jnp.diff(people_xy, axis=0, prepend=people_xy[:1]) / dt_s
+    return jnp.where(present[..., None], v, 0.0)
+
+
+def metrics_function(setup: arena.SceneSetup, config: arena.ArenaConfig, robot_radius_m: float):
+    """``(trajectories, variants) -> dict of metric arrays``, jitted and vmapped over episodes."""
+    rule = setup.spec.rule
+    timeout = setup.n_periods * config.replan_every_steps * config.dt_s
+
+    def one(tr: arena.Trajectory, v: Variant):
+        velocity = _velocities(tr.people_xy, tr.people_present, config.dt_s)
+        ok = nav_metrics.rule_satisfied(
+            rule, tr.robot_xy, tr.reached, tr.people_xy, v.start_xy, v.end_xy, tr.people_present, v.group
+        )
+        return nav_metrics.episode_metrics(
+            tr.robot_xy,
+            tr.robot_yaw,
+            tr.robot_speed,
+            tr.people_xy,
+            velocity,
+            tr.people_present,
+            tr.reached,
+            v.goal_xy,
+            v.robot_xy,
+            v.group,
+            config.dt_s,
+            timeout,
+            robot_radius_m,
+            config.person_radius_m,
+            ok,
+        )
+
+    return jax.jit(jax.vmap(one))
+
+
+def episode_frame(scene: str, method: str, first: int, metrics: dict, wall_contacts) -> pd.DataFrame:
+    """One row per episode: scalar metrics, zone shares, the first people's minimum distances."""
+    m = {k: np.asarray(v) for k, v in metrics.items()}
+    n = len(m["goal_success"])
+    rows = {"scene": [scene] * n, "method": [method] * n, "variant": np.arange(first, first + n)}
+    for key, value in m.items():
+        if key == "zone_share":
+            for z, name in enumerate(nav_metrics.ZONE_NAMES):
+                rows[f"zone_{name}"] = value[:, z]
+        elif key == "d_person_m":
+            for p in range(min(value.shape[1], 2)):
+                rows[f"d_{p + 1}_m"] = value[:, p]
+        else:
+            rows[key] = value
+    rows["wall_contacts"] = np.asarray(wall_contacts)
+    frame = pd.DataFrame(rows)
+    frame["metrics_version"] = nav_metrics.VERSION
+    return frame
+
+
+def trajectory_frame(scene: str, method: str, first: int, tr: arena.Trajectory, keep: int, dt_s: float):
+    """Long frame of the first ``keep`` episodes: one row per (variant, step), the robot's pose and
+    speed, and ``p<k>_x, p<k>_y, p<k>_present`` per person slot."""
+    keep = min(keep, tr.robot_xy.shape[0])
+    if keep == 0:
+        return None
+    t = tr.robot_xy.shape[1]
+    xy = np.asarray(tr.robot_xy[:keep]).reshape(-1, 2)
+    cols = {
+        "scene": scene,
+        "method": method,
+        "variant": np.repeat(np.arange(first, first + keep), t),
+        "t_s": np.tile((np.arange(t) + 1) * dt_s, keep),
+        "robot_x": xy[:, 0],
+        "robot_y": xy[:, 1],
+        "robot_yaw": np.asarray(tr.robot_yaw[:keep]).reshape(-1),
+        "robot_speed": np.asarray(tr.robot_speed[:keep]).reshape(-1),
+        "reached": np.asarray(tr.reached[:keep]).reshape(-1),
+        "speed_gain": np.asarray(tr.speed_gain[:keep]).reshape(-1),
+    }
+    pxy = np.asarray(tr.people_xy[:keep])
+    present = np.asarray(tr.people_present[:keep])
+    for p in range(pxy.shape[2]):
+        cols[f"p{p}_x"] = pxy[:, :, p, 0].reshape(-1)
+        cols[f"p{p}_y"] = pxy[:, :, p, 1].reshape(-1)
+        cols[f"p{p}_present"] = present[:, :, p].reshape(-1)
+    return pd.DataFrame(cols)
+
+
+def run_scene(
+    spec: SceneSpec,
+    methods: list[str],
+    n_variants: int,
+    seed: int = 0,
+    first: int = 0,
+    keep_trajectories: int = 0,
+    gscl_predict: Callable | None = None,
+    config: arena.ArenaConfig = arena.ArenaConfig(),
+    on_method: Callable[[str], None] | None = None,
+):
+    """Every method on variants ``first .. first + n_variants - 1`` of one scene:
+    ``(episodes frame, trajectories frame or None)``."""
+    setup = arena.setup_scene(spec, config)
+    crowd = arena.crowd_params()
+    variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, n_variants, first))
+    robot = RobotParams()
+    measure = metrics_function(setup, config, float(robot.radius_m))
+    episodes, trajectories = [], []
+    for name in methods:
+        run = arena.episode_function(setup, METHODS[name], crowd, robot, config, gscl_predict)
+        tr = run(variants)
+        episodes.append(episode_frame(spec.name, name, first, measure(tr, variants), tr.wall_contacts))
+        kept = trajectory_frame(spec.name, name, first, tr, keep_trajectories, config.dt_s)
+        if kept is not None:
+            trajectories.append(kept)
+        if on_method is not None:
+            on_method(name)
+    return pd.concat(episodes, ignore_index=True), (
+        pd.concat(trajectories, ignore_index=True) if trajectories else None
+    )
+
+
+def wilson(successes: int, n: int) -> tuple[float, float]:
+    """95 % Wilson interval of a proportion (scipy's ``binomtest``)."""
+    if n == 0:
+        return float("nan"), float("nan")
+    ci = stats.binomtest(int(successes), int(n)).proportion_ci(0.95, method="wilson")
+    return float(ci.low), float(ci.high)
+
+
+def summary(episodes: pd.DataFrame) -> pd.DataFrame:
+    """One row per (scene, method): n, goal and social success (%) with 95 % intervals, means."""
+    rows = []
+    for (scene, method), g in episodes.groupby(["scene", "method"], sort=False):
+        n = len(g)
+        row = {"scene": scene, "method": method, "n": n}
+        for key in ("goal_success", "social_success"):
+            k = int(g[key].sum())
+            lo, hi = wilson(k, n)
+            row[key + "_pct"] = 100.0 * k / n
+            row[key + "_ci"] = f"{100 * lo:.0f}-{100 * hi:.0f}"
+        for key in SUMMARY_MEANS:
+            if key in g:
+                values = g[key].replace([np.inf, -np.inf], np.nan)
+                row[key] = float(values.mean())
+        rows.append(row)
+    return pd.DataFrame(rows)

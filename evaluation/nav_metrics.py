@@ -1,0 +1,218 @@
+"""Social-navigation metrics of one episode, from its trajectory arrays (pure JAX: vmap over episodes).
+
+Every definition pinned here, with its source and the choice where the suites disagree
+(``../shared/notes/social-navigation.md`` Sec. 2). Distances are **centre to centre** (as seeds
+001 and 004 and SocNavBench report them; HuNavSim subtracts the radii) unless the name says
+otherwise. Sampled at the episode's step (0.1 s); only steps before the goal is reached count
+for the proxemic and person-distance metrics (after that the robot has arrived).
+
+* ``goal_success``: the centre within the goal tolerance before the timeout (HuNavSim's reading;
+  a collision does not void it, unlike Francis et al.'s S; ``collisions`` is reported apart).
+* ``social_success``: goal success and the scene's rule (:mod:`jaxsim.scenes.spec`).
+* ``collisions``: encounters of a present person closer than robot radius + person radius,
+  counted once per encounter (:func:`evaluation.metrics.collision_encounters`), split into
+  ``collisions_robot`` (the robot moving towards the person faster than the person towards it,
+  at the encounter's start) and ``collisions_person``.
+* ``time_s`` (tau, seed 004): to the goal (the timeout when not reached); ``path_length_m`` (d_t):
+  distance driven to then; ``chc_rad``: cumulative heading change, sum of wrapped yaw changes at
+  10 Hz (rate-dependent: HuNavSim samples at 1 Hz); ``stalled_s``: time below 0.05 m/s before the
+  goal; ``spl``: success x straight-line distance / max(driven, straight line) (social-jym's form).
+* ``d_h_m``: mean over time of the distance to the nearest present person (seed 004 Eq. 16);
+  ``d_min_m``: the smallest over time and people; ``d_person_m`` (P,): per person (d_1, d_2).
+* ``zone_share``: share of time with the nearest person in each Hall zone, intimate < 0.45 m,
+  personal < 1.2, social < 3.6, public beyond (seeds 002, 004; seed 000 uses 0.5 for intimate).
+* ``intrusions``: personal-space intrusions as seed 001 counts them: entries of the robot into a
+  person's 1.2 m (one per entry, per person).
+* ``ttc_min_s``: smallest time to collision at constant velocities over the episode (inf if none).
+* ``group_share``: share of time inside a group's circle (its members' mean distance to their
+  centroid).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from evaluation.metrics import collision_encounters
+
+VERSION = "nav-metrics 1"
+ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}
+ZONE_NAMES = ("intimate", "personal", "social", "public")
+STALLED_MPS = 0.05
+
+
+def _wrap(a):
+    return (a + jnp.pi) % (2 * jnp.pi) - jnp.pi
+
+
+def episode_metrics(
+    robot_xy,
+    robot_yaw,
+    robot_speed,
+    people_xy,
+    people_velocity,
+    present,
+    reached,
+    goal_xy,
+    start_xy,
+    group,
+    dt_s: float,
+    timeout_s: float,
+    robot_radius_m: float,
+    person_radius_m: float,
+    rule_ok,
+):
+    """Metrics of one episode.
+
+    Args:
+      robot_xy (T, 2), robot_yaw (T,), robot_speed (T,); people_xy (T, P, 2), people_velocity
+      (T, P, 2), present (T, P) bool; reached (T,) bool (goal reached by then); goal_xy, start_xy
+      (2,); group (P,) int32 group of each person (-1 none); rule_ok () bool, the scene's rule.
+
+    Returns: a dict of arrays (scalars, ``d_person_m`` (P,), ``zone_share`` (4,)).
+    """
+    active = ~jnp.concatenate([jnp.zeros(1, bool), reached[:-1]])  # steps before arrival
+    success = reached[-1]
+    arrival = jnp.argmax(reached)
+    time_s = jnp.where(success, (arrival + 1) * dt_s, timeout_s)
+    steps = jnp.linalg.norm(jnp.diff(robot_xy, axis=0), axis=-1)
+    path_length = jnp.sum(jnp.where(active[1:], steps, 0.0))
+    chc = jnp.sum(jnp.where(active[1:], jnp.abs(_wrap(jnp.diff(robot_yaw))), 0.0))
+    stalled = jnp.sum(active & (robot_speed < STALLED_MPS)) * dt_s
+    straight = jnp.linalg.norm(goal_xy - start_xy)
+    spl = jnp.where(success, straight / jnp.maximum(path_length, straight), 0.0)
+
+    offset = people_xy - robot_xy[:, None, :]
+    dist = jnp.linalg.norm(offset, axis=-1)  # (T, P)
+    seen = present & active[:, None]
+    dist_masked = jnp.where(seen, dist, jnp.inf)
+    nearest = jnp.min(dist_masked, axis=1)  # (T,)
+    has_near = jnp.isfinite(nearest)
+    d_h = jnp.sum(jnp.where(has_near, nearest, 0.0)) / jnp.maximum(jnp.sum(has_near), 1)
+    d_person = jnp.min(dist_masked, axis=0)
+    d_min = jnp.min(d_person)
+    edges = jnp.array([ZONES_M["intimate"], ZONES_M["personal"], ZONES_M["social"]])
+    zone = jnp.sum(nearest[:, None] >= edges[None], axis=1)  # 0..3
+    counted = active & has_near
+    zone_share = jnp.array([jnp.sum(counted & (zone == z)) for z in range(4)]) / jnp.maximum(jnp.sum(active), 1)
+
+    # Personal-space intrusions: entries into a person's 1.2 m.
+    inside = seen & (dist < ZONES_M["personal"])
+    entered = inside & ~jnp.concatenate([jnp.zeros((1,) + inside.shape[1:], bool), inside[:-1]])
+    intrusions = jnp.sum(entered)
+
+    # Collisions once per encounter, attributed at the encounter's start.
+    radius = robot_radius_m + person_radius_m
+    robot_v = robot_speed[:, None] * jnp.stack([jnp.cos(robot_yaw), jnp.sin(robot_yaw)], -1)  # (T, 2)
+    unit = offset / jnp.maximum(dist, 1e-9)[..., None]
+    robot_closing = jnp.sum(robot_v[:, None, :] * unit, axis=-1)
+    person_closing = -jnp.sum(people_velocity * unit, axis=-1)
+
+    def collide(contact, xs):
+        d, p, rc, pc = xs
+        now, _ = collision_encounters(contact, d, p, radius, 0.1)
+        start = now & ~contact
+        return now, (jnp.sum(start & (rc >= pc)), jnp.sum(start & (rc < pc)))
+
+    _, (by_robot, by_person) = jax.lax.scan(
+        collide, jnp.zeros(dist.shape[1], bool), (dist, seen, robot_closing, person_closing)
+    )
+
+    # Time to collision at constant velocities (the bodies touching), over steps and people.
+    rel_v = people_velocity - robot_v[:, None, :]
+    a = jnp.sum(rel_v * rel_v, axis=-1)
+    b = 2 * jnp.sum(offset * rel_v, axis=-1)
+    c = dist * dist - radius * radius
+    disc = b * b - 4 * a * c
+    t_hit = (-b - jnp.sqrt(jnp.maximum(disc, 0.0))) / jnp.maximum(2 * a, 1e-9)
+    ttc = jnp.where(seen & (disc > 0) & (t_hit > 0) & (a > 1e-9), t_hit, jnp.inf)
+    ttc = jnp.where(seen & (c <= 0), 0.0, ttc)
+
+    # Inside a group's circle.
+    n = group.shape[0]
+    member = (group[None, :] == jnp.arange(n)[:, None]) & (group[None, :] >= 0)  # (G, P)
+    count = jnp.sum(member, axis=1)
+    centre = jnp.einsum("gp,tpd->tgd", member.astype(robot_xy.dtype), people_xy) / jnp.maximum(count, 1)[None, :, None]
+    spread = jnp.linalg.norm(people_xy[:, None, :, :] - centre[:, :, None, :], axis=-1)  # (T, G, P)
+    radius_g = jnp.sum(jnp.where(member[None], spread, 0.0), axis=-1) / jnp.maximum(count, 1)[None]
+    in_group = jnp.any((count >= 2)[None] & (jnp.linalg.norm(robot_xy[:, None] - centre, axis=-1) < radius_g), axis=1)
+    group_share = jnp.sum(active & in_group) / jnp.maximum(jnp.sum(active), 1)
+
+    return {
+        "goal_success": success,
+        "social_success": success & rule_ok,
+        "collisions": jnp.sum(by_robot) + jnp.sum(by_person),
+        "collisions_robot": jnp.sum(by_robot),
+        "collisions_person": jnp.sum(by_person),
+        "time_s": time_s,
+        "path_length_m": path_length,
+        "chc_rad": chc,
+        "stalled_s": stalled,
+        "spl": spl,
+        "d_h_m": d_h,
+        "d_min_m": d_min,
+        "d_person_m": d_person,
+        "zone_share": zone_share,
+        "intrusions": intrusions,
+        "ttc_min_s": jnp.min(ttc),
+        "group_share": group_share,
+    }
+
+
+# ------------------------------------------------------------------ the scenes' rules
+
+
+def rule_satisfied(rule: dict, robot_xy, reached, people_xy, people_start_xy, people_end_xy, present, group):
+    """() bool: the trajectory obeys a scene's rule (:mod:`jaxsim.scenes.spec`), over the steps
+    before the goal is reached. ``people_start_xy``, ``people_end_xy``: (P, 2) walkers' legs."""
+    active = ~jnp.concatenate([jnp.zeros(1, bool), reached[:-1]])
+    kind = rule["type"]
+    if kind == "all":
+        oks = [
+            rule_satisfied(r, robot_xy, reached, people_xy, people_start_xy, people_end_xy, present, group)
+            for r in rule["rules"]
+        ]
+        return jnp.all(jnp.stack(oks))
+    if kind == "min_distance":
+        d = jnp.linalg.norm(people_xy - robot_xy[:, None], axis=-1)
+        return jnp.all(jnp.where(present & active[:, None], d >= rule["distance_m"], True))
+    if kind == "avoid_circle":
+        d = jnp.linalg.norm(robot_xy - jnp.asarray(rule["centre"], robot_xy.dtype), axis=-1)
+        return jnp.all(jnp.where(active, d >= rule["radius_m"], True))
+    if kind == "avoid_group":
+        member = group == rule["group"]
+        count = jnp.maximum(jnp.sum(member), 1)
+        centre = jnp.sum(jnp.where(member[None, :, None], people_xy, 0.0), axis=1) / count  # (T, 2)
+        spread = jnp.linalg.norm(people_xy - centre[:, None], axis=-1)
+        radius = jnp.sum(jnp.where(member[None], spread, 0.0), axis=1) / count
+        return jnp.all(jnp.where(active, jnp.linalg.norm(robot_xy - centre, axis=-1) >= radius, True))
+    if kind in ("keep_right", "visit"):
+        box = jnp.asarray(rule["box"], robot_xy.dtype)
+        inside = (
+            (robot_xy[:, 0] >= box[0])
+            & (robot_xy[:, 0] <= box[1])
+            & (robot_xy[:, 1] >= box[2])
+            & (robot_xy[:, 1] <= box[3])
+        ) & active
+        if kind == "visit":
+            return jnp.any(inside)
+        angle = np.radians(rule["direction_deg"])
+        right = jnp.array([np.sin(angle), -np.cos(angle)], robot_xy.dtype)
+        centre = jnp.array([(box[0] + box[1]) / 2, (box[2] + box[3]) / 2])
+        on_right = jnp.sum((robot_xy - centre) * right, axis=-1) > 0
+        share = jnp.sum(inside & on_right) / jnp.maximum(jnp.sum(inside), 1)
+        return (jnp.sum(inside) == 0) | (share >= rule["min_share"])
+    if kind == "pass_behind":
+        # The robot crosses the walker's line of motion behind them: when the robot is on the
+        # line (its signed side changes), the walker has already passed the robot's position.
+        i = rule["person"]
+        start, end = people_start_xy[i], people_end_xy[i]
+        direction = (end - start) / jnp.maximum(jnp.linalg.norm(end - start), 1e-9)
+        normal = jnp.array([-direction[1], direction[0]])
+        side = jnp.sum((robot_xy - start) * normal, axis=-1)
+        crosses = (jnp.sign(side[1:]) != jnp.sign(side[:-1])) & active[1:]
+        # Along the walker's direction, the walker is ahead of the crossing point.
+        ahead = jnp.sum((people_xy[1:, i] - robot_xy[1:]) * direction, axis=-1) > 0
+        return jnp.all(jnp.where(crosses, ahead, True))
+    raise ValueError(f"unknown rule {kind!r}")

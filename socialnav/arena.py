@@ -1,0 +1,209 @@
+"""``socialnav arena``: the seeds' methods on the seeds' scenes, in closed loop, many variants each.
+
+socialnav arena --out runs/arena                                   # every scene, every method, 100 variants
+socialnav arena --scenes casn_static_person,casn_head_on --methods navfn,casn --variants 20
+socialnav arena --scenes my_scene.json --out runs/mine             # a scene file of your own
+socialnav arena --gscl-run runs/gscl                               # adds the GSCL method
+
+Writes ``episodes/<scene>.parquet`` (one row per episode: every metric), ``trajectories/<scene>.parquet``
+(the first ``--keep-trajectories`` variants, step by step), ``pictures/<scene>_paths.png`` and
+``_distance.png`` (variant 0), ``summary.csv`` (one row per scene and method) and ``run.json``;
+every file atomically, one scene at a time: a rerun with the same settings skips the scenes
+already written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+
+from socialnav.argtypes import comma_names, positive_int
+
+DEFAULT_METHODS = ("navfn", "snl_small", "snl_large", "casn", "snape_eband", "snape_social_eband")
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "arena",
+        help="run navigation methods on the social-navigation scenes, many variants each",
+        description="Every chosen method on every chosen scene (data/scenes/*.json or your own files), "
+        "N seeded variants each, in closed loop; per-episode metrics, trajectories and a summary.",
+    )
+    p.add_argument(
+        "--scenes", type=comma_names, default=None, help="scene names or .json files (default: all built-in)"
+    )
+    p.add_argument(
+        "--methods",
+        type=comma_names,
+        default=None,
+        help=f"methods (default: {','.join(DEFAULT_METHODS)}; gscl too with --gscl-run)",
+    )
+    p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the variants (default 0)")
+    p.add_argument(
+        "--out", type=pathlib.Path, default=pathlib.Path("runs/arena"), help="output folder (default runs/arena)"
+    )
+    p.add_argument("--gscl-run", type=pathlib.Path, default=None, help="a trained GSCL run folder (enables 'gscl')")
+    p.add_argument(
+        "--keep-trajectories",
+        type=int,
+        default=5,
+        help="variants per scene and method whose trajectories are kept (default 5)",
+    )
+    p.add_argument(
+        "--animate",
+        type=_scene_method,
+        action="append",
+        default=[],
+        metavar="SCENE:METHOD",
+        help="also write pictures/<scene>_<method>.gif of variant 0 (repeatable)",
+    )
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.set_defaults(handler=run)
+
+
+def _scene_method(text: str) -> tuple[str, str]:
+    scene, sep, method = text.partition(":")
+    if not sep or not scene or not method:
+        raise argparse.ArgumentTypeError(f"expected SCENE:METHOD, got {text!r}")
+    return scene, method
+
+
+def _scene_files(names, scenes_dir: pathlib.Path) -> list[pathlib.Path]:
+    if names is None:
+        return sorted(scenes_dir.glob("*.json"))
+    files = []
+    for name in names:
+        path = pathlib.Path(name)
+        files.append(path if path.suffix == ".json" else scenes_dir / f"{name}.json")
+    return files
+
+
+def run(args) -> int:
+    from common.atomic import write_atomic, write_text_atomic
+    from common.progress import bar
+    from data import DATA_DIR
+    from jaxsim.scenario.errors import ScenarioError
+    from jaxsim.scenes.spec import load_scene
+    from planners.stack import METHODS
+
+    if str(args.out) in ("", "."):
+        print("socialnav arena: --out must name a folder, not the working directory", file=sys.stderr)
+        return 2
+    if args.keep_trajectories < 0:
+        print("socialnav arena: --keep-trajectories must be >= 0", file=sys.stderr)
+        return 2
+    methods = list(args.methods) if args.methods else list(DEFAULT_METHODS) + (["gscl"] if args.gscl_run else [])
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        print(
+            f"socialnav arena: --methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})", file=sys.stderr
+        )
+        return 2
+    for scene_name, method in args.animate:
+        if method not in methods:
+            print(f"socialnav arena: --animate {scene_name}:{method}: {method} is not among --methods", file=sys.stderr)
+            return 2
+    if args.animate and args.keep_trajectories < 1:
+        print("socialnav arena: --animate needs --keep-trajectories >= 1", file=sys.stderr)
+        return 2
+    if "gscl" in methods and args.gscl_run is None:
+        print("socialnav arena: --methods gscl needs --gscl-run RUN (a trained GSCL run folder)", file=sys.stderr)
+        return 2
+    try:
+        specs = [load_scene(f) for f in _scene_files(args.scenes, DATA_DIR / "scenes")]
+    except ScenarioError as e:
+        print(f"socialnav arena: {e}", file=sys.stderr)
+        return 2
+    predict = None
+    if args.gscl_run is not None:
+        if not (args.gscl_run / "checkpoints").is_dir():
+            print(
+                f"socialnav arena: {args.gscl_run}: no checkpoints/ folder (train one with socialnav gscl train)",
+                file=sys.stderr,
+            )
+            return 2
+        from models.inference import SocialCostModel
+
+        predict = SocialCostModel.load(args.gscl_run).function
+
+    import pandas as pd
+
+    from common import __version__
+    from evaluation import arena_plots, arena_report, nav_metrics
+
+    settings = {
+        "scenes": [s.name for s in specs],
+        "scene_files": [str(s.file) for s in specs],
+        "methods": methods,
+        "variants": args.variants,
+        "seed": args.seed,
+        "keep_trajectories": args.keep_trajectories,
+        "gscl_run": None if args.gscl_run is None else str(args.gscl_run),
+        "metrics_version": nav_metrics.VERSION,
+        "socialnav_version": __version__,
+    }
+    meta = args.out / "run.json"
+    if meta.exists():
+        try:
+            previous = json.loads(meta.read_text())
+        except (OSError, json.JSONDecodeError):
+            previous = None
+        if previous != settings:
+            print(
+                f"socialnav arena: {args.out} holds a run with other settings ({meta}); choose another --out",
+                file=sys.stderr,
+            )
+            return 2
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(meta, json.dumps(settings, indent=1) + "\n")
+
+    frames = []
+    with bar("arena", unit="runs", enabled=not args.no_progress) as progress:
+        total, done = len(specs) * len(methods), 0
+        for spec in specs:
+            episodes_file = args.out / "episodes" / f"{spec.name}.parquet"
+            if episodes_file.exists():
+                frames.append(pd.read_parquet(episodes_file))
+                done += len(methods)
+                progress.update(done, total)
+                continue
+            progress.set_postfix(scene=spec.name)
+
+            def tick(_name, state={"done": done}):  # noqa: B006
+                state["done"] += 1
+                progress.update(state["done"], total)
+
+            episodes, trajectories = arena_report.run_scene(
+                spec, methods, args.variants, args.seed, 0, args.keep_trajectories, predict, on_method=tick
+            )
+            done += len(methods)
+            if trajectories is not None:
+                write_atomic(args.out / "trajectories" / f"{spec.name}.parquet", trajectories.to_parquet)
+                pictures = args.out / "pictures"
+                arena_plots.paths_figure(spec, trajectories, pictures / f"{spec.name}_paths.png")
+                arena_plots.distance_figure(spec, trajectories, pictures / f"{spec.name}_distance.png")
+                for scene_name, method in args.animate:
+                    if scene_name == spec.name:
+                        arena_plots.animation(spec, trajectories, method, pictures / f"{spec.name}_{method}.gif")
+            write_atomic(episodes_file, episodes.to_parquet)  # last: its presence marks the scene done
+            frames.append(episodes)
+    summary = arena_report.summary(pd.concat(frames, ignore_index=True))
+    write_atomic(args.out / "summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
+    shown = [
+        "scene",
+        "method",
+        "n",
+        "goal_success_pct",
+        "social_success_pct",
+        "collisions",
+        "intrusions",
+        "d_min_m",
+        "time_s",
+    ]
+    with pd.option_context("display.width", 200, "display.max_rows", 500):
+        print(summary[shown].round(2).to_string(index=False))
+    print(f"wrote {args.out}/summary.csv, episodes/ and trajectories/")
+    return 0
