@@ -149,4 +149,4 @@ def animation(
         return [trail, robot, title, *people]
 
     anim = FuncAnimation(fig, draw, frames=len(steps), blit=False)
-    return write_atomic(path, lambda tmp: anim.save(tmp, writer=PillowWriter(fps=10), dpi=60))
+    return write_atomic(path, lambda tmp: anim.save(tmp, writer=PillowWriter(fps=10), dpi=100))

@@ -5,11 +5,11 @@ socialnav arena --scenes casn_static_person,casn_head_on --methods navfn,casn --
 socialnav arena --scenes my_scene.json --out runs/mine             # a scene file of your own
 socialnav arena --gscl-run runs/gscl                               # adds the GSCL method
 
-Writes ``episodes/<scene>.parquet`` (one row per episode: every metric), ``trajectories/<scene>.parquet``
-(the first ``--keep-trajectories`` variants, step by step), ``pictures/<scene>_paths.png`` and
-``_distance.png`` (variant 0), ``summary.csv`` (one row per scene and method) and ``run.json``;
-every file atomically, one scene at a time: a rerun with the same settings skips the scenes
-already written.
+Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
+``trajectories/<scene>.parquet`` (the first ``--keep-trajectories`` variants, step by step),
+``pictures/<scene>_paths.png``, ``_distance.png`` and (with the social band) ``_speed.png``
+(variant 0), ``summary.csv`` (one row per scene and method) and ``run.json``; every file
+atomically, one scene at a time: a rerun with the same settings skips the scenes already written.
 """
 
 from __future__ import annotations
@@ -185,6 +185,10 @@ def run(args) -> int:
                 pictures = args.out / "pictures"
                 arena_plots.paths_figure(spec, trajectories, pictures / f"{spec.name}_paths.png")
                 arena_plots.distance_figure(spec, trajectories, pictures / f"{spec.name}_distance.png")
+                if "snape_social_eband" in methods:
+                    arena_plots.speed_figure(
+                        spec, trajectories, "snape_social_eband", pictures / f"{spec.name}_speed.png"
+                    )
                 for scene_name, method in args.animate:
                     if scene_name == spec.name:
                         arena_plots.animation(spec, trajectories, method, pictures / f"{spec.name}_{method}.gif")
