@@ -1,9 +1,9 @@
 """Navigation stacks composed from parts, and the seeds' methods as named configurations.
 
-A stack is a cost layer (none, SNL small or large, CASN, SNAPE's social map, GSCL), a global grid
-planner replanning at a rate (NavFn-like or SNAPE's weighted Dijkstra) and a local planner at the
-control rate (pure pursuit, the classic elastic band, or SNAPE's social band with its speed
-gain). :data:`METHODS` names the seeds' configurations; any other combination is one
+A stack is a cost layer (none; SNL small, large, or matched to CASN's radius; CASN; SNAPE's
+social map; GSCL), a global grid planner replanning at a rate (NavFn-like or SNAPE's weighted
+Dijkstra) and a local planner at the control rate (pure pursuit, the classic elastic band, or
+SNAPE's social band with its speed gain). :data:`METHODS` names the seeds' configurations; any other combination is one
 ``StackConfig(...)``.
 """
 
@@ -16,9 +16,13 @@ import jax.numpy as jnp
 from planners import casn, costmap, elastic_band, grid_planner, pure_pursuit, snape, snl
 from planners.scene import Scene
 
-LAYERS = ("none", "snl_small", "snl_large", "casn", "snape", "gscl")
+LAYERS = ("none", "snl_small", "snl_large", "snl_matched", "casn", "snape", "gscl")
 GLOBAL_PLANNERS = ("navfn", "weighted")
 LOCAL_PLANNERS = ("pursuit", "eband", "social_eband")
+
+# Seed 001's SNL: "the radius of the gradient matches the radius of our cost model" (CASN's
+# personal 1.2 m): the covariance whose standing radius at cutoff is 1.2 m (0.354).
+SNL_MATCHED = snl.SNLParams(covariance=snl.covariance_for_radius(1.2))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,6 +63,7 @@ METHODS: dict[str, StackConfig] = {
     "navfn": StackConfig("none"),
     "snl_small": StackConfig("snl_small"),
     "snl_large": StackConfig("snl_large"),
+    "snl_matched": StackConfig("snl_matched"),
     "casn": StackConfig("casn"),
     "gscl": StackConfig("gscl"),
     "snape_eband": StackConfig("snape", "weighted", "eband", replan=False),
@@ -75,6 +80,8 @@ def social_layer(config: StackConfig, scene: Scene, x_m, y_m, casn_state, gscl_l
         return snl.snl_layer(scene, x_m, y_m, snl.SIGMA_SMALL), casn_state
     if config.layer == "snl_large":
         return snl.snl_layer(scene, x_m, y_m, snl.SIGMA_LARGE), casn_state
+    if config.layer == "snl_matched":
+        return snl.snl_layer(scene, x_m, y_m, SNL_MATCHED), casn_state
     if config.layer == "casn":
         return casn.casn_layer(scene, x_m, y_m, casn_state)
     if config.layer == "snape":

@@ -8,7 +8,8 @@ socialnav arena --gscl-run runs/gscl                               # adds the GS
 Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
 ``trajectories/<scene>.parquet`` (the first ``--keep-trajectories`` variants, step by step),
 ``pictures/<scene>_paths.png``, ``_distance.png`` and (with the social band) ``_speed.png``
-(variant 0), ``summary.csv`` (one row per scene and method) and ``run.json``; every file
+(variant 0), ``summary.csv`` (one row per scene and method), ``papers.csv`` (the seeds' published
+numbers beside ours, for the scenes and methods the run has) and ``run.json``; every file
 atomically, one scene at a time: a rerun with the same settings skips the scenes already written.
 """
 
@@ -21,7 +22,7 @@ import sys
 
 from socialnav.argtypes import comma_names, positive_int
 
-DEFAULT_METHODS = ("navfn", "snl_small", "snl_large", "casn", "snape_eband", "snape_social_eband")
+DEFAULT_METHODS = ("navfn", "snl_small", "snl_large", "snl_matched", "casn", "snape_eband", "snape_social_eband")
 
 
 def add_parser(sub) -> None:
@@ -132,7 +133,7 @@ def run(args) -> int:
     import pandas as pd
 
     from common import __version__
-    from evaluation import arena_plots, arena_report, nav_metrics
+    from evaluation import arena_plots, arena_report, nav_metrics, papers
 
     settings = {
         "scenes": [s.name for s in specs],
@@ -209,5 +210,11 @@ def run(args) -> int:
     ]
     with pd.option_context("display.width", 200, "display.max_rows", 500):
         print(summary[shown].round(2).to_string(index=False))
-    print(f"wrote {args.out}/summary.csv, episodes/ and trajectories/")
+    compared = papers.comparison(summary).dropna(subset=["ours"])
+    if len(compared):
+        write_atomic(args.out / "papers.csv", lambda tmp: compared.to_csv(tmp, index=False))
+        print("\nthe papers' numbers and ours:")
+        with pd.option_context("display.width", 200, "display.max_rows", 500):
+            print(compared.round(2).to_string(index=False))
+    print(f"wrote {args.out}/summary.csv, papers.csv, episodes/ and trajectories/")
     return 0

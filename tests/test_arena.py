@@ -371,3 +371,20 @@ def test_arena_command_writes_tables_resumes_and_refuses_other_settings(tmp_path
     assert (out / "episodes" / "casn_static_person.parquet").stat().st_mtime_ns == stamp
     assert cli.main([*args[:-1], "3", "--no-progress"]) == 2
     assert "other settings" in capsys.readouterr().err
+
+
+def test_the_papers_rows_name_known_scenes_and_methods_and_take_ours_from_a_summary():
+    from evaluation import papers
+    from jaxsim.scenes.spec import load_scene as load
+
+    scenes = {load(f).name for f in SCENES}
+    assert {row[1] for row in papers.PAPER_ROWS} <= scenes
+    assert {row[2] for row in papers.PAPER_ROWS} <= set(METHODS)
+    summary = pd.DataFrame(
+        [{"scene": "casn_crossing", "method": "casn", "d_min_m": 1.5, "intrusions": 0.2, "zone_personal": 0.1}]
+    )
+    compared = papers.comparison(summary)
+    assert len(compared) == len(papers.PAPER_ROWS)
+    mine = compared[(compared["scene"] == "casn_crossing") & (compared["method"] == "casn")]
+    assert dict(zip(mine["metric"], mine["ours"], strict=True)) == {"d_min_m": 1.5, "intrusions": 0.2}
+    assert compared["ours"].isna().sum() == len(compared) - 2
