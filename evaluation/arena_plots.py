@@ -56,7 +56,7 @@ def paths_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0) -
         ax.plot(g["robot_x"].to_numpy()[:stop], g["robot_y"].to_numpy()[:stop], color="tab:blue", lw=1.5)
         ax.plot(g["robot_x"].iloc[0], g["robot_y"].iloc[0], "o", color="black", ms=3)
         ax.set_title(method + ("" if upto.any() else " (no goal)"), fontsize=8)
-    fig.suptitle(f"{spec.name}, variant {variant}", fontsize=9)
+    fig.suptitle(f"{frame['scene'].iloc[0] if len(frame) else spec.name}, variant {variant}", fontsize=9)
     return figures.save(fig, path, dpi=80)
 
 
@@ -89,7 +89,7 @@ def distance_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0
     ax.set_ylabel("nearest person (m)")
     ax.set_ylim(0, 6)
     ax.legend(fontsize=6, ncol=2)
-    ax.set_title(f"{spec.name}, variant {variant}", fontsize=9)
+    ax.set_title(f"{frame['scene'].iloc[0] if len(frame) else spec.name}, variant {variant}", fontsize=9)
     return figures.save(fig, path, dpi=90)
 
 

@@ -18,7 +18,7 @@ from scipy import stats
 
 from evaluation import arena, nav_metrics
 from jaxsim.scenes.robot import RobotParams
-from jaxsim.scenes.spec import SceneSpec
+from jaxsim.scenes.spec import SceneSpec, mirror
 from jaxsim.scenes.variant import Variant, sample_variants
 from planners.stack import METHODS
 
@@ -127,6 +127,9 @@ def trajectory_frame(scene: str, method: str, first: int, tr: arena.Trajectory, 
     return pd.DataFrame(cols)
 
 
+HELD_OUT = "@held_out"
+
+
 def run_scene(
     spec: SceneSpec,
     methods: list[str],
@@ -137,24 +140,30 @@ def run_scene(
     gscl_predict: Callable | None = None,
     config: arena.ArenaConfig = arena.ArenaConfig(),
     on_method: Callable[[str], None] | None = None,
+    held_out: bool = False,
 ):
     """Every method on variants ``first .. first + n_variants - 1`` of one scene:
-    ``(episodes frame, trajectories frame or None)``."""
+    ``(episodes frame, trajectories frame or None)``. ``held_out``: the scene mirrored
+    (:func:`jaxsim.scenes.spec.mirror`) with every range drawn just outside itself, its rows named
+    ``<scene>@held_out``."""
+    name = spec.name + (HELD_OUT if held_out else "")
+    if held_out:
+        spec = mirror(spec)
     setup = arena.setup_scene(spec, config)
     crowd = arena.crowd_params()
-    variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, n_variants, first))
+    variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out))
     robot = RobotParams()
     measure = metrics_function(setup, config, float(robot.radius_m))
     episodes, trajectories = [], []
-    for name in methods:
-        run = arena.episode_function(setup, METHODS[name], crowd, robot, config, gscl_predict)
+    for method in methods:
+        run = arena.episode_function(setup, METHODS[method], crowd, robot, config, gscl_predict)
         tr = run(variants)
-        episodes.append(episode_frame(spec.name, name, first, measure(tr, variants), tr.wall_contacts))
-        kept = trajectory_frame(spec.name, name, first, tr, keep_trajectories, config.dt_s)
+        episodes.append(episode_frame(name, method, first, measure(tr, variants), tr.wall_contacts))
+        kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)
         if kept is not None:
             trajectories.append(kept)
         if on_method is not None:
-            on_method(name)
+            on_method(method)
     return pd.concat(episodes, ignore_index=True), (
         pd.concat(trajectories, ignore_index=True) if trajectories else None
     )

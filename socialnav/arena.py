@@ -4,12 +4,14 @@ socialnav arena --out runs/arena                                   # every scene
 socialnav arena --scenes casn_static_person,casn_head_on --methods navfn,casn --variants 20
 socialnav arena --scenes my_scene.json --out runs/mine             # a scene file of your own
 socialnav arena --gscl-run runs/gscl                               # adds the GSCL method
+socialnav arena --held-out                                         # and every scene mirrored, ranges exceeded
 
 Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
 ``trajectories/<scene>.parquet`` (the first ``--keep-trajectories`` variants, step by step),
 ``pictures/<scene>_paths.png``, ``_distance.png`` and (with the social band) ``_speed.png``
 (variant 0), ``summary.csv`` (one row per scene and method), ``papers.csv`` (the seeds' published
-numbers beside ours, for the scenes and methods the run has) and ``run.json``; every file
+numbers beside ours, for the scenes and methods the run has), ``stats.csv`` (Fisher, Welch ANOVA,
+Games-Howell, Hedges' g: :mod:`evaluation.arena_stats`) and ``run.json``; every file
 atomically, one scene at a time: a rerun with the same settings skips the scenes already written.
 """
 
@@ -61,6 +63,11 @@ def add_parser(sub) -> None:
         metavar="SCENE:METHOD",
         help="also write pictures/<scene>_<method>.gif of variant 0 (repeatable)",
     )
+    p.add_argument(
+        "--held-out",
+        action="store_true",
+        help="also run every scene mirrored with every range drawn just outside itself (rows <scene>@held_out)",
+    )
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.set_defaults(handler=run)
 
@@ -87,7 +94,7 @@ def run(args) -> int:
     from common.progress import bar
     from data import DATA_DIR
     from jaxsim.scenario.errors import ScenarioError
-    from jaxsim.scenes.spec import load_scene
+    from jaxsim.scenes.spec import load_scene, mirror
     from planners.stack import METHODS
 
     if str(args.out) in ("", "."):
@@ -133,7 +140,7 @@ def run(args) -> int:
     import pandas as pd
 
     from common import __version__
-    from evaluation import arena_plots, arena_report, nav_metrics, papers
+    from evaluation import arena_plots, arena_report, arena_stats, nav_metrics, papers
 
     settings = {
         "scenes": [s.name for s in specs],
@@ -142,6 +149,7 @@ def run(args) -> int:
         "variants": args.variants,
         "seed": args.seed,
         "keep_trajectories": args.keep_trajectories,
+        "held_out": args.held_out,
         "gscl_run": None if args.gscl_run is None else str(args.gscl_run),
         "metrics_version": nav_metrics.VERSION,
         "socialnav_version": __version__,
@@ -162,37 +170,39 @@ def run(args) -> int:
     write_text_atomic(meta, json.dumps(settings, indent=1) + "\n")
 
     frames = []
+    runs = [(spec, False) for spec in specs] + ([(spec, True) for spec in specs] if args.held_out else [])
     with bar("arena", unit="runs", enabled=not args.no_progress) as progress:
-        total, done = len(specs) * len(methods), 0
-        for spec in specs:
-            episodes_file = args.out / "episodes" / f"{spec.name}.parquet"
+        total, done = len(runs) * len(methods), 0
+        for spec, held_out in runs:
+            name = spec.name + (arena_report.HELD_OUT if held_out else "")
+            episodes_file = args.out / "episodes" / f"{name}.parquet"
             if episodes_file.exists():
                 frames.append(pd.read_parquet(episodes_file))
                 done += len(methods)
                 progress.update(done, total)
                 continue
-            progress.set_postfix(scene=spec.name)
+            progress.set_postfix(scene=name)
 
-            def tick(_name, state={"done": done}):  # noqa: B006
+            def tick(_method, state={"done": done}):  # noqa: B006
                 state["done"] += 1
                 progress.update(state["done"], total)
 
             episodes, trajectories = arena_report.run_scene(
-                spec, methods, args.variants, args.seed, 0, args.keep_trajectories, predict, on_method=tick
-            )
+                spec, methods, args.variants, args.seed, 0, args.keep_trajectories, predict, on_method=tick,
+                held_out=held_out,
+            )  # fmt: skip
             done += len(methods)
             if trajectories is not None:
-                write_atomic(args.out / "trajectories" / f"{spec.name}.parquet", trajectories.to_parquet)
+                drawn = mirror(spec) if held_out else spec
+                write_atomic(args.out / "trajectories" / f"{name}.parquet", trajectories.to_parquet)
                 pictures = args.out / "pictures"
-                arena_plots.paths_figure(spec, trajectories, pictures / f"{spec.name}_paths.png")
-                arena_plots.distance_figure(spec, trajectories, pictures / f"{spec.name}_distance.png")
+                arena_plots.paths_figure(drawn, trajectories, pictures / f"{name}_paths.png")
+                arena_plots.distance_figure(drawn, trajectories, pictures / f"{name}_distance.png")
                 if "snape_social_eband" in methods:
-                    arena_plots.speed_figure(
-                        spec, trajectories, "snape_social_eband", pictures / f"{spec.name}_speed.png"
-                    )
+                    arena_plots.speed_figure(drawn, trajectories, "snape_social_eband", pictures / f"{name}_speed.png")
                 for scene_name, method in args.animate:
-                    if scene_name == spec.name:
-                        arena_plots.animation(spec, trajectories, method, pictures / f"{spec.name}_{method}.gif")
+                    if scene_name == name:
+                        arena_plots.animation(drawn, trajectories, method, pictures / f"{name}_{method}.gif")
             write_atomic(episodes_file, episodes.to_parquet)  # last: its presence marks the scene done
             frames.append(episodes)
     summary = arena_report.summary(pd.concat(frames, ignore_index=True))
@@ -210,11 +220,13 @@ def run(args) -> int:
     ]
     with pd.option_context("display.width", 200, "display.max_rows", 500):
         print(summary[shown].round(2).to_string(index=False))
+    statistics = arena_stats.scene_statistics(pd.concat(frames, ignore_index=True))
+    write_atomic(args.out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
     compared = papers.comparison(summary).dropna(subset=["ours"])
     if len(compared):
         write_atomic(args.out / "papers.csv", lambda tmp: compared.to_csv(tmp, index=False))
         print("\nthe papers' numbers and ours:")
         with pd.option_context("display.width", 200, "display.max_rows", 500):
             print(compared.round(2).to_string(index=False))
-    print(f"wrote {args.out}/summary.csv, papers.csv, episodes/ and trajectories/")
+    print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, episodes/ and trajectories/")
     return 0

@@ -1,5 +1,6 @@
 """Pipelines that join parts, and their commands: ``socialnav run`` (simulate -> learn ->
-evaluate, the main job) and ``socialnav ablation`` (the simulator's series -> the causal
+evaluate, the main job, then a small arena run so that a newcomer sees the social-navigation
+table) and ``socialnav ablation`` (the simulator's series -> the causal
 pipeline's estimates).
 
 The joins live here because no part may import another part's internals: the causal code never
@@ -24,7 +25,7 @@ from jaxsim.scenario import load_scenario
 from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
 from planners.tables import TABLES_FILE
-from socialnav import evaluate, learn, simulate
+from socialnav import arena, evaluate, learn, simulate
 from socialnav.argtypes import comma_ints, comma_probabilities, positive_int
 
 
@@ -40,6 +41,12 @@ def add_parsers(sub) -> None:
         "--learn-worlds", type=comma_ints, default=[0], help="comma-separated worlds the engine learns from (default 0)"
     )
     evaluate.add_evaluation_options(run, default_out=pathlib.Path("runs/warehouse"), replicas=4)
+    run.add_argument(
+        "--arena-variants",
+        type=int,
+        default=10,
+        help="variants of seed 001's scenes with CASN and its SNL baseline in the last step (default 10; 0: skip)",
+    )
     run.set_defaults(handler=run_pipeline)
 
     abl = sub.add_parser(
@@ -75,13 +82,25 @@ def run_pipeline(args: argparse.Namespace) -> int:
     steps_sub = parser.add_subparsers(dest="command", required=True)
     simulate.add_parser(steps_sub)
     learn.add_parser(steps_sub)
+    if args.arena_variants < 0:
+        print("socialnav run: --arena-variants must be >= 0", file=sys.stderr)
+        return 2
+    total = 4 if args.arena_variants else 3
     for i, (name, handler, argv) in enumerate(steps, 1):
-        print(f"\n=== [{i}/3] {name} ===", flush=True)
+        print(f"\n=== [{i}/{total}] {name} ===", flush=True)
         code = handler(parser.parse_args(argv + quiet))
         if code:
             return code
-    print("\n=== [3/3] evaluate ===", flush=True)
-    return evaluate.evaluate_with(load_scenario(), out / "causal" / TABLES_FILE, out / "evaluation", args)
+    print(f"\n=== [3/{total}] evaluate ===", flush=True)
+    code = evaluate.evaluate_with(load_scenario(), out / "causal" / TABLES_FILE, out / "evaluation", args)
+    if code or not args.arena_variants:
+        return code
+    print(f"\n=== [4/{total}] arena: seed 001's scenes, CASN against its SNL baseline ===", flush=True)
+    arena.add_parser(steps_sub)
+    scenes = "casn_static_person,casn_static_group,casn_head_on,casn_crossing"
+    arena_argv = ["arena", "--out", str(out / "arena"), "--scenes", scenes, "--methods", "snl_matched,casn"]
+    arena_argv += ["--variants", str(args.arena_variants), "--keep-trajectories", "1", "--seed", str(args.seed)]
+    return arena.run(parser.parse_args(arena_argv + quiet))
 
 
 def ablation_series(

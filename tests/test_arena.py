@@ -388,3 +388,64 @@ def test_the_papers_rows_name_known_scenes_and_methods_and_take_ours_from_a_summ
     mine = compared[(compared["scene"] == "casn_crossing") & (compared["method"] == "casn")]
     assert dict(zip(mine["metric"], mine["ours"], strict=True)) == {"d_min_m": 1.5, "intrusions": 0.2}
     assert compared["ours"].isna().sum() == len(compared) - 2
+
+
+def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_hand():
+    from scipy import stats
+
+    from evaluation import arena_stats
+
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(0, 1, 30), rng.normal(0.5, 2, 40)
+    diff, p = arena_stats.games_howell({"a": a, "b": b}, "a", "b")
+    assert diff == pytest.approx(a.mean() - b.mean())
+    assert p == pytest.approx(stats.ttest_ind(a, b, equal_var=False).pvalue, rel=1e-6)
+    # Three groups: the studentized range of 3 is stricter than two groups' t test.
+    _, p3 = arena_stats.games_howell({"a": a, "b": b, "c": b + 1}, "a", "b")
+    assert p3 > p
+    x, y = np.array([1.0, 2.0, 3.0, 4.0]), np.array([2.0, 4.0, 6.0])
+    pooled = np.sqrt((3 * x.var(ddof=1) + 2 * y.var(ddof=1)) / 5)
+    assert arena_stats.hedges_g(x, y) == pytest.approx((2.5 - 4.0) / pooled * (1 - 3 / (4 * 7 - 9)))
+
+
+def test_scene_statistics_compare_the_proposed_method_with_the_others():
+    from evaluation import arena_stats
+
+    rng = np.random.default_rng(1)
+    rows = []
+    for method, succeed, personal in (("casn", 0.95, 0.02), ("navfn", 0.3, 0.2)):
+        for k in range(60):
+            share = float(np.clip(rng.normal(personal, 0.02), 0, 1))
+            rows.append(dict(scene="casn_x", method=method, variant=k, goal_success=True,
+                             social_success=rng.uniform() < succeed, zone_intimate=0.0, zone_personal=share,
+                             zone_social=0.5, zone_public=0.5 - share))  # fmt: skip
+    table = arena_stats.scene_statistics(pd.DataFrame(rows))
+    social = table[(table["measure"] == "social_success")].iloc[0]
+    assert social["other"] == "navfn" and social["p"] < 1e-6 and social["statistic"] > 0.4
+    gh = table[(table["measure"] == "zone_personal") & (table["test"] == "Games-Howell")].iloc[0]
+    assert gh["p"] < 1e-6 and gh["effect"] < -3
+    assert not ((table["measure"] == "zone_intimate").any())  # the same constant everywhere: not tested
+
+
+def test_held_out_variants_leave_the_ranges_and_the_mirror_keeps_the_rule():
+    from jaxsim.scenes.spec import mirror
+
+    spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
+    inside = sample_variants(spec, 0, 40)
+    outside = sample_variants(spec, 0, 40, held_out=True)
+    assert np.all((inside.speed_mps[:, 0] >= 0.4) & (inside.speed_mps[:, 0] <= 1.35))
+    assert np.all((outside.speed_mps[:, 0] < 0.4) | (outside.speed_mps[:, 0] > 1.35))
+    assert np.all(outside.speed_mps[:, 0] >= 0.05)
+    hall = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
+    flipped = mirror(hall)
+    c = hall.bounds_m[2] + hall.bounds_m[3]
+    np.testing.assert_allclose(flipped.walls_m[:, 2], c - hall.walls_m[:, 3])
+    assert mirror(flipped).rule["rules"][0]["direction_deg"] == hall.rule["rules"][0]["direction_deg"]
+    # A path keeping right in the original keeps right in the mirror image of the hallway.
+    x = np.linspace(-5.5, -0.5, 30)
+    right = jnp.asarray(np.stack([x, -0.5 + 0 * x], 1), jnp.float32)
+    mirrored_path = right.at[:, 1].set(c - right[:, 1])
+    rule = hall.rule["rules"][0]
+    none = jnp.zeros((30, 1, 2)), jnp.zeros((1, 2)), jnp.zeros((1, 2)), jnp.zeros((30, 1), bool), jnp.full(1, -1)
+    assert bool(nav_metrics.rule_satisfied(rule, right, jnp.zeros(30, bool), *none))
+    assert not bool(nav_metrics.rule_satisfied(flipped.rule["rules"][0], mirrored_path, jnp.zeros(30, bool), *none))

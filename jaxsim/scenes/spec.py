@@ -331,3 +331,65 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         rule=rule,
         n_people_slots=max(slots, 1),
     )
+
+
+def mirror(spec: SceneSpec) -> SceneSpec:
+    """The scene mirrored across the horizontal line through its bounds' centre (y -> c - y):
+    walls, objects, people, the robot, headings and the rule's geometry; "keep right" stays keep
+    right of the (mirrored) direction of travel. Used for held-out variants: a method that learnt
+    a layout's handedness rather than its rule shows it here."""
+    c = spec.bounds_m[2] + spec.bounds_m[3]
+
+    def y_range(r):
+        return (c - r[1], c - r[0])
+
+    def point(p):
+        return (p[0], y_range(p[1]))
+
+    def angle(r):
+        return (-r[1], -r[0])
+
+    walls = spec.walls_m.copy()
+    walls[:, 2], walls[:, 3] = c - spec.walls_m[:, 3], c - spec.walls_m[:, 2]
+    objects = tuple(
+        (name, np.stack([poly[::-1, 0], c - poly[::-1, 1]], axis=1).astype(np.float32), cost)
+        for name, poly, cost in spec.objects
+    )
+    people = []
+    for p in spec.people:
+        q = dict(p)
+        for key in ("position", "start", "end", "centre", "head", "exit"):
+            if key in q:
+                q[key] = point(q[key])
+        for key in ("heading_deg", "rotation_deg", "towards_deg"):
+            if key in q:
+                q[key] = angle(q[key])
+        people.append(q)
+
+    def rule(r):
+        r = dict(r)
+        if "box" in r:
+            b = np.asarray(r["box"], float)
+            r["box"] = np.array([b[0], b[1], c - b[3], c - b[2]])
+        if "centre" in r:
+            r["centre"] = np.array([r["centre"][0], c - r["centre"][1]])
+        if "direction_deg" in r:
+            r["direction_deg"] = -r["direction_deg"]
+        if "rules" in r:
+            r["rules"] = [rule(sub) for sub in r["rules"]]
+        return r
+
+    robot = {
+        "start": point(spec.robot["start"]),
+        "goal": point(spec.robot["goal"]),
+        "yaw_deg": angle(spec.robot["yaw_deg"]),
+    }
+    return dataclasses.replace(
+        spec,
+        name=spec.name,
+        walls_m=walls,
+        objects=objects,
+        robot=robot,
+        people=tuple(people),
+        rule=rule(spec.rule),
+    )

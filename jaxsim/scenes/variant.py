@@ -61,23 +61,46 @@ class Variant:
     seed_u32: np.ndarray
 
 
-def _draw(rng: np.random.Generator, value) -> float:
-    lo, hi = value
-    return float(lo) if lo == hi else float(rng.uniform(lo, hi))
+class _Drawer:
+    """Draws a scene's ranges: inside them, or (``held_out``) just outside them.
+
+    Held out, a range ``[lo, hi]`` of width ``w`` gives a value in ``[lo - w/2, lo)`` or ``(hi, hi +
+    w/2]`` (clipped to what the field allows); a count (group size, queue length) only below ``lo``
+    (its slots are reserved for ``hi``); positions stay inside their ranges (outside, they would
+    fall into walls); a fixed number stays fixed.
+    """
+
+    def __init__(self, rng: np.random.Generator, held_out: bool):
+        self.rng, self.held_out = rng, held_out
+
+    def number(self, value, legal=(-np.inf, np.inf)) -> float:
+        lo, hi = float(value[0]), float(value[1])
+        if lo == hi:
+            return lo
+        if not self.held_out:
+            return float(self.rng.uniform(lo, hi))
+        half = (hi - lo) / 2
+        below, above = (max(lo - half, legal[0]), lo), (hi, min(hi + half, legal[1]))
+        side = below if (self.rng.uniform() < 0.5 and below[1] > below[0]) or above[1] <= above[0] else above
+        return float(self.rng.uniform(*side)) if side[1] > side[0] else lo
+
+    def count(self, value, legal_low: int) -> int:
+        lo, hi = int(value[0]), int(value[1])
+        if self.held_out and lo > legal_low:
+            return int(self.rng.integers(legal_low, lo))
+        return lo if lo == hi else int(self.rng.integers(lo, hi + 1))
+
+    def point(self, value) -> np.ndarray:
+        inside = _Drawer(self.rng, False)
+        return np.array([inside.number(value[0]), inside.number(value[1])], np.float32)
 
 
-def _draw_int(rng: np.random.Generator, value) -> int:
-    lo, hi = int(value[0]), int(value[1])
-    return lo if lo == hi else int(rng.integers(lo, hi + 1))
-
-
-def _point(rng, value) -> np.ndarray:
-    return np.array([_draw(rng, value[0]), _draw(rng, value[1])], np.float32)
-
-
-def sample_variant(spec: SceneSpec, seed: int, k: int) -> Variant:
-    """Variant ``k`` of ``spec`` under ``seed`` (numpy arrays)."""
-    rng = np.random.default_rng((int(seed), int(k), zlib.crc32(spec.name.encode())))
+def sample_variant(spec: SceneSpec, seed: int, k: int, held_out: bool = False) -> Variant:
+    """Variant ``k`` of ``spec`` under ``seed`` (numpy arrays); ``held_out`` draws every range just
+    outside itself (:class:`_Drawer`)."""
+    entropy = (int(seed), int(k), zlib.crc32(spec.name.encode())) + ((1,) if held_out else ())
+    rng = np.random.default_rng(entropy)
+    draw = _Drawer(rng, held_out)
     n = spec.n_people_slots
     f32 = lambda shape=(): np.zeros(shape, np.float32)
     a = dict(
@@ -104,27 +127,29 @@ def sample_variant(spec: SceneSpec, seed: int, k: int) -> Variant:
     for person in spec.people:
         b = person["behaviour"]
         if b == "standing":
-            xy = _point(rng, person["position"])
+            xy = draw.point(person["position"])
             a["xy0"][slot], a["start_xy"][slot], a["end_xy"][slot] = xy, xy, xy
-            a["heading0"][slot] = math.radians(_draw(rng, person["heading_deg"]))
+            a["heading0"][slot] = math.radians(draw.number(person["heading_deg"]))
             a["valid"][slot] = True
             slot += 1
         elif b == "walk":
-            start, end = _point(rng, person["start"]), _point(rng, person["end"])
+            start, end = draw.point(person["start"]), draw.point(person["end"])
             a["kind"][slot] = KIND["walk"]
             a["xy0"][slot], a["start_xy"][slot], a["end_xy"][slot] = start, start, end
             a["heading0"][slot] = math.atan2(end[1] - start[1], end[0] - start[0])
-            a["speed_mps"][slot] = _draw(rng, person["speed_mps"])
-            a["start_s"][slot] = _draw(rng, person["start_s"])
+            a["speed_mps"][slot] = draw.number(person["speed_mps"], (0.05, 3.0))
+            a["start_s"][slot] = draw.number(person["start_s"], (0.0, np.inf))
             a["back_and_forth"][slot] = person["back_and_forth"]
             a["ignore_robot"][slot] = person["ignore_robot"]
             a["valid"][slot] = True
             slot += 1
         elif b == "group":
-            size = _draw_int(rng, person["size"])
-            centre, radius = _point(rng, person["centre"]), _draw(rng, person["radius_m"])
-            rotation = math.radians(_draw(rng, person["rotation_deg"]))
-            turn = None if person["turn_inward_at_s"] is None else _draw(rng, person["turn_inward_at_s"])
+            size = draw.count(person["size"], 2)
+            centre, radius = draw.point(person["centre"]), draw.number(person["radius_m"], (0.3, 5.0))
+            rotation = math.radians(draw.number(person["rotation_deg"]))
+            turn = (
+                None if person["turn_inward_at_s"] is None else draw.number(person["turn_inward_at_s"], (0.0, np.inf))
+            )
             slots = int(person["size"][1])
             for m in range(size):
                 angle = rotation + 2 * math.pi * m / size
@@ -139,13 +164,13 @@ def sample_variant(spec: SceneSpec, seed: int, k: int) -> Variant:
             slot += slots
             group_index += 1
         elif b == "queue":
-            length = _draw_int(rng, person["length"])
-            head = _point(rng, person["head"])
-            towards = math.radians(_draw(rng, person["towards_deg"]))
-            spacing = _draw(rng, person["spacing_m"])
+            length = draw.count(person["length"], 1)
+            head = draw.point(person["head"])
+            towards = math.radians(draw.number(person["towards_deg"]))
+            spacing = draw.number(person["spacing_m"], (0.3, 3.0))
             back = -spacing * np.array([math.cos(towards), math.sin(towards)], np.float32)
-            interval = _draw(rng, person["advance_every_s"])
-            exit_xy = _point(rng, person["exit"])
+            interval = draw.number(person["advance_every_s"], (1.0, np.inf))
+            exit_xy = draw.point(person["exit"])
             for m in range(length):
                 xy = head + m * back
                 a["kind"][slot + m] = KIND["queue"]
@@ -159,14 +184,14 @@ def sample_variant(spec: SceneSpec, seed: int, k: int) -> Variant:
                 a["valid"][slot + m] = True
             slot += int(person["length"][1])
         else:  # stream
-            start0 = _draw(rng, person["start_s"])
-            interval = _draw(rng, person["interval_s"])
+            start0 = draw.number(person["start_s"], (0.0, np.inf))
+            interval = draw.number(person["interval_s"], (0.1, np.inf))
             for m in range(person["count"]):
-                start, end = _point(rng, person["start"]), _point(rng, person["end"])
+                start, end = draw.point(person["start"]), draw.point(person["end"])
                 a["kind"][slot + m] = KIND["stream"]
                 a["xy0"][slot + m], a["start_xy"][slot + m], a["end_xy"][slot + m] = start, start, end
                 a["heading0"][slot + m] = math.atan2(end[1] - start[1], end[0] - start[0])
-                a["speed_mps"][slot + m] = _draw(rng, person["speed_mps"])
+                a["speed_mps"][slot + m] = draw.number(person["speed_mps"], (0.05, 3.0))
                 a["start_s"][slot + m] = start0 + m * interval
                 a["ignore_robot"][slot + m] = person["ignore_robot"]
                 a["valid"][slot + m] = True
@@ -174,14 +199,14 @@ def sample_variant(spec: SceneSpec, seed: int, k: int) -> Variant:
     robot = spec.robot
     return Variant(
         **a,
-        robot_xy=_point(rng, robot["start"]),
-        robot_yaw=np.float32(math.radians(_draw(rng, robot["yaw_deg"]))),
-        goal_xy=_point(rng, robot["goal"]),
+        robot_xy=draw.point(robot["start"]),
+        robot_yaw=np.float32(math.radians(draw.number(robot["yaw_deg"]))),
+        goal_xy=draw.point(robot["goal"]),
         seed_u32=np.uint32(rng.integers(0, 2**32, dtype=np.uint64)),
     )
 
 
-def sample_variants(spec: SceneSpec, seed: int, n: int, first: int = 0) -> Variant:
+def sample_variants(spec: SceneSpec, seed: int, n: int, first: int = 0, held_out: bool = False) -> Variant:
     """Variants ``first .. first + n - 1``, stacked on a leading axis."""
-    variants = [sample_variant(spec, seed, k) for k in range(first, first + n)]
+    variants = [sample_variant(spec, seed, k, held_out) for k in range(first, first + n)]
     return Variant(**{f.name: np.stack([getattr(v, f.name) for v in variants]) for f in dataclasses.fields(Variant)})

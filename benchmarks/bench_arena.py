@@ -1,0 +1,102 @@
+"""The social-navigation benchmark's speed on this machine: every scene x every method x N variants.
+
+    python benchmarks/bench_arena.py                     # 14 scenes x 8 methods x 100 variants
+    python benchmarks/bench_arena.py --variants 20 --gscl-run runs/gscl
+
+Prints the whole run's wall time (compilation included, as a user meets it), episodes per second
+and simulated seconds per wall second, then where the time goes on one scene: compilation, one
+run of each method, and the global planner alone (the same number of replans as the episodes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+
+from benchmarks.bench_simulator import machine  # noqa: E402
+from data import DATA_DIR  # noqa: E402
+from evaluation import arena, arena_report  # noqa: E402
+from jaxsim.scenes.spec import load_scene  # noqa: E402
+from jaxsim.scenes.variant import sample_variants  # noqa: E402
+from planners import costmap  # noqa: E402
+from planners.stack import METHODS, global_plan  # noqa: E402
+
+DEFAULT = ("navfn", "snl_small", "snl_large", "snl_matched", "casn", "snape_eband", "snape_social_eband")
+
+
+def profile_scene(name: str, variants: int, methods) -> None:
+    spec = load_scene(DATA_DIR / "scenes" / f"{name}.json")
+    setup = arena.setup_scene(spec)
+    crowd = arena.crowd_params()
+    batch = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 0, variants))
+    print(f"profile: {name}, {variants} variants, {setup.n_periods * 10} steps of 0.1 s, grid {setup.grid.shape}")
+    for m in methods:
+        run = arena.episode_function(setup, METHODS[m], crowd)
+        t0 = time.perf_counter()
+        jax.block_until_ready(run(batch))
+        first = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        jax.block_until_ready(run(batch))
+        second = time.perf_counter() - t0
+        print(f"  {m:<20} compile {first - second:5.1f} s   run {second:5.2f} s")
+    # The global planner alone: one replan per second of every episode.
+    costs = jnp.broadcast_to(jnp.asarray(setup.obstacle_costs), (variants,) + setup.grid.shape)
+    plan = jax.jit(
+        jax.vmap(lambda c, s, g: global_plan(METHODS["navfn"], c, s, g, setup.grid, arena.ArenaConfig().max_path_cells))
+    )
+    starts, goals = jnp.asarray(batch.robot_xy), jnp.asarray(batch.goal_xy)
+    jax.block_until_ready(plan(costs, starts, goals))
+    t0 = time.perf_counter()
+    for _ in range(setup.n_periods):
+        jax.block_until_ready(plan(costs, starts, goals))
+    print(f"  global planner alone ({setup.n_periods} replans x {variants}): {time.perf_counter() - t0:5.2f} s")
+    obstacle = jax.jit(jax.vmap(lambda o: costmap.obstacle_layer(o, setup.grid, 0.275)))
+    occ = jnp.broadcast_to(jnp.asarray(setup.occupancy), (variants,) + setup.grid.shape)
+    jax.block_until_ready(obstacle(occ))
+    t0 = time.perf_counter()
+    for _ in range(setup.n_periods):
+        jax.block_until_ready(obstacle(occ))
+    print(f"  obstacle layer with people, alone ({setup.n_periods} x {variants}): {time.perf_counter() - t0:5.2f} s")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--variants", type=int, default=100)
+    parser.add_argument("--gscl-run", type=pathlib.Path, default=None)
+    parser.add_argument("--profile-only", action="store_true")
+    args = parser.parse_args()
+    print(f"machine: {machine()}")
+    methods = list(DEFAULT)
+    predict = None
+    if args.gscl_run is not None:
+        from models.inference import SocialCostModel
+
+        predict = SocialCostModel.load(args.gscl_run).function
+        methods.append("gscl")
+    if not args.profile_only:
+        specs = [load_scene(f) for f in sorted((DATA_DIR / "scenes").glob("*.json"))]
+        t0 = time.perf_counter()
+        episodes, simulated = 0, 0.0
+        for spec in specs:
+            frame, _ = arena_report.run_scene(spec, methods, args.variants, gscl_predict=predict)
+            episodes += len(frame)
+            setup_s = spec.timeout_s
+            simulated += len(frame) * setup_s
+        wall = time.perf_counter() - t0
+        print(
+            f"benchmark: {len(specs)} scenes x {len(methods)} methods x {args.variants} variants = {episodes} episodes "
+            f"in {wall / 60:.1f} min: {episodes / wall:.1f} episodes/s, {simulated / wall:.0f} simulated s per wall s"
+        )
+    profile_scene("gscl_group", args.variants, ["navfn", "casn", "snape_social_eband"])
+
+
+if __name__ == "__main__":
+    main()
