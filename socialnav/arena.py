@@ -92,7 +92,7 @@ def _scene_files(names, scenes_dir: pathlib.Path) -> list[pathlib.Path]:
 def run(args) -> int:
     from common.atomic import write_atomic, write_text_atomic
     from common.progress import bar
-    from data import DATA_DIR
+    from data import SCENES_DIR
     from jaxsim.scenario.errors import ScenarioError
     from jaxsim.scenes.spec import load_scene, mirror
     from planners.stack import METHODS
@@ -121,7 +121,7 @@ def run(args) -> int:
         print("socialnav arena: --methods gscl needs --gscl-run RUN (a trained GSCL run folder)", file=sys.stderr)
         return 2
     try:
-        specs = [load_scene(f) for f in _scene_files(args.scenes, DATA_DIR / "scenes")]
+        specs = [load_scene(f) for f in _scene_files(args.scenes, SCENES_DIR)]
     except ScenarioError as e:
         print(f"socialnav arena: {e}", file=sys.stderr)
         return 2
