@@ -20,7 +20,8 @@ for the proxemic and person-distance metrics (after that the robot has arrived).
 * ``d_h_m``: mean over time of the distance to the nearest present person (seed 004 Eq. 16);
   ``d_min_m``: the smallest over time and people; ``d_person_m`` (P,): per person (d_1, d_2).
 * ``zone_share``: share of time with the nearest person in each Hall zone, intimate < 0.45 m,
-  personal < 1.2, social < 3.6, public beyond (seeds 002, 004; seed 000 uses 0.5 for intimate).
+  personal < 1.2, social < 3.6, public beyond or nobody present (seeds 002, 004; seed 000 uses 0.5
+  for intimate); the four shares sum to 1.
 * ``intrusions``: personal-space intrusions as seed 001 counts them: entries of the robot into a
   person's 1.2 m (one per entry, per person).
 * ``ttc_min_s``: smallest time to collision at constant velocities over the episode (inf if none).
@@ -93,9 +94,8 @@ def episode_metrics(
     d_person = jnp.min(dist_masked, axis=0)
     d_min = jnp.min(d_person)
     edges = jnp.array([ZONES_M["intimate"], ZONES_M["personal"], ZONES_M["social"]])
-    zone = jnp.sum(nearest[:, None] >= edges[None], axis=1)  # 0..3
-    counted = active & has_near
-    zone_share = jnp.array([jnp.sum(counted & (zone == z)) for z in range(4)]) / jnp.maximum(jnp.sum(active), 1)
+    zone = jnp.where(has_near, jnp.sum(nearest[:, None] >= edges[None], axis=1), 3)  # nobody near: public
+    zone_share = jnp.array([jnp.sum(active & (zone == z)) for z in range(4)]) / jnp.maximum(jnp.sum(active), 1)
 
     # Personal-space intrusions: entries into a person's 1.2 m.
     inside = seen & (dist < ZONES_M["personal"])

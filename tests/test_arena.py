@@ -288,6 +288,7 @@ def test_chc_of_a_square_path_and_its_length():
     assert float(m["path_length_m"]) == pytest.approx(3.0, abs=1e-5)
     assert bool(m["goal_success"])
     assert float(m["spl"]) == pytest.approx(1.0 / 3.0, abs=1e-5)  # straight line 1 m, driven 3 m
+    np.testing.assert_allclose(m["zone_share"], [0.0, 0.0, 0.0, 1.0])  # nobody present: public
 
 
 def test_a_straight_pass_at_a_known_distance():
