@@ -32,9 +32,10 @@ from socialnav.argtypes import comma_ints, comma_probabilities, positive_int
 def add_parsers(sub) -> None:
     run = sub.add_parser(
         "run",
-        help="the whole pipeline: simulate a day, learn the engine, evaluate the planners",
-        description="simulate -> learn -> evaluate on the built-in warehouse, into one folder: "
-        "logs and pictures, causal/ (graph, engine), evaluation/ (tables, figures).",
+        help="the whole pipeline: simulate a day, learn the engine, evaluate the planners, a small arena run",
+        description="simulate -> learn -> evaluate on the built-in warehouse, then a small arena run of seed 001's "
+        "scenes, into one folder: logs and pictures, causal/ (graph, engine), evaluation/ (tables, figures), "
+        "arena/ (episodes, summary, the papers' numbers beside ours).",
     )
     run.add_argument("--worlds", type=positive_int, default=4, help="worlds simulated for learning (default 4)")
     run.add_argument(
