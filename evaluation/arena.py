@@ -225,9 +225,7 @@ def run_episode(
     def plan_now(people, robot, tracks, casn_state):
         """The global plan from the robot's perception now: (path, length, found, CASN state)."""
         seen = perception.visible(world, robot.xy, people.xy, people.present)
-        span_s = (tracks.xy.shape[0] - 1) * config.dt_s
-        both = tracks.seen[0] & tracks.seen[-1]
-        velocity = jnp.where(both[:, None], (tracks.xy[-1] - tracks.xy[0]) / span_s, 0.0)
+        velocity = perception.velocity(tracks, config.dt_s)
         scene = _perceived_scene(setup, people, seen, velocity, robot, goal)
         social, casn_state = stack.social_layer(method, scene, x_m, y_m, casn_state, gscl_fn)
         # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the walls.

@@ -36,15 +36,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from evaluation.metrics import collision_encounters
+from planners.scene import wrap_angle
 
 VERSION = "nav-metrics 1"
 ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}
 ZONE_NAMES = ("intimate", "personal", "social", "public")
 STALLED_MPS = 0.05
-
-
-def _wrap(a):
-    return (a + jnp.pi) % (2 * jnp.pi) - jnp.pi
 
 
 def episode_metrics(
@@ -79,7 +76,7 @@ def episode_metrics(
     time_s = jnp.where(success, (arrival + 1) * dt_s, timeout_s)
     steps = jnp.linalg.norm(jnp.diff(robot_xy, axis=0), axis=-1)
     path_length = jnp.sum(jnp.where(active[1:], steps, 0.0))
-    chc = jnp.sum(jnp.where(active[1:], jnp.abs(_wrap(jnp.diff(robot_yaw))), 0.0))
+    chc = jnp.sum(jnp.where(active[1:], jnp.abs(wrap_angle(jnp.diff(robot_yaw))), 0.0))
     stalled = jnp.sum(active & (robot_speed < STALLED_MPS)) * dt_s
     straight = jnp.linalg.norm(goal_xy - start_xy)
     spl = jnp.where(success, straight / jnp.maximum(path_length, straight), 0.0)

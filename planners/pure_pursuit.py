@@ -12,6 +12,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
+from planners.scene import wrap_angle
+
 
 @struct.dataclass
 class PursuitParams:
@@ -21,10 +23,6 @@ class PursuitParams:
     lookahead_m: float = 0.6
     turn_gain: float = 1.5
     align_rad: float = 1.0472
-
-
-def wrap(angle):
-    return (angle + jnp.pi) % (2 * jnp.pi) - jnp.pi
 
 
 def lookahead_point(path_xy, path_len, robot_xy, lookahead_m):
@@ -43,7 +41,7 @@ def lookahead_point(path_xy, path_len, robot_xy, lookahead_m):
 def pursue(target_xy, robot_xy, robot_yaw, max_speed_mps, p: PursuitParams = PursuitParams()):
     """(v, omega) towards ``target_xy``."""
     delta = target_xy - robot_xy
-    error = wrap(jnp.arctan2(delta[1], delta[0]) - robot_yaw)
+    error = wrap_angle(jnp.arctan2(delta[1], delta[0]) - robot_yaw)
     v = max_speed_mps * jnp.where(jnp.abs(error) < p.align_rad, jnp.cos(error), 0.0)
     v = jnp.minimum(v, jnp.linalg.norm(delta) / 0.5 * max_speed_mps)  # slow down onto the goal
     return v, p.turn_gain * error

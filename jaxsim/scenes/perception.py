@@ -32,6 +32,14 @@ def visible(world: SceneWorld, robot_xy, people_xy, present, range_m: float = RA
     return present & near & ~blocked
 
 
+def velocity(tracks: Tracks, dt_s: float):
+    """(P, 2) velocity estimate of a track window: the displacement over the window divided by its
+    duration where the person was seen at both ends (Eq. 2 over the window), else 0."""
+    span_s = (tracks.xy.shape[0] - 1) * dt_s
+    both = tracks.seen[0] & tracks.seen[-1]
+    return jnp.where(both[:, None], (tracks.xy[-1] - tracks.xy[0]) / span_s, 0.0)
+
+
 def observe(tracks: Tracks, people_xy, seen, dt_s: float):
     """Push this step's observation; returns (tracks, velocity estimate (P, 2)).
 
@@ -40,7 +48,5 @@ def observe(tracks: Tracks, people_xy, seen, dt_s: float):
     """
     xy = jnp.concatenate([tracks.xy[1:], people_xy[None]], axis=0)
     seen_w = jnp.concatenate([tracks.seen[1:], seen[None]], axis=0)
-    span_s = (xy.shape[0] - 1) * dt_s
-    both = seen_w[0] & seen_w[-1]
-    velocity = jnp.where(both[:, None], (xy[-1] - xy[0]) / span_s, 0.0)
-    return Tracks(xy=xy, seen=seen_w), velocity
+    tracks = Tracks(xy=xy, seen=seen_w)
+    return tracks, velocity(tracks, dt_s)
