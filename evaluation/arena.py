@@ -7,14 +7,25 @@ local planner commands the base, the base moves (:mod:`jaxsim.scenes.robot`). Th
 replans every ``replan_every_steps`` (1 Hz at the default 0.1 s step; a stack with ``replan=False``
 plans once, at the start, as SNAPE does: its band adapts the path from then on): an outer
 ``lax.scan`` over replanning periods, an inner one over control steps, so no branch runs the
-planner every step under ``vmap``. :func:`run_variants` vmaps episodes over a scene's variants; the methods are a
-Python loop (each is another program). The physics knows nothing of stacks or metrics: the stack
-(:mod:`planners.stack`) is passed in.
+planner every step under ``vmap``. :func:`episode_function` vmaps episodes over a scene's variants;
+the methods are a Python loop (each is another program). The physics knows nothing of stacks or
+metrics: the stack (:mod:`planners.stack`) is passed in.
+
+Compilation is shared across scenes: a scene's arrays (occupancy, walls, wall field, objects) are
+arguments of the episode program, not constants in it, and are padded to sizes that depend on the
+scene alone (walls to a multiple of 8 with boxes far outside, objects to a multiple of 4, people
+slots to a power of two: :func:`jaxsim.scenes.variant.padded_slots`). Scenes with the same grid,
+timeout and padded sizes (seed 001's four, seed 004's five) run one compiled program per method.
+Padding walls and objects changes no episode (tested bit for bit); padding one person to two slots
+changes episodes to float rounding only (XLA reduces over a one-long axis in another order; d_min
+agrees to 1e-7 m). The sizes depend on the scene alone, so a scene gives the same episodes
+whichever other scenes run beside it.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 
@@ -31,7 +42,7 @@ from jaxsim.scenes import perception
 from jaxsim.scenes import robot as robot_lib
 from jaxsim.scenes import world as world_lib
 from jaxsim.scenes.spec import SceneSpec
-from jaxsim.scenes.variant import Variant
+from jaxsim.scenes.variant import Variant, padded_slots
 from planners import casn, costmap, gscl_layer, stack
 from planners.scene import Scene
 
@@ -84,17 +95,50 @@ class Trajectory:
     wall_contacts: jnp.ndarray
 
 
+@struct.dataclass
+class SceneArrays:
+    """A scene's arrays as the episode program's argument (padded; :func:`setup_scene`).
+
+    Attributes:
+      occupancy: (H, W) float32 planner grid; world: walls (K, 4) and wall field;
+      objects_xy_m (M, 8, 2), objects_cost (M,), objects_valid (M,): interaction spaces.
+    """
+
+    occupancy: jnp.ndarray
+    world: world_lib.SceneWorld
+    objects_xy_m: jnp.ndarray
+    objects_cost: jnp.ndarray
+    objects_valid: jnp.ndarray
+
+
 @dataclasses.dataclass(frozen=True)
 class SceneSetup:
-    """What an episode needs of a scene, built once on the host (:func:`setup_scene`)."""
+    """What an episode needs of a scene, built once on the host (:func:`setup_scene`).
+
+    Attributes:
+      spec: the scene; grid: the planner grid (static); arrays: the padded arrays the program
+      takes; obstacle_costs: (H, W) the walls' inflated layer (profiling); n_periods: replanning
+      periods per episode; n_slots: people slots the variants are padded to.
+    """
 
     spec: SceneSpec
-    world: world_lib.SceneWorld
     grid: costmap.GridSpec
-    occupancy: np.ndarray
+    arrays: SceneArrays
     obstacle_costs: np.ndarray
-    objects: tuple[np.ndarray, np.ndarray, np.ndarray]
     n_periods: int
+    n_slots: int
+
+    @property
+    def world(self) -> world_lib.SceneWorld:
+        return self.arrays.world
+
+    @property
+    def occupancy(self) -> np.ndarray:
+        return np.asarray(self.arrays.occupancy)
+
+
+def _round_up(n: int, multiple: int) -> int:
+    return max(multiple, -(-int(n) // multiple) * multiple)
 
 
 def crowd_params() -> SimParams:
@@ -108,7 +152,7 @@ def setup_scene(
     occ, origin = world_lib.occupancy(spec, config.grid_resolution_m)
     grid = costmap.GridSpec(occ.shape[0], occ.shape[1], config.grid_resolution_m, origin[0], origin[1])
     obstacles = np.asarray(costmap.obstacle_layer(occ, grid, float(robot.radius_m)))
-    m = max(1, len(spec.objects))
+    m = _round_up(len(spec.objects), 4)
     verts = np.zeros((m, 8, 2), np.float32)
     cost = np.zeros(m, np.float32)
     valid = np.zeros(m, bool)
@@ -116,28 +160,37 @@ def setup_scene(
         verts[k, : len(poly)] = poly
         verts[k, len(poly) :] = poly[-1]
         cost[k], valid[k] = c, True
+    world = world_lib.build_scene_world(spec)
+    walls = np.asarray(world.walls_m)
+    far = np.array([[1e4, 1e4 + 1.0, 1e4, 1e4 + 1.0]], np.float32)  # never nearest, never in sight
+    walls = np.concatenate([walls, np.repeat(far, _round_up(len(walls), 8) - len(walls), axis=0)])
     period_s = config.dt_s * config.replan_every_steps
+    arrays = SceneArrays(
+        occupancy=jnp.asarray(occ),
+        world=world.replace(walls_m=jnp.asarray(walls)),
+        objects_xy_m=jnp.asarray(verts),
+        objects_cost=jnp.asarray(cost),
+        objects_valid=jnp.asarray(valid),
+    )
     return SceneSetup(
         spec=spec,
-        world=world_lib.build_scene_world(spec),
         grid=grid,
-        occupancy=occ,
+        arrays=arrays,
         obstacle_costs=obstacles,
-        objects=(verts, cost, valid),
         n_periods=int(math.ceil(spec.timeout_s / period_s)),
+        n_slots=padded_slots(spec.n_people_slots),
     )
 
 
-def _perceived_scene(setup: SceneSetup, people, visible, velocity, robot, goal_xy) -> Scene:
-    verts, cost, valid = setup.objects
+def _perceived_scene(arrays: SceneArrays, people, visible, velocity, robot, goal_xy) -> Scene:
     return Scene(
         people_xy_m=people.xy,
         people_heading_rad=people.heading,
         people_velocity_mps=velocity,
         people_valid=visible,
-        objects_xy_m=jnp.asarray(verts),
-        objects_cost=jnp.asarray(cost),
-        objects_valid=jnp.asarray(valid),
+        objects_xy_m=arrays.objects_xy_m,
+        objects_cost=arrays.objects_cost,
+        objects_valid=arrays.objects_valid,
         robot_xy_m=robot.xy,
         robot_yaw_rad=robot.yaw,
         goal_xy_m=goal_xy,
@@ -145,7 +198,9 @@ def _perceived_scene(setup: SceneSetup, people, visible, velocity, robot, goal_x
 
 
 def run_episode(
-    setup: SceneSetup,
+    grid: costmap.GridSpec,
+    n_periods: int,
+    arrays: SceneArrays,
     method: stack.StackConfig,
     variant: Variant,
     crowd: SimParams,
@@ -153,13 +208,12 @@ def run_episode(
     config: ArenaConfig = ArenaConfig(),
     gscl_predict: Callable | None = None,
 ) -> Trajectory:
-    """One episode of one variant (jit it with ``setup``, ``method``, ``config`` and
-    ``gscl_predict`` closed over; vmap it over variants)."""
+    """One episode of one variant on a scene's ``arrays`` (``grid``, ``n_periods``, ``method``,
+    ``robot_params``, ``config`` and ``gscl_predict`` static; vmap it over variants)."""
     crowd = crowd.replace(dt_s=config.dt_s) if crowd.dt_s != config.dt_s else crowd
-    grid = setup.grid
     x_m, y_m = grid.cell_centres()
-    occupancy = jnp.asarray(setup.occupancy)
-    world = setup.world
+    occupancy = arrays.occupancy
+    world = arrays.world
     goal = jnp.asarray(variant.goal_xy)
     gscl_fn = None
     if method.layer == "gscl":
@@ -181,7 +235,7 @@ def run_episode(
         people, robot, tracks, path, path_len, reached, step = carry
         seen = perception.visible(world, robot.xy, people.xy, people.present)
         tracks, velocity = perception.observe(tracks, people.xy, seen, config.dt_s)
-        scene = _perceived_scene(setup, people, seen, velocity, robot, goal)
+        scene = _perceived_scene(arrays, people, seen, velocity, robot, goal)
         v, w, _, gain = stack.local_command(
             method,
             path,
@@ -226,7 +280,7 @@ def run_episode(
         """The global plan from the robot's perception now: (path, length, found, CASN state)."""
         seen = perception.visible(world, robot.xy, people.xy, people.present)
         velocity = perception.velocity(tracks, config.dt_s)
-        scene = _perceived_scene(setup, people, seen, velocity, robot, goal)
+        scene = _perceived_scene(arrays, people, seen, velocity, robot, goal)
         social, casn_state = stack.social_layer(method, scene, x_m, y_m, casn_state, gscl_fn)
         # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the walls.
         d = jnp.hypot(x_m[None] - people.xy[:, 0, None, None], y_m[None] - people.xy[:, 1, None, None])
@@ -257,7 +311,7 @@ def run_episode(
     path = jnp.where(found, path, straight)
     path_len = jnp.where(found, path_len, max_len)
     carry = (people, robot, tracks, casn_state, path, path_len, jnp.array(False), jnp.int32(0))
-    carry, records = jax.lax.scan(period, carry, None, length=setup.n_periods)
+    carry, records = jax.lax.scan(period, carry, None, length=n_periods)
     flat = jax.tree_util.tree_map(lambda a: a.reshape((-1,) + a.shape[2:]), records)
     robot_xy, yaw, speed, pxy, pheading, present, seen, reached, gain, pred_d = flat
     return Trajectory(
@@ -275,6 +329,27 @@ def run_episode(
     )
 
 
+@functools.lru_cache(maxsize=64)
+def _episode_program(
+    grid: costmap.GridSpec,
+    n_periods: int,
+    method: stack.StackConfig,
+    robot_params: robot_lib.RobotParams,
+    config: ArenaConfig,
+    gscl_predict: Callable | None,
+):
+    """``(arrays, crowd, variants) -> Trajectory``, jitted, vmapped over variants; one per static
+    key, so scenes of equal padded shapes share its compilations."""
+
+    def batch(arrays, crowd, variants):
+        def one(variant):
+            return run_episode(grid, n_periods, arrays, method, variant, crowd, robot_params, config, gscl_predict)
+
+        return jax.vmap(one)(variants)
+
+    return jax.jit(batch)
+
+
 def episode_function(
     setup: SceneSetup,
     method: stack.StackConfig,
@@ -283,9 +358,6 @@ def episode_function(
     config: ArenaConfig = ArenaConfig(),
     gscl_predict: Callable | None = None,
 ):
-    """``variants (batched Variant) -> Trajectory (batched)``, jitted and vmapped."""
-
-    def one(variant):
-        return run_episode(setup, method, variant, crowd, robot_params, config, gscl_predict)
-
-    return jax.jit(jax.vmap(one))
+    """``variants (batched Variant, padded to ``setup.n_slots``) -> Trajectory (batched)``."""
+    program = _episode_program(setup.grid, setup.n_periods, method, robot_params, config, gscl_predict)
+    return functools.partial(program, setup.arrays, crowd)

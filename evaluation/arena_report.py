@@ -89,7 +89,7 @@ def episode_frame(scene: str, method: str, first: int, metrics: dict, wall_conta
                 rows[f"zone_{name}"] = value[:, z]
         elif key == "d_person_m":
             for p in range(min(value.shape[1], 2)):
-                rows[f"d_{p + 1}_m"] = value[:, p]
+                rows[f"d_{p + 1}_m"] = np.where(np.isfinite(value[:, p]), value[:, p], np.nan)  # NaN: nobody there
         else:
             rows[key] = value
     rows["wall_contacts"] = np.asarray(wall_contacts)
@@ -151,7 +151,9 @@ def run_scene(
         spec = mirror(spec)
     setup = arena.setup_scene(spec, config)
     crowd = arena.crowd_params()
-    variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out))
+    variants = jax.tree_util.tree_map(
+        jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out, setup.n_slots)
+    )
     robot = RobotParams()
     measure = metrics_function(setup, config, float(robot.radius_m))
     episodes, trajectories = [], []

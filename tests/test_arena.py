@@ -1,5 +1,6 @@
 """The arena: scene files, variants, perception, elastic bands, the base, episodes, the metrics."""
 
+import dataclasses
 import json
 import math
 
@@ -16,7 +17,7 @@ from jaxsim.scenes import perception
 from jaxsim.scenes import robot as robot_lib
 from jaxsim.scenes import world as world_lib
 from jaxsim.scenes.spec import load_scene
-from jaxsim.scenes.variant import sample_variant, sample_variants
+from jaxsim.scenes.variant import padded_slots, sample_variant, sample_variants
 from planners import elastic_band, snape
 from planners.stack import METHODS
 
@@ -238,6 +239,65 @@ def test_episodes_are_deterministic_and_the_same_variant_for_every_method():
         np.testing.assert_array_equal(x, y)
     other = arena.episode_function(setup, METHODS["navfn"], arena.crowd_params())(variants)
     np.testing.assert_array_equal(a.people_xy[:, 0], other.people_xy[:, 0])  # same start for both
+
+
+# ---------------------------------------------------------------- padding and shared programs
+
+
+def test_padded_slots_is_a_power_of_two_of_at_least_two():
+    assert [padded_slots(n) for n in (1, 2, 3, 4, 5, 6, 8, 9)] == [2, 2, 4, 4, 8, 8, 8, 16]
+
+
+def test_padding_the_people_slots_keeps_the_draws_and_adds_empty_slots():
+    spec = load_scene(DATA_DIR / "scenes" / "gscl_queue.json")
+    own = sample_variant(spec, 4, 2)
+    padded = sample_variant(spec, 4, 2, n_slots=8)
+    n = spec.n_people_slots
+    assert padded.valid.shape == (8,) and own.valid.shape == (n,)
+    np.testing.assert_array_equal(padded.xy0[:n], own.xy0)
+    np.testing.assert_array_equal(padded.speed_mps[:n], own.speed_mps)
+    assert padded.seed_u32 == own.seed_u32 and not padded.valid[n:].any()
+    assert np.all(padded.group[n:] == -1) and np.all(np.isinf(padded.turn_at_s[n:]))
+    assert sample_variant(spec, 4, 2, n_slots=1).valid.shape == (n,)  # never fewer than the scene's own
+
+
+def test_scenes_of_a_family_share_one_program_shape():
+    """Seed 001's four scenes (1 or 2 people, the same room) pad to one set of shapes, so jit
+    compiles each method once for all four; seed 002's queue (5 people) pads to 8 slots."""
+    names = ("casn_static_person", "casn_static_group")
+    setups = [arena.setup_scene(load_scene(DATA_DIR / "scenes" / f"{n}.json")) for n in names]
+    shapes = [jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), s.arrays) for s in setups]
+    assert jax.tree_util.tree_structure(setups[0].arrays) == jax.tree_util.tree_structure(setups[1].arrays)
+    assert shapes[0] == shapes[1]
+    assert {s.n_slots for s in setups} == {2} and setups[0].grid == setups[1].grid
+    assert setups[0].arrays.world.walls_m.shape[0] % 8 == 0
+    assert arena.setup_scene(load_scene(DATA_DIR / "scenes" / "gscl_queue.json")).n_slots == 8
+
+
+@pytest.mark.slow
+def test_padding_walls_changes_no_episode_and_padding_people_only_rounding():
+    spec = load_scene(DATA_DIR / "scenes" / "snape_static_pair.json")  # 7 walls -> 8, 2 objects -> 4
+    setup = arena.setup_scene(spec)
+    n_walls = len(spec.walls_m)
+    assert setup.arrays.world.walls_m.shape[0] == 8 and n_walls < 8
+    bare = arena.SceneArrays(
+        occupancy=setup.arrays.occupancy,
+        world=setup.arrays.world.replace(walls_m=setup.arrays.world.walls_m[:n_walls]),
+        objects_xy_m=setup.arrays.objects_xy_m[:2],
+        objects_cost=setup.arrays.objects_cost[:2],
+        objects_valid=setup.arrays.objects_valid[:2],
+    )
+    unpadded = dataclasses.replace(setup, arrays=bare)
+    variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 1, 2, n_slots=setup.n_slots))
+    a = arena.episode_function(setup, METHODS["snape_social_eband"], arena.crowd_params())(variants)
+    b = arena.episode_function(unpadded, METHODS["snape_social_eband"], arena.crowd_params())(variants)
+    for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b), strict=True):
+        np.testing.assert_array_equal(x, y)
+    wide = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 1, 2, n_slots=4))
+    c = arena.episode_function(setup, METHODS["snape_social_eband"], arena.crowd_params())(wide)
+    np.testing.assert_allclose(c.robot_xy, a.robot_xy, atol=1e-3)
+    np.testing.assert_allclose(c.people_xy[:, :, :2], a.people_xy, atol=1e-3)
+    assert not np.asarray(c.people_present[:, :, 2:]).any()
 
 
 # ---------------------------------------------------------------- metrics on hand-made trajectories

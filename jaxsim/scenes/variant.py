@@ -95,13 +95,24 @@ class _Drawer:
         return np.array([inside.number(value[0]), inside.number(value[1])], np.float32)
 
 
-def sample_variant(spec: SceneSpec, seed: int, k: int, held_out: bool = False) -> Variant:
+def padded_slots(n_slots: int) -> int:
+    """The people slots a scene with ``n_slots`` is run with: a power of two, at least 2.
+
+    Scenes whose padded shapes agree share one compiled episode program (:mod:`evaluation.arena`);
+    the rule depends on the scene alone, so a scene gives the same episodes whichever other scenes
+    run beside it. Empty slots change nothing: a slot's random force is drawn by its index
+    (:func:`jaxsim.rng.hash_uniform16`) and every sum over people masks absent ones."""
+    return max(2, 1 << (max(int(n_slots), 1) - 1).bit_length())
+
+
+def sample_variant(spec: SceneSpec, seed: int, k: int, held_out: bool = False, n_slots: int = 0) -> Variant:
     """Variant ``k`` of ``spec`` under ``seed`` (numpy arrays); ``held_out`` draws every range just
-    outside itself (:class:`_Drawer`)."""
+    outside itself (:class:`_Drawer`); ``n_slots`` pads the people to that many slots (at least the
+    scene's own; the draws do not depend on it)."""
     entropy = (int(seed), int(k), zlib.crc32(spec.name.encode())) + ((1,) if held_out else ())
     rng = np.random.default_rng(entropy)
     draw = _Drawer(rng, held_out)
-    n = spec.n_people_slots
+    n = max(spec.n_people_slots, int(n_slots))
     f32 = lambda shape=(): np.zeros(shape, np.float32)
     a = dict(
         kind=np.zeros(n, np.int32),
@@ -206,7 +217,10 @@ def sample_variant(spec: SceneSpec, seed: int, k: int, held_out: bool = False) -
     )
 
 
-def sample_variants(spec: SceneSpec, seed: int, n: int, first: int = 0, held_out: bool = False) -> Variant:
-    """Variants ``first .. first + n - 1``, stacked on a leading axis."""
-    variants = [sample_variant(spec, seed, k, held_out) for k in range(first, first + n)]
+def sample_variants(
+    spec: SceneSpec, seed: int, n: int, first: int = 0, held_out: bool = False, n_slots: int = 0
+) -> Variant:
+    """Variants ``first .. first + n - 1``, stacked on a leading axis (``n_slots``: as
+    :func:`sample_variant`)."""
+    variants = [sample_variant(spec, seed, k, held_out, n_slots) for k in range(first, first + n)]
     return Variant(**{f.name: np.stack([getattr(v, f.name) for v in variants]) for f in dataclasses.fields(Variant)})
