@@ -179,8 +179,27 @@ def wilson(successes: int, n: int) -> tuple[float, float]:
     return float(ci.low), float(ci.high)
 
 
+# The means that get a 95 % interval in the summary (``<key>_lo``, ``<key>_hi``).
+INTERVAL_MEANS = ("collisions", "intrusions", "d_min_m", "d_h_m", "time_s", "chc_rad", "spl", "zone_personal")
+
+
+def mean_interval(values) -> tuple[float, float]:
+    """95 % Student-t interval of a mean (``scipy.stats.t``; NaN and inf dropped); the mean itself
+    twice when every value is equal, NaN with fewer than two values."""
+    x = np.asarray(values, float)
+    x = x[np.isfinite(x)]
+    if len(x) < 2:
+        return float("nan"), float("nan")
+    m, se = float(x.mean()), float(stats.sem(x))
+    if se == 0:
+        return m, m
+    lo, hi = stats.t.interval(0.95, len(x) - 1, loc=m, scale=se)
+    return float(lo), float(hi)
+
+
 def summary(episodes: pd.DataFrame) -> pd.DataFrame:
-    """One row per (scene, method): n, goal and social success (%) with 95 % intervals, means."""
+    """One row per (scene, method): n, goal and social success (%) with Wilson 95 % intervals
+    (``_ci`` as text, ``_lo``/``_hi`` in %), means, and t intervals of :data:`INTERVAL_MEANS`."""
     rows = []
     for (scene, method), g in episodes.groupby(["scene", "method"], sort=False):
         n = len(g)
@@ -190,9 +209,12 @@ def summary(episodes: pd.DataFrame) -> pd.DataFrame:
             lo, hi = wilson(k, n)
             row[key + "_pct"] = 100.0 * k / n
             row[key + "_ci"] = f"{100 * lo:.0f}-{100 * hi:.0f}"
+            row[key + "_lo"], row[key + "_hi"] = 100.0 * lo, 100.0 * hi
         for key in SUMMARY_MEANS:
             if key in g:
                 values = g[key].replace([np.inf, -np.inf], np.nan)
                 row[key] = float(values.mean())
+                if key in INTERVAL_MEANS:
+                    row[key + "_lo"], row[key + "_hi"] = mean_interval(values)
         rows.append(row)
     return pd.DataFrame(rows)

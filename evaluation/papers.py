@@ -10,6 +10,7 @@ Table 3 the two walking ones.
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 
 # (source, scene, method, metric, paper value). Metrics: d_min_m (mean minimum distance, m),
@@ -69,8 +70,20 @@ PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
 )
 
 
+def _ours(row: pd.Series, metric: str, suffix: str = "") -> float:
+    """A summary row's value of a paper's metric (zone shares as %)."""
+    if metric == "zone_personal_pct":
+        key = "zone_personal" + suffix
+        return 100.0 * float(row[key]) if key in row else float("nan")
+    key = metric.removesuffix("_pct") + suffix if suffix and metric.endswith("_pct") else metric + suffix
+    return float(row[key]) if key in row else float("nan")
+
+
 def comparison(summary: pd.DataFrame) -> pd.DataFrame:
-    """The papers' rows with ours beside them (``ours`` NaN where the run lacks the scene or method).
+    """The papers' rows with ours beside them: ``ours`` and its 95 % interval ``ours_lo``,
+    ``ours_hi`` (Wilson for success rates, Student t for means; NaN where the summary has none),
+    and ``paper_inside`` (the paper's value lies in our interval). ``ours`` is NaN where the run
+    lacks the scene or method.
 
     Args:
       summary: :func:`evaluation.arena_report.summary`'s frame.
@@ -78,11 +91,100 @@ def comparison(summary: pd.DataFrame) -> pd.DataFrame:
     rows = []
     for source, scene, method, metric, paper in PAPER_ROWS:
         match = summary[(summary["scene"] == scene) & (summary["method"] == method)]
-        ours = float("nan")
+        ours = lo = hi = float("nan")
         if len(match):
             r = match.iloc[0]
-            ours = 100.0 * float(r["zone_personal"]) if metric == "zone_personal_pct" else float(r[metric])
+            ours, lo, hi = _ours(r, metric), _ours(r, metric, "_lo"), _ours(r, metric, "_hi")
         rows.append(
-            {"source": source, "scene": scene, "method": method, "metric": metric, "paper": paper, "ours": ours}
+            {
+                "source": source,
+                "scene": scene,
+                "method": method,
+                "metric": metric,
+                "paper": paper,
+                "ours": ours,
+                "ours_lo": lo,
+                "ours_hi": hi,
+                "paper_inside": bool(lo <= paper <= hi) if lo == lo else None,
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+# Each paper's proposed method against the baselines it was compared with.
+PROPOSED_BY_SOURCE = {"seed 001": "casn", "seed 002": "gscl", "seed 004": "snape_social_eband"}
+
+
+def _episode_column(metric: str) -> tuple[str, float]:
+    """The episodes frame's column of a paper's metric and its scale to the paper's unit."""
+    if metric == "zone_personal_pct":
+        return "zone_personal", 100.0
+    if metric.endswith("_success_pct"):
+        return metric.removesuffix("_pct"), 100.0
+    return metric, 1.0
+
+
+def _episode_values(episodes: pd.DataFrame, scene: str, method: str, metric: str) -> pd.Series:
+    column, scale = _episode_column(metric)
+    g = episodes[(episodes["scene"] == scene) & (episodes["method"] == method)].set_index("variant")
+    return scale * g[column].astype(float)
+
+
+def directions(episodes: pd.DataFrame) -> pd.DataFrame:
+    """Does each paper's direction reproduce? For every paper row of a proposed method and each
+    baseline the paper compared it with on that scene and metric: the paper's difference
+    (proposed - baseline), ours, and ours' 95 % interval, paired by variant (common random
+    numbers: variant k is the same scene for both; a Student t interval of the per-variant
+    differences, for success rates the paired difference of proportions).
+
+    ``verdict``: ``reproduced`` (same sign, our interval excludes 0), ``same sign, not
+    significant``, ``opposite`` (our interval excludes 0 on the other side), ``opposite, not
+    significant`` (``no difference here`` where every pair is equal); where the paper reports no
+    difference, ``reproduced`` when our interval holds 0,
+    else ``differs``.
+    """
+    from evaluation.arena_report import mean_interval
+
+    paper = {(src, scene, method, metric): value for src, scene, method, metric, value in PAPER_ROWS}
+    have = set(zip(episodes["scene"], episodes["method"], strict=True))
+    rows = []
+    for (src, scene, method, metric), value in paper.items():
+        proposed = PROPOSED_BY_SOURCE[src[:8]]
+        if method == proposed or (scene, proposed) not in have or (scene, method) not in have:
+            continue
+        if (src, scene, proposed, metric) not in paper or _episode_column(metric)[0] not in episodes:
+            continue
+        a = _episode_values(episodes, scene, proposed, metric)
+        b = _episode_values(episodes, scene, method, metric)
+        both = a.index.intersection(b.index)
+        d = (a[both] - b[both]).replace([np.inf, -np.inf], np.nan).dropna()
+        ours = float(d.mean()) if len(d) else float("nan")
+        lo, hi = mean_interval(d)
+        paper_diff = paper[(src, scene, proposed, metric)] - value
+        if abs(paper_diff) < 1e-9:
+            verdict = "reproduced" if lo <= 0 <= hi else "differs"
+        else:
+            sign = np.sign(paper_diff)
+            significant = not (lo <= 0 <= hi)
+            if np.sign(ours) == sign:
+                verdict = "reproduced" if significant else "same sign, not significant"
+            elif significant:
+                verdict = "opposite"
+            else:
+                verdict = "no difference here" if ours == 0 else "opposite, not significant"
+        rows.append(
+            {
+                "source": src,
+                "scene": scene,
+                "metric": metric,
+                "proposed": proposed,
+                "baseline": method,
+                "paper_diff": paper_diff,
+                "ours_diff": ours,
+                "ours_diff_lo": lo,
+                "ours_diff_hi": hi,
+                "n_pairs": len(d),
+                "verdict": verdict,
+            }
         )
     return pd.DataFrame(rows)

@@ -10,7 +10,9 @@ Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
 ``trajectories/<scene>.parquet`` (the first ``--keep-trajectories`` variants, step by step),
 ``pictures/<scene>_paths.png``, ``_distance.png`` and (with the social band) ``_speed.png``
 (variant 0), ``summary.csv`` (one row per scene and method), ``papers.csv`` (the seeds' published
-numbers beside ours, for the scenes and methods the run has), ``stats.csv`` (Fisher, Welch ANOVA,
+numbers beside ours with our 95 % intervals, for the scenes and methods the run has),
+``directions.csv`` (each paper's difference against its baseline and ours, paired by variant,
+with a verdict: :func:`evaluation.papers.directions`), ``stats.csv`` (Fisher, Welch ANOVA,
 Games-Howell, Hedges' g: :mod:`evaluation.arena_stats`) and ``run.json``; every file
 atomically, one scene at a time: a rerun with the same settings skips the scenes already written.
 """
@@ -225,8 +227,14 @@ def run(args) -> int:
     compared = papers.comparison(summary).dropna(subset=["ours"])
     if len(compared):
         write_atomic(args.out / "papers.csv", lambda tmp: compared.to_csv(tmp, index=False))
-        print("\nthe papers' numbers and ours:")
+        print("\nthe papers' numbers and ours (95 % intervals):")
         with pd.option_context("display.width", 200, "display.max_rows", 500):
             print(compared.round(2).to_string(index=False))
-    print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, episodes/ and trajectories/")
+    turned = papers.directions(pd.concat(frames, ignore_index=True))
+    if len(turned):
+        write_atomic(args.out / "directions.csv", lambda tmp: turned.to_csv(tmp, index=False))
+        print("\ndo the papers' differences reproduce? (proposed - baseline, paired by variant)")
+        with pd.option_context("display.width", 200, "display.max_rows", 500):
+            print(turned.round(2).to_string(index=False))
+    print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, directions.csv, episodes/ and trajectories/")
     return 0
