@@ -115,12 +115,15 @@ def run_evaluation(
     weights: CausalWeights = CausalWeights(),
     segment_s: float = 600.0,
     progress: bool = True,
+    first_replica: int = 0,
 ) -> EvaluationResult:
     """Both methods on every slot's experiment, ``replicas`` times, with common random numbers.
 
     Args:
       tables: the causal engine's tables (:meth:`CausalTables.load` of ``engine_tables.npz``).
       replicas: independent replicas of the whole protocol (>= 1).
+      first_replica: the first replica's index (a shard of a larger run: replica ``r`` is the same
+        experiment whichever shard runs it; :func:`merge` joins shards).
       slots: slot indices to run (default all).
       cfg: protocol settings (default :meth:`~evaluation.protocol.ProtocolConfig.for_params`).
     """
@@ -134,7 +137,7 @@ def run_evaluation(
     world = build_world(scenario)
     methods = build_methods(scenario, tables, weights)
     # Batch order: replica-major, so a slot's experiments spread over the devices evenly.
-    rep_grid, slot_grid = np.meshgrid(np.arange(replicas), slot_ids, indexing="ij")
+    rep_grid, slot_grid = np.meshgrid(np.arange(first_replica, first_replica + replicas), slot_ids, indexing="ij")
     b_slots, b_reps = slot_grid.ravel().astype(np.int32), rep_grid.ravel().astype(np.int32)
     keys = ex.experiment_keys(seed, b_slots, b_reps)
 
@@ -166,6 +169,26 @@ def run_evaluation(
         plans=methods,
         density_ppm2=tables.density_ppm2,
         config=config,
+    )
+
+
+def merge(parts: list[EvaluationResult]) -> EvaluationResult:
+    """One result from shards of replicas (in replica order): tasks concatenated, histograms and
+    spans joined along the replica axis, wall times added."""
+    first = parts[0]
+    if len(parts) == 1:
+        return first
+    names = list(first.distance_hist)
+    return dataclasses.replace(
+        first,
+        # method-major, then replica order: the rows of one run of every replica
+        tasks=pd.concat([r.tasks for r in parts], ignore_index=True)
+        .sort_values("method", key=lambda m: m.map(METHODS.index), kind="stable")
+        .reset_index(drop=True),
+        distance_hist={m: np.concatenate([r.distance_hist[m] for r in parts], axis=1) for m in names},
+        experiment_s={m: np.concatenate([r.experiment_s[m] for r in parts], axis=1) for m in names},
+        wall_s={m: sum(r.wall_s[m] for r in parts) for m in names},
+        config={**first.config, "replicas": sum(r.config["replicas"] for r in parts)},
     )
 
 

@@ -113,6 +113,24 @@ def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUD
     return best
 
 
+def run_metadata(scenario: Scenario, *, final: dict, **fields) -> dict:
+    """``run.json``'s content: the schema version, ``fields`` (seed, worlds, duration, rows,
+    timings, ...), the JAX devices, the scenario's names and parameters, the final counters."""
+    import jax
+
+    return {
+        "schema_version": logschema.SCHEMA_VERSION,
+        **fields,
+        "jax_devices": [str(d) for d in jax.devices()],
+        "scenario": scenario.name,
+        "waypoints": list(scenario.waypoint_ids),
+        "slots": list(scenario.slot_names),
+        "slot_clock": list(scenario.slot_clock),
+        "params": dataclasses.asdict(scenario.params),
+        "final": final,
+    }
+
+
 def simulate_to_parquet(
     scenario: Scenario,
     out_dir: str | pathlib.Path,
@@ -126,6 +144,7 @@ def simulate_to_parquet(
     snapshot_time_s: float | None = None,
     progress: bool = True,
     chunk_budget_bytes: int = CHUNK_BUDGET_BYTES,
+    first_world: int = 0,
 ) -> RunSummary:
     """Simulate ``n_worlds`` worlds for ``duration_s`` and write ``logs.parquet`` + ``run.json``.
 
@@ -139,12 +158,13 @@ def simulate_to_parquet(
       duration_s: simulated time, a multiple of ``sample_interval_s``.
       sample_interval_s: logging interval, a multiple of ``dt_s``.
       log_positions: also log every worker's position and status.
-      snapshot_time_s: keep world 0's positions at this time for a picture.
+      snapshot_time_s: keep the first world's positions at this time for a picture.
+      first_world: the first world's index (a shard of a larger run: worlds ``first_world ..
+        first_world + n_worlds - 1``, the same worlds as in one run of them all).
 
     Raises:
       ValueError: on inconsistent sizes, before anything is written.
     """
-    import jax
 
     from jaxsim import rollout
     from jaxsim import world as world_lib
@@ -167,7 +187,7 @@ def simulate_to_parquet(
 
     start = time.perf_counter()
     world = world_lib.build_world(scenario)
-    keys = rollout.world_keys(seed, n_worlds)
+    keys = rollout.world_keys(seed, n_worlds, first_world)
     states = rollout.init_batch(p, world, controller, keys)
     per_sample = 4 * (scenario.n_waypoints + p.n_workers * (4 if log_positions else 2) + 32)
     chunk = chunk_samples(n_samples, per_sample * n_worlds, chunk_budget_bytes)
@@ -194,7 +214,7 @@ def simulate_to_parquet(
                 rec = rollout.to_numpy(rec)
                 if c == 0:
                     compile_s = time.perf_counter() - start
-                table = record_table(rec, np.arange(n_worlds), scenario, seed, log_positions)
+                table = record_table(rec, np.arange(first_world, first_world + n_worlds), scenario, seed, log_positions)
                 if writer is None:
                     writer = pq.ParquetWriter(tmp, table.schema, compression="zstd")
                 writer.write_table(table)
@@ -225,24 +245,19 @@ def simulate_to_parquet(
         wall = time.perf_counter() - start
 
     agent_steps = n_worlds * n_samples * every * (p.n_workers + 1)
-    meta = {
-        "schema_version": logschema.SCHEMA_VERSION,
-        "seed": seed,
-        "n_worlds": n_worlds,
-        "duration_s": duration_s,
-        "sample_interval_s": sample_interval_s,
-        "rows": rows,
-        "wall_s": wall,
-        "compile_s": compile_s,
-        "agent_steps_per_s": agent_steps / wall,
-        "jax_devices": [str(d) for d in jax.devices()],
-        "scenario": scenario.name,
-        "waypoints": list(scenario.waypoint_ids),
-        "slots": list(scenario.slot_names),
-        "slot_clock": list(scenario.slot_clock),
-        "params": dataclasses.asdict(p),
-        "final": final,
-    }
+    meta = run_metadata(
+        scenario,
+        seed=seed,
+        n_worlds=n_worlds,
+        first_world=first_world,
+        duration_s=duration_s,
+        sample_interval_s=sample_interval_s,
+        rows=rows,
+        wall_s=wall,
+        compile_s=compile_s,
+        agent_steps_per_s=agent_steps / wall,
+        final=final,
+    )
     write_text_atomic(out / META_FILE, json.dumps(meta, indent=1))
     with np.errstate(invalid="ignore"):
         mean_density = dens_sum / dens_n[:, None]

@@ -46,10 +46,11 @@ DEFAULT_WORLD_CHUNK = 64
 INIT_FOLD = 2**31 - 1
 
 
-def world_keys(seed: int, n_worlds: int) -> jax.Array:
-    """(n_worlds,) independent keys, world ``b`` always gets the same key for a given seed."""
+def world_keys(seed: int, n_worlds: int, first_world: int = 0) -> jax.Array:
+    """(n_worlds,) independent keys of worlds ``first_world ..``; world ``b`` always gets the same
+    key for a given seed (so worlds can be cut into shards)."""
     base = jax.random.key(seed)
-    return jax.vmap(lambda b: jax.random.fold_in(base, b))(jnp.arange(n_worlds))
+    return jax.vmap(lambda b: jax.random.fold_in(base, b))(jnp.arange(first_world, first_world + n_worlds))
 
 
 @functools.lru_cache(maxsize=4)

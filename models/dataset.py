@@ -53,9 +53,13 @@ def _as_key(seed) -> jax.Array:
     raise TypeError(f"seed must be an int or a jax.random.key, got {type(seed).__name__}")
 
 
+def _family_base(seed, family: str) -> jax.Array:
+    return jax.random.fold_in(_as_key(seed), list(FAMILIES).index(family))
+
+
 def family_keys(seed, family: str, n: int) -> jax.Array:
     """(n,) keys of a family: sample ``i`` of a family is the same whatever the other counts."""
-    base = jax.random.fold_in(_as_key(seed), list(FAMILIES).index(family))
+    base = _family_base(seed, family)
     return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(n))
 
 
@@ -82,16 +86,34 @@ def generate(seed, counts: dict[str, int] | None = None) -> dict[str, np.ndarray
     names = [f for f in FAMILIES if counts.get(f, 0) > 0]
     inputs, targets, family = [], [], []
     for idx, name in enumerate(names):
-        keys = family_keys(seed, name, counts[name])
-        for start in range(0, counts[name], CHUNK):  # one compiled shape per family, whatever the count
-            chunk = keys[start : start + CHUNK]
-            n = chunk.shape[0]
-            if n < CHUNK:
-                chunk = jnp.concatenate([chunk, jnp.broadcast_to(chunk[:1], (CHUNK - n,))])
-            x, y = batched_sampler(name)(chunk)
-            inputs.append(np.asarray(x[:n]))
-            targets.append(np.asarray(y[:n], np.float32))
+        x, y = generate_range(seed, name, 0, counts[name])
+        inputs.append(x)
+        targets.append(y)
         family.append(np.full(counts[name], idx, np.int8))
+    return assemble(names, inputs, targets, family)
+
+
+def generate_range(seed, name: str, start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+    """Samples ``start .. stop - 1`` of family ``name``: (inputs (n, 40, 40) uint8, targets (n, 40,
+    40) float32), the same samples as in any dataset that holds them (a shard of a dataset: with
+    ``start`` a multiple of :data:`CHUNK` the same bits too, the batches being the same)."""
+    keys = jax.vmap(lambda i: jax.random.fold_in(_family_base(seed, name), i))(jnp.arange(start, stop))
+    inputs, targets = [], []
+    for first in range(0, stop - start, CHUNK):  # one compiled shape per family, whatever the count
+        chunk = keys[first : first + CHUNK]
+        n = chunk.shape[0]
+        if n < CHUNK:
+            chunk = jnp.concatenate([chunk, jnp.broadcast_to(chunk[:1], (CHUNK - n,))])
+        x, y = batched_sampler(name)(chunk)
+        inputs.append(np.asarray(x[:n]))
+        targets.append(np.asarray(y[:n], np.float32))
+    if not inputs:
+        return np.zeros((0, grid.GRID, grid.GRID), np.uint8), np.zeros((0, grid.GRID, grid.GRID), np.float32)
+    return np.concatenate(inputs), np.concatenate(targets)
+
+
+def assemble(names, inputs, targets, family) -> dict[str, np.ndarray]:
+    """A dataset dict from per-part arrays (in order): see :func:`generate`."""
     if not names:
         empty = np.zeros((0, grid.GRID, grid.GRID))
         return {

@@ -11,7 +11,11 @@ from evaluation import warehouse
 from evaluation.protocol import ProtocolConfig
 from jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
 from planners.tables import TABLES_FILE, CausalTables, TablesError
+from socialnav import backend as backend_lib
 from socialnav.argtypes import comma_names, positive_float, positive_int
+from socialnav.backend import add_backend_options
+
+STAGING = ".shards"
 
 
 def add_parser(sub) -> None:
@@ -30,6 +34,13 @@ def add_parser(sub) -> None:
     )
     add_evaluation_options(ev, default_out=None)
     ev.add_argument("--scenario", type=pathlib.Path, default=None, help="scenario folder (default: the warehouse)")
+    ev.add_argument(
+        "--shard-replicas",
+        type=positive_int,
+        default=None,
+        help="replicas per shard (default: all in one; a Ray task per shard with --backend ray)",
+    )
+    add_backend_options(ev)
     ev.set_defaults(handler=run)
 
 
@@ -92,20 +103,32 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     settings = {"deadline_per_hop": not args.deadline_per_task}
     if args.collision_radius_m is not None:
         settings["collision_radius_m"] = args.collision_radius_m
+    backend = getattr(args, "backend", "local")
+    size = getattr(args, "shard_replicas", None) or args.replicas
     try:
-        result = warehouse.run_evaluation(
-            scenario,
-            tables,
-            replicas=args.replicas,
-            slots=slots,
-            seed=args.seed,
-            cfg=ProtocolConfig.for_params(scenario.params, **settings),
-            progress=not args.no_progress,
-        )
+        if backend == "local" and size >= args.replicas:
+            result = warehouse.run_evaluation(
+                scenario,
+                tables,
+                replicas=args.replicas,
+                slots=slots,
+                seed=args.seed,
+                cfg=ProtocolConfig.for_params(scenario.params, **settings),
+                progress=not args.no_progress,
+            )
+        else:
+            result = _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    except backend_lib.BackendError as e:
+        print(f"socialnav evaluate: {e}", file=sys.stderr)
+        return 2
     files = warehouse.write_report(result, scenario, out)
+    if (out / STAGING).is_dir():  # the shards live until the report is written
+        import shutil
+
+        shutil.rmtree(out / STAGING)
     summary = json.loads((out / "summary.json").read_text())
     print(
         f"\n{args.replicas} replica(s) x {len(result.config['slots'])} slot(s), both methods; wall time "
@@ -116,6 +139,89 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     for f in files:
         print(f"wrote {f}")
     return 0
+
+
+def compute_shard(scenario_dir, tables_file, first, n, slots, seed, settings) -> warehouse.EvaluationResult:
+    """Replicas ``first .. first + n - 1`` of the protocol (here or in a Ray worker); the routes
+    (``plans``) stay behind: the driver rebuilds them."""
+    import dataclasses
+
+    scenario = load_scenario(scenario_dir or WAREHOUSE_DIR)
+    result = warehouse.run_evaluation(
+        scenario,
+        CausalTables.load(tables_file),
+        replicas=n,
+        slots=slots,
+        seed=seed,
+        cfg=ProtocolConfig.for_params(scenario.params, **settings),
+        progress=False,
+        first_replica=first,
+    )
+    return dataclasses.replace(result, plans={})
+
+
+def _save_shard(shard, result) -> None:
+    import pickle
+
+    from common.atomic import write_bytes_atomic
+
+    write_bytes_atomic(shard.output, lambda handle: pickle.dump(result, handle))
+
+
+def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size) -> warehouse.EvaluationResult:
+    """The replicas cut into shards of ``size``, run by the chosen backend, kept under
+    ``<out>/.shards/`` until all are done (a rerun with the same settings computes only the
+    missing ones), then merged."""
+    import dataclasses
+    import pickle
+    import shutil
+
+    from common.atomic import write_text_atomic
+
+    staging = out / STAGING
+    layout = {
+        "scenario": None if args.scenario is None else str(args.scenario),
+        "tables": str(pathlib.Path(tables_file).resolve()),
+        "replicas": args.replicas,
+        "shard_replicas": size,
+        "slots": slots,
+        "seed": args.seed,
+        "settings": settings,
+    }
+    marker = staging / "settings.json"
+    if marker.exists() and json.loads(marker.read_text()) != layout:
+        shutil.rmtree(staging)
+    staging.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(marker, json.dumps(layout))
+    scenario_dir = None if args.scenario is None else str(pathlib.Path(args.scenario).resolve())
+    shards = [
+        backend_lib.Shard(
+            name=f"replicas {first}-{first + min(size, args.replicas - first) - 1}",
+            output=staging / f"replicas-{first:06d}.pkl",
+            args=(scenario_dir, layout["tables"], first, min(size, args.replicas - first), slots, args.seed, settings),
+            work=min(size, args.replicas - first),
+        )
+        for first in range(0, args.replicas, size)
+    ]
+    backend_lib.run_shards(
+        compute_shard,
+        _save_shard,
+        shards,
+        backend=args.backend,
+        address=args.ray_address,
+        cpus_per_task=args.ray_cpus_per_task,
+        progress=not args.no_progress,
+        desc="evaluate",
+        unit="replicas",
+    )
+    parts = [pickle.loads(s.output.read_bytes()) for s in shards]
+    result = warehouse.merge(parts)
+    result = dataclasses.replace(
+        result,
+        plans=warehouse.build_methods(scenario, tables),
+        config={**result.config, "shard_replicas": size, **backend_lib.describe(args)},
+    )
+    return result
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,6 +1,7 @@
 """``socialnav gscl``: GSCL's social cost-map learner on the command line (seed 002).
 
 socialnav gscl generate --out runs/gscl.npz                 # the paper's 24,200 pairs in one file
+socialnav gscl generate --out big.npz --scale 100 --backend ray --shard-samples 8192   # on a Ray cluster
 socialnav gscl train --out runs/gscl                        # the CPU recipe; run again to resume
 socialnav gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
 socialnav gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
@@ -11,9 +12,12 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import shutil
 import time
 
+from socialnav import backend as backend_lib
 from socialnav.argtypes import positive_float, positive_int
+from socialnav.backend import BackendError, add_backend_options
 
 
 def _features(text: str) -> tuple[int, ...]:
@@ -67,6 +71,15 @@ def add_parser(top) -> None:
         help="samples of one family (repeatable; overrides --scale for it)",
     )
     gen.add_argument("--preview", type=pathlib.Path, default=None, help="also write a PNG with one sample per family")
+    gen.add_argument(
+        "--shard-samples",
+        type=positive_int,
+        default=None,
+        help="samples per shard, rounded up to a multiple of 1024 (default: one shard per family; "
+        "a Ray task per shard with --backend ray)",
+    )
+    gen.add_argument("--no-progress", action="store_true", help="hide the progress bar (sharded runs)")
+    add_backend_options(gen)
 
     tr = sub.add_parser("train", help="train the U-Net (resumes the run in --out if there is one)")
     tr.add_argument(
@@ -123,9 +136,17 @@ def _generate(args) -> int:
             raise SystemExit(f"socialnav gscl generate: unknown family {name!r}; known: {', '.join(dataset.FAMILIES)}")
         counts[name] = n
     t0 = time.perf_counter()
-    data = dataset.generate(args.seed, counts)
+    if args.backend == "local" and args.shard_samples is None:
+        data = dataset.generate(args.seed, counts)
+    else:
+        try:
+            data = _generate_sharded(args, counts)
+        except BackendError as e:
+            raise SystemExit(f"socialnav gscl generate: {e}") from None
     dt = time.perf_counter() - t0
     dataset.save(args.out, data)
+    if _staging(args.out).is_dir():  # the shards live until the dataset is written
+        shutil.rmtree(_staging(args.out))
     print(f"{len(data['family'])} pairs in {dt:.1f} s (compilation included) -> {args.out}")
     for i, name in enumerate(data["names"]):
         print(f"  {name:<18}{int((data['family'] == i).sum()):>7}")
@@ -135,6 +156,77 @@ def _generate(args) -> int:
         plots.family_grid(data["inputs"], data["targets"], data["family"], data["names"], args.preview)
         print(f"preview -> {args.preview}")
     return 0
+
+
+def _staging(out: pathlib.Path) -> pathlib.Path:
+    return out.with_name(f".{out.name}.shards")
+
+
+def generate_shard(seed: int, name: str, start: int, stop: int):
+    """Samples ``start .. stop - 1`` of one family (here or in a Ray worker)."""
+    from models import dataset
+
+    return dataset.generate_range(seed, name, start, stop)
+
+
+def _save_shard(shard, result) -> None:
+    import numpy as np
+
+    from common.atomic import write_bytes_atomic
+
+    x, y = result
+    write_bytes_atomic(shard.output, lambda handle: np.savez(handle, inputs=x, targets=y))
+
+
+def _generate_sharded(args, counts: dict[str, int]):
+    """The dataset cut into shards of samples of one family (aligned to the generator's 1024-sample
+    chunks, so the same bits as one call), run by the chosen backend, kept beside ``--out`` until
+    the dataset is written; a rerun with the same settings computes only the missing ones."""
+    import json
+
+    import numpy as np
+
+    from common.atomic import write_text_atomic
+    from models import dataset
+
+    chunk = dataset.CHUNK
+    size = max(chunk, -(-(args.shard_samples or max(counts.values(), default=chunk)) // chunk) * chunk)
+    staging = _staging(args.out)
+    layout = {"seed": args.seed, "counts": counts, "shard_samples": size}
+    marker = staging / "settings.json"
+    if marker.exists() and json.loads(marker.read_text()) != layout:
+        shutil.rmtree(staging)
+    staging.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(marker, json.dumps(layout))
+    names = [f for f in dataset.FAMILIES if counts.get(f, 0) > 0]
+    shards = [
+        backend_lib.Shard(
+            name=f"{name}[{start}:{min(start + size, counts[name])}]",
+            output=staging / f"{k:02d}-{name}-{start:07d}.npz",
+            args=(args.seed, name, start, min(start + size, counts[name])),
+            work=min(start + size, counts[name]) - start,
+        )
+        for k, name in enumerate(names)
+        for start in range(0, counts[name], size)
+    ]
+    backend_lib.run_shards(
+        generate_shard,
+        _save_shard,
+        shards,
+        backend=args.backend,
+        address=args.ray_address,
+        cpus_per_task=args.ray_cpus_per_task,
+        progress=not args.no_progress,
+        desc="gscl generate",
+        unit="samples",
+    )
+    inputs, targets, family = [], [], []
+    for shard in shards:
+        with np.load(shard.output) as part:
+            inputs.append(part["inputs"])
+            targets.append(part["targets"])
+        family.append(np.full(len(inputs[-1]), names.index(shard.args[1]), np.int8))
+    return dataset.assemble(names, inputs, targets, family)
 
 
 def _train_config(args):

@@ -11,6 +11,7 @@ from jaxsim.robot import RouteFollower
 from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
 from planners.routes import shortest_path_plan
 from socialnav.argtypes import positive_float, positive_int, probability
+from socialnav.backend import BackendError, add_backend_options
 
 
 def add_parser(sub) -> None:
@@ -67,7 +68,15 @@ def add_parser(sub) -> None:
         help="time of the snapshot picture (default: the middle of the lunch slot S6, or of the run)",
     )
     sim.add_argument("--log-positions", action="store_true", help="also log every worker's position and status")
+    sim.add_argument(
+        "--shard-worlds",
+        type=positive_int,
+        default=None,
+        help="worlds per shard (default: all in one, logs.parquet one file; with shards, logs.parquet is a "
+        "folder of parts, one per shard, that pandas and pyarrow read as one table)",
+    )
     sim.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_backend_options(sim)
     sim.set_defaults(handler=run)
 
 
@@ -94,21 +103,30 @@ def run(args: argparse.Namespace) -> int:
     else:
         snap_t = duration_s / 2
     snap_t = round(snap_t / args.sample_interval_s) * args.sample_interval_s
+    sharded = args.backend != "local" or (args.shard_worlds is not None and args.shard_worlds < args.worlds)
     try:
-        run = logs.simulate_to_parquet(
-            scenario,
-            args.out,
-            RouteFollower(shortest_path_plan(scenario)),
-            n_worlds=args.worlds,
-            duration_s=duration_s,
-            seed=args.seed,
-            sample_interval_s=args.sample_interval_s,
-            log_positions=args.log_positions,
-            snapshot_time_s=snap_t,
-            progress=not args.no_progress,
-        )
+        if sharded:
+            from socialnav import simulate_shards
+
+            run = simulate_shards.run_sharded(args, overrides, duration_s, snap_t)
+        else:
+            run = logs.simulate_to_parquet(
+                scenario,
+                args.out,
+                RouteFollower(shortest_path_plan(scenario)),
+                n_worlds=args.worlds,
+                duration_s=duration_s,
+                seed=args.seed,
+                sample_interval_s=args.sample_interval_s,
+                log_positions=args.log_positions,
+                snapshot_time_s=snap_t,
+                progress=not args.no_progress,
+            )
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
+        return 2
+    except BackendError as e:
+        print(f"socialnav simulate: {e}", file=sys.stderr)
         return 2
     pictures = []
     if run.snapshot is not None:

@@ -88,3 +88,18 @@ def test_the_check_catches_a_forbidden_import(tmp_path, part, other):
     (tmp_path / part / "bad.py").write_text(f"import numpy\n\n\ndef f():\n    from {other} import something\n")
     (tmp_path / part / "good.py").write_text("from common import pytree\n")
     assert forbidden_arrows(tmp_path) == [f"{part}/bad.py:5 imports {other}"]
+
+
+def test_only_the_backend_module_imports_ray():
+    """Ray is an optional extra: the simulator, planners, models, causal code and evaluation never
+    import it; in the composition root only ``socialnav/backend.py`` does."""
+    users = []
+    for part in PARTS:
+        for file in sorted((ROOT / part).rglob("*.py")):
+            for node in ast.walk(ast.parse(file.read_text(), str(file))):
+                names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+                if isinstance(node, ast.ImportFrom) and node.module:
+                    names = [node.module]
+                if any(n.split(".")[0] == "ray" for n in names):
+                    users.append(str(file.relative_to(ROOT)))
+    assert sorted(set(users)) == ["socialnav/backend.py"]
