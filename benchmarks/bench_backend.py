@@ -25,8 +25,8 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.bench_simulator import machine  # noqa: E402
 
 JOBS = {
-    "simulate": ["simulate", "--worlds", "8", "--hours", "1", "--shard-worlds", "4", "--no-progress"],
-    "gscl generate": ["gscl", "generate", "--scale", "4", "--shard-samples", "16384", "--no-progress"],
+    "simulate": ["simulate", "--worlds", "8", "--shard-worlds", "4", "--no-progress"],
+    "gscl generate": ["gscl", "generate", "--scale", "8", "--shard-samples", "32768", "--no-progress"],
     "arena": [
         "arena",
         "--scenes",
@@ -70,9 +70,10 @@ def main() -> None:
 
     print(f"machine: {machine()}, ray {ray.__version__}")
     exe = str(pathlib.Path(sys.executable).with_name("socialnav"))
+    ray_cli = str(pathlib.Path(sys.executable).with_name("ray"))
     with tempfile.TemporaryDirectory() as tmp_dir:
         tmp = pathlib.Path(tmp_dir)
-        subprocess.run(["ray", "start", "--head", "--num-cpus", "2", "--disable-usage-stats"], check=True,
+        subprocess.run([ray_cli, "start", "--head", "--num-cpus", "2", "--disable-usage-stats"], check=True,
                        capture_output=True)  # fmt: skip
         try:
             for job, command in jobs.items():
@@ -93,7 +94,7 @@ def main() -> None:
                     flush=True,
                 )
         finally:
-            subprocess.run(["ray", "stop", "--force"], capture_output=True)
+            subprocess.run([ray_cli, "stop", "--force"], capture_output=True)
 
 
 if __name__ == "__main__":

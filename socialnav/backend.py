@@ -98,6 +98,20 @@ def _worker_env() -> dict[str, str]:
     return env
 
 
+def _check_reachable(address: str, timeout_s: float = 10.0) -> None:
+    """A ``host:port`` (or ``ray://host:port``) address must accept a TCP connection within
+    ``timeout_s``: Ray itself retries an unreachable cluster for minutes without a word."""
+    import socket
+
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit():
+        return  # "auto", "local" or a form Ray resolves itself
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout_s).close()
+    except OSError as e:
+        raise BackendError(f"cannot reach the Ray cluster at {address}: {e.strerror or e}") from e
+
+
 def _connect(address: str | None):
     try:
         import ray
@@ -106,6 +120,8 @@ def _connect(address: str | None):
     if ray.is_initialized():
         return ray
     address = address or os.environ.get("RAY_ADDRESS") or None
+    if address:
+        _check_reachable(address)
     try:
         ray.init(
             address=address,
@@ -159,15 +175,15 @@ def run_shards(
     total = sum(s.work for s in shards)
     todo = [s for s in shards if not s.output.exists()]
     done = total - sum(s.work for s in todo)
+    ray = _connect(address) if backend == "ray" else None  # before the bar: errors come first
     with bar(desc, unit=unit, enabled=progress) as progress_bar:
         progress_bar.update(done, total)
-        if backend == "local":
+        if ray is None:
             for shard in todo:
                 save(shard, compute(*shard.args))
                 done += shard.work
                 progress_bar.update(done, total)
             return len(todo)
-        ray = _connect(address)
         if not todo:
             return 0
         remote = ray.remote(compute).options(num_cpus=_cpus_per_task(ray, cpus_per_task), max_retries=max_retries)

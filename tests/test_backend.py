@@ -69,6 +69,20 @@ def test_unknown_backend_and_missing_ray_are_one_line_errors(tmp_path, monkeypat
         backend.run_shards(_square, _write_number, _shards(tmp_path), backend="ray", progress=False)
 
 
+def test_an_unreachable_cluster_is_a_one_line_error_within_seconds(tmp_path):
+    pytest.importorskip("ray")
+    import socket
+
+    with socket.socket() as sock:  # a port nothing listens on
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    with pytest.raises(backend.BackendError, match=f"cannot reach the Ray cluster at 127.0.0.1:{port}"):
+        backend.run_shards(
+            _square, _write_number, _shards(tmp_path), backend="ray", address=f"127.0.0.1:{port}", progress=False
+        )
+    assert not list(tmp_path.iterdir())
+
+
 def test_the_worker_environment_carries_the_drivers_device_count(monkeypatch):
     import jax
 
