@@ -203,17 +203,7 @@ def run(args) -> int:
                 )
             )
     try:
-        backend_lib.run_shards(
-            compute_shard,
-            _save_shard,
-            shards,
-            backend=args.backend,
-            address=args.ray_address,
-            cpus_per_task=args.ray_cpus_per_task,
-            progress=not args.no_progress,
-            desc="arena",
-            unit="episodes",
-        )
+        backend_lib.run_with_args(compute_shard, _save_shard, shards, args, desc="arena", unit="episodes")
     except backend_lib.BackendError as e:
         print(f"socialnav arena: {e}", file=sys.stderr)
         return 2

@@ -207,3 +207,42 @@ def run_shards(
             done += shard.work
             progress_bar.update(done, total)
     return len(todo)
+
+
+def run_with_args(
+    compute: Callable, save: Callable[[Shard, object], None], shards: Sequence[Shard], args, **bar
+) -> int:
+    """:func:`run_shards` with the backend options of a parsed command line (``--backend``,
+    ``--ray-address``, ``--ray-cpus-per-task``, ``--no-progress``); ``bar``: ``desc``, ``unit``."""
+    return run_shards(
+        compute,
+        save,
+        shards,
+        backend=getattr(args, "backend", "local"),
+        address=getattr(args, "ray_address", None),
+        cpus_per_task=getattr(args, "ray_cpus_per_task", None),
+        progress=not getattr(args, "no_progress", False),
+        **bar,
+    )
+
+
+def staging_folder(folder: pathlib.Path, layout: dict) -> pathlib.Path:
+    """The folder where a job keeps its finished shards until it commits its output: reused when
+    it holds shards of the same ``layout`` (settings and shard sizes), emptied when it holds
+    another run's, created if missing; ``layout`` is recorded in ``settings.json`` there."""
+    import json
+    import shutil
+
+    from common.atomic import write_text_atomic
+
+    marker = folder / "settings.json"
+    if folder.is_dir():
+        try:
+            same = json.loads(marker.read_text()) == json.loads(json.dumps(layout))
+        except (OSError, ValueError):
+            same = False
+        if not same:
+            shutil.rmtree(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(marker, json.dumps(layout))
+    return folder

@@ -174,9 +174,6 @@ def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size
     missing ones), then merged."""
     import dataclasses
     import pickle
-    import shutil
-
-    from common.atomic import write_text_atomic
 
     staging = out / STAGING
     layout = {
@@ -188,11 +185,7 @@ def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size
         "seed": args.seed,
         "settings": settings,
     }
-    marker = staging / "settings.json"
-    if marker.exists() and json.loads(marker.read_text()) != layout:
-        shutil.rmtree(staging)
-    staging.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(marker, json.dumps(layout))
+    backend_lib.staging_folder(staging, layout)
     scenario_dir = None if args.scenario is None else str(pathlib.Path(args.scenario).resolve())
     shards = [
         backend_lib.Shard(
@@ -203,17 +196,7 @@ def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size
         )
         for first in range(0, args.replicas, size)
     ]
-    backend_lib.run_shards(
-        compute_shard,
-        _save_shard,
-        shards,
-        backend=args.backend,
-        address=args.ray_address,
-        cpus_per_task=args.ray_cpus_per_task,
-        progress=not args.no_progress,
-        desc="evaluate",
-        unit="replicas",
-    )
+    backend_lib.run_with_args(compute_shard, _save_shard, shards, args, desc="evaluate", unit="replicas")
     parts = [pickle.loads(s.output.read_bytes()) for s in shards]
     result = warehouse.merge(parts)
     result = dataclasses.replace(

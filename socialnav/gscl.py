@@ -182,22 +182,16 @@ def _generate_sharded(args, counts: dict[str, int]):
     """The dataset cut into shards of samples of one family (aligned to the generator's 1024-sample
     chunks, so the same bits as one call), run by the chosen backend, kept beside ``--out`` until
     the dataset is written; a rerun with the same settings computes only the missing ones."""
-    import json
 
     import numpy as np
 
-    from common.atomic import write_text_atomic
     from models import dataset
 
     chunk = dataset.CHUNK
     size = max(chunk, -(-(args.shard_samples or max(counts.values(), default=chunk)) // chunk) * chunk)
     staging = _staging(args.out)
     layout = {"seed": args.seed, "counts": counts, "shard_samples": size}
-    marker = staging / "settings.json"
-    if marker.exists() and json.loads(marker.read_text()) != layout:
-        shutil.rmtree(staging)
-    staging.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(marker, json.dumps(layout))
+    backend_lib.staging_folder(staging, layout)
     names = [f for f in dataset.FAMILIES if counts.get(f, 0) > 0]
     shards = [
         backend_lib.Shard(
@@ -209,17 +203,7 @@ def _generate_sharded(args, counts: dict[str, int]):
         for k, name in enumerate(names)
         for start in range(0, counts[name], size)
     ]
-    backend_lib.run_shards(
-        generate_shard,
-        _save_shard,
-        shards,
-        backend=args.backend,
-        address=args.ray_address,
-        cpus_per_task=args.ray_cpus_per_task,
-        progress=not args.no_progress,
-        desc="gscl generate",
-        unit="samples",
-    )
+    backend_lib.run_with_args(generate_shard, _save_shard, shards, args, desc="gscl generate", unit="samples")
     inputs, targets, family = [], [], []
     for shard in shards:
         with np.load(shard.output) as part:

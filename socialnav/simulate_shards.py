@@ -95,11 +95,7 @@ def run_sharded(args, overrides: dict, duration_s: float, snap_t: float):
         "log_positions": args.log_positions,
         "snapshot_time_s": snap_t,
     }
-    layout = staging / "settings.json"
-    if layout.exists() and json.loads(layout.read_text()) != settings:
-        shutil.rmtree(staging)  # parts of a run with other settings: not ours to reuse
-    staging.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(layout, json.dumps(settings))
+    backend_lib.staging_folder(staging, settings)  # another run's parts are not ours to reuse
     scenario_dir = None if args.scenario is None else str(pathlib.Path(args.scenario).resolve())
     shards = [
         backend_lib.Shard(
@@ -121,22 +117,14 @@ def run_sharded(args, overrides: dict, duration_s: float, snap_t: float):
         for first in range(0, args.worlds, size)
     ]
     start = time.perf_counter()
-    backend_lib.run_shards(
-        compute_shard,
-        _save,
-        shards,
-        backend=args.backend,
-        address=args.ray_address,
-        cpus_per_task=args.ray_cpus_per_task,
-        progress=not args.no_progress,
-        desc=f"simulate {args.worlds} world(s)",
-        unit="worlds",
+    backend_lib.run_with_args(
+        compute_shard, _save, shards, args, desc=f"simulate {args.worlds} world(s)", unit="worlds"
     )
     wall = time.perf_counter() - start
     summaries = [json.loads(s.output.with_suffix(".json").read_text()) for s in shards]
     for s in shards:
         s.output.with_suffix(".json").unlink()
-    layout.unlink()
+    (staging / "settings.json").unlink()
     # Commit: the staging folder becomes logs.parquet in one rename (an older run's logs are
     # moved aside first and removed after).
     target = out / LOG_FILE
