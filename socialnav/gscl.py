@@ -15,6 +15,7 @@ import pathlib
 import shutil
 import time
 
+from common.atomic import write_text_atomic
 from socialnav import backend as backend_lib
 from socialnav.argtypes import positive_float, positive_int
 from socialnav.backend import BackendError, add_backend_options
@@ -53,7 +54,10 @@ def add_parser(top) -> None:
     )
     sub = parser.add_subparsers(dest="gscl_command", required=True)
 
-    gen = sub.add_parser("generate", help="write a dataset of (input map, target cost map) pairs to a .npz file")
+    gen = sub.add_parser(
+        "generate",
+        help="write a dataset of (input map, target cost map) pairs to a .npz file (and a .json of how it was made)",
+    )
     gen.add_argument("--out", type=pathlib.Path, required=True, help="the .npz file to write")
     gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     gen.add_argument(
@@ -145,9 +149,17 @@ def _generate(args) -> int:
             raise SystemExit(f"socialnav gscl generate: {e}") from None
     dt = time.perf_counter() - t0
     dataset.save(args.out, data)
+    provenance = {
+        "seed": args.seed,
+        "counts": counts,
+        "shard_samples": args.shard_samples,
+        **backend_lib.describe(args),
+        "wall_s": dt,
+    }
+    write_text_atomic(args.out.with_suffix(".json"), json.dumps(provenance, indent=1) + "\n")
     if _staging(args.out).is_dir():  # the shards live until the dataset is written
         shutil.rmtree(_staging(args.out))
-    print(f"{len(data['family'])} pairs in {dt:.1f} s (compilation included) -> {args.out}")
+    print(f"{len(data['family'])} pairs in {dt:.1f} s (compilation included) -> {args.out} (+ .json: how it was made)")
     for i, name in enumerate(data["names"]):
         print(f"  {name:<18}{int((data['family'] == i).sum()):>7}")
     if args.preview is not None:

@@ -120,6 +120,9 @@ def test_gscl_generate_in_shards_is_the_same_dataset_bit_for_bit(tmp_path):
     for key in a.files:
         np.testing.assert_array_equal(a[key], b[key])
     assert not (tmp_path / ".b.npz.shards").exists()
+    made = json.loads((tmp_path / "b.json").read_text())
+    assert made["seed"] == 0 and made["shard_samples"] == 1000 and made["backend"] == "local"
+    assert made["counts"]["queue"] == 1500
 
 
 # ---------------------------------------------------------------- Ray (slow tier)
