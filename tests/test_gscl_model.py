@@ -200,7 +200,7 @@ def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path,
     with pytest.raises(SystemExit, match="no checkpoint|no training run"):
         cli.main(["gscl", "evaluate", "--run", str(tmp_path / "nothing")])
     assert not (tmp_path / "d.csv").exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.npz"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.json", "d.npz"]  # the dataset and how it was made
     # A run folder with other settings is refused before anything is written to it.
     run = tmp_path / "run"
     run.mkdir()
