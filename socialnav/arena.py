@@ -31,6 +31,7 @@ import sys
 
 from socialnav.argtypes import comma_names, positive_int
 from socialnav.backend import add_backend_options
+from socialnav.locking import locks_folder
 
 DEFAULT_METHODS = ("navfn", "snl_small", "snl_large", "snl_matched", "casn", "snape_eband", "snape_social_eband")
 
@@ -104,6 +105,7 @@ def _scene_files(names, scenes_dir: pathlib.Path) -> list[pathlib.Path]:
     return files
 
 
+@locks_folder(lambda args: args.out, "arena")
 def run(args) -> int:
     from common.atomic import write_atomic, write_text_atomic
     from data import SCENES_DIR

@@ -14,6 +14,7 @@ from planners.tables import TABLES_FILE, CausalTables, TablesError
 from socialnav import backend as backend_lib
 from socialnav.argtypes import comma_names, positive_float, positive_int
 from socialnav.backend import add_backend_options
+from socialnav.locking import locks_folder
 
 STAGING = ".shards"
 
@@ -207,6 +208,7 @@ def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size
     return result
 
 
+@locks_folder(lambda args: args.out or args.tables.parent.parent / "evaluation", "evaluate")
 def run(args: argparse.Namespace) -> int:
     try:
         scenario = load_scenario(args.scenario or WAREHOUSE_DIR)

@@ -19,6 +19,7 @@ from common.atomic import write_text_atomic
 from socialnav import backend as backend_lib
 from socialnav.argtypes import positive_float, positive_int
 from socialnav.backend import BackendError, add_backend_options
+from socialnav.locking import locks_folder
 
 
 def _features(text: str) -> tuple[int, ...]:
@@ -235,6 +236,7 @@ def _train_config(args):
     return TrainConfig.paper(**given) if args.paper else TrainConfig(**given)
 
 
+@locks_folder(lambda args: args.out, "gscl train")
 def _train(args) -> int:
     from models import train
     from models.checkpoints import check_run_folder

@@ -9,6 +9,7 @@ import sys
 from causal.extract import LogError
 from causal.learn import learn
 from socialnav.argtypes import comma_ints, comma_names, positive_int
+from socialnav.locking import locks_folder
 
 
 def add_parser(sub) -> None:
@@ -59,6 +60,7 @@ def add_parser(sub) -> None:
     lrn.set_defaults(handler=run)
 
 
+@locks_folder(lambda args: args.out or args.logs / "causal", "learn")
 def run(args: argparse.Namespace) -> int:
     try:
         learn(

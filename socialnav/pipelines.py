@@ -27,6 +27,7 @@ from planners.routes import shortest_path_plan
 from planners.tables import TABLES_FILE
 from socialnav import arena, evaluate, learn, simulate
 from socialnav.argtypes import comma_ints, comma_probabilities, positive_int
+from socialnav.locking import locks_folder
 
 
 def add_parsers(sub) -> None:
@@ -70,6 +71,7 @@ def add_parsers(sub) -> None:
     abl.set_defaults(handler=run_ablation)
 
 
+@locks_folder(lambda args: args.out, "run")
 def run_pipeline(args: argparse.Namespace) -> int:
     """simulate -> learn -> evaluate, each step's output the next one's input."""
     out = args.out
@@ -144,6 +146,7 @@ def ablation_series(
     return series
 
 
+@locks_folder(lambda args: args.out, "ablation")
 def run_ablation(args: argparse.Namespace) -> int:
     print(f"simulating {len(args.probabilities)} probabilities x {args.seeds} seeds in one batch ...", flush=True)
     series = ablation_series(args.probabilities, args.seeds, args.seed)

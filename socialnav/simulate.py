@@ -12,6 +12,7 @@ from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
 from planners.routes import shortest_path_plan
 from socialnav.argtypes import positive_float, positive_int, probability
 from socialnav.backend import BackendError, add_backend_options
+from socialnav.locking import locks_folder
 
 
 def add_parser(sub) -> None:
@@ -80,6 +81,7 @@ def add_parser(sub) -> None:
     sim.set_defaults(handler=run)
 
 
+@locks_folder(lambda args: args.out, "simulate")
 def run(args: argparse.Namespace) -> int:
     overrides = {}
     if args.slot_length_s is not None:

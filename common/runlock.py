@@ -1,0 +1,80 @@
+"""One writer per run folder: an advisory lock that a second job on the same folder is refused by.
+
+``with run_lock(folder, "socialnav simulate"):`` takes an exclusive ``flock`` on
+``folder/.lock`` without waiting; if another process holds it, :class:`RunLocked` names the
+holder (its command, pid, host and start time, written in the file). The file is removed when
+the job ends; the operating system drops the lock when its process ends, killed or not, so a
+crashed run leaves at most an unlocked ``.lock`` file that the next job takes over. Within one
+process the lock is re-entrant (``socialnav run`` holds its folder while its steps take it again).
+POSIX only: elsewhere it does nothing.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime
+import os
+import pathlib
+import socket
+from collections.abc import Iterator
+
+LOCK_FILE = ".lock"
+_held: dict[pathlib.Path, int] = {}  # folder -> depth, locks this process holds
+
+
+class RunLocked(RuntimeError):
+    """Another process is writing the run folder; the message names it."""
+
+
+@contextlib.contextmanager
+def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
+    """Hold ``folder``'s lock (creating the folder) for the duration of the block.
+
+    Raises:
+      RunLocked: another process holds it.
+    """
+    folder = pathlib.Path(folder).resolve()
+    if folder in _held:
+        _held[folder] += 1
+        try:
+            yield folder
+        finally:
+            _held[folder] -= 1
+        return
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield folder
+        return
+    created = not folder.exists()
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / LOCK_FILE
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.pread(fd, 1000, 0).decode("utf-8", "replace").strip() or "another process"
+            os.close(fd)
+            raise RunLocked(f"{folder} is being written by {holder}; wait for it or choose another --out") from None
+        try:  # the file may have been removed by its last holder between our open and our lock
+            if os.stat(path).st_ino == os.fstat(fd).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    try:
+        since = datetime.datetime.now().isoformat(timespec="seconds")
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{job} (pid {os.getpid()} on {socket.gethostname()}, since {since})\n".encode(), 0)
+        _held[folder] = 1
+        try:
+            yield folder
+        finally:
+            del _held[folder]
+            path.unlink(missing_ok=True)  # removed while still held, so nobody locks a file on its way out
+            if created and folder.is_dir() and not any(folder.iterdir()):
+                folder.rmdir()  # a job that wrote nothing leaves no folder behind
+            fcntl.flock(fd, fcntl.LOCK_UN)
+    finally:
+        os.close(fd)

@@ -1,0 +1,36 @@
+"""One job per run folder: the handlers that write a folder hold its lock (:mod:`common.runlock`).
+
+A second job started on a folder another job is writing is refused at once, with one line naming
+the holder (command, pid, host, start time), exit code 2; nothing of either run is touched.
+"""
+
+from __future__ import annotations
+
+import functools
+import pathlib
+import sys
+from collections.abc import Callable
+
+from common.runlock import RunLocked, run_lock
+
+
+def locks_folder(folder_of: Callable[[object], pathlib.Path | None], name: str):
+    """Decorate a subcommand handler ``handler(args) -> int`` so that it runs holding the lock of
+    ``folder_of(args)`` (None, "" or "." : no lock, the handler's own checks speak)."""
+
+    def decorate(handler):
+        @functools.wraps(handler)
+        def wrapped(args) -> int:
+            folder = folder_of(args)
+            if folder is None or str(folder) in ("", "."):
+                return handler(args)
+            try:
+                with run_lock(folder, f"socialnav {name}"):
+                    return handler(args)
+            except RunLocked as e:
+                print(f"socialnav {name}: {e}", file=sys.stderr)
+                return 2
+
+        return wrapped
+
+    return decorate

@@ -1,0 +1,71 @@
+"""One writer per run folder: a second job is refused with the holder's name; no stale locks."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from common.runlock import LOCK_FILE, RunLocked, run_lock
+from socialnav import cli
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def _holder(folder: pathlib.Path) -> subprocess.Popen:
+    """Another process holding ``folder``'s lock until its stdin closes."""
+    code = textwrap.dedent(
+        f"""
+        import sys
+        from common.runlock import run_lock
+        with run_lock({str(folder)!r}, "socialnav simulate"):
+            print("held", flush=True)
+            sys.stdin.read()
+        """
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code], cwd=ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    assert proc.stdout.readline().strip() == "held"
+    return proc
+
+
+def test_a_second_job_on_a_folder_is_refused_naming_the_holder_and_the_lock_dies_with_it(tmp_path, capsys):
+    folder = tmp_path / "run"
+    holder = _holder(folder)
+    try:
+        with pytest.raises(RunLocked, match=rf"being written by socialnav simulate \(pid {holder.pid} "):
+            with run_lock(folder, "test"):
+                pass
+        code = cli.main(["simulate", "--worlds", "1", "--hours", "0.01", "--out", str(folder), "--no-progress"])
+        assert code == 2
+        err = capsys.readouterr().err
+        assert err.startswith("socialnav simulate: ") and f"pid {holder.pid}" in err and len(err.splitlines()) == 1
+        assert sorted(p.name for p in folder.iterdir()) == [LOCK_FILE]  # nothing written
+    finally:
+        holder.kill()  # killed, not closed: the operating system drops the lock
+        holder.wait()
+    with run_lock(folder, "test") as held:
+        assert held == folder.resolve()
+
+
+def test_the_lock_is_reentrant_in_one_process_and_an_idle_job_leaves_no_folder(tmp_path):
+    folder = tmp_path / "new"
+    with run_lock(folder, "outer"):
+        with run_lock(folder, "inner"):  # socialnav run's steps take their folder again
+            assert (folder / LOCK_FILE).read_text().startswith(f"outer (pid {os.getpid()}")
+    assert not folder.exists()  # created for nothing: removed
+    kept = tmp_path / "kept"
+    with run_lock(kept, "job"):
+        (kept / "result.txt").write_text("x")
+    assert sorted(p.name for p in kept.iterdir()) == ["result.txt"]  # the lock file goes with the job
+
+
+def test_a_job_refused_on_bad_input_leaves_no_folder(tmp_path):
+    out = tmp_path / "never"
+    assert cli.main(["simulate", "--out", str(out), "--scenario", str(tmp_path / "missing")]) == 2
+    assert not out.exists()
