@@ -69,9 +69,11 @@ def add_backend_options(parser) -> None:
         default=None,
         help="the Ray cluster (default: $RAY_ADDRESS, else a Ray instance started on this machine)",
     )
+    from socialnav.argtypes import positive_float
+
     group.add_argument(
         "--ray-cpus-per-task",
-        type=float,
+        type=positive_float,
         default=None,
         help="CPUs Ray reserves per task (default: a whole node's, so a shard keeps its machine's cores busy)",
     )
