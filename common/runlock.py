@@ -22,7 +22,12 @@ LOCK_FILE = ".lock"
 _held: dict[pathlib.Path, int] = {}  # folder -> depth, locks this process holds
 
 
-class RunLocked(RuntimeError):
+class RunFolderError(RuntimeError):
+    """The run folder cannot be used (a file of that name, no permission, a full disk); the
+    message is one line naming it."""
+
+
+class RunLocked(RunFolderError):
     """Another process is writing the run folder; the message names it."""
 
 
@@ -32,6 +37,7 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
 
     Raises:
       RunLocked: another process holds it.
+      RunFolderError: ``folder`` is a file or cannot be created or written.
     """
     folder = pathlib.Path(folder).resolve()
     if folder in _held:
@@ -46,11 +52,16 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
     except ImportError:  # not POSIX: no lock
         yield folder
         return
+    if folder.exists() and not folder.is_dir():
+        raise RunFolderError(f"{folder} is a file, not a folder")
     created = not folder.exists()
-    folder.mkdir(parents=True, exist_ok=True)
     path = folder / LOCK_FILE
     while True:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as e:
+            raise RunFolderError(f"{folder}: cannot write there ({e.strerror or e})") from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:

@@ -1,7 +1,8 @@
 """One job per run folder: the handlers that write a folder hold its lock (:mod:`common.runlock`).
 
 A second job started on a folder another job is writing is refused at once, with one line naming
-the holder (command, pid, host, start time), exit code 2; nothing of either run is touched.
+the holder (command, pid, host, start time), exit code 2; nothing of either run is touched. An
+``--out`` that is a file or cannot be created is refused the same way, before any work.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import pathlib
 import sys
 from collections.abc import Callable
 
-from common.runlock import RunLocked, run_lock
+from common.runlock import RunFolderError, run_lock
 
 
 def locks_folder(folder_of: Callable[[object], pathlib.Path | None], name: str):
@@ -27,7 +28,7 @@ def locks_folder(folder_of: Callable[[object], pathlib.Path | None], name: str):
             try:
                 with run_lock(folder, f"socialnav {name}"):
                     return handler(args)
-            except RunLocked as e:
+            except RunFolderError as e:  # locked by another job, a file, not writable
                 print(f"socialnav {name}: {e}", file=sys.stderr)
                 return 2
 

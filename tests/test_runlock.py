@@ -69,3 +69,14 @@ def test_a_job_refused_on_bad_input_leaves_no_folder(tmp_path):
     out = tmp_path / "never"
     assert cli.main(["simulate", "--out", str(out), "--scenario", str(tmp_path / "missing")]) == 2
     assert not out.exists()
+
+
+def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys):
+    file = tmp_path / "taken"
+    file.write_text("mine")
+    assert cli.main(["arena", "--out", str(file), "--scenes", "casn_crossing", "--variants", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err == f"socialnav arena: {file} is a file, not a folder\n"
+    assert file.read_text() == "mine"
+    assert cli.main(["simulate", "--out", str(file / "below"), "--worlds", "1", "--hours", "0.01"]) == 2
+    assert "cannot write there" in capsys.readouterr().err
