@@ -70,13 +70,24 @@ PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
 )
 
 
-def _ours(row: pd.Series, metric: str, suffix: str = "") -> float:
-    """A summary row's value of a paper's metric (zone shares as %)."""
+def _episode_column(metric: str) -> tuple[str, float]:
+    """The episodes frame's column of a paper's metric and its scale to the paper's unit."""
     if metric == "zone_personal_pct":
-        key = "zone_personal" + suffix
-        return 100.0 * float(row[key]) if key in row else float("nan")
-    key = metric.removesuffix("_pct") + suffix if suffix and metric.endswith("_pct") else metric + suffix
-    return float(row[key]) if key in row else float("nan")
+        return "zone_personal", 100.0
+    if metric.endswith("_success_pct"):
+        return metric.removesuffix("_pct"), 100.0
+    return metric, 1.0
+
+
+def _ours(row: pd.Series, metric: str, suffix: str = "") -> float:
+    """A summary row's value of a paper's metric in the paper's unit (``suffix``: ``_lo``, ``_hi``
+    for the interval); the summary keeps success rates in % already (``_pct``, ``_lo``, ``_hi``)."""
+    column, scale = _episode_column(metric)
+    if column.endswith("_success"):
+        column, scale = column + (suffix or "_pct"), 1.0
+    else:
+        column += suffix
+    return scale * float(row[column]) if column in row else float("nan")
 
 
 def comparison(summary: pd.DataFrame) -> pd.DataFrame:
@@ -113,15 +124,6 @@ def comparison(summary: pd.DataFrame) -> pd.DataFrame:
 
 # Each paper's proposed method against the baselines it was compared with.
 PROPOSED_BY_SOURCE = {"seed 001": "casn", "seed 002": "gscl", "seed 004": "snape_social_eband"}
-
-
-def _episode_column(metric: str) -> tuple[str, float]:
-    """The episodes frame's column of a paper's metric and its scale to the paper's unit."""
-    if metric == "zone_personal_pct":
-        return "zone_personal", 100.0
-    if metric.endswith("_success_pct"):
-        return metric.removesuffix("_pct"), 100.0
-    return metric, 1.0
 
 
 def _episode_values(episodes: pd.DataFrame, scene: str, method: str, metric: str) -> pd.Series:

@@ -57,10 +57,11 @@ def _family_base(seed, family: str) -> jax.Array:
     return jax.random.fold_in(_as_key(seed), list(FAMILIES).index(family))
 
 
-def family_keys(seed, family: str, n: int) -> jax.Array:
-    """(n,) keys of a family: sample ``i`` of a family is the same whatever the other counts."""
+def family_keys(seed, family: str, n: int, first: int = 0) -> jax.Array:
+    """(n,) keys of samples ``first .. first + n - 1`` of a family: sample ``i`` of a family is
+    the same whatever the other counts."""
     base = _family_base(seed, family)
-    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(n))
+    return jax.vmap(lambda i: jax.random.fold_in(base, i))(jnp.arange(first, first + n))
 
 
 def scaled_counts(fraction: float, counts: dict[str, int] | None = None) -> dict[str, int]:
@@ -97,7 +98,7 @@ def generate_range(seed, name: str, start: int, stop: int) -> tuple[np.ndarray, 
     """Samples ``start .. stop - 1`` of family ``name``: (inputs (n, 40, 40) uint8, targets (n, 40,
     40) float32), the same samples as in any dataset that holds them (a shard of a dataset: with
     ``start`` a multiple of :data:`CHUNK` the same bits too, the batches being the same)."""
-    keys = jax.vmap(lambda i: jax.random.fold_in(_family_base(seed, name), i))(jnp.arange(start, stop))
+    keys = family_keys(seed, name, stop - start, start)
     inputs, targets = [], []
     for first in range(0, stop - start, CHUNK):  # one compiled shape per family, whatever the count
         chunk = keys[first : first + CHUNK]

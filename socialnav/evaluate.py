@@ -208,11 +208,16 @@ def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size
     return result
 
 
-@locks_folder(lambda args: args.out or args.tables.parent.parent / "evaluation", "evaluate")
+def _out_folder(args) -> pathlib.Path:
+    """``--out``, else ``evaluation/`` beside the tables' run folder."""
+    return args.out or args.tables.parent.parent / "evaluation"
+
+
+@locks_folder(_out_folder, "evaluate")
 def run(args: argparse.Namespace) -> int:
     try:
         scenario = load_scenario(args.scenario or WAREHOUSE_DIR)
     except ScenarioError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    return evaluate_with(scenario, args.tables, args.out or args.tables.parent.parent / "evaluation", args)
+    return evaluate_with(scenario, args.tables, _out_folder(args), args)

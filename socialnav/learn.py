@@ -60,12 +60,17 @@ def add_parser(sub) -> None:
     lrn.set_defaults(handler=run)
 
 
-@locks_folder(lambda args: args.out or args.logs / "causal", "learn")
+def _out_folder(args) -> pathlib.Path:
+    """``--out``, else ``causal/`` inside the logs' run folder."""
+    return args.out or args.logs / "causal"
+
+
+@locks_folder(_out_folder, "learn")
 def run(args: argparse.Namespace) -> int:
     try:
         learn(
             args.logs,
-            args.out or args.logs / "causal",
+            _out_folder(args),
             test=args.test,
             alpha=args.alpha,
             step=args.step,

@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         if sharded:
             from socialnav import simulate_shards
 
-            run = simulate_shards.run_sharded(args, overrides, duration_s, snap_t)
+            run = simulate_shards.run_sharded(args, scenario, overrides, duration_s, snap_t)
         else:
             run = logs.simulate_to_parquet(
                 scenario,

@@ -74,14 +74,12 @@ def _save(shard: backend_lib.Shard, result) -> None:
     write_atomic(shard.output, lambda tmp: tmp.write_bytes(data))  # last: marks the shard done
 
 
-def run_sharded(args, overrides: dict, duration_s: float, snap_t: float):
+def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: float):
     """Run the shards with the chosen backend, then commit ``logs.parquet`` and ``run.json``;
     returns a :class:`jaxsim.logs.RunSummary` for the command's report."""
     from jaxsim import logs
-    from jaxsim.scenario import WAREHOUSE_DIR, load_scenario
 
     out = pathlib.Path(args.out)
-    scenario = load_scenario(args.scenario or WAREHOUSE_DIR, **overrides)  # validated before any work
     size = args.shard_worlds or args.worlds
     staging = out / STAGING
     settings = {
