@@ -216,7 +216,7 @@ def read_run(logs_dir: str | pathlib.Path, waypoints: list[str] | None = None) -
     logs_dir = pathlib.Path(logs_dir)
     log_file, meta_file = logs_dir / logschema.LOG_FILE, logs_dir / logschema.META_FILE
     for f in (log_file, meta_file):
-        if not f.is_file():
+        if not f.exists():  # logs.parquet is a folder of parts when the run was sharded
             raise LogError(f"{f} is missing: point --logs at a folder written by 'socialnav simulate'")
     try:
         meta = json.loads(meta_file.read_text())
@@ -234,4 +234,36 @@ def read_run(logs_dir: str | pathlib.Path, waypoints: list[str] | None = None) -
     missing = [c for c in columns if c not in present]
     if missing:
         raise LogError(f"{log_file} lacks column(s) {missing[:5]}{' ...' if len(missing) > 5 else ''}")
-    return pd.read_parquet(log_file, columns=columns), meta
+    try:
+        frame = pd.read_parquet(log_file, columns=columns)
+    except Exception as e:  # a truncated or corrupt data page: pyarrow's errors have no common base
+        raise LogError(f"{log_file}: not a readable Parquet file ({type(e).__name__}: {e})") from None
+    check_values(frame, log_file)
+    return frame, meta
+
+
+def check_values(frame: pd.DataFrame, log_file: pathlib.Path) -> None:
+    """Raise :class:`LogError` naming the column at fault: a non-numeric column, NaN or infinite
+    values, or a world whose ``time_s`` is not strictly increasing (duplicated or reordered rows)."""
+    for column in frame.columns:
+        values = frame[column].to_numpy()
+        if values.dtype == bool:
+            continue
+        if not np.issubdtype(values.dtype, np.number):
+            raise LogError(f"{log_file}: column {column!r} holds {values.dtype} values, expected numbers")
+        bad = ~np.isfinite(values)
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise LogError(
+                f"{log_file}: column {column!r} has {int(bad.sum())} NaN or infinite value(s), "
+                f"the first at row {row} (world {frame['world'].iloc[row]}, time_s {frame['time_s'].iloc[row]})"
+            )
+    step = frame.groupby("world", sort=False)["time_s"].diff()
+    back = (step <= 0).to_numpy()
+    if back.any():
+        row = int(np.argmax(back))
+        raise LogError(
+            f"{log_file}: column 'time_s' is not strictly increasing in world {frame['world'].iloc[row]} "
+            f"(time_s {frame['time_s'].iloc[row]} at row {row} after {frame['time_s'].iloc[row] - step.iloc[row]}): "
+            "duplicated or reordered rows"
+        )

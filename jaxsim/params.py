@@ -29,6 +29,58 @@ from common.pytree import stack
 SECTION_PREFIX = {"sim": "", "workers": "worker_", "robot": "robot_", "battery": "battery_"}
 # Fields that shape the compiled program; every other field is a dynamic float.
 STATIC_FIELDS = ("dt_s", "slot_length_s", "n_workers", "robot_teleport_on_failure")
+# The largest crowd a scenario may ask for: the all-pairs social force traces N/2 shifted
+# copies and holds (N/2, N) pair arrays per world.
+MAX_WORKERS = 1000
+_POSITIVE = (
+    "dt_s",
+    "slot_length_s",
+    "worker_radius_m",
+    "worker_desired_speed_mean_mps",
+    "worker_desired_speed_min_mps",
+    "worker_max_speed_mps",
+    "worker_relaxation_time_s",
+    "worker_social_gamma",
+    "worker_obstacle_sigma_m",
+    "worker_min_reach_radius_m",
+    "worker_stuck_time_s",
+    "robot_radius_m",
+    "robot_max_speed_mps",
+    "robot_accel_mps2",
+    "robot_goal_tolerance_m",
+    "robot_block_slow_gap_m",
+    "robot_leg_deadline_s",
+    "battery_charge_pct_per_s",
+)
+_NON_NEGATIVE = (
+    "worker_desired_speed_std_mps",
+    "worker_social_force_factor",
+    "worker_social_lambda",
+    "worker_social_n",
+    "worker_social_n_prime",
+    "worker_obstacle_force_factor",
+    "worker_random_force_std_mps2",
+    "worker_robot_force_factor",
+    "worker_activity_min_s",
+    "worker_toilet_activity_min_s",
+    "worker_spawn_dx_m",
+    "worker_spawn_dy_m",
+    "worker_exit_margin_s",
+    "robot_block_stop_gap_m",
+    "robot_block_lane_margin_m",
+    "robot_obstacle_length_m",
+    "battery_static_pct_per_s",
+    "battery_dynamic_pct_per_m",
+    "battery_obstacle_factor",
+)
+
+
+def json_field(name: str) -> str:
+    """A field's name as written in ``params.json``: ``robot_accel_mps2`` -> ``robot.accel_mps2``."""
+    for section, prefix in SECTION_PREFIX.items():
+        if prefix and name.startswith(prefix):
+            return f"{section}.{name[len(prefix) :]}"
+    return f"sim.{name}"
 
 
 def _static():
@@ -132,9 +184,13 @@ class SimParams:
         if not file.is_file():
             raise error(file, "<file>", "file is missing")
         try:
-            raw = json.loads(file.read_text())
+            raw = json.loads(file.read_text(encoding="utf-8"))
+        except UnicodeDecodeError as e:
+            raise error(file, "<file>", f"not UTF-8 text ({e.reason} at byte {e.start})") from None
         except json.JSONDecodeError as e:
             raise error(file, "<file>", f"invalid JSON: {e}") from None
+        if not isinstance(raw, dict):
+            raise error(file, "<file>", f"top level must be a JSON object, got {type(raw).__name__}")
         types = {f.name: f.type for f in dataclasses.fields(cls)}
         values = {}
         for section, prefix in SECTION_PREFIX.items():
@@ -151,6 +207,8 @@ class SimParams:
                         raise error(file, f"{section}.{key}", f"expected true/false, got {value!r}")
                 elif isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                     raise error(file, f"{section}.{key}", f"expected a finite number, got {value!r}")
+                if want == "int" and value != int(value):
+                    raise error(file, f"{section}.{key}", f"expected a whole number, got {value!r}")
                 values[name] = int(value) if want == "int" else value
         missing = sorted(set(types) - set(values))
         if missing:
@@ -165,34 +223,48 @@ class SimParams:
         return cls(**values)
 
     def validate(self, error: type[Exception] = ValueError, file: str = "params.json") -> None:
-        """Check ranges; raise ``error(file, field, message)`` on the first bad value."""
-        positive = [
-            "dt_s",
-            "slot_length_s",
-            "worker_radius_m",
-            "worker_max_speed_mps",
-            "worker_relaxation_time_s",
-            "worker_obstacle_sigma_m",
-            "robot_radius_m",
-            "robot_max_speed_mps",
-            "robot_leg_deadline_s",
-            "battery_charge_pct_per_s",
-        ]
-        for name in positive:
+        """Check ranges and consistency; raise ``error(file, field, message)`` on the first bad
+        value, ``field`` as written in ``params.json`` (``robot.accel_mps2``)."""
+
+        def fail(name: str, message: str):
+            raise error(file, json_field(name), f"{message}, got {getattr(self, name)!r}")
+
+        for name in _POSITIVE:
             if not getattr(self, name) > 0:
-                raise error(file, name, f"must be > 0, got {getattr(self, name)}")
-        if self.n_workers < 0:
-            raise error(file, "n_workers", f"must be >= 0, got {self.n_workers}")
-        if not 0 <= self.robot_obstacle_probability <= 1:
-            raise error(file, "robot_obstacle_probability", "must be a probability")
+                fail(name, "must be > 0")
+        for name in _NON_NEGATIVE:
+            if not getattr(self, name) >= 0:
+                fail(name, "must be >= 0")
+        if not 0 <= self.n_workers <= MAX_WORKERS:
+            fail(
+                "n_workers",
+                f"must be in 0..{MAX_WORKERS} (the all-pairs social force is O(N^2) in memory and "
+                "compile time; a larger crowd needs a neighbour structure this simulator does not have)",
+            )
+        for name in ("robot_obstacle_probability",):
+            if not 0 <= getattr(self, name) <= 1:
+                fail(name, "must be a probability in [0, 1]")
+        if not 0 < self.robot_obstacle_speed_factor_min <= 1:
+            fail("robot_obstacle_speed_factor_min", "must be in (0, 1]")
+        if not 0 <= self.battery_initial_pct <= 100:
+            fail("battery_initial_pct", "must be a charge in [0, 100] %")
         if (
             self.steps_per_slot * self.dt_s != self.slot_length_s
             and abs(self.steps_per_slot * self.dt_s - self.slot_length_s) > 1e-6 * self.slot_length_s
         ):
-            raise error(file, "slot_length_s", f"must be a multiple of dt_s={self.dt_s}")
-        if self.worker_activity_min_s > self.worker_activity_max_s:
-            raise error(file, "worker_activity_min_s", "greater than worker_activity_max_s")
+            fail("slot_length_s", f"must be a multiple of sim.dt_s={self.dt_s}")
+        ordered = [
+            ("worker_activity_min_s", "worker_activity_max_s"),
+            ("worker_toilet_activity_min_s", "worker_toilet_activity_max_s"),
+            ("worker_desired_speed_min_mps", "worker_max_speed_mps"),
+        ]
+        for low, high in ordered:
+            if getattr(self, low) > getattr(self, high):
+                fail(low, f"must be <= {json_field(high)} = {getattr(self, high)!r}")
         if self.robot_block_stop_gap_m >= self.robot_block_slow_gap_m:
-            raise error(file, "robot_block_stop_gap_m", "must be below robot_block_slow_gap_m")
+            fail("robot_block_stop_gap_m", f"must be below robot.block_slow_gap_m = {self.robot_block_slow_gap_m!r}")
         if not 0 <= self.battery_recharge_below_pct < self.battery_charged_pct <= 100:
-            raise error(file, "battery_recharge_below_pct", "need 0 <= recharge_below < charged <= 100")
+            fail(
+                "battery_recharge_below_pct",
+                f"need 0 <= battery.recharge_below_pct < battery.charged_pct = {self.battery_charged_pct!r} <= 100",
+            )

@@ -29,7 +29,7 @@ import json
 import pathlib
 import sys
 
-from socialnav.argtypes import comma_names, positive_int
+from socialnav.argtypes import comma_names, output_folder, positive_int
 from socialnav.backend import add_backend_options
 from socialnav.locking import locks_folder
 
@@ -55,7 +55,7 @@ def add_parser(sub) -> None:
     p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the variants (default 0)")
     p.add_argument(
-        "--out", type=pathlib.Path, default=pathlib.Path("runs/arena"), help="output folder (default runs/arena)"
+        "--out", type=output_folder, default=pathlib.Path("runs/arena"), help="output folder (default runs/arena)"
     )
     p.add_argument("--gscl-run", type=pathlib.Path, default=None, help="a trained GSCL run folder (enables 'gscl')")
     p.add_argument(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import pathlib
 
 
 def positive_int(text: str) -> int:
@@ -34,7 +35,7 @@ def probability(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 <= value <= 1:
+    if not 0 <= value <= 1:  # also false for nan
         raise argparse.ArgumentTypeError(f"must be in [0, 1], got {text}")
     return value
 
@@ -64,3 +65,21 @@ def comma_probabilities(text: str) -> list[float]:
     if any(not 0 < v <= 1 for v in values):
         raise argparse.ArgumentTypeError(f"probabilities must be in (0, 1], got {text}")
     return values
+
+
+def non_negative_float(text: str) -> float:
+    """A finite number >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    return value
+
+
+def output_folder(text: str) -> pathlib.Path:
+    """An output folder's path: not empty (``--out ""`` would write into the working folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder, got an empty path")
+    return pathlib.Path(text)

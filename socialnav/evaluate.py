@@ -12,7 +12,7 @@ from evaluation.protocol import ProtocolConfig
 from jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
 from planners.tables import TABLES_FILE, CausalTables, TablesError
 from socialnav import backend as backend_lib
-from socialnav.argtypes import comma_names, positive_float, positive_int
+from socialnav.argtypes import comma_names, output_folder, positive_float, positive_int
 from socialnav.backend import add_backend_options
 from socialnav.locking import locks_folder
 
@@ -75,7 +75,7 @@ def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: in
     )
     p.add_argument(
         "--out",
-        type=pathlib.Path,
+        type=output_folder,
         default=default_out,
         help="output folder"
         + (f" (default {default_out})" if default_out else " (default: evaluation/ next to the tables' folder)"),

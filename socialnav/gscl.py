@@ -17,7 +17,7 @@ import time
 
 from common.atomic import write_text_atomic
 from socialnav import backend as backend_lib
-from socialnav.argtypes import positive_float, positive_int
+from socialnav.argtypes import output_folder, positive_float, positive_int
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.locking import locks_folder
 
@@ -59,7 +59,7 @@ def add_parser(top) -> None:
         "generate",
         help="write a dataset of (input map, target cost map) pairs to a .npz file (and a .json of how it was made)",
     )
-    gen.add_argument("--out", type=pathlib.Path, required=True, help="the .npz file to write")
+    gen.add_argument("--out", type=output_folder, required=True, help="the .npz file to write")
     gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     gen.add_argument(
         "--scale",
@@ -88,7 +88,7 @@ def add_parser(top) -> None:
 
     tr = sub.add_parser("train", help="train the U-Net (resumes the run in --out if there is one)")
     tr.add_argument(
-        "--out", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
+        "--out", type=output_folder, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
     )
     tr.add_argument(
         "--paper",
@@ -123,7 +123,7 @@ def add_parser(top) -> None:
         "--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
     )
     ev.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
-    ev.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default RUN/evaluation)")
+    ev.add_argument("--out", type=output_folder, default=None, help="output folder (default RUN/evaluation)")
     ev.add_argument("--examples", type=positive_int, default=2, help="examples per family in the PNG (default 2)")
     gen.set_defaults(handler=_generate)
     tr.set_defaults(handler=_train)

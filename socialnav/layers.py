@@ -9,6 +9,8 @@ from __future__ import annotations
 import pathlib
 import sys
 
+from socialnav.argtypes import output_folder
+
 
 def add_parser(top) -> None:
     parser = top.add_parser(
@@ -16,7 +18,7 @@ def add_parser(top) -> None:
         help="draw the social cost layers and their planned paths on the seeds' scene types",
         description="One PNG per scene type: every cost layer side by side with the path its grid planner finds.",
     )
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("docs/img"), help="folder (default docs/img)")
+    parser.add_argument("--out", type=output_folder, default=pathlib.Path("docs/img"), help="folder (default docs/img)")
     parser.add_argument(
         "--gscl-run", type=pathlib.Path, default=None, help="a trained GSCL run folder: adds the GSCL layer's panel"
     )

@@ -8,7 +8,7 @@ import sys
 
 from causal.extract import LogError
 from causal.learn import learn
-from socialnav.argtypes import comma_ints, comma_names, positive_int
+from socialnav.argtypes import comma_ints, comma_names, output_folder, positive_int
 from socialnav.locking import locks_folder
 
 
@@ -25,7 +25,7 @@ def add_parser(sub) -> None:
         default=pathlib.Path("runs/warehouse"),
         help="folder written by 'socialnav simulate' (default runs/warehouse)",
     )
-    lrn.add_argument("--out", type=pathlib.Path, default=None, help="output folder (default: LOGS/causal)")
+    lrn.add_argument("--out", type=output_folder, default=None, help="output folder (default: LOGS/causal)")
     lrn.add_argument(
         "--test",
         choices=["parcorr", "regression"],

@@ -26,7 +26,7 @@ from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
 from planners.tables import TABLES_FILE
 from socialnav import arena, evaluate, learn, simulate
-from socialnav.argtypes import comma_ints, comma_probabilities, positive_int
+from socialnav.argtypes import comma_ints, comma_probabilities, output_folder, positive_int
 from socialnav.locking import locks_folder
 
 
@@ -49,6 +49,11 @@ def add_parsers(sub) -> None:
         default=10,
         help="variants of seed 001's scenes with CASN and its SNL baseline in the last step (default 10; 0: skip)",
     )
+    run.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the run in --out whole (its logs, causal/, evaluation/, arena/)",
+    )
     run.set_defaults(handler=run_pipeline)
 
     abl = sub.add_parser(
@@ -58,7 +63,7 @@ def add_parsers(sub) -> None:
         "each p and seed, all in one batched rollout; E[L | V] against E[L | do(V)] "
         "for 60 m at 0.5 m/s; writes ablation.csv, ablation.json and ablation.png.",
     )
-    abl.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/ablation"), help="output folder")
+    abl.add_argument("--out", type=output_folder, default=pathlib.Path("runs/ablation"), help="output folder")
     abl.add_argument("--seeds", type=positive_int, default=8, help="seeds (worlds) per probability (default 8)")
     abl.add_argument(
         "--probabilities",
@@ -77,6 +82,7 @@ def run_pipeline(args: argparse.Namespace) -> int:
     out = args.out
     quiet = ["--no-progress"] if args.no_progress else []
     sim_argv = ["simulate", "--worlds", str(args.worlds), "--seed", str(args.seed), "--out", str(out)]
+    sim_argv += ["--overwrite"] if args.overwrite else []
     steps = [
         ("simulate", simulate.run, sim_argv),
         ("learn", learn.run, ["learn", "--logs", str(out), "--worlds", ",".join(map(str, args.learn_worlds))]),

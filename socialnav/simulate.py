@@ -6,11 +6,13 @@ import argparse
 import pathlib
 import sys
 
+from common import runfolder
+from common.logschema import LOG_FILE, META_FILE
 from jaxsim import logs, viz
 from jaxsim.robot import RouteFollower
 from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
 from planners.routes import shortest_path_plan
-from socialnav.argtypes import positive_float, positive_int, probability
+from socialnav.argtypes import non_negative_float, output_folder, positive_float, positive_int, probability
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.locking import locks_folder
 
@@ -46,9 +48,12 @@ def add_parser(sub) -> None:
     sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     sim.add_argument(
         "--out",
-        type=pathlib.Path,
+        type=output_folder,
         default=pathlib.Path("runs/warehouse"),
-        help="output folder (default runs/warehouse)",
+        help="output folder (default runs/warehouse); a folder holding a run is refused without --overwrite",
+    )
+    sim.add_argument(
+        "--overwrite", action="store_true", help="replace the run in --out whole (only once the new one is complete)"
     )
     sim.add_argument(
         "--sample-interval-s",
@@ -64,7 +69,7 @@ def add_parser(sub) -> None:
     )
     sim.add_argument(
         "--snapshot-time-s",
-        type=float,
+        type=non_negative_float,
         default=None,
         help="time of the snapshot picture (default: the middle of the lunch slot S6, or of the run)",
     )
@@ -94,10 +99,24 @@ def run(args: argparse.Namespace) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 2
     p = scenario.params
+    if args.slots is not None and args.slots > scenario.n_slots:
+        return _usage(f"--slots {args.slots}: the scenario has {scenario.n_slots} slots")
     if args.hours is not None:
         duration_s = args.hours * 3600.0
     else:
         duration_s = (args.slots or scenario.n_slots) * p.slot_length_s
+    every = args.sample_interval_s / p.dt_s
+    if abs(every - round(every)) > 1e-6 or round(every) < 1:
+        return _usage(f"--sample-interval-s {args.sample_interval_s:g}: must be a multiple of dt_s = {p.dt_s:g} s")
+    if args.snapshot_time_s is not None and args.snapshot_time_s > duration_s:
+        return _usage(f"--snapshot-time-s {args.snapshot_time_s:g}: after the run's end ({duration_s:g} s)")
+    try:
+        removed = runfolder.prepare(args.out, RESULTS, args.overwrite)
+    except runfolder.PreviousRun as e:
+        print(f"socialnav simulate: {e}", file=sys.stderr)
+        return 2
+    if removed:
+        print(f"removed what a killed run left in {args.out}: {', '.join(removed)}")
     if args.snapshot_time_s is not None:
         snap_t = args.snapshot_time_s
     elif duration_s >= 6 * p.slot_length_s:
@@ -107,22 +126,29 @@ def run(args: argparse.Namespace) -> int:
     snap_t = round(snap_t / args.sample_interval_s) * args.sample_interval_s
     sharded = args.backend != "local" or (args.shard_worlds is not None and args.shard_worlds < args.worlds)
     try:
-        if sharded:
-            from socialnav import simulate_shards
+        with runfolder.staged(args.out, META_FILE, args.overwrite) as stage:
+            if sharded:
+                from socialnav import simulate_shards
 
-            run = simulate_shards.run_sharded(args, scenario, overrides, duration_s, snap_t)
-        else:
-            run = logs.simulate_to_parquet(
-                scenario,
-                args.out,
-                RouteFollower(shortest_path_plan(scenario)),
-                n_worlds=args.worlds,
-                duration_s=duration_s,
-                seed=args.seed,
-                sample_interval_s=args.sample_interval_s,
-                log_positions=args.log_positions,
-                snapshot_time_s=snap_t,
-                progress=not args.no_progress,
+                run = simulate_shards.run_sharded(args, scenario, overrides, duration_s, snap_t, stage)
+            else:
+                run = logs.simulate_to_parquet(
+                    scenario,
+                    stage,
+                    RouteFollower(shortest_path_plan(scenario)),
+                    n_worlds=args.worlds,
+                    duration_s=duration_s,
+                    seed=args.seed,
+                    sample_interval_s=args.sample_interval_s,
+                    log_positions=args.log_positions,
+                    snapshot_time_s=snap_t,
+                    progress=not args.no_progress,
+                )
+            pictures = []
+            if run.snapshot is not None:
+                pictures.append(viz.snapshot_png(scenario, run.snapshot, stage / "snapshot.png").name)
+            pictures.append(
+                viz.density_by_slot_png(scenario, run.mean_density_by_slot, stage / "density_by_slot.png").name
             )
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
@@ -130,10 +156,9 @@ def run(args: argparse.Namespace) -> int:
     except BackendError as e:
         print(f"socialnav simulate: {e}", file=sys.stderr)
         return 2
-    pictures = []
-    if run.snapshot is not None:
-        pictures.append(viz.snapshot_png(scenario, run.snapshot, args.out / "snapshot.png"))
-    pictures.append(viz.density_by_slot_png(scenario, run.mean_density_by_slot, args.out / "density_by_slot.png"))
+    except OSError as e:  # a full disk or a folder made read-only during the run: the old run is kept
+        print(f"socialnav simulate: cannot write {args.out}: {e.strerror or e}", file=sys.stderr)
+        return 2
 
     f = run.final
     n = len(f["tasks_started"])
@@ -155,7 +180,16 @@ def run(args: argparse.Namespace) -> int:
             d = run.mean_density_by_slot[k]
             top = [scenario.waypoint_ids[i] for i in d.argsort()[::-1][:2] if d[i] > 0]
             print(f"  {scenario.slot_names[k]:>3} {scenario.slot_clock[k]:>11}: most crowded {', '.join(top) or '-'}")
-    print(f"wrote {run.log_file} ({run.rows} rows), {run.meta_file}")
+    print(f"wrote {args.out / LOG_FILE} ({run.rows} rows), {args.out / META_FILE}")
     for pic in pictures:
-        print(f"wrote {pic}")
+        print(f"wrote {args.out / pic}")
     return 0
+
+
+# What a finished run leaves in its folder (a folder holding any of them holds a run).
+RESULTS = (META_FILE, LOG_FILE, "snapshot.png", "density_by_slot.png")
+
+
+def _usage(message: str) -> int:
+    print(f"socialnav simulate: error: {message}", file=sys.stderr)
+    return 2

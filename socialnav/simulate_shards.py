@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import os
 import pathlib
-import shutil
 import tempfile
 import time
 
@@ -74,9 +73,10 @@ def _save(shard: backend_lib.Shard, result) -> None:
     write_atomic(shard.output, lambda tmp: tmp.write_bytes(data))  # last: marks the shard done
 
 
-def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: float):
-    """Run the shards with the chosen backend, then commit ``logs.parquet`` and ``run.json``;
-    returns a :class:`jaxsim.logs.RunSummary` for the command's report."""
+def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: float, dest: pathlib.Path):
+    """Run the shards with the chosen backend, then write ``logs.parquet`` and ``run.json`` into
+    ``dest`` (the run's staging folder, :func:`common.runfolder.staged`); returns a
+    :class:`jaxsim.logs.RunSummary` for the command's report."""
     from jaxsim import logs
 
     out = pathlib.Path(args.out)
@@ -123,17 +123,9 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
     for s in shards:
         s.output.with_suffix(".json").unlink()
     (staging / "settings.json").unlink()
-    # Commit: the staging folder becomes logs.parquet in one rename (an older run's logs are
-    # moved aside first and removed after).
-    target = out / LOG_FILE
-    old = out / f".old-{os.getpid()}-{LOG_FILE}"
-    if target.exists():
-        os.replace(target, old)
+    # The parts' folder becomes logs.parquet in one rename (same file system: inside --out).
+    target = dest / LOG_FILE
     os.replace(staging, target)
-    if old.is_dir():
-        shutil.rmtree(old)
-    elif old.exists():
-        old.unlink()
     p = scenario.params
     density = sum(np.asarray(s["density_sum"]) for s in summaries)
     samples = sum(np.asarray(s["slot_samples"]) for s in summaries)
@@ -154,7 +146,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
         **backend_lib.describe(args),
         final=final,
     )
-    write_text_atomic(out / META_FILE, json.dumps(meta, indent=1))
+    write_text_atomic(dest / META_FILE, json.dumps(meta, indent=1))
     snapshot = summaries[0]["snapshot"]
     if snapshot is not None:
         snapshot = {k: (np.asarray(v) if isinstance(v, list) else v) for k, v in snapshot.items()}
@@ -162,7 +154,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
         mean_density = density / samples[:, None]
     return logs.RunSummary(
         target,
-        out / META_FILE,
+        dest / META_FILE,
         rows,
         wall,
         meta["compile_s"],

@@ -39,3 +39,42 @@ def load_graph(folder: pathlib.Path, index: dict[str, int]) -> tuple[np.ndarray,
     human_allowed = _exclusion_mask(graph, file, "humans_exclude", index)
     robot_allowed = _exclusion_mask(graph, file, "robot_exclude", index)
     return np.asarray(edges, np.int32).reshape(-1, 2), human_allowed, robot_allowed
+
+
+def reachable(n_waypoints: int, edges: np.ndarray, allowed: np.ndarray, start: int) -> np.ndarray:
+    """(W,) bool: the waypoints reachable from ``start`` along ``edges`` through ``allowed`` ones."""
+    neighbours: list[list[int]] = [[] for _ in range(n_waypoints)]
+    for u, v in edges:
+        if allowed[u] and allowed[v]:
+            neighbours[u].append(int(v))
+            neighbours[v].append(int(u))
+    seen = np.zeros(n_waypoints, bool)
+    seen[start] = True
+    frontier = [start]
+    while frontier:
+        nxt = [v for u in frontier for v in neighbours[u] if not seen[v]]
+        seen[nxt] = True
+        frontier = list(dict.fromkeys(nxt))
+    return seen
+
+
+def check_connected(
+    file: pathlib.Path,
+    ids: tuple[str, ...],
+    edges: np.ndarray,
+    allowed: np.ndarray,
+    start: int,
+    needed: dict[int, str],
+    who: str,
+) -> None:
+    """Raise :class:`ScenarioError` on ``file`` naming the first waypoint of ``needed`` (index ->
+    what it is for) that ``who`` cannot reach from ``start``."""
+    seen = reachable(len(ids), edges, allowed, start)
+    for wp, role in needed.items():
+        if not seen[wp]:
+            raise ScenarioError(
+                file,
+                "edges",
+                f"{role} {ids[wp]!r} cannot be reached by {who} from {ids[start]!r} "
+                f"(no path of edges through waypoints {who} may use)",
+            )

@@ -22,11 +22,17 @@ import numpy as np
 from data import DATA_DIR, WAREHOUSE_DIR
 from jaxsim.params import SimParams
 from jaxsim.scenario.errors import ScenarioError
-from jaxsim.scenario.graph import load_graph
+from jaxsim.scenario.graph import FILE as GRAPH_FILE
+from jaxsim.scenario.graph import check_connected, load_graph
 from jaxsim.scenario.schedule import load_schedule
 from jaxsim.scenario.tasks import load_tasks
 from jaxsim.scenario.walls import load_walls
+from jaxsim.scenario.waypoints import FILE as WAYPOINTS_FILE
 from jaxsim.scenario.waypoints import load_waypoints
+
+# The largest map (bounding box of walls and waypoints) a scenario may span: the simulator
+# precomputes a wall distance field over it at 5 cm (200 m x 200 m: 16 M cells, 190 MB).
+MAX_MAP_SIDE_M = 200.0
 
 DATA_ROOT = DATA_DIR
 
@@ -116,13 +122,18 @@ def load_scenario(path: str | pathlib.Path = WAREHOUSE_DIR, **param_overrides: A
     edges, human_allowed, robot_allowed = load_graph(folder, index)
     schedule = load_schedule(folder, index, human_allowed)
     tasks = load_tasks(folder, index, robot_allowed, schedule.names)
-    params = SimParams.from_json(folder / "params.json", ScenarioError)
+    _check_extent(folder, waypoints, boxes_m)
+    _check_routes(folder, waypoints.ids, edges, human_allowed, robot_allowed, schedule, tasks, index["parking"])
+    params_file = folder / "params.json"
+    params = SimParams.from_json(params_file, ScenarioError)
+    params.validate(ScenarioError, params_file)
     if param_overrides:
         unknown = sorted(set(param_overrides) - {f.name for f in dataclasses.fields(SimParams)})
         if unknown:
-            raise ScenarioError(folder / "params.json", unknown[0], "unknown parameter (override)")
+            raise ScenarioError(params_file, unknown[0], "unknown parameter (override)")
         params = params.replace(**param_overrides)
-    params.validate(ScenarioError)
+        changed = ", ".join(f"{k}={v!r}" for k, v in param_overrides.items())
+        params.validate(ScenarioError, f"{params_file} with {changed}")
     return Scenario(
         name=folder.name,
         waypoint_ids=waypoints.ids,
@@ -144,3 +155,32 @@ def load_scenario(path: str | pathlib.Path = WAREHOUSE_DIR, **param_overrides: A
         parking=index["parking"],
         params=params,
     )
+
+
+def _check_extent(folder: pathlib.Path, waypoints, boxes_m: np.ndarray) -> None:
+    """Refuse a map wider than :data:`MAX_MAP_SIDE_M`, naming the waypoint farthest out."""
+    xs = np.concatenate([boxes_m[:, :2].ravel(), waypoints.xy_m[:, 0]])
+    ys = np.concatenate([boxes_m[:, 2:].ravel(), waypoints.xy_m[:, 1]])
+    width, height = xs.max() - xs.min(), ys.max() - ys.min()
+    if max(width, height) <= MAX_MAP_SIDE_M:
+        return
+    centre = np.median(waypoints.xy_m, axis=0)
+    far = int(np.argmax(np.abs(waypoints.xy_m - centre).max(axis=1)))
+    x, y = waypoints.xy_m[far]
+    raise ScenarioError(
+        folder / WAYPOINTS_FILE,
+        f"waypoints[{far}]",
+        f"the map spans {width:.0f} m x {height:.0f} m, more than the {MAX_MAP_SIDE_M:.0f} m supported "
+        f"(its wall distance field would need about {width * height * 400 * 12 / 1e9:.1f} GB); "
+        f"waypoint {waypoints.ids[far]!r} at ({x:g}, {y:g}) lies farthest from the others",
+    )
+
+
+def _check_routes(folder, ids, edges, human_allowed, robot_allowed, schedule, tasks, parking: int) -> None:
+    """Every destination a worker may draw is reachable from the parking lot, and every goal of
+    the robot and its charger from its start, along the graph."""
+    destinations = {int(w): "destination" for w in np.flatnonzero(schedule.destination_p.max(axis=0) > 0)}
+    check_connected(folder / GRAPH_FILE, ids, edges, human_allowed, parking, destinations, "workers")
+    needed = {int(g): "task goal" for goals in tasks.goals for g in goals}
+    needed[tasks.charging_station] = "charging station"
+    check_connected(folder / GRAPH_FILE, ids, edges, robot_allowed, tasks.robot_start, needed, "the robot")

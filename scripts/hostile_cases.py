@@ -1,0 +1,643 @@
+"""Hostile but fair input against the command line and the model API, each case classified.
+
+    python scripts/hostile_cases.py                     # every case, a table and the counts
+    python scripts/hostile_cases.py --only params       # the cases whose name starts with it
+    python scripts/hostile_cases.py --json cases.json   # also the outcomes as JSON
+
+Each case builds its input in a scratch folder (a mutated copy of the warehouse scenario, a
+truncated file, a bad option ...), runs one command in a subprocess and classifies what happened:
+
+* ``clean error``: exit status not 0, no Python traceback, and the message names what the case
+  expects (the file or option and the field);
+* ``vague error``: exit status not 0 and no traceback, but the message does not name them;
+* ``traceback``: a Python traceback reached the user;
+* ``hang``: no answer within the case's time limit;
+* ``accepted nonsense``: exit status 0 on input that is wrong;
+* ``correct``: a case whose input is valid, run to the right result;
+* ``wrong``: a valid input that failed or gave a wrong result;
+* ``data lost``: a case about files whose check found a previous result damaged.
+
+This is the measurement behind issue 17's table (before / after); the fuzz tests in
+``tests/test_fuzz.py`` check the same properties in-process at random.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+WAREHOUSE = ROOT / "data" / "warehouse"
+PY = sys.executable
+SOCIALNAV = [PY, "-m", "socialnav.cli"]
+SHORT_DAY = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
+
+
+@dataclasses.dataclass
+class Case:
+    """One hostile input: ``make(tmp) -> argv``, the words a clean error names, or a check."""
+
+    name: str
+    make: Callable[[pathlib.Path], list[str]]
+    expect_words: tuple[str, ...] = ()  # an error is expected; its message names these
+    check: Callable[[pathlib.Path, subprocess.CompletedProcess], bool] | None = None  # valid input: the result
+    timeout_s: float = 120.0
+
+
+def scenario(tmp: pathlib.Path, file: str, mutate: Callable[[dict], object]) -> pathlib.Path:
+    """A copy of the warehouse with ``mutate`` applied to the JSON of ``file``."""
+    folder = tmp / "scenario"
+    if not folder.exists():
+        shutil.copytree(WAREHOUSE, folder)
+    path = folder / file
+    obj = json.loads(path.read_text())
+    mutate(obj)
+    path.write_text(json.dumps(obj))
+    return folder
+
+
+def simulate_with(file: str, mutate: Callable[[dict], object]) -> Callable[[pathlib.Path], list[str]]:
+    return lambda tmp: [
+        *SOCIALNAV,
+        "simulate",
+        "--scenario",
+        str(scenario(tmp, file, mutate)),
+        "--out",
+        str(tmp / "out"),
+        *SHORT_DAY,
+    ]
+
+
+def simulate_args(*extra: str) -> Callable[[pathlib.Path], list[str]]:
+    def make(tmp):
+        args = [*SOCIALNAV, "simulate", "--out", str(tmp / "out"), *SHORT_DAY]
+        for e in extra:  # a later option of the same name wins in argparse
+            args.append(e.replace("{tmp}", str(tmp)))
+        return args
+
+    return make
+
+
+def setp(section: str, key: str, value) -> Callable[[dict], None]:
+    def mutate(obj):
+        obj[section][key] = value
+
+    return mutate
+
+
+def _move_waypoint(name: str, x: float, y: float) -> Callable[[dict], None]:
+    def mutate(obj):
+        for wp in obj["waypoints"]:
+            if wp["id"] == name:
+                wp["x_m"], wp["y_m"] = x, y
+
+    return mutate
+
+
+def _drop_edges_of(name: str) -> Callable[[dict], None]:
+    def mutate(obj):
+        obj["edges"] = [e for e in obj["edges"] if name not in e]
+
+    return mutate
+
+
+def _raw(file: str, text: bytes) -> Callable[[pathlib.Path], list[str]]:
+    def make(tmp):
+        folder = scenario(tmp, file, lambda obj: None)
+        (folder / file).write_bytes(text)
+        return [*SOCIALNAV, "simulate", "--scenario", str(folder), "--out", str(tmp / "out"), *SHORT_DAY]
+
+    return make
+
+
+# --- shared fixtures: a short run's logs and tables, made once -----------------------------------
+
+
+FIXTURES = pathlib.Path(tempfile.mkdtemp(prefix="hostile-fixtures-"))
+
+
+def base_run() -> pathlib.Path:
+    """A 2-world day of 60 s slots with its causal tables (made once per harness run)."""
+    run = FIXTURES / "run"
+    if not (run / "causal" / "engine_tables.npz").exists():
+        subprocess.run(
+            [*SOCIALNAV, "simulate", "--out", str(run), "--worlds", "2", "--slot-length-s", "60", "--no-progress"],
+            check=True,
+            capture_output=True,
+            cwd=ROOT,
+        )
+        subprocess.run(
+            [*SOCIALNAV, "learn", "--logs", str(run), "--no-progress"], check=True, capture_output=True, cwd=ROOT
+        )
+    return run
+
+
+def logs_with(change: Callable[[object], object]) -> Callable[[pathlib.Path], list[str]]:
+    """``socialnav learn`` on a copy of the base run's logs changed by ``change(frame)``."""
+
+    def make(tmp):
+        import pandas as pd
+
+        run = tmp / "run"
+        run.mkdir()
+        shutil.copy(base_run() / "run.json", run / "run.json")
+        frame = pd.read_parquet(base_run() / "logs.parquet")
+        frame = change(frame)
+        if frame is not None:
+            frame.to_parquet(run / "logs.parquet")
+        return [*SOCIALNAV, "learn", "--logs", str(run), "--no-progress"]
+
+    return make
+
+
+def tables_with(change: Callable[[dict], dict | bytes]) -> Callable[[pathlib.Path], list[str]]:
+    """``socialnav evaluate`` on a copy of the base run's engine tables changed by ``change``."""
+
+    def make(tmp):
+        import numpy as np
+
+        with np.load(base_run() / "causal" / "engine_tables.npz", allow_pickle=False) as f:
+            tables = {k: f[k] for k in f.files}
+        out = change(tables)
+        path = tmp / "engine_tables.npz"
+        if isinstance(out, bytes):
+            path.write_bytes(out)
+        else:
+            np.savez(path, **out)
+        return [*SOCIALNAV, "evaluate", "--tables", str(path), "--replicas", "1", "--slots", "S1", "--no-progress"]
+
+    return make
+
+
+def _truncated_tables(tables):
+    import io
+
+    import numpy as np
+
+    buf = io.BytesIO()
+    np.savez(buf, **tables)
+    return buf.getvalue()[: len(buf.getvalue()) // 2]
+
+
+def _reversed_names(tables):
+    key = next(k for k in tables if "name" in k)
+    tables[key] = tables[key][::-1].copy()
+    return tables
+
+
+def _drop_key(tables):
+    tables.pop(sorted(tables)[0])
+    return tables
+
+
+def python_case(code: str) -> Callable[[pathlib.Path], list[str]]:
+    return lambda tmp: [PY, "-c", code]
+
+
+GSCL_INPUT = (
+    "import numpy as np; from models.inference import {fn}; import jax.numpy as jnp\n"
+    "occ = np.zeros((100, 100), np.float32)\n"
+)
+
+
+def _gscl_predict(values: str) -> Callable[[pathlib.Path], list[str]]:
+    """``SocialCostModel`` of a tiny training run applied to ``values`` (a Python expression)."""
+
+    def make(tmp):
+        run = tiny_gscl_run()
+        code = (
+            "import numpy as np\n"
+            "from models.inference import SocialCostModel\n"
+            f"model = SocialCostModel({str(run)!r})\n"
+            f"print(np.asarray(model({values})).mean())\n"
+        )
+        return [PY, "-c", code]
+
+    return make
+
+
+def tiny_gscl_run() -> pathlib.Path:
+    run = FIXTURES / "gscl"
+    if not (run / "config.json").exists():
+        code = (
+            "from models.config import TrainConfig; from models.train import train\n"
+            "train(TrainConfig(features=(4, 4, 8, 8), epochs=1, batch_size=16, train_fraction=0.01, "
+            f"test_fraction=0.004, warmup_steps=2), {str(run)!r}, progress=False)\n"
+        )
+        subprocess.run([PY, "-c", code], check=True, capture_output=True, cwd=ROOT)
+    return run
+
+
+def _copy_gscl(mutate: Callable[[pathlib.Path], None]) -> Callable[[pathlib.Path], list[str]]:
+    def make(tmp):
+        run = tmp / "gscl"
+        shutil.copytree(tiny_gscl_run(), run)
+        mutate(run)
+        return [*SOCIALNAV, "gscl", "evaluate", "--run", str(run), "--examples", "1"]
+
+    return make
+
+
+def _truncate_checkpoint(run: pathlib.Path) -> None:
+    files = sorted(p for p in (run / "checkpoints").rglob("*") if p.is_file() and p.stat().st_size > 1000)
+    biggest = max(files, key=lambda p: p.stat().st_size)
+    biggest.write_bytes(biggest.read_bytes()[: biggest.stat().st_size // 3])
+
+
+def _other_width(run: pathlib.Path) -> None:
+    cfg = json.loads((run / "config.json").read_text())
+    cfg["features"] = [8, 8, 8, 8]
+    (run / "config.json").write_text(json.dumps(cfg))
+
+
+# --- file-safety cases ---------------------------------------------------------------------------
+
+
+def _second_simulate(tmp):
+    out = tmp / "out"
+    subprocess.run([*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY], check=True, capture_output=True, cwd=ROOT)
+    (tmp / "first.sha").write_bytes((out / "logs.parquet").read_bytes())
+    return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY, "--seed", "5"]
+
+
+def _first_run_kept(tmp, proc):
+    out = tmp / "out"
+    return proc.returncode != 0 and (out / "logs.parquet").read_bytes() == (tmp / "first.sha").read_bytes()
+
+
+def _overwrite(tmp):
+    out = tmp / "out"
+    subprocess.run([*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY], check=True, capture_output=True, cwd=ROOT)
+    (out / "causal").mkdir()
+    (out / "causal" / "stale.txt").write_text("from the old run")
+    return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY, "--seed", "5", "--overwrite"]
+
+
+def _overwritten_whole(tmp, proc):
+    out = tmp / "out"
+    return proc.returncode == 0 and not (out / "causal").exists() and json.loads((out / "run.json").read_text())
+
+
+def _stale_temporary(tmp):
+    out = tmp / "out"
+    out.mkdir()
+    (out / ".tmp-99999-logs.parquet").write_bytes(b"half a file from a killed run")
+    return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY]
+
+
+def _no_stale_left(tmp, proc):
+    out = tmp / "out"
+    return proc.returncode == 0 and not list(out.glob(".tmp-*")) and (out / "logs.parquet").exists()
+
+
+def _same_day(tmp, proc):
+    return proc.returncode == 0
+
+
+CASES: list[Case] = [
+    # params.json: ranges and types
+    Case(
+        "params: robot accel 0", simulate_with("params.json", setp("robot", "accel_mps2", 0)), ("params.json", "accel")
+    ),
+    Case(
+        "params: robot accel negative",
+        simulate_with("params.json", setp("robot", "accel_mps2", -1)),
+        ("params.json", "accel"),
+    ),
+    Case(
+        "params: battery initial -10 %",
+        simulate_with("params.json", setp("battery", "initial_pct", -10)),
+        ("params.json", "initial_pct"),
+    ),
+    Case(
+        "params: battery initial 150 %",
+        simulate_with("params.json", setp("battery", "initial_pct", 150)),
+        ("params.json", "initial_pct"),
+    ),
+    Case(
+        "params: negative static drain",
+        simulate_with("params.json", setp("battery", "static_pct_per_s", -0.1)),
+        ("params.json", "static_pct_per_s"),
+    ),
+    Case(
+        "params: negative activity time",
+        simulate_with("params.json", setp("workers", "activity_min_s", -5)),
+        ("params.json", "activity_min_s"),
+    ),
+    Case(
+        "params: negative stuck time",
+        simulate_with("params.json", setp("workers", "stuck_time_s", -1)),
+        ("params.json", "stuck_time_s"),
+    ),
+    Case(
+        "params: toilet min above max",
+        simulate_with("params.json", setp("workers", "toilet_activity_min_s", 9)),
+        ("params.json", "toilet_activity"),
+    ),
+    Case(
+        "params: n_workers 2.7",
+        simulate_with("params.json", setp("sim", "n_workers", 2.7)),
+        ("params.json", "n_workers"),
+    ),
+    Case(
+        "params: n_workers 40,000",
+        simulate_with("params.json", setp("sim", "n_workers", 40_000)),
+        ("params.json", "n_workers"),
+        timeout_s=90,
+    ),
+    Case(
+        "params: n_workers 10^6",
+        simulate_with("params.json", setp("sim", "n_workers", 10**6)),
+        ("params.json", "n_workers"),
+        timeout_s=90,
+    ),
+    Case(
+        "params: n_workers '50'",
+        simulate_with("params.json", setp("sim", "n_workers", "50")),
+        ("params.json", "n_workers"),
+    ),
+    Case("params: dt 0", simulate_with("params.json", setp("sim", "dt_s", 0)), ("params.json", "dt_s")),
+    Case(
+        "params: negative radius",
+        simulate_with("params.json", setp("workers", "radius_m", -0.2)),
+        ("params.json", "radius"),
+    ),
+    Case(
+        "params: random force std negative",
+        simulate_with("params.json", setp("workers", "random_force_std_mps2", -1)),
+        ("params.json", "random_force"),
+    ),
+    Case(
+        "params: desired speed min above max speed",
+        simulate_with("params.json", setp("workers", "desired_speed_min_mps", 3.0)),
+        ("params.json", "desired_speed"),
+    ),
+    Case(
+        "params: obstacle probability 1.5",
+        simulate_with("params.json", setp("robot", "obstacle_probability", 1.5)),
+        ("params.json", "obstacle_probability"),
+    ),
+    Case(
+        "params: missing section", simulate_with("params.json", lambda o: o.pop("battery")), ("params.json", "battery")
+    ),
+    Case(
+        "params: unknown key",
+        simulate_with("params.json", setp("robot", "max_sped_mps", 1.0)),
+        ("params.json", "max_sped"),
+    ),
+    Case("params: not UTF-8", _raw("params.json", b"\xff\xfe{ \x00"), ("params.json",)),
+    Case("params: a JSON list", _raw("params.json", b"[1, 2]"), ("params.json", "object")),
+    Case("params: empty file", _raw("params.json", b""), ("params.json",)),
+    # geometry and graph
+    Case(
+        "waypoints: one moved to (500, -700)",
+        simulate_with("waypoints.json", _move_waypoint("toilet", 500.0, -700.0)),
+        ("waypoints.json", "toilet"),
+        timeout_s=90,
+    ),
+    Case(
+        "waypoints: NaN radius",
+        _raw(
+            "waypoints.json",
+            b'{"waypoints": [{"id": "parking", "x_m": 0, "y_m": 0, "radius_m": NaN, "kind": "p", '
+            b'"human_destination": false}]}',
+        ),
+        ("waypoints.json", "radius_m"),
+    ),
+    Case("graph: no edges", simulate_with("graph.json", lambda o: o.update(edges=[])), ("graph.json",)),
+    Case(
+        "graph: a destination cut off",
+        simulate_with("graph.json", _drop_edges_of("toilet")),
+        ("graph.json", "toilet"),
+    ),
+    Case(
+        "graph: the charger cut off",
+        simulate_with("graph.json", _drop_edges_of("charging-station")),
+        ("graph.json", "charging-station"),
+    ),
+    Case(
+        "walls: an empty box",
+        simulate_with("walls.json", lambda o: o["boxes"][0].update(xmax_m=o["boxes"][0]["xmin_m"])),
+        ("walls.json", "boxes[0]"),
+    ),
+    Case(
+        "schedule: probabilities sum to 0.5",
+        simulate_with("schedule.json", lambda o: o["slots"][0].update(destinations={"toilet": 0.5})),
+        ("schedule.json", "destinations"),
+    ),
+    Case(
+        "tasks: a goal that does not exist",
+        simulate_with("tasks.json", lambda o: o["slots"][0].update(goals=["nowhere"])),
+        ("tasks.json", "goals"),
+    ),
+    # command-line values
+    Case("cli: --slots 15 of 11", simulate_args("--slots", "15"), ("--slots", "11")),
+    Case("cli: --slots 0", simulate_args("--slots", "0"), ("--slots",)),
+    Case("cli: --hours inf", simulate_args("--hours", "inf"), ("--hours",)),
+    Case("cli: --hours nan", simulate_args("--hours", "nan"), ("--hours",)),
+    Case("cli: --slot-length-s nan", simulate_args("--slot-length-s", "nan"), ("--slot-length-s",)),
+    Case("cli: --slot-length-s -60", simulate_args("--slot-length-s", "-60"), ("--slot-length-s",)),
+    Case("cli: --sample-interval-s inf", simulate_args("--sample-interval-s", "inf"), ("--sample-interval-s",)),
+    Case("cli: --sample-interval-s 0.15", simulate_args("--sample-interval-s", "0.15"), ("--sample-interval-s", "0.1")),
+    Case("cli: --snapshot-time-s nan", simulate_args("--snapshot-time-s", "nan"), ("--snapshot-time-s",)),
+    Case("cli: --snapshot-time-s 1e9", simulate_args("--snapshot-time-s", "1e9"), ("--snapshot-time-s",)),
+    Case("cli: --worlds 0", simulate_args("--worlds", "0"), ("--worlds",)),
+    Case("cli: --obstacle-probability 2", simulate_args("--obstacle-probability", "2"), ("--obstacle-probability",)),
+    Case("cli: --out ''", simulate_args("--out", ""), ("--out",)),
+    Case(
+        "cli: --out a file",
+        lambda tmp: (tmp.joinpath("f").write_text("x"), simulate_args("--out", "{tmp}/f")(tmp))[1],
+        ("--out",),
+    ),
+    Case(
+        "cli: --out read-only",
+        lambda tmp: (os.makedirs(tmp / "ro"), os.chmod(tmp / "ro", 0o500), simulate_args("--out", "{tmp}/ro/run")(tmp))[
+            2
+        ],
+        ("--out",),
+    ),
+    Case("cli: --seed -1 (valid)", simulate_args("--seed", "-1"), check=_same_day),
+    Case(
+        "cli: evaluate --slots S99",
+        lambda tmp: [
+            *SOCIALNAV,
+            "evaluate",
+            "--tables",
+            str(base_run() / "causal" / "engine_tables.npz"),
+            "--slots",
+            "S99",
+        ],
+        ("--slots", "S99"),
+    ),
+    Case(
+        "cli: evaluate --replicas 0",
+        lambda tmp: [
+            *SOCIALNAV,
+            "evaluate",
+            "--tables",
+            str(base_run() / "causal" / "engine_tables.npz"),
+            "--replicas",
+            "0",
+        ],
+        ("--replicas",),
+    ),
+    Case(
+        "cli: learn --alpha 2",
+        lambda tmp: [*SOCIALNAV, "learn", "--logs", str(base_run()), "--alpha", "2"],
+        ("--alpha",),
+    ),
+    Case(
+        "cli: gscl train --learning-rate inf",
+        lambda tmp: [*SOCIALNAV, "gscl", "train", "--out", str(tmp / "g"), "--learning-rate", "inf"],
+        ("--learning-rate",),
+    ),
+    Case(
+        "cli: gscl train --learning-rate nan",
+        lambda tmp: [*SOCIALNAV, "gscl", "train", "--out", str(tmp / "g"), "--learning-rate", "nan"],
+        ("--learning-rate",),
+    ),
+    Case(
+        "cli: gscl generate --scale 1e-9",
+        lambda tmp: [*SOCIALNAV, "gscl", "generate", "--out", str(tmp / "d.npz"), "--scale", "1e-9"],
+        ("--scale",),
+    ),
+    Case(
+        "cli: gscl generate --count nothing=5",
+        lambda tmp: [*SOCIALNAV, "gscl", "generate", "--out", str(tmp / "d.npz"), "--count", "nothing=5"],
+        ("nothing",),
+    ),
+    Case(
+        "cli: arena --scenes nowhere",
+        lambda tmp: [*SOCIALNAV, "arena", "--out", str(tmp / "a"), "--scenes", "nowhere"],
+        ("nowhere",),
+    ),
+    # logs
+    Case("logs: folder without logs", lambda tmp: [*SOCIALNAV, "learn", "--logs", str(tmp)], ("logs.parquet",)),
+    Case(
+        "logs: truncated parquet",
+        lambda tmp: (
+            (tmp / "run").mkdir(),
+            (tmp / "run" / "logs.parquet").write_bytes((base_run() / "logs.parquet").read_bytes()[:5000]),
+            [*SOCIALNAV, "learn", "--logs", str(tmp / "run")],
+        )[2],
+        ("logs.parquet",),
+    ),
+    Case(
+        "logs: a column dropped", logs_with(lambda f: f.drop(columns=["battery_pct"])), ("logs.parquet", "battery_pct")
+    ),
+    Case(
+        "logs: NaN in a column",
+        logs_with(lambda f: f.assign(robot_speed_mps=float("nan"))),
+        ("logs.parquet", "robot_speed_mps"),
+    ),
+    Case(
+        "logs: duplicated rows",
+        logs_with(lambda f: __import__("pandas").concat([f, f.iloc[:100]])),
+        ("logs.parquet", "time"),
+    ),
+    Case("logs: time not increasing", logs_with(lambda f: f.iloc[::-1]), ("logs.parquet", "time")),
+    Case("logs: wrong dtype", logs_with(lambda f: f.assign(slot=f["slot"].astype(str))), ("logs.parquet", "slot")),
+    # engine tables
+    Case("tables: truncated", tables_with(_truncated_tables), ("engine_tables.npz",)),
+    Case("tables: random bytes", tables_with(lambda t: os.urandom(4000)), ("engine_tables.npz",)),
+    Case("tables: a key missing", tables_with(_drop_key), ("engine_tables.npz",)),
+    Case("tables: waypoint order differs", tables_with(_reversed_names), ("engine_tables.npz", "waypoint")),
+    # checkpoints and model inputs
+    Case("checkpoint: truncated", _copy_gscl(_truncate_checkpoint), ("checkpoint",)),
+    Case("checkpoint: config names another width", _copy_gscl(_other_width), ("config.json", "features")),
+    Case("model input: 0/1 occupancy floats", _gscl_predict("np.ones((1, 40, 40), np.float32)"), ("0", "255")),
+    Case("model input: walls coded 254", _gscl_predict("np.full((1, 40, 40), 254, np.uint8)"), ("254",)),
+    Case("model input: NaN", _gscl_predict("np.full((1, 40, 40), np.nan, np.float32)"), ("NaN",)),
+    Case("model input: bool", _gscl_predict("np.zeros((1, 40, 40), bool)"), ("bool",)),
+    Case("model input: wrong shape", _gscl_predict("np.zeros((1, 30, 40), np.uint8)"), ("40",)),
+    Case(
+        "model input: person at NaN",
+        python_case(
+            GSCL_INPUT.format(fn="input_map")
+            + "input_map(occ, 0.1, (0.0, 0.0), (5.0, 5.0), [[np.nan, 5.0]], [0.0], (8.0, 5.0))\n"
+        ),
+        ("people_xy_m", "NaN"),
+    ),
+    # run folders
+    Case("folder: a second run into the same --out", _second_simulate, check=_first_run_kept),
+    Case("folder: --overwrite replaces the run whole", _overwrite, check=_overwritten_whole),
+    Case("folder: a killed run's temporary", _stale_temporary, check=_no_stale_left),
+]
+
+
+def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
+    """(outcome, the message's last line)."""
+    try:
+        argv = case.make(tmp)
+    except Exception as e:  # the harness's own set-up failed: report it, never hide it
+        return "harness error", f"{type(e).__name__}: {e}"
+    t0 = time.perf_counter()
+    try:
+        proc = subprocess.run(
+            argv,
+            cwd=tmp,
+            capture_output=True,
+            text=True,
+            timeout=case.timeout_s,
+            env=dict(os.environ, PYTHONPATH=str(ROOT)),
+        )
+    except subprocess.TimeoutExpired:
+        return "hang", f"no answer in {case.timeout_s:.0f} s"
+    text = (proc.stderr or "") + (proc.stdout or "")
+    last = next((line for line in reversed(text.strip().splitlines()) if line.strip()), "")
+    if case.check is not None:
+        ok = case.check(tmp, proc)
+        if "Traceback" in text:
+            return "traceback", last
+        if ok:
+            return "correct", last
+        return ("data lost" if case.name.startswith("folder") else "wrong"), last
+    if "Traceback" in text:
+        return "traceback", last
+    if proc.returncode == 0:
+        return "accepted nonsense", last or f"exit 0 in {time.perf_counter() - t0:.0f} s"
+    if all(w.lower() in text.lower() for w in case.expect_words):
+        return "clean error", last
+    return "vague error", last
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--only", default="", help="run the cases whose name starts with this")
+    ap.add_argument("--json", type=pathlib.Path, default=None, help="write the outcomes here")
+    args = ap.parse_args()
+    results = []
+    for case in CASES:
+        if not case.name.startswith(args.only):
+            continue
+        with tempfile.TemporaryDirectory() as tmp:
+            outcome, message = classify(case, pathlib.Path(tmp))
+            for path in pathlib.Path(tmp).rglob("*"):  # read-only folders of a case
+                if path.is_dir():
+                    os.chmod(path, 0o700)
+        results.append({"case": case.name, "outcome": outcome, "message": message[:160]})
+        print(f"| {case.name} | {outcome} | {message[:110]} |", flush=True)
+    counts: dict[str, int] = {}
+    for r in results:
+        counts[r["outcome"]] = counts.get(r["outcome"], 0) + 1
+    print(
+        "\n" + ", ".join(f"{k}: {v}" for k, v in sorted(counts.items(), key=lambda kv: -kv[1])),
+        f"({len(results)} cases)",
+    )
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=1))
+    shutil.rmtree(FIXTURES, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
