@@ -111,6 +111,27 @@ def crowd_speed_factor(
     return jnp.clip((gap - stop) / (slow - stop), 0.0, 1.0)
 
 
+def keep_body_clear(params: SimParams, world: World, x_m: jax.Array, y_m: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Push the robot's centre out to ``robot_radius_m`` from the nearest wall surface.
+
+    Its routes are straight lines between waypoints, and a few of the warehouse's edges pass a
+    thin wall's end closer than the robot's radius (1.2 % of a day's samples had the body in a
+    wall, 10 of 26,400 the centre itself); the robot now slides round the wall's end instead.
+    The distance at ``(x, y)`` is the wall field's value at the nearest grid point carried to the
+    point along its normal (exact beside a straight wall, within the field's 5 cm cell at a
+    corner). No robot waypoint lies within ``robot_radius_m`` of a wall (checked by
+    ``tests/test_physics.py``), so the push never keeps the robot from a goal.
+    """
+    field = world.wall_field
+    row, col = field.index(x_m, y_m)
+    d, nx, ny = field.values[row, col, 0], field.values[row, col, 1], field.values[row, col, 2]
+    gx = field.origin_x_m + col.astype(x_m.dtype) * field.resolution_m
+    gy = field.origin_y_m + row.astype(y_m.dtype) * field.resolution_m
+    d = d + nx * (x_m - gx) + ny * (y_m - gy)
+    push = jnp.maximum(params.robot_radius_m - d, 0.0)
+    return x_m + push * nx, y_m + push * ny
+
+
 def drive(
     params: SimParams, world: World, r: RobotState, wx: jax.Array, wy: jax.Array, present: jax.Array
 ) -> tuple[RobotState, jax.Array]:
@@ -135,9 +156,10 @@ def drive(
 
     charging = r.mode == CHARGING
     change = battery.battery_change_pct(params, speed, charging, in_obstacle)
+    x_m, y_m = keep_body_clear(params, world, r.x_m + travel * hx, r.y_m + travel * hy)
     new = r.replace(
-        x_m=r.x_m + travel * hx,
-        y_m=r.y_m + travel * hy,
+        x_m=x_m,
+        y_m=y_m,
         heading_x=hx,
         heading_y=hy,
         speed_mps=speed,

@@ -154,3 +154,29 @@ def test_hash_uniforms_are_uniform_and_independent():
     other = np.asarray(hash_uniform16(jnp.uint32(12346), jnp.int32(0), (6, 51)))
     assert abs(np.corrcoef(other.ravel(), u[0].ravel())[0, 1]) < 0.2
     np.testing.assert_array_equal(u[3], np.asarray(hash_uniform16(jnp.uint32(12345), jnp.int32(3), (6, 51))))
+
+
+def _box_distance_m(boxes_m, x, y):
+    """(P,) exact distance from points to the nearest axis-aligned box (0 inside one)."""
+    dx = np.maximum(np.maximum(boxes_m[None, :, 0] - x[:, None], 0), x[:, None] - boxes_m[None, :, 1])
+    dy = np.maximum(np.maximum(boxes_m[None, :, 2] - y[:, None], 0), y[:, None] - boxes_m[None, :, 3])
+    return np.sqrt(dx**2 + dy**2).min(axis=1)
+
+
+def test_no_robot_waypoint_within_the_robots_radius_of_a_wall(warehouse):
+    """What keep_body_clear relies on to never hold the robot off a goal."""
+    x, y = warehouse.waypoint_xy_m[warehouse.robot_allowed].T
+    assert _box_distance_m(warehouse.boxes_m, x, y).min() >= warehouse.params.robot_radius_m
+
+
+def test_robot_body_stays_out_of_walls(short_day):
+    """A whole short day of 4 worlds: the robot's body (its radius, not only its centre) never
+    overlaps a wall box, to the field's first-order error (1 mm), and it still does its tasks."""
+    from jaxsim.rollout import rollout
+
+    scenario, world, controller = short_day
+    _, rec = rollout(scenario.params, world, controller, 3, 4, scenario.n_slots * 600, 5)
+    x, y = np.asarray(rec.robot_x_m).ravel(), np.asarray(rec.robot_y_m).ravel()
+    clearance = _box_distance_m(scenario.boxes_m, x, y)
+    assert clearance.min() >= scenario.params.robot_radius_m - 1e-3
+    assert np.asarray(rec.tasks_succeeded)[:, -1].min() > 0
