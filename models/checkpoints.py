@@ -58,19 +58,54 @@ def check_run_folder(out, config: TrainConfig) -> None:
         )
 
 
-def restore(out, step: int | None = None):
-    """``(config, graphdef, state, meta)`` of a run's checkpoint (the latest by default)."""
+class CheckpointError(ValueError):
+    """No checkpoint of a run folder can be restored with its ``config.json``; the message says why."""
+
+
+def restore_state(manager, template, out, step: int | None = None, log=print):
+    """``(step, state, meta)`` restored into ``template``'s shapes: the given step, or the newest
+    checkpoint that restores, falling back past unreadable ones with a warning (``log``).
+
+    Raises:
+      CheckpointError: the run has no checkpoint, or none restores (a config.json whose widths
+        differ from the weights' reads this way too); FileNotFoundError for a missing ``step``.
+    """
     import orbax.checkpoint as ocp
 
+    steps = sorted(manager.all_steps(), reverse=True)
+    if step is not None:
+        if step not in steps:
+            raise FileNotFoundError(f"{out} has no checkpoint at step {step} (it has {sorted(steps)})")
+        steps = [step]
+    if not steps:
+        raise FileNotFoundError(f"{out} has no checkpoint yet")
+    failures = []
+    for candidate in steps:
+        try:
+            restored = manager.restore(
+                candidate,
+                args=ocp.args.Composite(state=ocp.args.StandardRestore(host(template)), meta=ocp.args.JsonRestore()),
+            )
+        except Exception as e:  # orbax and tensorstore raise many types for a damaged or foreign file
+            first = str(e).strip().splitlines()[0][:200] if str(e).strip() else type(e).__name__
+            failures.append(f"step {candidate}: {first}")
+            continue
+        if failures:
+            log(f"warning: {out}: skipped unreadable checkpoint(s) ({'; '.join(failures)}); using step {candidate}")
+        return candidate, restored["state"], restored["meta"]
+    raise CheckpointError(
+        f"{out}/checkpoints: no checkpoint restores with {out}/config.json (features "
+        f"{list(json.loads((pathlib.Path(out) / 'config.json').read_text())['features'])}): {'; '.join(failures)}. "
+        "A truncated or damaged checkpoint, or a config.json that does not describe these weights"
+    )
+
+
+def restore(out, step: int | None = None, log=print):
+    """``(config, graphdef, state, meta)`` of a run's checkpoint (the newest good one by default)."""
     out = pathlib.Path(out)
     config = load_config(out)
     graphdef = compiled(config)[0]
     template = initial_state(config)
     with checkpoint_manager(out, config, read_only=True) as manager:
-        step = manager.latest_step() if step is None else step
-        if step is None:
-            raise FileNotFoundError(f"{out} has no checkpoint yet")
-        restored = manager.restore(
-            step, args=ocp.args.Composite(state=ocp.args.StandardRestore(host(template)), meta=ocp.args.JsonRestore())
-        )
-    return config, graphdef, restored["state"], restored["meta"]
+        _, state, meta = restore_state(manager, template, out, step, log)
+    return config, graphdef, state, meta

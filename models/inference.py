@@ -22,6 +22,17 @@ from models import grid
 OCCUPIED_ABOVE = 0.6  # the paper's threshold on occupancy values
 
 
+def _check_finite(**arrays) -> None:
+    """ValueError naming the first argument holding NaN or inf (arguments traced under ``jit``
+    cannot be checked and are skipped: there a person at NaN is simply not drawn)."""
+    for name, value in arrays.items():
+        if isinstance(value, jax.core.Tracer):
+            continue
+        array = np.asarray(value, np.float64)
+        if not np.isfinite(array).all():
+            raise ValueError(f"{name} holds NaN or inf at {np.argwhere(~np.isfinite(array))[0].tolist()}")
+
+
 def input_map(
     occupancy,
     resolution_m: float,
@@ -58,6 +69,9 @@ def input_map(
     """
     if supersample is None:
         supersample = max(1, math.ceil(grid.CELL_M / resolution_m - 1e-9))
+    _check_finite(
+        people_xy_m=people_xy_m, people_heading_rad=people_heading_rad, robot_xy_m=robot_xy_m, goal_xy_m=goal_xy_m
+    )
     occupancy = jnp.asarray(occupancy, jnp.float32)
     people_xy_m = jnp.asarray(people_xy_m, jnp.float32).reshape(-1, 2)
     people_heading_rad = jnp.asarray(people_heading_rad, jnp.float32).reshape(-1)
@@ -90,6 +104,31 @@ def input_map(
     return grid.draw_goal(image, gx / reach, gy / reach)
 
 
+def check_maps(maps) -> jax.Array:
+    """The input maps as an array, or ValueError saying what is wrong with them: a shape other
+    than (B, 40, 40) or (40, 40), a bool or non-numeric dtype, NaN, or values outside the pixel
+    encoding (0 free, 25 heading, 100 person, 200 goal, 255 wall; an occupancy grid in [0, 1]
+    goes through :func:`input_map` first). Without the check such maps gave the empty room's
+    costs."""
+    array = np.asarray(maps)
+    g = grid.GRID
+    if array.ndim not in (2, 3) or array.shape[-2:] != (g, g):
+        raise ValueError(f"input maps must be (B, {g}, {g}) or ({g}, {g}), got shape {array.shape}")
+    if array.dtype == bool or not np.issubdtype(array.dtype, np.number):
+        raise ValueError(f"input maps hold {array.dtype} values; expected the pixel codes {grid.INPUT_CODES} (uint8)")
+    if np.issubdtype(array.dtype, np.floating) and np.isnan(array).any():
+        raise ValueError(f"input maps hold NaN at {np.argwhere(np.isnan(array))[0].tolist()}")
+    outside = ~np.isin(array, grid.INPUT_CODES)
+    if outside.any():
+        where = np.argwhere(outside)[0]
+        values = np.unique(array[outside])
+        raise ValueError(
+            f"input maps hold values outside the pixel encoding {grid.INPUT_CODES}: {values[:5].tolist()} "
+            f"(first at {where.tolist()}); an occupancy grid goes through models.inference.input_map first"
+        )
+    return jnp.asarray(array.astype(np.uint8))
+
+
 class SocialCostModel:
     """A trained U-Net in evaluation mode: ``model(maps)`` (B, 40, 40) codes -> (B, 40, 40) costs.
 
@@ -116,13 +155,11 @@ class SocialCostModel:
         return self._predict(self._params, self._batch_stats, maps)
 
     def __call__(self, maps) -> jax.Array:
-        maps = jnp.asarray(maps)
+        """Costs (B, 40, 40) in [0, 1] of input maps (B, 40, 40) or (40, 40), checked first
+        (:func:`check_maps`)."""
+        maps = check_maps(maps)
         if maps.ndim == 2:
             return self.function(maps[None])[0]
-        if maps.ndim != 3 or maps.shape[1:] != (grid.GRID, grid.GRID):
-            raise ValueError(
-                f"input maps must be (B, {grid.GRID}, {grid.GRID}) or ({grid.GRID}, {grid.GRID}), got {maps.shape}"
-            )
         return self.function(maps)
 
     def cost_layer(self, maps) -> np.ndarray:

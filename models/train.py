@@ -30,7 +30,7 @@ import numpy as np
 from common import progress as progress_lib
 from common.atomic import write_text_atomic
 from models import dataset
-from models.checkpoints import check_run_folder, checkpoint_manager, host, write_metrics
+from models.checkpoints import check_run_folder, checkpoint_manager, host, restore_state, write_metrics
 from models.config import TrainConfig, learning_rate_schedule
 from models.quality import by_family, meets_quality, trivial_baselines
 from models.steps import batch_sharding, compiled, initial_state, per_sample_mse
@@ -71,12 +71,8 @@ def train(
     meta = {"step": 0, "wall_s": 0.0, "history": [], "baselines": None}
 
     manager = checkpoint_manager(out, config)
-    latest = manager.latest_step()
-    if latest is not None:
-        restored = manager.restore(
-            latest, args=ocp.args.Composite(state=ocp.args.StandardRestore(host(state)), meta=ocp.args.JsonRestore())
-        )
-        state, meta = restored["state"], restored["meta"]
+    if manager.latest_step() is not None:
+        latest, state, meta = restore_state(manager, state, out, log=log)
         log(f"resuming {out} at step {latest} (epoch {latest // config.steps_per_epoch})")
         write_metrics(out, meta)  # a kill between a checkpoint and its metrics line loses nothing
     if meta["baselines"] is None:
@@ -114,9 +110,11 @@ def train(
                 step += 1
                 bar.update(step, config.total_steps)
                 if step % 20 == 0:
+                    _check_finite(loss, step, manager, out)
                     bar.set_postfix(loss=f"{float(loss):.5f}", epoch=epoch + 1)
                 epoch_done = step % spe == 0
                 if epoch_done or step % config.checkpoint_every_steps == 0 or step == last_step:
+                    _check_finite(loss, step, manager, out)  # a diverged state is never saved
                     meta["wall_s"] += time.perf_counter() - t_start
                     t_start = time.perf_counter()
                     if epoch_done:
@@ -145,6 +143,21 @@ def train(
         bar.close()
         manager.close()
     return line
+
+
+class TrainingDiverged(ValueError):
+    """The training loss became NaN or infinite; the message names the step and the last checkpoint."""
+
+
+def _check_finite(loss, step: int, manager, out) -> None:
+    value = float(loss)
+    if not np.isfinite(value):
+        last = manager.latest_step()
+        raise TrainingDiverged(
+            f"the training loss became {value} by step {step}; stopped without saving it. "
+            + (f"The last good checkpoint in {out} is step {last}. " if last is not None else "")
+            + "Try a lower --learning-rate."
+        )
 
 
 def _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule) -> dict:

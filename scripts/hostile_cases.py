@@ -96,9 +96,8 @@ def setp(section: str, key: str, value) -> Callable[[dict], None]:
 
 def _move_waypoint(name: str, x: float, y: float) -> Callable[[dict], None]:
     def mutate(obj):
-        for wp in obj["waypoints"]:
-            if wp["id"] == name:
-                wp["x_m"], wp["y_m"] = x, y
+        (wp,) = [wp for wp in obj["waypoints"] if wp["id"] == name]
+        wp["x_m"], wp["y_m"] = x, y
 
     return mutate
 
@@ -217,7 +216,7 @@ def _gscl_predict(values: str) -> Callable[[pathlib.Path], list[str]]:
         code = (
             "import numpy as np\n"
             "from models.inference import SocialCostModel\n"
-            f"model = SocialCostModel({str(run)!r})\n"
+            f"model = SocialCostModel.load({str(run)!r})\n"
             f"print(np.asarray(model({values})).mean())\n"
         )
         return [PY, "-c", code]
@@ -400,8 +399,8 @@ CASES: list[Case] = [
     # geometry and graph
     Case(
         "waypoints: one moved to (500, -700)",
-        simulate_with("waypoints.json", _move_waypoint("toilet", 500.0, -700.0)),
-        ("waypoints.json", "toilet"),
+        simulate_with("waypoints.json", _move_waypoint("toilet-1", 500.0, -700.0)),
+        ("waypoints.json", "toilet-1"),
         timeout_s=90,
     ),
     Case(
@@ -416,8 +415,8 @@ CASES: list[Case] = [
     Case("graph: no edges", simulate_with("graph.json", lambda o: o.update(edges=[])), ("graph.json",)),
     Case(
         "graph: a destination cut off",
-        simulate_with("graph.json", _drop_edges_of("toilet")),
-        ("graph.json", "toilet"),
+        simulate_with("graph.json", _drop_edges_of("toilet-1")),
+        ("graph.json", "toilet-1"),
     ),
     Case(
         "graph: the charger cut off",
@@ -431,7 +430,7 @@ CASES: list[Case] = [
     ),
     Case(
         "schedule: probabilities sum to 0.5",
-        simulate_with("schedule.json", lambda o: o["slots"][0].update(destinations={"toilet": 0.5})),
+        simulate_with("schedule.json", lambda o: o["slots"][0].update(destinations={"toilet-1": 0.5})),
         ("schedule.json", "destinations"),
     ),
     Case(

@@ -281,7 +281,7 @@ def _evaluate(args) -> int:
 
     try:
         report = evaluation.evaluate_run(args.run, step=args.step, out=args.out, examples=args.examples)
-    except FileNotFoundError as err:
+    except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl evaluate: {err}") from None
     print(report["table"])
     print(
