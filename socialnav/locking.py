@@ -29,7 +29,7 @@ def locks_folder(folder_of: Callable[[object], pathlib.Path | None], name: str):
                 with run_lock(folder, f"socialnav {name}"):
                     return handler(args)
             except RunFolderError as e:  # locked by another job, a file, not writable
-                print(f"socialnav {name}: {e}", file=sys.stderr)
+                print(f"socialnav {name}: --out: {e}", file=sys.stderr)
                 return 2
 
         return wrapped

@@ -76,7 +76,7 @@ def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys):
     file.write_text("mine")
     assert cli.main(["arena", "--out", str(file), "--scenes", "casn_crossing", "--variants", "1"]) == 2
     err = capsys.readouterr().err
-    assert err == f"socialnav arena: {file} is a file, not a folder\n"
+    assert err == f"socialnav arena: --out: {file} is a file, not a folder\n"
     assert file.read_text() == "mine"
     assert cli.main(["simulate", "--out", str(file / "below"), "--worlds", "1", "--hours", "0.01"]) == 2
     assert "cannot write there" in capsys.readouterr().err
