@@ -189,6 +189,8 @@ class SimParams:
             raise error(file, "<file>", f"not UTF-8 text ({e.reason} at byte {e.start})") from None
         except json.JSONDecodeError as e:
             raise error(file, "<file>", f"invalid JSON: {e}") from None
+        except OSError as e:
+            raise error(file, "<file>", f"cannot be read ({e.strerror or e})") from None
         if not isinstance(raw, dict):
             raise error(file, "<file>", f"top level must be a JSON object, got {type(raw).__name__}")
         types = {f.name: f.type for f in dataclasses.fields(cls)}

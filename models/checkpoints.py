@@ -45,7 +45,11 @@ def load_config(out) -> TrainConfig:
     path = pathlib.Path(out) / "config.json"
     if not path.exists():
         raise FileNotFoundError(f"{out} holds no training run (no config.json)")
-    return TrainConfig.from_json(json.loads(path.read_text()))
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ValueError(f"{path}: not valid JSON ({e})") from None
+    return TrainConfig.from_json(raw, str(path))
 
 
 def check_run_folder(out, config: TrainConfig) -> None:

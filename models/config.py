@@ -7,6 +7,7 @@ A frozen, hashable dataclass validated on construction; the paper's recipe is
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import optax
@@ -53,7 +54,15 @@ class TrainConfig:
     keep_checkpoints: int = 2
 
     def __post_init__(self):
-        object.__setattr__(self, "features", tuple(int(f) for f in self.features))
+        features = tuple(self.features)
+        if len(features) != 4 or not all(isinstance(f, int) and not isinstance(f, bool) and f >= 1 for f in features):
+            raise ValueError(f"features must be 4 whole numbers >= 1, got {list(features)}")
+        object.__setattr__(self, "features", tuple(int(f) for f in features))
+        for name in ("learning_rate", "final_lr_fraction", "train_fraction", "test_fraction"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
+        if self.warmup_steps < 0 or not 0 <= self.final_lr_fraction <= 1:
+            raise ValueError("warmup_steps must be >= 0 and final_lr_fraction in [0, 1]")
         if self.schedule not in ("constant", "cosine"):
             raise ValueError(f"schedule must be 'constant' or 'cosine', got {self.schedule!r}")
         for name in ("epochs", "batch_size", "checkpoint_every_steps", "keep_checkpoints"):
@@ -100,8 +109,30 @@ class TrainConfig:
         return d
 
     @classmethod
-    def from_json(cls, d: dict[str, Any]) -> TrainConfig:
-        return cls(**{**d, "features": tuple(d["features"])})
+    def from_json(cls, d: Any, source: str = "config.json") -> TrainConfig:
+        """A configuration from its JSON object; ``ValueError`` naming ``source`` and the field
+        (unknown or missing keys, a wrong type, a value out of range)."""
+        if not isinstance(d, dict):
+            raise ValueError(f"{source}: top level must be a JSON object, got {type(d).__name__}")
+        fields = {f.name: f for f in dataclasses.fields(cls)}
+        unknown = sorted(set(d) - set(fields))
+        if unknown:
+            raise ValueError(f"{source}: field '{unknown[0]}': unknown setting")
+        missing = sorted(set(fields) - set(d))
+        if missing:
+            raise ValueError(f"{source}: field '{missing[0]}': missing")
+        kinds = {"features": list, "coords": bool, "fresh_samples": bool, "schedule": str}
+        for name, value in d.items():
+            want = kinds.get(name, type(getattr(cls, name)))
+            ok = isinstance(value, want) and not (want is not bool and isinstance(value, bool))
+            if want is float:
+                ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not ok:
+                raise ValueError(f"{source}: field '{name}': expected {want.__name__}, got {value!r}")
+        try:
+            return cls(**{**d, "features": tuple(d["features"])})
+        except ValueError as e:
+            raise ValueError(f"{source}: {e}") from None
 
 
 def learning_rate_schedule(config: TrainConfig) -> optax.Schedule:

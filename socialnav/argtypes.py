@@ -83,3 +83,14 @@ def output_folder(text: str) -> pathlib.Path:
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a folder, got an empty path")
     return pathlib.Path(text)
+
+
+def open_unit_interval(text: str) -> float:
+    """A number strictly between 0 and 1 (a significance level)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not 0 < value < 1:  # also false for nan
+        raise argparse.ArgumentTypeError(f"must be in (0, 1), got {text}")
+    return value

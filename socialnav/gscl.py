@@ -140,6 +140,12 @@ def _generate(args) -> int:
         if name not in dataset.FAMILIES:
             raise SystemExit(f"socialnav gscl generate: unknown family {name!r}; known: {', '.join(dataset.FAMILIES)}")
         counts[name] = n
+    if sum(counts.values()) == 0:
+        smallest = 1 / min(n for n in dataset.scaled_counts(1.0).values() if n > 0)
+        raise SystemExit(
+            f"socialnav gscl generate: --scale {args.scale:g} gives 0 samples in every family "
+            f"(the smallest scale that gives one is about {smallest:.2g}); nothing written"
+        )
     t0 = time.perf_counter()
     if args.backend == "local" and args.shard_samples is None:
         data = dataset.generate(args.seed, counts)

@@ -8,7 +8,7 @@ import sys
 
 from causal.extract import LogError
 from causal.learn import learn
-from socialnav.argtypes import comma_ints, comma_names, output_folder, positive_int
+from socialnav.argtypes import comma_ints, comma_names, open_unit_interval, output_folder, positive_int
 from socialnav.locking import locks_folder
 
 
@@ -32,7 +32,7 @@ def add_parser(sub) -> None:
         default="parcorr",
         help="conditional independence test: parcorr (fast) or regression (RegressionCI, mixed data)",
     )
-    lrn.add_argument("--alpha", type=float, default=0.01, help="significance level (default 0.01)")
+    lrn.add_argument("--alpha", type=open_unit_interval, default=0.01, help="significance level (default 0.01)")
     lrn.add_argument(
         "--step", type=positive_int, default=None, help="subsampling step in logged samples (default: the Nyquist rule)"
     )

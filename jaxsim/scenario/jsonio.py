@@ -16,9 +16,13 @@ def read_json(file: pathlib.Path) -> dict:
     if not file.is_file():
         raise ScenarioError(file, "<file>", "file is missing")
     try:
-        obj = json.loads(file.read_text())
+        obj = json.loads(file.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as e:
+        raise ScenarioError(file, "<file>", f"not UTF-8 text ({e.reason} at byte {e.start})") from None
     except json.JSONDecodeError as e:
         raise ScenarioError(file, "<file>", f"invalid JSON: {e}") from None
+    except OSError as e:  # a folder of that name, no permission
+        raise ScenarioError(file, "<file>", f"cannot be read ({e.strerror or e})") from None
     if not isinstance(obj, dict):
         raise ScenarioError(file, "<file>", "top level must be a JSON object")
     return obj
