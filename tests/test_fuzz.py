@@ -258,7 +258,7 @@ def fuzz_maps(n: int, seed: int) -> dict[str, int]:
 
     rng = np.random.default_rng(seed)
     tally = {"refused": 0, "accepted": 0}
-    for case in range(n):
+    for _ in range(n):
         shape = [(40, 40), (3, 40, 40), (1, 30, 40), (40,), (2, 40, 40, 1)][rng.integers(5)]
         dtype = [np.uint8, np.float32, np.int64, bool, np.float64][rng.integers(5)]
         kind = rng.integers(4)
