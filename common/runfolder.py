@@ -54,12 +54,13 @@ def clear_leftovers(folder: pathlib.Path) -> list[str]:
     return sorted(gone)
 
 
-def prepare(folder: str | pathlib.Path, results: Sequence[str], overwrite: bool) -> list[str]:
+def prepare(folder: str | pathlib.Path, results: Sequence[str], overwrite: bool, marker: str = "run.json") -> list[str]:
     """Make ``folder`` ready for a new run: leftovers cleared, an earlier run refused unless
     ``overwrite``; returns the names of the leftovers removed.
 
     Args:
       results: the entries a finished run of this job leaves (``run.json``, ``logs.parquet``).
+      marker: the entry committed last (its absence beside other results: a killed commit).
 
     Raises:
       PreviousRun: an entry of ``results`` exists and ``overwrite`` is False.
@@ -68,9 +69,11 @@ def prepare(folder: str | pathlib.Path, results: Sequence[str], overwrite: bool)
     gone = clear_leftovers(folder)
     found = [name for name in results if (folder / name).exists()]
     if found and not overwrite:
+        what = "a previous run"
+        if not (folder / marker).exists():
+            what = f"an incomplete run (no {marker}: killed while saving)"
         raise PreviousRun(
-            f"{folder} holds a previous run ({', '.join(found)}); pass --overwrite to replace it whole, "
-            "or choose another --out"
+            f"{folder} holds {what} ({', '.join(found)}); pass --overwrite to replace it whole, or choose another --out"
         )
     return gone
 

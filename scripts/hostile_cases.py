@@ -125,18 +125,18 @@ FIXTURES = pathlib.Path(tempfile.mkdtemp(prefix="hostile-fixtures-"))
 
 
 def base_run() -> pathlib.Path:
-    """A 2-world day of 60 s slots with its causal tables (made once per harness run)."""
+    """A 2-world day of 60 s slots with its causal tables (made once per harness run); the
+    battery starts low so that the robot charges and the causal variables vary."""
     run = FIXTURES / "run"
     if not (run / "causal" / "engine_tables.npz").exists():
-        subprocess.run(
-            [*SOCIALNAV, "simulate", "--out", str(run), "--worlds", "2", "--slot-length-s", "60", "--no-progress"],
-            check=True,
-            capture_output=True,
-            cwd=ROOT,
-        )
-        subprocess.run(
-            [*SOCIALNAV, "learn", "--logs", str(run), "--no-progress"], check=True, capture_output=True, cwd=ROOT
-        )
+        low = scenario(FIXTURES, "params.json", setp("battery", "initial_pct", 21.0))
+        for argv in (
+            ["simulate", "--scenario", str(low), "--out", str(run), "--worlds", "2", "--slot-length-s", "60"],
+            ["learn", "--logs", str(run)],
+        ):
+            done = subprocess.run([*SOCIALNAV, *argv, "--no-progress"], capture_output=True, text=True, cwd=ROOT)
+            if done.returncode:
+                raise RuntimeError(f"fixture {argv[0]} failed: {done.stderr.strip().splitlines()[-1:]}")
     return run
 
 
