@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import pathlib
 import time
 
@@ -36,6 +37,7 @@ from common import progress as progress_lib
 from common.atomic import atomic_path, write_text_atomic
 from common.logschema import LOG_FILE, META_FILE, density_column, distance_column, position_columns
 from jaxsim.scenario import Scenario
+from jaxsim.state import ACTIVITY, WALKING
 from jaxsim.step import Controller
 
 # Device memory for one time chunk of records (all worlds); bounds the host memory too.
@@ -113,6 +115,61 @@ def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUD
     return best
 
 
+class SimulationDiverged(ValueError):
+    """A world's state turned NaN or infinite; the message names the world, the time and the field."""
+
+
+def check_finite(rec, first_world: int = 0) -> None:
+    """Raise :class:`SimulationDiverged` if a logged robot signal, density or present worker's
+    position is NaN or infinite (extreme parameters can make the explicit integration blow up;
+    such a day is stopped, not written)."""
+    present = (rec.worker_status == WALKING) | (rec.worker_status == ACTIVITY)
+    fields = {
+        "robot_x_m": rec.robot_x_m,
+        "robot_y_m": rec.robot_y_m,
+        "robot_speed_mps": rec.robot_speed_mps,
+        "battery_pct": rec.battery_pct,
+        "density_ppm2": rec.density_ppm2,
+        "worker_x_m": np.where(present, rec.worker_x_m, 0.0),
+        "worker_y_m": np.where(present, rec.worker_y_m, 0.0),
+    }
+    for name, values in fields.items():
+        bad = ~np.isfinite(values)
+        if bad.any():
+            world, sample = np.argwhere(bad)[0][:2]
+            raise SimulationDiverged(
+                f"the simulation diverged: {name} is {values[tuple(np.argwhere(bad)[0])]} in world "
+                f"{first_world + world} at t = {rec.time_s[world, sample]:.1f} s; nothing was written "
+                "(check the scenario's force and speed parameters)"
+            )
+
+
+def reproducibility() -> dict:
+    """What the logs' bits depend on, for ``run.json``: the same seed and settings give the same
+    logs bit for bit whatever the batch size, shard layout and number of host devices (tested:
+    ``tests/test_determinism.py``); across machines, XLA compiles for the host CPU's instruction
+    set, so the CPU model and the jax/jaxlib versions are recorded too (not tested across CPUs)."""
+    import platform
+
+    import jax
+    import jaxlib
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    return {
+        "independent_of": ["batch size", "shards", "number of host devices"],
+        "jax": jax.__version__,
+        "jaxlib": jaxlib.__version__,
+        "cpu": cpu,
+        "machine": platform.machine(),
+        "xla_flags": os.environ.get("XLA_FLAGS", ""),
+    }
+
+
 def run_metadata(scenario: Scenario, *, final: dict, **fields) -> dict:
     """``run.json``'s content: the schema version, ``fields`` (seed, worlds, duration, rows,
     timings, ...), the JAX devices, the scenario's names and parameters, the final counters."""
@@ -122,6 +179,7 @@ def run_metadata(scenario: Scenario, *, final: dict, **fields) -> dict:
         "schema_version": logschema.SCHEMA_VERSION,
         **fields,
         "jax_devices": [str(d) for d in jax.devices()],
+        "reproducibility": reproducibility(),
         "scenario": scenario.name,
         "waypoints": list(scenario.waypoint_ids),
         "slots": list(scenario.slot_names),
@@ -150,11 +208,11 @@ def simulate_to_parquet(
 
     Args:
       scenario: the validated scenario (its params included).
-      out_dir: output folder (created). Existing files of a previous run are replaced only when
-        this run completes.
+      out_dir: output folder (created); each file is renamed into place when written (the
+        command line stages the whole run and commits it at once: :mod:`common.runfolder`).
       controller: the robot's controller, e.g. ``RouteFollower(planners.routes.shortest_path_plan(s))``.
-      n_worlds: batch size; world ``b`` is the same world for a given seed whatever ``n_worlds``
-        (bit for bit for the same ``n_worlds``, to float rounding across batch sizes).
+      n_worlds: batch size; world ``b`` is the same world bit for bit for a given seed whatever
+        ``n_worlds`` and the number of host devices.
       duration_s: simulated time, a multiple of ``sample_interval_s``.
       sample_interval_s: logging interval, a multiple of ``dt_s``.
       log_positions: also log every worker's position and status.
@@ -212,6 +270,7 @@ def simulate_to_parquet(
                 if c + 1 < n_chunks:  # dispatch the next chunk before converting this one
                     pending = rollout.run_samples(p, world, controller, states, keys, chunk, every)
                 rec = rollout.to_numpy(rec)
+                check_finite(rec, first_world)
                 if c == 0:
                     compile_s = time.perf_counter() - start
                 table = record_table(rec, np.arange(first_world, first_world + n_worlds), scenario, seed, log_positions)

@@ -94,6 +94,10 @@ def restore_state(manager, template, out, step: int | None = None, log=print):
             first = str(e).strip().splitlines()[0][:200] if str(e).strip() else type(e).__name__
             failures.append(f"step {candidate}: {first}")
             continue
+        mismatch = _shape_mismatch(template, restored["state"])
+        if mismatch:  # orbax restores the saved shapes whatever the template's
+            failures.append(f"step {candidate}: {mismatch}")
+            continue
         if failures:
             log(f"warning: {out}: skipped unreadable checkpoint(s) ({'; '.join(failures)}); using step {candidate}")
         return candidate, restored["state"], restored["meta"]
@@ -102,6 +106,18 @@ def restore_state(manager, template, out, step: int | None = None, log=print):
         f"{list(json.loads((pathlib.Path(out) / 'config.json').read_text())['features'])}): {'; '.join(failures)}. "
         "A truncated or damaged checkpoint, or a config.json that does not describe these weights"
     )
+
+
+def _shape_mismatch(template, restored) -> str:
+    """'' if ``restored`` has ``template``'s tree and shapes, else where it first differs."""
+    want = jax.tree_util.tree_flatten_with_path(template)[0]
+    got = jax.tree_util.tree_flatten_with_path(restored)[0]
+    if [p for p, _ in want] != [p for p, _ in got]:
+        return "its arrays are not those of this configuration's model"
+    for (path, a), (_, b) in zip(want, got, strict=True):
+        if np.shape(a) != np.shape(b):
+            return f"{jax.tree_util.keystr(path)} has shape {np.shape(b)}, this configuration's model {np.shape(a)}"
+    return ""
 
 
 def restore(out, step: int | None = None, log=print):

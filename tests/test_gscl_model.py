@@ -208,3 +208,55 @@ def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path,
     with pytest.raises(SystemExit, match="another configuration"):
         cli.main(["gscl", "train", "--out", str(run), "--paper"])
     assert sorted(p.name for p in run.iterdir()) == ["config.json"]
+
+
+def _truncate_biggest_file(folder):
+    files = [p for p in folder.rglob("*") if p.is_file()]
+    biggest = max(files, key=lambda p: p.stat().st_size)
+    biggest.write_bytes(biggest.read_bytes()[: biggest.stat().st_size // 3])
+
+
+def test_a_damaged_checkpoint_falls_back_and_a_foreign_config_is_named(tmp_path):
+    """Killed at step 6 (checkpoints 4 and 6 kept): the newest damaged, the older one is used with
+    a warning; every one damaged, or a config.json naming other widths, is one error naming it."""
+    run = tmp_path / "run"
+    config = TrainConfig(**TINY)
+    train.train(config, run, progress=False, max_steps=6, log=lambda *_: None)
+    _truncate_biggest_file(run / "checkpoints" / "6")
+    warnings = []
+    _, _, state, meta = checkpoints.restore(run, log=warnings.append)
+    assert meta["step"] == 4 and "skipped unreadable checkpoint" in warnings[0] and "step 6" in warnings[0]
+    # Resuming trains on from the good checkpoint instead of failing.
+    train.train(config, run, progress=False, max_steps=8, log=warnings.append)
+    assert any("resuming" in w and "step 4" in w for w in warnings)
+
+    foreign = tmp_path / "foreign"
+    train.train(config, foreign, progress=False, max_steps=4, log=lambda *_: None)
+    cfg = json.loads((foreign / "config.json").read_text())
+    (foreign / "config.json").write_text(json.dumps({**cfg, "features": [8, 8, 8, 8]}))
+    with pytest.raises(checkpoints.CheckpointError, match=r"config\.json \(features \[8, 8, 8, 8\]\)"):
+        inference.SocialCostModel.load(foreign)
+
+
+def test_training_stops_when_the_loss_turns_nan(tmp_path):
+    config = TrainConfig(**{**TINY, "learning_rate": 1e30, "schedule": "constant"})
+    with pytest.raises(train.TrainingDiverged, match="became nan"):
+        train.train(config, tmp_path / "nan", progress=False, log=lambda *_: None)
+
+
+def test_model_inputs_outside_the_pixel_encoding_are_refused():
+    good = np.zeros((2, 40, 40), np.uint8)
+    good[0, 5, 5] = grid.PERSON
+    np.testing.assert_array_equal(np.asarray(inference.check_maps(good.astype(np.float32))), good)
+    cases = {
+        "outside the pixel encoding": np.ones((1, 40, 40), np.float32) * 0.5,
+        "254": np.full((1, 40, 40), 254, np.uint8),
+        "NaN": np.full((1, 40, 40), np.nan, np.float32),
+        "bool": np.zeros((1, 40, 40), bool),
+        "shape": np.zeros((1, 30, 40), np.uint8),
+    }
+    for words, maps in cases.items():
+        with pytest.raises(ValueError, match=words):
+            inference.check_maps(maps)
+    with pytest.raises(ValueError, match="people_xy_m holds NaN"):
+        inference.input_map(np.zeros((50, 50)), 0.1, (0.0, 0.0), (2.5, 2.5), [[np.nan, 1.0]], [0.0], (4.0, 2.5))

@@ -201,3 +201,16 @@ def test_world_without_workers_runs():
     rec = to_numpy(rec)
     assert rec.worker_dist_m.shape == (4, 60, 0) and (rec.n_present == 0).all()
     assert (rec.robot_speed_mps.max(axis=1) > 0.4).all()  # the robot drives
+
+
+def test_a_diverged_state_stops_the_run(day_rollout):
+    """NaN in a logged signal (as extreme force parameters can cause) is an error naming the
+    field, the world and the time; absent workers' positions do not count."""
+    from jaxsim import logs
+
+    _, _, rec = day_rollout
+    logs.check_finite(rec)  # a normal day passes
+    broken = rec.replace(robot_x_m=rec.robot_x_m.copy())
+    broken.robot_x_m[1, 7] = np.nan
+    with pytest.raises(logs.SimulationDiverged, match=r"robot_x_m is nan in world 1 at t = "):
+        logs.check_finite(broken)
