@@ -50,6 +50,7 @@ class Case:
     make: Callable[[pathlib.Path], list[str]]
     expect_words: tuple[str, ...] = ()  # an error is expected; its message names these
     check: Callable[[pathlib.Path, subprocess.CompletedProcess], bool] | None = None  # valid input: the result
+    api: bool = False  # a Python API call: its error is an exception (ValueError) naming the words
     timeout_s: float = 120.0
 
 
@@ -188,8 +189,7 @@ def _truncated_tables(tables):
 
 
 def _reversed_names(tables):
-    key = next(k for k in tables if "name" in k)
-    tables[key] = tables[key][::-1].copy()
+    tables["waypoints"] = tables["waypoints"][::-1].copy()
     return tables
 
 
@@ -520,8 +520,9 @@ CASES: list[Case] = [
         lambda tmp: (
             (tmp / "run").mkdir(),
             (tmp / "run" / "logs.parquet").write_bytes((base_run() / "logs.parquet").read_bytes()[:5000]),
+            shutil.copy(base_run() / "run.json", tmp / "run" / "run.json"),
             [*SOCIALNAV, "learn", "--logs", str(tmp / "run")],
-        )[2],
+        )[3],
         ("logs.parquet",),
     ),
     Case(
@@ -547,11 +548,11 @@ CASES: list[Case] = [
     # checkpoints and model inputs
     Case("checkpoint: truncated", _copy_gscl(_truncate_checkpoint), ("checkpoint",)),
     Case("checkpoint: config names another width", _copy_gscl(_other_width), ("config.json", "features")),
-    Case("model input: 0/1 occupancy floats", _gscl_predict("np.ones((1, 40, 40), np.float32)"), ("0", "255")),
-    Case("model input: walls coded 254", _gscl_predict("np.full((1, 40, 40), 254, np.uint8)"), ("254",)),
-    Case("model input: NaN", _gscl_predict("np.full((1, 40, 40), np.nan, np.float32)"), ("NaN",)),
-    Case("model input: bool", _gscl_predict("np.zeros((1, 40, 40), bool)"), ("bool",)),
-    Case("model input: wrong shape", _gscl_predict("np.zeros((1, 30, 40), np.uint8)"), ("40",)),
+    Case("model input: 0/1 occupancy floats", _gscl_predict("np.ones((1, 40, 40), np.float32)"), ("0", "255"), api=True),
+    Case("model input: walls coded 254", _gscl_predict("np.full((1, 40, 40), 254, np.uint8)"), ("254",), api=True),
+    Case("model input: NaN", _gscl_predict("np.full((1, 40, 40), np.nan, np.float32)"), ("NaN",), api=True),
+    Case("model input: bool", _gscl_predict("np.zeros((1, 40, 40), bool)"), ("bool",), api=True),
+    Case("model input: wrong shape", _gscl_predict("np.zeros((1, 30, 40), np.uint8)"), ("40",), api=True),
     Case(
         "model input: person at NaN",
         python_case(
@@ -559,6 +560,7 @@ CASES: list[Case] = [
             + "input_map(occ, 0.1, (0.0, 0.0), (5.0, 5.0), [[np.nan, 5.0]], [0.0], (8.0, 5.0))\n"
         ),
         ("people_xy_m", "NaN"),
+        api=True,
     ),
     # run folders
     Case("folder: a second run into the same --out", _second_simulate, check=_first_run_kept),
@@ -594,6 +596,8 @@ def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
         if ok:
             return "correct", last
         return ("data lost" if case.name.startswith("folder") else "wrong"), last
+    if case.api and last.startswith("ValueError:") and all(w.lower() in last.lower() for w in case.expect_words):
+        return "clean error", last  # the API's documented exception, naming what is wrong
     if "Traceback" in text:
         return "traceback", last
     if proc.returncode == 0:
