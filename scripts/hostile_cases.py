@@ -548,7 +548,7 @@ CASES: list[Case] = [
     # checkpoints and model inputs
     Case("checkpoint: truncated", _copy_gscl(_truncate_checkpoint), ("checkpoint",)),
     Case("checkpoint: config names another width", _copy_gscl(_other_width), ("config.json", "features")),
-    Case("model input: 0/1 occupancy floats", _gscl_predict("np.ones((1, 40, 40), np.float32)"), ("0", "255"), api=True),
+    Case("model input: 0/1 occupancy", _gscl_predict("np.ones((1, 40, 40), np.float32)"), ("0", "255"), api=True),
     Case("model input: walls coded 254", _gscl_predict("np.full((1, 40, 40), 254, np.uint8)"), ("254",), api=True),
     Case("model input: NaN", _gscl_predict("np.full((1, 40, 40), np.nan, np.float32)"), ("NaN",), api=True),
     Case("model input: bool", _gscl_predict("np.zeros((1, 40, 40), bool)"), ("bool",), api=True),
