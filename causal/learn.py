@@ -51,6 +51,7 @@ def learn(
     waypoints: list[str] | None = None,
     compare_subsampling: bool = False,
     progress: bool = True,
+    shown_as: str | pathlib.Path | None = None,
 ) -> LearnReport:
     """Run extraction, discovery, parameter learning and the do-queries on a run's logs.
 
@@ -63,6 +64,8 @@ def learn(
       worlds: world ids to learn from (default: all).
       waypoints: waypoints to learn (default: all whose density changes).
       compare_subsampling: also run discovery at the Nyquist step (no budget) and report both.
+      shown_as: the folder named in the closing message (default ``out_dir``; the command line
+        writes into a staging folder that becomes ``out_dir`` when the run is complete).
 
     Raises:
       extract.LogError: the logs lack a column, a variable is constant, a waypoint is empty.
@@ -147,7 +150,7 @@ def learn(
     say(
         f"learn finished in {timings['total_s']:.1f} s (extract {timings['extract_s']:.1f}, discover "
         f"{timings['discover_s']:.1f}, fit {timings['fit_s']:.1f}, queries {timings['queries_s']:.1f}); "
-        f"wrote {out}/{{discovery.json, causal_graph.png, engine.bifxml, engine.json, engine_tables.npz, "
+        f"wrote {shown_as or out}/{{discovery.json, causal_graph.png, engine.bifxml, engine.json, engine_tables.npz, "
         f"report.json}}",
         flush=True,
     )

@@ -7,6 +7,7 @@ import json
 import pathlib
 import sys
 
+from common import runfolder
 from evaluation import warehouse
 from evaluation.protocol import ProtocolConfig
 from jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
@@ -45,8 +46,20 @@ def add_parser(sub) -> None:
     ev.set_defaults(handler=run)
 
 
+# What a finished evaluation leaves in its folder; summary.json is written last.
+RESULTS = (
+    "summary.json",
+    "tasks.parquet",
+    "per_slot.csv",
+    "distance_hist.npz",
+    "fig9_efficiency.png",
+    "fig10_safety.png",
+    "fig11_routes.png",
+)
+
+
 def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: int = 32) -> None:
-    """The options ``evaluate`` and ``run`` share."""
+    """The options ``evaluate`` and ``run`` share (``--overwrite`` included)."""
     p.add_argument(
         "--replicas",
         type=positive_int,
@@ -81,6 +94,9 @@ def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: in
         + (f" (default {default_out})" if default_out else " (default: evaluation/ next to the tables' folder)"),
     )
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    p.add_argument(
+        "--overwrite", action="store_true", help="replace the run in --out whole (only once the new one is complete)"
+    )
 
 
 def _slot_ids(scenario: Scenario, names: list[str] | None) -> list[int] | None:
@@ -100,6 +116,12 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     except (TablesError, ValueError) as e:
         hint = " (run 'socialnav learn' first)" if not tables_file.is_file() else ""
         print(f"error: {e}{hint}", file=sys.stderr)
+        return 2
+    overwrite = getattr(args, "overwrite", False)
+    try:
+        runfolder.prepare(out, RESULTS, overwrite, marker="summary.json")
+    except runfolder.PreviousRun as e:
+        print(f"socialnav evaluate: {e}", file=sys.stderr)
         return 2
     settings = {"deadline_per_hop": not args.deadline_per_task}
     if args.collision_radius_m is not None:
@@ -125,7 +147,8 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     except backend_lib.BackendError as e:
         print(f"socialnav evaluate: {e}", file=sys.stderr)
         return 2
-    files = warehouse.write_report(result, scenario, out)
+    with runfolder.staged(out, "summary.json", overwrite) as stage:
+        files = [out / f.name for f in warehouse.write_report(result, scenario, stage)]
     if (out / STAGING).is_dir():  # the shards live until the report is written
         import shutil
 

@@ -8,6 +8,7 @@ import sys
 
 from causal.extract import LogError
 from causal.learn import learn
+from common import runfolder
 from socialnav.argtypes import comma_ints, comma_names, open_unit_interval, output_folder, positive_int
 from socialnav.locking import locks_folder
 
@@ -56,6 +57,9 @@ def add_parser(sub) -> None:
         action="store_true",
         help="also run discovery at the Nyquist step (no sample budget) and report both",
     )
+    lrn.add_argument(
+        "--overwrite", action="store_true", help="replace the engine in --out whole (only once the new one is complete)"
+    )
     lrn.add_argument("--no-progress", action="store_true", help="print nothing but errors")
     lrn.set_defaults(handler=run)
 
@@ -65,22 +69,38 @@ def _out_folder(args) -> pathlib.Path:
     return args.out or args.logs / "causal"
 
 
+# What a finished learn leaves in its folder; report.json is written last.
+RESULTS = ("report.json", "engine_tables.npz", "engine.json", "engine.bifxml", "discovery.json", "causal_graph.png")
+
+
 @locks_folder(_out_folder, "learn")
 def run(args: argparse.Namespace) -> int:
+    out = _out_folder(args)
     try:
-        learn(
-            args.logs,
-            _out_folder(args),
-            test=args.test,
-            alpha=args.alpha,
-            step=args.step,
-            max_samples=args.max_samples,
-            worlds=args.worlds,
-            waypoints=args.waypoints,
-            compare_subsampling=args.compare_subsampling,
-            progress=not args.no_progress,
-        )
+        runfolder.prepare(out, RESULTS, args.overwrite, marker="report.json")
+    except runfolder.PreviousRun as e:
+        print(f"socialnav learn: {e}", file=sys.stderr)
+        return 2
+    try:
+        with runfolder.staged(out, "report.json", args.overwrite) as stage:
+            _learn(args, stage, out)
     except (LogError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0
+
+
+def _learn(args: argparse.Namespace, stage: pathlib.Path, out: pathlib.Path) -> None:
+    learn(
+        args.logs,
+        stage,
+        test=args.test,
+        alpha=args.alpha,
+        step=args.step,
+        max_samples=args.max_samples,
+        worlds=args.worlds,
+        waypoints=args.waypoints,
+        compare_subsampling=args.compare_subsampling,
+        progress=not args.no_progress,
+        shown_as=out,
+    )

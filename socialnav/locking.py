@@ -2,7 +2,8 @@
 
 A second job started on a folder another job is writing is refused at once, with one line naming
 the holder (command, pid, host, start time), exit code 2; nothing of either run is touched. An
-``--out`` that is a file or cannot be created is refused the same way, before any work.
+``--out`` that is a file or cannot be created is refused the same way, before any work. Holding
+the lock, a job first removes what a killed job left in the folder (:func:`common.runfolder.clear_leftovers`).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import pathlib
 import sys
 from collections.abc import Callable
 
+from common import runfolder
 from common.runlock import RunFolderError, run_lock
 
 
@@ -26,7 +28,10 @@ def locks_folder(folder_of: Callable[[object], pathlib.Path | None], name: str):
             if folder is None or str(folder) in ("", "."):
                 return handler(args)
             try:
-                with run_lock(folder, f"socialnav {name}"):
+                with run_lock(folder, f"socialnav {name}") as held:
+                    gone = runfolder.clear_leftovers(held)  # a killed job's temporaries: nobody else writes here
+                    if gone:
+                        print(f"socialnav {name}: removed what a killed job left in {folder}: {', '.join(gone)}")
                     return handler(args)
             except RunFolderError as e:  # locked by another job, a file, not writable
                 print(f"socialnav {name}: --out: {e}", file=sys.stderr)

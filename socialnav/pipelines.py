@@ -49,11 +49,6 @@ def add_parsers(sub) -> None:
         default=10,
         help="variants of seed 001's scenes with CASN and its SNL baseline in the last step (default 10; 0: skip)",
     )
-    run.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace the run in --out whole (its logs, causal/, evaluation/, arena/)",
-    )
     run.set_defaults(handler=run_pipeline)
 
     abl = sub.add_parser(
@@ -82,11 +77,12 @@ def run_pipeline(args: argparse.Namespace) -> int:
     out = args.out
     quiet = ["--no-progress"] if args.no_progress else []
     sim_argv = ["simulate", "--worlds", str(args.worlds), "--seed", str(args.seed), "--out", str(out)]
-    sim_argv += ["--overwrite"] if args.overwrite else []
     steps = [
         ("simulate", simulate.run, sim_argv),
         ("learn", learn.run, ["learn", "--logs", str(out), "--worlds", ",".join(map(str, args.learn_worlds))]),
     ]
+    if args.overwrite:  # simulate's --overwrite removes the old run whole; its steps start afresh
+        steps = [(name, handler, argv + ["--overwrite"]) for name, handler, argv in steps]
     parser = argparse.ArgumentParser(prog="socialnav run")  # the steps' own parsers, defaults included
     steps_sub = parser.add_subparsers(dest="command", required=True)
     simulate.add_parser(steps_sub)

@@ -111,12 +111,10 @@ def run(args: argparse.Namespace) -> int:
     if args.snapshot_time_s is not None and args.snapshot_time_s > duration_s:
         return _usage(f"--snapshot-time-s {args.snapshot_time_s:g}: after the run's end ({duration_s:g} s)")
     try:
-        removed = runfolder.prepare(args.out, RESULTS, args.overwrite)
+        runfolder.prepare(args.out, RESULTS, args.overwrite)
     except runfolder.PreviousRun as e:
         print(f"socialnav simulate: {e}", file=sys.stderr)
         return 2
-    if removed:
-        print(f"removed what a killed run left in {args.out}: {', '.join(removed)}")
     if args.snapshot_time_s is not None:
         snap_t = args.snapshot_time_s
     elif duration_s >= 6 * p.slot_length_s:
