@@ -102,6 +102,22 @@ def record_table(rec, world_ids: np.ndarray, scenario: Scenario, seed: int, log_
     return pa.table(cols)
 
 
+def estimate_memory_bytes(scenario: Scenario, n_worlds: int, log_positions: bool = False) -> int:
+    """A rough upper estimate of the memory a run of ``n_worlds`` worlds holds at once: the
+    states (about 64 bytes per worker and 400 for the robot, three copies: input, output, host),
+    one chunk of records on the device and on the host (at least one sample per world), and the
+    social force's pair arrays of one chunk of worlds (N/2 x N floats, about ten live at once).
+    Measured: 3.2 kB of state per world for 50 workers."""
+    from jaxsim.rollout import DEFAULT_WORLD_CHUNK
+
+    n = scenario.params.n_workers
+    state = 64 * n + 400
+    per_sample = 4 * (scenario.n_waypoints + n * (4 if log_positions else 2) + 32)
+    records = 2 * max(CHUNK_BUDGET_BYTES, per_sample * n_worlds)
+    pairs = min(n_worlds, DEFAULT_WORLD_CHUNK) * (n + 1) * max((n + 1) // 2, 1) * 4 * 10
+    return 3 * state * n_worlds + records + pairs
+
+
 def chunk_samples(n_samples: int, bytes_per_sample: int, budget: int = CHUNK_BUDGET_BYTES, min_chunks: int = 20) -> int:
     """Largest divisor of ``n_samples`` whose chunk fits ``budget`` and leaves at least
     ``min_chunks`` chunks for the progress bar (equal chunks: one compile)."""

@@ -8,6 +8,7 @@ import sys
 
 from common import runfolder
 from common.logschema import LOG_FILE, META_FILE
+from common.memory import available_bytes
 from jaxsim import logs, viz
 from jaxsim.robot import RouteFollower
 from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
@@ -110,6 +111,13 @@ def run(args: argparse.Namespace) -> int:
         return _usage(f"--sample-interval-s {args.sample_interval_s:g}: must be a multiple of dt_s = {p.dt_s:g} s")
     if args.snapshot_time_s is not None and args.snapshot_time_s > duration_s:
         return _usage(f"--snapshot-time-s {args.snapshot_time_s:g}: after the run's end ({duration_s:g} s)")
+    in_memory = min(args.worlds, args.shard_worlds or args.worlds)
+    needed, available = logs.estimate_memory_bytes(scenario, in_memory, args.log_positions), available_bytes()
+    if available is not None and needed > 0.9 * available:
+        return _usage(
+            f"--worlds {args.worlds}: about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB "
+            "available; split the run with --shard-worlds (each shard in turn, or one per Ray task)"
+        )
     try:
         runfolder.prepare(args.out, RESULTS, args.overwrite)
     except runfolder.PreviousRun as e:

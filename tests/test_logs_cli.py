@@ -161,3 +161,18 @@ def test_cli_rejects_bad_input(tmp_path, capsys):
         with pytest.raises(SystemExit):
             cli.main(["simulate", option, value, "--out", str(tmp_path / "o")])
         assert value in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["--slots", "15"], "the scenario has 11 slots"),
+        (["--slots", "1", "--slot-length-s", "60", "--snapshot-time-s", "1e9"], "after the run's end"),
+        (["--worlds", "100000000"], "split the run with --shard-worlds"),
+    ],
+)
+def test_cli_refuses_values_that_do_not_fit_the_run_before_any_work(tmp_path, capsys, argv, words):
+    assert cli.main(["simulate", "--out", str(tmp_path / "o"), "--no-progress", *argv]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
