@@ -450,6 +450,7 @@ CASES: list[Case] = [
     Case("cli: --snapshot-time-s nan", simulate_args("--snapshot-time-s", "nan"), ("--snapshot-time-s",)),
     Case("cli: --snapshot-time-s 1e9", simulate_args("--snapshot-time-s", "1e9"), ("--snapshot-time-s",)),
     Case("cli: --worlds 0", simulate_args("--worlds", "0"), ("--worlds",)),
+    Case("cli: --worlds 10^8", simulate_args("--worlds", "100000000"), ("--worlds", "GB"), timeout_s=90),
     Case("cli: --obstacle-probability 2", simulate_args("--obstacle-probability", "2"), ("--obstacle-probability",)),
     Case("cli: --out ''", simulate_args("--out", ""), ("--out",)),
     Case(
