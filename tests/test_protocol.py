@@ -76,10 +76,11 @@ def test_protocol_invariants_in_working_slots(setup):
     assert (log.stalled_s <= log.time_s + 1e-4).all()
     assert (log.distance_m <= p.robot_max_speed_mps * log.time_s + 1e-3).all()
     ok = log.outcome == SUCCESS
-    # A success drives the planned route, short by at most the tolerance at each waypoint.
+    # A success drives the planned route, short by at most the tolerance at each waypoint, long
+    # by what its body slides round wall ends (jaxsim.robot.keep_body_clear; under 1 % here).
     hops = np.asarray(methods["baseline"].plan.hops)[state.slot[:, None], log.start_wp, log.goal_wp]
     assert (log.distance_m[ok] >= log.planned_m[ok] - p.robot_goal_tolerance_m * hops[ok] - 1e-3).all()
-    assert (log.distance_m[ok] <= log.planned_m[ok] + 1e-3).all()
+    assert (log.distance_m[ok] <= 1.01 * log.planned_m[ok] + 1e-3).all()
     failed = log.outcome == CONGESTION
     assert (log.time_s[failed] >= p.robot_leg_deadline_s - 1e-3).all()
     # Task k starts where task k - 1 was to end, whatever happened to it.
