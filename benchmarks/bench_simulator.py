@@ -33,6 +33,7 @@ request_host_devices()
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
+from common.machine import cpu_model  # noqa: E402
 from jaxsim.robot import RouteFollower  # noqa: E402
 from jaxsim.rollout import init_batch, run_samples, world_keys  # noqa: E402
 from jaxsim.scenario import load_scenario  # noqa: E402
@@ -43,12 +44,7 @@ WARMUP_S = 200.0  # simulated seconds before timing: the workers have arrived
 
 
 def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
+    cpu = cpu_model()
     return (
         f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, jax {jax.__version__}, "
         f"{jax.local_device_count()} host device(s)"

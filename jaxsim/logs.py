@@ -170,17 +170,13 @@ def reproducibility() -> dict:
     import jax
     import jaxlib
 
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
+    from common.machine import cpu_model
+
     return {
         "independent_of": ["batch size", "shards", "number of host devices"],
         "jax": jax.__version__,
         "jaxlib": jaxlib.__version__,
-        "cpu": cpu,
+        "cpu": cpu_model(),
         "machine": platform.machine(),
         "xla_flags": os.environ.get("XLA_FLAGS", ""),
     }
