@@ -258,6 +258,36 @@ def _other_width(run: pathlib.Path) -> None:
     (run / "config.json").write_text(json.dumps(cfg))
 
 
+def arena_scene(mutate: Callable[[dict], object]) -> Callable[[pathlib.Path], list[str]]:
+    """``socialnav arena`` on a mutated copy of seed 001's static-person scene."""
+
+    def make(tmp):
+        obj = json.loads((ROOT / "data" / "scenes" / "casn_static_person.json").read_text())
+        mutate(obj)
+        path = tmp / "scene.json"
+        path.write_text(json.dumps(obj))
+        scene = ["--scenes", str(path), "--methods", "navfn", "--variants", "2", "--no-progress"]
+        return [*SOCIALNAV, "arena", "--out", str(tmp / "a"), *scene]
+
+    return make
+
+
+def command(*argv: str) -> Callable[[pathlib.Path], list[str]]:
+    """A command line; ``{tmp}`` is the case's scratch folder, ``{tables}`` the fixture's tables."""
+
+    def make(tmp):
+        out = []
+        for a in argv:
+            if "{tables}" in a:
+                a = a.replace("{tables}", str(base_run() / "causal" / "engine_tables.npz"))
+            if "{run}" in a:
+                a = a.replace("{run}", str(base_run()))
+            out.append(a.replace("{tmp}", str(tmp)))
+        return [*SOCIALNAV, *out]
+
+    return make
+
+
 # --- file-safety cases ---------------------------------------------------------------------------
 
 
@@ -563,6 +593,63 @@ CASES: list[Case] = [
         ("people_xy_m", "NaN"),
         api=True,
     ),
+    # more commands and files
+    Case(
+        "more: arena scene with NaN goal",
+        arena_scene(lambda o: o["robot"].update(goal=[float("nan"), 0.0])),
+        ("scene.json", "goal"),
+    ),
+    Case("more: arena scene without robot", arena_scene(lambda o: o.pop("robot")), ("scene.json", "robot")),
+    Case("more: arena scene timeout -1", arena_scene(lambda o: o.update(timeout_s=-1)), ("scene.json", "timeout_s")),
+    Case(
+        "more: arena goal inside a wall",
+        arena_scene(lambda o: o["robot"].update(goal=[4.9, 0.0])),
+        ("scene.json", "goal"),
+    ),
+    Case("more: arena --variants 0", command("arena", "--out", "{tmp}/a", "--variants", "0"), ("--variants",)),
+    Case("more: arena --methods nothing", command("arena", "--out", "{tmp}/a", "--methods", "nothing"), ("nothing",)),
+    Case(
+        "more: evaluate --collision-radius-m nan",
+        command("evaluate", "--tables", "{tables}", "--collision-radius-m", "nan"),
+        ("--collision-radius-m",),
+    ),
+    Case(
+        "more: evaluate --collision-radius-m -1",
+        command("evaluate", "--tables", "{tables}", "--collision-radius-m", "-1"),
+        ("--collision-radius-m",),
+    ),
+    Case(
+        "more: evaluate --tables a folder", command("evaluate", "--tables", "{tmp}", "--replicas", "1"), ("--tables",)
+    ),
+    Case("more: learn --step 0", command("learn", "--logs", "{run}", "--out", "{tmp}/c", "--step", "0"), ("--step",)),
+    Case("more: learn --worlds 99", command("learn", "--logs", "{run}", "--out", "{tmp}/c", "--worlds", "99"), ("99",)),
+    Case(
+        "more: learn --waypoints nowhere",
+        command("learn", "--logs", "{run}", "--out", "{tmp}/c", "--waypoints", "nowhere"),
+        ("nowhere",),
+    ),
+    Case(
+        "more: gscl train --batch-size 0",
+        command("gscl", "train", "--out", "{tmp}/g", "--batch-size", "0"),
+        ("--batch-size",),
+    ),
+    Case(
+        "more: gscl train --features 1,2",
+        command("gscl", "train", "--out", "{tmp}/g", "--features", "1,2"),
+        ("--features",),
+    ),
+    Case("more: gscl evaluate --run nowhere", command("gscl", "evaluate", "--run", "{tmp}/nowhere"), ("nowhere",)),
+    Case(
+        "more: simulate --scenario a file",
+        command("simulate", "--scenario", "{tmp}/x.json", "--out", "{tmp}/o"),
+        ("x.json",),
+    ),
+    Case(
+        "more: ablation --probabilities 0,2",
+        command("ablation", "--out", "{tmp}/a", "--probabilities", "0,2"),
+        ("--probabilities",),
+    ),
+    Case("more: ablation --seeds 0", command("ablation", "--out", "{tmp}/a", "--seeds", "0"), ("--seeds",)),
     # run folders
     Case("folder: a second run into the same --out", _second_simulate, check=_first_run_kept),
     Case("folder: --overwrite replaces the run whole", _overwrite, check=_overwritten_whole),
