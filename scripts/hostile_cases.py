@@ -51,6 +51,7 @@ class Case:
     expect_words: tuple[str, ...] = ()  # an error is expected; its message names these
     check: Callable[[pathlib.Path, subprocess.CompletedProcess], bool] | None = None  # valid input: the result
     api: bool = False  # a Python API call: its error is an exception (ValueError) naming the words
+    fail_label: str = "wrong"  # what a failed check is called
     timeout_s: float = 120.0
 
 
@@ -651,7 +652,7 @@ CASES: list[Case] = [
     ),
     Case("more: ablation --seeds 0", command("ablation", "--out", "{tmp}/a", "--seeds", "0"), ("--seeds",)),
     # run folders
-    Case("folder: a second run into the same --out", _second_simulate, check=_first_run_kept),
+    Case("folder: a second run into the same --out", _second_simulate, check=_first_run_kept, fail_label="data lost"),
     Case("folder: --overwrite replaces the run whole", _overwrite, check=_overwritten_whole),
     Case("folder: a killed run's temporary", _stale_temporary, check=_no_stale_left),
 ]
@@ -683,7 +684,7 @@ def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
             return "traceback", last
         if ok:
             return "correct", last
-        return ("data lost" if case.name.startswith("folder") else "wrong"), last
+        return case.fail_label, last
     if case.api and last.startswith("ValueError:") and all(w.lower() in last.lower() for w in case.expect_words):
         return "clean error", last  # the API's documented exception, naming what is wrong
     if "Traceback" in text:
