@@ -124,6 +124,8 @@ class CausalTables:
     def load(cls, path: str | pathlib.Path) -> CausalTables:
         """Read ``engine_tables.npz``; raises :class:`TablesError` naming the file on any problem."""
         path = pathlib.Path(path)
+        if path.is_dir():
+            raise TablesError(f"{path}: is a folder; expected the engine_tables.npz file in its causal/ folder")
         if not path.is_file():
             raise TablesError(f"{path}: not found (the causal pipeline, 'socialnav learn', writes it)")
         try:

@@ -114,8 +114,8 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
         tables = CausalTables.load(tables_file)  # checked against the scenario by the causal planner
         slots = _slot_ids(scenario, args.slots)
     except (TablesError, ValueError) as e:
-        hint = " (run 'socialnav learn' first)" if not tables_file.is_file() else ""
-        print(f"error: {e}{hint}", file=sys.stderr)
+        hint = " (run 'socialnav learn' first)" if not tables_file.exists() else ""
+        print(f"error: --tables: {e}{hint}", file=sys.stderr)
         return 2
     overwrite = getattr(args, "overwrite", False)
     try:

@@ -71,6 +71,10 @@ def _mutated(tmp_path, mutate):
         (lambda o: o.update(rule={"type": "teleport"}), "rule.type"),
         (lambda o: o.update(objects=[{"polygon": [[0, 0], [1, 1], [1, 0]], "cost": 10}]), "objects[0].polygon"),
         (lambda o: o.update(bounds_m=[0, 100, 0, 100]), "bounds_m"),
+        (
+            lambda o: o.update(walls=o["walls"] + [[o["robot"]["goal"][0] - 0.1, o["robot"]["goal"][0] + 0.1, -9, 9]]),
+            "robot.goal",
+        ),
     ],
 )
 def test_a_bad_scene_file_gives_one_error_naming_file_and_field(tmp_path, mutate, field):

@@ -142,7 +142,18 @@ def _inside_bounds(r: _Reader, bounds, point, where):
         r.fail(where, f"lies outside bounds_m {list(bounds)}")
 
 
-def _person(r: _Reader, p: dict, where: str, bounds) -> tuple[dict, int]:
+def _clear_of_walls(r: _Reader, walls_m: np.ndarray, point, where):
+    """A point's whole range must lie outside every wall box (a centre inside a wall)."""
+    (x0, x1), (y0, y1) = point
+    for k, (wx0, wx1, wy0, wy1) in enumerate(walls_m):
+        if x0 <= wx1 and wx0 <= x1 and y0 <= wy1 and wy0 <= y1:
+            r.fail(
+                where,
+                f"range x {[x0, x1]}, y {[y0, y1]} reaches into walls[{k}] {[float(v) for v in (wx0, wx1, wy0, wy1)]}",
+            )
+
+
+def _person(r: _Reader, p: dict, where: str, bounds, walls_m: np.ndarray) -> tuple[dict, int]:
     behaviour = r.get(p, where, "behaviour")
     if behaviour not in BEHAVIOURS:
         r.fail(f"{where}.behaviour", f"expected one of {', '.join(BEHAVIOURS)}, got {behaviour!r}")
@@ -151,6 +162,7 @@ def _person(r: _Reader, p: dict, where: str, bounds) -> tuple[dict, int]:
     def pt(key):
         value = r.point(r.get(p, where, key), f"{where}.{key}")
         _inside_bounds(r, bounds, value, f"{where}.{key}")
+        _clear_of_walls(r, walls_m, value, f"{where}.{key}")
         return value
 
     def num(key, low=-math.inf, high=math.inf, default=..., integer=False):
@@ -304,15 +316,16 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         "goal": r.point(r.get(robot_obj, "robot", "goal"), "robot.goal"),
         "yaw_deg": r.number(r.get(robot_obj, "robot", "yaw_deg", 0.0), "robot.yaw_deg"),
     }
-    _inside_bounds(r, bounds, robot["start"], "robot.start")
-    _inside_bounds(r, bounds, robot["goal"], "robot.goal")
+    for key in ("start", "goal"):
+        _inside_bounds(r, bounds, robot[key], f"robot.{key}")
+        _clear_of_walls(r, walls_m, robot[key], f"robot.{key}")
     timeout = r.number(r.get(obj, "", "timeout_s"), "timeout_s", 1.0, 3600.0)[0]
     people_obj = r.get(obj, "", "people")
     if not isinstance(people_obj, list):
         r.fail("people", "expected a list")
     people, slots = [], 0
     for i, p in enumerate(people_obj):
-        person, n = _person(r, p, f"people[{i}]", bounds)
+        person, n = _person(r, p, f"people[{i}]", bounds, walls_m)
         people.append(person)
         slots += n
     if slots > 64:
