@@ -84,6 +84,7 @@ def add_parser(top) -> None:
         "a Ray task per shard with --backend ray)",
     )
     gen.add_argument("--no-progress", action="store_true", help="hide the progress bar (sharded runs)")
+    gen.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     add_backend_options(gen)
 
     tr = sub.add_parser("train", help="train the U-Net (resumes the run in --out if there is one)")
@@ -146,6 +147,8 @@ def _generate(args) -> int:
             f"socialnav gscl generate: --scale {args.scale:g} gives 0 samples in every family "
             f"(the smallest scale that gives one is about {smallest:.2g}); nothing written"
         )
+    if args.out.exists() and not args.overwrite:
+        raise SystemExit(f"socialnav gscl generate: --out {args.out} exists; pass --overwrite to replace it")
     t0 = time.perf_counter()
     if args.backend == "local" and args.shard_samples is None:
         data = dataset.generate(args.seed, counts)

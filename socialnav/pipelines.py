@@ -18,6 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from causal import ablation as causal_ablation
+from common import runfolder
 from jaxsim import rollout
 from jaxsim.params import SimParams
 from jaxsim.robot import RouteFollower
@@ -68,6 +69,9 @@ def add_parsers(sub) -> None:
     )
     abl.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     abl.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    abl.add_argument(
+        "--overwrite", action="store_true", help="replace the results in --out (only once the new ones are complete)"
+    )
     abl.set_defaults(handler=run_ablation)
 
 
@@ -150,9 +154,16 @@ def ablation_series(
 
 @locks_folder(lambda args: args.out, "ablation")
 def run_ablation(args: argparse.Namespace) -> int:
+    results = ("ablation.json", "ablation.csv", "ablation.png")
+    try:
+        runfolder.prepare(args.out, results, args.overwrite, marker="ablation.json")
+    except runfolder.PreviousRun as e:
+        print(f"socialnav ablation: {e}", file=sys.stderr)
+        return 2
     print(f"simulating {len(args.probabilities)} probabilities x {args.seeds} seeds in one batch ...", flush=True)
     series = ablation_series(args.probabilities, args.seeds, args.seed)
-    causal_ablation.run(args.out, series, progress=not args.no_progress)
+    with runfolder.staged(args.out, "ablation.json", args.overwrite) as stage:
+        causal_ablation.run(stage, series, progress=not args.no_progress)
     summary = json.loads((args.out / "ablation.json").read_text())
     print(f"structure found by J-PCMCI+ at p = 0.3: {summary['structure_at_p_0.3']}")
     print(

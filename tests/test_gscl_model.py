@@ -195,6 +195,10 @@ def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path,
         cli.main(["gscl", "generate", "--out", str(tmp_path / "d.csv")])
     with pytest.raises(SystemExit, match="unknown family"):
         cli.main(["gscl", "generate", "--out", str(out), "--count", "corridor=3"])
+    with pytest.raises(SystemExit, match="exists; pass --overwrite"):  # a dataset is never replaced silently
+        cli.main(["gscl", "generate", "--out", str(out), "--scale", "0.001"])
+    again = ["gscl", "generate", "--out", str(out), "--scale", "0.001", "--count", "queue=5", "--overwrite"]
+    assert cli.main(again) == 0
     with pytest.raises(SystemExit):
         cli.main(["gscl", "train", "--features", "8,8"])
     with pytest.raises(SystemExit, match="no checkpoint|no training run"):
