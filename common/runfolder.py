@@ -54,9 +54,9 @@ def clear_leftovers(folder: pathlib.Path) -> list[str]:
     return sorted(gone)
 
 
-def prepare(folder: str | pathlib.Path, results: Sequence[str], overwrite: bool, marker: str = "run.json") -> list[str]:
+def prepare(folder: str | pathlib.Path, results: Sequence[str], overwrite: bool, marker: str = "run.json") -> None:
     """Make ``folder`` ready for a new run: leftovers cleared, an earlier run refused unless
-    ``overwrite``; returns the names of the leftovers removed.
+    ``overwrite``.
 
     Args:
       results: the entries a finished run of this job leaves (``run.json``, ``logs.parquet``).
@@ -66,7 +66,7 @@ def prepare(folder: str | pathlib.Path, results: Sequence[str], overwrite: bool,
       PreviousRun: an entry of ``results`` exists and ``overwrite`` is False.
     """
     folder = pathlib.Path(folder)
-    gone = clear_leftovers(folder)
+    clear_leftovers(folder)
     found = [name for name in results if (folder / name).exists()]
     if found and not overwrite:
         what = "a previous run"
@@ -75,7 +75,6 @@ def prepare(folder: str | pathlib.Path, results: Sequence[str], overwrite: bool,
         raise PreviousRun(
             f"{folder} holds {what} ({', '.join(found)}); pass --overwrite to replace it whole, or choose another --out"
         )
-    return gone
 
 
 def commit(folder: pathlib.Path, stage: pathlib.Path, marker: str, overwrite: bool) -> None:

@@ -152,9 +152,10 @@ def check_finite(rec, first_world: int = 0) -> None:
     for name, values in fields.items():
         bad = ~np.isfinite(values)
         if bad.any():
-            world, sample = np.argwhere(bad)[0][:2]
+            first = tuple(np.argwhere(bad)[0])
+            world, sample = first[:2]
             raise SimulationDiverged(
-                f"the simulation diverged: {name} is {values[tuple(np.argwhere(bad)[0])]} in world "
+                f"the simulation diverged: {name} is {values[first]} in world "
                 f"{first_world + world} at t = {rec.time_s[world, sample]:.1f} s; nothing was written "
                 "(check the scenario's force and speed parameters)"
             )

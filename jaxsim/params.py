@@ -243,9 +243,8 @@ class SimParams:
                 f"must be in 0..{MAX_WORKERS} (the all-pairs social force is O(N^2) in memory and "
                 "compile time; a larger crowd needs a neighbour structure this simulator does not have)",
             )
-        for name in ("robot_obstacle_probability",):
-            if not 0 <= getattr(self, name) <= 1:
-                fail(name, "must be a probability in [0, 1]")
+        if not 0 <= self.robot_obstacle_probability <= 1:
+            fail("robot_obstacle_probability", "must be a probability in [0, 1]")
         if not 0 < self.robot_obstacle_speed_factor_min <= 1:
             fail("robot_obstacle_speed_factor_min", "must be in (0, 1]")
         if not 0 <= self.battery_initial_pct <= 100:

@@ -66,7 +66,7 @@ class CheckpointError(ValueError):
     """No checkpoint of a run folder can be restored with its ``config.json``; the message says why."""
 
 
-def restore_state(manager, template, out, step: int | None = None, log=print):
+def restore_state(manager, template, out, config: TrainConfig, step: int | None = None, log=print):
     """``(step, state, meta)`` restored into ``template``'s shapes: the given step, or the newest
     checkpoint that restores, falling back past unreadable ones with a warning (``log``).
 
@@ -103,7 +103,7 @@ def restore_state(manager, template, out, step: int | None = None, log=print):
         return candidate, restored["state"], restored["meta"]
     raise CheckpointError(
         f"{out}/checkpoints: no checkpoint restores with {out}/config.json (features "
-        f"{list(json.loads((pathlib.Path(out) / 'config.json').read_text())['features'])}): {'; '.join(failures)}. "
+        f"{list(config.features)}): {'; '.join(failures)}. "
         "A truncated or damaged checkpoint, or a config.json that does not describe these weights"
     )
 
@@ -127,5 +127,5 @@ def restore(out, step: int | None = None, log=print):
     graphdef = compiled(config)[0]
     template = initial_state(config)
     with checkpoint_manager(out, config, read_only=True) as manager:
-        _, state, meta = restore_state(manager, template, out, step, log)
+        _, state, meta = restore_state(manager, template, out, config, step, log)
     return config, graphdef, state, meta

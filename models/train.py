@@ -72,7 +72,7 @@ def train(
 
     manager = checkpoint_manager(out, config)
     if manager.latest_step() is not None:
-        latest, state, meta = restore_state(manager, state, out, log=log)
+        latest, state, meta = restore_state(manager, state, out, config, log=log)
         log(f"resuming {out} at step {latest} (epoch {latest // config.steps_per_epoch})")
         write_metrics(out, meta)  # a kill between a checkpoint and its metrics line loses nothing
     if meta["baselines"] is None:
