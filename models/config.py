@@ -15,6 +15,8 @@ from flax import nnx
 
 from models import dataset, unet
 
+ADDED_LATER = {"composites": 0}  # settings added after runs were saved, with the value those runs used
+
 
 @dataclasses.dataclass(frozen=True)
 class TrainConfig:
@@ -33,6 +35,8 @@ class TrainConfig:
       train_fraction / test_fraction: epoch and test-set sizes as fractions of the paper's
         24,200 samples, family by family (the paper's 70 / 30 split).
       fresh_samples: new training samples every epoch (True) or epoch 0's reused (the paper).
+      composites: composite samples (two families' scenes in one, :func:`models.families.sample_composite`)
+        per 24,200 of the paper's, scaled like the others (0: the paper's eight families only).
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
       keep_checkpoints: how many checkpoints orbax keeps.
@@ -49,6 +53,7 @@ class TrainConfig:
     train_fraction: float = 0.7
     test_fraction: float = 0.3
     fresh_samples: bool = True
+    composites: int = 4000
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2
@@ -65,6 +70,8 @@ class TrainConfig:
             raise ValueError("warmup_steps must be >= 0 and final_lr_fraction in [0, 1]")
         if self.schedule not in ("constant", "cosine"):
             raise ValueError(f"schedule must be 'constant' or 'cosine', got {self.schedule!r}")
+        if self.composites < 0:
+            raise ValueError(f"composites must be >= 0, got {self.composites}")
         for name in ("epochs", "batch_size", "checkpoint_every_steps", "keep_checkpoints"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -84,16 +91,22 @@ class TrainConfig:
             schedule="constant",
             fresh_samples=False,
             epochs=20,
+            composites=0,
         )
         return cls(**{**base, **overrides})
 
     @property
+    def counts(self) -> dict[str, int]:
+        """Samples per family of the whole (train + test) set: the paper's, plus the composites."""
+        return {**dataset.PAPER_COUNTS, **({"composite": self.composites} if self.composites else {})}
+
+    @property
     def train_counts(self) -> dict[str, int]:
-        return dataset.scaled_counts(self.train_fraction)
+        return dataset.scaled_counts(self.train_fraction, self.counts)
 
     @property
     def test_counts(self) -> dict[str, int]:
-        return dataset.scaled_counts(self.test_fraction)
+        return dataset.scaled_counts(self.test_fraction, self.counts)
 
     @property
     def steps_per_epoch(self) -> int:
@@ -118,6 +131,7 @@ class TrainConfig:
         unknown = sorted(set(d) - set(fields))
         if unknown:
             raise ValueError(f"{source}: field '{unknown[0]}': unknown setting")
+        d = {**ADDED_LATER, **d}  # runs written before a setting existed had its old value
         missing = sorted(set(fields) - set(d))
         if missing:
             raise ValueError(f"{source}: field '{missing[0]}': missing")

@@ -53,8 +53,15 @@ def _as_key(seed) -> jax.Array:
     raise TypeError(f"seed must be an int or a jax.random.key, got {type(seed).__name__}")
 
 
+# Families drawn from their partner's keys: sample i of ``non_queue`` is sample i of ``queue``'s
+# layout with the goal elsewhere, sample i of ``non_group`` the same circle facing out. Training then
+# sees the same people with and without the rule, which is the contrast the rule suite
+# (:mod:`models.rules`) measures; with independent keys the queue's U stayed weak (README).
+PAIRED_WITH = {"non_queue": "queue", "non_group": "group"}
+
+
 def _family_base(seed, family: str) -> jax.Array:
-    return jax.random.fold_in(_as_key(seed), list(FAMILIES).index(family))
+    return jax.random.fold_in(_as_key(seed), list(FAMILIES).index(PAIRED_WITH.get(family, family)))
 
 
 def family_keys(seed, family: str, n: int, first: int = 0) -> jax.Array:

@@ -92,3 +92,41 @@ def soft_band(distance_m, inner_m, outer_m, level: float, edge_m: float = 0.15):
     rise = 1.0 / (1.0 + jnp.exp(-(distance_m - inner_m) / edge_m))
     fall = 1.0 / (1.0 + jnp.exp((distance_m - outer_m) / edge_m))
     return level * rise * fall
+
+
+def queue_u_cost(head_x_m, head_y_m, heading_rad, tail_m):
+    """(GRID, GRID) the U around a queue whose goal is at its head: :data:`QUEUE_U_COST` along
+    both sides (0.6-1.4 m from the queue's line, from the tail to 1.6 m ahead of the head) and
+    across the front (1.4-2.2 m ahead), open at the tail.
+
+    Args:
+      head_x_m, head_y_m: the head's position; heading_rad: the way the queue faces (its line
+        runs from the head along ``heading + pi``); tail_m: the tail's distance behind the head.
+    """
+    c, s = jnp.cos(heading_rad), jnp.sin(heading_rad)
+    dx, dy = CELL_X_M - head_x_m, CELL_Y_M - head_y_m
+    lx, ly = dx * c + dy * s, -dx * s + dy * c  # +x ahead of the head, the queue along -x
+    along = soft_band(lx, -tail_m, 1.6, 1.0, edge_m=0.3)  # from the tail to the front bar
+    sides = along * soft_band(jnp.abs(ly), 0.6, 1.4, QUEUE_U_COST)
+    front = soft_band(jnp.abs(ly), -1.0, 1.4, 1.0) * soft_band(lx, 1.4, 2.2, QUEUE_U_COST)
+    return jnp.maximum(sides, front)
+
+
+def left_of_path(lx_m, ly_m, turn_at_m: float | jax.Array, turns_left):
+    """Distance (m) of cells to the left of an L-shaped way, 0 on its right.
+
+    The way runs along +x (local frame) up to ``x = turn_at_m`` and then along +y
+    (``turns_left``) or along -y; ``ly_m`` is given mirrored for a right turn (so the turn is
+    always towards +y, as :func:`models.families` draws the L). Before the turn the left is +y
+    for a left turn and -y for a right one; after it, -x for a left turn and +x for a right one;
+    round the turn's vertex on the outer side the distance is to the vertex.
+    """
+    a = turn_at_m
+    inner = jnp.where((lx_m < a) & (ly_m > 0), jnp.minimum(ly_m, a - lx_m), 0.0)
+    before = (lx_m <= a) & (ly_m < 0)
+    after = (lx_m > a) & (ly_m >= 0)
+    round_vertex = (lx_m > a) & (ly_m < 0)
+    outer = jnp.where(
+        before, -ly_m, jnp.where(after, lx_m - a, jnp.where(round_vertex, jnp.hypot(lx_m - a, ly_m), 0.0))
+    )
+    return jnp.where(turns_left, inner, outer)

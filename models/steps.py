@@ -15,7 +15,6 @@ import numpy as np
 import optax
 from flax import nnx
 
-from models import dataset
 from models.config import TrainConfig, learning_rate_schedule, make_model
 
 
@@ -107,13 +106,13 @@ def compiled(config: TrainConfig):
     resuming, restoring and evaluating in one process do not compile again."""
     graphdef = nnx.graphdef(make_model(config))
     tx = optax.adam(learning_rate_schedule(config))
-    return graphdef, tx, make_train_step(graphdef, tx, len(dataset.FAMILIES)), make_predict(graphdef)
+    return graphdef, tx, make_train_step(graphdef, tx, len(config.counts)), make_predict(graphdef)
 
 
 def initial_state(config: TrainConfig) -> dict:
     """The training state before the first step: fresh weights, Adam's state, zero accumulators."""
     _, params, batch_stats = nnx.split(make_model(config), nnx.Param, nnx.BatchStat)
-    n = len(dataset.FAMILIES)
+    n = len(config.counts)  # the families this run draws (runs before the composites: 9)
     return {
         "params": params,
         "batch_stats": batch_stats,

@@ -29,12 +29,14 @@ import numpy as np
 
 from common import progress as progress_lib
 from common.atomic import write_text_atomic
-from models import dataset
+from models import dataset, rules
 from models.checkpoints import check_run_folder, checkpoint_manager, host, restore_state, write_metrics
 from models.config import TrainConfig, learning_rate_schedule
 from models.quality import by_family, meets_quality, trivial_baselines
 from models.steps import batch_sharding, compiled, initial_state, per_sample_mse
 from models.streams import epoch_data, test_data
+
+RULE_SCENES = 100  # scenes of each kind of the rule suite checked at every epoch's end
 
 
 def train(
@@ -49,7 +51,9 @@ def train(
     """Train (or resume) a run in ``out``; returns the last epoch's metrics line.
 
     Args:
-      stop_when_good: stop at the first epoch end that :func:`meets_quality` (for benchmarks).
+      stop_when_good: stop at the first epoch end that :func:`meets_quality` and whose every
+        check of the held-out rule suite (:mod:`models.rules`, :data:`RULE_SCENES` scenes of each
+        kind) passes on 95 % of its cases (for benchmarks).
       max_steps: stop after this many steps in all (a checkpoint is written there), e.g. to
         test resuming; the run resumes from it when called again.
     """
@@ -133,8 +137,9 @@ def train(
                             f"epoch {epoch + 1}/{config.epochs}: train {line['train_mse']:.5f} "
                             f"test {line['test_mse']:.5f} ({line['wall_s']:.0f} s)"
                             + ("  meets the quality bar" if line["meets_quality"] else "")
+                            + f"; rule suite: worst check {100 * line['rules_pass_min']:.0f} %"
                         )
-                        if stop_when_good and line["meets_quality"]:
+                        if stop_when_good and line["meets_quality"] and line["meets_rules"]:
                             return line
                     t_start = time.perf_counter()
                 if step >= last_step:
@@ -179,5 +184,13 @@ def _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule)
         "test_mse_by_family": test_by_family,
     }
     line["meets_quality"] = meets_quality(line["test_mse"], test_by_family, meta["baselines"])
+    t0 = time.perf_counter()
+    suite = rules.evaluate(
+        lambda maps: predict(state["params"], state["batch_stats"], maps), rules.build_suite(RULE_SCENES)
+    )
+    line["rules_pass_by_check"] = {k: v["pass_share"] for k, v in suite["by_check"].items()}
+    line["rules_pass_min"] = min(line["rules_pass_by_check"].values())
+    line["meets_rules"] = rules.passes(suite)
+    line["rules_s"] = round(time.perf_counter() - t0, 2)
     meta["history"].append(line)
     return line

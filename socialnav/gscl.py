@@ -5,6 +5,7 @@ socialnav gscl generate --out big.npz --scale 100 --backend ray --shard-samples 
 socialnav gscl train --out runs/gscl                        # the CPU recipe; run again to resume
 socialnav gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
 socialnav gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
+socialnav gscl rules --run runs/gscl                        # the held-out rule suite + rules.png
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import time
 
 from common.atomic import write_text_atomic
 from socialnav import backend as backend_lib
-from socialnav.argtypes import output_folder, positive_float, positive_int
+from socialnav.argtypes import non_negative_int, output_folder, positive_float, positive_int
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.locking import locks_folder
 
@@ -44,7 +45,17 @@ def _count(text: str) -> tuple[str, int]:
 
 
 # Training options that make up a TrainConfig (None = not given on the command line).
-_TRAIN_OPTIONS = ("features", "epochs", "batch_size", "learning_rate", "schedule", "fresh_samples", "seed", "coords")
+_TRAIN_OPTIONS = (
+    "features",
+    "epochs",
+    "batch_size",
+    "learning_rate",
+    "schedule",
+    "fresh_samples",
+    "seed",
+    "coords",
+    "composites",
+)
 
 
 def add_parser(top) -> None:
@@ -112,6 +123,12 @@ def add_parser(top) -> None:
     )
     tr.add_argument("--seed", type=int, default=None)
     tr.add_argument(
+        "--composites",
+        type=non_negative_int,
+        default=None,
+        help="composite samples (two scenes in one) per the paper's 24,200 (default 4000; --paper: 0)",
+    )
+    tr.add_argument(
         "--stop-when-good",
         action="store_true",
         help="stop at the first epoch that meets the quality bar (test MSE <= 0.0033 and <= 1/10 of "
@@ -126,6 +143,17 @@ def add_parser(top) -> None:
     ev.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
     ev.add_argument("--out", type=output_folder, default=None, help="output folder (default RUN/evaluation)")
     ev.add_argument("--examples", type=positive_int, default=2, help="examples per family in the PNG (default 2)")
+    ru = sub.add_parser(
+        "rules",
+        help="the held-out rule suite: each family's rule checked on scenes no generator drew (models.rules)",
+    )
+    ru.add_argument(
+        "--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
+    )
+    ru.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
+    ru.add_argument("--scenes", type=positive_int, default=100, help="scenes of each kind (default 100)")
+    ru.add_argument("--out", type=output_folder, default=None, help="output folder (default RUN/evaluation)")
+    ru.set_defaults(handler=_rules)
     gen.set_defaults(handler=_generate)
     tr.set_defaults(handler=_train)
     ev.set_defaults(handler=_evaluate)
@@ -296,5 +324,38 @@ def _evaluate(args) -> int:
     print(
         f"step {report['step']}: {'meets' if report['meets_quality'] else 'does not meet'} the quality bar; "
         f"-> {report['out']}"
+    )
+    return 0
+
+
+def _rules(args) -> int:
+    from models import rules
+    from models.checkpoints import restore
+    from models.steps import make_predict
+
+    try:
+        _, graphdef, state, meta = restore(args.run, args.step)
+    except (FileNotFoundError, ValueError) as err:
+        raise SystemExit(f"socialnav gscl rules: {err}") from None
+    predict = make_predict(graphdef)
+    cases = rules.build_suite(args.scenes)
+    report = rules.evaluate(lambda maps: predict(state["params"], state["batch_stats"], maps), cases)
+    out = args.run / "evaluation" if args.out is None else args.out
+    out.mkdir(parents=True, exist_ok=True)
+    record = {
+        "run": str(args.run),
+        "step": int(meta["step"]),
+        "scenes_per_kind": args.scenes,
+        "pass_fraction": rules.PASS_FRACTION,
+        "bar": rules.RULES_BAR,
+        "meets_rules": rules.passes(report),
+        **{k: report[k] for k in ("cases", "mse", "by_check", "by_rule")},
+    }
+    write_text_atomic(out / "rules.json", json.dumps(record, indent=1))
+    rules.plot(cases, report, out / "rules.png")
+    print(rules.table(report))
+    print(
+        f"step {record['step']}: {'every' if record['meets_rules'] else 'not every'} check passes on "
+        f">= {100 * rules.RULES_BAR:.0f} % of its scenes; -> {out / 'rules.json'}, {out / 'rules.png'}"
     )
     return 0

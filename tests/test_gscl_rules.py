@@ -1,0 +1,157 @@
+"""GSCL's held-out rule suite (models.rules), the rule shapes it shares with the generator, and
+the generator's composite and paired samples."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from models import dataset, families, grid, rules, steps
+from models import social_costs as sc
+from models.config import TrainConfig
+
+SCENES = 12
+
+
+@pytest.fixture(scope="module")
+def cases():
+    return rules.build_suite(SCENES)
+
+
+def _lookup(cases, attribute):
+    """A 'model' that returns, for each input map of the cases, that map's ``attribute`` map."""
+    table = {}
+    for c in cases:
+        for m in range(2):
+            table[c.images[m].tobytes()] = getattr(c, attribute)[m]
+
+    def predict(maps):
+        return np.stack([table.get(np.asarray(x).tobytes(), np.zeros((40, 40), np.float32)) for x in maps])
+
+    return predict
+
+
+def test_left_of_path_known_answers():
+    # The way runs along +x and turns at x = 2 (ly mirrored for a right turn: the turn is always to +y).
+    lx, ly = np.array([0.0, 0.0, 1.5, 3.0, 3.0, 2.5]), np.array([0.5, -0.5, 1.0, 1.0, -1.0, 2.0])
+    left_turn = np.asarray(sc.left_of_path(lx, ly, 2.0, True))
+    right_turn = np.asarray(sc.left_of_path(lx, ly, 2.0, False))
+    # Left turn: the left is the inner side (+y before the turn, x < 2 after it).
+    np.testing.assert_allclose(left_turn, [0.5, 0.0, 0.5, 0.0, 0.0, 0.0], atol=1e-6)
+    # Right turn: the left is the outer side (-y before, x > 2 after, the vertex round the outside).
+    np.testing.assert_allclose(right_turn, [0.0, 0.5, 0.0, 1.0, np.hypot(1.0, 1.0), 0.5], atol=1e-6)
+
+
+def test_queue_u_cost_known_answers():
+    # A queue facing +x with its head at the origin and its tail 4 m behind.
+    u = np.asarray(sc.queue_u_cost(0.0, 0.0, 0.0, 4.0))
+
+    def at(x, y):
+        r, c = (int(v) for v in grid.cell_of(np.float32(x), np.float32(y)))
+        return u[r, c]
+
+    # Mid-band (0.4 m inside both soft edges of width 0.15 m): the level times two logistic factors.
+    mid_band = sc.QUEUE_U_COST / (1 + np.exp(-0.4 / 0.15)) ** 2
+    assert at(-2.0, 1.0) == pytest.approx(mid_band, abs=0.01)  # beside, left (1 m from the line)
+    assert at(-2.0, -1.0) == pytest.approx(mid_band, abs=0.01)  # beside, right
+    assert at(1.8, 0.2) == pytest.approx(mid_band, abs=0.01)  # across the front (1.8 m ahead)
+    assert at(-2.0, 0.2) < 0.05  # on the queue's own line
+    assert at(-5.8, 1.0) < 0.05  # behind the tail: the U is open there
+    assert at(-2.0, 2.6) < 0.01  # well outside
+
+
+def test_the_suites_expected_maps_pass_and_rule_blind_maps_fail(cases):
+    assert {c.rule for c in cases} == set(rules.RULES)
+    assert {c.scene for c in cases} == set(rules.SCENES)
+    for c in cases:
+        assert c.region_a.sum() >= rules.MIN_REGION_CELLS and c.region_b.sum() >= rules.MIN_REGION_CELLS
+        # The rule adds at least MIN_EXPECTED_CONTRAST over the same scene without it.
+        assert rules.expected_contrast(c) - rules.expected_contrast(c, blind=True) >= rules.MIN_EXPECTED_CONTRAST
+        assert np.all(c.expected[c.images == grid.WALL] == 0)
+    by_rule = {r: [c for c in cases if c.rule == r] for r in rules.RULES}
+    for rule, subset in by_rule.items():
+        oracle = rules.evaluate(_lookup(subset, "expected"), subset, batch=16)
+        assert oracle["passed"].all(), rule
+        assert oracle["mse"] == pytest.approx(0.0, abs=1e-10)
+        blind = rules.evaluate(_lookup(subset, "blind"), subset, batch=16)
+        assert not blind["passed"].any(), rule
+    nothing = rules.evaluate(lambda maps: np.zeros(maps.shape, np.float32), cases, batch=64)
+    assert not rules.passes(nothing) and nothing["passed"].mean() < 0.05
+
+
+def test_the_suite_goes_beyond_the_generators_layouts():
+    cases = rules.build_suite()  # the default suite, as `socialnav gscl rules` runs it
+    groups = [c.params for c in cases if c.scene == "group"]
+    assert max(p["radius_m"] for p in groups) > families.GROUP_RADIUS_M[1]
+    assert max(p["n"] for p in groups) > families.MAX_GROUP
+    queues = [c.params for c in cases if c.scene == "queue"]
+    assert max(p["length_m"] for p in queues) > families.QUEUE_LENGTH_M[1]
+    assert min(p["spacing_m"] for p in queues) < families.QUEUE_BODY_M + families.QUEUE_GAP_M[0]
+    assert {c.params["turn"] for c in cases if c.scene == "hallway_l"} == {"left", "right"}
+    offs = [c.params["heading_off_drawn_deg"] for c in cases if c.scene == "person"]
+    assert max(offs) > 10  # headings between the 8 drawn directions
+
+
+def test_the_suite_is_deterministic_by_seed():
+    a = rules.build_suite(3, seed=5, kinds=("queue", "two_groups"))
+    b = rules.build_suite.__wrapped__(3, seed=5, kinds=("queue", "two_groups"))  # not the cached one
+    c = rules.build_suite(3, seed=6, kinds=("queue", "two_groups"))
+    assert all(np.array_equal(x.images, y.images) and np.array_equal(x.expected, y.expected) for x, y in zip(a, b))
+    assert not all(np.array_equal(x.images, y.images) for x, y in zip(a, c))
+    with pytest.raises(ValueError, match="unknown scene kinds"):
+        rules.build_suite(1, kinds=("spiral",))
+
+
+def test_composite_samples_hold_both_scenes_and_their_max():
+    data = dataset.generate(3, {"composite": 64})
+    inputs, targets = data["inputs"], data["targets"]
+    assert np.all(targets[inputs == grid.WALL] == 0) and targets.min() >= 0 and targets.max() <= 1
+    people = inputs == grid.PERSON
+    # Everybody's cost peaks on their own cell (people are drawn at cell centres).
+    assert np.all(targets[people] > 0.99)
+    # Most composites hold two scenes: more people than any single family's sample would have...
+    per_sample = people.sum((1, 2))
+    assert np.median(per_sample) >= 4
+    # ... and they are deterministic by seed.
+    again = dataset.generate(3, {"composite": 64})
+    np.testing.assert_array_equal(again["inputs"], inputs)
+
+
+def test_paired_families_share_their_people():
+    data = dataset.generate(0, {"queue": 6, "non_queue": 6, "group": 6, "non_group": 6})
+    names = list(data["names"])
+    for with_rule, without in (("queue", "non_queue"), ("group", "non_group")):
+        a = data["inputs"][data["family"] == names.index(with_rule)]
+        b = data["inputs"][data["family"] == names.index(without)]
+        np.testing.assert_array_equal(a == grid.PERSON, b == grid.PERSON)
+
+
+def test_composites_are_a_training_setting():
+    assert TrainConfig().train_counts["composite"] == round(0.7 * TrainConfig().composites)
+    assert "composite" not in TrainConfig.paper().train_counts  # the paper's data only
+    old = {**TrainConfig().to_json()}
+    del old["composites"]  # a run saved before the setting existed
+    assert TrainConfig.from_json(old).composites == 0
+
+
+@pytest.mark.slow
+def test_a_tiny_model_trained_here_learns_to_pass_on_the_left():
+    """The passing rule, pinned: an untrained U-Net fails it on every held-out scene; 150 steps on
+    the proxemics family (whose people face only the 8 drawn directions and keep walls 0.9 m
+    away) pass it on most held-out scenes (any heading, walls 0.7 m behind a person)."""
+    config = TrainConfig(features=(8, 8, 16, 16), batch_size=32, warmup_steps=10, epochs=1)
+    state = steps.initial_state(config)
+    _, _, train_step, predict = steps.compiled(config)
+    data = dataset.generate(7, {"proxemics": 32 * 150})
+    cases = rules.build_suite(40, kinds=("person",))
+
+    def pass_share(state):
+        report = rules.evaluate(lambda maps: predict(state["params"], state["batch_stats"], maps), cases)
+        return report["by_rule"]["pass_left"]["pass_share"]
+
+    assert pass_share(state) == 0.0
+    family = np.zeros(32, np.int32)
+    for i in range(150):
+        batch = slice(32 * i, 32 * (i + 1))
+        state, _ = train_step(state, data["inputs"][batch], data["targets"][batch], family)
+    assert pass_share(state) >= 0.8
