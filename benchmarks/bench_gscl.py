@@ -105,20 +105,20 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
             )
 
 
-def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = None):
+def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = None, keep: pathlib.Path | None = None):
     print(f"time to target: {config}")
     max_steps = None if stop_after_epochs is None else stop_after_epochs * config.steps_per_epoch
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         line = train.train(
             config,
-            pathlib.Path(tmp) / "run",
+            keep or pathlib.Path(tmp) / "run",
             progress=False,
             stop_when_good=stop_after_epochs is None,
             max_steps=max_steps,
         )
         total = time.perf_counter() - t0
-        baselines = json.loads((pathlib.Path(tmp) / "run" / "baselines.json").read_text())
+        baselines = json.loads(((keep or pathlib.Path(tmp) / "run") / "baselines.json").read_text())
     print(quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
     print("held-out rule suite (models.rules), share of scenes passing per check:")
     for check, share in line["rules_pass_by_check"].items():
@@ -152,6 +152,12 @@ def main(argv=None):
     parser.add_argument("--composites", type=int, default=None, help="composite samples per 24,200 (default 4000)")
     parser.add_argument("--paper", action="store_true", help="the paper's recipe (TrainConfig.paper())")
     parser.add_argument(
+        "--keep",
+        type=pathlib.Path,
+        default=None,
+        help="train into this (new) folder and keep it (default: a temporary one)",
+    )
+    parser.add_argument(
         "--stop-after-epochs",
         type=int,
         default=None,
@@ -177,7 +183,9 @@ def main(argv=None):
     }
     given = {k: v for k, v in given.items() if v is not None}
     config = TrainConfig.paper(**given) if args.paper else TrainConfig(**given)
-    bench_time_to_target(config, args.stop_after_epochs)
+    if args.keep is not None and args.keep.exists():
+        parser.error(f"--keep: {args.keep} exists; give a new folder")
+    bench_time_to_target(config, args.stop_after_epochs, args.keep)
 
 
 if __name__ == "__main__":

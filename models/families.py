@@ -17,8 +17,9 @@ Families (paper's Fig. 1 (a)-(h), the hallway split in its three configurations)
 * ``group`` (4500) / ``non_group`` (4500): 2-7 standing people on a circle of radius 0.8-1.8 m
   (first version: 2-6, 1-1.5 m), spread over an arc from half to all of the circle (from
   L-shaped and face-to-face pairs to circles, covering the F-formations), facing the centre
-  (group: proxemics + the interaction zone) or facing out (non-group: proxemics only). Sample i
-  of ``non_group`` is sample i of ``group`` facing out (:data:`models.dataset.PAIRED_WITH`).
+  (group: proxemics + the interaction zone) or facing out (non-group: proxemics only), with up
+  to two walls kept 0.6 m from the people and the circle (first version: none). Sample i of
+  ``non_group`` is sample i of ``group`` facing out (:data:`models.dataset.PAIRED_WITH`).
 * ``hallway_straight`` / ``hallway_l`` / ``hallway_people`` (5000 together): a corridor 1.4-4.6 m
   (first version: 1.6-4 m) wide through the robot, random orientation and wall lengths, the
   goal along it; cost on the left half relative to the way to the goal (keep right; rising
@@ -144,14 +145,23 @@ def group_layout(key):
     return cx + radius * jnp.cos(angle), cy + radius * jnp.sin(angle), angle, valid, cx, cy, radius
 
 
+GROUP_WALL_CLEARANCE_M = 0.6  # walls near a group keep this far from its people, centre and circle
+
+
 def _sample_circle(key, inward: bool):
     x, y, angle, valid, cx, cy, radius = group_layout(key)
+    # Up to two walls near the group (from a key of their own: the layout is the same with or
+    # without them), kept off the people, the centre and 8 points of the circle.
+    ring = jnp.linspace(0.0, 2 * jnp.pi, 8, endpoint=False)
+    keep_x = jnp.concatenate([jnp.where(valid, x, jnp.nan), cx[None], cx + radius * jnp.cos(ring)])
+    keep_y = jnp.concatenate([jnp.where(valid, y, jnp.nan), cy[None], cy + radius * jnp.sin(ring)])
+    segments, wvalid = _random_walls(jax.random.fold_in(key, 1), 2, keep_x, keep_y, GROUP_WALL_CLEARANCE_M)
     x, y, heading = _as_drawn(x, y, angle + (jnp.pi if inward else 0.0))
-    image = grid.draw_people(_blank(), x, y, heading, valid)
+    image = grid.draw_people(_walls_image(segments, wvalid), x, y, heading, valid)
     cost = sc.people_cost(x, y, heading, valid)
     if inward:
         cost = jnp.maximum(cost, sc.disc_plateau(cx, cy, radius))
-    return image, cost
+    return image, jnp.where(image == grid.WALL, 0.0, cost)
 
 
 sample_group = functools.partial(_sample_circle, inward=True)
@@ -333,6 +343,9 @@ COMPOSITE_PAIRS = (
     ("corner", "queue"),
     ("corner", "non_queue"),
     ("corner", "group"),
+    ("corner", "proxemics"),
+    ("group", "corner"),
+    ("non_group", "corner"),
     ("proxemics", "group"),
 )
 COMPOSITE_SHIFT_CELLS = 16  # B moves by up to this many cells along each axis

@@ -482,7 +482,7 @@ def _corner_walls(rng, distance=(1.0, 6.5), wedge_deg=(35.0, 150.0)):
     theta0 = np.arctan2(cy, cx) + rng.uniform(-0.3, 0.3) * (np.pi - beta) - beta / 2
     walls = [(cx, cy, cx + LONG_M * np.cos(t), cy + LONG_M * np.sin(t)) for t in (theta0, theta0 + beta)]
     rel = (np.arctan2(grid.CELL_Y_M - cy, grid.CELL_X_M - cx) - theta0) % (2 * np.pi)
-    return walls, (cx, cy), rel > beta
+    return walls, (cx, cy), rel > beta, {"corner_m": d, "wedge_deg": float(np.rad2deg(beta))}
 
 
 def _blind_corner_regions(corner, free_side, image, keep_out):
@@ -492,7 +492,7 @@ def _blind_corner_regions(corner, free_side, image, keep_out):
 
 
 def _scene_corner(rng):
-    walls, corner, free_side = _corner_walls(rng)
+    walls, corner, free_side, geometry = _corner_walls(rng)
     s = _Scene(walls=walls)
     s.costs.append(("blind_corner", np.asarray(sc.corner_cost(*corner, free_side))))
     people = []
@@ -507,7 +507,7 @@ def _scene_corner(rng):
                 break
     image, expected = s.render()
     a, b = _blind_corner_regions(corner, free_side, image, _near(people, 1.5))
-    return [_case("corner", "blind_corner", image, expected, a, b, person=bool(people))]
+    return [_case("corner", "blind_corner", image, expected, a, b, person=bool(people), **geometry)]
 
 
 def _pass_regions(x, y, heading, image):
@@ -559,7 +559,7 @@ def _scene_hallway_group(rng):
 
 def _scene_queue_corner(rng):
     """A queue on the free side of a blind corner, 1.5-3 m from its walls."""
-    walls, corner, free_side = _corner_walls(rng, distance=(1.5, 5.0))
+    walls, corner, free_side, geometry = _corner_walls(rng, distance=(1.5, 5.0))
     q = _queue(rng, length=(2.0, 6.0), head_box=5.0)
     clear = [min(_segment_distance(x, y, w) for w in walls) for x, y in q.people]
     cells = [grid.cell_of(x, y) for x, y in q.people]
@@ -574,7 +574,7 @@ def _scene_queue_corner(rng):
     a, b = _blind_corner_regions(corner, free_side, images[0], _near(q.people + [q.elsewhere_goal], 2.0))
     return [
         _case("queue+corner", "queue_u", images, expected, region, region),
-        _case("queue+corner", "blind_corner", images[0], _first(expected), a, b),
+        _case("queue+corner", "blind_corner", images[0], _first(expected), a, b, **geometry),
     ]
 
 

@@ -132,7 +132,8 @@ def add_parser(top) -> None:
         "--stop-when-good",
         action="store_true",
         help="stop at the first epoch that meets the quality bar (test MSE <= 0.0033 and <= 1/10 of "
-        "the better trivial predictor in every family)",
+        "the better trivial predictor in every family) and passes the held-out rule suite (every check "
+        "on >= 95 %% of its scenes)",
     )
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
