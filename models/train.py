@@ -68,7 +68,9 @@ def train(
         write_text_atomic(config_path, json.dumps(config.to_json(), indent=1))
 
     schedule = learning_rate_schedule(config)
-    names = list(dataset.FAMILIES)
+    # The family index of a training sample counts the families this run draws, in FAMILIES order
+    # (as dataset.generate numbers them).
+    names = [f for f in dataset.FAMILIES if config.train_counts.get(f, 0) > 0]
     _, _, train_step, predict = compiled(config)
     state = initial_state(config)
     test = test_data(config)
