@@ -57,7 +57,7 @@ from models import grid
 from models import social_costs as sc
 
 WALL_LENGTH_M = 24.0  # long enough to cross the 16 m image from anywhere inside it
-# Ranges widened beyond the first generator's (in brackets), still inside the held-out rule
+# Ranges widened beyond the first generator's (in brackets), still short of the held-out rule
 # suite's (models.rules), which goes further: corner wedge [60, 120] deg, walls kept [1.2] m from
 # a lone person, hallway width [1.6, 4] m.
 CORNER_WEDGE_DEG = (45.0, 135.0)

@@ -215,13 +215,14 @@ class _Queue:
 
 
 def _queue(rng, length=(1.5, 13.0), gap=(0.15, 1.1), head_box=3.5) -> _Queue:
-    """A queue at any angle, lengths and gaps at and beyond the generator's (3-10 m, 0.3-0.8 m)."""
+    """A queue at any angle, lengths and gaps at and beyond the generator's (first 3-10 m and
+    0.3-0.8 m, then 2-12 m and 0.2-1.0 m)."""
     phi = rng.uniform(-np.pi, np.pi)
     spacing = QUEUE_BODY_M + rng.uniform(*gap)
     n = int(rng.uniform(*length) // spacing) + 1
     hx, hy = rng.uniform(-head_box, head_box, 2)
     people = [_world(hx, hy, phi, -i * spacing, rng.uniform(-0.05, 0.05)) for i in range(n)]
-    return _Queue(hx, hy, phi, spacing, max(n, 2), people)
+    return _Queue(hx, hy, phi, spacing, n, people)  # n >= 2: length >= 1.5 m >= spacing
 
 
 def _draw_queue(scene: _Scene, q: _Queue, goal: str, rng):
@@ -792,4 +793,4 @@ def plot(cases, report: dict, path):
         axes[0, col].set_xlabel(title, fontsize=7)
         axes[0, col].xaxis.set_label_position("top")
     fig.tight_layout()
-    return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
+    return write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=72, format="png"))

@@ -3,10 +3,12 @@ the generator's composite and paired samples."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
-from models import dataset, families, grid, rules, steps
+from models import dataset, families, grid, rules, steps, train
 from models import social_costs as sc
 from models.config import TrainConfig
 
@@ -155,3 +157,22 @@ def test_a_tiny_model_trained_here_learns_to_pass_on_the_left():
         batch = slice(32 * i, 32 * (i + 1))
         state, _ = train_step(state, data["inputs"][batch], data["targets"][batch], family)
     assert pass_share(state) >= 0.8
+
+
+@pytest.mark.slow
+def test_the_rules_command_writes_its_report_and_names_a_missing_run(tmp_path, capsys):
+    from socialnav import cli
+
+    config = TrainConfig(features=(4, 4, 8, 8), epochs=1, batch_size=16, train_fraction=0.01, test_fraction=0.004)
+    line = train.train(config, tmp_path / "run", progress=False, log=lambda *_: None)
+    assert set(line["rules_pass_by_check"]) == {f"{c.scene}/{c.rule}" for c in rules.build_suite(train.RULE_SCENES)}
+    assert (
+        cli.main(["gscl", "rules", "--run", str(tmp_path / "run"), "--scenes", "3", "--out", str(tmp_path / "r")]) == 0
+    )
+    report = json.loads((tmp_path / "r" / "rules.json").read_text())
+    assert report["cases"] == len(rules.build_suite(3)) and report["meets_rules"] is False
+    assert {k.split("/")[1] for k in report["by_check"]} == set(rules.RULES)
+    assert (tmp_path / "r" / "rules.png").stat().st_size > 10_000
+    assert "queue_u" in capsys.readouterr().out
+    with pytest.raises(SystemExit, match="socialnav gscl rules: .*nowhere"):
+        cli.main(["gscl", "rules", "--run", str(tmp_path / "nowhere")])
