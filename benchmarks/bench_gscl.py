@@ -149,7 +149,7 @@ def main(argv=None):
     parser.add_argument("--schedule", default=None)
     parser.add_argument("--no-fresh-samples", action="store_true")
     parser.add_argument("--no-coords", action="store_true", help="no coordinate input channels")
-    parser.add_argument("--composites", type=int, default=None, help="composite samples per 24,200 (default 6000)")
+    parser.add_argument("--composites", type=int, default=None, help="composite samples per 24,200 (default 10000)")
     parser.add_argument("--paper", action="store_true", help="the paper's recipe (TrainConfig.paper())")
     parser.add_argument(
         "--keep",

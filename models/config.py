@@ -53,7 +53,7 @@ class TrainConfig:
     train_fraction: float = 0.7
     test_fraction: float = 0.3
     fresh_samples: bool = True
-    composites: int = 6000
+    composites: int = 10000
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2

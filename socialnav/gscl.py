@@ -126,7 +126,7 @@ def add_parser(top) -> None:
         "--composites",
         type=non_negative_int,
         default=None,
-        help="composite samples (two scenes in one) per the paper's 24,200 (default 6000; --paper: 0)",
+        help="composite samples (two scenes in one) per the paper's 24,200 (default 10000; --paper: 0)",
     )
     tr.add_argument(
         "--stop-when-good",
