@@ -109,16 +109,17 @@ def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = No
     print(f"time to target: {config}")
     max_steps = None if stop_after_epochs is None else stop_after_epochs * config.steps_per_epoch
     with tempfile.TemporaryDirectory() as tmp:
+        run = keep or pathlib.Path(tmp) / "run"
         t0 = time.perf_counter()
         line = train.train(
             config,
-            keep or pathlib.Path(tmp) / "run",
+            run,
             progress=False,
             stop_when_good=stop_after_epochs is None,
             max_steps=max_steps,
         )
         total = time.perf_counter() - t0
-        baselines = json.loads(((keep or pathlib.Path(tmp) / "run") / "baselines.json").read_text())
+        baselines = json.loads((run / "baselines.json").read_text())
     print(quality_table(line["test_mse"], line["test_mse_by_family"], baselines))
     print("held-out rule suite (models.rules), share of scenes passing per check:")
     for check, share in line["rules_pass_by_check"].items():

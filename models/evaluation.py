@@ -1,5 +1,6 @@
-"""Evaluation of a trained GSCL U-Net on its run's held-out test set: MSE per family beside the
-two trivial predictors, and a PNG of input / target / prediction for every family."""
+"""Evaluation of a trained GSCL U-Net: on its run's held-out test set, MSE per family beside the
+two trivial predictors and a PNG of input / target / prediction for every family
+(:func:`evaluate_run`); on the held-out rule suite, pass shares per check (:func:`rules_run`)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import pathlib
 import numpy as np
 
 from common.atomic import write_text_atomic
-from models import plots
+from models import plots, rules
 from models.checkpoints import restore
 from models.quality import by_family as mse_by_family
 from models.quality import meets_quality, quality_table
@@ -58,5 +59,36 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
         mse=mse[pick],
     )
     report["table"] = quality_table(report["test_mse"], by_family, baselines)
+    report["out"] = str(out)
+    return report
+
+
+def rules_run(run, step: int | None = None, out=None, scenes_per_kind: int = 100) -> dict:
+    """Score a run's checkpoint (the latest by default) on the held-out rule suite
+    (:mod:`models.rules`, ``scenes_per_kind`` scenes of each kind).
+
+    Writes ``rules.json`` (pass share and mean contrasts per check and per rule, the MSE against
+    the expected maps, the verdict) and ``rules.png`` to ``out`` (default ``run/evaluation``) and
+    returns the same dictionary plus ``table`` (text) and ``out``.
+    """
+    run = pathlib.Path(run)
+    config, _, state, meta = restore(run, step)
+    predict = compiled(config)[3]
+    cases = rules.build_suite(scenes_per_kind)
+    suite = rules.evaluate(lambda maps: predict(state["params"], state["batch_stats"], maps), cases)
+    report = {
+        "run": str(run),
+        "step": int(meta["step"]),
+        "scenes_per_kind": scenes_per_kind,
+        "pass_fraction": rules.PASS_FRACTION,
+        "bar": rules.RULES_BAR,
+        "meets_rules": rules.passes(suite),
+        **{k: suite[k] for k in ("cases", "mse", "by_check", "by_rule")},
+    }
+    out = run / "evaluation" if out is None else pathlib.Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(out / "rules.json", json.dumps(report, indent=1))
+    rules.plot(cases, suite, out / "rules.png")
+    report["table"] = rules.table(suite)
     report["out"] = str(out)
     return report

@@ -379,6 +379,8 @@ def sample_composite(key):
     b_names = sorted({b for _, b in COMPOSITE_PAIRS})
     a_index = jnp.array([a_names.index(a) for a, _ in COMPOSITE_PAIRS])[pair]
     b_index = jnp.array([b_names.index(b) for _, b in COMPOSITE_PAIRS])[pair]
+    # Every candidate family is drawn and one picked by index: under vmap a switch would run every
+    # branch anyway, and drawing costs under 1 % of an epoch.
     a_all = [FAMILIES[n](k_a) for n in a_names]
     b_all = [FAMILIES[n](k_b) for n in b_names]
     a_image = jnp.stack([x for x, _ in a_all])[a_index]

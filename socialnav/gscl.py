@@ -330,33 +330,15 @@ def _evaluate(args) -> int:
 
 
 def _rules(args) -> int:
-    from models import rules
-    from models.checkpoints import restore
-    from models.steps import make_predict
+    from models import evaluation, rules
 
     try:
-        _, graphdef, state, meta = restore(args.run, args.step)
-    except (FileNotFoundError, ValueError) as err:
+        report = evaluation.rules_run(args.run, step=args.step, out=args.out, scenes_per_kind=args.scenes)
+    except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl rules: {err}") from None
-    predict = make_predict(graphdef)
-    cases = rules.build_suite(args.scenes)
-    report = rules.evaluate(lambda maps: predict(state["params"], state["batch_stats"], maps), cases)
-    out = args.run / "evaluation" if args.out is None else args.out
-    out.mkdir(parents=True, exist_ok=True)
-    record = {
-        "run": str(args.run),
-        "step": int(meta["step"]),
-        "scenes_per_kind": args.scenes,
-        "pass_fraction": rules.PASS_FRACTION,
-        "bar": rules.RULES_BAR,
-        "meets_rules": rules.passes(report),
-        **{k: report[k] for k in ("cases", "mse", "by_check", "by_rule")},
-    }
-    write_text_atomic(out / "rules.json", json.dumps(record, indent=1))
-    rules.plot(cases, report, out / "rules.png")
-    print(rules.table(report))
+    print(report["table"])
     print(
-        f"step {record['step']}: {'every' if record['meets_rules'] else 'not every'} check passes on "
-        f">= {100 * rules.RULES_BAR:.0f} % of its scenes; -> {out / 'rules.json'}, {out / 'rules.png'}"
+        f"step {report['step']}: {'every' if report['meets_rules'] else 'not every'} check passes on "
+        f">= {100 * rules.RULES_BAR:.0f} % of its scenes; -> {report['out']}"
     )
     return 0
