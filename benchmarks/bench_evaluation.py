@@ -20,9 +20,10 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from socialnav.runtime import request_host_devices
+from socialnav.runtime import request_host_devices, request_wide_vectors
 
 request_host_devices()
+request_wide_vectors()
 
 import numpy as np  # noqa: E402
 

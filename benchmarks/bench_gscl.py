@@ -27,9 +27,10 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from socialnav.runtime import request_host_devices  # noqa: E402
+from socialnav.runtime import request_host_devices, request_wide_vectors  # noqa: E402
 
 request_host_devices()
+request_wide_vectors()
 
 import jax  # noqa: E402
 import numpy as np  # noqa: E402

@@ -26,9 +26,10 @@ import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
-from socialnav.runtime import request_host_devices
+from socialnav.runtime import request_host_devices, request_wide_vectors
 
 request_host_devices()
+request_wide_vectors()
 
 import jax  # noqa: E402
 import numpy as np  # noqa: E402

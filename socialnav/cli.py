@@ -44,6 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     runtime.request_host_devices()
+    runtime.request_wide_vectors()
     runtime.request_compilation_cache()
     args = build_parser().parse_args(argv)
     return args.handler(args)

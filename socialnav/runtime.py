@@ -1,4 +1,5 @@
-"""Runtime set-up of the ``socialnav`` command: XLA host devices and JAX's compilation cache.
+"""Runtime set-up of the ``socialnav`` command: XLA host devices, vector width and JAX's
+compilation cache.
 
 Both must happen before JAX is imported to take full effect, which is why only the composition
 root does them (this module does not import JAX): library code never changes the process's
@@ -20,6 +21,41 @@ def request_host_devices(n: int | None = None) -> None:
         return
     n = n or os.cpu_count() or 1
     os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={n}".strip()
+
+
+# The wider vectors XLA's CPU code may use where the processor has them (LLVM's preferred width;
+# XLA's default is 256 bits even on AVX-512 processors).
+WIDE_VECTOR_BITS = 512
+_WIDTH_FLAG = "--xla_cpu_prefer_vector_width"
+
+
+def cpu_has_avx512(cpuinfo: str | None = None) -> bool:
+    """Whether the processor reports AVX-512F (Linux ``/proc/cpuinfo``; False where unreadable)."""
+    if cpuinfo is None:
+        try:
+            with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
+                cpuinfo = f.read()
+        except OSError:
+            return False
+    return any(line.startswith("flags") and "avx512f" in line.split() for line in cpuinfo.splitlines())
+
+
+def request_wide_vectors(cpuinfo: str | None = None) -> None:
+    """Let XLA's CPU code use 512-bit vectors on a processor with AVX-512F.
+
+    Measured on this project's 2-core AMD EPYC (``benchmarks/profile_step.py``): the full
+    warehouse step 16 % faster (every elementwise fusion of the social force is compute-bound).
+    Float results per operation are unchanged (IEEE arithmetic does not depend on the vector
+    width); sums may be associated differently, so a day's logs are bitwise reproducible for a
+    given setting and agree with the other setting to float rounding. Must run before ``import
+    jax``; does nothing if ``XLA_FLAGS`` already sets the width (``--xla_cpu_prefer_vector_width=256``
+    turns it off) or the processor lacks AVX-512F. Processes started by :mod:`socialnav.backend`
+    inherit the driver's ``XLA_FLAGS``.
+    """
+    flags = os.environ.get("XLA_FLAGS", "")
+    if _WIDTH_FLAG in flags or not cpu_has_avx512(cpuinfo):
+        return
+    os.environ["XLA_FLAGS"] = f"{flags} {_WIDTH_FLAG}={WIDE_VECTOR_BITS}".strip()
 
 
 def request_compilation_cache(path: str | None = None) -> None:

@@ -1,0 +1,51 @@
+"""The process set-up of the ``socialnav`` command: XLA's vector width."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from socialnav import runtime
+
+ROOT = os.path.join(os.path.dirname(__file__), "..")
+ZEN5 = "processor\t: 0\nflags\t\t: fpu sse2 avx2 fma avx512f avx512dq avx512_bf16\n"
+ZEN3 = "processor\t: 0\nflags\t\t: fpu sse2 avx2 fma\n"
+FP16_ONLY = "flags\t\t: fpu avx2 avx512fp16\n"  # a name that starts like avx512f but is not it
+
+
+def test_avx512f_is_read_from_the_flags_line():
+    assert runtime.cpu_has_avx512(ZEN5)
+    assert not runtime.cpu_has_avx512(ZEN3)
+    assert not runtime.cpu_has_avx512(FP16_ONLY)
+    assert not runtime.cpu_has_avx512("")
+
+
+def test_wide_vectors_are_asked_for_only_where_the_cpu_has_them(monkeypatch):
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=2")
+    runtime.request_wide_vectors(ZEN3)
+    assert os.environ["XLA_FLAGS"] == "--xla_force_host_platform_device_count=2"
+    runtime.request_wide_vectors(ZEN5)
+    assert os.environ["XLA_FLAGS"] == "--xla_force_host_platform_device_count=2 --xla_cpu_prefer_vector_width=512"
+    runtime.request_wide_vectors(ZEN5)  # asking twice adds nothing
+    assert os.environ["XLA_FLAGS"].count("prefer_vector_width") == 1
+
+
+def test_a_width_the_user_set_is_kept(monkeypatch):
+    monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_prefer_vector_width=256")
+    runtime.request_wide_vectors(ZEN5)
+    assert os.environ["XLA_FLAGS"] == "--xla_cpu_prefer_vector_width=256"
+
+
+@pytest.mark.slow
+def test_a_day_is_bitwise_reproducible_with_either_width():
+    """Two processes with the same vector width give the same day bit for bit (either width)."""
+    code = "import sys; sys.path.insert(0, 'tests'); from test_determinism import day_digest; print(day_digest(2))"
+    digests = {}
+    for width in (256, 512, 512, 256):
+        env = dict(os.environ, XLA_FLAGS=f"--xla_cpu_prefer_vector_width={width}")
+        out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, check=True)
+        digests.setdefault(width, set()).add(out.stdout.strip())
+    assert len(digests[256]) == 1 and len(digests[512]) == 1
