@@ -27,7 +27,7 @@ import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
-from socialnav.runtime import request_host_devices, request_wide_vectors  # noqa: E402
+from socialnav.runtime import request_host_devices, request_wide_vectors
 
 request_host_devices()
 request_wide_vectors()

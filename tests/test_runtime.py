@@ -46,6 +46,7 @@ def test_a_day_is_bitwise_reproducible_with_either_width():
     digests = {}
     for width in (256, 512, 512, 256):
         env = dict(os.environ, XLA_FLAGS=f"--xla_cpu_prefer_vector_width={width}")
-        out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, check=True)
+        run = [sys.executable, "-c", code]
+        out = subprocess.run(run, cwd=ROOT, env=env, capture_output=True, text=True, check=True)
         digests.setdefault(width, set()).add(out.stdout.strip())
     assert len(digests[256]) == 1 and len(digests[512]) == 1
