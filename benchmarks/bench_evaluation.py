@@ -1,7 +1,7 @@
 """Time seed 000's whole evaluation protocol: 2 methods x 11 slots (2090 tasks each) x replicas.
 
-    python benchmarks/bench_warehouse.py                      # 32 replicas (the issue's size)
-    python benchmarks/bench_warehouse.py --replicas 4 --tables runs/warehouse/causal/engine_tables.npz
+    python benchmarks/bench_evaluation.py                     # 32 replicas (the issue's size)
+    python benchmarks/bench_evaluation.py --replicas 4 --tables runs/warehouse/causal/engine_tables.npz
 
 Prints the machine, wall time per method (compilation included, reported separately), simulated
 time and agent-steps per second, and the headline numbers, so the speed claim and the result
