@@ -1,7 +1,7 @@
 """Runtime set-up of the ``socialnav`` command: XLA host devices, vector width and JAX's
 compilation cache.
 
-Both must happen before JAX is imported to take full effect, which is why only the composition
+All must happen before JAX is imported to take full effect, which is why only the composition
 root does them (this module does not import JAX): library code never changes the process's
 devices or caches behind a user's back."""
 
@@ -43,8 +43,10 @@ def cpu_has_avx512(cpuinfo: str | None = None) -> bool:
 def request_wide_vectors(cpuinfo: str | None = None) -> None:
     """Let XLA's CPU code use 512-bit vectors on a processor with AVX-512F.
 
-    Measured on this project's 2-core AMD EPYC (``benchmarks/profile_step.py``): the full
-    warehouse step 16 % faster (every elementwise fusion of the social force is compute-bound).
+    Measured on this project's 2-core AMD EPYC: the full warehouse step 14 % faster
+    (``benchmarks/bench_simulator.py``, interleaved runs; 16 % in ``benchmarks/profile_step.py``),
+    the 4-replica evaluation protocol 11 % (every elementwise kernel of the social force is
+    compute-bound).
     Float results per operation are unchanged (IEEE arithmetic does not depend on the vector
     width); sums may be associated differently, so a day's logs are bitwise reproducible for a
     given setting and agree with the other to float rounding (here they were even bitwise equal:
