@@ -15,7 +15,8 @@ from flax import nnx
 
 from models import dataset, unet
 
-ADDED_LATER = {"composites": 0}  # settings added after runs were saved, with the value those runs used
+# Settings added after runs were saved, with the value those runs used.
+ADDED_LATER = {"composites": 0, "cost_weight": 0.0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,6 +38,9 @@ class TrainConfig:
       fresh_samples: new training samples every epoch (True) or epoch 0's reused (the paper).
       composites: composite samples (two families' scenes in one, :func:`models.families.sample_composite`)
         per 24,200 of the paper's, scaled like the others (0: the paper's eight families only).
+      cost_weight: the training loss weighs each pixel's squared error by ``1 + cost_weight *
+        target`` (0: the plain MSE of the paper), so the cells a rule makes costly count more than
+        the free space that fills most of a map; test errors are always the plain MSE.
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
       keep_checkpoints: how many checkpoints orbax keeps.
@@ -54,6 +58,7 @@ class TrainConfig:
     test_fraction: float = 0.3
     fresh_samples: bool = True
     composites: int = 10000
+    cost_weight: float = 0.0
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2
@@ -70,6 +75,8 @@ class TrainConfig:
             raise ValueError("warmup_steps must be >= 0 and final_lr_fraction in [0, 1]")
         if self.schedule not in ("constant", "cosine"):
             raise ValueError(f"schedule must be 'constant' or 'cosine', got {self.schedule!r}")
+        if not (math.isfinite(self.cost_weight) and self.cost_weight >= 0):
+            raise ValueError(f"cost_weight must be finite and >= 0, got {self.cost_weight}")
         if self.composites < 0:
             raise ValueError(f"composites must be >= 0, got {self.composites}")
         for name in ("epochs", "batch_size", "checkpoint_every_steps", "keep_checkpoints"):

@@ -37,19 +37,24 @@ def batch_sharding(batch_size: int):
     )
 
 
-def make_train_step(graphdef, tx: optax.GradientTransformation, n_families: int):
+def make_train_step(graphdef, tx: optax.GradientTransformation, n_families: int, cost_weight: float = 0.0):
     """``step(state, inputs, targets, family) -> (state, loss)``; ``state`` is a dict with
-    ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and ``family_count`` (F,)."""
+    ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and ``family_count`` (F,).
+
+    The loss is the mean over pixels of ``(1 + cost_weight * target) * error**2`` (the plain MSE
+    at 0); ``loss`` and the per-family accumulators are the plain MSE whatever the weight."""
 
     def loss_fn(params, batch_stats, inputs, targets):
         model = nnx.merge(graphdef, params, batch_stats, copy=True)
         model.train()
-        per_sample = jnp.mean((model(inputs) - targets) ** 2, axis=(1, 2))
-        return jnp.mean(per_sample), (per_sample, nnx.state(model, nnx.BatchStat))
+        squared = (model(inputs) - targets) ** 2
+        per_sample = jnp.mean(squared, axis=(1, 2))
+        weighted = jnp.mean((1.0 + cost_weight * targets) * squared) if cost_weight else jnp.mean(per_sample)
+        return weighted, (per_sample, nnx.state(model, nnx.BatchStat))
 
     @jax.jit
     def step(state, inputs, targets, family):
-        (loss, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
+        (_, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
             state["params"], state["batch_stats"], inputs, targets
         )
         updates, opt_state = tx.update(grads, state["opt_state"], state["params"])
@@ -60,7 +65,7 @@ def make_train_step(graphdef, tx: optax.GradientTransformation, n_families: int)
             "opt_state": opt_state,
             "family_sse": state["family_sse"] + onehot.T @ per_sample,
             "family_count": state["family_count"] + onehot.sum(0),
-        }, loss
+        }, jnp.mean(per_sample)
 
     return step
 
@@ -106,7 +111,7 @@ def compiled(config: TrainConfig):
     resuming, restoring and evaluating in one process do not compile again."""
     graphdef = nnx.graphdef(make_model(config))
     tx = optax.adam(learning_rate_schedule(config))
-    return graphdef, tx, make_train_step(graphdef, tx, len(config.counts)), make_predict(graphdef)
+    return graphdef, tx, make_train_step(graphdef, tx, len(config.counts), config.cost_weight), make_predict(graphdef)
 
 
 def initial_state(config: TrainConfig) -> dict:

@@ -18,7 +18,7 @@ import time
 
 from common.atomic import write_text_atomic
 from socialnav import backend as backend_lib
-from socialnav.argtypes import non_negative_int, output_folder, positive_float, positive_int
+from socialnav.argtypes import non_negative_float, non_negative_int, output_folder, positive_float, positive_int
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.locking import locks_folder
 
@@ -55,6 +55,7 @@ _TRAIN_OPTIONS = (
     "seed",
     "coords",
     "composites",
+    "cost_weight",
 )
 
 
@@ -127,6 +128,12 @@ def add_parser(top) -> None:
         type=non_negative_int,
         default=None,
         help="composite samples (two scenes in one) per the paper's 24,200 (default 10000; --paper: 0)",
+    )
+    tr.add_argument(
+        "--cost-weight",
+        type=non_negative_float,
+        default=None,
+        help="training loss: each pixel's squared error weighed by 1 + this x its target cost (default 0: plain MSE)",
     )
     tr.add_argument(
         "--stop-when-good",

@@ -264,3 +264,34 @@ def test_model_inputs_outside_the_pixel_encoding_are_refused():
             inference.check_maps(maps)
     with pytest.raises(ValueError, match="people_xy_m holds NaN"):
         inference.input_map(np.zeros((50, 50)), 0.1, (0.0, 0.0), (2.5, 2.5), [[np.nan, 1.0]], [0.0], (4.0, 2.5))
+
+
+def test_the_cost_weighted_loss_changes_only_what_it_weighs():
+    """``cost_weight`` weighs a pixel's error by 1 + w x target: on maps whose targets are all zero
+    the step is the plain-MSE step exactly; on costed maps the update differs, and the loss the step
+    reports is the plain MSE either way. Bad weights are refused; runs saved before it read as 0."""
+    first_step_moves = {**TINY, "schedule": "constant"}  # the warm-up's first learning rate is 0
+    plain, weighted = TrainConfig(**first_step_moves), TrainConfig(**{**first_step_moves, "cost_weight": 4.0})
+    data = dataset.generate(3, {"group": 16})
+    family = np.zeros(16, np.int32)
+
+    def step(config, targets):
+        state = steps.initial_state(config)  # the same seed: the same weights
+        new, loss = steps.compiled(config)[2](state, data["inputs"], targets, family)
+        return jax.tree.leaves(new["params"]), float(loss)
+
+    zeros = np.zeros_like(data["targets"])
+    before = jax.tree.leaves(steps.initial_state(plain)["params"])
+    after_plain, after_weighted = step(plain, zeros)[0], step(weighted, zeros)[0]
+    assert any(np.any(a != b) for a, b in zip(after_plain, before, strict=True))  # the step moved
+    for a, b in zip(after_plain, after_weighted, strict=True):
+        np.testing.assert_array_equal(a, b)
+    (p_plain, loss_plain), (p_weighted, loss_weighted) = step(plain, data["targets"]), step(weighted, data["targets"])
+    assert loss_plain == pytest.approx(loss_weighted, rel=1e-6)
+    assert max(float(np.max(np.abs(a - b))) for a, b in zip(p_plain, p_weighted, strict=True)) > 1e-6
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="cost_weight"):
+            TrainConfig(cost_weight=bad)
+    old = TrainConfig().to_json()
+    del old["cost_weight"]
+    assert TrainConfig.from_json(old).cost_weight == 0.0
