@@ -152,7 +152,7 @@ def main(argv=None):
     parser.add_argument("--no-fresh-samples", action="store_true")
     parser.add_argument("--no-coords", action="store_true", help="no coordinate input channels")
     parser.add_argument("--composites", type=int, default=None, help="composite samples per 24,200 (default 10000)")
-    parser.add_argument("--cost-weight", type=float, default=None, help="loss weight 1 + w x target (default 0)")
+    parser.add_argument("--cost-weight", type=float, default=None, help="loss weight 1 + w x target (default 10)")
     parser.add_argument("--paper", action="store_true", help="the paper's recipe (TrainConfig.paper())")
     parser.add_argument(
         "--keep",

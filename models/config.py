@@ -40,7 +40,9 @@ class TrainConfig:
         per 24,200 of the paper's, scaled like the others (0: the paper's eight families only).
       cost_weight: the training loss weighs each pixel's squared error by ``1 + cost_weight *
         target`` (0: the plain MSE of the paper), so the cells a rule makes costly count more than
-        the free space that fills most of a map; test errors are always the plain MSE.
+        the free space that fills most of a map; test errors are always the plain MSE. 10 by
+        default: at 10 epochs, 4 and 10 lifted the held-out suite's blind corner beside a queue
+        from 85 to 90 and 95 % (README, "The held-out rule suite").
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
       keep_checkpoints: how many checkpoints orbax keeps.
@@ -58,7 +60,7 @@ class TrainConfig:
     test_fraction: float = 0.3
     fresh_samples: bool = True
     composites: int = 10000
-    cost_weight: float = 0.0
+    cost_weight: float = 10.0
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2
@@ -99,6 +101,7 @@ class TrainConfig:
             fresh_samples=False,
             epochs=20,
             composites=0,
+            cost_weight=0.0,
         )
         return cls(**{**base, **overrides})
 

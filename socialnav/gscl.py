@@ -133,7 +133,7 @@ def add_parser(top) -> None:
         "--cost-weight",
         type=non_negative_float,
         default=None,
-        help="training loss: each pixel's squared error weighed by 1 + this x its target cost (default 0: plain MSE)",
+        help="training loss: each pixel's squared error weighed by 1 + this x its target (default 10; 0: plain MSE)",
     )
     tr.add_argument(
         "--stop-when-good",

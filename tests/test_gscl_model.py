@@ -271,7 +271,8 @@ def test_the_cost_weighted_loss_changes_only_what_it_weighs():
     the step is the plain-MSE step exactly; on costed maps the update differs, and the loss the step
     reports is the plain MSE either way. Bad weights are refused; runs saved before it read as 0."""
     first_step_moves = {**TINY, "schedule": "constant"}  # the warm-up's first learning rate is 0
-    plain, weighted = TrainConfig(**first_step_moves), TrainConfig(**{**first_step_moves, "cost_weight": 4.0})
+    plain = TrainConfig(**{**first_step_moves, "cost_weight": 0.0})
+    weighted = TrainConfig(**{**first_step_moves, "cost_weight": 4.0})
     data = dataset.generate(3, {"group": 16})
     family = np.zeros(16, np.int32)
 

@@ -131,6 +131,7 @@ def test_paired_families_share_their_people():
 def test_composites_are_a_training_setting():
     assert TrainConfig().train_counts["composite"] == round(0.7 * TrainConfig().composites)
     assert "composite" not in TrainConfig.paper().train_counts  # the paper's data only
+    assert TrainConfig.paper().cost_weight == 0.0  # and its plain MSE
     old = {**TrainConfig().to_json()}
     del old["composites"]  # a run saved before the setting existed
     assert TrainConfig.from_json(old).composites == 0
