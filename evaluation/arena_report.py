@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from common.intervals import wilson
 from evaluation import arena, nav_metrics
 from jaxsim.scenes.robot import RobotParams
 from jaxsim.scenes.spec import SceneSpec, mirror
@@ -169,14 +170,6 @@ def run_scene(
     return pd.concat(episodes, ignore_index=True), (
         pd.concat(trajectories, ignore_index=True) if trajectories else None
     )
-
-
-def wilson(successes: int, n: int) -> tuple[float, float]:
-    """95 % Wilson interval of a proportion (scipy's ``binomtest``)."""
-    if n == 0:
-        return float("nan"), float("nan")
-    ci = stats.binomtest(int(successes), int(n)).proportion_ci(0.95, method="wilson")
-    return float(ci.low), float(ci.high)
 
 
 # The means that get a 95 % interval in the summary (``<key>_lo``, ``<key>_hi``).

@@ -63,9 +63,11 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
     return report
 
 
-def rules_run(run, step: int | None = None, out=None, scenes_per_kind: int = 100) -> dict:
+def rules_run(run, step: int | None = None, out=None, scenes_per_kind: int = 100, seed: int | None = None) -> dict:
     """Score a run's checkpoint (the latest by default) on the held-out rule suite
-    (:mod:`models.rules`, ``scenes_per_kind`` scenes of each kind).
+    (:mod:`models.rules`, ``scenes_per_kind`` scenes of each kind, drawn from ``seed``: the
+    suite's own, :data:`models.rules.SUITE_SEED`, by default; training evaluates that one after
+    every epoch, so another seed gives scenes no run was ever stopped or chosen on).
 
     Writes ``rules.json`` (pass share and mean contrasts per check and per rule, the MSE against
     the expected maps, the verdict) and ``rules.png`` to ``out`` (default ``run/evaluation``) and
@@ -74,12 +76,14 @@ def rules_run(run, step: int | None = None, out=None, scenes_per_kind: int = 100
     run = pathlib.Path(run)
     config, _, state, meta = restore(run, step)
     predict = compiled(config)[3]
-    cases = rules.build_suite(scenes_per_kind)
+    seed = rules.SUITE_SEED if seed is None else seed
+    cases = rules.build_suite(scenes_per_kind, seed=seed)
     suite = rules.evaluate(lambda maps: predict(state["params"], state["batch_stats"], maps), cases)
     report = {
         "run": str(run),
         "step": int(meta["step"]),
         "scenes_per_kind": scenes_per_kind,
+        "seed": seed,
         "pass_fraction": rules.PASS_FRACTION,
         "bar": rules.RULES_BAR,
         "meets_rules": rules.passes(suite),

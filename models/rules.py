@@ -56,6 +56,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from common.intervals import wilson
 from models import grid
 from models import social_costs as sc
 from models.families import QUEUE_BODY_M
@@ -693,11 +694,11 @@ def evaluate(predict, cases, batch: int = 256) -> dict:
     """Score ``predict`` ((B, 40, 40) uint8 -> (B, 40, 40) costs) on the cases.
 
     Returns ``{"by_check": {"scene/rule": {...}}, "by_rule": {...}, "mse": float, "cases": int,
-    "contrast": (N,) model contrasts, "expected_contrast": (N,), "blind_contrast": (N,), "passed": (N,)
-    bool, "predictions":
-    (N, 2, 40, 40)}``: for each
-    (scene, rule) and each rule, the number of cases, the share that pass, the mean model and
-    expected contrasts; the MSE of the predictions against the expected maps over every map.
+    "contrast": (N,) model contrasts, "expected_contrast": (N,), "blind_contrast": (N,), "passed":
+    (N,) bool, "predictions": (N, 2, 40, 40)}``: for each (scene, rule) and each rule, the number
+    of cases, the share that pass with its 95 % Wilson interval (what a suite of this size can
+    tell), the mean model and expected contrasts; the MSE of the predictions against the expected
+    maps over every map.
     """
     images = np.stack([c.images for c in cases])  # (N, 2, 40, 40)
     flat = images.reshape(-1, grid.GRID, grid.GRID)
@@ -716,6 +717,7 @@ def evaluate(predict, cases, batch: int = 256) -> dict:
         return {
             "cases": int(mask.sum()),
             "pass_share": float(passed[mask].mean()),
+            "pass_share_ci95": list(wilson(int(passed[mask].sum()), int(mask.sum()))),
             "contrast": float(model[mask].mean()),
             "expected_contrast": float(want[mask].mean()),
             "blind_contrast": float(blind[mask].mean()),
@@ -747,13 +749,15 @@ def passes(report: dict, share: float = RULES_BAR) -> bool:
 def table(report: dict) -> str:
     """The per-check table (markdown): cases, pass share, mean contrasts."""
     lines = [
-        "| scene | rule | cases | pass | contrast: model | expected | rule-blind |",
-        "|---|---|---|---|---|---|---|",
+        "| scene | rule | cases | pass | 95 % interval | contrast: model | expected | rule-blind |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for key, v in report["by_check"].items():
         scene, rule = key.split("/")
+        lo, hi = v["pass_share_ci95"]
         lines.append(
-            f"| {scene} | {rule} | {v['cases']} | {100 * v['pass_share']:.0f} % | {v['contrast']:.3f} "
+            f"| {scene} | {rule} | {v['cases']} | {100 * v['pass_share']:.0f} % | {100 * lo:.0f}-{100 * hi:.0f} % "
+            f"| {v['contrast']:.3f} "
             f"| {v['expected_contrast']:.3f} | {v['blind_contrast']:.3f} |"
         )
     lines.append(f"\nMSE against the expected maps: {report['mse']:.5f} over {2 * report['cases']} maps")

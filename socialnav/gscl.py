@@ -160,6 +160,12 @@ def add_parser(top) -> None:
     )
     ru.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
     ru.add_argument("--scenes", type=positive_int, default=100, help="scenes of each kind (default 100)")
+    ru.add_argument(
+        "--seed",
+        type=non_negative_int,
+        default=None,
+        help="draw the suite's scenes from this seed (default: the suite's own, which training checks every epoch)",
+    )
     ru.add_argument("--out", type=output_folder, default=None, help="output folder (default RUN/evaluation)")
     ru.set_defaults(handler=_rules)
     gen.set_defaults(handler=_generate)
@@ -340,7 +346,9 @@ def _rules(args) -> int:
     from models import evaluation, rules
 
     try:
-        report = evaluation.rules_run(args.run, step=args.step, out=args.out, scenes_per_kind=args.scenes)
+        report = evaluation.rules_run(
+            args.run, step=args.step, out=args.out, scenes_per_kind=args.scenes, seed=args.seed
+        )
     except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl rules: {err}") from None
     print(report["table"])
