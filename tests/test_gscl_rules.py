@@ -81,7 +81,7 @@ def test_the_suites_expected_maps_pass_and_rule_blind_maps_fail(cases):
         assert not blind["passed"].any(), rule
     nothing = rules.evaluate(lambda maps: np.zeros(maps.shape, np.float32), cases, batch=64)
     assert not rules.passes(nothing) and nothing["passed"].mean() < 0.05
-    for v in nothing["by_check"].values():  # the interval holds the share and narrows with the cases
+    for v in nothing["by_check"].values():  # the interval holds the share and is narrower than [0, 1]
         lo, hi = v["pass_share_ci95"]
         assert lo <= v["pass_share"] <= hi and hi - lo < 1.0
     assert "95 % interval" in rules.table(nothing)
