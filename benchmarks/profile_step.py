@@ -55,6 +55,7 @@ VARIANTS = {
     "full step": {},
     "social force -> zeros": {"sf": _zero_force},
     "social force -> dense reference": {"sf": social_force.social_force_dense},
+    "social force -> JAX version": {"sf": social_force.social_force_xla},
     "worker context -> no-op": {"ctx": lambda params, world, w, *a: w},
     "robot controller -> no-op": {"robot": lambda self, params, world, robot, *a: robot},
     "crowd move -> no-op": {"move": lambda params, world, w, *a: w},

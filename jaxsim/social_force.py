@@ -18,6 +18,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxsim import native
 from jaxsim.params import SimParams
 
 _EPS = 1e-6
@@ -81,7 +82,42 @@ def pair_force(params: SimParams, dx, dy, dvx, dvy):
 def social_force(
     params: SimParams, x: jax.Array, y: jax.Array, vx: jax.Array, vy: jax.Array, weight: jax.Array
 ) -> tuple[jax.Array, jax.Array]:
-    """Moussaid interaction on every agent from every other one, each pair computed once.
+    """Moussaid interaction on every agent from every other one (shapes as
+    :func:`social_force_xla`; ``vmap`` over worlds as usual).
+
+    On the CPU this is the hand-written kernel of :mod:`jaxsim.native` when it builds (the
+    worlds of a ``vmap`` become its vector lanes; measured in ``benchmarks/bench_simulator.py``),
+    elsewhere, for float64 or with ``SOCIALNAV_NATIVE=off`` it is :func:`social_force_xla`.
+    The two agree to float rounding (tested), not bit for bit: their sums run in other orders.
+    Not differentiable on the CPU kernel's path (nothing differentiates the simulator).
+    """
+    if x.dtype != jnp.float32 or not native.social_force_available():
+        return social_force_xla(params, x, y, vx, vy, weight)
+    coefficients = jnp.stack(
+        [
+            jnp.asarray(params.worker_social_lambda, jnp.float32),
+            jnp.asarray(params.worker_social_gamma, jnp.float32),
+            jnp.asarray(params.worker_social_n_prime, jnp.float32),
+            jnp.asarray(params.worker_social_n, jnp.float32),
+            jnp.asarray(params.worker_social_force_factor, jnp.float32),
+        ]
+    )
+
+    def on_cpu(coefficients, x, y, vx, vy, weight):
+        out = jax.ShapeDtypeStruct(x.shape, x.dtype)
+        call = jax.ffi.ffi_call(native.SOCIAL_FORCE_TARGET, (out, out), vmap_method="broadcast_all")
+        return tuple(call(x, y, vx, vy, weight, coefficients))
+
+    def elsewhere(coefficients, x, y, vx, vy, weight):
+        return social_force_xla(params, x, y, vx, vy, weight)
+
+    return jax.lax.platform_dependent(coefficients, x, y, vx, vy, weight, cpu=on_cpu, default=elsewhere)
+
+
+def social_force_xla(
+    params: SimParams, x: jax.Array, y: jax.Array, vx: jax.Array, vy: jax.Array, weight: jax.Array
+) -> tuple[jax.Array, jax.Array]:
+    """Moussaid interaction on every agent from every other one, each pair computed once, in JAX.
 
     Pairs ``(i, i + k mod A)`` for ``k = 1 .. A // 2`` cover every unordered pair once when
     ``A`` is odd (for even ``A`` the ``k = A / 2`` row holds each pair twice and is applied to
@@ -121,7 +157,7 @@ def social_force(
 def social_force_dense(
     params: SimParams, x: jax.Array, y: jax.Array, vx: jax.Array, vy: jax.Array, weight: jax.Array
 ) -> tuple[jax.Array, jax.Array]:
-    """Reference for :func:`social_force`: the full ``(A, A)`` matrix of pair forces.
+    """Reference for :func:`social_force_xla`: the full ``(A, A)`` matrix of pair forces.
 
     Args:
       x, y, vx, vy: (A,) positions and velocities of all agents (workers and robot).

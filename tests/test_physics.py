@@ -126,15 +126,17 @@ def test_fast_atan2_matches_arctan2():
     assert float(sf.fast_atan2(jnp.float32(0), jnp.float32(0))) == 0.0
 
 
+@pytest.mark.parametrize("force", [sf.social_force, sf.social_force_xla], ids=["default", "xla"])
 @pytest.mark.parametrize("n", [1, 2, 7, 8, 51])
-def test_pairwise_social_force_equals_dense(warehouse, n):
-    """Each pair once (Newton's third law) gives the full-matrix result."""
+def test_pairwise_social_force_equals_dense(warehouse, n, force):
+    """Each pair once (Newton's third law) gives the full-matrix result, in the CPU kernel
+    (:mod:`jaxsim.native`, the default here) and in JAX."""
     p = warehouse.params
     k = jax.random.split(jax.random.key(n), 5)
     x, y = jax.random.uniform(k[0], (n,)) * 6, jax.random.uniform(k[1], (n,)) * 6
     vx, vy = jax.random.normal(k[2], (n,)), jax.random.normal(k[3], (n,))
     w = (jax.random.uniform(k[4], (n,)) > 0.3).astype(jnp.float32)
-    got = sf.social_force(p, x, y, vx, vy, w)
+    got = force(p, x, y, vx, vy, w)
     want = sf.social_force_dense(p, x, y, vx, vy, w)
     scale = float(jnp.max(jnp.abs(jnp.stack(want)))) + 1.0
     np.testing.assert_allclose(np.stack(got), np.stack(want), atol=2e-5 * scale)

@@ -1,0 +1,116 @@
+"""Hand-written CPU kernels called from JAX through XLA's FFI, compiled on first use.
+
+One kernel so far, the social force over a batch of worlds (``social_force.cc``): XLA's CPU
+compiler runs that pair computation at 8.6 ns per pair per core, split into about 15 loop
+kernels, and no setting or rewriting in JAX moved it (README "Speed"); the C++ loop, with the
+worlds as vector lanes, is the same arithmetic in one pass. The JAX version
+(:func:`jaxsim.social_force.social_force_xla`) stays the reference, the GPU path and the
+fallback, and a test holds the two to float rounding.
+
+The library is built with the system's C++ compiler (``$CXX``, else ``c++``) for this processor
+(``-march=native``) into ``$SOCIALNAV_NATIVE_CACHE``, else ``~/.cache/socialnav-jax/native``,
+under a name that hashes the source, the flags, the compiler's version, jaxlib's FFI headers and
+the processor's flags, so a changed source or another machine builds anew (about 3 s). The
+build writes to a temporary file and renames it, so processes building at once never load a
+half-written library. ``SOCIALNAV_NATIVE=off`` uses the JAX version; so does a machine without
+a compiler (with a warning that says why).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import hashlib
+import os
+import pathlib
+import shlex
+import subprocess
+import tempfile
+import warnings
+
+SOURCE = pathlib.Path(__file__).with_name("social_force.cc")
+SOCIAL_FORCE_TARGET = "socialnav_social_force"
+FLAGS = ("-O3", "-march=native", "-std=c++20", "-fPIC", "-shared", "-fopenmp-simd", "-fno-math-errno")
+
+
+def disabled() -> bool:
+    """``SOCIALNAV_NATIVE`` is set to off / 0 / false / no."""
+    return os.environ.get("SOCIALNAV_NATIVE", "").lower() in ("off", "0", "false", "no")
+
+
+def _cache_dir() -> pathlib.Path:
+    setting = os.environ.get("SOCIALNAV_NATIVE_CACHE")
+    if setting:
+        return pathlib.Path(setting)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return pathlib.Path(base) / "socialnav-jax" / "native"
+
+
+def _cpu_flags() -> str:
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
+            return next((line for line in f if line.startswith("flags")), "")
+    except OSError:
+        return ""
+
+
+def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
+    """The shared library of ``source``, compiled now unless the cache already holds it.
+
+    Raises:
+      RuntimeError: no compiler, or the compiler failed (the message holds its first error line).
+    """
+    import jax.ffi
+
+    compiler = shlex.split(os.environ.get("CXX", "c++"))
+    include = jax.ffi.include_dir()
+    try:
+        version = subprocess.run([*compiler, "--version"], capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError) as e:
+        raise RuntimeError(f"no C++ compiler ({' '.join(compiler)}: {e})") from None
+    header = pathlib.Path(include, "xla", "ffi", "api", "ffi.h")
+    key = hashlib.sha256(
+        b"\0".join(
+            s.encode() if isinstance(s, str) else s
+            for s in (source.read_bytes(), " ".join(FLAGS), version, header.read_bytes(), _cpu_flags())
+        )
+    ).hexdigest()[:16]
+    folder = _cache_dir()
+    target = folder / f"{source.stem}-{key}.so"
+    if target.exists():
+        return target
+    folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=folder, suffix=".so.tmp")
+    os.close(fd)
+    try:
+        done = subprocess.run(
+            [*compiler, *FLAGS, f"-I{include}", str(source), "-o", tmp], capture_output=True, text=True
+        )
+        if done.returncode:
+            first = next((line for line in done.stderr.splitlines() if "error" in line), done.stderr.strip()[:200])
+            raise RuntimeError(f"compiling {source.name} failed: {first}")
+        os.replace(tmp, target)  # atomic: another process sees the whole library or none
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return target
+
+
+@functools.cache
+def social_force_available() -> bool:
+    """Whether the social-force kernel is built and registered with XLA (for the CPU).
+
+    False when ``SOCIALNAV_NATIVE`` is off, or, with a warning naming the reason, when it cannot
+    be built or loaded; the callers then use the JAX version.
+    """
+    if disabled():
+        return False
+    import jax.ffi
+
+    try:
+        library = ctypes.cdll.LoadLibrary(str(build()))
+        jax.ffi.register_ffi_target(SOCIAL_FORCE_TARGET, jax.ffi.pycapsule(library.SocialForce), platform="cpu")
+    except (RuntimeError, OSError) as e:
+        warnings.warn(f"jaxsim.native: the social force runs in XLA's slower code ({e})", stacklevel=2)
+        return False
+    return True

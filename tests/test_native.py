@@ -1,0 +1,109 @@
+"""The hand-written CPU social force (jaxsim.native) against the JAX one: batched, per-world
+parameters, batch invariance, the edge sizes, and how a failed build reads."""
+
+from __future__ import annotations
+
+import dataclasses
+import shutil
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxsim import native
+from jaxsim import social_force as sf
+
+needs_compiler = pytest.mark.skipif(
+    native.disabled() or shutil.which("c++") is None, reason="no C++ compiler, or SOCIALNAV_NATIVE=off"
+)
+
+
+def _crowd(key, worlds: int, agents: int):
+    k = jax.random.split(key, 5)
+    x, y = jax.random.uniform(k[0], (2, worlds, agents), minval=-8.0, maxval=8.0)
+    vx, vy = jax.random.normal(k[2], (2, worlds, agents))
+    weight = (jax.random.uniform(k[4], (worlds, agents)) > 0.2).astype(jnp.float32)
+    return x, y, vx, vy, weight
+
+
+@needs_compiler
+def test_the_kernel_is_built_and_is_what_the_simulator_calls(warehouse):
+    assert native.social_force_available()
+    p = warehouse.params
+    x = jnp.zeros((3, 51))
+    text = jax.jit(jax.vmap(lambda *a: sf.social_force(p, *a))).lower(x, x, x, x, x).as_text()
+    assert native.SOCIAL_FORCE_TARGET in text
+
+
+@needs_compiler
+@pytest.mark.parametrize("worlds", [1, 5, 64, 130])  # under, at and over one block of 64 lanes
+def test_kernel_equals_jax_over_a_batch_with_per_world_parameters(warehouse, worlds):
+    base = warehouse.params
+    x, y, vx, vy, weight = _crowd(jax.random.key(worlds), worlds, 51)
+    # Each world its own interaction parameters (stacked params, as a sweep would vmap them).
+    scale = jnp.linspace(0.7, 1.3, worlds)
+    params = jax.vmap(
+        lambda s: dataclasses.replace(
+            base,
+            worker_social_lambda=base.worker_social_lambda * s,
+            worker_social_gamma=base.worker_social_gamma * s,
+            worker_social_force_factor=base.worker_social_force_factor * s,
+        )
+    )(scale)
+    got = jax.jit(jax.vmap(sf.social_force))(params, x, y, vx, vy, weight)
+    want = jax.jit(jax.vmap(sf.social_force_xla))(params, x, y, vx, vy, weight)
+    top = float(jnp.max(jnp.abs(jnp.stack(want)))) + 1.0
+    np.testing.assert_allclose(np.stack(got), np.stack(want), atol=2e-6 * top)
+    # The parameters really differ between worlds: the first world's alone give another answer.
+    if worlds > 1:
+        first = jax.tree.map(lambda a: a[0], params)
+        other = jax.vmap(lambda *a: sf.social_force(first, *a))(x, y, vx, vy, weight)
+        assert float(jnp.max(jnp.abs(other[0][-1] - got[0][-1]))) > 1e-3
+
+
+@needs_compiler
+def test_a_world_gets_the_same_bits_alone_and_inside_any_batch(warehouse):
+    p = warehouse.params
+    crowd = _crowd(jax.random.key(7), 100, 51)
+    batched = jax.jit(jax.vmap(lambda *a: sf.social_force(p, *a)))(*crowd)
+    for row in (0, 63, 64, 99):
+        alone = sf.social_force(p, *(a[row] for a in crowd))
+        assert np.array_equal(np.asarray(alone[0]), np.asarray(batched[0][row]))
+        assert np.array_equal(np.asarray(alone[1]), np.asarray(batched[1][row]))
+        # Two-world batch with the row last: other neighbours in the lanes, same answer.
+        pair = jax.vmap(lambda *a: sf.social_force(p, *a))(*(a[jnp.array([5, row])] for a in crowd))
+        assert np.array_equal(np.asarray(pair[0][1]), np.asarray(batched[0][row]))
+
+
+@needs_compiler
+@pytest.mark.parametrize("agents", [0, 1])
+def test_no_pairs_no_force(warehouse, agents):
+    p = warehouse.params
+    crowd = _crowd(jax.random.key(1), 4, agents)
+    ax, ay = jax.vmap(lambda *a: sf.social_force(p, *a))(*crowd)
+    assert ax.shape == (4, agents) and not np.any(np.asarray(ax)) and not np.any(np.asarray(ay))
+
+
+def test_a_source_that_does_not_compile_names_the_file_and_the_error(tmp_path, monkeypatch):
+    if shutil.which("c++") is None:
+        pytest.skip("no C++ compiler")
+    bad = tmp_path / "broken.cc"
+    bad.write_text("int main( { return 0; }\n")
+    monkeypatch.setenv("SOCIALNAV_NATIVE_CACHE", str(tmp_path / "cache"))
+    with pytest.raises(RuntimeError, match=r"compiling broken\.cc failed: .*error"):
+        native.build(bad)
+    assert not list((tmp_path / "cache").glob("*.so*"))  # nothing half written is left
+
+
+def test_no_compiler_is_a_clear_error(tmp_path, monkeypatch):
+    monkeypatch.setenv("CXX", str(tmp_path / "no-such-compiler"))
+    monkeypatch.setenv("SOCIALNAV_NATIVE_CACHE", str(tmp_path / "cache"))
+    with pytest.raises(RuntimeError, match="no C\\+\\+ compiler"):
+        native.build()
+
+
+@pytest.mark.parametrize(("value", "off"), [("off", True), ("0", True), ("FALSE", True), ("", False), ("1", False)])
+def test_the_switch(monkeypatch, value, off):
+    monkeypatch.setenv("SOCIALNAV_NATIVE", value)
+    assert native.disabled() is off
