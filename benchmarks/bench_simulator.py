@@ -2,12 +2,16 @@
 
     python benchmarks/bench_simulator.py                 # batches 1..4096, both peers
     python benchmarks/bench_simulator.py --batches 1 64 256 --seconds 3
+    SOCIALNAV_NATIVE=off python benchmarks/bench_simulator.py   # the social force in JAX throughout
 
 Agent-steps per second = (workers + robot) x worlds x steps / wall time, compile excluded
 (reported separately). The jaxsim step is everything switched on: the worker context
 (schedule, routes, activities, replanning), pedsim's social force with the robot as an agent,
 walls, random force, the robot with its blocking rule, obstacles, deadline, battery and
-charging, and the Eq. (3) densities and robot-worker distances measured every 1 s.
+charging, and the Eq. (3) densities and robot-worker distances measured every 1 s. The social
+force runs in the C++ kernel of :mod:`jaxsim.native` where it builds; the same step with the
+social force in JAX (the reference, every pair exact as well) is measured after it in a child
+process with ``SOCIALNAV_NATIVE=off`` (``--no-reference`` skips it).
 
 The peers run the same crowd: the warehouse's walls and furniture, 50 walkers cycling between
 the human destination waypoints. JuPedSim (C++, single-threaded) uses its SocialForceModel at
@@ -21,6 +25,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import subprocess
 import sys
 import time
 
@@ -198,11 +203,31 @@ def bench_pysocialforce(scenario, n_agents, seconds):
     return rate
 
 
+def reference_rate(batches, seconds) -> float:
+    """Best rate of the same step with the social force in JAX (``SOCIALNAV_NATIVE=off``), measured
+    in a child process (the switch is read once per process); its lines are printed as they come."""
+    env = {**os.environ, "SOCIALNAV_NATIVE": "off"}
+    command = [sys.executable, __file__, "--no-peers", "--no-reference", "--seconds", str(seconds), "--batches"]
+    done = subprocess.run(command + [str(b) for b in batches], env=env, capture_output=True, text=True, check=True)
+    best = 0.0
+    for line in done.stdout.splitlines():
+        if line.startswith("  jaxsim  batch"):
+            print("  (JAX social force)" + line[len("  jaxsim") :], flush=True)
+        if line.startswith("best:"):
+            best = float(line.split()[1]) * 1e6
+    return best
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--batches", type=int, nargs="+", default=[1, 4, 16, 64, 256, 1024, 4096])
     ap.add_argument("--seconds", type=float, default=5.0, help="timed wall seconds per measurement")
     ap.add_argument("--no-peers", action="store_true", help="skip JuPedSim and pysocialforce")
+    ap.add_argument(
+        "--no-reference",
+        action="store_true",
+        help="skip the same step with the JAX social force (SOCIALNAV_NATIVE=off, in a child process)",
+    )
     args = ap.parse_args()
     scenario = load_scenario()
     print(f"machine: {machine()}")
@@ -213,6 +238,10 @@ def main() -> int:
     for b, rate, comp in rows:
         print(f"{b:>6} {rate / 1e6:>16.2f} {comp:>18.1f}")
     print(f"best: {best / 1e6:.2f} M agent-steps/s at batch {best_b}")
+    if not args.no_reference and os.environ.get("SOCIALNAV_NATIVE", "").lower() not in ("off", "0", "false", "no"):
+        reference = reference_rate(sorted({256, best_b}), args.seconds)
+        print(f"the same step with the JAX social force (the reference): {reference / 1e6:.2f} M agent-steps/s")
+        print(f"ratio C++ kernel / JAX social force: {best / reference:.2f}x")
     if not args.no_peers:
         n = load_scenario().params.n_workers
         jps_rate = bench_jupedsim(scenario, n, args.seconds)
