@@ -90,8 +90,18 @@ def describe(args) -> dict:
 def _worker_env() -> dict[str, str]:
     """Environment every Ray worker gets: the driver's XLA host-device count (the one JAX runs
     with here, whatever ``XLA_FLAGS`` says now) and JAX settings, so a shard computes what it
-    would compute here."""
-    keys = ("XLA_FLAGS", "JAX_COMPILATION_CACHE_DIR", "SOCIALNAV_JAX_CACHE", "JAX_ENABLE_X64", "JAX_PLATFORMS")
+    would compute here (the C++ social force's switch and build settings included: a worker on the
+    JAX force would sum in another order than a driver on the kernel)."""
+    keys = (
+        "XLA_FLAGS",
+        "JAX_COMPILATION_CACHE_DIR",
+        "SOCIALNAV_JAX_CACHE",
+        "JAX_ENABLE_X64",
+        "JAX_PLATFORMS",
+        "SOCIALNAV_NATIVE",
+        "SOCIALNAV_NATIVE_CACHE",
+        "CXX",
+    )
     env = {k: os.environ[k] for k in keys if k in os.environ}
     jax = sys.modules.get("jax")
     if jax is not None and jax.default_backend() == "cpu":

@@ -8,6 +8,16 @@ import pytest
 
 # Tests do not write JAX's compilation cache into the user's home (the command line turns it on).
 os.environ.setdefault("SOCIALNAV_JAX_CACHE", "off")
+# The C++ social force (jaxsim.native) is built afresh into a folder of this session's own, once
+# (about 3 s; the processes the tests start inherit it): every run checks the build from source.
+if "SOCIALNAV_NATIVE_CACHE" not in os.environ:
+    import atexit
+    import shutil
+    import tempfile
+
+    _native_cache = tempfile.mkdtemp(prefix="socialnav-native-")
+    os.environ["SOCIALNAV_NATIVE_CACHE"] = _native_cache
+    atexit.register(shutil.rmtree, _native_cache, ignore_errors=True)
 
 from plans import scipy_shortest_plan
 

@@ -93,6 +93,15 @@ def test_the_worker_environment_carries_the_drivers_device_count(monkeypatch):
     assert "--xla_cpu_use_thunk_runtime=true" in env["XLA_FLAGS"] and "count=7" not in env["XLA_FLAGS"]
 
 
+def test_the_worker_environment_carries_the_social_force_switch(monkeypatch):
+    monkeypatch.setenv("SOCIALNAV_NATIVE", "off")
+    monkeypatch.setenv("SOCIALNAV_NATIVE_CACHE", "/tmp/somewhere")
+    env = backend._worker_env()
+    assert env["SOCIALNAV_NATIVE"] == "off" and env["SOCIALNAV_NATIVE_CACHE"] == "/tmp/somewhere"
+    monkeypatch.delenv("SOCIALNAV_NATIVE")
+    assert "SOCIALNAV_NATIVE" not in backend._worker_env()
+
+
 @pytest.mark.slow
 def test_simulate_in_shards_gives_the_worlds_of_one_run_to_float_rounding(tmp_path):
     """Worlds cut into shards are the same worlds (keys by world index); across batch shapes the
