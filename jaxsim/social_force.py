@@ -82,16 +82,25 @@ def pair_force(params: SimParams, dx, dy, dvx, dvy):
 def social_force(
     params: SimParams, x: jax.Array, y: jax.Array, vx: jax.Array, vy: jax.Array, weight: jax.Array
 ) -> tuple[jax.Array, jax.Array]:
-    """Moussaid interaction on every agent from every other one (shapes as
-    :func:`social_force_xla`; ``vmap`` over worlds as usual).
+    """Moussaid interaction on every agent from every other one; ``vmap`` over worlds as usual.
 
     On the CPU this is the hand-written kernel of :mod:`jaxsim.native` when it builds (the
-    worlds of a ``vmap`` become its vector lanes; measured in ``benchmarks/bench_simulator.py``),
-    elsewhere, for float64 or with ``SOCIALNAV_NATIVE=off`` it is :func:`social_force_xla`.
-    The two agree to float rounding (tested), not bit for bit: their sums run in other orders.
-    Not differentiable on the CPU kernel's path (nothing differentiates the simulator).
+    worlds of a ``vmap`` become its vector lanes; 2.0x the whole step in
+    ``benchmarks/bench_simulator.py``); on a GPU, for float64, without a C++ compiler or with
+    ``SOCIALNAV_NATIVE=off`` it is :func:`social_force_xla`. The two agree to float rounding
+    (tested), not bit for bit: their sums run in other orders. Not differentiable on the
+    kernel's path (nothing differentiates the simulator).
+
+    Args:
+      x, y, vx, vy: (A,) positions (m) and velocities (m/s) of all agents (workers and robot).
+      weight: (A,) force factor of each agent as a source (0 for absent agents).
+
+    Returns:
+      (ax, ay): (A,) summed social acceleration (m/s^2), scaled by ``social_force_factor``.
     """
-    if x.dtype != jnp.float32 or not native.social_force_available():
+    # Not even built where JAX's default backend is a GPU (platform_dependent below also keeps a
+    # program lowered for another platform off the CPU kernel).
+    if x.dtype != jnp.float32 or jax.default_backend() != "cpu" or not native.social_force_available():
         return social_force_xla(params, x, y, vx, vy, weight)
     coefficients = jnp.stack(
         [
