@@ -126,6 +126,30 @@ def test_fast_atan2_matches_arctan2():
     assert float(sf.fast_atan2(jnp.float32(0), jnp.float32(0))) == 0.0
 
 
+def test_cos_sin_of_turns_matches_numpy_within_the_stated_bound():
+    u = np.concatenate([np.linspace(0.0, 1.0, 200_001), [-1.3, -0.75, -0.25, 0.25, 0.5, 0.75, 1.0, 2.6]])
+    cos, sin = sf.cos_sin_turns(jnp.asarray(u, jnp.float32))
+    angle = 2.0 * np.pi * u  # float64 truth
+    assert np.max(np.abs(np.asarray(cos) - np.cos(angle))) < 6e-7 * 2  # float32 input rounding of u
+    assert np.max(np.abs(np.asarray(sin) - np.sin(angle))) < 6e-7 * 2
+    # The quarter turns land on the axes.
+    c, s = sf.cos_sin_turns(jnp.asarray([0.0, 0.25, 0.5, 0.75], jnp.float32))
+    np.testing.assert_allclose(np.asarray(c), [1, 0, -1, 0], atol=1e-6)
+    np.testing.assert_allclose(np.asarray(s), [0, 1, 0, -1], atol=1e-6)
+
+
+def test_random_force_is_gaussian_with_the_configured_spread(warehouse):
+    p = warehouse.params
+    k1, k2 = jax.random.split(jax.random.key(3))
+    u1 = jax.random.uniform(k1, (200_000,), minval=1e-7, maxval=1.0)
+    u2 = jax.random.uniform(k2, (200_000,))
+    ax, ay = sf.random_force(p, u1, u2)
+    sigma = float(p.worker_random_force_std_mps2)
+    for a in (np.asarray(ax), np.asarray(ay)):
+        assert abs(a.mean()) < 0.01 * sigma and abs(a.std() / sigma - 1) < 0.01
+    assert abs(np.corrcoef(np.asarray(ax), np.asarray(ay))[0, 1]) < 0.01
+
+
 @pytest.mark.parametrize("force", [sf.social_force, sf.social_force_xla], ids=["default", "xla"])
 @pytest.mark.parametrize("n", [1, 2, 7, 8, 51])
 def test_pairwise_social_force_equals_dense(warehouse, n, force):
