@@ -106,7 +106,7 @@ def social_force(
     """Moussaid interaction on every agent from every other one; ``vmap`` over worlds as usual.
 
     On the CPU this is the hand-written kernel of :mod:`jaxsim.native` when it builds (the
-    worlds of a ``vmap`` become its vector lanes; 2.0x the whole step in
+    worlds of a ``vmap`` become its vector lanes; the whole step 2.0-2.35x as fast in
     ``benchmarks/bench_simulator.py``); on a GPU, for float64, without a C++ compiler or with
     ``SOCIALNAV_NATIVE=off`` it is :func:`social_force_xla`. The two agree to float rounding
     (tested), not bit for bit: their sums run in other orders. Not differentiable on the
