@@ -12,6 +12,7 @@ import numpy as np
 from common.atomic import write_text_atomic
 from models import plots, rules
 from models.checkpoints import restore
+from models.inference import rotation_averaged
 from models.quality import by_family as mse_by_family
 from models.quality import meets_quality, quality_table
 from models.steps import compiled, per_sample_mse
@@ -63,11 +64,15 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
     return report
 
 
-def rules_run(run, step: int | None = None, out=None, scenes_per_kind: int = 100, seed: int | None = None) -> dict:
+def rules_run(
+    run, step: int | None = None, out=None, scenes_per_kind: int = 100, seed: int | None = None, rotations: int = 1
+) -> dict:
     """Score a run's checkpoint (the latest by default) on the held-out rule suite
     (:mod:`models.rules`, ``scenes_per_kind`` scenes of each kind, drawn from ``seed``: the
     suite's own, :data:`models.rules.SUITE_SEED`, by default; training evaluates that one after
-    every epoch, so another seed gives scenes no run was ever stopped or chosen on).
+    every epoch, so another seed gives scenes no run was ever stopped or chosen on);
+    ``rotations=4`` scores the model averaged over the four quarter turns of its input
+    (:func:`models.inference.rotation_averaged`).
 
     Writes ``rules.json`` (pass share and mean contrasts per check and per rule, the MSE against
     the expected maps, the verdict) and ``rules.png`` to ``out`` (default ``run/evaluation``) and
@@ -78,12 +83,15 @@ def rules_run(run, step: int | None = None, out=None, scenes_per_kind: int = 100
     predict = compiled(config)[3]
     seed = rules.SUITE_SEED if seed is None else seed
     cases = rules.build_suite(scenes_per_kind, seed=seed)
-    suite = rules.evaluate(lambda maps: predict(state["params"], state["batch_stats"], maps), cases)
+    suite = rules.evaluate(
+        rotation_averaged(lambda maps: predict(state["params"], state["batch_stats"], maps), rotations), cases
+    )
     report = {
         "run": str(run),
         "step": int(meta["step"]),
         "scenes_per_kind": scenes_per_kind,
         "seed": seed,
+        "rotations": rotations,
         "pass_fraction": rules.PASS_FRACTION,
         "bar": rules.RULES_BAR,
         "meets_rules": rules.passes(suite),

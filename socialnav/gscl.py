@@ -166,6 +166,13 @@ def add_parser(top) -> None:
         default=None,
         help="draw the suite's scenes from this seed (default: the suite's own, which training checks every epoch)",
     )
+    ru.add_argument(
+        "--rotations",
+        type=int,
+        choices=(1, 4),
+        default=1,
+        help="score the model averaged over the 4 quarter turns of its input (default 1: the model alone)",
+    )
     ru.add_argument("--out", type=output_folder, default=None, help="output folder (default RUN/evaluation)")
     ru.set_defaults(handler=_rules)
     gen.set_defaults(handler=_generate)
@@ -347,7 +354,12 @@ def _rules(args) -> int:
 
     try:
         report = evaluation.rules_run(
-            args.run, step=args.step, out=args.out, scenes_per_kind=args.scenes, seed=args.seed
+            args.run,
+            step=args.step,
+            out=args.out,
+            scenes_per_kind=args.scenes,
+            seed=args.seed,
+            rotations=args.rotations,
         )
     except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl rules: {err}") from None

@@ -296,3 +296,26 @@ def test_the_cost_weighted_loss_changes_only_what_it_weighs():
     old = TrainConfig().to_json()
     del old["cost_weight"]
     assert TrainConfig.from_json(old).cost_weight == 0.0
+
+
+def test_the_rotation_average_turns_with_the_map():
+    """The average over quarter turns is equivariant to them (to float rounding); the network alone
+    is not, so the check could fail; 1 rotation is the function itself; other counts are refused."""
+    model = unet.UNet((4, 4, 8, 8), rngs=nnx.Rngs(3))
+    graphdef, params, batch_stats = nnx.split(model, nnx.Param, nnx.BatchStat)
+    predict = steps.make_predict(graphdef)
+
+    def plain(maps):
+        return predict(params, batch_stats, maps)
+
+    codes = np.array(grid.INPUT_CODES, np.uint8)
+    maps = jnp.asarray(codes[np.random.default_rng(0).integers(0, len(codes), (3, 40, 40))])
+    averaged = inference.rotation_averaged(plain, 4)
+    for k in (1, 2, 3):
+        turned = jnp.rot90(maps, k, axes=(1, 2))
+        np.testing.assert_allclose(averaged(turned), jnp.rot90(averaged(maps), k, axes=(1, 2)), atol=1e-6)
+    alone = plain(jnp.rot90(maps, 1, axes=(1, 2))) - jnp.rot90(plain(maps), 1, axes=(1, 2))
+    assert float(jnp.max(jnp.abs(alone))) > 1e-3
+    assert inference.rotation_averaged(plain, 1) is plain
+    with pytest.raises(ValueError, match="rotations must be one of"):
+        inference.rotation_averaged(plain, 2)

@@ -191,12 +191,15 @@ def test_the_rules_command_writes_its_report_and_names_a_missing_run(tmp_path, c
         "3",
         "--seed",
         "4",
+        "--rotations",
+        "4",
         "--out",
         str(tmp_path / "s"),
     ]
     assert cli.main(other) == 0
     again = json.loads((tmp_path / "s" / "rules.json").read_text())
     assert again["seed"] == 4 and report["seed"] == rules.SUITE_SEED
+    assert again["rotations"] == 4 and report["rotations"] == 1
     assert again["cases"] == len(rules.build_suite(3, seed=4))
     with pytest.raises(SystemExit, match="socialnav gscl rules: .*nowhere"):
         cli.main(["gscl", "rules", "--run", str(tmp_path / "nowhere")])
