@@ -105,7 +105,10 @@ def main(argv=None) -> int:
     passed = middle(p_in) - middle(p_out) >= bar
     print(f"{args.run}: {usable.sum()} of {args.samples} generator groups scored; pass {passed[usable].mean():.3f}")
     print("radius m | groups | model passes | middle facing in: model / target | facing out: model / target", end="")
-    print(" | input-optimal map passes (groups) | model passes on those" if args.posterior else "")
+    if args.posterior:
+        print(" | input-optimal map passes (groups) | model passes on those | its middle - target: mean / rms")
+    else:
+        print()
     rng = np.random.default_rng(0)
     for lo, hi in BANDS_M:
         band = usable & (radius >= lo) & (radius < hi)
@@ -114,7 +117,7 @@ def main(argv=None) -> int:
             f"{middle(t_in)[band].mean():.3f} | {middle(p_out)[band].mean():.3f} / {middle(t_out)[band].mean():.3f}"
         )
         if args.posterior:
-            optimal, model_on_same = [], []
+            optimal, model_on_same, optimal_in = [], [], []
             for k in np.flatnonzero(band)[: args.posterior]:
                 v = valid[k]
                 plateaus = input_optimal_zone(x[k][v], y[k][v], angle[k][v], cx[k], cy[k], radius[k], rng)
@@ -124,9 +127,11 @@ def main(argv=None) -> int:
                 region = zone[k : k + 1]
                 contrast = middle(mean_in[None], region)[0] - middle(t_out[k : k + 1], region)[0]
                 optimal.append(contrast >= bar[k])
+                optimal_in.append(middle(mean_in[None], region)[0] - middle(t_in[k : k + 1], region)[0])
                 model_on_same.append(passed[k])
             if optimal:
                 line += f" | {np.mean(optimal):.2f} ({len(optimal)}) | {np.mean(model_on_same):.2f}"
+                line += f" | {np.mean(optimal_in):+.3f} / {np.sqrt(np.mean(np.square(optimal_in))):.3f}"
         print(line)
     return 0
 

@@ -55,6 +55,7 @@ _TRAIN_OPTIONS = (
     "seed",
     "coords",
     "composites",
+    "group_scale",
     "cost_weight",
 )
 
@@ -128,6 +129,12 @@ def add_parser(top) -> None:
         type=non_negative_int,
         default=None,
         help="composite samples (two scenes in one) per the paper's 24,200 (default 10000; --paper: 0)",
+    )
+    tr.add_argument(
+        "--group-scale",
+        type=positive_int,
+        default=None,
+        help="the group and non-group families' samples times this (default 2; --paper: 1)",
     )
     tr.add_argument(
         "--cost-weight",

@@ -139,8 +139,13 @@ def test_composites_are_a_training_setting():
     assert "composite" not in TrainConfig.paper().train_counts  # the paper's data only
     assert TrainConfig.paper().cost_weight == 0.0  # and its plain MSE
     old = {**TrainConfig().to_json()}
-    del old["composites"]  # a run saved before the setting existed
-    assert TrainConfig.from_json(old).composites == 0
+    del old["composites"], old["group_scale"]  # a run saved before the settings existed
+    assert TrainConfig.from_json(old).composites == 0 and TrainConfig.from_json(old).counts["group"] == 4500
+    counts = TrainConfig().counts
+    assert counts["group"] == counts["non_group"] == 2 * dataset.PAPER_COUNTS["group"]
+    assert counts["queue"] == dataset.PAPER_COUNTS["queue"] and TrainConfig.paper().counts["group"] == 4500
+    with pytest.raises(ValueError, match="group_scale must be >= 1"):
+        TrainConfig(group_scale=0)
 
 
 @pytest.mark.slow
