@@ -88,21 +88,24 @@ def main(argv=None) -> int:
     p_in, p_out = predict(img_in), predict(img_out)
     d = np.hypot(grid.CELL_X_M[None] - cx[:, None, None], grid.CELL_Y_M[None] - cy[:, None, None])
     zone = (d < np.maximum(0.55 * radius, 0.5)[:, None, None]) & (img_in == grid.FREE) & (img_out == grid.FREE)
-    blind_in = np.stack(
-        [
-            np.asarray(sc.people_cost(*families._as_drawn(x[k], y[k], angle[k] + np.pi), valid[k]))
-            for k in range(args.samples)
-        ]
-    )
-    blind_in = np.where(img_in == grid.WALL, 0.0, blind_in)
+    # The facing-in map without the zone: the people's own cost, as the suite's rule-blind map.
+    people = jax.vmap(lambda *a: sc.people_cost(*families._as_drawn(*a[:3]), a[3]))(x, y, angle + np.pi, valid)
+    blind_in = np.where(img_in == grid.WALL, 0.0, np.asarray(people))
 
     def middle(maps, region=zone):
         return (maps * region).sum((1, 2)) / np.maximum(region.sum((1, 2)), 1)
 
-    expected_c, blind_c = middle(t_in) - middle(t_out), middle(blind_in) - middle(t_out)
+    def contrast(facing_in, facing_out=t_out):
+        """The suite's contrast (the zone facing in minus facing out); NaN for an empty zone, which
+        ``usable`` leaves out."""
+        with np.errstate(invalid="ignore"):
+            return rules.contrasts(np.stack([facing_in, facing_out], 1), zone, zone)
+
+    expected_c, blind_c = contrast(t_in), contrast(blind_in)
     usable = (zone.sum((1, 2)) >= rules.MIN_REGION_CELLS) & (expected_c - blind_c >= rules.MIN_EXPECTED_CONTRAST)
     bar = blind_c + rules.PASS_FRACTION * (expected_c - blind_c)
-    passed = middle(p_in) - middle(p_out) >= bar
+    passed = contrast(p_in, p_out) >= bar
+    m_p_in, m_t_in, m_p_out, m_t_out = (middle(m) for m in (p_in, t_in, p_out, t_out))
     print(f"{args.run}: {usable.sum()} of {args.samples} generator groups scored; pass {passed[usable].mean():.3f}")
     print("radius m | groups | model passes | middle facing in: model / target | facing out: model / target", end="")
     if args.posterior:
@@ -113,8 +116,8 @@ def main(argv=None) -> int:
     for lo, hi in BANDS_M:
         band = usable & (radius >= lo) & (radius < hi)
         line = (
-            f"{lo:.1f}-{hi:.1f} | {band.sum()} | {passed[band].mean():.2f} | {middle(p_in)[band].mean():.3f} / "
-            f"{middle(t_in)[band].mean():.3f} | {middle(p_out)[band].mean():.3f} / {middle(t_out)[band].mean():.3f}"
+            f"{lo:.1f}-{hi:.1f} | {band.sum()} | {passed[band].mean():.2f} | {m_p_in[band].mean():.3f} / "
+            f"{m_t_in[band].mean():.3f} | {m_p_out[band].mean():.3f} / {m_t_out[band].mean():.3f}"
         )
         if args.posterior:
             optimal, model_on_same, optimal_in = [], [], []
@@ -124,10 +127,9 @@ def main(argv=None) -> int:
                 if plateaus is None:
                     continue
                 mean_in = np.where(img_in[k] == grid.WALL, 0.0, np.maximum(blind_in[k][None], plateaus).mean(0))
-                region = zone[k : k + 1]
-                contrast = middle(mean_in[None], region)[0] - middle(t_out[k : k + 1], region)[0]
-                optimal.append(contrast >= bar[k])
-                optimal_in.append(middle(mean_in[None], region)[0] - middle(t_in[k : k + 1], region)[0])
+                mean_middle = middle(mean_in[None], zone[k : k + 1])[0]
+                optimal.append(mean_middle - m_t_out[k] >= bar[k])
+                optimal_in.append(mean_middle - m_t_in[k])
                 model_on_same.append(passed[k])
             if optimal:
                 line += f" | {np.mean(optimal):.2f} ({len(optimal)}) | {np.mean(model_on_same):.2f}"
