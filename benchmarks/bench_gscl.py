@@ -152,7 +152,9 @@ def main(argv=None):
     parser.add_argument("--no-fresh-samples", action="store_true")
     parser.add_argument("--no-coords", action="store_true", help="no coordinate input channels")
     parser.add_argument("--composites", type=int, default=None, help="composite samples per 24,200 (default 10000)")
+    parser.add_argument("--group-scale", type=int, default=None, help="groups and non-groups times this (default 2)")
     parser.add_argument("--cost-weight", type=float, default=None, help="loss weight 1 + w x target (default 10)")
+    parser.add_argument("--pair-weight", type=float, default=None, help="loss weight + w x |target - twin's target|")
     parser.add_argument("--paper", action="store_true", help="the paper's recipe (TrainConfig.paper())")
     parser.add_argument(
         "--keep",
@@ -183,7 +185,9 @@ def main(argv=None):
         "fresh_samples": False if args.no_fresh_samples else None,
         "coords": False if args.no_coords else None,
         "composites": args.composites,
+        "group_scale": args.group_scale,
         "cost_weight": args.cost_weight,
+        "pair_weight": args.pair_weight,
     }
     given = {k: v for k, v in given.items() if v is not None}
     config = TrainConfig.paper(**given) if args.paper else TrainConfig(**given)

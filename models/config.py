@@ -16,7 +16,7 @@ from flax import nnx
 from models import dataset, unet
 
 # Settings added after runs were saved, with the value those runs used.
-ADDED_LATER = {"composites": 0, "cost_weight": 0.0, "group_scale": 1}
+ADDED_LATER = {"composites": 0, "cost_weight": 0.0, "group_scale": 1, "pair_weight": 0.0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,6 +49,12 @@ class TrainConfig:
         the free space that fills most of a map; test errors are always the plain MSE. 10 by
         default: at 10 epochs, 4 and 10 lifted the held-out suite's blind corner beside a queue
         from 85 to 90 and 95 % (README, "The held-out rule suite").
+      pair_weight: adds ``pair_weight * |target - twin's target|`` to each pixel's weight in the
+        paired families (:data:`models.dataset.PAIRED_WITH`: a group and the same circle facing
+        out, a queue and the same queue with the goal elsewhere), on both twins: the cells where
+        the rule changes the cost, which the held-out suite's contrasts measure, count more on
+        both sides of the contrast (``cost_weight`` alone weighs the facing-in side up, not the
+        facing-out one). 0: no pair term (runs saved before it).
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
       keep_checkpoints: how many checkpoints orbax keeps.
@@ -68,6 +74,7 @@ class TrainConfig:
     composites: int = 10000
     group_scale: int = 2
     cost_weight: float = 10.0
+    pair_weight: float = 0.0
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2
@@ -84,8 +91,9 @@ class TrainConfig:
             raise ValueError("warmup_steps must be >= 0 and final_lr_fraction in [0, 1]")
         if self.schedule not in ("constant", "cosine"):
             raise ValueError(f"schedule must be 'constant' or 'cosine', got {self.schedule!r}")
-        if not (math.isfinite(self.cost_weight) and self.cost_weight >= 0):
-            raise ValueError(f"cost_weight must be finite and >= 0, got {self.cost_weight}")
+        for name in ("cost_weight", "pair_weight"):
+            if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {getattr(self, name)}")
         if self.composites < 0:
             raise ValueError(f"composites must be >= 0, got {self.composites}")
         if self.group_scale < 1:
@@ -112,6 +120,7 @@ class TrainConfig:
             composites=0,
             group_scale=1,
             cost_weight=0.0,
+            pair_weight=0.0,
         )
         return cls(**{**base, **overrides})
 

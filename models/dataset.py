@@ -60,6 +60,28 @@ def _as_key(seed) -> jax.Array:
 PAIRED_WITH = {"non_queue": "queue", "non_group": "group"}
 
 
+def pair_contrast(data: dict[str, np.ndarray]) -> np.ndarray:
+    """(N, 40, 40) float32: ``|target - twin's target|`` for each sample of a paired family and its
+    partner (:data:`PAIRED_WITH`), 0 for every other sample: the cells where the rule (the group's
+    zone, the queue's U) and the headings it comes with change the cost.
+
+    ``data`` must be in :func:`generate`'s order (each family's samples by index, before any
+    shuffle): sample ``i`` of a twin is paired with sample ``i`` of its partner, the first
+    ``min`` of their two counts (sample ``i`` is the same whatever the counts)."""
+    contrast = np.zeros(data["targets"].shape, np.float32)
+    names = list(data["names"])
+    for twin, partner in PAIRED_WITH.items():
+        if twin not in names or partner not in names:
+            continue
+        rows_t = np.flatnonzero(data["family"] == names.index(twin))
+        rows_p = np.flatnonzero(data["family"] == names.index(partner))
+        n = min(len(rows_t), len(rows_p))
+        diff = np.abs(data["targets"][rows_t[:n]] - data["targets"][rows_p[:n]])
+        contrast[rows_t[:n]] = diff
+        contrast[rows_p[:n]] = diff
+    return contrast
+
+
 def _family_base(seed, family: str) -> jax.Array:
     return jax.random.fold_in(_as_key(seed), list(FAMILIES).index(PAIRED_WITH.get(family, family)))
 

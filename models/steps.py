@@ -37,25 +37,32 @@ def batch_sharding(batch_size: int):
     )
 
 
-def make_train_step(graphdef, tx: optax.GradientTransformation, n_families: int, cost_weight: float = 0.0):
-    """``step(state, inputs, targets, family) -> (state, loss)``; ``state`` is a dict with
-    ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and ``family_count`` (F,).
+def make_train_step(
+    graphdef, tx: optax.GradientTransformation, n_families: int, cost_weight: float = 0.0, pair_weight: float = 0.0
+):
+    """``step(state, inputs, targets, family, contrast=None) -> (state, loss)``; ``state`` is a
+    dict with ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and ``family_count``
+    (F,); ``contrast`` (B, 40, 40) is :func:`models.dataset.pair_contrast` of the batch.
 
-    The loss is the mean over pixels of ``(1 + cost_weight * target) * error**2`` (the plain MSE
-    at 0); ``loss`` and the per-family accumulators are the plain MSE whatever the weight."""
+    The loss is the mean over pixels of ``(1 + cost_weight * target + pair_weight * contrast) *
+    error**2`` (the plain MSE with both at 0 or no contrast given); ``loss`` and the per-family
+    accumulators are the plain MSE whatever the weights."""
 
-    def loss_fn(params, batch_stats, inputs, targets):
+    def loss_fn(params, batch_stats, inputs, targets, contrast):
         model = nnx.merge(graphdef, params, batch_stats, copy=True)
         model.train()
         squared = (model(inputs) - targets) ** 2
         per_sample = jnp.mean(squared, axis=(1, 2))
-        weighted = jnp.mean((1.0 + cost_weight * targets) * squared) if cost_weight else jnp.mean(per_sample)
+        weight = 1.0 + cost_weight * targets
+        if pair_weight and contrast is not None:
+            weight = weight + pair_weight * contrast
+        weighted = jnp.mean(weight * squared) if (cost_weight or pair_weight) else jnp.mean(per_sample)
         return weighted, (per_sample, nnx.state(model, nnx.BatchStat))
 
     @jax.jit
-    def step(state, inputs, targets, family):
+    def step(state, inputs, targets, family, contrast=None):
         (_, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
-            state["params"], state["batch_stats"], inputs, targets
+            state["params"], state["batch_stats"], inputs, targets, contrast
         )
         updates, opt_state = tx.update(grads, state["opt_state"], state["params"])
         onehot = jax.nn.one_hot(family, n_families, dtype=jnp.float32)
@@ -111,7 +118,12 @@ def compiled(config: TrainConfig):
     resuming, restoring and evaluating in one process do not compile again."""
     graphdef = nnx.graphdef(make_model(config))
     tx = optax.adam(learning_rate_schedule(config))
-    return graphdef, tx, make_train_step(graphdef, tx, len(config.counts), config.cost_weight), make_predict(graphdef)
+    return (
+        graphdef,
+        tx,
+        make_train_step(graphdef, tx, len(config.counts), config.cost_weight, config.pair_weight),
+        make_predict(graphdef),
+    )
 
 
 def initial_state(config: TrainConfig) -> dict:

@@ -24,11 +24,15 @@ def _stream_key(seed: int, stream: str, index: int = 0) -> jax.Array:
 
 @functools.lru_cache(maxsize=1)  # epoch 0 serves the trivial baselines and then the first epoch
 def epoch_data(config: TrainConfig, epoch: int) -> dict[str, np.ndarray]:
-    """The shuffled training samples of ``epoch`` (epoch 0's for every epoch without fresh samples)."""
+    """The shuffled training samples of ``epoch`` (epoch 0's for every epoch without fresh samples),
+    with ``contrast`` (:func:`models.dataset.pair_contrast`) when the run weighs its pairs."""
     e = epoch if config.fresh_samples else 0
     data = dataset.generate(_stream_key(config.seed, "train", e), config.train_counts)
+    if config.pair_weight:
+        data["contrast"] = dataset.pair_contrast(data)  # before the shuffle: twins are found by order
     order = np.random.default_rng([config.seed, epoch]).permutation(len(data["family"]))
-    return {**{k: data[k][order] for k in ("inputs", "targets", "family")}, "names": data["names"]}
+    shuffled = ("inputs", "targets", "family", "contrast")
+    return {**{k: data[k][order] for k in shuffled if k in data}, "names": data["names"]}
 
 
 def test_data(config: TrainConfig) -> dict[str, np.ndarray]:

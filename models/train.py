@@ -110,6 +110,8 @@ def train(
             for b in range(step % spe, spe):
                 sl = slice(b * config.batch_size, (b + 1) * config.batch_size)
                 batch = (data["inputs"][sl], data["targets"][sl], data["family"][sl].astype(np.int32))
+                if "contrast" in data:
+                    batch = (*batch, data["contrast"][sl])
                 if data_sharding is not None:
                     batch = jax.device_put(batch, data_sharding)
                 state, loss = train_step(state, *batch)

@@ -57,6 +57,7 @@ _TRAIN_OPTIONS = (
     "composites",
     "group_scale",
     "cost_weight",
+    "pair_weight",
 )
 
 
@@ -141,6 +142,13 @@ def add_parser(top) -> None:
         type=non_negative_float,
         default=None,
         help="training loss: each pixel's squared error weighed by 1 + this x its target (default 10; 0: plain MSE)",
+    )
+    tr.add_argument(
+        "--pair-weight",
+        type=non_negative_float,
+        default=None,
+        help="training loss: add this x |target - twin's target| to the weight of a group and the same circle "
+        "facing out, a queue and the same queue with the goal elsewhere (default 0)",
     )
     tr.add_argument(
         "--stop-when-good",
