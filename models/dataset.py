@@ -18,7 +18,7 @@ import numpy as np
 
 from common.atomic import write_bytes_atomic
 from models import grid
-from models.families import FAMILIES
+from models.families import COMPOSITE, FAMILIES, composite_contrast
 
 # Paper's sample counts per family (Sec. 4.1; the hallway's 5000 split over its three kinds).
 PAPER_COUNTS = {
@@ -60,10 +60,12 @@ def _as_key(seed) -> jax.Array:
 PAIRED_WITH = {"non_queue": "queue", "non_group": "group"}
 
 
-def pair_contrast(data: dict[str, np.ndarray]) -> np.ndarray:
+def pair_contrast(data: dict[str, np.ndarray], seed=None) -> np.ndarray:
     """(N, 40, 40) float32: ``|target - twin's target|`` for each sample of a paired family and its
     partner (:data:`PAIRED_WITH`), 0 for every other sample: the cells where the rule (the group's
-    zone, the queue's U) and the headings it comes with change the cost.
+    zone, the queue's U) and the headings it comes with change the cost. With ``seed`` (the one
+    ``data`` was generated from), composites get the same for each of their two scenes that has a
+    twin (:func:`models.families.composite_contrast`).
 
     ``data`` must be in :func:`generate`'s order (each family's samples by index, before any
     shuffle): sample ``i`` of a twin is paired with sample ``i`` of its partner, the first
@@ -79,7 +81,19 @@ def pair_contrast(data: dict[str, np.ndarray]) -> np.ndarray:
         diff = np.abs(data["targets"][rows_t[:n]] - data["targets"][rows_p[:n]])
         contrast[rows_t[:n]] = diff
         contrast[rows_p[:n]] = diff
+    if seed is not None and COMPOSITE in names:
+        rows = np.flatnonzero(data["family"] == names.index(COMPOSITE))
+        keys = family_keys(seed, COMPOSITE, len(rows))
+        for first in range(0, len(rows), CHUNK):
+            chunk = keys[first : first + CHUNK]
+            n = chunk.shape[0]
+            if n < CHUNK:  # one compiled shape whatever the count, as in generate_range
+                chunk = jnp.concatenate([chunk, jnp.broadcast_to(chunk[:1], (CHUNK - n,))])
+            contrast[rows[first : first + n]] = np.asarray(_composite_contrast(chunk)[:n])
     return contrast
+
+
+_composite_contrast = jax.jit(jax.vmap(composite_contrast))
 
 
 def _family_base(seed, family: str) -> jax.Array:

@@ -379,9 +379,15 @@ def _people_only(image):
     return jnp.where((image == grid.PERSON) | (image == grid.HEADING), image, jnp.uint8(grid.FREE))
 
 
-def sample_composite(key):
-    """Two families' scenes in one (see :data:`COMPOSITE_PAIRS`); the target is the cell-wise max
-    of the two targets, zero on walls."""
+# A paired family and its twin (the same layout with the rule's condition flipped): the pairs of
+# models.dataset.PAIRED_WITH, both ways round.
+TWINS = {"group": "non_group", "non_group": "group", "queue": "non_queue", "non_queue": "queue"}
+
+
+def _composite(key):
+    """``(image, target, contrast)`` of a composite; ``contrast`` is ``|target - twin's target|`` of
+    each of the two scenes that has a twin (:data:`TWINS`: the same layout with the rule flipped),
+    moved with its scene, their max, 0 elsewhere and on walls (:func:`composite_contrast`)."""
     k_pair, k_a, k_b, k_shift = jax.random.split(key, 4)
     pair = jax.random.randint(k_pair, (), 0, len(COMPOSITE_PAIRS))
     a_names = sorted({a for a, _ in COMPOSITE_PAIRS})
@@ -393,10 +399,17 @@ def sample_composite(key):
     a_all = [FAMILIES[n](k_a) for n in a_names]
     b_all = [FAMILIES[n](k_b) for n in b_names]
     a_image = jnp.stack([x for x, _ in a_all])[a_index]
-    a_cost = jnp.stack([y for _, y in a_all])[a_index]
+    a_costs = jnp.stack([y for _, y in a_all])
+    a_cost = a_costs[a_index]
     b_images = [(_people_only(x) if n == "proxemics" else x) for n, (x, _) in zip(b_names, b_all)]
     b_image = jnp.stack(b_images)[b_index]
-    b_cost = jnp.stack([y for _, y in b_all])[b_index]
+    b_costs = jnp.stack([y for _, y in b_all])
+    b_cost = b_costs[b_index]
+
+    def twin_contrast(names, costs, index):
+        # the twin is drawn from the same key as its partner, so it is among the candidates above
+        twin = jnp.array([names.index(TWINS[n]) if TWINS.get(n) in names else i for i, n in enumerate(names)])
+        return jnp.abs(costs[index] - costs[twin[index]])
 
     blocked = _dilate(a_image != grid.FREE, COMPOSITE_CLEARANCE_CELLS)
     things = (b_image == grid.PERSON) | (b_image == grid.GOAL)
@@ -406,14 +419,34 @@ def sample_composite(key):
         image = _shift(b_image, shift[0], shift[1], jnp.uint8(grid.FREE))
         moved_things = (image == grid.PERSON) | (image == grid.GOAL)
         ok = ~jnp.any(blocked & (image != grid.FREE)) & (moved_things.sum() == things.sum())
-        return image, _shift(b_cost, shift[0], shift[1], 0.0), ok
+        return image, ok
 
-    images, costs, ok = jax.vmap(placed)(shifts)
+    images, ok = jax.vmap(placed)(shifts)
     first = jnp.argmax(ok)
     any_ok = ok[first]
     image = jnp.where(any_ok & (images[first] != grid.FREE), images[first], a_image)
-    cost = jnp.where(any_ok, jnp.maximum(a_cost, costs[first]), a_cost)
-    return image, jnp.where(image == grid.WALL, 0.0, cost)
+    move = functools.partial(_shift, drow=shifts[first, 0], dcol=shifts[first, 1], fill=0.0)
+    cost = jnp.where(any_ok, jnp.maximum(a_cost, move(b_cost)), a_cost)
+    contrast = twin_contrast(a_names, a_costs, a_index)
+    contrast = jnp.where(any_ok, jnp.maximum(contrast, move(twin_contrast(b_names, b_costs, b_index))), contrast)
+    walls = image == grid.WALL
+    return image, jnp.where(walls, 0.0, cost), jnp.where(walls, 0.0, contrast)
+
+
+def sample_composite(key):
+    """Two families' scenes in one (see :data:`COMPOSITE_PAIRS`); the target is the cell-wise max
+    of the two targets, zero on walls."""
+    image, cost, _ = _composite(key)
+    return image, cost
+
+
+def composite_contrast(key):
+    """(40, 40) for the composite of ``key``: for each of its two scenes that has a twin (a group
+    and the same circle facing out, a queue and the same queue with the goal elsewhere), the
+    difference of the two targets where the scene was placed; the max of the two, 0 elsewhere.
+    The training loss's pair term (:attr:`models.config.TrainConfig.pair_weight`) weighs these
+    cells as it weighs the paired families'."""
+    return _composite(key)[2]
 
 
 COMPOSITE = "composite"

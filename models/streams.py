@@ -27,9 +27,10 @@ def epoch_data(config: TrainConfig, epoch: int) -> dict[str, np.ndarray]:
     """The shuffled training samples of ``epoch`` (epoch 0's for every epoch without fresh samples),
     with ``contrast`` (:func:`models.dataset.pair_contrast`) when the run weighs its pairs."""
     e = epoch if config.fresh_samples else 0
-    data = dataset.generate(_stream_key(config.seed, "train", e), config.train_counts)
+    key = _stream_key(config.seed, "train", e)
+    data = dataset.generate(key, config.train_counts)
     if config.pair_weight:
-        data["contrast"] = dataset.pair_contrast(data)  # before the shuffle: twins are found by order
+        data["contrast"] = dataset.pair_contrast(data, key)  # before the shuffle: twins are found by order
     order = np.random.default_rng([config.seed, epoch]).permutation(len(data["family"]))
     shuffled = ("inputs", "targets", "family", "contrast")
     return {**{k: data[k][order] for k in shuffled if k in data}, "names": data["names"]}

@@ -3,6 +3,7 @@ samples, plus the encoding, shapes, dtypes and determinism."""
 
 from __future__ import annotations
 
+import jax
 import numpy as np
 import pytest
 
@@ -135,3 +136,32 @@ def test_the_queue_u_shape_is_there_only_when_the_goal_is_at_the_head(data):
     assert ((inputs == grid.GOAL).sum(axis=(1, 2)) <= 1).all()
     people = (_family(data, "queue")[0] == grid.PERSON).sum(axis=(1, 2))
     assert people.min() >= 2 and people.max() <= families.MAX_QUEUE  # 2-12 m at 0.6-1.4 m spacing
+
+
+@pytest.mark.slow
+def test_a_composites_contrast_is_its_scenes_twin_difference():
+    """A group moved beside nothing else (the pair group + corner keeps the group where it was
+    drawn): the composite's contrast is |group - the same circle facing out| of scene A, 0 on walls;
+    pairs without a twin (corner + proxemics) have none; ``pair_contrast`` fills composites from the
+    dataset's seed and leaves them at 0 without it."""
+    keys = dataset.family_keys(11, "composite", 256)
+    split = jax.vmap(lambda k: jax.random.split(k, 4))(keys)  # k_pair, k_a, k_b, k_shift as drawn
+    pair_of = jax.vmap(lambda k: jax.random.randint(k, (), 0, len(families.COMPOSITE_PAIRS)))(split[:, 0])
+    pairs = [families.COMPOSITE_PAIRS[int(i)] for i in pair_of]
+    group_first = pairs.index(("group", "corner"))
+    images, _, contrasts = jax.jit(jax.vmap(families._composite))(keys)
+    image, contrast = images[group_first], contrasts[group_first]
+    facing = [jax.jit(f)(split[group_first, 1])[1] for f in (families.sample_group, families.sample_non_group)]
+    expected = np.abs(np.asarray(facing[0]) - np.asarray(facing[1]))
+    np.testing.assert_allclose(np.asarray(contrast), np.where(np.asarray(image) == grid.WALL, 0.0, expected), atol=1e-6)
+    assert np.asarray(contrast).max() > 0.3
+    no_twin = pairs.index(("corner", "proxemics"))
+    assert np.asarray(contrasts[no_twin]).max() == 0.0
+
+    data = dataset.generate(11, {"corner": 2, "composite": 40})
+    rows = data["family"] == list(data["names"]).index("composite")
+    with_seed = dataset.pair_contrast(data, 11)
+    expected_rows = np.asarray(contrasts[:40])  # samples 0-39 of the family: the same keys
+    # atol: XLA rounds a few cells' costs differently in a batch of 40 than in generate's chunks
+    np.testing.assert_allclose(with_seed[rows], expected_rows, atol=1e-2)
+    assert with_seed[~rows].max() == 0.0 and dataset.pair_contrast(data).max() == 0.0
