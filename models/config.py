@@ -54,7 +54,9 @@ class TrainConfig:
         out, a queue and the same queue with the goal elsewhere), on both twins: the cells where
         the rule changes the cost, which the held-out suite's contrasts measure, count more on
         both sides of the contrast (``cost_weight`` alone weighs the facing-in side up, not the
-        facing-out one). 0: no pair term (runs saved before it).
+        facing-out one). 20 by default: on 400 fresh scenes of each kind every held-out check
+        passed (the zone beside a hallway 92.8 -> 96.0 %, beside a queue 94.8 -> 97.2 %); 0: no
+        pair term (runs saved before it, ``--paper``).
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
       keep_checkpoints: how many checkpoints orbax keeps.
@@ -74,7 +76,7 @@ class TrainConfig:
     composites: int = 10000
     group_scale: int = 2
     cost_weight: float = 10.0
-    pair_weight: float = 0.0
+    pair_weight: float = 20.0
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2

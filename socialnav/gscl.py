@@ -148,7 +148,7 @@ def add_parser(top) -> None:
         type=non_negative_float,
         default=None,
         help="training loss: add this x |target - twin's target| to the weight of a group and the same circle "
-        "facing out, a queue and the same queue with the goal elsewhere (default 0)",
+        "facing out, a queue and the same queue with the goal elsewhere (default 20; --paper: 0)",
     )
     tr.add_argument(
         "--stop-when-good",

@@ -344,7 +344,7 @@ def test_the_pair_weighted_loss_weighs_only_the_contrast():
     """``pair_weight`` adds w x contrast to each pixel's weight: with a zero contrast (or none) the
     step is the unweighted step exactly; with the twins' contrast the update differs and the
     reported loss stays the plain MSE. Bad weights are refused; runs saved before it read as 0."""
-    first_step_moves = {**TINY, "schedule": "constant", "cost_weight": 0.0}
+    first_step_moves = {**TINY, "schedule": "constant", "cost_weight": 0.0, "pair_weight": 0.0}
     plain = TrainConfig(**first_step_moves)
     paired = TrainConfig(**{**first_step_moves, "pair_weight": 20.0})
     data = dataset.generate(3, {"group": 8, "non_group": 8})
