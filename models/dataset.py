@@ -18,7 +18,7 @@ import numpy as np
 
 from common.atomic import write_bytes_atomic
 from models import grid
-from models.families import COMPOSITE, FAMILIES, composite_contrast
+from models.families import COMPOSITE, FAMILIES, PAIRED_WITH, composite_contrast
 
 # Paper's sample counts per family (Sec. 4.1; the hallway's 5000 split over its three kinds).
 PAPER_COUNTS = {
@@ -57,7 +57,7 @@ def _as_key(seed) -> jax.Array:
 # layout with the goal elsewhere, sample i of ``non_group`` the same circle facing out. Training then
 # sees the same people with and without the rule, which is the contrast the rule suite
 # (:mod:`models.rules`) measures; with independent keys the queue's U stayed weak (README).
-PAIRED_WITH = {"non_queue": "queue", "non_group": "group"}
+# PAIRED_WITH (from models.families) names them.
 
 
 def pair_contrast(data: dict[str, np.ndarray], seed=None) -> np.ndarray:
@@ -83,13 +83,7 @@ def pair_contrast(data: dict[str, np.ndarray], seed=None) -> np.ndarray:
         contrast[rows_p[:n]] = diff
     if seed is not None and COMPOSITE in names:
         rows = np.flatnonzero(data["family"] == names.index(COMPOSITE))
-        keys = family_keys(seed, COMPOSITE, len(rows))
-        for first in range(0, len(rows), CHUNK):
-            chunk = keys[first : first + CHUNK]
-            n = chunk.shape[0]
-            if n < CHUNK:  # one compiled shape whatever the count, as in generate_range
-                chunk = jnp.concatenate([chunk, jnp.broadcast_to(chunk[:1], (CHUNK - n,))])
-            contrast[rows[first : first + n]] = np.asarray(_composite_contrast(chunk)[:n])
+        contrast[rows] = np.concatenate(_in_chunks(_composite_contrast, family_keys(seed, COMPOSITE, len(rows))))
     return contrast
 
 
@@ -141,19 +135,26 @@ def generate_range(seed, name: str, start: int, stop: int) -> tuple[np.ndarray, 
     """Samples ``start .. stop - 1`` of family ``name``: (inputs (n, 40, 40) uint8, targets (n, 40,
     40) float32), the same samples as in any dataset that holds them (a shard of a dataset: with
     ``start`` a multiple of :data:`CHUNK` the same bits too, the batches being the same)."""
-    keys = family_keys(seed, name, stop - start, start)
-    inputs, targets = [], []
-    for first in range(0, stop - start, CHUNK):  # one compiled shape per family, whatever the count
+    parts = _in_chunks(batched_sampler(name), family_keys(seed, name, stop - start, start))
+    inputs = [x for x, _ in parts]
+    targets = [y.astype(np.float32) for _, y in parts]
+    if not inputs:
+        return np.zeros((0, grid.GRID, grid.GRID), np.uint8), np.zeros((0, grid.GRID, grid.GRID), np.float32)
+    return np.concatenate(inputs), np.concatenate(targets)
+
+
+def _in_chunks(batched, keys) -> list:
+    """``batched`` (a jitted function of (CHUNK,) keys) over ``keys`` in chunks of :data:`CHUNK`,
+    the last padded, so one compiled shape serves any count; each chunk's outputs as numpy, cut to
+    its keys."""
+    parts = []
+    for first in range(0, keys.shape[0], CHUNK):
         chunk = keys[first : first + CHUNK]
         n = chunk.shape[0]
         if n < CHUNK:
             chunk = jnp.concatenate([chunk, jnp.broadcast_to(chunk[:1], (CHUNK - n,))])
-        x, y = batched_sampler(name)(chunk)
-        inputs.append(np.asarray(x[:n]))
-        targets.append(np.asarray(y[:n], np.float32))
-    if not inputs:
-        return np.zeros((0, grid.GRID, grid.GRID), np.uint8), np.zeros((0, grid.GRID, grid.GRID), np.float32)
-    return np.concatenate(inputs), np.concatenate(targets)
+        parts.append(jax.tree.map(lambda a, n=n: np.asarray(a[:n]), batched(chunk)))
+    return parts
 
 
 def assemble(names, inputs, targets, family) -> dict[str, np.ndarray]:

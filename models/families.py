@@ -379,9 +379,11 @@ def _people_only(image):
     return jnp.where((image == grid.PERSON) | (image == grid.HEADING), image, jnp.uint8(grid.FREE))
 
 
-# A paired family and its twin (the same layout with the rule's condition flipped): the pairs of
-# models.dataset.PAIRED_WITH, both ways round.
-TWINS = {"group": "non_group", "non_group": "group", "queue": "non_queue", "non_queue": "queue"}
+# Families drawn from their partner's keys (models.dataset draws them so): sample i of ``non_queue``
+# is sample i of ``queue``'s layout with the goal elsewhere, sample i of ``non_group`` the same
+# circle facing out. TWINS: each paired family and its twin, both ways round.
+PAIRED_WITH = {"non_queue": "queue", "non_group": "group"}
+TWINS = {**PAIRED_WITH, **{partner: twin for twin, partner in PAIRED_WITH.items()}}
 
 
 def _composite(key):
