@@ -125,6 +125,23 @@ def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = No
     print("held-out rule suite (models.rules), share of scenes passing per check:")
     for check, share in line["rules_pass_by_check"].items():
         print(f"  {check:<28} {100 * share:5.1f} %")
+    history = [json.loads(text) for text in (run / "metrics.jsonl").read_text().splitlines()]
+    print(
+        "per epoch (wall_s: generation + training so far): "
+        + "; ".join(
+            f"{h['epoch']}: {h['wall_s']:.0f} s, test {h['test_mse']:.5f}"
+            + (" bar" if h["meets_quality"] else "")
+            + f", worst check {100 * h['rules_pass_min']:.0f} %"
+            for h in history
+        )
+    )
+    both = [h for h in history if h["meets_quality"] and h.get("meets_rules")]
+    if both and both[0]["epoch"] != line["epoch"]:
+        first = both[0]
+        print(f"quality bar and rule suite first met at epoch {first['epoch']} ({first['wall_s'] / 60:.1f} min)")
+    # This machine's speed on the day, to set a time against runs of other days: the training
+    # throughput of the run itself (samples per second of generation and training).
+    print(f"this run's training throughput: {line['samples_seen'] / line['wall_s']:.0f} samples/s")
     if line["meets_quality"] and line["meets_rules"]:
         print(
             f"quality bar and rule suite reached at epoch {line['epoch']} ({line['samples_seen']:,} samples): "
