@@ -473,9 +473,12 @@ def _scene_hallway_l(rng):
     ]
 
 
-def _corner_walls(rng, distance=(1.0, 6.5), wedge_deg=(35.0, 150.0)):
-    """Two walls meeting at a corner 1-6.5 m from the robot, the wall block's angle 35-150 degrees
-    (generator: 60-120), the robot on the free side. Returns walls, corner, free-side mask."""
+CORNER_WEDGE_DEG = (35.0, 150.0)  # the wall block's angle at the suite's corners (generator: 45-135)
+
+
+def _corner_walls(rng, distance=(1.0, 6.5), wedge_deg=CORNER_WEDGE_DEG):
+    """Two walls meeting at a corner 1-6.5 m from the robot, the wall block's angle
+    :data:`CORNER_WEDGE_DEG`, the robot on the free side. Returns walls, corner, free-side mask."""
     d = rng.uniform(*distance)
     bearing = rng.uniform(-np.pi, np.pi)
     cx, cy = d * np.cos(bearing), d * np.sin(bearing)

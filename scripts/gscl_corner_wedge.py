@@ -2,8 +2,8 @@
 
     python scripts/gscl_corner_wedge.py --run runs/gscl                  # the suite's seed (100) and a fresh draw (400)
 
-The generator draws wedges (the wall block's angle) of :data:`models.families.CORNER_WEDGE_DEG`;
-the suite draws 35-150 degrees. Prints, for the corner alone and beside a queue, how many scenes
+The generator draws wedges (the wall block's angle) of :data:`models.families.CORNER_WEDGE_DEG`,
+the suite :data:`models.rules.CORNER_WEDGE_DEG`. Prints, for the corner alone and beside a queue, how many scenes
 pass below, within and above the generator's range.
 """
 
@@ -13,14 +13,12 @@ import argparse
 import pathlib
 import sys
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from models import rules  # noqa: E402
-from models.families import CORNER_WEDGE_DEG  # noqa: E402
-from models.inference import SocialCostModel  # noqa: E402
+from models import families, rules
+from models.inference import SocialCostModel
 
 
 def main(argv=None):
@@ -28,8 +26,8 @@ def main(argv=None):
     parser.add_argument("--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder")
     args = parser.parse_args(argv)
     model = SocialCostModel.load(args.run)
-    low, high = CORNER_WEDGE_DEG
-    bands = ((0.0, low, "narrower"), (low, high, "generator's"), (high, 360.0, "wider"))
+    (suite_low, suite_high), (low, high) = rules.CORNER_WEDGE_DEG, families.CORNER_WEDGE_DEG
+    bands = ((suite_low, low, "narrower"), (low, high, "generator's"), (high, suite_high, "wider"))
     for name, seed, scenes in (("suite's seed", rules.SUITE_SEED, 100), ("fresh draw, seed 1", 1, 400)):
         cases = rules.build_suite(scenes, seed)  # all kinds, so the same scenes as `socialnav gscl rules`
         report = rules.evaluate(model.function, cases)
@@ -40,7 +38,7 @@ def main(argv=None):
             parts = []
             for lo, hi, label in bands:
                 sel = (wedge >= lo) & (wedge < hi)
-                parts.append(f"{label} ({max(lo, 35):.0f}-{min(hi, 150):.0f} deg) {passed[sel].sum()}/{sel.sum()}")
+                parts.append(f"{label} ({lo:.0f}-{hi:.0f} deg) {passed[sel].sum()}/{sel.sum()}")
             print(f"{name:<20} {scene:<13} all {100 * passed.mean():5.1f} %   " + "   ".join(parts))
 
 
