@@ -103,6 +103,11 @@ def highest_frequency_hz(x: np.ndarray, dt_s: float, energy: float = SIGNIFICANT
     return float(freqs[min(k, len(freqs) - 1)])
 
 
+# Samples a world's series keeps after subsampling, at least: J-PCMCI+ at tau_max 1 regresses on
+# the previous sample and the contexts, and its partial correlations need some dozens of points.
+MIN_SERIES_SAMPLES = 20
+
+
 def nyquist_step(
     series: dict[str, np.ndarray], dt_s: float, energy: float = SIGNIFICANT_ENERGY
 ) -> tuple[int, dict[str, float]]:
@@ -179,6 +184,13 @@ def build_datasets(
     step = int(step)
     if step < 1:
         raise LogError(f"step must be >= 1, got {step}")
+    shortest = int(df.groupby("world", sort=False).size().min())
+    if shortest // step < MIN_SERIES_SAMPLES:
+        raise LogError(
+            f"subsampling step {step} (--step) leaves {shortest // step} sample(s) of the shortest world's "
+            f"{shortest}: discovery needs at least {MIN_SERIES_SAMPLES} per world, so a step of at most "
+            f"{max(1, shortest // MIN_SERIES_SAMPLES)}"
+        )
 
     data, names, world_of = {}, {}, {}
     index = {w: i for i, w in enumerate(waypoint_names)}

@@ -128,6 +128,9 @@ class CausalTables:
             raise TablesError(f"{path}: is a folder; expected the engine_tables.npz file in its causal/ folder")
         if not path.is_file():
             raise TablesError(f"{path}: not found (the causal pipeline, 'socialnav learn', writes it)")
+        with open(path, "rb") as head:
+            if head.read(4) != b"PK\x03\x04":  # numpy reads anything else as a pickle, and says so
+                raise TablesError(f"{path}: not an .npz archive (engine_tables.npz is a zip of arrays)")
         try:
             with np.load(path, allow_pickle=False) as f:
                 arrays = {k: f[k] for k in f.files}

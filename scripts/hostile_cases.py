@@ -53,6 +53,7 @@ class Case:
     api: bool = False  # a Python API call: its error is an exception (ValueError) naming the words
     fail_label: str = "wrong"  # what a failed check is called
     timeout_s: float = 120.0
+    misleading: tuple[str, ...] = ()  # words that make an error vague even if it names the rest
 
 
 def scenario(tmp: pathlib.Path, file: str, mutate: Callable[[dict], object]) -> pathlib.Path:
@@ -331,6 +332,246 @@ def _no_stale_left(tmp, proc):
 
 def _same_day(tmp, proc):
     return proc.returncode == 0
+
+
+# --- round two (issue 30): files outside --out, --overwrite, resumption, estimates, noise ----------
+
+INJECT_REMOVE_FAILURE = (
+    "import os, shutil, sys\n"
+    "FAIL = os.environ['FAIL_ON']\n"
+    "def failing(fn):\n"
+    "    def wrapper(p, *a, **k):\n"
+    "        if os.path.basename(str(p)) == FAIL or str(p).endswith(os.sep + FAIL):\n"
+    "            raise PermissionError(1, 'Operation not permitted', str(p))\n"
+    "        return fn(p, *a, **k)\n"
+    "    return wrapper\n"
+    "os.unlink = failing(os.unlink); os.remove = failing(os.remove); os.rmdir = failing(os.rmdir)\n"
+    "shutil.rmtree = failing(shutil.rmtree)\n"
+    "_replace = os.replace\n"
+    "def replace(src, dst, *a, **k):\n"
+    "    if os.path.basename(str(src)) == FAIL and '.staging-' not in str(src):\n"
+    "        raise PermissionError(1, 'Operation not permitted', str(src))\n"
+    "    return _replace(src, dst, *a, **k)\n"
+    "os.replace = replace\n"
+    "from socialnav.cli import main\n"
+    "sys.exit(main(sys.argv[1:]))\n"
+)
+
+
+def _user_files(folder: pathlib.Path) -> dict[str, bytes]:
+    """A folder of a user's own files (notes, data), made and returned as name -> content."""
+    files = {"notes.txt": b"my notes", "data/measurements.csv": b"t,x\n0,1\n", "logs.txt": b"not a run"}
+    for name, content in files.items():
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        (folder / name).write_bytes(content)
+    return files
+
+
+def _untouched(folder: pathlib.Path, files: dict[str, bytes]) -> bool:
+    return all((folder / n).is_file() and (folder / n).read_bytes() == c for n, c in files.items())
+
+
+def _overwrite_user_folder(*job: str) -> Callable[[pathlib.Path], list[str]]:
+    """``job`` with ``--out {tmp}/mine --overwrite`` on a folder of the user's files."""
+
+    def make(tmp):
+        mine = tmp / "mine"
+        mine.mkdir()
+        (tmp / "expected.json").write_text(json.dumps({k: v.decode() for k, v in _user_files(mine).items()}))
+        return command(*job, "--out", "{tmp}/mine", "--overwrite")(tmp)
+
+    return make
+
+
+def _user_files_kept(tmp, proc):
+    files = {k: v.encode() for k, v in json.loads((tmp / "expected.json").read_text()).items()}
+    return _untouched(tmp / "mine", files)
+
+
+def _learn_into_its_logs(tmp):
+    run = tmp / "run"
+    shutil.copytree(base_run(), run, ignore=shutil.ignore_patterns("causal"))
+    (run / "my-notes.txt").write_text("notes")
+    (tmp / "logs.sha").write_bytes((run / "logs.parquet").read_bytes())
+    return [*SOCIALNAV, "learn", "--logs", str(run), "--out", str(run), "--overwrite", "--no-progress"]
+
+
+def _logs_kept(tmp, proc):
+    run = tmp / "run"
+    ok = (run / "logs.parquet").is_file() and (run / "logs.parquet").read_bytes() == (tmp / "logs.sha").read_bytes()
+    return ok and (run / "run.json").is_file() and (run / "my-notes.txt").is_file()
+
+
+def _scene_named(name: str, *, file: str = "scene.json") -> Callable[[pathlib.Path], pathlib.Path]:
+    def write(tmp):
+        obj = json.loads((ROOT / "data" / "scenes" / "casn_static_person.json").read_text())
+        obj["name"] = name
+        path = tmp / file
+        path.write_text(json.dumps(obj))
+        return path
+
+    return write
+
+
+def _arena_escape(tmp):
+    """A scene named ``../../victim`` beside a folder of the user's called victim."""
+    victim = tmp / "victim"
+    victim.mkdir()
+    (victim / "thesis.tex").write_text("three years of work")
+    scene = _scene_named("../../victim")(tmp)
+    return [*SOCIALNAV, "arena", "--out", str(tmp / "a"), "--scenes", str(scene), "--methods", "navfn"] + [
+        "--variants",
+        "2",
+        "--no-progress",
+    ]
+
+
+def _nothing_outside(tmp, proc):
+    inside = {p for p in tmp.rglob("*") if p.is_file() and (p.is_relative_to(tmp / "a") or p.name == "scene.json")}
+    others = {p for p in tmp.rglob("*") if p.is_file()} - inside
+    return (tmp / "victim" / "thesis.tex").is_file() and others == {tmp / "victim" / "thesis.tex"}
+
+
+def _arena_edited_scene(tmp):
+    """A run, then the scene file edited (the person moved 0.8 m), then a rerun into the same --out."""
+    scene = _scene_named("mine")(tmp)
+    argv = [*SOCIALNAV, "arena", "--out", str(tmp / "a"), "--scenes", str(scene), "--methods", "navfn"]
+    argv += ["--variants", "2", "--no-progress"]
+    subprocess.run(argv, check=True, capture_output=True, cwd=ROOT)
+    (tmp / "before.csv").write_bytes((tmp / "a" / "summary.csv").read_bytes())
+    obj = json.loads(scene.read_text())
+    obj["robot"]["goal"] = [obj["robot"]["goal"][0], obj["robot"]["goal"][1] + 0.8]
+    scene.write_text(json.dumps(obj))
+    return argv
+
+
+def _edit_seen(tmp, proc):
+    """Refused with a line naming the scene, or recomputed (the summary changed)."""
+    if proc.returncode != 0:
+        return "mine" in proc.stderr and "Traceback" not in proc.stderr
+    return (tmp / "a" / "summary.csv").read_bytes() != (tmp / "before.csv").read_bytes()
+
+
+def _two_scenes_one_name(tmp):
+    first = _scene_named("twin", file="one.json")(tmp)
+    second = _scene_named("twin", file="two.json")(tmp)
+    return [*SOCIALNAV, "arena", "--out", str(tmp / "a"), "--scenes", f"{first},{second}", "--methods", "navfn"] + [
+        "--variants",
+        "2",
+        "--no-progress",
+    ]
+
+
+def _commit_cannot_remove(tmp):
+    """A previous run one of whose files cannot be removed, replaced with --overwrite."""
+    out = tmp / "out"
+    subprocess.run([*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY], check=True, capture_output=True, cwd=ROOT)
+    (tmp / "old.parquet").write_bytes((out / "logs.parquet").read_bytes())
+    (tmp / "old.json").write_bytes((out / "run.json").read_bytes())
+    os.environ["FAIL_ON"] = "snapshot.png"
+    return [PY, "-c", INJECT_REMOVE_FAILURE, "simulate", "--out", str(out), *SHORT_DAY, "--seed", "5", "--overwrite"]
+
+
+def _one_whole_run(tmp, proc):
+    """Either the old run whole (and the error names the file) or the new one whole."""
+    out = tmp / "out"
+    if not (out / "run.json").is_file() or not (out / "logs.parquet").is_file():
+        return False
+    old = (out / "run.json").read_bytes() == (tmp / "old.json").read_bytes()
+    if old:
+        same_logs = (out / "logs.parquet").read_bytes() == (tmp / "old.parquet").read_bytes()
+        return same_logs and proc.returncode != 0 and "snapshot.png" in proc.stderr
+    return json.loads((out / "run.json").read_text())["seed"] == 5
+
+
+def _damaged_newest_checkpoint(tmp):
+    run = tmp / "gscl"
+    shutil.copytree(tiny_gscl_run(), run)
+    steps = sorted((run / "checkpoints").iterdir(), key=lambda p: int(p.name) if p.name.isdigit() else -1)
+    (tmp / "steps").write_text(str(len([s for s in steps if s.name.isdigit()])))
+    newest = [s for s in steps if s.name.isdigit()][-1]
+    for f in newest.rglob("*"):
+        if f.is_file() and f.stat().st_size > 100:
+            f.write_bytes(f.read_bytes()[: f.stat().st_size // 3])
+    return [*SOCIALNAV, "gscl", "evaluate", "--run", str(run), "--examples", "1"]
+
+
+def _quiet_fallback(tmp, proc):
+    """One warning naming the skipped step, not hundreds of lines of third-party noise."""
+    text = proc.stderr + proc.stdout
+    if int((tmp / "steps").read_text()) < 2:
+        return proc.returncode != 0 and len(text.strip().splitlines()) <= 3
+    return proc.returncode == 0 and "Event loop is closed" not in text and len(proc.stderr.splitlines()) <= 5
+
+
+def _layers_with(mutate: Callable[[pathlib.Path], None]) -> Callable[[pathlib.Path], list[str]]:
+    def make(tmp):
+        run = tmp / "gscl"
+        shutil.copytree(tiny_gscl_run(), run)
+        mutate(run)
+        return [*SOCIALNAV, "layers", "--out", str(tmp / "img"), "--gscl-run", str(run)]
+
+    return make
+
+
+def _empty_checkpoints(run: pathlib.Path) -> None:
+    shutil.rmtree(run / "checkpoints")
+    (run / "checkpoints").mkdir()
+
+
+def _bad_config(run: pathlib.Path) -> None:
+    (run / "config.json").write_text('{"features": "wide"')
+
+
+def _text_as_tables(tmp):
+    path = tmp / "engine_tables.npz"
+    path.write_text("these are not tables\n")
+    return [*SOCIALNAV, "evaluate", "--tables", str(path), "--replicas", "1", "--slots", "S1", "--no-progress"]
+
+
+def _generate_read_only(tmp):
+    return [*SOCIALNAV, "gscl", "generate", "--out", "/proc/socialnav-data.npz", "--count", "group=8"]
+
+
+def _evaluate_out_a_file(tmp):
+    (tmp / "f").write_text("a file of mine")
+    return [*SOCIALNAV, "gscl", "evaluate", "--run", str(tiny_gscl_run()), "--out", str(tmp / "f")]
+
+
+def _scene_people(mutate: Callable[[dict], object]) -> Callable[[pathlib.Path], list[str]]:
+    """``socialnav arena`` on a copy of seed 001's group scene changed by ``mutate``."""
+
+    def make(tmp):
+        obj = json.loads((ROOT / "data" / "scenes" / "casn_static_person.json").read_text())
+        mutate(obj)
+        path = tmp / "scene.json"
+        path.write_text(json.dumps(obj))
+        return [*SOCIALNAV, "arena", "--out", str(tmp / "a"), "--scenes", str(path), "--methods", "navfn"] + [
+            "--variants",
+            "2",
+            "--no-progress",
+        ]
+
+    return make
+
+
+def _second_person_at_first(obj):
+    first = obj["people"][0]
+    obj["people"].append(dict(first))
+
+
+def _person_on_start(obj):
+    obj["people"].append({"behaviour": "standing", "position": obj["robot"]["start"], "heading_deg": 0})
+
+
+def _goal_at_start(obj):
+    obj["robot"]["goal"] = list(obj["robot"]["start"])
+
+
+def _waypoint_on_wall_face(obj):
+    """Move ``toilet-1`` onto the face of the first wall box (x exactly at its xmin)."""
+    (wp,) = [wp for wp in obj["waypoints"] if wp["id"] == "toilet-1"]
+    wp["x_m"], wp["y_m"] = 9.925, 0.0
 
 
 CASES: list[Case] = [
@@ -655,6 +896,123 @@ CASES: list[Case] = [
     Case("folder: a second run into the same --out", _second_simulate, check=_first_run_kept, fail_label="data lost"),
     Case("folder: --overwrite replaces the run whole", _overwrite, check=_overwritten_whole),
     Case("folder: a killed run's temporary", _stale_temporary, check=_no_stale_left),
+    # round two (issue 30): files outside --out, --overwrite, resumption
+    Case("r2 lost: arena scene named ../../victim", _arena_escape, check=_nothing_outside, fail_label="data lost"),
+    Case(
+        "r2 lost: simulate --overwrite on a folder of user files",
+        _overwrite_user_folder("simulate", *SHORT_DAY),
+        check=_user_files_kept,
+        fail_label="data lost",
+    ),
+    Case(
+        "r2 lost: ablation --overwrite on a folder of user files",
+        _overwrite_user_folder("ablation", "--seeds", "1", "--probabilities", "0.3", "--no-progress"),
+        check=_user_files_kept,
+        fail_label="data lost",
+        timeout_s=300,
+    ),
+    Case(
+        "r2 lost: evaluate --overwrite on a folder of user files",
+        _overwrite_user_folder("evaluate", "--tables", "{tables}", "--replicas", "1", "--slots", "S1", "--no-progress"),
+        check=_user_files_kept,
+        fail_label="data lost",
+        timeout_s=300,
+    ),
+    Case(
+        "r2 lost: learn --overwrite on a folder of user files",
+        _overwrite_user_folder("learn", "--logs", "{run}", "--no-progress"),
+        check=_user_files_kept,
+        fail_label="data lost",
+        timeout_s=300,
+    ),
+    Case(
+        "r2 lost: learn --out its own --logs --overwrite",
+        _learn_into_its_logs,
+        check=_logs_kept,
+        fail_label="data lost",
+    ),
+    Case(
+        "r2 lost: a commit that cannot remove an old file",
+        _commit_cannot_remove,
+        check=_one_whole_run,
+        fail_label="data lost",
+    ),
+    Case("r2 stale: arena rerun after the scene file was edited", _arena_edited_scene, check=_edit_seen),
+    Case("r2 stale: two scene files with one name", _two_scenes_one_name, ("twin", "one.json")),
+    Case(
+        "r2 hang: arena --variants 10^9",
+        command("arena", "--out", "{tmp}/a", "--scenes", "casn_head_on", "--variants", "1000000000", "--no-progress"),
+        ("--variants", "GB"),
+        timeout_s=60,
+    ),
+    Case(
+        "r2 hang: gscl generate --scale 10^6",
+        command("gscl", "generate", "--out", "{tmp}/d.npz", "--scale", "1000000"),
+        ("--scale", "GB"),
+        timeout_s=60,
+    ),
+    Case(
+        "r2 hang: evaluate --replicas 10^7",
+        command("evaluate", "--tables", "{tables}", "--out", "{tmp}/e", "--replicas", "10000000", "--no-progress"),
+        ("--replicas", "GB"),
+        timeout_s=60,
+    ),
+    # round two: tracebacks
+    Case("r2 traceback: simulate --seed 2^70", simulate_args("--seed", str(2**70)), ("--seed",)),
+    Case(
+        "r2 traceback: arena --seed 2^70",
+        command("arena", "--out", "{tmp}/a", "--scenes", "casn_head_on", "--seed", str(2**70)),
+        ("--seed",),
+    ),
+    Case("r2 traceback: gscl generate onto a read-only file system", _generate_read_only, ("/proc",)),
+    Case("r2 traceback: gscl evaluate --out a file", _evaluate_out_a_file, ("--out",)),
+    Case("r2 traceback: layers with an empty checkpoints folder", _layers_with(_empty_checkpoints), ("checkpoint",)),
+    Case("r2 traceback: layers with a bad config.json", _layers_with(_bad_config), ("config.json",)),
+    Case("r2 noise: a damaged newest checkpoint", _damaged_newest_checkpoint, check=_quiet_fallback),
+    # round two: accepted without a word
+    Case(
+        "r2 silent: waypoint radius 1e6 m",
+        simulate_with("waypoints.json", lambda o: o["waypoints"][1].update(radius_m=1e6)),
+        ("waypoints.json", "radius_m"),
+    ),
+    Case(
+        "r2 silent: worker radius 5 m",
+        simulate_with("params.json", setp("workers", "radius_m", 5.0)),
+        ("params.json", "radius_m"),
+    ),
+    Case(
+        "r2 silent: a waypoint on a wall face",
+        simulate_with("waypoints.json", _waypoint_on_wall_face),
+        ("waypoints.json", "toilet-1"),
+    ),
+    Case(
+        "r2 silent: an empty waypoint name",
+        simulate_with("waypoints.json", lambda o: o["waypoints"][1].update(id="")),
+        ("waypoints.json", "id"),
+    ),
+    Case("r2 silent: two people at one point", _scene_people(_second_person_at_first), ("scene.json", "people[1]")),
+    Case("r2 silent: a person on the robot's start", _scene_people(_person_on_start), ("scene.json", "start")),
+    Case("r2 silent: the robot's goal at its start", _scene_people(_goal_at_start), ("scene.json", "goal")),
+    # round two: unclear messages
+    Case(
+        "r2 unclear: an empty wall list",
+        simulate_with("walls.json", lambda o: o.update(boxes=[])),
+        ("walls.json", "boxes"),
+        misleading=("argmin",),
+    ),
+    Case(
+        "r2 unclear: learn --step 100000",
+        command("learn", "--logs", "{run}", "--out", "{tmp}/c", "--step", "100000", "--no-progress"),
+        ("--step",),
+        misleading=("No valid reference point",),
+    ),
+    Case(
+        "r2 unclear: a text file given as tables",
+        _text_as_tables,
+        ("engine_tables.npz",),
+        misleading=("allow_pickle",),
+        timeout_s=120,
+    ),
 ]
 
 
@@ -691,7 +1049,9 @@ def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
         return "traceback", last
     if proc.returncode == 0:
         return "accepted nonsense", last or f"exit 0 in {time.perf_counter() - t0:.0f} s"
-    if all(w.lower() in text.lower() for w in case.expect_words):
+    if all(w.lower() in text.lower() for w in case.expect_words) and not any(
+        w.lower() in text.lower() for w in case.misleading
+    ):
         return "clean error", last
     return "vague error", last
 

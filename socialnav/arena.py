@@ -25,11 +25,12 @@ from __future__ import annotations
 
 import argparse
 import functools
+import hashlib
 import json
 import pathlib
 import sys
 
-from socialnav.argtypes import comma_names, output_folder, positive_int
+from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.backend import add_backend_options
 from socialnav.locking import locks_folder
 
@@ -53,7 +54,6 @@ def add_parser(sub) -> None:
         help=f"methods (default: {','.join(DEFAULT_METHODS)}; gscl too with --gscl-run)",
     )
     p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the variants (default 0)")
     p.add_argument(
         "--out", type=output_folder, default=pathlib.Path("runs/arena"), help="output folder (default runs/arena)"
     )
@@ -83,6 +83,13 @@ def add_parser(sub) -> None:
         default=None,
         help="variants per shard (default: all of a scene's in one; a Ray task per shard with --backend ray)",
     )
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the arena run in --out whole (only once the new one is complete); without it a run with the "
+        "same settings is resumed and one with other settings refused",
+    )
+    p.add_argument("--seed", type=seed_int, default=0, help="random seed of the variants (default 0)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     add_backend_options(p)
     p.set_defaults(handler=run)
@@ -105,9 +112,83 @@ def _scene_files(names, scenes_dir: pathlib.Path) -> list[pathlib.Path]:
     return files
 
 
+JOB = "socialnav arena"
+# What an arena run leaves at the top of its folder (run.json first, summary.csv last).
+RESULTS = (
+    "run.json",
+    "summary.csv",
+    "stats.csv",
+    "papers.csv",
+    "directions.csv",
+    "episodes",
+    "trajectories",
+    "pictures",
+    "shards",
+)
+# Rough cost of one episode for the estimate printed before a run (this project's 2-core
+# machine, the default 100-variant table: 22,400 episodes in about 12 min, README "The arena").
+EPISODES_PER_S = 30.0
+# Bytes a finished episode's row costs in the joined tables (about 45 columns of 8 bytes, with
+# pandas' overhead), measured on the default table's frames.
+EPISODE_ROW_BYTES = 600
+
+
 @locks_folder(lambda args: args.out, "arena")
 def run(args) -> int:
+    from common import runfolder
+
+    try:
+        if args.overwrite:
+            runfolder.claim(args.out, JOB, RESULTS, overwrite=True, marker="run.json")
+            with runfolder.staged(args.out, "run.json", True, job=JOB) as stage:
+                code = _run_into(args, stage, shown_as=args.out)
+                if code:
+                    raise _Failed(code)
+            print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, directions.csv, episodes/ and trajectories/")
+            return 0
+        runfolder.claim(args.out, JOB, RESULTS)  # a previous arena run is resumed, not refused
+        code = _run_into(args, args.out, shown_as=args.out)
+    except _Failed as failed:
+        return failed.code
+    except (runfolder.RunFolderError, OSError) as e:
+        where = f" {e.filename}" if isinstance(e, OSError) and e.filename else ""
+        print(f"socialnav arena: cannot write{where}: {getattr(e, 'strerror', None) or e}", file=sys.stderr)
+        return 2
+    if code == 0:
+        print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, directions.csv, episodes/ and trajectories/")
+    return code
+
+
+class _Failed(Exception):
+    """A check of the run failed (already reported); the staged run is dropped."""
+
+    def __init__(self, code: int):
+        self.code = code
+
+
+def _gscl_identity(run: pathlib.Path) -> str:
+    """What makes a GSCL run's model this one: its configuration and its checkpoints' steps."""
+    config = (run / "config.json").read_bytes() if (run / "config.json").is_file() else b""
+    steps = sorted(p.name for p in (run / "checkpoints").iterdir() if p.name.isdigit())
+    return hashlib.sha256(config + ",".join(steps).encode()).hexdigest()[:16]
+
+
+def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str:
+    """A scene's results are these when this digest matches: the scene file's bytes, the held-out
+    flag, and every setting that changes an episode (methods, variants, seed, shard layout, the
+    GSCL model, the metrics' and the toolkit's versions)."""
+    h = hashlib.sha256()
+    h.update(pathlib.Path(spec_file).read_bytes())
+    keys = ("methods", "variants", "seed", "shard_variants", "keep_trajectories", "gscl_model")
+    h.update(json.dumps({"held_out": held_out, **{k: settings.get(k) for k in keys}}, sort_keys=True).encode())
+    h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
+    return h.hexdigest()[:16]
+
+
+def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
+    from common import runfolder
     from common.atomic import write_atomic, write_text_atomic
+    from common.memory import available_bytes
     from data import SCENES_DIR
     from jaxsim.scenario.errors import ScenarioError
     from jaxsim.scenes.spec import load_scene
@@ -139,10 +220,41 @@ def run(args) -> int:
     if "gscl" in methods and args.gscl_run is None:
         print("socialnav arena: --methods gscl needs --gscl-run RUN (a trained GSCL run folder)", file=sys.stderr)
         return 2
+    files = _scene_files(args.scenes, SCENES_DIR)
     try:
-        specs = [load_scene(f) for f in _scene_files(args.scenes, SCENES_DIR)]
+        runfolder.check_inputs(shown_as, [*files, args.gscl_run])
+        specs = [load_scene(f) for f in files]
     except ScenarioError as e:
         print(f"socialnav arena: {e}", file=sys.stderr)
+        return 2
+    except runfolder.NotOurs as e:
+        print(f"socialnav arena: {e}", file=sys.stderr)
+        return 2
+    seen: dict[str, pathlib.Path] = {}
+    for spec in specs:
+        if spec.name in seen:
+            print(
+                f"socialnav arena: {spec.file} and {seen[spec.name]} are both named {spec.name!r}: "
+                "a run's scenes need different names (their results are filed under it)",
+                file=sys.stderr,
+            )
+            return 2
+        seen[spec.name] = spec.file
+    for scene_name, _ in args.animate:
+        if scene_name.removesuffix(_HELD_OUT) not in seen:
+            print(f"socialnav arena: --animate {scene_name}: not a scene of this run", file=sys.stderr)
+            return 2
+    runs = [(spec, False) for spec in specs] + ([(spec, True) for spec in specs] if args.held_out else [])
+    n_episodes = len(runs) * args.variants * len(methods)
+    needed = _memory_bytes(specs, args, len(methods))
+    available = available_bytes()
+    if available is not None and needed > 0.8 * available:
+        print(
+            f"socialnav arena: --variants {args.variants}: about {needed / 1e9:.1f} GB at once "
+            f"({n_episodes:,} episodes' rows and a shard of {args.shard_variants:,} variants in flight), this machine "
+            f"has {available / 1e9:.1f} GB available; lower --variants, or --shard-variants for the shards",
+            file=sys.stderr,
+        )
         return 2
     if args.gscl_run is not None:
         if not (args.gscl_run / "checkpoints").is_dir():
@@ -152,7 +264,11 @@ def run(args) -> int:
             )
             return 2
         args.gscl_run = args.gscl_run.resolve()  # a Ray worker may start elsewhere
-        _gscl_predict(args.gscl_run)  # loads it here first: a bad run fails before any work
+        try:
+            _gscl_predict(args.gscl_run)  # loads it here first: a bad run fails before any work
+        except (FileNotFoundError, ValueError) as e:
+            print(f"socialnav arena: --gscl-run: {e}", file=sys.stderr)
+            return 2
 
     import pandas as pd
 
@@ -169,37 +285,55 @@ def run(args) -> int:
         "held_out": args.held_out,
         "shard_variants": args.shard_variants,
         "gscl_run": None if args.gscl_run is None else str(args.gscl_run),
+        "gscl_model": None if args.gscl_run is None else _gscl_identity(args.gscl_run),
         "metrics_version": nav_metrics.VERSION,
         "socialnav_version": __version__,
     }
-    meta = args.out / "run.json"
+    names = [spec.name + (arena_report.HELD_OUT if held_out else "") for spec, held_out in runs]
+    digests = {name: scene_digest(spec.file, held_out, settings) for (spec, held_out), name in zip(runs, names)}
+    settings["scene_digests"] = digests
+    meta = out / "run.json"
     if meta.exists():
         try:
             previous = json.loads(meta.read_text())
         except (OSError, json.JSONDecodeError):
             previous = None
-        if not isinstance(previous, dict) or {k: previous.get(k) for k in settings} != settings:
+        differs = [k for k in settings if not isinstance(previous, dict) or previous.get(k) != settings[k]]
+        if differs:
+            changed = [
+                n
+                for n, d in digests.items()
+                if isinstance(previous, dict) and (previous.get("scene_digests") or {}).get(n) not in (None, d)
+            ]
+            what = f"scene file(s) changed since: {', '.join(changed)}" if changed else f"other {', '.join(differs)}"
             print(
-                f"socialnav arena: {args.out} holds a run with other settings ({meta}); choose another --out",
+                f"socialnav arena: {shown_as} holds a run with {what} ({shown_as / 'run.json'}); "
+                "pass --overwrite to replace it whole, or choose another --out",
                 file=sys.stderr,
             )
             return 2
-    args.out.mkdir(parents=True, exist_ok=True)
+    minutes = n_episodes / EPISODES_PER_S / 60
+    print(
+        f"arena: {len(runs)} scene run(s) x {len(methods)} method(s) x {args.variants} variant(s) = {n_episodes:,} "
+        f"episodes; about {minutes:.0f} min at {EPISODES_PER_S:.0f} episodes/s (2 cores), at most "
+        f"{needed / 1e9:.2f} GB at once",
+        flush=True,
+    )
+    out.mkdir(parents=True, exist_ok=True)
     # The backend is recorded, not compared: both give the same episodes for the same shards.
     write_text_atomic(meta, json.dumps({**settings, **backend_lib.describe(args)}, indent=1) + "\n")
+    runfolder.record(out, JOB, ["run.json", "shards/"])
 
-    runs = [(spec, False) for spec in specs] + ([(spec, True) for spec in specs] if args.held_out else [])
-    names = [spec.name + (arena_report.HELD_OUT if held_out else "") for spec, held_out in runs]
     shards = []
     for (spec, held_out), name in zip(runs, names, strict=True):
-        if (args.out / "episodes" / f"{name}.parquet").exists():
-            continue  # the whole scene is done
+        if _finished(out, name, digests[name]):
+            continue  # the whole scene is done, with these settings
         for first in range(0, args.variants, args.shard_variants):
             n = min(args.shard_variants, args.variants - first)
             shards.append(
                 backend_lib.Shard(
                     name=f"{name}[{first}:{first + n}]",
-                    output=_shard_file(args.out, name, first),
+                    output=runfolder.inside(out, _shard_file(out, name, digests[name], first)),
                     args=(spec, held_out, first, n, tuple(methods), args.seed, args.keep_trajectories, args.gscl_run),
                     work=n * len(methods),
                 )
@@ -211,12 +345,12 @@ def run(args) -> int:
         return 2
     frames = []
     for (spec, held_out), name in zip(runs, names, strict=True):
-        episodes_file = args.out / "episodes" / f"{name}.parquet"
-        if not episodes_file.exists():
-            _finish_scene(args, spec, held_out, name, methods)
+        episodes_file = runfolder.inside(out, out / "episodes" / f"{name}.parquet")
+        if not _finished(out, name, digests[name]):
+            _finish_scene(args, out, spec, held_out, name, methods, digests[name])
         frames.append(pd.read_parquet(episodes_file))
     summary = arena_report.summary(pd.concat(frames, ignore_index=True))
-    write_atomic(args.out / "summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
+    write_atomic(out / "summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
     shown = [
         "scene",
         "method",
@@ -231,25 +365,67 @@ def run(args) -> int:
     with pd.option_context("display.width", 200, "display.max_rows", 500):
         print(summary[shown].round(2).to_string(index=False))
     statistics = arena_stats.scene_statistics(pd.concat(frames, ignore_index=True))
-    write_atomic(args.out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
+    write_atomic(out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
+    written = ["summary.csv", "stats.csv"]
     compared = papers.comparison(summary).dropna(subset=["ours"])
     if len(compared):
-        write_atomic(args.out / "papers.csv", lambda tmp: compared.to_csv(tmp, index=False))
+        write_atomic(out / "papers.csv", lambda tmp: compared.to_csv(tmp, index=False))
+        written.append("papers.csv")
         print("\nthe papers' numbers and ours (95 % intervals):")
         with pd.option_context("display.width", 200, "display.max_rows", 500):
             print(compared.round(2).to_string(index=False))
     turned = papers.directions(pd.concat(frames, ignore_index=True))
     if len(turned):
-        write_atomic(args.out / "directions.csv", lambda tmp: turned.to_csv(tmp, index=False))
+        write_atomic(out / "directions.csv", lambda tmp: turned.to_csv(tmp, index=False))
+        written.append("directions.csv")
         print("\ndo the papers' differences reproduce? (proposed - baseline, paired by variant)")
         with pd.option_context("display.width", 200, "display.max_rows", 500):
             print(turned.round(2).to_string(index=False))
-    print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, directions.csv, episodes/ and trajectories/")
+    runfolder.record(out, JOB, written)
     return 0
 
 
-def _shard_file(out: pathlib.Path, name: str, first: int) -> pathlib.Path:
-    return out / "shards" / name / f"{first:06d}.parquet"
+_HELD_OUT = "@held_out"
+
+
+def _memory_bytes(specs, args, n_methods: int) -> float:
+    """What a run holds at once: every episode's row in the joined tables, and one shard's
+    variants in flight (their trajectories, T steps of the robot and every person slot, and the
+    planner's grids, a few (H, W) float32 maps per variant)."""
+    from evaluation.arena import ArenaConfig
+
+    config = ArenaConfig()
+    scenes = len(specs) * (2 if args.held_out else 1)
+    rows = scenes * args.variants * n_methods * EPISODE_ROW_BYTES
+    flight = 0.0
+    for spec in specs:
+        steps = spec.timeout_s / config.dt_s
+        xmin, xmax, ymin, ymax = spec.bounds_m
+        cells = (xmax - xmin) * (ymax - ymin) / config.grid_resolution_m**2
+        per_variant = steps * (48 + 24 * spec.n_people_slots) + 16 * cells * 4
+        flight = max(flight, per_variant * min(args.shard_variants or args.variants, args.variants))
+    return rows + flight
+
+
+def _finished(out: pathlib.Path, name: str, digest: str) -> bool:
+    """A scene's episodes file exists and was made with these settings (its ``scene_digest``)."""
+    import pyarrow.parquet as pq
+
+    path = out / "episodes" / f"{name}.parquet"
+    if not path.is_file():
+        return False
+    try:
+        metadata = pq.read_schema(path).metadata or {}
+        attrs = json.loads(metadata.get(b"PANDAS_ATTRS", b"{}"))
+    except (OSError, ValueError):
+        return False
+    return attrs.get("scene_digest") == digest
+
+
+def _shard_file(out: pathlib.Path, name: str, digest: str, first: int) -> pathlib.Path:
+    """A shard's episodes file: under a folder named by its scene and the digest of what made it,
+    so a shard of an edited scene or of other settings is never joined with these."""
+    return out / "shards" / f"{name}-{digest}" / f"{first:06d}.parquet"
 
 
 @functools.lru_cache(maxsize=4)
@@ -279,37 +455,50 @@ def _save_shard(shard, result) -> None:
     write_atomic(shard.output, episodes.to_parquet)  # last: its presence marks the shard done
 
 
-def _finish_scene(args, spec, held_out, name, methods) -> None:
+def _finish_scene(args, out, spec, held_out, name, methods, digest) -> None:
     """Join a scene's shards into ``episodes/<name>.parquet`` and ``trajectories/``, draw its
-    pictures, then remove the shards (the episodes file last: its presence marks the scene done)."""
+    pictures, then remove the shards (the episodes file last: its presence, with the scene's
+    digest in its metadata, marks the scene done)."""
     import shutil
 
     import pandas as pd
 
+    from common import runfolder
     from common.atomic import write_atomic
     from evaluation import arena_plots
     from jaxsim.scenes.spec import mirror
 
-    folder = args.out / "shards" / name
+    folder = runfolder.inside(out, out / "shards" / f"{name}-{digest}")
     parts = sorted(folder.glob("[0-9]*[0-9].parquet"))
     episodes = pd.concat([pd.read_parquet(f) for f in parts], ignore_index=True)
     kept = [pd.read_parquet(f) for f in sorted(folder.glob("*.trajectories.parquet"))]
     order = {m: k for k, m in enumerate(methods)}
     episodes = episodes.sort_values(["method", "variant"], key=lambda c: c.map(order) if c.name == "method" else c)
     episodes = episodes.reset_index(drop=True)
+    episodes.attrs = {"scene_digest": digest}
+    written = []
     if kept:
         trajectories = pd.concat(kept, ignore_index=True)
         drawn = mirror(spec) if held_out else spec
-        write_atomic(args.out / "trajectories" / f"{name}.parquet", trajectories.to_parquet)
-        pictures = args.out / "pictures"
-        arena_plots.paths_figure(drawn, trajectories, pictures / f"{name}_paths.png")
-        arena_plots.distance_figure(drawn, trajectories, pictures / f"{name}_distance.png")
+        write_atomic(runfolder.inside(out, out / "trajectories" / f"{name}.parquet"), trajectories.to_parquet)
+        written.append(f"trajectories/{name}.parquet")
+        pictures = out / "pictures"
+        drawings = [
+            (arena_plots.paths_figure, f"{name}_paths.png", ()),
+            (arena_plots.distance_figure, f"{name}_distance.png", ()),
+        ]
         if "snape_social_eband" in methods:
-            arena_plots.speed_figure(drawn, trajectories, "snape_social_eband", pictures / f"{name}_speed.png")
+            drawings.append((arena_plots.speed_figure, f"{name}_speed.png", ("snape_social_eband",)))
+        for draw, file, extra in drawings:
+            draw(drawn, trajectories, *extra, runfolder.inside(out, pictures / file))
+            written.append(f"pictures/{file}")
         for scene_name, method in args.animate:
             if scene_name == name:
-                arena_plots.animation(drawn, trajectories, method, pictures / f"{name}_{method}.gif")
-    write_atomic(args.out / "episodes" / f"{name}.parquet", episodes.to_parquet)
+                gif = runfolder.inside(out, pictures / f"{name}_{method}.gif")
+                arena_plots.animation(drawn, trajectories, method, gif)
+                written.append(f"pictures/{gif.name}")
+    runfolder.record(out, JOB, [*written, f"episodes/{name}.parquet"])
+    write_atomic(runfolder.inside(out, out / "episodes" / f"{name}.parquet"), episodes.to_parquet)
     shutil.rmtree(folder, ignore_errors=True)
-    if args.out.joinpath("shards").is_dir() and not any(args.out.joinpath("shards").iterdir()):
-        args.out.joinpath("shards").rmdir()
+    if out.joinpath("shards").is_dir() and not any(out.joinpath("shards").iterdir()):
+        out.joinpath("shards").rmdir()

@@ -103,3 +103,23 @@ def open_unit_interval(text: str) -> float:
     if not 0 < value < 1:  # also false for nan
         raise argparse.ArgumentTypeError(f"must be in (0, 1), got {text}")
     return value
+
+
+# JAX's random keys keep 32 bits of a seed when 64-bit types are off (its default): seeds 0 and
+# 2**40 give the same key, -1 the same as 2**32 - 1. Seeds are therefore the 32-bit range, so that
+# different seeds are different streams.
+MAX_SEED = 2**32 - 1
+
+
+def seed_int(text: str) -> int:
+    """A random seed: an integer in [0, 2**32 - 1] (JAX's keys keep 32 bits of a seed)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(
+            f"must be in [0, {MAX_SEED}] (JAX keeps 32 bits of a seed: larger or negative ones would repeat "
+            f"another seed's stream), got {text}"
+        )
+    return value

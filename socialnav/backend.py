@@ -238,23 +238,51 @@ def run_with_args(
     )
 
 
+STAGING_SIGNATURE = "socialnav-shards/1"
+
+
+def _is_staging(folder: pathlib.Path) -> dict | None:
+    """The layout recorded in a shard staging folder this toolkit made, else None."""
+    import json
+
+    try:
+        raw = json.loads((folder / "settings.json").read_text())
+    except (OSError, ValueError):
+        return None
+    if isinstance(raw, dict) and raw.get("format") == STAGING_SIGNATURE:
+        return raw.get("layout")
+    return None
+
+
 def staging_folder(folder: pathlib.Path, layout: dict) -> pathlib.Path:
     """The folder where a job keeps its finished shards until it commits its output: reused when
     it holds shards of the same ``layout`` (settings and shard sizes), emptied when it holds
-    another run's, created if missing; ``layout`` is recorded in ``settings.json`` there."""
+    another run's, created if missing; ``layout`` is recorded in ``settings.json`` there.
+
+    Raises:
+      common.runfolder.NotOurs: ``folder`` exists and is not a staging folder of this toolkit
+        (nothing in it is removed).
+    """
     import json
     import shutil
 
     from common.atomic import write_text_atomic
+    from common.runfolder import NotOurs
 
-    marker = folder / "settings.json"
-    if folder.is_dir():
-        try:
-            same = json.loads(marker.read_text()) == json.loads(json.dumps(layout))
-        except (OSError, ValueError):
-            same = False
-        if not same:
+    if folder.exists() or folder.is_symlink():
+        recorded = _is_staging(folder) if folder.is_dir() and not folder.is_symlink() else None
+        if recorded is None and (not folder.is_dir() or folder.is_symlink() or any(folder.iterdir())):
+            raise NotOurs(f"{folder} exists and is not a shard folder socialnav made: move it away")
+        if recorded is not None and recorded != json.loads(json.dumps(layout)):
             shutil.rmtree(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(marker, json.dumps(layout))
+    write_text_atomic(folder / "settings.json", json.dumps({"format": STAGING_SIGNATURE, "layout": layout}))
     return folder
+
+
+def remove_staging(folder: pathlib.Path) -> None:
+    """Remove a shard staging folder once its job has committed, if it is one this toolkit made."""
+    import shutil
+
+    if folder.is_dir() and not folder.is_symlink() and _is_staging(folder) is not None:
+        shutil.rmtree(folder)

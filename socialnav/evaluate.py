@@ -8,12 +8,13 @@ import pathlib
 import sys
 
 from common import runfolder
+from common.memory import available_bytes
 from evaluation import warehouse
 from evaluation.protocol import ProtocolConfig
 from jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
 from planners.tables import TABLES_FILE, CausalTables, TablesError
 from socialnav import backend as backend_lib
-from socialnav.argtypes import comma_names, output_folder, positive_float, positive_int
+from socialnav.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
 from socialnav.backend import add_backend_options
 from socialnav.locking import locks_folder
 
@@ -56,6 +57,12 @@ RESULTS = (
     "fig10_safety.png",
     "fig11_routes.png",
 )
+JOB = "socialnav evaluate"
+# Rough memory of one experiment (a replica of a slot, one method at a time) in the batch: its
+# world's state and the all-pairs social force's buffers for 51 agents; and of its tasks' rows in
+# the result (about 400 tasks of two methods). For the refusal before a run the machine cannot hold.
+EXPERIMENT_BYTES = 1_000_000
+TASK_ROWS_BYTES = 150_000
 
 
 def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: int = 32) -> None:
@@ -72,7 +79,7 @@ def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: in
         default=None,
         help="comma-separated slot names to run, e.g. S1,S6,S11 (default: all)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=seed_int, default=0, help="random seed (default 0)")
     p.add_argument(
         "--collision-radius-m",
         type=positive_float,
@@ -119,15 +126,28 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
         return 2
     overwrite = getattr(args, "overwrite", False)
     try:
-        runfolder.prepare(out, RESULTS, overwrite, marker="summary.json")
-    except runfolder.PreviousRun as e:
+        runfolder.check_inputs(out, [tables_file, getattr(args, "scenario", None)])
+        runfolder.prepare(out, RESULTS, overwrite, marker="summary.json", job=JOB)
+    except runfolder.RunFolderError as e:
         print(f"socialnav evaluate: {e}", file=sys.stderr)
+        return 2
+    backend = getattr(args, "backend", "local")
+    size = getattr(args, "shard_replicas", None) or args.replicas
+    n_slots = len(slots) if slots is not None else scenario.n_slots
+    in_flight = min(size, args.replicas) * n_slots * EXPERIMENT_BYTES
+    held = args.replicas * n_slots * TASK_ROWS_BYTES
+    available = available_bytes()
+    if available is not None and in_flight + held > 0.8 * available:
+        print(
+            f"socialnav evaluate: --replicas {args.replicas}: about {(in_flight + held) / 1e9:.1f} GB at once "
+            f"({min(size, args.replicas) * n_slots:,} experiments in one batch, and every task's row), this machine "
+            f"has {available / 1e9:.1f} GB available; lower --replicas, or --shard-replicas for smaller batches",
+            file=sys.stderr,
+        )
         return 2
     settings = {"deadline_per_hop": not args.deadline_per_task}
     if args.collision_radius_m is not None:
         settings["collision_radius_m"] = args.collision_radius_m
-    backend = getattr(args, "backend", "local")
-    size = getattr(args, "shard_replicas", None) or args.replicas
     try:
         if backend == "local" and size >= args.replicas:
             result = warehouse.run_evaluation(
@@ -144,15 +164,16 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    except backend_lib.BackendError as e:
+    except (backend_lib.BackendError, runfolder.RunFolderError) as e:
         print(f"socialnav evaluate: {e}", file=sys.stderr)
         return 2
-    with runfolder.staged(out, "summary.json", overwrite) as stage:
-        files = [out / f.name for f in warehouse.write_report(result, scenario, stage)]
-    if (out / STAGING).is_dir():  # the shards live until the report is written
-        import shutil
-
-        shutil.rmtree(out / STAGING)
+    try:
+        with runfolder.staged(out, "summary.json", overwrite, job=JOB) as stage:
+            files = [out / f.name for f in warehouse.write_report(result, scenario, stage)]
+    except runfolder.RunFolderError as e:
+        print(f"socialnav evaluate: {e}", file=sys.stderr)
+        return 2
+    backend_lib.remove_staging(out / STAGING)  # the shards live until the report is written
     summary = json.loads((out / "summary.json").read_text())
     print(
         f"\n{args.replicas} replica(s) x {len(result.config['slots'])} slot(s), both methods; wall time "

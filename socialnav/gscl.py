@@ -13,12 +13,21 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import shutil
 import time
 
+from common import runfolder
 from common.atomic import write_text_atomic
+from common.memory import available_bytes
+from common.runfolder import RunFolderError
 from socialnav import backend as backend_lib
-from socialnav.argtypes import non_negative_float, non_negative_int, output_folder, positive_float, positive_int
+from socialnav.argtypes import (
+    non_negative_float,
+    non_negative_int,
+    output_folder,
+    positive_float,
+    positive_int,
+    seed_int,
+)
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.locking import locks_folder
 
@@ -74,7 +83,7 @@ def add_parser(top) -> None:
         help="write a dataset of (input map, target cost map) pairs to a .npz file (and a .json of how it was made)",
     )
     gen.add_argument("--out", type=output_folder, required=True, help="the .npz file to write")
-    gen.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    gen.add_argument("--seed", type=seed_int, default=0, help="random seed (default 0)")
     gen.add_argument(
         "--scale",
         type=positive_float,
@@ -124,7 +133,7 @@ def add_parser(top) -> None:
     tr.add_argument(
         "--coords", action=argparse.BooleanOptionalAction, default=None, help="coordinate input channels (default on)"
     )
-    tr.add_argument("--seed", type=int, default=None)
+    tr.add_argument("--seed", type=seed_int, default=None)
     tr.add_argument(
         "--composites",
         type=non_negative_int,
@@ -211,18 +220,29 @@ def _generate(args) -> int:
             f"socialnav gscl generate: --scale {args.scale:g} gives 0 samples in every family "
             f"(the smallest scale that gives one is about {smallest:.2g}); nothing written"
         )
-    if args.out.exists() and not args.overwrite:
-        raise SystemExit(f"socialnav gscl generate: --out {args.out} exists; pass --overwrite to replace it")
+    _check_dataset_target(args.out, args.overwrite)
+    n = sum(counts.values())
+    needed, available = n * DATASET_BYTES_PER_SAMPLE, available_bytes()
+    if available is not None and needed > 0.8 * available:
+        raise SystemExit(
+            f"socialnav gscl generate: --scale {args.scale:g}: {n:,} samples need about {needed / 1e9:.1f} GB at once "
+            f"(the dataset is one array in memory before it is written), this machine has {available / 1e9:.1f} GB "
+            "available; lower --scale or --count (the shards of --shard-samples are joined in memory too)"
+        )
+    print(f"gscl generate: {n:,} samples, about {needed / 1e9:.2f} GB at once", flush=True)
     t0 = time.perf_counter()
     if args.backend == "local" and args.shard_samples is None:
         data = dataset.generate(args.seed, counts)
     else:
         try:
             data = _generate_sharded(args, counts)
-        except BackendError as e:
+        except (BackendError, RunFolderError) as e:
             raise SystemExit(f"socialnav gscl generate: {e}") from None
     dt = time.perf_counter() - t0
-    dataset.save(args.out, data)
+    try:
+        dataset.save(args.out, data)
+    except OSError as e:
+        raise SystemExit(f"socialnav gscl generate: cannot write {args.out}: {e.strerror or e}") from None
     provenance = {
         "seed": args.seed,
         "counts": counts,
@@ -231,8 +251,7 @@ def _generate(args) -> int:
         "wall_s": dt,
     }
     write_text_atomic(args.out.with_suffix(".json"), json.dumps(provenance, indent=1) + "\n")
-    if _staging(args.out).is_dir():  # the shards live until the dataset is written
-        shutil.rmtree(_staging(args.out))
+    backend_lib.remove_staging(_staging(args.out))  # the shards live until the dataset is written
     print(f"{len(data['family'])} pairs in {dt:.1f} s (compilation included) -> {args.out} (+ .json: how it was made)")
     for i, name in enumerate(data["names"]):
         print(f"  {name:<18}{int((data['family'] == i).sum()):>7}")
@@ -242,6 +261,38 @@ def _generate(args) -> int:
         plots.family_grid(data["inputs"], data["targets"], data["family"], data["names"], args.preview)
         print(f"preview -> {args.preview}")
     return 0
+
+
+# Memory a generated sample holds: its input (1,600 bytes) and target (6,400), about three times
+# over while the generator's chunks are joined and written.
+DATASET_BYTES_PER_SAMPLE = 24_000
+
+
+def _check_dataset_target(out: pathlib.Path, overwrite: bool) -> None:
+    """``--out`` may be written: new, or (with ``--overwrite``) a dataset this command wrote
+    (its ``.json`` provenance beside it); never a folder or a user's file. Checked before any work,
+    the folder's writability included."""
+    from common.runfolder import RunFolderError, check_writable
+
+    provenance = out.with_suffix(".json")
+    if out.is_dir():
+        raise SystemExit(f"socialnav gscl generate: --out {out} is a folder; give the .npz file to write")
+    if out.exists() or provenance.exists():
+        if not overwrite:
+            raise SystemExit(f"socialnav gscl generate: --out {out} exists; pass --overwrite to replace it")
+        try:
+            ours = set(json.loads(provenance.read_text())) >= {"seed", "counts"}
+        except (OSError, ValueError, TypeError):
+            ours = False
+        if not ours:
+            raise SystemExit(
+                f"socialnav gscl generate: --out {out}: {provenance} is not the record 'gscl generate' writes beside "
+                "its datasets, so the file is not replaced: move it away or choose another --out"
+            )
+    try:
+        check_writable(out.parent)
+    except RunFolderError as e:
+        raise SystemExit(f"socialnav gscl generate: --out {out}: {e}") from None
 
 
 def _staging(out: pathlib.Path) -> pathlib.Path:
@@ -316,10 +367,12 @@ def _train(args) -> int:
     from models.quality import quality_table
 
     try:
+        runfolder.claim(args.out, TRAIN_JOB, TRAIN_RESULTS, adopt=_an_earlier_training_run)
         config = _train_config(args)
         check_run_folder(args.out, config)
-    except ValueError as err:
+    except (ValueError, RunFolderError) as err:
         raise SystemExit(f"socialnav gscl train: {err}") from None
+    runfolder.record(args.out, TRAIN_JOB, ["config.json", "baselines.json", "metrics.jsonl", "checkpoints/"])
     import jax
 
     print(
@@ -342,6 +395,35 @@ def _train(args) -> int:
     return 0
 
 
+TRAIN_JOB = "socialnav gscl train"
+TRAIN_RESULTS = ("config.json", "baselines.json", "metrics.jsonl", "checkpoints")
+EVALUATION_JOB = "socialnav gscl evaluation"  # evaluate and rules share RUN/evaluation
+
+
+def _an_earlier_training_run(folder: pathlib.Path) -> bool:
+    """A training run of socialnav before 0.3 (no manifest): a config.json that reads as a
+    TrainConfig and a checkpoints/ folder."""
+    from models.checkpoints import load_config
+
+    try:
+        load_config(folder)
+    except (FileNotFoundError, ValueError):
+        return False
+    return (folder / "checkpoints").is_dir()
+
+
+def _evaluation_folder(args, names: tuple[str, ...]) -> pathlib.Path:
+    """``--out`` (default RUN/evaluation), checked before the work: a folder this job may write
+    ``names`` into."""
+    out = args.run / "evaluation" if args.out is None else args.out
+    try:
+        runfolder.claim(out, EVALUATION_JOB, names)
+        runfolder.check_writable(out)
+    except RunFolderError as err:
+        raise SystemExit(f"socialnav gscl {args.gscl_command}: --out: {err}") from None
+    return out
+
+
 def _parameters(config) -> int:
     from models import unet
     from models.config import make_model
@@ -352,10 +434,13 @@ def _parameters(config) -> int:
 def _evaluate(args) -> int:
     from models import evaluation
 
+    names = ("evaluation.json", "predictions.png")
+    out = _evaluation_folder(args, names)
     try:
-        report = evaluation.evaluate_run(args.run, step=args.step, out=args.out, examples=args.examples)
+        report = evaluation.evaluate_run(args.run, step=args.step, out=out, examples=args.examples)
     except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl evaluate: {err}") from None
+    runfolder.record(out, EVALUATION_JOB, names)
     print(report["table"])
     print(
         f"step {report['step']}: {'meets' if report['meets_quality'] else 'does not meet'} the quality bar; "
@@ -367,17 +452,20 @@ def _evaluate(args) -> int:
 def _rules(args) -> int:
     from models import evaluation, rules
 
+    names = ("rules.json", "rules.png")
+    out = _evaluation_folder(args, names)
     try:
         report = evaluation.rules_run(
             args.run,
             step=args.step,
-            out=args.out,
+            out=out,
             scenes_per_kind=args.scenes,
             seed=args.seed,
             rotations=args.rotations,
         )
     except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl rules: {err}") from None
+    runfolder.record(out, EVALUATION_JOB, names)
     print(report["table"])
     print(
         f"step {report['step']}: {'every' if report['meets_rules'] else 'not every'} check passes on "

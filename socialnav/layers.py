@@ -25,17 +25,36 @@ def add_parser(top) -> None:
     parser.set_defaults(handler=run)
 
 
+JOB = "socialnav layers"
+
+
 def run(args) -> int:
+    from common import runfolder
     from planners import plots
 
+    names = tuple(f"layers_{name}.png" for name in plots.demo_scenes())
+    try:
+        runfolder.claim(args.out, JOB, names)
+        runfolder.check_writable(args.out)
+    except runfolder.RunFolderError as e:
+        print(f"socialnav layers: --out: {e}", file=sys.stderr)
+        return 2
     predict = None
     if args.gscl_run is not None:
         if not (args.gscl_run / "checkpoints").is_dir():
-            print(f"socialnav layers: {args.gscl_run}: no checkpoints/ folder (train one with socialnav gscl train)")
+            print(
+                f"socialnav layers: {args.gscl_run}: no checkpoints/ folder (train one with socialnav gscl train)",
+                file=sys.stderr,
+            )
             return 2
         from models.inference import SocialCostModel
 
-        predict = SocialCostModel.load(args.gscl_run).function
+        try:
+            predict = SocialCostModel.load(args.gscl_run).function
+        except (FileNotFoundError, ValueError) as e:  # no checkpoint, none restorable, a bad config.json
+            print(f"socialnav layers: --gscl-run: {e}", file=sys.stderr)
+            return 2
     for path in plots.write_all(args.out, predict):
+        runfolder.record(args.out, JOB, [path.name])
         print(f"wrote {path}", file=sys.stdout)
     return 0

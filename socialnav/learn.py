@@ -9,6 +9,7 @@ import sys
 from causal.extract import LogError
 from causal.learn import learn
 from common import runfolder
+from common.logschema import LOG_FILE, META_FILE
 from socialnav.argtypes import comma_ints, comma_names, open_unit_interval, output_folder, positive_int
 from socialnav.locking import locks_folder
 
@@ -71,21 +72,26 @@ def _out_folder(args) -> pathlib.Path:
 
 # What a finished learn leaves in its folder; report.json is written last.
 RESULTS = ("report.json", "engine_tables.npz", "engine.json", "engine.bifxml", "discovery.json", "causal_graph.png")
+JOB = "socialnav learn"
 
 
 @locks_folder(_out_folder, "learn")
 def run(args: argparse.Namespace) -> int:
     out = _out_folder(args)
     try:
-        runfolder.prepare(out, RESULTS, args.overwrite, marker="report.json")
-    except runfolder.PreviousRun as e:
+        runfolder.check_inputs(out, [args.logs / LOG_FILE, args.logs / META_FILE])
+        runfolder.prepare(out, RESULTS, args.overwrite, marker="report.json", job=JOB)
+    except runfolder.RunFolderError as e:
         print(f"socialnav learn: {e}", file=sys.stderr)
         return 2
     try:
-        with runfolder.staged(out, "report.json", args.overwrite) as stage:
+        with runfolder.staged(out, "report.json", args.overwrite, job=JOB) as stage:
             _learn(args, stage, out)
     except (LogError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
+        return 2
+    except runfolder.RunFolderError as e:
+        print(f"socialnav learn: {e}", file=sys.stderr)
         return 2
     return 0
 

@@ -29,7 +29,8 @@ def locks_folder(folder_of: Callable[[object], pathlib.Path | None], name: str):
                 return handler(args)
             try:
                 with run_lock(folder, f"socialnav {name}") as held:
-                    gone = runfolder.clear_leftovers(held)  # a killed job's temporaries: nobody else writes here
+                    warn = lambda message: print(f"socialnav {name}: warning: {message}", file=sys.stderr)
+                    gone = runfolder.clear_leftovers(held, warn)  # a killed job's temporaries: nobody else writes here
                     if gone:
                         print(f"socialnav {name}: removed what a killed job left in {folder}: {', '.join(gone)}")
                     return handler(args)

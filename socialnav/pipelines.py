@@ -27,7 +27,7 @@ from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
 from planners.tables import TABLES_FILE
 from socialnav import arena, evaluate, learn, simulate
-from socialnav.argtypes import comma_ints, comma_probabilities, output_folder, positive_int
+from socialnav.argtypes import comma_ints, comma_probabilities, output_folder, positive_int, seed_int
 from socialnav.locking import locks_folder
 
 
@@ -67,7 +67,7 @@ def add_parsers(sub) -> None:
         default=list(causal_ablation.PROBABILITIES),
         help="obstacle probabilities (default 0.1,...,0.5)",
     )
-    abl.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
+    abl.add_argument("--seed", type=seed_int, default=0, help="base random seed (default 0)")
     abl.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     abl.add_argument(
         "--overwrite", action="store_true", help="replace the results in --out (only once the new ones are complete)"
@@ -156,14 +156,18 @@ def ablation_series(
 def run_ablation(args: argparse.Namespace) -> int:
     results = ("ablation.json", "ablation.csv", "ablation.png")
     try:
-        runfolder.prepare(args.out, results, args.overwrite, marker="ablation.json")
-    except runfolder.PreviousRun as e:
+        runfolder.prepare(args.out, results, args.overwrite, marker="ablation.json", job="socialnav ablation")
+    except runfolder.RunFolderError as e:
         print(f"socialnav ablation: {e}", file=sys.stderr)
         return 2
     print(f"simulating {len(args.probabilities)} probabilities x {args.seeds} seeds in one batch ...", flush=True)
     series = ablation_series(args.probabilities, args.seeds, args.seed)
-    with runfolder.staged(args.out, "ablation.json", args.overwrite) as stage:
-        causal_ablation.run(stage, series, progress=not args.no_progress)
+    try:
+        with runfolder.staged(args.out, "ablation.json", args.overwrite, job="socialnav ablation") as stage:
+            causal_ablation.run(stage, series, progress=not args.no_progress)
+    except runfolder.RunFolderError as e:
+        print(f"socialnav ablation: {e}", file=sys.stderr)
+        return 2
     summary = json.loads((args.out / "ablation.json").read_text())
     print(f"structure found by J-PCMCI+ at p = 0.3: {summary['structure_at_p_0.3']}")
     print(

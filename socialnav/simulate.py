@@ -13,7 +13,7 @@ from jaxsim import logs, viz
 from jaxsim.robot import RouteFollower
 from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
 from planners.routes import shortest_path_plan
-from socialnav.argtypes import non_negative_float, output_folder, positive_float, positive_int, probability
+from socialnav.argtypes import non_negative_float, output_folder, positive_float, positive_int, probability, seed_int
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.locking import locks_folder
 
@@ -46,7 +46,7 @@ def add_parser(sub) -> None:
         default=None,
         help="length of a time slot in s (default from params.json: 3600)",
     )
-    sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sim.add_argument("--seed", type=seed_int, default=0, help="random seed (default 0)")
     sim.add_argument(
         "--out",
         type=output_folder,
@@ -119,8 +119,9 @@ def run(args: argparse.Namespace) -> int:
             "available; split the run with --shard-worlds (each shard in turn, or one per Ray task)"
         )
     try:
-        runfolder.prepare(args.out, RESULTS, args.overwrite)
-    except runfolder.PreviousRun as e:
+        runfolder.check_inputs(args.out, [args.scenario])
+        runfolder.prepare(args.out, RESULTS, args.overwrite, job=JOB)
+    except runfolder.RunFolderError as e:
         print(f"socialnav simulate: {e}", file=sys.stderr)
         return 2
     if args.snapshot_time_s is not None:
@@ -132,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     snap_t = round(snap_t / args.sample_interval_s) * args.sample_interval_s
     sharded = args.backend != "local" or (args.shard_worlds is not None and args.shard_worlds < args.worlds)
     try:
-        with runfolder.staged(args.out, META_FILE, args.overwrite) as stage:
+        with runfolder.staged(args.out, META_FILE, args.overwrite, job=JOB) as stage:
             if sharded:
                 from socialnav import simulate_shards
 
@@ -159,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    except BackendError as e:
+    except (BackendError, runfolder.RunFolderError) as e:
         print(f"socialnav simulate: {e}", file=sys.stderr)
         return 2
     except OSError as e:  # a full disk or a folder made read-only during the run: the old run is kept
@@ -194,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
 
 # What a finished run leaves in its folder (a folder holding any of them holds a run).
 RESULTS = (META_FILE, LOG_FILE, "snapshot.png", "density_by_slot.png")
+JOB = "socialnav simulate"  # the name its run folders' manifest records
 
 
 def _usage(message: str) -> int:

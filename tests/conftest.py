@@ -60,4 +60,14 @@ def learned_run(tmp_path_factory):
         progress=False,
     )
     learn(run, run / "causal", max_samples=60_000, progress=False)
+    # Written from Python, not by the commands: give the folders the manifests the commands write,
+    # so that the commands treat them as their runs.
+    from common import runfolder
+
+    for folder, job, marker in (
+        (run, "socialnav simulate", "run.json"),
+        (run / "causal", "socialnav learn", "report.json"),
+    ):
+        files = [p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file()]
+        runfolder.record(folder, job, [f for f in files if not f.startswith("causal/")], marker=marker)
     return run

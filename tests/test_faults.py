@@ -11,14 +11,18 @@ temporaries.
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 import textwrap
 
 import pytest
+
+from common import runfolder
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -53,8 +57,8 @@ JOB = textwrap.dedent(
     import pathlib, sys
     from common import runfolder
     folder = pathlib.Path(sys.argv[1])
-    runfolder.prepare(folder, ("run.json", "logs.parquet", "snapshot.png"), overwrite=True)
-    with runfolder.staged(folder, "run.json", overwrite=True) as stage:
+    runfolder.prepare(folder, ("run.json", "logs.parquet", "snapshot.png", "causal"), overwrite=True, job="test")
+    with runfolder.staged(folder, "run.json", overwrite=True, job="test") as stage:
         (stage / "logs.parquet").write_text("new logs")
         (stage / "snapshot.png").write_text("new picture")
         (stage / "causal").mkdir()
@@ -68,10 +72,13 @@ NEW = {"run.json": "new", "logs.parquet": "new logs", "snapshot.png": "new pictu
 
 
 def _write_old(folder: pathlib.Path) -> None:
+
     for name, text in OLD.items():
         (folder / name).parent.mkdir(parents=True, exist_ok=True)
         (folder / name).write_text(text)
     (folder / "density_by_slot.png").write_text("old only")
+    (folder / "my-notes.txt").write_text("the user's")  # never touched
+    runfolder.record(folder, "test", [*OLD, "density_by_slot.png"], marker="run.json")
 
 
 def _state(folder: pathlib.Path) -> str:
@@ -81,7 +88,7 @@ def _state(folder: pathlib.Path) -> str:
         rel = str(path.relative_to(folder))
         if path.is_file() and not rel.startswith("."):  # temporaries are hidden and cleared next time
             text = path.read_text()
-            assert text in (OLD.get(rel), NEW.get(rel), "old only"), f"{rel} holds {text!r}"
+            assert text in (OLD.get(rel), NEW.get(rel), "old only", "the user's"), f"{rel} holds {text!r}"
     if not (folder / "run.json").exists():
         return "incomplete"
     marker = (folder / "run.json").read_text()
@@ -106,6 +113,7 @@ def test_a_run_folder_killed_at_every_file_operation(tmp_path):
     _write_old(whole)
     assert _run(JOB, whole, 0, count_file) == 0
     assert _state(whole) == "new" and not (whole / "density_by_slot.png").exists()
+    assert (whole / "my-notes.txt").read_text() == "the user's"
     n_ops = int(count_file.read_text())
     assert n_ops >= 8
     seen = set()
@@ -115,10 +123,87 @@ def test_a_run_folder_killed_at_every_file_operation(tmp_path):
         _write_old(folder)
         assert _run(JOB, folder, k, count_file) == 9
         seen.add(_state(folder))
+        assert (folder / "my-notes.txt").read_text() == "the user's"
+        settled = tmp_path / f"settled{k}"  # what the next job finds once it has settled the commit
+        shutil.copytree(folder, settled, symlinks=True)
+        runfolder.clear_leftovers(settled)
+        assert _state(settled) in ("old", "new")
         assert _run(JOB, folder, 0, count_file) == 0  # the next job recovers
         assert _state(folder) == "new"
-        assert not [p.name for p in folder.iterdir() if p.name.startswith(".")], "temporaries left"
+        hidden = [p.name for p in folder.iterdir() if p.name.startswith(".")]
+        assert hidden == [runfolder.MANIFEST], "temporaries left"
     assert seen >= {"old", "incomplete"}
+
+
+def _count_and_fail(monkeypatch, folder: pathlib.Path, fail_at: int) -> list[int]:
+    """Make the ``fail_at``-th file operation on ``folder`` raise OSError (0: none); returns the
+    counter (its one element: the operations seen)."""
+    count = [0]
+    root = os.path.realpath(folder)
+
+    def counted(fn):
+        def wrapper(*a, **k):
+            paths = [os.path.realpath(str(x)) for x in a if isinstance(x, (str, os.PathLike))]
+            if any(p.startswith(root) for p in paths):
+                count[0] += 1
+                if count[0] == fail_at:
+                    raise PermissionError(1, "Operation not permitted", paths[0])
+            return fn(*a, **k)
+
+        return wrapper
+
+    for name in ("replace", "unlink", "rmdir", "mkdir", "rename"):
+        monkeypatch.setattr(os, name, counted(getattr(os, name)))
+    monkeypatch.setattr(shutil, "rmtree", counted(shutil.rmtree))
+    return count
+
+
+def _commit_job(folder: pathlib.Path) -> None:
+
+    with runfolder.staged(folder, "run.json", overwrite=True, job="test") as stage:
+        for name, text in NEW.items():
+            (stage / name).parent.mkdir(parents=True, exist_ok=True)
+            (stage / name).write_text(text)
+
+
+def test_a_commit_failing_at_every_file_operation_leaves_one_whole_run(tmp_path, monkeypatch):
+    """An error (not a kill) at any file operation of a commit: the folder holds exactly one
+    whole run, the old one when the error came before the new marker was in place (every rename
+    undone) and the new one after; the error names a file; the user's file is untouched."""
+
+    probe = tmp_path / "probe"
+    probe.mkdir()
+    _write_old(probe)
+    with monkeypatch.context() as m:
+        count = _count_and_fail(m, probe, 0)
+        _commit_job(probe)
+    assert _state(probe) == "new"
+    n_ops = count[0]
+    assert n_ops >= 12
+    outcomes = set()
+    for k in range(1, n_ops + 1):
+        folder = tmp_path / f"fail{k}"
+        folder.mkdir()
+        _write_old(folder)
+        with monkeypatch.context() as m:
+            _count_and_fail(m, folder, k)
+            m.setattr(sys, "stderr", io.StringIO())
+            try:
+                _commit_job(folder)
+                failed = None
+            except (OSError, runfolder.RunFolderError) as e:
+                failed = str(e)
+        state = _state(folder)
+        assert state in ("old", "new"), f"operation {k}: {state}"
+        if failed is not None:
+            assert state == "old" and str(folder) in failed, f"operation {k}: {failed}"
+        elif k <= n_ops:  # a failure after the commit: a warning naming what was left
+            assert state == "new"
+        assert (folder / "my-notes.txt").read_text() == "the user's"
+        outcomes.add((state, failed is None))
+        runfolder.clear_leftovers(folder)
+        assert _state(folder) == state
+    assert ("old", False) in outcomes and ("new", True) in outcomes
 
 
 @pytest.mark.slow
@@ -131,7 +216,6 @@ def test_simulate_killed_at_every_file_operation(tmp_path):
     included); every operation on the run folder's own entries is."""
     import shutil
 
-    from common import runfolder
     from socialnav.simulate import RESULTS
 
     argv = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
@@ -157,7 +241,62 @@ def test_simulate_killed_at_every_file_operation(tmp_path):
                 assert (folder / "run.json").read_text() == old_meta
         if any((folder / name).exists() for name in RESULTS):  # what is left is never reused silently
             with pytest.raises(runfolder.PreviousRun, match="--overwrite"):
-                runfolder.prepare(folder, RESULTS, overwrite=False)
+                runfolder.prepare(folder, RESULTS, overwrite=False, job="socialnav simulate")
         assert _run(job, folder, 0, count_file) == 0
         assert json.loads((folder / "run.json").read_text())["seed"] == 0
-        assert not [p.name for p in folder.iterdir() if p.name.startswith(".")]
+        assert [p.name for p in folder.iterdir() if p.name.startswith(".")] == [runfolder.MANIFEST]
+
+
+USER_FILES = {"notes.txt": "my notes", "data/measurements.csv": "t,x\n0,1\n", "logs.txt": "not a run", ".keep": ""}
+
+
+def _commands(learned_run):
+    tables = str(learned_run / "causal" / "engine_tables.npz")
+    short = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
+    return {
+        "simulate": ["simulate", *short, "--out", "{out}", "--overwrite"],
+        "learn": ["learn", "--logs", str(learned_run), "--out", "{out}", "--overwrite", "--no-progress"],
+        "evaluate": ["evaluate", "--tables", tables, "--out", "{out}", "--replicas", "1", "--slots", "S11"]
+        + ["--no-progress", "--overwrite"],
+        "ablation": ["ablation", "--out", "{out}", "--seeds", "1", "--probabilities", "0.3", "--no-progress"]
+        + ["--overwrite"],
+        "arena": ["arena", "--out", "{out}", "--scenes", "casn_head_on", "--methods", "navfn", "--variants", "2"]
+        + ["--keep-trajectories", "1", "--no-progress", "--overwrite"],
+        "layers": ["layers", "--out", "{out}"],
+        "gscl generate": ["gscl", "generate", "--out", "{out}/d.npz", "--count", "group=4", "--overwrite"],
+    }
+
+
+@pytest.mark.parametrize(
+    "job",
+    [
+        "simulate",
+        pytest.param("learn", marks=pytest.mark.slow),
+        pytest.param("evaluate", marks=pytest.mark.slow),
+        pytest.param("ablation", marks=pytest.mark.slow),
+        pytest.param("arena", marks=pytest.mark.slow),
+        pytest.param("layers", marks=pytest.mark.slow),
+        "gscl generate",
+    ],
+)
+def test_every_command_leaves_a_users_files_alone(job, learned_run, tmp_path):
+    """Each command that writes a folder, run twice (the second time replacing its own run) into
+    a folder of a user's files: they stay as they were, and every file the command left there is
+    listed in the folder's manifest."""
+    from socialnav import cli
+
+    out = tmp_path / "mine"
+    for name, text in USER_FILES.items():
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        (out / name).write_text(text)
+    argv = [a.replace("{out}", str(out)) for a in _commands(learned_run)[job]]
+    assert cli.main(argv) == 0
+    assert cli.main(argv) == 0
+    for name, text in USER_FILES.items():
+        assert (out / name).read_text() == text, name
+    manifest = runfolder.read_manifest(out)
+    written = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()} - set(USER_FILES)
+    if manifest is not None:
+        assert written - {runfolder.MANIFEST} <= set(runfolder.owned_files(out)), written
+    else:  # gscl generate writes a file and its record, not a folder
+        assert written == {"d.npz", "d.json"}

@@ -1,13 +1,29 @@
 """Run folders as units on the command line: a folder holding a run is refused without
-``--overwrite``, which replaces it whole; a killed job's temporaries are removed by the next."""
+``--overwrite``, which replaces that run whole and nothing else (a user's files beside it are
+never touched, nor the job's own inputs); a killed job's temporaries are removed by the next."""
 
 from __future__ import annotations
 
 import json
 
+import pytest
+
+from common import runfolder
 from socialnav import cli
 
 SHORT = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
+
+
+def _user_files(folder):
+    files = {"notes.txt": "my notes", "data/measurements.csv": "t,x\n0,1\n", ".hidden": "mine too"}
+    for name, text in files.items():
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        (folder / name).write_text(text)
+    return files
+
+
+def _untouched(folder, files):
+    return all((folder / name).read_text() == text for name, text in files.items())
 
 
 def test_simulate_refuses_a_previous_run_and_overwrite_replaces_it_whole(tmp_path, capsys):
@@ -21,23 +37,79 @@ def test_simulate_refuses_a_previous_run_and_overwrite_replaces_it_whole(tmp_pat
     assert "holds a previous run" in err and "--overwrite" in err and err.count("\n") == 1
     assert (out / "logs.parquet").read_bytes() == first  # untouched
 
+    # A later step of the old run, recorded as its own run, and a user's files beside both.
     (out / "causal").mkdir()
-    (out / "causal" / "report.json").write_text("{}")  # a later step of the old run
+    (out / "causal" / "report.json").write_text("{}")
+    runfolder.record(out / "causal", "socialnav learn", ["report.json"], marker="report.json")
+    mine = _user_files(out)
+    (out / "causal" / "my-plot.png").write_text("a picture of mine")
     (out / ".tmp-4242-logs.parquet").write_bytes(b"half a file of a killed run")
     assert cli.main(["simulate", "--out", str(out), "--overwrite", *SHORT]) == 0
     assert "removed what a killed job left" in capsys.readouterr().out
     assert json.loads((out / "run.json").read_text())["seed"] == 0
     assert (out / "logs.parquet").read_bytes() != first
-    assert not (out / "causal").exists()
-    assert sorted(p.name for p in out.iterdir()) == ["density_by_slot.png", "logs.parquet", "run.json", "snapshot.png"]
+    assert not (out / "causal" / "report.json").exists()  # the old run's derived results went with it
+    assert (out / "causal" / "my-plot.png").read_text() == "a picture of mine"
+    assert _untouched(out, mine)
+    listed = runfolder.read_manifest(out)
+    assert listed.job == "socialnav simulate" and listed.journal is None
+    assert sorted(listed.files) == ["density_by_slot.png", "logs.parquet", "run.json", "snapshot.png"]
 
 
 def test_a_folder_without_run_json_is_an_incomplete_run(tmp_path, capsys):
     out = tmp_path / "run"
     out.mkdir()
     (out / "logs.parquet").write_bytes(b"")
+    runfolder.record(out, "socialnav simulate", ["logs.parquet"], marker="run.json")
     assert cli.main(["simulate", "--out", str(out), *SHORT]) == 2
     assert "incomplete run (no run.json" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_a_users_file_under_a_result_name_is_never_replaced(tmp_path, capsys, overwrite):
+    """No manifest lists it: refused with or without --overwrite, naming it, the file intact."""
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "logs.parquet").write_text("my own table")
+    assert cli.main(["simulate", "--out", str(out), *SHORT, *(["--overwrite"] if overwrite else [])]) == 2
+    err = capsys.readouterr().err
+    assert "logs.parquet" in err and "no socialnav job recorded writing" in err and err.count("\n") == 1
+    assert (out / "logs.parquet").read_text() == "my own table"
+    assert sorted(p.name for p in out.iterdir()) == ["logs.parquet"]
+
+
+def test_overwrite_on_a_folder_of_user_files_leaves_them(tmp_path):
+    out = tmp_path / "mine"
+    out.mkdir()
+    mine = _user_files(out)
+    assert cli.main(["simulate", "--out", str(out), "--overwrite", *SHORT]) == 0
+    assert _untouched(out, mine) and (out / "run.json").is_file()
+    assert cli.main(["simulate", "--out", str(out), "--overwrite", "--seed", "3", *SHORT]) == 0  # and again
+    assert _untouched(out, mine) and json.loads((out / "run.json").read_text())["seed"] == 3
+
+
+def test_learn_refuses_to_write_where_it_reads(learned_run, tmp_path, capsys):
+    """``learn --logs L --out L --overwrite`` deleted its own logs once; now it is refused."""
+    logs = (learned_run / "logs.parquet").read_bytes()
+    assert cli.main(["learn", "--logs", str(learned_run), "--out", str(learned_run), "--overwrite"]) == 2
+    err = capsys.readouterr().err
+    assert "contains the job's input" in err and err.count("\n") == 1
+    assert (learned_run / "logs.parquet").read_bytes() == logs
+    assert cli.main(["learn", "--logs", str(learned_run), "--out", str(learned_run.parent), "--overwrite"]) == 2
+    assert "contains the job's input" in capsys.readouterr().err
+
+
+def test_another_jobs_run_is_not_replaced(learned_run, tmp_path, capsys):
+    """evaluate --overwrite into a folder holding a simulate run: refused, the run intact."""
+    tables = learned_run / "causal" / "engine_tables.npz"
+    sim = tmp_path / "sim"
+    assert cli.main(["simulate", "--out", str(sim), *SHORT]) == 0
+    before = sorted(p.name for p in sim.iterdir())
+    capsys.readouterr()
+    argv = ["evaluate", "--tables", str(tables), "--out", str(sim), "--replicas", "1", "--overwrite"]
+    assert cli.main(argv) == 2
+    assert "holds a run of 'socialnav simulate'" in capsys.readouterr().err
+    assert sorted(p.name for p in sim.iterdir()) == before
 
 
 def test_learn_and_evaluate_refuse_to_replace_their_results(learned_run, tmp_path, capsys):
@@ -50,7 +122,22 @@ def test_learn_and_evaluate_refuse_to_replace_their_results(learned_run, tmp_pat
     evaluation = tmp_path / "evaluation"
     evaluation.mkdir()
     (evaluation / "summary.json").write_text("{}")
+    runfolder.record(evaluation, "socialnav evaluate", ["summary.json"], marker="summary.json")
     tables = learned_run / "causal" / "engine_tables.npz"
     assert cli.main(["evaluate", "--tables", str(tables), "--out", str(evaluation), "--replicas", "1"]) == 2
     assert "--overwrite" in capsys.readouterr().err
     assert (evaluation / "summary.json").read_text() == "{}"
+
+
+def test_names_that_reach_paths_are_checked(tmp_path):
+    assert runfolder.check_name("casn_head_on@held_out", "scene") == "casn_head_on@held_out"
+    for bad in ("../../victim", "", ".hidden", "-x", "a/b", "a..b", "x" * 101, "ü", None):
+        with pytest.raises(ValueError, match="cannot name a file"):
+            runfolder.check_name(bad, "scene")
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "link").symlink_to(tmp_path)
+    assert runfolder.inside(tmp_path / "out", tmp_path / "out" / "a" / "b.parquet")
+    with pytest.raises(runfolder.NotOurs, match="outside the output folder"):
+        runfolder.inside(tmp_path / "out", tmp_path / "out" / "link" / "x.parquet")
+    with pytest.raises(runfolder.NotOurs, match="outside the output folder"):
+        runfolder.inside(tmp_path / "out", tmp_path / "out" / ".." / "x.parquet")

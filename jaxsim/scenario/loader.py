@@ -26,6 +26,7 @@ from jaxsim.scenario.graph import FILE as GRAPH_FILE
 from jaxsim.scenario.graph import check_connected, load_graph
 from jaxsim.scenario.schedule import load_schedule
 from jaxsim.scenario.tasks import load_tasks
+from jaxsim.scenario.walls import FILE as WALLS_FILE
 from jaxsim.scenario.walls import load_walls
 from jaxsim.scenario.waypoints import FILE as WAYPOINTS_FILE
 from jaxsim.scenario.waypoints import load_waypoints
@@ -123,10 +124,12 @@ def load_scenario(path: str | pathlib.Path = WAREHOUSE_DIR, **param_overrides: A
     schedule = load_schedule(folder, index, human_allowed)
     tasks = load_tasks(folder, index, robot_allowed, schedule.names)
     _check_extent(folder, waypoints, boxes_m)
+    _check_waypoint_discs(folder, waypoints, boxes_m)
     _check_routes(folder, waypoints.ids, edges, human_allowed, robot_allowed, schedule, tasks, index["parking"])
     params_file = folder / "params.json"
     params = SimParams.from_json(params_file, ScenarioError)
     params.validate(ScenarioError, params_file)
+    _check_clearance(folder, waypoints, boxes_m, params.robot_radius_m)
     if param_overrides:
         unknown = sorted(set(param_overrides) - {f.name for f in dataclasses.fields(SimParams)})
         if unknown:
@@ -174,6 +177,38 @@ def _check_extent(folder: pathlib.Path, waypoints, boxes_m: np.ndarray) -> None:
         f"(its wall distance field would need about {width * height * 400 * 12 / 1e9:.1f} GB); "
         f"waypoint {waypoints.ids[far]!r} at ({x:g}, {y:g}) lies farthest from the others",
     )
+
+
+def _check_waypoint_discs(folder: pathlib.Path, waypoints, boxes_m: np.ndarray) -> None:
+    """A waypoint's disc (the area whose people Eq. 3 counts) fits in the map: its radius is at
+    most half the walls' extent (the warehouse's largest, the parking lot's, is 3 m of 30 m)."""
+    extent = max(boxes_m[:, 1].max() - boxes_m[:, 0].min(), boxes_m[:, 3].max() - boxes_m[:, 2].min())
+    for i, r in enumerate(waypoints.radius_m):
+        if r > extent / 2:
+            raise ScenarioError(
+                folder / WAYPOINTS_FILE,
+                f"waypoints[{i}].radius_m",
+                f"waypoint {waypoints.ids[i]!r} has a {r:g} m disc, more than half the map's {extent:.1f} m extent: "
+                "its density (people per m^2 in the disc, Eq. 3) would count the whole map",
+            )
+
+
+def _check_clearance(folder: pathlib.Path, waypoints, boxes_m: np.ndarray, robot_radius_m: float) -> None:
+    """Every waypoint's centre lies at least the robot's radius from every wall: the robot and the
+    workers stand there (the warehouse's closest, corridor-1, is 0.325 m from a wall)."""
+    x, y = waypoints.xy_m[:, :1], waypoints.xy_m[:, 1:]
+    dx = np.maximum(np.maximum(boxes_m[None, :, 0] - x, x - boxes_m[None, :, 1]), 0.0)
+    dy = np.maximum(np.maximum(boxes_m[None, :, 2] - y, y - boxes_m[None, :, 3]), 0.0)
+    gap = np.hypot(dx, dy)  # (W, B): 0 inside or on a box
+    for i in np.flatnonzero(gap.min(axis=1) < robot_radius_m):
+        j = int(np.argmin(gap[i]))
+        raise ScenarioError(
+            folder / WAYPOINTS_FILE,
+            f"waypoints[{i}]",
+            f"waypoint {waypoints.ids[i]!r} at ({waypoints.xy_m[i, 0]:g}, {waypoints.xy_m[i, 1]:g}) is "
+            f"{gap[i, j]:.3f} m from wall box {j} of {WALLS_FILE}: closer than the robot's radius "
+            f"({robot_radius_m:g} m, params.json robot.radius_m), so the robot could not stand on it",
+        )
 
 
 def _check_routes(folder, ids, edges, human_allowed, robot_allowed, schedule, tasks, parking: int) -> None:

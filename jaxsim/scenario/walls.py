@@ -18,6 +18,8 @@ def load_walls(folder: pathlib.Path, waypoints: Waypoints) -> tuple[np.ndarray, 
     """(B, 4) boxes as ``xmin, xmax, ymin, ymax`` and their kinds; no waypoint may lie inside one."""
     file = folder / FILE
     raw = list_field(read_json(file), file, "boxes")
+    if not raw:
+        raise ScenarioError(file, "boxes", "is empty: the map needs its walls (at least its outline) as boxes")
     boxes, kinds = [], []
     for i, b in enumerate(raw):
         where = f"boxes[{i}]"

@@ -7,6 +7,7 @@ import pathlib
 
 import numpy as np
 
+from common.names import SAFE_NAME_RULE, is_safe_name
 from jaxsim.scenario.errors import ScenarioError
 from jaxsim.scenario.jsonio import field, list_field, number, read_json
 
@@ -35,6 +36,8 @@ def load_waypoints(folder: pathlib.Path) -> Waypoints:
     for i, wp in enumerate(list_field(read_json(file), file, "waypoints")):
         where = f"waypoints[{i}]"
         name = field(wp, file, where, "id", str)
+        if not is_safe_name(name):  # it names a log column, density_<id>, and the pictures' labels
+            raise ScenarioError(file, f"{where}.id", f"{name!r} cannot name a log column: use {SAFE_NAME_RULE}")
         if name in ids:
             raise ScenarioError(file, f"{where}.id", f"duplicate waypoint id {name!r}")
         ids.append(name)

@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from common.names import SAFE_NAME_RULE, is_safe_name
 from jaxsim.scenario.errors import ScenarioError
 
 BEHAVIOURS = ("standing", "walk", "group", "queue", "stream")
@@ -267,6 +268,75 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
     return {"type": kind, "rules": [_rule(r, sub, f"{where}.rules[{i}]", people) for i, sub in enumerate(rules)]}
 
 
+# Bodies for the placement checks of :func:`load_scene`: a person's radius is the crowd model's
+# (``data/warehouse/params.json`` workers.radius_m, 0.2 m, which the scenes' social force uses),
+# the robot's :class:`jaxsim.scenes.robot.RobotParams` radius (0.275 m, TIAGo's footprint).
+PERSON_RADIUS_M = 0.2
+# A goal closer to the start than this is reached before the robot moves (the arena's goal
+# tolerance is 0.3 m): an episode that tests nothing.
+MIN_START_GOAL_M = 0.5
+
+
+def _range_gap_m(a, b) -> float:
+    """The smallest distance between two points drawn from ranges ``((x0, x1), (y0, y1))``."""
+    (ax0, ax1), (ay0, ay1) = a
+    (bx0, bx1), (by0, by1) = b
+    dx = max(0.0, bx0 - ax1, ax0 - bx1)
+    dy = max(0.0, by0 - ay1, ay0 - by1)
+    return math.hypot(dx, dy)
+
+
+def _placed_at_start(person: dict) -> list[tuple[str, tuple]]:
+    """Where a person stands when the episode starts: (field, point range) pairs."""
+    b = person["behaviour"]
+    if b == "standing":
+        return [("position", person["position"])]
+    if b in ("walk", "stream"):
+        starts_at_once = person["start_s"][0] == 0.0
+        return [("from", person["start"])] if starts_at_once else []
+    if b == "queue":
+        return [("head", person["head"])]
+    return []
+
+
+def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
+    """Refuse what no episode can use: the goal at the start, a person on the robot's start
+    (or on its circle, for a group), two people in one place at the start."""
+    from jaxsim.scenes.robot import RobotParams
+
+    robot_radius = RobotParams().radius_m
+    if _range_gap_m(robot["start"], robot["goal"]) < MIN_START_GOAL_M:
+        r.fail(
+            "robot.goal",
+            f"within {MIN_START_GOAL_M} m of robot.start: the goal would be reached before the robot moves",
+        )
+    placed = []
+    for i, person in enumerate(people):
+        for key, point in _placed_at_start(person):
+            if _range_gap_m(point, robot["start"]) < robot_radius + PERSON_RADIUS_M:
+                r.fail(
+                    f"people[{i}].{key}",
+                    f"can be within {robot_radius + PERSON_RADIUS_M:.3f} m of robot.start: the person would stand "
+                    "on the robot (radii 0.2 m and 0.275 m)",
+                )
+            placed.append((i, key, point))
+        if person["behaviour"] == "group":
+            (cx0, cx1), (cy0, cy1) = person["centre"]
+            sx, sy = (sum(robot["start"][0]) / 2, sum(robot["start"][1]) / 2)
+            gap = math.hypot(sx - (cx0 + cx1) / 2, sy - (cy0 + cy1) / 2)
+            r_lo, r_hi = person["radius_m"]
+            if r_lo - robot_radius - PERSON_RADIUS_M < gap < r_hi + robot_radius + PERSON_RADIUS_M:
+                r.fail(f"people[{i}].centre", "the group's circle passes over robot.start: a member would stand on it")
+    for a in range(len(placed)):
+        for b in range(a + 1, len(placed)):
+            (i, ki, pi), (j, kj, pj) = placed[a], placed[b]
+            if _range_gap_m(pi, pj) < 2 * PERSON_RADIUS_M:
+                r.fail(
+                    f"people[{j}].{kj}",
+                    f"can be within {2 * PERSON_RADIUS_M} m of people[{i}].{ki}: two people in one place at the start",
+                )
+
+
 def load_scene(file: str | pathlib.Path) -> SceneSpec:
     """Read and validate a scene file (one :class:`ScenarioError` naming file and field on error)."""
     file = pathlib.Path(file)
@@ -280,8 +350,8 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     if not isinstance(obj, dict):
         r.fail("<file>", "top level must be a JSON object")
     name = r.get(obj, "", "name")
-    if not isinstance(name, str) or not name:
-        r.fail("name", f"expected a non-empty string, got {name!r}")
+    if not is_safe_name(name):  # the name files its results: episodes/<name>.parquet
+        r.fail("name", f"{name!r} cannot name the scene's result files: use {SAFE_NAME_RULE}")
     bounds = tuple(r.box(r.get(obj, "", "bounds_m"), "bounds_m"))
     if (bounds[1] - bounds[0]) * (bounds[3] - bounds[2]) > 2500:
         r.fail(
@@ -331,6 +401,7 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     if slots > 64:
         r.fail("people", f"{slots} people at most: 64 allowed")
     rule = _rule(r, r.get(obj, "", "rule"), "rule", people)
+    _check_placements(r, robot, people)
     return SceneSpec(
         file=file,
         name=name,
