@@ -46,6 +46,7 @@ def main(argv: list[str] | None = None) -> int:
     runtime.request_host_devices()
     runtime.request_wide_vectors()
     runtime.request_compilation_cache()
+    runtime.quiet_third_party_logs()
     args = build_parser().parse_args(argv)
     return args.handler(args)
 

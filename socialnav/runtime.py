@@ -82,3 +82,25 @@ def request_compilation_cache(path: str | None = None) -> None:
     os.environ["JAX_COMPILATION_CACHE_DIR"] = folder
     if "jax" in sys.modules:
         sys.modules["jax"].config.update("jax_compilation_cache_dir", folder)
+
+
+def quiet_third_party_logs() -> None:
+    """Keep libraries' chatter out of the user's terminal: absl's log lines from orbax (``read_only=True,
+    setting max_to_keep=None``, ``Given directory is read only``, its own error for a damaged checkpoint
+    that the toolkit reports in one line of its own) and asyncio's "Event loop is closed" from orbax's
+    background threads at exit. ``SOCIALNAV_VERBOSE=1`` keeps them."""
+    import logging
+    import sys
+
+    if os.environ.get("SOCIALNAV_VERBOSE", "") not in ("", "0"):
+        return
+    for name in ("absl", "asyncio", "orbax"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
+    previous = sys.unraisablehook
+
+    def hook(unraisable):
+        if isinstance(unraisable.exc_value, RuntimeError) and "Event loop is closed" in str(unraisable.exc_value):
+            return
+        previous(unraisable)
+
+    sys.unraisablehook = hook
