@@ -159,12 +159,17 @@ def check_writable(folder: str | pathlib.Path) -> None:
     import tempfile
 
     folder = pathlib.Path(folder)
+    missing = [p for p in (folder, *folder.parents) if not _exists(p)]
     try:
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=folder, prefix=".tmp-0-probe-"):
             pass
     except OSError as e:
         raise RunFolderError(f"{folder}: cannot write there ({e.strerror or e})") from None
+    finally:
+        for made in missing:  # the job creates its folders when it writes, not before
+            with contextlib.suppress(OSError):
+                made.rmdir()
 
 
 def check_inputs(out: str | pathlib.Path, inputs: Iterable[str | pathlib.Path | None], option: str = "--out") -> None:
@@ -260,7 +265,8 @@ def claim(
 
     Args:
       adopt: for a folder without a manifest, a test that recognises a run of this job written
-        by an earlier version (``gscl train``'s ``config.json``): such a folder is given one.
+        by an earlier version (``gscl train``'s ``config.json``): such a folder is given one
+        when the job records its first file.
     """
     folder = pathlib.Path(folder)
     if _exists(folder) and not folder.is_dir():
@@ -275,7 +281,7 @@ def claim(
         listed = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
         listed = [f for f in listed if not f.startswith(".") and f.split("/")[0] in names]
         manifest = Manifest(job, marker, tuple(listed))
-        write_manifest(folder, manifest)
+        return manifest  # written with the job's first record(), not before it writes anything
     if manifest is None:
         clash = [n for n in names if _exists(folder / n)]
         if clash:

@@ -310,6 +310,10 @@ def _overwrite(tmp):
     subprocess.run([*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY], check=True, capture_output=True, cwd=ROOT)
     (out / "causal").mkdir()
     (out / "causal" / "stale.txt").write_text("from the old run")
+    sys.path.insert(0, str(ROOT))
+    from common import runfolder
+
+    runfolder.record(out / "causal", "socialnav learn", ["stale.txt"])  # a later job's run inside it
     return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY, "--seed", "5", "--overwrite"]
 
 
@@ -731,7 +735,8 @@ CASES: list[Case] = [
         ("--out",),
     ),
     Case("cli: --out cannot be created", simulate_args("--out", "/proc/socialnav-run"), ("--out", "/proc")),
-    Case("cli: --seed -1 (valid)", simulate_args("--seed", "-1"), check=_same_day),
+    Case("cli: --seed -1 (32-bit seeds: it would repeat 2^32 - 1)", simulate_args("--seed", "-1"), ("--seed",)),
+    Case("cli: --seed 4294967295 (valid)", simulate_args("--seed", "4294967295"), check=_same_day),
     Case(
         "cli: evaluate --slots S99",
         lambda tmp: [

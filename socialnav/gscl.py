@@ -402,14 +402,14 @@ EVALUATION_JOB = "socialnav gscl evaluation"  # evaluate and rules share RUN/eva
 
 def _an_earlier_training_run(folder: pathlib.Path) -> bool:
     """A training run of socialnav before 0.3 (no manifest): a config.json that reads as a
-    TrainConfig and a checkpoints/ folder."""
+    TrainConfig (its checkpoints, if any, are orbax's)."""
     from models.checkpoints import load_config
 
     try:
         load_config(folder)
     except (FileNotFoundError, ValueError):
         return False
-    return (folder / "checkpoints").is_dir()
+    return True
 
 
 def _evaluation_folder(args, names: tuple[str, ...]) -> pathlib.Path:

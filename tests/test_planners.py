@@ -155,5 +155,5 @@ def test_tables_file_errors_name_the_file_and_key(warehouse, tmp_path):
     with pytest.raises(TablesError, match="not found"):
         CausalTables.load(tmp_path / "none.npz")
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
-    with pytest.raises(TablesError, match="not a readable"):
+    with pytest.raises(TablesError, match="not an .npz archive"):
         CausalTables.load(tmp_path / "junk.npz")
