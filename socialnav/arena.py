@@ -305,7 +305,9 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                 for n, d in digests.items()
                 if isinstance(previous, dict) and (previous.get("scene_digests") or {}).get(n) not in (None, d)
             ]
-            what = f"scene file(s) changed since: {', '.join(changed)}" if changed else f"other {', '.join(differs)}"
+            what = f"other settings ({', '.join(differs)})"
+            if changed:
+                what = f"scene file(s) changed since: {', '.join(changed)}"
             print(
                 f"socialnav arena: {shown_as} holds a run with {what} ({shown_as / 'run.json'}); "
                 "pass --overwrite to replace it whole, or choose another --out",
