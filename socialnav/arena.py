@@ -292,6 +292,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     names = [spec.name + (arena_report.HELD_OUT if held_out else "") for spec, held_out in runs]
     digests = {name: scene_digest(spec.file, held_out, settings) for (spec, held_out), name in zip(runs, names)}
     settings["scene_digests"] = digests
+    settings["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in specs}
     meta = out / "run.json"
     if meta.exists():
         try:
@@ -300,11 +301,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
             previous = None
         differs = [k for k in settings if not isinstance(previous, dict) or previous.get(k) != settings[k]]
         if differs:
-            changed = [
-                n
-                for n, d in digests.items()
-                if isinstance(previous, dict) and (previous.get("scene_digests") or {}).get(n) not in (None, d)
-            ]
+            files_before = previous.get("scene_file_digests") or {} if isinstance(previous, dict) else {}
+            changed = [n for n, d in settings["scene_file_digests"].items() if files_before.get(n) not in (None, d)]
             what = f"other settings ({', '.join(differs)})"
             if changed:
                 what = f"scene file(s) changed since: {', '.join(changed)}"

@@ -141,3 +141,20 @@ def test_names_that_reach_paths_are_checked(tmp_path):
         runfolder.inside(tmp_path / "out", tmp_path / "out" / "link" / "x.parquet")
     with pytest.raises(runfolder.NotOurs, match="outside the output folder"):
         runfolder.inside(tmp_path / "out", tmp_path / "out" / ".." / "x.parquet")
+
+
+def test_a_scene_whose_name_would_leave_the_folder_is_refused(tmp_path):
+    from data import SCENES_DIR
+    from jaxsim.scenario.errors import ScenarioError
+    from jaxsim.scenes.spec import load_scene
+
+    obj = json.loads((SCENES_DIR / "casn_static_person.json").read_text())
+    for name in ("../../victim", "a/b", ""):
+        path = tmp_path / "scene.json"
+        path.write_text(json.dumps({**obj, "name": name}))
+        with pytest.raises(ScenarioError, match="cannot name the scene's result files"):
+            load_scene(path)
+    bad = {**obj, "robot": {**obj["robot"], "goal": obj["robot"]["start"]}}
+    path.write_text(json.dumps(bad))
+    with pytest.raises(ScenarioError, match="robot.goal"):
+        load_scene(path)
