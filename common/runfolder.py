@@ -62,8 +62,6 @@ OLD_PREFIX = ".old-"
 # run's files moved aside (.old-<pid>). Only these exact forms are removed: a user's own
 # ``.tmp-notes`` is not ours.
 _LEFTOVER = re.compile(r"^(\.tmp-\d+-.+|\.staging-\d+|\.old-\d+)$")
-# Kept for the readers of earlier versions' names.
-TEMPORARY_PREFIXES = (".tmp-", STAGING_PREFIX, OLD_PREFIX)
 
 
 class PreviousRun(RunFolderError):
@@ -400,7 +398,7 @@ def commit(
     new = [f for f in _staged_files(stage) if f != MANIFEST]
     old = [f for f in owned_files(folder, previous) if f != MANIFEST] if (overwrite and previous) else []
     for rel in new:
-        target = folder / rel
+        target = inside(folder, folder / rel)  # a user's symbolic link inside the run never leads out
         taken = _exists(target) and rel not in old
         blocked = next((p for p in target.parents if p != folder and p.is_relative_to(folder) and p.is_file()), None)
         if taken or blocked is not None:
@@ -532,14 +530,6 @@ def staged(folder: str | pathlib.Path, marker: str, overwrite: bool, job: str = 
             with contextlib.suppress(OSError):
                 _remove(stage)
         raise
-
-
-def ours_to_remove(folder: pathlib.Path, rel: str) -> bool:
-    """Whether ``folder/rel`` is listed in ``folder``'s manifest (a job may remove it)."""
-    manifest = read_manifest(folder)
-    if manifest is None:
-        return False
-    return any(rel == f or (f.endswith("/") and rel.startswith(f)) for f in manifest.files)
 
 
 __all__ = [

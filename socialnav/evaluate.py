@@ -63,6 +63,9 @@ JOB = "socialnav evaluate"
 # the result (about 400 tasks of two methods). For the refusal before a run the machine cannot hold.
 EXPERIMENT_BYTES = 1_000_000
 TASK_ROWS_BYTES = 150_000
+# Seconds of one experiment, both methods, on this project's 2-core machine: the 32-replica
+# protocol of 11 slots took 281.9 s (README "What it finds"), 0.8 s per replica and slot.
+EXPERIMENT_S = 0.8
 
 
 def add_evaluation_options(p: argparse.ArgumentParser, default_out, replicas: int = 32) -> None:
@@ -145,6 +148,12 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
             file=sys.stderr,
         )
         return 2
+    minutes = args.replicas * n_slots * EXPERIMENT_S / 60
+    print(
+        f"evaluate: {args.replicas} replica(s) x {n_slots} slot(s) x 2 methods; about {minutes:.0f} min on two cores, "
+        f"at most {(in_flight + held) / 1e9:.2f} GB at once",
+        flush=True,
+    )
     settings = {"deadline_per_hop": not args.deadline_per_task}
     if args.collision_radius_m is not None:
         settings["collision_radius_m"] = args.collision_radius_m

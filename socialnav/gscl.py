@@ -229,7 +229,8 @@ def _generate(args) -> int:
             f"(the dataset is one array in memory before it is written), this machine has {available / 1e9:.1f} GB "
             "available; lower --scale or --count (the shards of --shard-samples are joined in memory too)"
         )
-    print(f"gscl generate: {n:,} samples, about {needed / 1e9:.2f} GB at once", flush=True)
+    seconds = n / GENERATED_PER_S + 25
+    print(f"gscl generate: {n:,} samples, about {seconds:.0f} s and {needed / 1e9:.2f} GB at once", flush=True)
     t0 = time.perf_counter()
     if args.backend == "local" and args.shard_samples is None:
         data = dataset.generate(args.seed, counts)
@@ -266,6 +267,9 @@ def _generate(args) -> int:
 # Memory a generated sample holds: its input (1,600 bytes) and target (6,400), about three times
 # over while the generator's chunks are joined and written.
 DATASET_BYTES_PER_SAMPLE = 24_000
+# Samples generated per second once compiled (22-36 k pairs/s over the sessions, README "What it
+# reaches"); a new process adds about 25 s of compilation.
+GENERATED_PER_S = 20_000
 
 
 def _check_dataset_target(out: pathlib.Path, overwrite: bool) -> None:
