@@ -313,10 +313,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                 file=sys.stderr,
             )
             return 2
-    minutes = n_episodes / EPISODES_PER_S / 60
+    seconds = n_episodes / EPISODES_PER_S
+    took = f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
     print(
         f"arena: {len(runs)} scene run(s) x {len(methods)} method(s) x {args.variants} variant(s) = {n_episodes:,} "
-        f"episodes; about {minutes:.0f} min at {EPISODES_PER_S:.0f} episodes/s (2 cores), at most "
+        f"episodes; about {took} at {EPISODES_PER_S:.0f} episodes/s (2 cores, compilation not counted), at most "
         f"{needed / 1e9:.2f} GB at once",
         flush=True,
     )

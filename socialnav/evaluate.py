@@ -58,10 +58,12 @@ RESULTS = (
     "fig11_routes.png",
 )
 JOB = "socialnav evaluate"
-# Rough memory of one experiment (a replica of a slot, one method at a time) in the batch: its
-# world's state and the all-pairs social force's buffers for 51 agents; and of its tasks' rows in
-# the result (about 400 tasks of two methods). For the refusal before a run the machine cannot hold.
-EXPERIMENT_BYTES = 1_000_000
+# Memory of one experiment (a replica of a slot) in the batch, measured as the growth of the peak
+# resident set of `socialnav evaluate --slots S11` (/usr/bin/time -v): 602 MB at 1 replica, 678
+# MB at 4, 733 MB at 16, so about 4.6 MB per experiment beyond the first few; and of its tasks' rows
+# kept until the report (about 400 tasks of two methods, an estimate). For the refusal before a run
+# the machine cannot hold.
+EXPERIMENT_BYTES = 5_000_000
 TASK_ROWS_BYTES = 150_000
 # Seconds of one experiment, both methods, on this project's 2-core machine: the 32-replica
 # protocol of 11 slots took 281.9 s (README "What it finds"), 0.8 s per replica and slot.
@@ -148,9 +150,10 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
             file=sys.stderr,
         )
         return 2
-    minutes = args.replicas * n_slots * EXPERIMENT_S / 60
+    seconds = args.replicas * n_slots * EXPERIMENT_S
+    took = f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
     print(
-        f"evaluate: {args.replicas} replica(s) x {n_slots} slot(s) x 2 methods; about {minutes:.0f} min on two cores, "
+        f"evaluate: {args.replicas} replica(s) x {n_slots} slot(s) x 2 methods; about {took} on two cores, "
         f"at most {(in_flight + held) / 1e9:.2f} GB at once",
         flush=True,
     )
