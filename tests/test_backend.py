@@ -205,7 +205,7 @@ def test_ray_and_local_give_the_same_bits_for_simulate_gscl_and_arena(tmp_path, 
 @pytest.mark.slow
 def test_ray_and_local_evaluate_the_same_replicas(tmp_path, ray_instance, learned_run):
     tables = learned_run / "causal" / "engine_tables.npz"
-    ev = ["evaluate", "--tables", str(tables), "--replicas", "2", "--shard-replicas", "1", "--slots", "S1"]
+    ev = ["evaluate", "--tables", str(tables), "--replicas", "2", "--shard-replicas", "1", "--slots", "S11"]
     ev += ["--no-progress"]
     assert cli.main([*ev, "--out", str(tmp_path / "local")]) == 0
     assert cli.main([*ev, "--out", str(tmp_path / "ray"), "--backend", "ray"]) == 0
@@ -213,7 +213,7 @@ def test_ray_and_local_evaluate_the_same_replicas(tmp_path, ray_instance, learne
     b = pd.read_parquet(tmp_path / "ray" / "tasks.parquet")
     pd.testing.assert_frame_equal(a, b)
     assert sorted(a["replica"].unique()) == [0, 1]
-    one = ["evaluate", "--tables", str(tables), "--replicas", "2", "--slots", "S1", "--no-progress"]
+    one = ["evaluate", "--tables", str(tables), "--replicas", "2", "--slots", "S11", "--no-progress"]
     assert cli.main([*one, "--out", str(tmp_path / "one")]) == 0
     whole = pd.read_parquet(tmp_path / "one" / "tasks.parquet")
     assert len(whole) == len(a) and list(whole["method"]) == list(a["method"])

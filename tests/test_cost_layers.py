@@ -260,7 +260,10 @@ def test_gscl_layers_batch_equals_one_by_one():
     batch = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *scenes)
     together = np.asarray(gscl_layer.gscl_layers(predict, occupancy, SPEC, batch))
     for k, scene in enumerate(scenes):
-        np.testing.assert_allclose(together[k], gscl_layer.gscl_layer(predict, occupancy, SPEC, scene), atol=1e-6)
+        # Costs reach 252: a batch of two and a batch of one may pick different convolution
+        # orders in XLA, a few float32 ulps apart (2.9e-6 at 12.0 seen on CI's processor).
+        one = gscl_layer.gscl_layer(predict, occupancy, SPEC, scene)
+        np.testing.assert_allclose(together[k], one, rtol=1e-6, atol=1e-6)
     far = np.hypot(X - 0.0, Y - 0.0) > 8 * math.sqrt(2) + 0.1
     assert np.all(together[0][far] == 0.0)
 
