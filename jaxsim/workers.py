@@ -24,6 +24,7 @@ import jax
 import jax.numpy as jnp
 import jax.scipy.special as jss
 
+from jaxsim import crowd
 from jaxsim import social_force as sf
 from jaxsim.params import SimParams
 from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING, WorkerState
@@ -33,8 +34,6 @@ from jaxsim.world import World
 SPOT_RADIUS_FRACTION = 0.7
 # Distance to the spot under which a worker doing an activity slows down (m).
 SETTLE_DISTANCE_M = 1.0
-# Minimum clearance kept from wall surfaces by the hard wall constraint (m).
-WALL_CLEARANCE_M = 0.1
 # Required gain in distance to the target to count as progress (m).
 PROGRESS_M = 0.25
 
@@ -168,15 +167,11 @@ def move(
     u1: jax.Array,
     u2: jax.Array,
 ) -> WorkerState:
-    """One social-force step of every present worker (semi-implicit Euler, pedsim speed cap).
-
-    The robot is an agent the workers avoid (its Moussaid force is scaled by
-    ``worker_robot_force_factor``); it is not moved here. ``u1, u2``: (N,) uniforms for the
-    random force. Walls are also a hard constraint: a worker that ends a step closer than
-    ``WALL_CLEARANCE_M`` to a wall surface is projected back out and loses its velocity into
-    the wall (the obstacle force alone lets fast walkers tunnel through 0.15 m walls at dt=0.1).
-    The distance after the move is extrapolated from the one before along the wall normal.
-    """
+    """One social-force step of every present worker (:func:`jaxsim.crowd.step_crowd`, the
+    crowd model the arena's people share), towards the current waypoint or, at the destination,
+    the worker's spot there (slowing down within ``SETTLE_DISTANCE_M``; the speed cap stays the
+    worker's desired speed). The robot is an agent the workers avoid; it is not moved here.
+    ``u1, u2``: (N,) uniforms for the random force."""
     present = w.present
     on_spot = w.target_wp == w.dest_wp
     aim_x = world.waypoint_x_m[w.target_wp] + jnp.where(on_spot, w.spot_dx_m, 0.0)
@@ -184,45 +179,12 @@ def move(
     dx, dy = aim_x - w.x_m, aim_y - w.y_m
     settle = jnp.minimum(1.0, jnp.sqrt(dx * dx + dy * dy) / SETTLE_DISTANCE_M)
     speed = jnp.where(w.status == ACTIVITY, w.desired_speed_mps * settle, w.desired_speed_mps)
-    ax, ay = sf.desired_force(params, dx, dy, w.vx_mps, w.vy_mps, speed)
-
-    x = jnp.concatenate([w.x_m, robot_x[None]])
-    y = jnp.concatenate([w.y_m, robot_y[None]])
-    vx = jnp.concatenate([w.vx_mps, robot_vx[None]])
-    vy = jnp.concatenate([w.vy_mps, robot_vy[None]])
-    weight = jnp.concatenate([present.astype(x.dtype), jnp.full((1,), params.worker_robot_force_factor, x.dtype)])
-    sx, sy = sf.social_force(params, x, y, vx, vy, weight)
-    ax, ay = ax + sx[:-1], ay + sy[:-1]
-
-    field = world.wall_field.lookup(w.x_m, w.y_m)
-    wall, nx, ny = field[..., 0], field[..., 1], field[..., 2]
-    ox, oy = sf.obstacle_force(params, wall, nx, ny)
-    rx, ry = sf.random_force(params, u1, u2)
-    ax, ay = ax + ox + rx, ay + oy + ry
-
-    vx = w.vx_mps + params.dt_s * ax
-    vy = w.vy_mps + params.dt_s * ay
-    speed_now = jnp.sqrt(vx * vx + vy * vy)
-    cap = jnp.minimum(1.0, w.desired_speed_mps / jnp.maximum(speed_now, 1e-6))
-    vx, vy = vx * cap, vy * cap
-    x_new = w.x_m + params.dt_s * vx
-    y_new = w.y_m + params.dt_s * vy
-
-    # Distance after the move to first order (exact for a straight wall): saves a second lookup.
-    v_normal = vx * nx + vy * ny
-    wall = wall + params.dt_s * v_normal
-    push = jnp.maximum(WALL_CLEARANCE_M - wall, 0.0)
-    x_new, y_new = x_new + push * nx, y_new + push * ny
-    into = jnp.minimum(v_normal, 0.0) * (push > 0)
-    vx, vy = vx - into * nx, vy - into * ny
-
-    zero = jnp.zeros_like(vx)
-    return w.replace(
-        x_m=jnp.where(present, x_new, w.x_m),
-        y_m=jnp.where(present, y_new, w.y_m),
-        vx_mps=jnp.where(present, vx, zero),
-        vy_mps=jnp.where(present, vy, zero),
-    )
+    robot = (robot_x, robot_y, robot_vx, robot_vy)
+    x, y, vx, vy = crowd.step_crowd(
+        params, world.wall_field, w.x_m, w.y_m, w.vx_mps, w.vy_mps, dx, dy, speed, w.desired_speed_mps,
+        present, present, robot, u1, u2,
+    )  # fmt: skip
+    return w.replace(x_m=x, y_m=y, vx_mps=vx, vy_mps=vy)
 
 
 def init_workers(params: SimParams, world: World, u: jax.Array) -> WorkerState:

@@ -1,8 +1,9 @@
-"""People of a scene: where each behaviour wants them, and one step of the warehouse's social force.
+"""People of a scene: where each behaviour wants them, and one step of the crowd model.
 
-Walkers, stream members and queue members move by the same social force model as the warehouse
-crowd (:mod:`jaxsim.social_force`: pedsim's desired, Moussaid and wall forces, the random force;
-the warehouse's constants), with the robot as an agent they avoid unless ``ignore_robot``.
+Walkers, stream members and queue members move by the warehouse crowd's own step
+(:func:`jaxsim.crowd.step_crowd`: pedsim's desired, Moussaid and wall forces, the random force,
+walls as a hard constraint; the warehouse's constants), with the robot as an agent they avoid
+unless ``ignore_robot``.
 Standing people (and group members) stay where they stand, as the seeds' subjects did; a group
 member turns to face the group's centre at its ``turn_at_s``.
 """
@@ -13,14 +14,15 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim import rng, social_force
+from jaxsim import crowd, orca, rng
 from jaxsim.params import SimParams
 from jaxsim.scenes.spec import KIND
 from jaxsim.scenes.variant import Variant
 from jaxsim.scenes.world import SceneWorld
 
 ARRIVED_M = 0.3  # a walker within this distance of its target has arrived
-STOP_RAMP_M = 0.5  # a queue member slows down over the last half metre to its place
+STOP_RAMP_M = 0.5
+HUMAN_MODELS = ("social_force", "orca")  # a queue member slows down over the last half metre to its place
 
 
 @struct.dataclass
@@ -80,43 +82,48 @@ def step_people(
     robot_xy,
     robot_velocity,
     step,
+    model: str = "social_force",
+    orca_params: orca.ORCAParams | None = None,
+    robot_radius_m: float = 0.275,
 ) -> PeopleState:
-    """One step of ``params.dt_s``: behaviours, then the social force on the mobile people.
+    """One step of ``params.dt_s``: behaviours, then the human model on the mobile people.
 
     Args:
       robot_xy, robot_velocity: (2,) the robot's previous position and velocity.
       step: () int32 step counter (time and the random force's stream).
+      model: :data:`HUMAN_MODELS`: ``social_force`` (:func:`jaxsim.crowd.step_crowd`, the
+        warehouse's) or ``orca`` (:func:`jaxsim.orca.step_orca` with ``orca_params``; the robot a
+        disc of ``robot_radius_m``).
     """
+    if model not in HUMAN_MODELS:
+        raise ValueError(f"human model must be one of {', '.join(HUMAN_MODELS)}, got {model!r}")
     dt = params.dt_s
     time_s = step.astype(jnp.float32) * dt
     target, speed, mobile = targets(v, s, time_s)
-    x, y = s.xy[:, 0], s.xy[:, 1]
-    vx, vy = s.velocity[:, 0], s.velocity[:, 1]
-    ax, ay = social_force.desired_force(params, target[:, 0] - x, target[:, 1] - y, vx, vy, speed)
-    weight = s.present.astype(jnp.float32)
-    sx, sy = social_force.social_force(params, x, y, vx, vy, weight)
-    # The robot as a source, felt by those who do not ignore it.
-    rfx, rfy = social_force.pair_force(
-        params, robot_xy[0] - x, robot_xy[1] - y, vx - robot_velocity[0], vy - robot_velocity[1]
-    )
-    sees_robot = (
-        (~v.ignore_robot).astype(jnp.float32) * params.worker_robot_force_factor * params.worker_social_force_factor
-    )
-    field = world.wall_field.lookup(x, y)
-    wx, wy = social_force.obstacle_force(params, field[..., 0], field[..., 1], field[..., 2])
-    u = rng.hash_uniform16(v.seed_u32, step, (2, x.shape[0]))
-    nx_, ny_ = social_force.random_force(params, u[0], u[1])
-    ax = ax + sx + sees_robot * rfx + wx + nx_
-    ay = ay + sy + sees_robot * rfy + wy + ny_
-    new_v = s.velocity + dt * jnp.stack([ax, ay], axis=-1)
-    norm = jnp.linalg.norm(new_v, axis=-1, keepdims=True)
-    new_v = new_v * jnp.minimum(1.0, speed[:, None] / jnp.maximum(norm, 1e-9))  # pedsim's cap: the desired speed
-    new_v = jnp.where(mobile[:, None], new_v, 0.0)
-    xy = s.xy + dt * new_v
-    # Out of the walls: push back along the normal to a body radius from the surface.
-    field = world.wall_field.lookup(xy[:, 0], xy[:, 1])
-    depth = jnp.maximum(params.worker_radius_m - field[..., 0], 0.0)
-    xy = xy + (depth * mobile)[:, None] * field[..., 1:3]
+    u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
+    robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
+    if model == "orca":
+        x, y, vx, vy = orca.step_orca(
+            orca.ORCAParams() if orca_params is None else orca_params,
+            world.wall_field,
+            dt,
+            s.xy[:, 0],
+            s.xy[:, 1],
+            s.velocity[:, 0],
+            s.velocity[:, 1],
+            target[:, 0] - s.xy[:, 0],
+            target[:, 1] - s.xy[:, 1],
+            speed,
+            s.present,
+            mobile,
+            robot,
+            robot_radius_m,
+            ignores_robot=v.ignore_robot,
+        )
+    else:
+        x, y, vx, vy = _social_force(params, world, s, target, speed, mobile, robot, u, v.ignore_robot)
+    xy = jnp.stack([x, y], axis=-1)
+    new_v = jnp.stack([vx, vy], axis=-1)
 
     moving = jnp.linalg.norm(new_v, axis=-1) > 0.1
     turned = jnp.where(time_s >= v.turn_at_s, v.heading_turned, v.heading0)
@@ -134,6 +141,27 @@ def step_people(
     enters = v.valid & stream & (time_s + dt >= v.start_s) & ~done
     present = jnp.where(stream, enters, s.present & ~leaves)
     return PeopleState(xy=xy, velocity=new_v, heading=heading, present=present, leg=leg, done=done)
+
+
+def _social_force(params, world, s, target, speed, mobile, robot, u, ignores_robot):
+    return crowd.step_crowd(
+        params,
+        world.wall_field,
+        s.xy[:, 0],
+        s.xy[:, 1],
+        s.velocity[:, 0],
+        s.velocity[:, 1],
+        target[:, 0] - s.xy[:, 0],
+        target[:, 1] - s.xy[:, 1],
+        speed,
+        speed,  # pedsim's cap: the desired speed (a queue member's slows down to its place)
+        s.present,
+        mobile,
+        robot,
+        u[0],
+        u[1],
+        ignores_robot=ignores_robot,
+    )
 
 
 def stack_people(states: list[PeopleState]) -> PeopleState:
