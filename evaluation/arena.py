@@ -1,15 +1,13 @@
-"""The social-navigation arena: a scene's people and a robot with a navigation stack, in closed loop,
+"""The social-navigation arena: a scene's people and a robot driven by an actor, in closed loop,
 as batched JAX episodes.
 
-One episode step: the people move (:mod:`jaxsim.scenes.people`, the robot as an agent they see),
-the robot perceives them (range, line of sight, velocities from a window of positions), the
-local planner commands the base, the base moves (:mod:`jaxsim.scenes.robot`). The global planner
-replans every ``replan_every_steps`` (1 Hz at the default 0.1 s step; a stack with ``replan=False``
-plans once, at the start, as SNAPE does: its band adapts the path from then on): an outer
-``lax.scan`` over replanning periods, an inner one over control steps, so no branch runs the
-planner every step under ``vmap``. :func:`episode_function` vmaps episodes over a scene's variants;
-the methods are a Python loop (each is another program). The physics knows nothing of stacks or
-metrics: the stack (:mod:`planners.stack`) is passed in.
+An episode is :func:`jaxsim.scenes.actor.rollout`: the environment (:mod:`jaxsim.scenes.env`:
+the people's social force, the robot's base, its perception) stepped by an actor's actions. The
+built-in methods are actors made from their stacks (:func:`planners.actors.stack_actor`: the
+social layer and global planner at 1 Hz, the local planner at 10 Hz); a user's own actor runs
+the same way (:func:`actor_function`). The physics knows nothing of stacks or metrics.
+:func:`episode_function` vmaps episodes over a scene's variants; the methods are a Python loop
+(each is another program).
 
 Compilation is shared across scenes: a scene's arrays (occupancy, walls, wall field, objects) are
 arguments of the episode program, not constants in it, and are padded to sizes that depend on the
@@ -36,15 +34,15 @@ from flax import struct
 
 from data import WAREHOUSE_DIR
 from jaxsim.params import SimParams
+from jaxsim.rollout import MIN_CHUNK, map_worlds
 from jaxsim.scenario.loader import load_scenario
-from jaxsim.scenes import people as people_lib
-from jaxsim.scenes import perception
+from jaxsim.scenes import env as env_lib
 from jaxsim.scenes import robot as robot_lib
 from jaxsim.scenes import world as world_lib
+from jaxsim.scenes.actor import Actor, rollout
 from jaxsim.scenes.spec import SceneSpec
 from jaxsim.scenes.variant import Variant, padded_slots
-from planners import casn, costmap, gscl_layer, stack
-from planners.scene import Scene
+from planners import actors, costmap, stack
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,6 +58,7 @@ class ArenaConfig:
         than robot radius + person radius + this margin.
       person_radius_m: a person's body radius (the warehouse's workers').
       max_path_cells: the global path's length bound in cells.
+      human_model: how the people move: ``social_force`` (the warehouse's crowd) or ``orca``.
     """
 
     dt_s: float = 0.1
@@ -69,6 +68,7 @@ class ArenaConfig:
     safety_margin_m: float = 0.1
     person_radius_m: float = 0.25
     max_path_cells: int = 256
+    human_model: str = "social_force"
 
 
 @struct.dataclass
@@ -95,50 +95,33 @@ class Trajectory:
     wall_contacts: jnp.ndarray
 
 
-@struct.dataclass
-class SceneArrays:
-    """A scene's arrays as the episode program's argument (padded; :func:`setup_scene`).
-
-    Attributes:
-      occupancy: (H, W) float32 planner grid; world: walls (K, 4) and wall field;
-      objects_xy_m (M, 8, 2), objects_cost (M,), objects_valid (M,): interaction spaces.
-    """
-
-    occupancy: jnp.ndarray
-    world: world_lib.SceneWorld
-    objects_xy_m: jnp.ndarray
-    objects_cost: jnp.ndarray
-    objects_valid: jnp.ndarray
-
-
 @dataclasses.dataclass(frozen=True)
 class SceneSetup:
     """What an episode needs of a scene, built once on the host (:func:`setup_scene`).
 
     Attributes:
-      spec: the scene; grid: the planner grid (static); arrays: the padded arrays the program
-      takes; obstacle_costs: (H, W) the walls' inflated layer (profiling); n_periods: replanning
-      periods per episode; n_slots: people slots the variants are padded to.
+      spec: the scene; grid: the planner grid (static); env: the scene as an environment
+      (:class:`jaxsim.scenes.env.Env`, its walls padded); map: what a stack knows of it
+      (:class:`planners.actors.StackMap`); obstacle_costs: (H, W) the walls' inflated layer
+      (profiling); n_periods: replanning periods per episode; n_slots: people slots the variants
+      are padded to.
     """
 
     spec: SceneSpec
     grid: costmap.GridSpec
-    arrays: SceneArrays
+    env: env_lib.Env
+    map: actors.StackMap
     obstacle_costs: np.ndarray
     n_periods: int
     n_slots: int
 
     @property
     def world(self) -> world_lib.SceneWorld:
-        return self.arrays.world
+        return self.env.world
 
     @property
     def occupancy(self) -> np.ndarray:
-        return np.asarray(self.arrays.occupancy)
-
-
-def _round_up(n: int, multiple: int) -> int:
-    return max(multiple, -(-int(n) // multiple) * multiple)
+        return np.asarray(self.map.occupancy)
 
 
 def crowd_params() -> SimParams:
@@ -147,173 +130,75 @@ def crowd_params() -> SimParams:
 
 
 def setup_scene(
-    spec: SceneSpec, config: ArenaConfig = ArenaConfig(), robot: robot_lib.RobotParams = robot_lib.RobotParams()
+    spec: SceneSpec,
+    config: ArenaConfig = ArenaConfig(),
+    robot: robot_lib.RobotParams = robot_lib.RobotParams(),
+    crowd: SimParams | None = None,
+    reward: env_lib.RewardParams = env_lib.RewardParams(),
 ) -> SceneSetup:
-    occ, origin = world_lib.occupancy(spec, config.grid_resolution_m)
+    period_s = config.dt_s * config.replan_every_steps
+    n_periods = int(math.ceil(spec.timeout_s / period_s))
+    env_config = env_lib.EnvConfig(
+        dt_s=config.dt_s,
+        max_steps=n_periods * config.replan_every_steps,
+        goal_tolerance_m=config.goal_tolerance_m,
+        person_radius_m=config.person_radius_m,
+        human_model=config.human_model,
+    )
+    crowd = crowd_params() if crowd is None else crowd
+    env = env_lib.make_env(spec, env_config, robot, crowd, reward, config.grid_resolution_m)
+    occ = np.asarray(env.occupancy.values)
+    origin = (
+        env.occupancy.origin_x_m - config.grid_resolution_m / 2,
+        env.occupancy.origin_y_m - config.grid_resolution_m / 2,
+    )
     grid = costmap.GridSpec(occ.shape[0], occ.shape[1], config.grid_resolution_m, origin[0], origin[1])
     obstacles = np.asarray(costmap.obstacle_layer(occ, grid, float(robot.radius_m)))
-    m = _round_up(len(spec.objects), 4)
-    verts = np.zeros((m, 8, 2), np.float32)
-    cost = np.zeros(m, np.float32)
-    valid = np.zeros(m, bool)
-    for k, (_, poly, c) in enumerate(spec.objects):
-        verts[k, : len(poly)] = poly
-        verts[k, len(poly) :] = poly[-1]
-        cost[k], valid[k] = c, True
-    world = world_lib.build_scene_world(spec)
-    walls = np.asarray(world.walls_m)
-    far = np.array([[1e4, 1e4 + 1.0, 1e4, 1e4 + 1.0]], np.float32)  # never nearest, never in sight
-    walls = np.concatenate([walls, np.repeat(far, _round_up(len(walls), 8) - len(walls), axis=0)])
-    period_s = config.dt_s * config.replan_every_steps
-    arrays = SceneArrays(
-        occupancy=jnp.asarray(occ),
-        world=world.replace(walls_m=jnp.asarray(walls)),
-        objects_xy_m=jnp.asarray(verts),
-        objects_cost=jnp.asarray(cost),
-        objects_valid=jnp.asarray(valid),
-    )
     return SceneSetup(
         spec=spec,
         grid=grid,
-        arrays=arrays,
+        env=env,
+        map=actors.stack_map(spec, grid, occ, env.world.walls_m),
         obstacle_costs=obstacles,
-        n_periods=int(math.ceil(spec.timeout_s / period_s)),
+        n_periods=n_periods,
         n_slots=padded_slots(spec.n_people_slots),
     )
 
 
-def _perceived_scene(arrays: SceneArrays, people, visible, velocity, robot, goal_xy) -> Scene:
-    return Scene(
-        people_xy_m=people.xy,
-        people_heading_rad=people.heading,
-        people_velocity_mps=velocity,
-        people_valid=visible,
-        objects_xy_m=arrays.objects_xy_m,
-        objects_cost=arrays.objects_cost,
-        objects_valid=arrays.objects_valid,
-        robot_xy_m=robot.xy,
-        robot_yaw_rad=robot.yaw,
-        goal_xy_m=goal_xy,
+def _record(seen: env_lib.Observation, action, actor_state, timestep: env_lib.TimeStep):
+    """One step of a :class:`Trajectory` (before stacking)."""
+    o, info = timestep.observation, timestep.info
+    # The nearest seen person's predicted distance 2 s ahead, from what the actor saw.
+    heading = jnp.stack([jnp.cos(seen.robot_yaw_rad), jnp.sin(seen.robot_yaw_rad)])
+    ahead = seen.robot_xy_m + 2.0 * seen.robot_speed_mps * heading
+    predicted = seen.people_xy_m + 2.0 * seen.people_velocity_mps
+    pred_d = jnp.min(jnp.where(seen.people_visible, jnp.linalg.norm(predicted - ahead, axis=-1), jnp.inf))
+    gain = getattr(actor_state, "speed_gain", jnp.float32(1.0))
+    return (
+        o.robot_xy_m,
+        o.robot_yaw_rad,
+        o.robot_speed_mps,
+        info.people_xy_m,
+        info.people_heading_rad,
+        info.people_present,
+        seen.people_visible,
+        info.reached,
+        jnp.asarray(gain, jnp.float32),
+        pred_d,
     )
 
 
-def run_episode(
-    grid: costmap.GridSpec,
-    n_periods: int,
-    arrays: SceneArrays,
-    method: stack.StackConfig,
-    variant: Variant,
-    crowd: SimParams,
-    robot_params: robot_lib.RobotParams = robot_lib.RobotParams(),
-    config: ArenaConfig = ArenaConfig(),
-    gscl_predict: Callable | None = None,
-) -> Trajectory:
-    """One episode of one variant on a scene's ``arrays`` (``grid``, ``n_periods``, ``method``,
-    ``robot_params``, ``config`` and ``gscl_predict`` static; vmap it over variants)."""
-    crowd = crowd.replace(dt_s=config.dt_s) if crowd.dt_s != config.dt_s else crowd
-    x_m, y_m = grid.cell_centres()
-    occupancy = arrays.occupancy
-    world = arrays.world
-    goal = jnp.asarray(variant.goal_xy)
-    gscl_fn = None
-    if method.layer == "gscl":
-        if gscl_predict is None:
-            raise ValueError("method 'gscl' needs a trained GSCL model")
-        gscl_fn = lambda scene: gscl_layer.gscl_layer(gscl_predict, occupancy, grid, scene)
-    n_people = variant.valid.shape[-1]
-    radius_sum = robot_params.radius_m + config.person_radius_m
+def episode_key(variant: Variant) -> jax.Array:
+    """The actor's and the env's key of a variant: from its own seed, so a variant's episode is
+    the same alone and in any batch, and the same for every method (common random numbers)."""
+    return jax.random.fold_in(jax.random.key(0), variant.seed_u32)
 
-    def clearance_fn(people_xy, visible):
-        def fn(q):
-            walls = world_lib.wall_distance(q, world.walls_m)[0]
-            d = jnp.linalg.norm(q[:, None, :] - people_xy[None], axis=-1) - config.person_radius_m
-            return jnp.minimum(walls, jnp.min(jnp.where(visible[None], d, jnp.inf), axis=1))
 
-        return fn
-
-    def control_step(carry, _):
-        people, robot, tracks, path, path_len, reached, step = carry
-        seen = perception.visible(world, robot.xy, people.xy, people.present)
-        tracks, velocity = perception.observe(tracks, people.xy, seen, config.dt_s)
-        scene = _perceived_scene(arrays, people, seen, velocity, robot, goal)
-        v, w, _, gain = stack.local_command(
-            method,
-            path,
-            path_len,
-            robot.xy,
-            robot.yaw,
-            robot.speed,
-            robot_params.max_speed_mps,
-            scene,
-            clearance_fn(people.xy, seen),
-        )
-        # The local planner's speed factor and the predicted distance (for the pictures).
-        predicted = people.xy + 2.0 * velocity
-        ahead = robot.xy + 2.0 * robot.velocity
-        pred_d = jnp.min(jnp.where(seen, jnp.linalg.norm(predicted - ahead, axis=-1), jnp.inf))
-        # Safety stop: a visible person in front, closer than the bodies plus a margin.
-        offset = people.xy - robot.xy
-        dist = jnp.linalg.norm(offset, axis=-1)
-        bearing = jnp.arctan2(offset[:, 1], offset[:, 0]) - robot.yaw
-        in_front = jnp.cos(bearing) > 0.5
-        stop = jnp.any(seen & in_front & (dist < radius_sum + config.safety_margin_m))
-        v = jnp.where(stop | reached, 0.0, v)
-        w = jnp.where(reached, 0.0, w)
-        new_people = people_lib.step_people(crowd, world, variant, people, robot.xy, robot.velocity, step)
-        robot = robot_lib.step_robot(robot_params, world, robot, v, w, config.dt_s)
-        reached = reached | (jnp.linalg.norm(robot.xy - goal) < config.goal_tolerance_m)
-        record = (
-            robot.xy,
-            robot.yaw,
-            robot.speed,
-            new_people.xy,
-            new_people.heading,
-            new_people.present,
-            seen,
-            reached,
-            gain,
-            pred_d,
-        )
-        return (new_people, robot, tracks, path, path_len, reached, step + 1), record
-
-    def plan_now(people, robot, tracks, casn_state):
-        """The global plan from the robot's perception now: (path, length, found, CASN state)."""
-        seen = perception.visible(world, robot.xy, people.xy, people.present)
-        velocity = perception.velocity(tracks, config.dt_s)
-        scene = _perceived_scene(arrays, people, seen, velocity, robot, goal)
-        social, casn_state = stack.social_layer(method, scene, x_m, y_m, casn_state, gscl_fn)
-        # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the walls.
-        d = jnp.hypot(x_m[None] - people.xy[:, 0, None, None], y_m[None] - people.xy[:, 1, None, None])
-        bodies = jnp.any((d <= config.person_radius_m) & seen[:, None, None], axis=0)
-        obstacles = costmap.obstacle_layer(jnp.maximum(occupancy, bodies), grid, float(robot_params.radius_m))
-        costs = costmap.combine_max(obstacles, social)
-        path, length, found = stack.global_plan(method, costs, robot.xy, goal, grid, config.max_path_cells)
-        return path, length, found, casn_state
-
-    def period(carry, _):
-        people, robot, tracks, casn_state, path, path_len, reached, step = carry
-        if method.replan:
-            new_path, new_len, found, casn_state = plan_now(people, robot, tracks, casn_state)
-            # Keep the previous path when no path is found now (a person on the goal, say).
-            path = jnp.where(found, new_path, path)
-            path_len = jnp.where(found, new_len, path_len)
-        inner = (people, robot, tracks, path, path_len, reached, step)
-        inner, records = jax.lax.scan(control_step, inner, None, length=config.replan_every_steps)
-        people, robot, tracks, path, path_len, reached, step = inner
-        return (people, robot, tracks, casn_state, path, path_len, reached, step), records
-
-    robot = robot_lib.init_robot(variant.robot_xy, variant.robot_yaw)
-    people = people_lib.init_people(variant)
-    tracks = perception.init_tracks(n_people)
-    max_len = config.max_path_cells + 1
-    straight = jnp.linspace(0.0, 1.0, max_len)[:, None] * (goal - robot.xy) + robot.xy
-    path, path_len, found, casn_state = plan_now(people, robot, tracks, casn.initial_state(n_people))
-    path = jnp.where(found, path, straight)
-    path_len = jnp.where(found, path_len, max_len)
-    carry = (people, robot, tracks, casn_state, path, path_len, jnp.array(False), jnp.int32(0))
-    carry, records = jax.lax.scan(period, carry, None, length=n_periods)
-    flat = jax.tree_util.tree_map(lambda a: a.reshape((-1,) + a.shape[2:]), records)
-    robot_xy, yaw, speed, pxy, pheading, present, seen, reached, gain, pred_d = flat
+def run_episode(env: env_lib.Env, actor: Actor, params, variant: Variant) -> Trajectory:
+    """One episode of ``variant`` in ``env`` driven by ``actor`` (``actor`` static; vmap it over
+    variants): :func:`jaxsim.scenes.actor.rollout` with the arena's record."""
+    (state, _), records = rollout(env, actor, params, variant, episode_key(variant), record=_record)
+    robot_xy, yaw, speed, pxy, pheading, present, seen, reached, gain, pred_d = records
     return Trajectory(
         robot_xy=robot_xy,
         robot_yaw=yaw,
@@ -325,39 +210,73 @@ def run_episode(
         reached=reached,
         speed_gain=gain,
         predicted_distance_m=pred_d,
-        wall_contacts=carry[1].wall_contacts,
+        wall_contacts=state.robot.wall_contacts,
     )
 
 
 @functools.lru_cache(maxsize=64)
-def _episode_program(
-    grid: costmap.GridSpec,
-    n_periods: int,
-    method: stack.StackConfig,
-    robot_params: robot_lib.RobotParams,
-    config: ArenaConfig,
-    gscl_predict: Callable | None,
-):
-    """``(arrays, crowd, variants) -> Trajectory``, jitted, vmapped over variants; one per static
-    key, so scenes of equal padded shapes share its compilations."""
+def _episode_program(actor: Actor):
+    """``(env, params, variants) -> Trajectory``, jitted, vmapped over variants; one per actor
+    (the env's and the params' arrays are arguments: scenes of equal padded shapes and every
+    value of a parameter share its compilations)."""
 
-    def batch(arrays, crowd, variants):
-        def one(variant):
-            return run_episode(grid, n_periods, arrays, method, variant, crowd, robot_params, config, gscl_predict)
-
-        return jax.vmap(one)(variants)
+    def batch(env, params, variants):
+        # map_worlds: a batch of one is run as two (XLA compiles a one-element vmap as the
+        # unbatched program, which rounds differently), so a variant's episode has the same bits
+        # alone and in any batch.
+        n = jax.tree_util.tree_leaves(variants)[0].shape[0]
+        return map_worlds(lambda v: run_episode(env, actor, params, v), (variants,), max(n, MIN_CHUNK))
 
     return jax.jit(batch)
+
+
+@functools.lru_cache(maxsize=64)
+def method_actor(
+    method: stack.StackConfig,
+    grid: costmap.GridSpec,
+    robot_radius_m: float,
+    config: ArenaConfig = ArenaConfig(),
+    gscl_apply: Callable | None = None,
+) -> Actor:
+    """A built-in stack as an actor (cached: the same stack on the same grid is the same actor,
+    so its compiled program is reused)."""
+    return actors.stack_actor(
+        method, grid, robot_radius_m, config.replan_every_steps, config.max_path_cells, gscl_apply, name=method.layer
+    )
+
+
+def actor_function(setup: SceneSetup, actor: Actor, params, env: env_lib.Env | None = None):
+    """``variants (batched Variant, padded to ``setup.n_slots``) -> Trajectory (batched)`` for
+    any actor with its ``params``."""
+    program = _episode_program(actor)
+    return functools.partial(program, setup.env if env is None else env, params)
 
 
 def episode_function(
     setup: SceneSetup,
     method: stack.StackConfig,
-    crowd: SimParams,
+    crowd: SimParams | None = None,
     robot_params: robot_lib.RobotParams = robot_lib.RobotParams(),
     config: ArenaConfig = ArenaConfig(),
     gscl_predict: Callable | None = None,
+    gscl_weights=None,
 ):
-    """``variants (batched Variant, padded to ``setup.n_slots``) -> Trajectory (batched)``."""
-    program = _episode_program(setup.grid, setup.n_periods, method, robot_params, config, gscl_predict)
-    return functools.partial(program, setup.arrays, crowd)
+    """``variants -> Trajectory`` of a built-in stack. ``gscl_predict`` is either ``maps ->
+    costs`` (closing over its weights: each model compiles anew) or, with ``gscl_weights``,
+    ``(weights, maps) -> costs`` (the weights traced: a new checkpoint reuses the program)."""
+    env = setup.env.replace(robot=robot_params)
+    if crowd is not None:
+        env = env.replace(crowd=crowd)
+    apply = None
+    if gscl_predict is not None and method.layer == "gscl":
+        apply = gscl_predict if gscl_weights is not None else _closed(gscl_predict)
+    if method.layer == "gscl" and apply is None:
+        raise ValueError("method 'gscl' needs a trained GSCL model")
+    actor = method_actor(method, setup.grid, float(robot_params.radius_m), config, apply)
+    params = actors.stack_params(env, setup.map, config.safety_margin_m, config.person_radius_m, gscl_weights)
+    return actor_function(setup, actor, params, env)
+
+
+@functools.lru_cache(maxsize=16)
+def _closed(predict: Callable) -> Callable:
+    return lambda weights, maps: predict(maps)

@@ -18,6 +18,7 @@ from scipy import stats
 
 from common.intervals import wilson
 from evaluation import arena, nav_metrics
+from jaxsim.scenes.actor import Actor
 from jaxsim.scenes.robot import RobotParams
 from jaxsim.scenes.spec import SceneSpec, mirror
 from jaxsim.scenes.variant import Variant, sample_variants
@@ -142,11 +143,13 @@ def run_scene(
     config: arena.ArenaConfig = arena.ArenaConfig(),
     on_method: Callable[[str], None] | None = None,
     held_out: bool = False,
+    user_actors: dict[str, Callable] | None = None,
 ):
     """Every method on variants ``first .. first + n_variants - 1`` of one scene:
     ``(episodes frame, trajectories frame or None)``. ``held_out``: the scene mirrored
     (:func:`jaxsim.scenes.spec.mirror`) with every range drawn just outside itself, its rows named
-    ``<scene>@held_out``."""
+    ``<scene>@held_out``. ``user_actors``: method name -> a factory ``env -> Actor`` or ``env ->
+    (Actor, params)`` (:func:`user_actor`), for the names of ``methods`` that are not built in."""
     name = spec.name + (HELD_OUT if held_out else "")
     if held_out:
         spec = mirror(spec)
@@ -158,8 +161,13 @@ def run_scene(
     robot = RobotParams()
     measure = metrics_function(setup, config, float(robot.radius_m))
     episodes, trajectories = [], []
+    user_actors = user_actors or {}
     for method in methods:
-        run = arena.episode_function(setup, METHODS[method], crowd, robot, config, gscl_predict)
+        if method in user_actors:
+            actor, params = user_actor(user_actors[method], setup.env.replace(crowd=crowd, robot=robot))
+            run = arena.actor_function(setup, actor, params, setup.env.replace(crowd=crowd, robot=robot))
+        else:
+            run = arena.episode_function(setup, METHODS[method], crowd, robot, config, gscl_predict)
         tr = run(variants)
         episodes.append(episode_frame(name, method, first, measure(tr, variants), tr.wall_contacts))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)
@@ -170,6 +178,19 @@ def run_scene(
     return pd.concat(episodes, ignore_index=True), (
         pd.concat(trajectories, ignore_index=True) if trajectories else None
     )
+
+
+def user_actor(factory: Callable, env) -> tuple[Actor, object]:
+    """``(actor, params)`` from a user's factory called with the scene's env: it returns an
+    :class:`~jaxsim.scenes.actor.Actor` (its params are then the env's robot limits,
+    :class:`~jaxsim.scenes.robot.RobotParams`) or ``(actor, params)``."""
+    made = factory(env)
+    if isinstance(made, Actor):
+        return made, env.robot
+    if isinstance(made, tuple) and len(made) == 2 and isinstance(made[0], Actor):
+        return made
+    name = getattr(factory, "__name__", repr(factory))
+    raise TypeError(f"{name}(env) must return an Actor or (Actor, params), got {type(made).__name__}")
 
 
 # The means that get a 95 % interval in the summary (``<key>_lo``, ``<key>_hi``).

@@ -30,6 +30,7 @@ import json
 import pathlib
 import sys
 
+from socialnav import actor_spec
 from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.backend import add_backend_options
 from socialnav.locking import locks_folder
@@ -52,6 +53,14 @@ def add_parser(sub) -> None:
         type=comma_names,
         default=None,
         help=f"methods (default: {','.join(DEFAULT_METHODS)}; gscl too with --gscl-run)",
+    )
+    p.add_argument(
+        "--actor",
+        action="append",
+        default=[],
+        metavar="MODULE:FUNCTION",
+        help="also run your own actor (repeatable): FUNCTION(env) in MODULE (or in a file.py) returns a "
+        "jaxsim.scenes.actor.Actor or (actor, params); its rows are named FUNCTION",
     )
     p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")
     p.add_argument(
@@ -180,7 +189,7 @@ def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str
     GSCL model, the metrics' and the toolkit's versions)."""
     h = hashlib.sha256()
     h.update(pathlib.Path(spec_file).read_bytes())
-    keys = ("methods", "variants", "seed", "shard_variants", "keep_trajectories", "gscl_model")
+    keys = ("methods", "variants", "seed", "shard_variants", "keep_trajectories", "gscl_model", "actor_sources")
     h.update(json.dumps({"held_out": held_out, **{k: settings.get(k) for k in keys}}, sort_keys=True).encode())
     h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
     return h.hexdigest()[:16]
@@ -211,6 +220,20 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
             f"socialnav arena: --methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})", file=sys.stderr
         )
         return 2
+    try:
+        actor_specs = [_absolute_spec(spec) for spec in args.actor]
+        actor_names = [actor_spec.name(spec) for spec in actor_specs]
+        for spec, actor_name in zip(args.actor, actor_names, strict=True):
+            if actor_name in METHODS or actor_names.count(actor_name) > 1:
+                raise actor_spec.ActorSpecError(
+                    f"--actor {spec}: the name {actor_name!r} is taken (a built-in method or another --actor)"
+                )
+        for spec in actor_specs:
+            actor_spec.load(spec)
+    except actor_spec.ActorSpecError as e:
+        print(f"socialnav arena: {e}", file=sys.stderr)
+        return 2
+    methods += actor_names
     for scene_name, method in args.animate:
         if method not in methods:
             print(f"socialnav arena: --animate {scene_name}:{method}: {method} is not among --methods", file=sys.stderr)
@@ -231,6 +254,17 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     except runfolder.NotOurs as e:
         print(f"socialnav arena: {e}", file=sys.stderr)
         return 2
+    if actor_specs:  # each factory called once here: a bad one fails before any work
+        from evaluation import arena as arena_lib
+        from evaluation import arena_report as report_lib
+
+        env = arena_lib.setup_scene(specs[0]).env
+        for spec in actor_specs:
+            try:
+                report_lib.user_actor(actor_spec.load(spec), env)
+            except Exception as e:  # the user's code: any error, named in one line
+                print(f"socialnav arena: --actor {spec}: {type(e).__name__}: {e}", file=sys.stderr)
+                return 2
     seen: dict[str, pathlib.Path] = {}
     for spec in specs:
         if spec.name in seen:
@@ -287,6 +321,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         "shard_variants": args.shard_variants,
         "gscl_run": None if args.gscl_run is None else str(args.gscl_run),
         "gscl_model": None if args.gscl_run is None else _gscl_identity(args.gscl_run),
+        "actors": actor_specs,
+        "actor_sources": [actor_spec.source_digest(spec) for spec in actor_specs],
         "metrics_version": nav_metrics.VERSION,
         "socialnav_version": __version__,
     }
@@ -336,7 +372,17 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                 backend_lib.Shard(
                     name=f"{name}[{first}:{first + n}]",
                     output=runfolder.inside(out, _shard_file(out, name, digests[name], first)),
-                    args=(spec, held_out, first, n, tuple(methods), args.seed, args.keep_trajectories, args.gscl_run),
+                    args=(
+                        spec,
+                        held_out,
+                        first,
+                        n,
+                        tuple(methods),
+                        args.seed,
+                        args.keep_trajectories,
+                        args.gscl_run,
+                        tuple(actor_specs),
+                    ),
                     work=n * len(methods),
                 )
             )
@@ -439,13 +485,26 @@ def _gscl_predict(run: pathlib.Path | None):
     return SocialCostModel.load(run).function
 
 
-def compute_shard(spec, held_out, first, n, methods, seed, keep_trajectories, gscl_run):
+def compute_shard(spec, held_out, first, n, methods, seed, keep_trajectories, gscl_run, actor_specs=()):
     """One shard: every method on variants ``first .. first + n - 1`` of a scene (a Ray task with
-    ``--backend ray``): ``(episodes frame, trajectories frame or None)``."""
+    ``--backend ray``): ``(episodes frame, trajectories frame or None)``. ``actor_specs``: the
+    ``--actor`` factories, loaded here (in the worker)."""
     from evaluation import arena_report
 
     keep = max(0, min(n, keep_trajectories - first))
-    return arena_report.run_scene(spec, list(methods), n, seed, first, keep, _gscl_predict(gscl_run), held_out=held_out)
+    users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
+    predict = _gscl_predict(gscl_run)
+    return arena_report.run_scene(
+        spec, list(methods), n, seed, first, keep, predict, held_out=held_out, user_actors=users
+    )
+
+
+def _absolute_spec(spec: str) -> str:
+    """``spec`` with a file path made absolute (a Ray worker may start elsewhere)."""
+    where, function = actor_spec.split(spec)
+    if where.endswith(".py"):
+        where = str(pathlib.Path(where).resolve())
+    return f"{where}:{function}"
 
 
 def _save_shard(shard, result) -> None:

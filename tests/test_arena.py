@@ -270,11 +270,12 @@ def test_scenes_of_a_family_share_one_program_shape():
     compiles each method once for all four; seed 002's queue (5 people) pads to 8 slots."""
     names = ("casn_static_person", "casn_static_group")
     setups = [arena.setup_scene(load_scene(DATA_DIR / "scenes" / f"{n}.json")) for n in names]
-    shapes = [jax.tree_util.tree_map(lambda a: (a.shape, a.dtype), s.arrays) for s in setups]
-    assert jax.tree_util.tree_structure(setups[0].arrays) == jax.tree_util.tree_structure(setups[1].arrays)
+    arrays = [(s.env, s.map) for s in setups]
+    shapes = [jax.tree_util.tree_map(lambda a: (np.shape(a), np.asarray(a).dtype), a) for a in arrays]
+    assert jax.tree_util.tree_structure(arrays[0]) == jax.tree_util.tree_structure(arrays[1])
     assert shapes[0] == shapes[1]
     assert {s.n_slots for s in setups} == {2} and setups[0].grid == setups[1].grid
-    assert setups[0].arrays.world.walls_m.shape[0] % 8 == 0
+    assert setups[0].env.world.walls_m.shape[0] % 8 == 0
     assert arena.setup_scene(load_scene(DATA_DIR / "scenes" / "gscl_queue.json")).n_slots == 8
 
 
@@ -283,15 +284,16 @@ def test_padding_walls_changes_no_episode_and_padding_people_only_rounding():
     spec = load_scene(DATA_DIR / "scenes" / "snape_static_pair.json")  # 7 walls -> 8, 2 objects -> 4
     setup = arena.setup_scene(spec)
     n_walls = len(spec.walls_m)
-    assert setup.arrays.world.walls_m.shape[0] == 8 and n_walls < 8
-    bare = arena.SceneArrays(
-        occupancy=setup.arrays.occupancy,
-        world=setup.arrays.world.replace(walls_m=setup.arrays.world.walls_m[:n_walls]),
-        objects_xy_m=setup.arrays.objects_xy_m[:2],
-        objects_cost=setup.arrays.objects_cost[:2],
-        objects_valid=setup.arrays.objects_valid[:2],
+    assert setup.env.world.walls_m.shape[0] == 8 and n_walls < 8
+    bare_env = setup.env.replace(world=setup.env.world.replace(walls_m=setup.env.world.walls_m[:n_walls]))
+    m = setup.map
+    bare_map = m.replace(
+        walls_m=m.walls_m[:n_walls],
+        objects_xy_m=m.objects_xy_m[:2],
+        objects_cost=m.objects_cost[:2],
+        objects_valid=m.objects_valid[:2],
     )
-    unpadded = dataclasses.replace(setup, arrays=bare)
+    unpadded = dataclasses.replace(setup, env=bare_env, map=bare_map)
     variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 1, 2, n_slots=setup.n_slots))
     a = arena.episode_function(setup, METHODS["snape_social_eband"], arena.crowd_params())(variants)
     b = arena.episode_function(unpadded, METHODS["snape_social_eband"], arena.crowd_params())(variants)

@@ -1,0 +1,147 @@
+"""Actors: whatever drives the robot (a navigation stack, a reactive rule, a learned policy, a
+user's own function), passed into the rollout, never written inside the physics.
+
+An :class:`Actor` is two pure functions and two static numbers::
+
+    init(key, observation) -> actor_state
+    act(params, actor_state, observation, key) -> (action (2,) = (v, omega), actor_state)
+
+``params`` is any pytree (weights, layer parameters, the map the actor was given); its leaves
+are traced, so a new checkpoint or a parameter sweep does not recompile. ``actor_state`` is any
+pytree of fixed shapes (a path, a recurrent state, a filter).
+
+A stack that replans at a slower rate adds ``plan(params, actor_state, observation, key) ->
+actor_state`` and ``plan_every_steps``: :func:`rollout` then runs an outer ``lax.scan`` over
+planning periods around an inner one over control steps. Under ``vmap`` a ``lax.cond`` on the
+step counter runs both branches for every variant, so a planner called every tenth step inside
+one flat scan would cost as much as one called every step; the two scans keep the 1 Hz planner
+at 1 Hz. ``plan_every_steps = 0`` plans once, at the start (SNAPE's stack).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+import jax
+from flax import struct
+
+from jaxsim.scenes.env import Env, EnvState, Observation, TimeStep
+
+ActorState = Any
+Params = Any
+
+
+@dataclasses.dataclass(frozen=True)
+class Actor:
+    """A controller of the robot (static: hashable, compared by its functions).
+
+    Attributes:
+      init: ``(key, observation) -> actor_state``.
+      act: ``(params, actor_state, observation, key) -> (action (2,), actor_state)``.
+      plan: optional ``(params, actor_state, observation, key) -> actor_state`` run every
+        ``plan_every_steps`` control steps (0: once, at the start).
+      name: shown in tables and errors.
+    """
+
+    init: Callable[[jax.Array, Observation], ActorState]
+    act: Callable[[Params, ActorState, Observation, jax.Array], tuple[jax.Array, ActorState]]
+    plan: Callable[[Params, ActorState, Observation, jax.Array], ActorState] | None = None
+    plan_every_steps: int = 1
+    name: str = "actor"
+
+
+@struct.dataclass
+class StepRecord:
+    """What :func:`rollout` keeps of each step by default (T steps; a batch adds a leading axis).
+
+    Attributes:
+      robot_xy_m (T, 2), robot_yaw_rad (T,), robot_speed_mps (T,): after the step.
+      people_xy_m (T, P, 2), people_heading_rad (T, P), people_present (T, P): after the step.
+      people_visible (T, P): what the actor saw when it chose its action.
+      action (T, 2); reward (T,); reached (T,) bool (by the end of the step).
+    """
+
+    robot_xy_m: jax.Array
+    robot_yaw_rad: jax.Array
+    robot_speed_mps: jax.Array
+    people_xy_m: jax.Array
+    people_heading_rad: jax.Array
+    people_present: jax.Array
+    people_visible: jax.Array
+    action: jax.Array
+    reward: jax.Array
+    reached: jax.Array
+
+
+def default_record(seen: Observation, action, actor_state, timestep: TimeStep) -> StepRecord:
+    """The record of one step: the observation acted on, the action, the actor's state after it,
+    the timestep that followed."""
+    del actor_state
+    o, info = timestep.observation, timestep.info
+    return StepRecord(
+        robot_xy_m=o.robot_xy_m,
+        robot_yaw_rad=o.robot_yaw_rad,
+        robot_speed_mps=o.robot_speed_mps,
+        people_xy_m=info.people_xy_m,
+        people_heading_rad=info.people_heading_rad,
+        people_present=info.people_present,
+        people_visible=seen.people_visible,
+        action=action,
+        reward=timestep.reward,
+        reached=info.reached,
+    )
+
+
+def rollout(
+    env: Env,
+    actor: Actor,
+    params: Params,
+    variant,
+    key: jax.Array,
+    n_steps: int | None = None,
+    record: Callable = default_record,
+) -> tuple[tuple[EnvState, ActorState], Any]:
+    """One episode of ``variant`` driven by ``actor``; ``vmap`` it over variants (and keys).
+
+    Runs ``n_steps`` (default ``env.config.max_steps``, rounded up to whole planning periods)
+    whatever happens: an episode past its goal goes on with the base stopped, so every episode
+    of a batch has one length. Returns ``((final env state, final actor state), records)``,
+    ``records`` the pytree ``record(observation, action, actor_state, timestep)`` stacked over
+    steps (:class:`StepRecord` by default).
+    """
+    n_steps = env.config.max_steps if n_steps is None else int(n_steps)
+    key_reset, key_init, key_run = jax.random.split(key, 3)
+    state, timestep = env.reset(key_reset, variant)
+    actor_state = actor.init(key_init, timestep.observation)
+
+    def control(carry, step_key):
+        state, timestep, actor_state = carry
+        observation = timestep.observation
+        action, actor_state = actor.act(params, actor_state, observation, step_key)
+        state, timestep = env.step(state, action)
+        return (state, timestep, actor_state), record(observation, action, actor_state, timestep)
+
+    if actor.plan is None or not actor.plan_every_steps:
+        if actor.plan is not None:  # plans once, at the start
+            key_plan, key_run = jax.random.split(key_run)
+            actor_state = actor.plan(params, actor_state, timestep.observation, key_plan)
+        keys = jax.random.split(key_run, n_steps)
+        (state, _, actor_state), records = jax.lax.scan(control, (state, timestep, actor_state), keys)
+        return (state, actor_state), records
+
+    period = int(actor.plan_every_steps)
+    n_periods = -(-n_steps // period)
+
+    def one_period(carry, period_key):
+        state, timestep, actor_state = carry
+        key_plan, key_steps = jax.random.split(period_key)
+        actor_state = actor.plan(params, actor_state, timestep.observation, key_plan)
+        keys = jax.random.split(key_steps, period)
+        return jax.lax.scan(control, (state, timestep, actor_state), keys)
+
+    carry = (state, timestep, actor_state)
+    (state, _, actor_state), records = jax.lax.scan(one_period, carry, jax.random.split(key_run, n_periods))
+    records = jax.tree_util.tree_map(lambda a: a.reshape((-1,) + a.shape[2:]), records)
+    return (state, actor_state), records

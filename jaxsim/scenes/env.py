@@ -1,0 +1,405 @@
+"""The social-navigation environment: pure ``reset`` and ``step`` over a scene's people and a robot.
+
+In the style of brax, gymnax and jumanji: :class:`Env` is a pytree whose array leaves (the
+scene's walls and occupancy, the crowd's and the robot's parameters, the reward's weights) are
+traced, so one compiled program serves every scene of the same padded shapes and every value of
+a parameter; its static part (:class:`EnvConfig`, the grid's origin) is the cache key.
+
+One step (``dt_s``, 0.1 s by default):
+
+1. the action ``(v, omega)`` (m/s, rad/s) is applied to the base, whose limits
+   (:class:`~jaxsim.scenes.robot.RobotParams`) clip it; once the goal is reached the base is
+   commanded to stop (the episode's people go on);
+2. the people move by the social force (:mod:`jaxsim.scenes.people`), the robot's previous
+   position and velocity an agent they avoid; the base moves and slides along walls;
+3. the robot perceives (:mod:`jaxsim.scenes.perception`): people in range and in line of sight,
+   their velocities estimated from a window of observed positions (never read from the
+   simulator), and the occupancy around it.
+
+:class:`TimeStep` carries the :class:`Observation`, the reward (:class:`RewardParams`, CrowdNav's
+sparse reward with a progress term), ``terminated`` (the goal reached), ``truncated`` (the time
+limit) and :class:`StepInfo`, the true quantities the metrics need. Everything vmaps over
+variants; a variant gives the same bits alone and in any batch (tested).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+from flax import struct
+
+from jaxsim.orca import ORCAParams
+from jaxsim.params import SimParams
+from jaxsim.scenes import people as people_lib
+from jaxsim.scenes import perception
+from jaxsim.scenes import robot as robot_lib
+from jaxsim.scenes.variant import Variant
+from jaxsim.scenes.world import SceneWorld, wall_distance
+from jaxsim.world import Grid
+
+
+@dataclasses.dataclass(frozen=True)
+class EnvConfig:
+    """Static settings (hashable; a change recompiles).
+
+    Attributes:
+      dt_s: simulation and control step (0.1 s: 10 Hz, the seeds' local planners).
+      max_steps: the time limit in steps (``truncated`` from then on).
+      goal_tolerance_m: the goal is reached when the robot's centre is this close.
+      person_radius_m: a person's body radius for contacts and the reward (the warehouse's
+        workers' 0.25 m).
+      sensor_range_m: people farther than this are not seen (8 m: GSCL's window; the seeds'
+        RGB-D sensors reach about as far).
+      window_cells: the observed occupancy window's side in cells, centred on the robot and
+        turned with it (row 0 behind, column 0 to the right; 0: no window).
+      window_resolution_m: its cell size.
+      human_model: how the people move (:data:`jaxsim.scenes.people.HUMAN_MODELS`): the
+        warehouse's social force (default) or ORCA (:mod:`jaxsim.orca`).
+    """
+
+    dt_s: float = 0.1
+    max_steps: int = 600
+    goal_tolerance_m: float = 0.3
+    person_radius_m: float = 0.25
+    sensor_range_m: float = perception.RANGE_M
+    window_cells: int = 16
+    window_resolution_m: float = 0.25
+    human_model: str = "social_force"
+
+    def __post_init__(self):
+        if self.human_model not in people_lib.HUMAN_MODELS:
+            raise ValueError(
+                f"human_model must be one of {', '.join(people_lib.HUMAN_MODELS)}, got {self.human_model!r}"
+            )
+
+
+@struct.dataclass
+class RewardParams:
+    """The default reward's weights (dynamic floats: a sweep does not recompile).
+
+    CrowdNav's (Chen et al. 2019, also social-jym's ``Reward1``): ``goal_reward`` on the step
+    the goal is reached, ``collision_penalty`` on each step in contact with a person,
+    ``discomfort_weight * (d - discomfort_distance_m) * dt`` while a person's body is closer than
+    ``discomfort_distance_m`` to the robot's; plus ``progress_weight`` per metre gained towards
+    the goal (the dense shaping robot_sf uses, 0 for CrowdNav's own), ``wall_penalty`` per step
+    in contact with a wall and ``time_penalty`` per step.
+    """
+
+    goal_reward: float = 1.0
+    collision_penalty: float = -0.25
+    discomfort_distance_m: float = 0.2
+    discomfort_weight: float = 0.5
+    progress_weight: float = 0.1
+    wall_penalty: float = -0.05
+    time_penalty: float = 0.0
+
+
+@struct.dataclass
+class Observation:
+    """What the robot perceives (P people slots; a batch adds leading axes).
+
+    Attributes:
+      robot_xy_m (2,), robot_yaw_rad (), robot_speed_mps (), robot_turn_rate_rps (): its own
+        pose and velocity (odometry).
+      goal_xy_m (2,).
+      people_xy_m (P, 2), people_heading_rad (P,), people_velocity_mps (P, 2): the people as
+        sensed (zeros where not seen); the velocity is the estimate from the track window.
+      people_visible (P,) bool: in range and in line of sight now.
+      occupancy (C, C) float32: the walls around the robot, in its frame (``window_cells``).
+      time_s ().
+    """
+
+    robot_xy_m: jax.Array
+    robot_yaw_rad: jax.Array
+    robot_speed_mps: jax.Array
+    robot_turn_rate_rps: jax.Array
+    goal_xy_m: jax.Array
+    people_xy_m: jax.Array
+    people_heading_rad: jax.Array
+    people_velocity_mps: jax.Array
+    people_visible: jax.Array
+    occupancy: jax.Array
+    time_s: jax.Array
+
+
+@struct.dataclass
+class StepInfo:
+    """True quantities for metrics (not for the robot): people_xy_m (P, 2),
+    people_heading_rad (P,), people_present (P,) bool, reached () bool (by now),
+    person_contact () bool, wall_contact () bool (this step), nearest_person_m () the smallest
+    body-to-body distance (inf with nobody present)."""
+
+    people_xy_m: jax.Array
+    people_heading_rad: jax.Array
+    people_present: jax.Array
+    reached: jax.Array
+    person_contact: jax.Array
+    wall_contact: jax.Array
+    nearest_person_m: jax.Array
+
+
+@struct.dataclass
+class TimeStep:
+    """observation; reward () float32; terminated () bool (the goal reached); truncated () bool
+    (the time limit, not terminated); info: :class:`StepInfo`."""
+
+    observation: Observation
+    reward: jax.Array
+    terminated: jax.Array
+    truncated: jax.Array
+    info: StepInfo
+
+    @property
+    def done(self) -> jax.Array:
+        return self.terminated | self.truncated
+
+
+@struct.dataclass
+class EnvState:
+    """variant (the episode's draw), people, robot, tracks (the perception's window), step ()
+    int32, reached () bool, key (the env's own stream; unused by the default sensors)."""
+
+    variant: Variant
+    people: people_lib.PeopleState
+    robot: robot_lib.RobotState
+    tracks: perception.Tracks
+    step: jax.Array
+    reached: jax.Array
+    key: jax.Array
+
+
+@struct.dataclass
+class Env:
+    """A scene as an environment (a pytree: pass it to ``jit`` as an argument).
+
+    Attributes:
+      world: the scene's walls (boxes and distance field).
+      occupancy: the planner-resolution occupancy as a :class:`~jaxsim.world.Grid` (H, W).
+      crowd: the social force's constants (``dt_s`` is the env's).
+      robot: the base's limits.
+      reward: the reward's weights.
+      orca: ORCA's constants (used with ``config.human_model = "orca"``).
+      config: static settings.
+    """
+
+    world: SceneWorld
+    occupancy: Grid
+    crowd: SimParams
+    robot: robot_lib.RobotParams
+    reward: RewardParams
+    orca: ORCAParams
+    config: EnvConfig = struct.field(pytree_node=False)
+
+    # ------------------------------------------------------------------ API
+
+    def reset(self, key: jax.Array, variant: Variant) -> tuple[EnvState, TimeStep]:
+        """The episode of ``variant`` at time 0 (the variant fixes the people and the crowd's
+        random force, so every actor meets the same crowd: common random numbers)."""
+        n = variant.valid.shape[-1]
+        robot = robot_lib.init_robot(variant.robot_xy, variant.robot_yaw)
+        people = people_lib.init_people(variant)
+        state = EnvState(
+            variant=variant,
+            people=people,
+            robot=robot,
+            tracks=perception.init_tracks(n),
+            step=jnp.int32(0),
+            reached=jnp.array(False),
+            key=key,
+        )
+        state, observation = self._perceive(state)
+        info = self._info(state, jnp.array(False))
+        zero = jnp.float32(0.0)
+        return state, TimeStep(observation, zero, jnp.array(False), jnp.array(False), info)
+
+    def step(self, state: EnvState, action: jax.Array) -> tuple[EnvState, TimeStep]:
+        """Apply ``action`` (2,) = (v m/s, omega rad/s) for one step."""
+        cfg = self.config
+        action = jnp.asarray(action, jnp.float32)
+        v = jnp.where(state.reached, 0.0, action[0])
+        w = jnp.where(state.reached, 0.0, action[1])
+        crowd = self.crowd.replace(dt_s=cfg.dt_s)
+        people = people_lib.step_people(
+            crowd,
+            self.world,
+            state.variant,
+            state.people,
+            state.robot.xy,
+            state.robot.velocity,
+            state.step,
+            cfg.human_model,
+            self.orca,
+            self.robot.radius_m,
+        )
+        robot = robot_lib.step_robot(self.robot, self.world, state.robot, v, w, cfg.dt_s)
+        goal = state.variant.goal_xy
+        reached_now = jnp.linalg.norm(robot.xy - goal) < cfg.goal_tolerance_m
+        new = state.replace(people=people, robot=robot, step=state.step + 1, reached=state.reached | reached_now)
+        new, observation = self._perceive(new)
+        wall_contact = robot.wall_contacts > state.robot.wall_contacts
+        info = self._info(new, wall_contact)
+        progress_m = jnp.linalg.norm(state.robot.xy - goal) - jnp.linalg.norm(robot.xy - goal)
+        reward = self._reward(info, ~state.reached & new.reached, progress_m, state.reached)
+        terminated = new.reached
+        truncated = (new.step >= cfg.max_steps) & ~terminated
+        return new, TimeStep(observation, reward, terminated, truncated, info)
+
+    # ------------------------------------------------------------------ specs
+
+    def observation_spec(self, n_people: int) -> dict[str, tuple[tuple[int, ...], Any]]:
+        """``{field: (shape, dtype)}`` of one observation with ``n_people`` slots."""
+        c = self.config.window_cells
+        return {
+            "robot_xy_m": ((2,), jnp.float32),
+            "robot_yaw_rad": ((), jnp.float32),
+            "robot_speed_mps": ((), jnp.float32),
+            "robot_turn_rate_rps": ((), jnp.float32),
+            "goal_xy_m": ((2,), jnp.float32),
+            "people_xy_m": ((n_people, 2), jnp.float32),
+            "people_heading_rad": ((n_people,), jnp.float32),
+            "people_velocity_mps": ((n_people, 2), jnp.float32),
+            "people_visible": ((n_people,), jnp.bool_),
+            "occupancy": ((c, c), jnp.float32),
+            "time_s": ((), jnp.float32),
+        }
+
+    def action_spec(self) -> dict[str, Any]:
+        """The action (2,) float32 (v m/s, omega rad/s) and the bounds the base clips it to."""
+        r = self.robot
+        return {
+            "shape": (2,),
+            "dtype": jnp.float32,
+            "low": (0.0, -float(r.max_turn_rate_rps)),
+            "high": (float(r.max_speed_mps), float(r.max_turn_rate_rps)),
+        }
+
+    # ------------------------------------------------------------------ parts
+
+    def _perceive(self, state: EnvState) -> tuple[EnvState, Observation]:
+        cfg = self.config
+        people, robot = state.people, state.robot
+        seen = perception.visible(self.world, robot.xy, people.xy, people.present, cfg.sensor_range_m)
+        tracks, velocity = perception.observe(state.tracks, people.xy, seen, cfg.dt_s)
+        observation = Observation(
+            robot_xy_m=robot.xy,
+            robot_yaw_rad=robot.yaw,
+            robot_speed_mps=robot.speed,
+            robot_turn_rate_rps=robot.turn_rate,
+            goal_xy_m=jnp.asarray(state.variant.goal_xy, jnp.float32),
+            people_xy_m=jnp.where(seen[:, None], people.xy, 0.0),
+            people_heading_rad=jnp.where(seen, people.heading, 0.0),
+            people_velocity_mps=velocity,
+            people_visible=seen,
+            occupancy=self._window(robot.xy, robot.yaw),
+            time_s=state.step.astype(jnp.float32) * cfg.dt_s,
+        )
+        return state.replace(tracks=tracks), observation
+
+    def _window(self, xy, yaw):
+        """(C, C) occupancy around ``xy`` in the robot's frame (nearest cell; off the map: 1)."""
+        cfg = self.config
+        c = cfg.window_cells
+        if c == 0:
+            return jnp.zeros((0, 0), jnp.float32)
+        offsets = (jnp.arange(c, dtype=jnp.float32) - (c - 1) / 2) * cfg.window_resolution_m
+        fwd, left = jnp.meshgrid(offsets, -offsets[::-1], indexing="ij")  # row: forward, col: left
+        cos, sin = jnp.cos(yaw), jnp.sin(yaw)
+        x = xy[0] + cos * fwd - sin * left
+        y = xy[1] + sin * fwd + cos * left
+        grid = self.occupancy
+        h, w = grid.values.shape
+        col = jnp.round((x - grid.origin_x_m) / grid.resolution_m)
+        row = jnp.round((y - grid.origin_y_m) / grid.resolution_m)
+        inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
+        value = grid.values[jnp.clip(row, 0, h - 1).astype(jnp.int32), jnp.clip(col, 0, w - 1).astype(jnp.int32)]
+        return jnp.where(inside, value, 1.0)
+
+    def _info(self, state: EnvState, wall_contact) -> StepInfo:
+        people, robot = state.people, state.robot
+        gap = jnp.linalg.norm(people.xy - robot.xy, axis=-1) - self.robot.radius_m - self.config.person_radius_m
+        nearest = jnp.min(jnp.where(people.present, gap, jnp.inf))
+        return StepInfo(
+            people_xy_m=people.xy,
+            people_heading_rad=people.heading,
+            people_present=people.present,
+            reached=state.reached,
+            person_contact=nearest < 0.0,
+            wall_contact=wall_contact,
+            nearest_person_m=nearest,
+        )
+
+    def _reward(self, info: StepInfo, arrived, progress_m, was_reached):
+        r = self.reward
+        discomfort = jnp.where(
+            (info.nearest_person_m >= 0.0) & (info.nearest_person_m < r.discomfort_distance_m),
+            r.discomfort_weight * (info.nearest_person_m - r.discomfort_distance_m) * self.config.dt_s,
+            0.0,
+        )
+        reward = (
+            r.goal_reward * arrived
+            + r.collision_penalty * info.person_contact
+            + discomfort
+            + r.progress_weight * progress_m
+            + r.wall_penalty * info.wall_contact
+            + r.time_penalty
+        )
+        return jnp.where(was_reached, 0.0, reward).astype(jnp.float32)
+
+
+def wall_clearance_m(env: Env, xy) -> jax.Array:
+    """Distance from points (..., 2) to the nearest wall surface (negative inside)."""
+    return wall_distance(xy, env.world.walls_m)[0]
+
+
+def _round_up(n: int, multiple: int) -> int:
+    return max(multiple, -(-int(n) // multiple) * multiple)
+
+
+def pad_walls(walls_m, multiple: int = 8):
+    """(K', 4) the wall boxes padded to a multiple of ``multiple`` with boxes far outside (never
+    nearest, never in sight): scenes of similar size share one compiled program; the padding
+    changes no episode (tested bit for bit)."""
+    import numpy as np
+
+    walls = np.asarray(walls_m, np.float32)
+    far = np.array([[1e4, 1e4 + 1.0, 1e4, 1e4 + 1.0]], np.float32)
+    return np.concatenate([walls, np.repeat(far, _round_up(len(walls), multiple) - len(walls), axis=0)])
+
+
+def make_env(
+    spec,
+    config: EnvConfig = EnvConfig(),
+    robot: robot_lib.RobotParams = robot_lib.RobotParams(),
+    crowd: SimParams | None = None,
+    reward: RewardParams = RewardParams(),
+    occupancy_resolution_m: float = 0.2,
+    orca: ORCAParams = ORCAParams(),
+) -> Env:
+    """The environment of a :class:`~jaxsim.scenes.spec.SceneSpec` (host side, once per scene).
+
+    ``crowd`` defaults to the warehouse's social force constants (the arena's people are the
+    same walkers). ``config.max_steps`` is kept as given (see :func:`episode_steps`).
+    """
+    from jaxsim.scenes import world as world_lib
+
+    if crowd is None:
+        from data import WAREHOUSE_DIR
+        from jaxsim.scenario.loader import load_scenario
+
+        crowd = load_scenario(WAREHOUSE_DIR).params
+    world = world_lib.build_scene_world(spec)
+    world = world.replace(walls_m=jnp.asarray(pad_walls(world.walls_m)))
+    occ, (x0, y0) = world_lib.occupancy(spec, occupancy_resolution_m)
+    half = occupancy_resolution_m / 2
+    grid = Grid(jnp.asarray(occ), origin_x_m=x0 + half, origin_y_m=y0 + half, resolution_m=occupancy_resolution_m)
+    return Env(world=world, occupancy=grid, crowd=crowd, robot=robot, reward=reward, orca=orca, config=config)
+
+
+def episode_steps(timeout_s: float, dt_s: float, period_steps: int = 1) -> int:
+    """Steps of an episode of ``timeout_s``, rounded up to whole periods of ``period_steps``."""
+    import math
+
+    return int(math.ceil(timeout_s / (dt_s * period_steps))) * period_steps

@@ -1,0 +1,159 @@
+"""Gymnasium adapters of the JAX environment, numpy in and out, for Stable-Baselines3- and
+CleanRL-style code (``pip install socialnav-jax[gym]``).
+
+* :class:`SocialNavEnv`: one ``gymnasium.Env`` (passes ``gymnasium.utils.env_checker.check_env``).
+* :class:`SocialNavVectorEnv`: a ``gymnasium.vector.VectorEnv`` of ``num_envs`` episodes stepped
+  as one jitted ``vmap`` (gymnasium's default next-step autoreset: the step after an episode ends
+  returns the new episode's first observation with reward 0).
+
+Observations are a ``Dict`` of float32 boxes, one per :class:`~jaxsim.scenes.env.Observation`
+field (``people_visible`` as 0/1); the action is ``Box([0, -w_max], [v_max, w_max])``. Each
+reset draws a variant of the scene from a pool drawn once (``pool`` variants under ``seed``,
+the scene's training draws, never the held-out ones); ``reset(seed=s)`` reseeds the choice.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import jax
+import jax.numpy as jnp
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector.utils import batch_space
+
+from jaxsim.scenes import env as env_lib
+from jaxsim.scenes.spec import SceneSpec
+from jaxsim.scenes.variant import padded_slots, sample_variants
+
+# Bounds of the unbounded fields (the yaw is not wrapped: it counts whole turns).
+_BOUND = {
+    "robot_speed_mps": (-10.0, 10.0),
+    "robot_turn_rate_rps": (-10.0, 10.0),
+    "people_velocity_mps": (-20.0, 20.0),
+    "people_heading_rad": (-4.0, 4.0),
+}
+
+
+def observation_space(env: env_lib.Env, n_people: int) -> spaces.Dict:
+    """The gymnasium space of one observation."""
+    fields = {}
+    for name, (shape, dtype) in env.observation_spec(n_people).items():
+        if dtype == jnp.bool_ or name == "occupancy":
+            lo, hi = 0.0, 1.0
+        else:
+            lo, hi = _BOUND.get(name, (-1e4, 1e4))
+        fields[name] = spaces.Box(lo, hi, shape, np.float32)
+    return spaces.Dict(fields)
+
+
+def action_space(env: env_lib.Env) -> spaces.Box:
+    spec = env.action_spec()
+    return spaces.Box(np.array(spec["low"], np.float32), np.array(spec["high"], np.float32), dtype=np.float32)
+
+
+def _numpy(observation: env_lib.Observation) -> dict[str, np.ndarray]:
+    return {k: np.asarray(v, np.float32) for k, v in vars(observation).items()}
+
+
+class _Pool:
+    """A scene's variants drawn once, padded to one shape; ``take(indices)`` stacks some."""
+
+    def __init__(self, spec: SceneSpec, pool: int, seed: int):
+        self.n_slots = padded_slots(spec.n_people_slots)
+        self.variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, pool, 0, False, self.n_slots))
+        self.size = pool
+
+    def take(self, indices):
+        return jax.tree_util.tree_map(lambda a: a[jnp.asarray(indices)], self.variants)
+
+
+class SocialNavVectorEnv(gym.vector.VectorEnv):
+    """``num_envs`` episodes of one scene, stepped together (see the module's docstring).
+
+    Args:
+      spec: the scene; num_envs: episodes at once; pool: variants to draw resets from; seed:
+      the pool's draw; config/robot/reward: the env's settings (:func:`jaxsim.scenes.env.make_env`).
+    """
+
+    metadata = {"autoreset_mode": gym.vector.AutoresetMode.NEXT_STEP}
+
+    def __init__(
+        self,
+        spec: SceneSpec,
+        num_envs: int = 8,
+        pool: int = 256,
+        seed: int = 0,
+        config: env_lib.EnvConfig | None = None,
+        robot=None,
+        reward: env_lib.RewardParams = env_lib.RewardParams(),
+    ):
+        if num_envs < 1 or pool < 1:
+            raise ValueError(f"num_envs and pool must be >= 1, got {num_envs} and {pool}")
+        config = config or env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, 0.1))
+        kwargs = {} if robot is None else {"robot": robot}
+        self.env = env_lib.make_env(spec, config, reward=reward, **kwargs)
+        self._pool = _Pool(spec, pool, seed)
+        self.num_envs = num_envs
+        self.single_observation_space = observation_space(self.env, self._pool.n_slots)
+        self.single_action_space = action_space(self.env)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self._rng = np.random.default_rng(seed)
+        self._state = None
+        self._needs_reset = np.zeros(num_envs, bool)
+        env = self.env
+        self._reset = jax.jit(jax.vmap(env.reset))
+
+        def step(states, actions, reset_mask, keys, variants):
+            stepped, ts = jax.vmap(env.step)(states, actions)
+            fresh, ts0 = jax.vmap(env.reset)(keys, variants)
+            pick = lambda a, b: jnp.where(reset_mask.reshape((-1,) + (1,) * (a.ndim - 1)), a, b)
+            return jax.tree_util.tree_map(pick, fresh, stepped), jax.tree_util.tree_map(pick, ts0, ts)
+
+        self._step = jax.jit(step)
+
+    def _draw(self, n: int):
+        keys = jax.random.split(jax.random.key(int(self._rng.integers(2**31))), n)
+        return keys, self._pool.take(self._rng.integers(0, self._pool.size, n))
+
+    def reset(self, *, seed: int | None = None, options=None):
+        super().reset(seed=seed)
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        keys, variants = self._draw(self.num_envs)
+        self._state, ts = self._reset(keys, variants)
+        self._needs_reset[:] = False
+        return _numpy(ts.observation), {}
+
+    def step(self, actions):
+        if self._state is None:
+            raise RuntimeError("SocialNavVectorEnv.step before reset")
+        actions = jnp.asarray(np.asarray(actions, np.float32).reshape(self.num_envs, 2))
+        keys, variants = self._draw(self.num_envs)
+        mask = jnp.asarray(self._needs_reset)
+        self._state, ts = self._step(self._state, actions, mask, keys, variants)
+        terminated = np.asarray(ts.terminated) & ~self._needs_reset
+        truncated = np.asarray(ts.truncated) & ~self._needs_reset
+        reward = np.where(self._needs_reset, 0.0, np.asarray(ts.reward)).astype(np.float32)
+        self._needs_reset = terminated | truncated
+        return _numpy(ts.observation), reward, terminated, truncated, {}
+
+
+class SocialNavEnv(gym.Env):
+    """One episode at a time: :class:`SocialNavVectorEnv` with ``num_envs = 1``, unbatched."""
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, spec: SceneSpec, pool: int = 256, seed: int = 0, **kwargs):
+        self._vector = SocialNavVectorEnv(spec, 1, pool, seed, **kwargs)
+        self.observation_space = self._vector.single_observation_space
+        self.action_space = self._vector.single_action_space
+
+    def reset(self, *, seed: int | None = None, options=None):
+        super().reset(seed=seed)
+        obs, info = self._vector.reset(seed=seed)
+        return {k: v[0] for k, v in obs.items()}, info
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self._vector.step(np.asarray(action, np.float32)[None])
+        return {k: v[0] for k, v in obs.items()}, float(reward[0]), bool(terminated[0]), bool(truncated[0]), info

@@ -1,0 +1,248 @@
+"""The built-in methods as actors (:class:`jaxsim.scenes.actor.Actor`), and the simplest one.
+
+:func:`stack_actor` turns a :class:`~planners.stack.StackConfig` (a cost layer, a global grid
+planner at 1 Hz, a local planner at 10 Hz) into an actor: its ``plan`` draws the social layer
+from what the robot perceives, adds the seen people as obstacles inflated with the walls and
+plans the global path; its ``act`` runs the local planner on that path and a safety stop. The
+map (occupancy, interaction spaces, walls) and every float of the robot and the layers are the
+actor's ``params``, traced: another scene of the same shapes, another speed limit or another
+GSCL checkpoint reuses the compiled program.
+
+:func:`go_to_goal` drives straight at the goal (a throughput baseline and the shape of a user's
+own actor).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from jaxsim.scenes import world as world_lib
+from jaxsim.scenes.actor import Actor
+from jaxsim.scenes.env import Env, Observation
+from planners import casn, costmap, gscl_layer, stack
+from planners.scene import Scene
+
+
+@struct.dataclass
+class StackMap:
+    """What a stack knows of the scene before it starts (M interaction spaces, K wall boxes).
+
+    Attributes:
+      occupancy: (H, W) float32 on the planner grid; walls_m: (K, 4) boxes (the band's
+      clearance); objects_xy_m (M, 8, 2), objects_cost (M,), objects_valid (M,) bool.
+    """
+
+    occupancy: jax.Array
+    walls_m: jax.Array
+    objects_xy_m: jax.Array
+    objects_cost: jax.Array
+    objects_valid: jax.Array
+
+
+@struct.dataclass
+class StackParams:
+    """A stack's dynamic inputs: the map, the robot's speed limit (m/s) and body radius used by
+    the safety stop (m), the safety margin (m), a person's radius (m), and the GSCL weights
+    (``None`` without the gscl layer)."""
+
+    map: StackMap
+    max_speed_mps: jax.Array
+    robot_radius_m: jax.Array
+    safety_margin_m: jax.Array
+    person_radius_m: jax.Array
+    gscl_weights: Any = None
+
+
+@struct.dataclass
+class StackState:
+    """path (L, 2) m, path_len () int32 (0: no plan yet), casn: CASN's frozen points,
+    planner_velocity (P, 2) m/s (the velocity estimate of the previous control step, what the
+    1 Hz planner sees), speed_gain () (the social band's factor; 1 otherwise)."""
+
+    path: jax.Array
+    path_len: jax.Array
+    casn: casn.CASNState
+    planner_velocity: jax.Array
+    speed_gain: jax.Array
+
+
+def stack_map(spec, grid: costmap.GridSpec, occupancy, walls_m) -> StackMap:
+    """The map of a scene: occupancy on ``grid``, the (padded) walls, its interaction spaces
+    padded to a multiple of 4."""
+    m = max(4, -(-len(spec.objects) // 4) * 4)
+    verts = np.zeros((m, 8, 2), np.float32)
+    cost = np.zeros(m, np.float32)
+    valid = np.zeros(m, bool)
+    for k, (_, poly, c) in enumerate(spec.objects):
+        verts[k, : len(poly)] = poly
+        verts[k, len(poly) :] = poly[-1]
+        cost[k], valid[k] = c, True
+    return StackMap(
+        occupancy=jnp.asarray(occupancy, jnp.float32),
+        walls_m=jnp.asarray(walls_m),
+        objects_xy_m=jnp.asarray(verts),
+        objects_cost=jnp.asarray(cost),
+        objects_valid=jnp.asarray(valid),
+    )
+
+
+def stack_params(
+    env: Env, map_: StackMap, safety_margin_m: float = 0.1, person_radius_m: float | None = None, gscl_weights=None
+) -> StackParams:
+    """A stack's params for ``env`` (its robot's limits) on ``map_``."""
+    person = env.config.person_radius_m if person_radius_m is None else person_radius_m
+    return StackParams(
+        map=map_,
+        max_speed_mps=jnp.float32(env.robot.max_speed_mps),
+        robot_radius_m=jnp.float32(env.robot.radius_m),
+        safety_margin_m=jnp.float32(safety_margin_m),
+        person_radius_m=jnp.float32(person),
+        gscl_weights=gscl_weights,
+    )
+
+
+def _scene(params: StackParams, obs: Observation, velocity) -> Scene:
+    m = params.map
+    return Scene(
+        people_xy_m=obs.people_xy_m,
+        people_heading_rad=obs.people_heading_rad,
+        people_velocity_mps=velocity,
+        people_valid=obs.people_visible,
+        objects_xy_m=m.objects_xy_m,
+        objects_cost=m.objects_cost,
+        objects_valid=m.objects_valid,
+        robot_xy_m=obs.robot_xy_m,
+        robot_yaw_rad=obs.robot_yaw_rad,
+        goal_xy_m=obs.goal_xy_m,
+    )
+
+
+def stack_actor(
+    method: stack.StackConfig,
+    grid: costmap.GridSpec,
+    robot_radius_m: float,
+    replan_every_steps: int = 10,
+    max_path_cells: int = 256,
+    gscl_apply: Callable | None = None,
+    name: str | None = None,
+) -> Actor:
+    """A navigation stack as an actor.
+
+    Args:
+      method: the stack (layer, global and local planner, replanning or not).
+      grid: the planner grid (static: its shape and origin).
+      robot_radius_m: the inscribed radius of the obstacle layer's inflation (static: it sets
+        the inflation's kernel).
+      replan_every_steps: the global planner's period (10: 1 Hz at 0.1 s); a stack with
+        ``replan=False`` plans once.
+      max_path_cells: the global path's length bound.
+      gscl_apply: ``(weights, maps (B, 40, 40)) -> costs (B, 40, 40)`` for the gscl layer; its
+        weights are ``params.gscl_weights``.
+    """
+    if method.layer == "gscl" and gscl_apply is None:
+        raise ValueError("method 'gscl' needs a trained GSCL model (gscl_apply)")
+    x_np, y_np = grid.cell_centres()
+    max_len = max_path_cells + 1
+
+    def init(key, obs: Observation) -> StackState:
+        del key
+        n = obs.people_visible.shape[-1]
+        return StackState(
+            path=jnp.zeros((max_len, 2), jnp.float32),
+            path_len=jnp.int32(0),
+            casn=casn.initial_state(n),
+            planner_velocity=jnp.zeros((n, 2), jnp.float32),
+            speed_gain=jnp.float32(1.0),
+        )
+
+    def plan(params: StackParams, st: StackState, obs: Observation, key) -> StackState:
+        del key
+        x_m, y_m = jnp.asarray(x_np), jnp.asarray(y_np)
+        occupancy = params.map.occupancy
+        scene = _scene(params, obs, st.planner_velocity)
+        gscl_fn = None
+        if method.layer == "gscl":
+            predict = lambda maps: gscl_apply(params.gscl_weights, maps)
+            gscl_fn = lambda s: gscl_layer.gscl_layer(predict, occupancy, grid, s)
+        social, casn_state = stack.social_layer(method, scene, x_m, y_m, st.casn, gscl_fn)
+        # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the walls.
+        pxy = obs.people_xy_m
+        d = jnp.hypot(x_m[None] - pxy[:, 0, None, None], y_m[None] - pxy[:, 1, None, None])
+        bodies = jnp.any((d <= params.person_radius_m) & obs.people_visible[:, None, None], axis=0)
+        obstacles = costmap.obstacle_layer(jnp.maximum(occupancy, bodies), grid, float(robot_radius_m))
+        costs = costmap.combine_max(obstacles, social)
+        path, length, found = stack.global_plan(method, costs, obs.robot_xy_m, obs.goal_xy_m, grid, max_path_cells)
+        # No path now (a person on the goal, say): keep the previous one; before any, a straight line.
+        straight = jnp.linspace(0.0, 1.0, max_len)[:, None] * (obs.goal_xy_m - obs.robot_xy_m) + obs.robot_xy_m
+        had = st.path_len > 0
+        path = jnp.where(found, path, jnp.where(had, st.path, straight))
+        length = jnp.where(found, length, jnp.where(had, st.path_len, max_len))
+        return st.replace(path=path, path_len=length, casn=casn_state)
+
+    def act(params: StackParams, st: StackState, obs: Observation, key):
+        del key
+        scene = _scene(params, obs, obs.people_velocity_mps)
+        walls = params.map.walls_m
+        person_r = params.person_radius_m
+
+        def clearance(q):
+            to_walls = world_lib.wall_distance(q, walls)[0]
+            d = jnp.linalg.norm(q[:, None, :] - obs.people_xy_m[None], axis=-1) - person_r
+            return jnp.minimum(to_walls, jnp.min(jnp.where(obs.people_visible[None], d, jnp.inf), axis=1))
+
+        v, w, _, gain = stack.local_command(
+            method,
+            st.path,
+            st.path_len,
+            obs.robot_xy_m,
+            obs.robot_yaw_rad,
+            obs.robot_speed_mps,
+            params.max_speed_mps,
+            scene,
+            clearance,
+        )
+        v = jnp.where(safety_stop(params, obs), 0.0, v)
+        action = jnp.stack([v, w]).astype(jnp.float32)
+        return action, st.replace(planner_velocity=obs.people_velocity_mps, speed_gain=gain)
+
+    every = replan_every_steps if method.replan else 0
+    label = name or method.layer
+    return Actor(init=init, act=act, plan=plan, plan_every_steps=every, name=label)
+
+
+def safety_stop(params: StackParams, obs: Observation) -> jax.Array:
+    """() bool: a visible person in front (within 60 deg of the heading) closer, centre to
+    centre, than the bodies plus the safety margin: the base stops."""
+    offset = obs.people_xy_m - obs.robot_xy_m
+    dist = jnp.linalg.norm(offset, axis=-1)
+    bearing = jnp.arctan2(offset[:, 1], offset[:, 0]) - obs.robot_yaw_rad
+    in_front = jnp.cos(bearing) > 0.5
+    near = dist < params.robot_radius_m + params.person_radius_m + params.safety_margin_m
+    return jnp.any(obs.people_visible & in_front & near)
+
+
+def go_to_goal(gain_turn: float = 2.0, name: str = "go_to_goal") -> Actor:
+    """Drive towards the goal at the speed limit, turning at ``gain_turn`` x the heading error
+    (rad/s per rad; the base clips both), slower the more it must turn: no planner, no people.
+    Its ``params`` are the robot's limits (:class:`~jaxsim.scenes.robot.RobotParams`, the
+    default params of an actor)."""
+
+    def init(key, obs):
+        del key, obs
+        return ()
+
+    def act(robot, st, obs, key):
+        del key
+        to_goal = obs.goal_xy_m - obs.robot_xy_m
+        error = jnp.arctan2(to_goal[1], to_goal[0]) - obs.robot_yaw_rad
+        error = jnp.arctan2(jnp.sin(error), jnp.cos(error))
+        v = robot.max_speed_mps * jnp.clip(jnp.cos(error), 0.0, 1.0)
+        return jnp.stack([v, gain_turn * error]).astype(jnp.float32), st
+
+    return Actor(init=init, act=act, name=name)

@@ -1,0 +1,140 @@
+"""The crowd's step: one function for the warehouse and the arena; ORCA as the other human model."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from data import DATA_DIR
+from evaluation import arena
+from jaxsim import crowd, orca, rng
+from jaxsim.scenario import load_scenario
+from jaxsim.scenes import people as people_lib
+from jaxsim.scenes.spec import load_scene
+from jaxsim.scenes.variant import sample_variant
+from jaxsim.world import Grid
+
+# No walls within reach: a distance field 100 m from everything.
+OPEN = Grid(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), origin_x_m=-50.0, origin_y_m=-50.0, resolution_m=30.0)
+FAR_ROBOT = (jnp.float32(100.0), jnp.float32(100.0), jnp.float32(0.0), jnp.float32(0.0))
+
+
+@pytest.fixture(scope="module")
+def params():
+    return load_scenario().params
+
+
+def test_the_warehouse_and_the_arena_move_people_with_one_function(monkeypatch, short_day, params):
+    from jaxsim import step as step_lib
+
+    calls = []
+    original = crowd.step_crowd
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get("ignores_robot") is not None)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(crowd, "step_crowd", counted)
+    scenario, world, controller = short_day
+    state = step_lib.init_state(scenario.params, world, controller, jax.random.key(0))
+    workers, robot = state.workers, state.robot
+    u = jnp.full((6, workers.x_m.shape[0]), 0.5)
+    step_lib.crowd_step(scenario.params, world, workers, robot, jnp.float32(0.0), jnp.int32(0), u)
+    setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"))
+    variant = jax.tree_util.tree_map(jnp.asarray, sample_variant(setup.spec, 0, 0))
+    people = people_lib.init_people(variant)
+    people_lib.step_people(params, setup.env.world, variant, people, jnp.zeros(2), jnp.zeros(2), jnp.int32(0))
+    assert calls == [False, True]  # the warehouse's workers all feel the robot; the arena's may not
+
+
+def test_a_person_walking_into_a_wall_stops_at_the_clearance_without_velocity_into_it(params):
+    # A wall whose surface is the line x = 0, the free side x > 0: distance x, normal +x.
+    xs = np.arange(-1.0, 3.01, 0.05, dtype=np.float32)
+    field = np.zeros((3, len(xs), 3), np.float32)
+    field[..., 0] = xs[None, :]
+    field[..., 1] = 1.0
+    wall = Grid(jnp.asarray(field), origin_x_m=-1.0, origin_y_m=-0.05, resolution_m=0.05)
+    x, y = jnp.array([1.0]), jnp.array([0.0])
+    vx, vy = jnp.array([-1.5]), jnp.array([0.0])
+    one = jnp.ones(1, bool)
+    for _ in range(40):
+        x, y, vx, vy = crowd.step_crowd(
+            params, wall, x, y, vx, vy, jnp.array([-5.0]), jnp.array([0.0]), jnp.array([1.5]), jnp.array([1.5]),
+            one, one, FAR_ROBOT, jnp.array([0.5]), jnp.array([0.25]),
+        )  # fmt: skip
+        assert float(x[0]) >= crowd.WALL_CLEARANCE_M - 1e-6
+    # One step that would cross the clearance (no wall force to slow it): pushed back onto the
+    # clearance, the velocity into the wall removed.
+    x, y, vx, vy = crowd.step_crowd(
+        params.replace(worker_obstacle_force_factor=0.0), wall, jnp.array([0.15]), y, jnp.array([-1.5]), vy,
+        jnp.array([-5.0]), jnp.array([0.0]),
+        jnp.array([1.5]), jnp.array([1.5]), one, one, FAR_ROBOT, jnp.array([0.5]), jnp.array([0.25]),
+    )  # fmt: skip
+    assert float(x[0]) == pytest.approx(crowd.WALL_CLEARANCE_M, abs=1e-6) and float(vx[0]) == pytest.approx(
+        0.0, abs=1e-6
+    )
+
+
+def test_a_person_who_ignores_the_robot_moves_as_if_it_were_not_there(params):
+    x, y = jnp.array([0.0, 3.0]), jnp.array([0.0, 0.0])
+    vx, vy = jnp.array([0.8, 0.0]), jnp.array([0.0, 0.0])
+    args = (jnp.array([5.0, 0.0]), jnp.array([0.0, 0.0]), jnp.full(2, 1.2), jnp.full(2, 1.2), jnp.ones(2, bool))
+    moving = jnp.array([True, False])
+    u = rng.hash_uniform16(jnp.uint32(7), jnp.int32(3), (2, 2))
+    near = (jnp.float32(1.0), jnp.float32(0.2), jnp.float32(-0.5), jnp.float32(0.0))
+    felt = crowd.step_crowd(params, OPEN, x, y, vx, vy, *args, moving, near, u[0], u[1])
+    ignored = crowd.step_crowd(params, OPEN, x, y, vx, vy, *args, moving, near, u[0], u[1], jnp.ones(2, bool))
+    absent = crowd.step_crowd(params, OPEN, x, y, vx, vy, *args, moving, FAR_ROBOT, u[0], u[1])
+    assert abs(float(felt[2][0] - absent[2][0])) > 1e-3  # the robot 1 m ahead pushes
+    np.testing.assert_allclose(np.asarray(ignored), np.asarray(absent), atol=1e-6)
+
+
+def _orca_run(x, y, aim_x, aim_y, moving, steps):
+    p = orca.ORCAParams()
+    n = x.shape[0]
+
+    @jax.jit
+    def step(x, y, vx, vy):
+        return orca.step_orca(
+            p, OPEN, 0.1, x, y, vx, vy, aim_x - x, aim_y - y, jnp.ones(n), jnp.ones(n, bool), moving, FAR_ROBOT, 0.3
+        )
+
+    vx = vy = jnp.zeros(n)
+    gaps = []
+    for _ in range(steps):
+        x, y, vx, vy = step(x, y, vx, vy)
+        gaps.append(float(jnp.hypot(x[0] - x[1], y[0] - y[1])))
+    return x, y, vx, vy, np.array(gaps)
+
+
+def test_orca_two_people_head_on_swap_without_contact():
+    x, y = jnp.array([-3.0, 3.0]), jnp.array([0.05, -0.05])
+    x, y, _, _, gaps = _orca_run(x, y, jnp.array([3.0, -3.0]), jnp.array([0.05, -0.05]), jnp.ones(2, bool), 120)
+    np.testing.assert_allclose(np.asarray(x), [3.0, -3.0], atol=0.05)  # swapped
+    assert gaps.min() >= 2 * orca.ORCAParams().radius_m  # bodies never overlap
+
+
+def test_orca_a_person_stops_before_a_standing_one():
+    x, y = jnp.array([-3.0, 0.0]), jnp.array([0.0, 0.0])
+    x, _, vx, vy, gaps = _orca_run(x, y, jnp.zeros(2), jnp.zeros(2), jnp.array([True, False]), 300)
+    assert gaps.min() >= 2 * orca.ORCAParams().radius_m
+    assert float(jnp.hypot(vx[0], vy[0])) < 0.05 and float(x[1]) == 0.0  # stopped; the standing one stayed
+
+
+@pytest.mark.slow
+def test_the_arena_runs_with_orca_humans():
+    from planners import actors
+
+    spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
+    sf = arena.setup_scene(spec)
+    oc = arena.setup_scene(spec, arena.ArenaConfig(human_model="orca"))
+    variants = jax.tree_util.tree_map(jnp.asarray, sample_variant(spec, 0, 0, n_slots=sf.n_slots))
+    variants = jax.tree_util.tree_map(lambda a: a[None], variants)
+    actor = actors.go_to_goal()
+    a = arena.actor_function(sf, actor, sf.env.robot)(variants)
+    b = arena.actor_function(oc, actor, oc.env.robot)(variants)
+    assert not np.allclose(np.asarray(a.people_xy), np.asarray(b.people_xy))
+    walked = np.linalg.norm(np.asarray(b.people_xy)[0, -1, 0] - np.asarray(b.people_xy)[0, 0, 0])
+    assert walked > 3.0  # the walker crossed the room

@@ -1,0 +1,258 @@
+"""The environment (reset/step), actors and the rollout: determinism, batching, specs, reward,
+and a user's own actor from Python and from the command line."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pandas as pd
+import pytest
+
+from data import DATA_DIR
+from evaluation import arena
+from jaxsim.scenes import env as env_lib
+from jaxsim.scenes.actor import Actor, rollout
+from jaxsim.scenes.spec import load_scene
+from jaxsim.scenes.variant import sample_variant, sample_variants
+from planners import actors
+from socialnav import cli
+
+ROOT = DATA_DIR.parent
+
+
+@pytest.fixture(scope="module")
+def setup():
+    return arena.setup_scene(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"))
+
+
+def _variants(setup, n, seed=0):
+    return jax.tree_util.tree_map(jnp.asarray, sample_variants(setup.spec, seed, n, 0, False, setup.n_slots))
+
+
+def _leaves(tree):
+    """The arrays of a pytree, typed keys as their raw data (comparable)."""
+    keys = lambda a: jax.random.key_data(a) if jax.dtypes.issubdtype(a.dtype, jax.dtypes.prng_key) else a
+    return [np.asarray(keys(a)) for a in jax.tree_util.tree_leaves(tree)]
+
+
+def _one(variants, k):
+    return jax.tree_util.tree_map(lambda a: a[k], variants)
+
+
+def test_reset_and_step_are_deterministic_and_follow_the_specs(setup):
+    env = setup.env
+    variant = _one(_variants(setup, 1), 0)
+    key = jax.random.key(1)
+    reset, step = jax.jit(env.reset), jax.jit(env.step)
+    s1, t1 = reset(key, variant)
+    s2, t2 = reset(key, variant)
+    action = jnp.array([0.4, 0.3])
+    for _ in range(5):
+        s1, t1 = step(s1, action)
+        s2, t2 = step(s2, action)
+    for a, b in zip(_leaves((s1, t1)), _leaves((s2, t2)), strict=True):
+        np.testing.assert_array_equal(a, b)
+    n = variant.valid.shape[0]
+    for name, (shape, dtype) in env.observation_spec(n).items():
+        value = getattr(t1.observation, name)
+        assert value.shape == shape and value.dtype == dtype, name
+    spec = env.action_spec()
+    assert spec["shape"] == (2,) and spec["high"][0] == pytest.approx(float(env.robot.max_speed_mps))
+    assert float(t1.observation.time_s) == pytest.approx(0.5)
+
+
+def test_the_base_clips_an_action_beyond_its_limits(setup):
+    env = setup.env
+    state, _ = env.reset(jax.random.key(0), _one(_variants(setup, 1), 0))
+    step = jax.jit(env.step)
+    for _ in range(40):
+        state, ts = step(state, jnp.array([50.0, -50.0]))
+        assert float(ts.observation.robot_speed_mps) <= float(env.robot.max_speed_mps) + 1e-6
+        assert abs(float(ts.observation.robot_turn_rate_rps)) <= float(env.robot.max_turn_rate_rps) + 1e-6
+
+
+def test_a_variant_alone_equals_the_same_variant_in_a_batch(setup):
+    """Through the arena's batch program (a batch of one is run as two: an unbatched program
+    rounds differently, as the warehouse's ``map_worlds`` guards against)."""
+    actor = actors.go_to_goal()
+    variants = _variants(setup, 4)
+    together = arena.actor_function(setup, actor, setup.env.robot)(variants)
+    for k in (0, 3):
+        alone = arena.actor_function(setup, actor, setup.env.robot)(
+            jax.tree_util.tree_map(lambda a, k=k: a[k : k + 1], variants)
+        )
+        for a, b in zip(_leaves(alone), _leaves(together), strict=True):
+            np.testing.assert_array_equal(a[0], b[k])
+
+
+def _open_room(tmp_path):
+    scene = {
+        "name": "open_room",
+        "bounds_m": [-4, 4, -3, 3],
+        "walls": [[-4, 4, -3, -2.9], [-4, 4, 2.9, 3], [-4, -3.9, -3, 3], [3.9, 4, -3, 3]],
+        "robot": {"start": [-3, 0.5], "yaw_deg": 0, "goal": [3, 0]},
+        "timeout_s": 30,
+        "people": [],
+        "rule": {"type": "min_distance", "distance_m": 0.45},
+    }
+    path = tmp_path / "open_room.json"
+    path.write_text(json.dumps(scene))
+    return load_scene(path)
+
+
+def test_reward_pays_the_goal_once_and_charges_a_contact(tmp_path):
+    """A scene without people: driving to the goal earns the progress made plus the goal reward,
+    once. Then a person placed on the robot: the collision penalty."""
+    spec = _open_room(tmp_path)
+    setup_ = arena.setup_scene(spec)
+    env = setup_.env
+    variant = jax.tree_util.tree_map(jnp.asarray, sample_variant(spec, 0, 0, n_slots=setup_.n_slots))
+    (state, _), records = jax.jit(lambda v: rollout(env, actors.go_to_goal(), env.robot, v, jax.random.key(0)))(variant)
+    reward = np.asarray(records.reward)
+    reached = np.asarray(records.reached)
+    assert reached[-1] and not reached[0]
+    start = np.asarray(variant.robot_xy)
+    goal = np.asarray(variant.goal_xy)
+    end_before = np.asarray(records.robot_xy_m)[np.argmax(reached)]
+    progress = np.linalg.norm(start - goal) - np.linalg.norm(end_before - goal)
+    expected = env.reward.goal_reward + env.reward.progress_weight * progress
+    assert reward.sum() == pytest.approx(expected, rel=1e-4)
+    assert np.all(reward[np.argmax(reached) + 1 :] == 0.0)
+    # A person on top of the robot.
+    s, _ = env.reset(jax.random.key(0), variant)
+    people = s.people.replace(xy=s.people.xy.at[0].set(s.robot.xy), present=s.people.present.at[0].set(True))
+    s = s.replace(people=people, variant=s.variant.replace(valid=s.variant.valid.at[0].set(True)))
+    _, ts = env.step(s, jnp.zeros(2))
+    assert bool(ts.info.person_contact)
+    assert float(ts.reward) <= env.reward.collision_penalty + 1e-6
+
+
+def test_a_parameter_sweep_reuses_the_compiled_program(setup):
+    variants = _variants(setup, 2)
+    actor = actors.go_to_goal()
+    fast_tr = arena.actor_function(setup, actor, setup.env.robot)(variants)
+    slow_tr = arena.actor_function(setup, actor, setup.env.robot.replace(max_speed_mps=0.25))(variants)
+    assert float(jnp.max(slow_tr.robot_speed)) <= 0.25 + 1e-6 < float(jnp.max(fast_tr.robot_speed))
+    assert arena._episode_program(actor)._cache_size() == 1  # the speed limit is traced
+
+
+def _readme_quickstart() -> str:
+    text = (ROOT / "README.md").read_text()
+    match = re.search(r"<!-- actor-quickstart -->\s*```python\n(.*?)```", text, re.S)
+    assert match, "README: the actor quickstart block is missing"
+    return match.group(1)
+
+
+def test_the_readme_actor_quickstart_runs():
+    namespace: dict = {}
+    exec(compile(_readme_quickstart(), "README.md (actor quickstart)", "exec"), namespace)
+    summary = namespace["summary"]
+    assert {"keep_right", "navfn"} <= set(summary["method"])
+    assert np.all(summary["n"] == 4)
+
+
+MY_ACTOR = '''
+import jax.numpy as jnp
+from jaxsim.scenes.actor import Actor
+
+
+def creep(env):
+    """Straight at the goal at a third of the speed limit, no planner."""
+
+    def act(robot, state, obs, key):
+        to_goal = obs.goal_xy_m - obs.robot_xy_m
+        error = jnp.arctan2(to_goal[1], to_goal[0]) - obs.robot_yaw_rad
+        error = jnp.arctan2(jnp.sin(error), jnp.cos(error))
+        return jnp.stack([robot.max_speed_mps / 3, 2.0 * error]), state
+
+    return Actor(init=lambda key, obs: (), act=act)
+
+
+def broken(env):
+    return 42
+'''
+
+
+def test_a_users_actor_runs_from_the_command_line_beside_the_built_in_ones(tmp_path):
+    module = tmp_path / "my_actor.py"
+    module.write_text(MY_ACTOR)
+    argv = ["arena", "--scenes", "casn_static_person", "--methods", "navfn", "--variants", "3", "--no-progress"]
+    out = tmp_path / "run"
+    assert cli.main([*argv, "--actor", f"{module}:creep", "--out", str(out)]) == 0
+    summary = pd.read_csv(out / "summary.csv")
+    assert list(summary["method"]) == ["navfn", "creep"]
+    episodes = pd.read_parquet(out / "episodes" / "casn_static_person.parquet")
+    creep = episodes[episodes.method == "creep"]
+    assert len(creep) == 3 and creep["time_s"].min() > episodes[episodes.method == "navfn"]["time_s"].max()
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("nowhere_module_xyz:make", "cannot import nowhere_module_xyz"),
+        ("{module}:missing", "has no function missing"),
+        ("{module}:broken", "must return an Actor"),
+        ("{module}", "expected module:function"),
+        ("{module}:navfn_x", "has no function navfn_x"),
+    ],
+)
+def test_a_bad_actor_is_refused_in_one_line(tmp_path, capsys, spec, message):
+    module = tmp_path / "my_actor.py"
+    module.write_text(MY_ACTOR)
+    argv = ["arena", "--scenes", "casn_static_person", "--variants", "1", "--no-progress", "--out", str(tmp_path / "o")]
+    assert cli.main([*argv, "--actor", spec.format(module=module)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "o" / "run.json").exists()
+
+
+def test_an_actor_named_like_a_built_in_method_is_refused(tmp_path, capsys):
+    module = tmp_path / "my_actor.py"
+    module.write_text(MY_ACTOR + "\nnavfn = creep\n")
+    argv = ["arena", "--scenes", "casn_static_person", "--variants", "1", "--out", str(tmp_path / "o")]
+    assert cli.main([*argv, "--actor", f"{module}:navfn"]) == 2
+    assert "is taken" in capsys.readouterr().err
+
+
+def test_an_actor_is_an_immutable_pair_of_functions():
+    actor = Actor(init=lambda key, obs: (), act=lambda p, s, o, k: (jnp.zeros(2), s))
+    with pytest.raises(AttributeError):
+        actor.name = "other"  # frozen: a cache key
+    assert env_lib.episode_steps(30.0, 0.1, 10) == 300 and env_lib.episode_steps(30.05, 0.1, 10) == 310
+
+
+# ---------------------------------------------------------------- Gymnasium
+
+
+def test_the_gymnasium_env_passes_the_env_checker():
+    gym_env = pytest.importorskip("jaxsim.scenes.gym_env")
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym_env.SocialNavEnv(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"), pool=8)
+    check_env(env, skip_render_check=True)
+    obs, _ = env.reset(seed=3)
+    assert env.observation_space.contains(obs)
+
+
+def test_the_vector_env_steps_a_batch_and_resets_an_ended_episode_on_the_next_step():
+    gym_env = pytest.importorskip("jaxsim.scenes.gym_env")
+    spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
+    venv = gym_env.SocialNavVectorEnv(spec, num_envs=3, pool=8, config=env_lib.EnvConfig(max_steps=5))
+    obs, _ = venv.reset(seed=1)
+    again, _ = gym_env.SocialNavVectorEnv(spec, num_envs=3, pool=8, config=env_lib.EnvConfig(max_steps=5)).reset(seed=1)
+    for k in obs:
+        np.testing.assert_array_equal(obs[k], again[k])
+    assert venv.observation_space.contains(obs) and obs["people_xy_m"].shape[0] == 3
+    action = np.tile(venv.single_action_space.high, (3, 1))
+    for step in range(1, 6):
+        obs, reward, terminated, truncated, _ = venv.step(action)
+        assert reward.shape == (3,) and reward.dtype == np.float32
+        np.testing.assert_allclose(obs["time_s"], 0.1 * step, rtol=1e-5)
+    assert truncated.all() and not terminated.any()
+    obs, reward, terminated, truncated, _ = venv.step(action)  # the new episodes' first observations
+    assert np.all(obs["time_s"] == 0.0) and np.all(reward == 0.0) and not (terminated | truncated).any()
+    assert venv.observation_space.contains(obs)
