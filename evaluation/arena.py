@@ -260,10 +260,13 @@ def episode_function(
     config: ArenaConfig = ArenaConfig(),
     gscl_predict: Callable | None = None,
     gscl_weights=None,
+    layers: stack.LayerParams | None = None,
 ):
     """``variants -> Trajectory`` of a built-in stack. ``gscl_predict`` is either ``maps ->
     costs`` (closing over its weights: each model compiles anew) or, with ``gscl_weights``,
-    ``(weights, maps) -> costs`` (the weights traced: a new checkpoint reuses the program)."""
+    ``(weights, maps) -> costs`` (the weights traced: a new checkpoint reuses the program).
+    ``layers``: the layers' and local planners' parameters (default: the method's,
+    :func:`planners.stack.layer_params`), traced: a sweep reuses the program."""
     env = setup.env.replace(robot=robot_params)
     if crowd is not None:
         env = env.replace(crowd=crowd)
@@ -273,7 +276,9 @@ def episode_function(
     if method.layer == "gscl" and apply is None:
         raise ValueError("method 'gscl' needs a trained GSCL model")
     actor = method_actor(method, setup.grid, float(robot_params.radius_m), config, apply)
-    params = actors.stack_params(env, setup.map, config.safety_margin_m, config.person_radius_m, gscl_weights)
+    params = actors.stack_params(
+        env, setup.map, config.safety_margin_m, config.person_radius_m, gscl_weights, layers, method
+    )
     return actor_function(setup, actor, params, env)
 
 

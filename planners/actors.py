@@ -48,14 +48,16 @@ class StackMap:
 @struct.dataclass
 class StackParams:
     """A stack's dynamic inputs: the map, the robot's speed limit (m/s) and body radius used by
-    the safety stop (m), the safety margin (m), a person's radius (m), and the GSCL weights
-    (``None`` without the gscl layer)."""
+    the safety stop (m), the safety margin (m), a person's radius (m), the layers' and local
+    planners' parameters (:class:`planners.stack.LayerParams`) and the GSCL weights (``None``
+    without the gscl layer)."""
 
     map: StackMap
     max_speed_mps: jax.Array
     robot_radius_m: jax.Array
     safety_margin_m: jax.Array
     person_radius_m: jax.Array
+    layers: stack.LayerParams
     gscl_weights: Any = None
 
 
@@ -93,11 +95,21 @@ def stack_map(spec, grid: costmap.GridSpec, occupancy, walls_m) -> StackMap:
 
 
 def stack_params(
-    env: Env, map_: StackMap, safety_margin_m: float = 0.1, person_radius_m: float | None = None, gscl_weights=None
+    env: Env,
+    map_: StackMap,
+    safety_margin_m: float = 0.1,
+    person_radius_m: float | None = None,
+    gscl_weights=None,
+    layers: stack.LayerParams | None = None,
+    method: stack.StackConfig | None = None,
 ) -> StackParams:
-    """A stack's params for ``env`` (its robot's limits) on ``map_``."""
+    """A stack's params for ``env`` (its robot's limits) on ``map_``; ``layers`` default to
+    ``method``'s (:func:`planners.stack.layer_params`)."""
     person = env.config.person_radius_m if person_radius_m is None else person_radius_m
+    if layers is None:
+        layers = stack.layer_params(method) if method is not None else stack.LayerParams()
     return StackParams(
+        layers=layers,
         map=map_,
         max_speed_mps=jnp.float32(env.robot.max_speed_mps),
         robot_radius_m=jnp.float32(env.robot.radius_m),
@@ -170,7 +182,7 @@ def stack_actor(
         if method.layer == "gscl":
             predict = lambda maps: gscl_apply(params.gscl_weights, maps)
             gscl_fn = lambda s: gscl_layer.gscl_layer(predict, occupancy, grid, s)
-        social, casn_state = stack.social_layer(method, scene, x_m, y_m, st.casn, gscl_fn)
+        social, casn_state = stack.social_layer(method, scene, x_m, y_m, st.casn, gscl_fn, params.layers)
         # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the walls.
         pxy = obs.people_xy_m
         d = jnp.hypot(x_m[None] - pxy[:, 0, None, None], y_m[None] - pxy[:, 1, None, None])
@@ -206,6 +218,9 @@ def stack_actor(
             params.max_speed_mps,
             scene,
             clearance,
+            params.layers.band,
+            params.layers.pursuit,
+            params.layers.snape,
         )
         v = jnp.where(safety_stop(params, obs), 0.0, v)
         action = jnp.stack([v, w]).astype(jnp.float32)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 
 import jax.numpy as jnp
+from flax import struct
 
 from planners import casn, costmap, elastic_band, grid_planner, pure_pursuit, snape, snl
 from planners.scene import Scene
@@ -71,21 +72,39 @@ METHODS: dict[str, StackConfig] = {
 }
 
 
-def social_layer(config: StackConfig, scene: Scene, x_m, y_m, casn_state, gscl_layer_fn=None):
-    """(H, W) the stack's social layer of a perceived scene, and CASN's next state."""
+@struct.dataclass
+class LayerParams:
+    """The parameters of every layer and local planner a stack may use (dynamic floats: traced in
+    an episode program, so a sweep does not recompile). :func:`layer_params` gives a method's
+    defaults (the seeds' values)."""
+
+    snl: snl.SNLParams = snl.SNLParams()
+    casn: casn.CASNParams = casn.CASNParams()
+    snape: snape.SNAPEParams = snape.SNAPEParams()
+    band: elastic_band.BandParams = elastic_band.BandParams()
+    pursuit: pure_pursuit.PursuitParams = pure_pursuit.PursuitParams()
+
+
+def layer_params(config: StackConfig) -> LayerParams:
+    """A stack's default parameters: its SNL variant's covariances (small, large or matched to
+    CASN's radius), every other part's defaults."""
+    sigma = {"snl_large": snl.SIGMA_LARGE, "snl_matched": SNL_MATCHED}.get(config.layer, snl.SIGMA_SMALL)
+    return LayerParams(snl=sigma)
+
+
+def social_layer(config: StackConfig, scene: Scene, x_m, y_m, casn_state, gscl_layer_fn=None, params=None):
+    """(H, W) the stack's social layer of a perceived scene, and CASN's next state (``params``:
+    :class:`LayerParams`, default :func:`layer_params`)."""
+    params = layer_params(config) if params is None else params
     zeros = jnp.zeros(x_m.shape, jnp.float32)
     if config.layer == "none":
         return zeros, casn_state
-    if config.layer == "snl_small":
-        return snl.snl_layer(scene, x_m, y_m, snl.SIGMA_SMALL), casn_state
-    if config.layer == "snl_large":
-        return snl.snl_layer(scene, x_m, y_m, snl.SIGMA_LARGE), casn_state
-    if config.layer == "snl_matched":
-        return snl.snl_layer(scene, x_m, y_m, SNL_MATCHED), casn_state
+    if config.layer in ("snl_small", "snl_large", "snl_matched"):
+        return snl.snl_layer(scene, x_m, y_m, params.snl), casn_state
     if config.layer == "casn":
-        return casn.casn_layer(scene, x_m, y_m, casn_state)
+        return casn.casn_layer(scene, x_m, y_m, casn_state, params.casn)
     if config.layer == "snape":
-        return snape.snape_layer(scene, x_m, y_m), casn_state
+        return snape.snape_layer(scene, x_m, y_m, params.snape), casn_state
     if gscl_layer_fn is None:
         raise ValueError("the gscl layer needs a trained model (gscl_layer_fn)")
     return gscl_layer_fn(scene), casn_state

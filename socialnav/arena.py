@@ -62,6 +62,13 @@ def add_parser(sub) -> None:
         help="also run your own actor (repeatable): FUNCTION(env) in MODULE (or in a file.py) returns a "
         "jaxsim.scenes.actor.Actor or (actor, params); its rows are named FUNCTION",
     )
+    p.add_argument(
+        "--human-model",
+        choices=("social_force", "orca"),
+        default="social_force",
+        help="how the people move: the warehouse's social force (default) or ORCA (a method checked against "
+        "another human model)",
+    )
     p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")
     p.add_argument(
         "--out", type=output_folder, default=pathlib.Path("runs/arena"), help="output folder (default runs/arena)"
@@ -190,6 +197,7 @@ def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str
     h = hashlib.sha256()
     h.update(pathlib.Path(spec_file).read_bytes())
     keys = ("methods", "variants", "seed", "shard_variants", "keep_trajectories", "gscl_model", "actor_sources")
+    keys += ("human_model",)
     h.update(json.dumps({"held_out": held_out, **{k: settings.get(k) for k in keys}}, sort_keys=True).encode())
     h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
     return h.hexdigest()[:16]
@@ -321,6 +329,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         "shard_variants": args.shard_variants,
         "gscl_run": None if args.gscl_run is None else str(args.gscl_run),
         "gscl_model": None if args.gscl_run is None else _gscl_identity(args.gscl_run),
+        "human_model": args.human_model,
         "actors": actor_specs,
         "actor_sources": [actor_spec.source_digest(spec) for spec in actor_specs],
         "metrics_version": nav_metrics.VERSION,
@@ -382,6 +391,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                         args.keep_trajectories,
                         args.gscl_run,
                         tuple(actor_specs),
+                        args.human_model,
                     ),
                     work=n * len(methods),
                 )
@@ -485,17 +495,29 @@ def _gscl_predict(run: pathlib.Path | None):
     return SocialCostModel.load(run).function
 
 
-def compute_shard(spec, held_out, first, n, methods, seed, keep_trajectories, gscl_run, actor_specs=()):
+def compute_shard(
+    spec, held_out, first, n, methods, seed, keep_trajectories, gscl_run, actor_specs=(), human_model="social_force"
+):
     """One shard: every method on variants ``first .. first + n - 1`` of a scene (a Ray task with
     ``--backend ray``): ``(episodes frame, trajectories frame or None)``. ``actor_specs``: the
     ``--actor`` factories, loaded here (in the worker)."""
     from evaluation import arena_report
+    from evaluation.arena import ArenaConfig
 
     keep = max(0, min(n, keep_trajectories - first))
     users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
     predict = _gscl_predict(gscl_run)
     return arena_report.run_scene(
-        spec, list(methods), n, seed, first, keep, predict, held_out=held_out, user_actors=users
+        spec,
+        list(methods),
+        n,
+        seed,
+        first,
+        keep,
+        predict,
+        ArenaConfig(human_model=human_model),
+        held_out=held_out,
+        user_actors=users,
     )
 
 
