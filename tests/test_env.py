@@ -76,12 +76,15 @@ def test_the_base_clips_an_action_beyond_its_limits(setup):
 
 
 def test_a_variant_alone_equals_the_same_variant_in_a_batch(setup):
-    """Through the arena's batch program (a batch of one is run as two: an unbatched program
-    rounds differently, as the warehouse's ``map_worlds`` guards against)."""
+    """Through the arena's batch program (padded to a multiple of ``arena.LANES``: XLA
+    vectorises other batch sizes differently)."""
     actor = actors.go_to_goal()
-    variants = _variants(setup, 4)
+    variants = _variants(setup, 9)
     together = arena.actor_function(setup, actor, setup.env.robot)(variants)
-    for k in (0, 3):
+    four = arena.actor_function(setup, actor, setup.env.robot)(jax.tree_util.tree_map(lambda a: a[:4], variants))
+    for a, b in zip(_leaves(four), _leaves(together), strict=True):
+        np.testing.assert_array_equal(a, b[:4])
+    for k in (0, 8):
         alone = arena.actor_function(setup, actor, setup.env.robot)(
             jax.tree_util.tree_map(lambda a, k=k: a[k : k + 1], variants)
         )
@@ -256,3 +259,18 @@ def test_the_vector_env_steps_a_batch_and_resets_an_ended_episode_on_the_next_st
     obs, reward, terminated, truncated, _ = venv.step(action)  # the new episodes' first observations
     assert np.all(obs["time_s"] == 0.0) and np.all(reward == 0.0) and not (terminated | truncated).any()
     assert venv.observation_space.contains(obs)
+
+
+@pytest.mark.slow
+def test_a_layer_parameter_sweep_reuses_the_stacks_program(setup):
+    """The SNL covariance is a traced leaf: a wider one changes the episodes, not the program."""
+    from planners import snl, stack
+
+    variants = _variants(setup, 2)
+    method = stack.METHODS["snl_small"]
+    small = arena.episode_function(setup, method)(variants)
+    wide = stack.layer_params(method).replace(snl=snl.SNLParams(covariance=2.0))
+    large = arena.episode_function(setup, method, layers=wide)(variants)
+    actor = arena.method_actor(method, setup.grid, float(setup.env.robot.radius_m), arena.ArenaConfig(), None)
+    assert arena._episode_program(actor)._cache_size() == 1
+    assert not np.array_equal(np.asarray(small.robot_xy), np.asarray(large.robot_xy))
