@@ -25,19 +25,24 @@ variants; a variant gives the same bits alone and in any batch (tested).
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from flax import struct
 
+from data import WAREHOUSE_DIR
 from jaxsim.orca import ORCAParams
 from jaxsim.params import SimParams
+from jaxsim.scenario.loader import load_scenario
 from jaxsim.scenes import people as people_lib
 from jaxsim.scenes import perception
 from jaxsim.scenes import robot as robot_lib
+from jaxsim.scenes import world as world_lib
 from jaxsim.scenes.variant import Variant
-from jaxsim.scenes.world import SceneWorld, wall_distance
+from jaxsim.scenes.world import SceneWorld
 from jaxsim.world import Grid
 
 
@@ -349,11 +354,6 @@ class Env:
         return jnp.where(was_reached, 0.0, reward).astype(jnp.float32)
 
 
-def wall_clearance_m(env: Env, xy) -> jax.Array:
-    """Distance from points (..., 2) to the nearest wall surface (negative inside)."""
-    return wall_distance(xy, env.world.walls_m)[0]
-
-
 def _round_up(n: int, multiple: int) -> int:
     return max(multiple, -(-int(n) // multiple) * multiple)
 
@@ -362,8 +362,6 @@ def pad_walls(walls_m, multiple: int = 8):
     """(K', 4) the wall boxes padded to a multiple of ``multiple`` with boxes far outside (never
     nearest, never in sight): scenes of similar size share one compiled program; the padding
     changes no episode (tested bit for bit)."""
-    import numpy as np
-
     walls = np.asarray(walls_m, np.float32)
     far = np.array([[1e4, 1e4 + 1.0, 1e4, 1e4 + 1.0]], np.float32)
     return np.concatenate([walls, np.repeat(far, _round_up(len(walls), multiple) - len(walls), axis=0)])
@@ -383,12 +381,7 @@ def make_env(
     ``crowd`` defaults to the warehouse's social force constants (the arena's people are the
     same walkers). ``config.max_steps`` is kept as given (see :func:`episode_steps`).
     """
-    from jaxsim.scenes import world as world_lib
-
     if crowd is None:
-        from data import WAREHOUSE_DIR
-        from jaxsim.scenario.loader import load_scenario
-
         crowd = load_scenario(WAREHOUSE_DIR).params
     world = world_lib.build_scene_world(spec)
     world = world.replace(walls_m=jnp.asarray(pad_walls(world.walls_m)))
@@ -400,6 +393,4 @@ def make_env(
 
 def episode_steps(timeout_s: float, dt_s: float, period_steps: int = 1) -> int:
     """Steps of an episode of ``timeout_s``, rounded up to whole periods of ``period_steps``."""
-    import math
-
     return int(math.ceil(timeout_s / (dt_s * period_steps))) * period_steps
