@@ -152,8 +152,14 @@ class SocialNavEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options=None):
         super().reset(seed=seed)
         obs, info = self._vector.reset(seed=seed)
-        return {k: v[0] for k, v in obs.items()}, info
+        return {k: np.asarray(v[0]) for k, v in obs.items()}, info
 
     def step(self, action):
         obs, reward, terminated, truncated, info = self._vector.step(np.asarray(action, np.float32)[None])
-        return {k: v[0] for k, v in obs.items()}, float(reward[0]), bool(terminated[0]), bool(truncated[0]), info
+        return (
+            {k: np.asarray(v[0]) for k, v in obs.items()},
+            float(reward[0]),
+            bool(terminated[0]),
+            bool(truncated[0]),
+            info,
+        )
