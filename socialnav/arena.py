@@ -193,11 +193,12 @@ def _gscl_identity(run: pathlib.Path) -> str:
 def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str:
     """A scene's results are these when this digest matches: the scene file's bytes, the held-out
     flag, and every setting that changes an episode (methods, variants, seed, shard layout, the
-    GSCL model, the metrics' and the toolkit's versions)."""
+    GSCL model, the source files of the ``--actor`` factories, the human model, the metrics' and
+    the toolkit's versions)."""
     h = hashlib.sha256()
     h.update(pathlib.Path(spec_file).read_bytes())
     keys = ("methods", "variants", "seed", "shard_variants", "keep_trajectories", "gscl_model", "actor_sources")
-    keys += ("human_model",)
+    keys = (*keys, "human_model")
     h.update(json.dumps({"held_out": held_out, **{k: settings.get(k) for k in keys}}, sort_keys=True).encode())
     h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
     return h.hexdigest()[:16]
