@@ -164,8 +164,9 @@ def run_scene(
     user_actors = user_actors or {}
     for method in methods:
         if method in user_actors:
-            actor, params = user_actor(user_actors[method], setup.env.replace(crowd=crowd, robot=robot))
-            run = arena.actor_function(setup, actor, params, setup.env.replace(crowd=crowd, robot=robot))
+            env = setup.env.replace(crowd=crowd, robot=robot)
+            actor, params = user_actor(user_actors[method], env)
+            run = arena.actor_function(setup, actor, params, env)
         else:
             run = arena.episode_function(setup, METHODS[method], crowd, robot, config, gscl_predict)
         tr = run(variants)

@@ -223,13 +223,15 @@ def step_orca(
     wall_point = xy - wall_d[:, None] * jnp.stack([nx, ny], -1)
     wall_valid = wall_d < params.neighbor_dist_m
 
+    # Everyone's neighbours: the people, then the robot (the same for every agent).
+    others_xy = jnp.concatenate([xy, jnp.stack([rx, ry])[None]])
+    others_v = jnp.concatenate([v, jnp.stack([rvx, rvy])[None]])
+    radius = jnp.concatenate([jnp.full(n, params.radius_m), jnp.full(1, robot_radius_m)])
+    share = jnp.concatenate([jnp.where(moving, 0.5, 1.0), jnp.full(1, 0.5)])
+
     def one(i):
-        others_xy = jnp.concatenate([xy, jnp.stack([rx, ry])[None]])
-        others_v = jnp.concatenate([v, jnp.stack([rvx, rvy])[None]])
-        radius = jnp.concatenate([jnp.full(n, params.radius_m), jnp.full(1, robot_radius_m)])
         me = jnp.arange(n + 1) == i
         valid = jnp.concatenate([present, ~ignores[i][None]]) & ~me
-        share = jnp.concatenate([jnp.where(moving, 0.5, 1.0), jnp.full(1, 0.5)])
         return orca_velocity(
             params, xy[i], v[i], pref[i], desired_speed_mps[i], others_xy, others_v, radius, valid, share,
             wall_point[i], wall_valid[i], dt,

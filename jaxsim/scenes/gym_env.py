@@ -106,9 +106,13 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
 
         def step(states, actions, reset_mask, keys, variants):
             stepped, ts = jax.vmap(env.step)(states, actions)
-            fresh, ts0 = jax.vmap(env.reset)(keys, variants)
-            pick = lambda a, b: jnp.where(reset_mask.reshape((-1,) + (1,) * (a.ndim - 1)), a, b)
-            return jax.tree_util.tree_map(pick, fresh, stepped), jax.tree_util.tree_map(pick, ts0, ts)
+
+            def reset_ended():  # only on a step after an episode ended (a cond: one branch runs)
+                fresh, ts0 = jax.vmap(env.reset)(keys, variants)
+                pick = lambda a, b: jnp.where(reset_mask.reshape((-1,) + (1,) * (a.ndim - 1)), a, b)
+                return jax.tree_util.tree_map(pick, fresh, stepped), jax.tree_util.tree_map(pick, ts0, ts)
+
+            return jax.lax.cond(jnp.any(reset_mask), reset_ended, lambda: (stepped, ts))
 
         self._step = jax.jit(step)
 

@@ -102,26 +102,19 @@ def step_people(
     target, speed, mobile = targets(v, s, time_s)
     u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
     robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
+    x, y, vx, vy = s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1]
+    aim_dx, aim_dy = target[:, 0] - x, target[:, 1] - y
     if model == "orca":
+        orca_params = orca.ORCAParams() if orca_params is None else orca_params
         x, y, vx, vy = orca.step_orca(
-            orca.ORCAParams() if orca_params is None else orca_params,
-            world.wall_field,
-            dt,
-            s.xy[:, 0],
-            s.xy[:, 1],
-            s.velocity[:, 0],
-            s.velocity[:, 1],
-            target[:, 0] - s.xy[:, 0],
-            target[:, 1] - s.xy[:, 1],
-            speed,
-            s.present,
-            mobile,
-            robot,
-            robot_radius_m,
-            ignores_robot=v.ignore_robot,
-        )
-    else:
-        x, y, vx, vy = _social_force(params, world, s, target, speed, mobile, robot, u, v.ignore_robot)
+            orca_params, world.wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, s.present, mobile, robot,
+            robot_radius_m, ignores_robot=v.ignore_robot,
+        )  # fmt: skip
+    else:  # pedsim's cap is the desired speed (a queue member's slows down to its place)
+        x, y, vx, vy = crowd.step_crowd(
+            params, world.wall_field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, s.present, mobile, robot,
+            u[0], u[1], ignores_robot=v.ignore_robot,
+        )  # fmt: skip
     xy = jnp.stack([x, y], axis=-1)
     new_v = jnp.stack([vx, vy], axis=-1)
 
@@ -141,27 +134,6 @@ def step_people(
     enters = v.valid & stream & (time_s + dt >= v.start_s) & ~done
     present = jnp.where(stream, enters, s.present & ~leaves)
     return PeopleState(xy=xy, velocity=new_v, heading=heading, present=present, leg=leg, done=done)
-
-
-def _social_force(params, world, s, target, speed, mobile, robot, u, ignores_robot):
-    return crowd.step_crowd(
-        params,
-        world.wall_field,
-        s.xy[:, 0],
-        s.xy[:, 1],
-        s.velocity[:, 0],
-        s.velocity[:, 1],
-        target[:, 0] - s.xy[:, 0],
-        target[:, 1] - s.xy[:, 1],
-        speed,
-        speed,  # pedsim's cap: the desired speed (a queue member's slows down to its place)
-        s.present,
-        mobile,
-        robot,
-        u[0],
-        u[1],
-        ignores_robot=ignores_robot,
-    )
 
 
 def stack_people(states: list[PeopleState]) -> PeopleState:
