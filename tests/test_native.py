@@ -107,3 +107,49 @@ def test_no_compiler_is_a_clear_error(tmp_path, monkeypatch):
 def test_the_switch(monkeypatch, value, off):
     monkeypatch.setenv("SOCIALNAV_NATIVE", value)
     assert native.disabled() is off
+
+
+def test_the_target_processor_is_a_setting_and_part_of_the_build_key(monkeypatch):
+    monkeypatch.delenv("SOCIALNAV_NATIVE_MARCH", raising=False)
+    assert native.flags()[-1] == "-march=native"
+    monkeypatch.setenv("SOCIALNAV_NATIVE_MARCH", " x86-64-v3 ")
+    assert native.flags()[-1] == "-march=x86-64-v3" and "-fno-trapping-math" in native.flags()
+
+
+def _has_avx2() -> bool:
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
+            return " avx2" in f.read()
+    except OSError:
+        return False
+
+
+@needs_compiler
+@pytest.mark.slow
+@pytest.mark.skipif(not _has_avx2(), reason="the processor has no AVX2")
+def test_the_avx2_build_passes_the_same_checks(tmp_path):
+    """The AVX2 build (8-lane narrow blocks, no AVX-512) under XLA capped at AVX2, as a processor
+    without AVX-512 runs it: this module's kernel checks again, in a process of its own."""
+    import os
+    import pathlib
+    import subprocess
+    import sys
+
+    env = dict(
+        os.environ,
+        SOCIALNAV_NATIVE_MARCH="x86-64-v3",
+        SOCIALNAV_NATIVE_CACHE=str(tmp_path),
+        XLA_FLAGS=(os.environ.get("XLA_FLAGS", "") + " --xla_cpu_max_isa=AVX2").strip(),
+    )
+    here = pathlib.Path(__file__)
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(here), "-k", "equals or same_bits"],
+        env=env,
+        cwd=here.parent.parent,
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-2000:]
+    assert "5 passed" in done.stdout  # 4 batch sizes against JAX, and the batch-invariance check
+    (library,) = tmp_path.glob("social_force-*.so")  # built there, for x86-64-v3
+    assert library.stat().st_size > 0

@@ -8,12 +8,12 @@ worlds as vector lanes, is the same arithmetic in one pass. The JAX version
 fallback, and a test holds the two to float rounding.
 
 The library is built with the system's C++ compiler (``$CXX``, else ``c++``) for this processor
-(``-march=native``) into ``$SOCIALNAV_NATIVE_CACHE``, else ``~/.cache/socialnav-jax/native``,
-under a name that hashes the source, the flags, the compiler's version, jaxlib's FFI headers and
-the processor's flags, so a changed source or another machine builds anew (about 3 s). The
-build writes to a temporary file and renames it, so processes building at once never load a
-half-written library. ``SOCIALNAV_NATIVE=off`` uses the JAX version; so does a machine without
-a compiler (with a warning that says why).
+(``-march=native``; ``$SOCIALNAV_NATIVE_MARCH`` overrides it) into ``$SOCIALNAV_NATIVE_CACHE``,
+else ``~/.cache/socialnav-jax/native``, under a name that hashes the source, the flags, the
+compiler's version, jaxlib's FFI headers and the processor's flags, so a changed source or
+another machine builds anew (about 3 s). The build writes to a temporary file and renames it,
+so processes building at once never load a half-written library. ``SOCIALNAV_NATIVE=off``
+uses the JAX version; so does a machine without a compiler (with a warning that says why).
 """
 
 from __future__ import annotations
@@ -30,7 +30,36 @@ import warnings
 
 SOURCE = pathlib.Path(__file__).with_name("social_force.cc")
 SOCIAL_FORCE_TARGET = "socialnav_social_force"
-FLAGS = ("-O3", "-march=native", "-std=c++20", "-fPIC", "-shared", "-fopenmp-simd", "-fno-math-errno")
+# -fno-trapping-math: without it GCC 12 leaves the pair loop scalar on AVX2 ("control flow in
+# loop": the selects of max_of / fast_atan2 may not be if-converted when a comparison could trap),
+# and the kernel ran slower than the JAX force (bench_simulator, AVX2 build under
+# --xla_cpu_max_isa=AVX2: 2.14 M agent-steps/s at batch 1024 without the flag, 5.68 M with it,
+# JAX 4.37 M). AVX-512's masked instructions vectorised the loop either way. Nothing reads the
+# floating-point exception flags, so the flag changes no result.
+FLAGS = (
+    "-O3",
+    "-std=c++20",
+    "-fPIC",
+    "-shared",
+    "-fopenmp-simd",
+    "-fno-math-errno",
+    "-fno-trapping-math",
+)
+
+
+def march() -> str:
+    """The processor the kernel is built for: ``$SOCIALNAV_NATIVE_MARCH``, else ``native``.
+
+    ``x86-64-v3`` builds the AVX2 code on a machine with AVX-512 (with XLA's
+    ``--xla_cpu_max_isa=AVX2`` this emulates a processor without AVX-512, as the benchmarks'
+    README figures for AVX2 do); any ``-march`` value of the compiler is accepted.
+    """
+    return os.environ.get("SOCIALNAV_NATIVE_MARCH", "").strip() or "native"
+
+
+def flags() -> tuple[str, ...]:
+    """The compiler's flags: :data:`FLAGS` and ``-march`` (:func:`march`)."""
+    return (*FLAGS, f"-march={march()}")
 
 
 def disabled() -> bool:
@@ -72,7 +101,7 @@ def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
     key = hashlib.sha256(
         b"\0".join(
             s.encode() if isinstance(s, str) else s
-            for s in (source.read_bytes(), " ".join(FLAGS), version, header.read_bytes(), _cpu_flags())
+            for s in (source.read_bytes(), " ".join(flags()), version, header.read_bytes(), _cpu_flags())
         )
     ).hexdigest()[:16]
     folder = _cache_dir()
@@ -84,7 +113,7 @@ def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
     os.close(fd)
     try:
         done = subprocess.run(
-            [*compiler, *FLAGS, f"-I{include}", str(source), "-o", tmp], capture_output=True, text=True
+            [*compiler, *flags(), f"-I{include}", str(source), "-o", tmp], capture_output=True, text=True
         )
         if done.returncode:
             first = next((line for line in done.stderr.splitlines() if "error" in line), done.stderr.strip()[:200])

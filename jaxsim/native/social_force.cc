@@ -3,9 +3,9 @@
 // The same force as jaxsim/social_force.py's social_force (read its docstring for the model);
 // written by hand because XLA's CPU compiler splits that pair computation into about 15 loop
 // kernels and runs it at 8.6 ns per pair per core (README "Speed"). Here the worlds are the
-// vector lanes: the inputs are transposed to (agent, world) blocks of 64 or 16 worlds, every
-// unordered pair (i < j) is computed once for all the block's worlds at a time (the force on i
-// is +w_j F, on j it is -w_i F: the model is antisymmetric), and the sums are transposed back.
+// vector lanes: the inputs are transposed to (agent, world) blocks of 64 worlds (then 16 or 8),
+// every unordered pair (i < j) is computed once for all the block's worlds at a time (the force
+// on i is +w_j F, on j it is -w_i F: the model is antisymmetric), and the sums are transposed back.
 // Every world goes through the same vector code whatever the batch size or its place in the
 // batch (a partial last block is padded), so a world's result does not depend on its batch.
 //
@@ -24,11 +24,16 @@ namespace ffi = xla::ffi;
 
 namespace {
 
-// Worlds per block: 64 while as many remain, then 16 (the widest vector's floats), so that one
-// world alone computes 16 lanes, not 64. Every lane runs the same vector instructions either way.
+// Worlds per block: 64 while as many remain, then one vector register's floats (16 with AVX-512,
+// 8 otherwise), so that one world alone computes 8 or 16 lanes, not 64. Every lane runs the same
+// vector instructions either way, so a world's result does not depend on its batch.
 constexpr int kWideLanes = 64;
+#ifdef __AVX512F__
 constexpr int kNarrowLanes = 16;
-static_assert(kWideLanes % 16 == 0 && kNarrowLanes % 16 == 0, "whole 512-bit vectors");
+#else
+constexpr int kNarrowLanes = 8;
+#endif
+static_assert(kWideLanes % kNarrowLanes == 0, "whole vectors in both block widths");
 constexpr float kEps = 1e-6f;
 
 // max / min as selects: GCC does not vectorise fmaxf / fminf (their NaN rules) without fast math.
