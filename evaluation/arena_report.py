@@ -18,8 +18,8 @@ from scipy import stats
 
 from common.intervals import wilson
 from evaluation import arena, nav_metrics
+from evaluation.arena_params import ArenaParams
 from jaxsim.scenes.actor import Actor
-from jaxsim.scenes.robot import RobotParams
 from jaxsim.scenes.spec import SceneSpec, mirror
 from jaxsim.scenes.variant import Variant, sample_variants
 from planners.stack import METHODS
@@ -144,12 +144,18 @@ def run_scene(
     on_method: Callable[[str], None] | None = None,
     held_out: bool = False,
     user_actors: dict[str, Callable] | None = None,
+    params: ArenaParams | None = None,
+    gscl_weights=None,
 ):
     """Every method on variants ``first .. first + n_variants - 1`` of one scene:
     ``(episodes frame, trajectories frame or None)``. ``held_out``: the scene mirrored
     (:func:`jaxsim.scenes.spec.mirror`) with every range drawn just outside itself, its rows named
     ``<scene>@held_out``. ``user_actors``: method name -> a factory ``env -> Actor`` or ``env ->
-    (Actor, params)`` (:func:`user_actor`), for the names of ``methods`` that are not built in."""
+    (Actor, params)`` (:func:`user_actor`), for the names of ``methods`` that are not built in.
+    ``params``: the robot's limits and the layers' parameters (:mod:`evaluation.arena_params`;
+    default: the seeds' values). ``gscl_weights``: with it, ``gscl_predict`` is ``(weights, maps)
+    -> costs`` and the weights are traced (another checkpoint of the same network reuses the
+    compiled program); without it, ``maps -> costs``."""
     name = spec.name + (HELD_OUT if held_out else "")
     if held_out:
         spec = mirror(spec)
@@ -158,7 +164,8 @@ def run_scene(
     variants = jax.tree_util.tree_map(
         jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out, setup.n_slots)
     )
-    robot = RobotParams()
+    params = ArenaParams() if params is None else params
+    robot = params.robot
     measure = metrics_function(setup, config, float(robot.radius_m))
     episodes, trajectories = [], []
     user_actors = user_actors or {}
@@ -168,7 +175,16 @@ def run_scene(
             actor, params = user_actor(user_actors[method], env)
             run = arena.actor_function(setup, actor, params, env)
         else:
-            run = arena.episode_function(setup, METHODS[method], crowd, robot, config, gscl_predict)
+            run = arena.episode_function(
+                setup,
+                METHODS[method],
+                crowd,
+                robot,
+                config,
+                gscl_predict,
+                gscl_weights=gscl_weights,
+                layers=params.layers_for(method),
+            )
         tr = run(variants)
         episodes.append(episode_frame(name, method, first, measure(tr, variants), tr.wall_contacts))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import pathlib
 
@@ -157,6 +158,19 @@ def rotation_averaged(predict, rotations: int = 4):
     return averaged
 
 
+@functools.lru_cache(maxsize=8)
+def _apply_for(graphdef):
+    from flax import nnx
+
+    def apply(weights, maps):
+        params, batch_stats = weights
+        model = nnx.merge(graphdef, params, batch_stats, copy=True)
+        model.eval()
+        return model(maps)
+
+    return apply
+
+
 class SocialCostModel:
     """A trained U-Net in evaluation mode: ``model(maps)`` (B, 40, 40) codes -> (B, 40, 40) costs.
 
@@ -167,6 +181,7 @@ class SocialCostModel:
         from models.steps import make_predict
 
         self._predict = make_predict(graphdef)  # jitted, batch norm in eval mode
+        self._graphdef = graphdef
         self._params, self._batch_stats = params, batch_stats
 
     @classmethod
@@ -181,6 +196,19 @@ class SocialCostModel:
         """The prediction as a function of the maps alone (closes over the weights): use it inside
         your own jit."""
         return self._predict(self._params, self._batch_stats, maps)
+
+    @property
+    def weights(self):
+        """The network's weights and batch statistics, the pytree :attr:`apply` takes."""
+        return (self._params, self._batch_stats)
+
+    @property
+    def apply(self):
+        """``(weights, maps (B, 40, 40)) -> costs (B, 40, 40)``: the prediction with the weights an
+        argument, so that under a caller's ``jit`` they are traced and another checkpoint of the
+        same network reuses the compiled program. One function per network structure (equal
+        structures give the same function, so callers that cache on it hit)."""
+        return _apply_for(self._graphdef)
 
     def __call__(self, maps) -> jax.Array:
         """Costs (B, 40, 40) in [0, 1] of input maps (B, 40, 40) or (40, 40), checked first

@@ -4,6 +4,7 @@ socialnav arena --out runs/arena                                   # every scene
 socialnav arena --scenes casn_static_person,casn_head_on --methods navfn,casn --variants 20
 socialnav arena --scenes my_scene.json --out runs/mine             # a scene file of your own
 socialnav arena --gscl-run runs/gscl                               # adds the GSCL method
+socialnav arena --params my_params.toml                            # the robot's and layers' parameters
 socialnav arena --held-out                                         # and every scene mirrored, ranges exceeded
 socialnav arena --backend ray --shard-variants 25                  # a Ray task per 25 variants of a scene
 
@@ -74,6 +75,14 @@ def add_parser(sub) -> None:
         "--out", type=output_folder, default=pathlib.Path("runs/arena"), help="output folder (default runs/arena)"
     )
     p.add_argument("--gscl-run", type=pathlib.Path, default=None, help="a trained GSCL run folder (enables 'gscl')")
+    p.add_argument(
+        "--params",
+        type=pathlib.Path,
+        default=None,
+        metavar="FILE.toml",
+        help="the robot's limits and the layers' and local planners' parameters ([robot], [casn], [snl], [snape], "
+        "[band], [pursuit], [methods.<method>.<section>]; evaluation/arena_params.py); default: the seeds' values",
+    )
     p.add_argument(
         "--keep-trajectories",
         type=int,
@@ -193,12 +202,21 @@ def _gscl_identity(run: pathlib.Path) -> str:
 def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str:
     """A scene's results are these when this digest matches: the scene file's bytes, the held-out
     flag, and every setting that changes an episode (methods, variants, seed, shard layout, the
-    GSCL model, the source files of the ``--actor`` factories, the human model, the metrics' and
-    the toolkit's versions)."""
+    GSCL model, the source files of the ``--actor`` factories, the human model, the ``--params``
+    file's text, the metrics' and the toolkit's versions)."""
     h = hashlib.sha256()
     h.update(pathlib.Path(spec_file).read_bytes())
-    keys = ("methods", "variants", "seed", "shard_variants", "keep_trajectories", "gscl_model", "actor_sources")
-    keys = (*keys, "human_model")
+    keys = (
+        "methods",
+        "variants",
+        "seed",
+        "shard_variants",
+        "keep_trajectories",
+        "gscl_model",
+        "actor_sources",
+        "human_model",
+        "params",
+    )
     h.update(json.dumps({"held_out": held_out, **{k: settings.get(k) for k in keys}}, sort_keys=True).encode())
     h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
     return h.hexdigest()[:16]
@@ -253,9 +271,16 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     if "gscl" in methods and args.gscl_run is None:
         print("socialnav arena: --methods gscl needs --gscl-run RUN (a trained GSCL run folder)", file=sys.stderr)
         return 2
+    from evaluation import arena_params
+
+    try:
+        params = arena_params.ArenaParams() if args.params is None else arena_params.load(args.params)
+    except arena_params.ParamsFileError as e:
+        print(f"socialnav arena: --params {e}", file=sys.stderr)
+        return 2
     files = _scene_files(args.scenes, SCENES_DIR)
     try:
-        runfolder.check_inputs(shown_as, [*files, args.gscl_run])
+        runfolder.check_inputs(shown_as, [*files, args.gscl_run, args.params])
         specs = [load_scene(f) for f in files]
     except ScenarioError as e:
         print(f"socialnav arena: {e}", file=sys.stderr)
@@ -309,7 +334,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
             return 2
         args.gscl_run = args.gscl_run.resolve()  # a Ray worker may start elsewhere
         try:
-            _gscl_predict(args.gscl_run)  # loads it here first: a bad run fails before any work
+            _gscl_model(args.gscl_run)  # loads it here first: a bad run fails before any work
         except (FileNotFoundError, ValueError) as e:
             print(f"socialnav arena: --gscl-run: {e}", file=sys.stderr)
             return 2
@@ -331,6 +356,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         "gscl_run": None if args.gscl_run is None else str(args.gscl_run),
         "gscl_model": None if args.gscl_run is None else _gscl_identity(args.gscl_run),
         "human_model": args.human_model,
+        "params_file": None if args.params is None else str(args.params),
+        "params": params.text or None,  # None without a file: earlier runs' digests stay valid
         "actors": actor_specs,
         "actor_sources": [actor_spec.source_digest(spec) for spec in actor_specs],
         "metrics_version": nav_metrics.VERSION,
@@ -393,6 +420,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                         args.gscl_run,
                         tuple(actor_specs),
                         args.human_model,
+                        params.text or "",
                     ),
                     work=n * len(methods),
                 )
@@ -488,26 +516,38 @@ def _shard_file(out: pathlib.Path, name: str, digest: str, first: int) -> pathli
 
 
 @functools.lru_cache(maxsize=4)
-def _gscl_predict(run: pathlib.Path | None):
+def _gscl_model(run: pathlib.Path | None):
     if run is None:
         return None
     from models.inference import SocialCostModel
 
-    return SocialCostModel.load(run).function
+    return SocialCostModel.load(run)
 
 
 def compute_shard(
-    spec, held_out, first, n, methods, seed, keep_trajectories, gscl_run, actor_specs=(), human_model="social_force"
+    spec,
+    held_out,
+    first,
+    n,
+    methods,
+    seed,
+    keep_trajectories,
+    gscl_run,
+    actor_specs=(),
+    human_model="social_force",
+    params_text="",
 ):
     """One shard: every method on variants ``first .. first + n - 1`` of a scene (a Ray task with
     ``--backend ray``): ``(episodes frame, trajectories frame or None)``. ``actor_specs``: the
-    ``--actor`` factories, loaded here (in the worker)."""
-    from evaluation import arena_report
+    ``--actor`` factories, loaded here (in the worker); ``params_text``: the ``--params`` file's
+    text (parsed here, so a worker needs no access to the file). The GSCL weights enter the
+    episode program traced: a second checkpoint of the same network compiles nothing new."""
+    from evaluation import arena_params, arena_report
     from evaluation.arena import ArenaConfig
 
     keep = max(0, min(n, keep_trajectories - first))
     users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
-    predict = _gscl_predict(gscl_run)
+    model = _gscl_model(gscl_run)
     return arena_report.run_scene(
         spec,
         list(methods),
@@ -515,10 +555,12 @@ def compute_shard(
         seed,
         first,
         keep,
-        predict,
+        None if model is None else model.apply,
         ArenaConfig(human_model=human_model),
         held_out=held_out,
         user_actors=users,
+        params=arena_params.parse(params_text, "--params") if params_text else None,
+        gscl_weights=None if model is None else model.weights,
     )
 
 

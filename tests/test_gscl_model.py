@@ -105,6 +105,13 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
         atol=1e-6,
     )
     assert model(test["inputs"][0]).shape == (40, 40)
+    # The weights as an argument: the same answer, and one function for every checkpoint of the
+    # network (what a caller's jit caches on), with another checkpoint's own answer.
+    maps = jnp.asarray(test["inputs"][:8])
+    np.testing.assert_allclose(np.asarray(model.apply(model.weights, maps)), np.asarray(model(maps)), atol=1e-6)
+    earlier = inference.SocialCostModel(graphdef, s0["params"], s0["batch_stats"])  # the untrained weights
+    assert earlier.apply is model.apply
+    assert float(jnp.max(jnp.abs(earlier.apply(earlier.weights, maps) - model.apply(model.weights, maps)))) > 1e-4
     with pytest.raises(ValueError, match="input maps must be"):
         model(np.zeros((2, 20, 20)))
 
