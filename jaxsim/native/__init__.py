@@ -35,7 +35,8 @@ SOCIAL_FORCE_TARGET = "socialnav_social_force"
 # and the kernel ran slower than the JAX force (bench_simulator, AVX2 build under
 # --xla_cpu_max_isa=AVX2: 2.14 M agent-steps/s at batch 1024 without the flag, 5.68 M with it,
 # JAX 4.37 M). AVX-512's masked instructions vectorised the loop either way. Nothing reads the
-# floating-point exception flags, so the flag changes no result.
+# floating-point exception flags, so the flag changes no result. -ffp-contract=off: no fused
+# multiply-adds, so that a world alone and a world in a block of worlds get the same bits.
 FLAGS = (
     "-O3",
     "-std=c++20",
@@ -44,6 +45,7 @@ FLAGS = (
     "-fopenmp-simd",
     "-fno-math-errno",
     "-fno-trapping-math",
+    "-ffp-contract=off",
 )
 
 
