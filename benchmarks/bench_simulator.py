@@ -52,9 +52,7 @@ WARMUP_S = 200.0  # simulated seconds before timing: the workers have arrived
 
 def machine() -> str:
     cpu = cpu_model()
-    force = (
-        "C++ kernel (jaxsim.native)" if native.social_force_available() else "JAX (SOCIALNAV_NATIVE=off or no compiler)"
-    )
+    force = native.describe()
     return (
         f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, jax {jax.__version__}, "
         f"{jax.local_device_count()} host device(s); social force on the CPU: {force}"

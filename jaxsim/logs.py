@@ -36,6 +36,7 @@ from common import logschema
 from common import progress as progress_lib
 from common.atomic import atomic_path, write_text_atomic
 from common.logschema import LOG_FILE, META_FILE, density_column, distance_column, position_columns
+from jaxsim import native
 from jaxsim.actor import Driver
 from jaxsim.scenario import Scenario
 from jaxsim.state import ACTIVITY, WALKING
@@ -180,6 +181,7 @@ def reproducibility() -> dict:
         "cpu": cpu_model(),
         "machine": platform.machine(),
         "xla_flags": os.environ.get("XLA_FLAGS", ""),
+        "social_force": native.describe(),  # floats differ between the kernel and JAX, not the model
     }
 
 

@@ -153,3 +153,14 @@ def test_the_avx2_build_passes_the_same_checks(tmp_path):
     assert "5 passed" in done.stdout  # 4 batch sizes against JAX, and the batch-invariance check
     (library,) = tmp_path.glob("social_force-*.so")  # built there, for x86-64-v3
     assert library.stat().st_size > 0
+
+
+def test_the_path_description_names_the_kernel_its_target_and_xla_cap(monkeypatch):
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=2 --xla_cpu_max_isa=AVX2")
+    monkeypatch.setenv("SOCIALNAV_NATIVE_MARCH", "x86-64-v3")
+    text = native.describe()
+    assert text.endswith("; XLA capped at AVX2") and f"processor {native.cpu_isa()}" in text
+    if native.social_force_available():
+        assert text.startswith("C++ kernel (jaxsim.native, -march=x86-64-v3)")
+    monkeypatch.setenv("XLA_FLAGS", "")
+    assert "capped" not in native.describe()

@@ -64,6 +64,25 @@ def flags() -> tuple[str, ...]:
     return (*FLAGS, f"-march={march()}")
 
 
+def cpu_isa() -> str:
+    """The processor's widest x86 vector instructions: ``"AVX-512"``, ``"AVX2"``, or ``"other"``."""
+    flags = set(_cpu_flags().split())
+    if "avx512f" in flags:
+        return "AVX-512"
+    return "AVX2" if "avx2" in flags else "other"
+
+
+def describe() -> str:
+    """Which social force runs on the CPU and for which instruction set, in one line (what the
+    benchmarks print and a run's ``run.json`` records): the kernel's ``-march``, the processor's
+    instruction set, and XLA's cap when ``--xla_cpu_max_isa`` is set."""
+    cap = next((f for f in os.environ.get("XLA_FLAGS", "").split() if f.startswith("--xla_cpu_max_isa=")), "")
+    xla = f"; XLA capped at {cap.split('=', 1)[1]}" if cap else ""
+    if not social_force_available():
+        return f"JAX (SOCIALNAV_NATIVE=off or no compiler); processor {cpu_isa()}{xla}"
+    return f"C++ kernel (jaxsim.native, -march={march()}); processor {cpu_isa()}{xla}"
+
+
 def disabled() -> bool:
     """``SOCIALNAV_NATIVE`` is set to off / 0 / false / no."""
     return os.environ.get("SOCIALNAV_NATIVE", "").lower() in ("off", "0", "false", "no")
