@@ -36,10 +36,9 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from jaxsim import robot as robot_lib  # noqa: E402
 from jaxsim import rollout, social_force  # noqa: E402
 from jaxsim import workers as workers_lib  # noqa: E402
-from jaxsim.route_follower import route_follower  # noqa: E402
+from jaxsim.robot import RouteFollower  # noqa: E402
 from jaxsim.scenario import load_scenario  # noqa: E402
 from jaxsim.world import build_world  # noqa: E402
 from planners.routes import shortest_path_plan  # noqa: E402
@@ -58,14 +57,14 @@ VARIANTS = {
     "social force -> dense reference": {"sf": social_force.social_force_dense},
     "social force -> JAX version": {"sf": social_force.social_force_xla},
     "worker context -> no-op": {"ctx": lambda params, world, w, *a: w},
-    "robot update -> no-op": {"robot": lambda params, world, robot, *a: robot},
+    "robot controller -> no-op": {"robot": lambda self, params, world, robot, *a: robot},
     "crowd move -> no-op": {"move": lambda params, world, w, *a: w},
 }
 _ORIGINAL = {
     "sf": workers_lib.sf.social_force,
     "ctx": workers_lib.update_context,
     "move": workers_lib.move,
-    "robot": robot_lib.update_robot,
+    "robot": RouteFollower.step,
 }
 
 
@@ -73,13 +72,12 @@ def _install(replace: dict) -> None:
     workers_lib.sf.social_force = replace.get("sf", _ORIGINAL["sf"])
     workers_lib.update_context = replace.get("ctx", _ORIGINAL["ctx"])
     workers_lib.move = replace.get("move", _ORIGINAL["move"])
-    robot_lib.update_robot = replace.get("robot", _ORIGINAL["robot"])
+    RouteFollower.step = replace.get("robot", _ORIGINAL["robot"])
 
 
 def ablation(scenario, batch: int, rounds: int) -> None:
     p = scenario.params
-    world = build_world(scenario)
-    controller = route_follower(shortest_path_plan(scenario), world)
+    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
     keys = rollout.world_keys(0, batch)
     agents = p.n_workers + 1
     n_dev = rollout.devices_for(batch)
@@ -116,8 +114,7 @@ def ablation(scenario, batch: int, rounds: int) -> None:
 
 def kernels(scenario, top: int) -> None:
     p = scenario.params
-    world = build_world(scenario)
-    controller = route_follower(shortest_path_plan(scenario), world)
+    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
     keys = rollout.world_keys(0, 64)
     fn = rollout._compiled(1, 10, 64, 1, False)  # one device: one thread's kernels in order
     states = rollout.init_batch(p, world, controller, keys)

@@ -30,9 +30,8 @@ STAGING = ".shards"
 def compute_shard(scenario_dir, overrides, first, n, duration_s, seed, sample_interval_s, log_positions, snap_t):
     """Simulate one shard of worlds (here or in a Ray worker): ``(Parquet bytes, summary dict)``."""
     from jaxsim import logs
-    from jaxsim.route_follower import route_follower
+    from jaxsim.robot import RouteFollower
     from jaxsim.scenario import WAREHOUSE_DIR, load_scenario
-    from jaxsim.world import build_world
     from planners.routes import shortest_path_plan
 
     scenario = load_scenario(scenario_dir or WAREHOUSE_DIR, **overrides)
@@ -40,7 +39,7 @@ def compute_shard(scenario_dir, overrides, first, n, duration_s, seed, sample_in
         run = logs.simulate_to_parquet(
             scenario,
             tmp,
-            route_follower(shortest_path_plan(scenario), build_world(scenario)),
+            RouteFollower(shortest_path_plan(scenario)),
             n_worlds=n,
             duration_s=duration_s,
             seed=seed,
