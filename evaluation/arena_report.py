@@ -172,8 +172,8 @@ def run_scene(
     for method in methods:
         if method in user_actors:
             env = setup.env.replace(crowd=crowd, robot=robot)
-            actor, params = user_actor(user_actors[method], env)
-            run = arena.actor_function(setup, actor, params, env)
+            actor, actor_params = user_actor(user_actors[method], env)
+            run = arena.actor_function(setup, actor, actor_params, env)
         else:
             run = arena.episode_function(
                 setup,

@@ -91,6 +91,24 @@ def test_the_files_values_reach_the_episodes_without_a_new_compilation():
     assert slower["goal_success"].all()
 
 
+def test_a_users_actor_before_a_built_in_method_keeps_the_files_values():
+    """The user's actor gets the file's robot limits, and the built-in after it its layers."""
+    from jaxsim.scenes.actor import Actor
+
+    seen = {}
+
+    def still(env):
+        seen["robot"] = env.robot
+        return Actor(init=lambda key, obs: (), act=lambda p, s, obs, key: (obs.robot_xy_m * 0.0, s), name="still")
+
+    spec = load_scene(SCENES_DIR / "casn_static_person.json")
+    params = arena_params.parse("[robot]\nmax_speed_mps = 0.4\n[pursuit]\nturn_gain = 1.2")
+    episodes = arena_report.run_scene(spec, ["still", "navfn"], 2, user_actors={"still": still}, params=params)[0]
+    assert seen["robot"].max_speed_mps == 0.4
+    assert list(episodes["method"]) == ["still", "still", "navfn", "navfn"]
+    assert not episodes[episodes["method"] == "still"]["goal_success"].any()
+
+
 def test_the_command_refuses_a_bad_file_before_any_work(tmp_path, capsys):
     from socialnav import cli
 
