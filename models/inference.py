@@ -160,15 +160,11 @@ def rotation_averaged(predict, rotations: int = 4):
 
 @functools.lru_cache(maxsize=8)
 def _apply_for(graphdef):
-    from flax import nnx
+    """``(weights, maps) -> costs`` over :func:`models.steps.make_predict`, one per structure."""
+    from models.steps import make_predict
 
-    def apply(weights, maps):
-        params, batch_stats = weights
-        model = nnx.merge(graphdef, params, batch_stats, copy=True)
-        model.eval()
-        return model(maps)
-
-    return apply
+    predict = make_predict(graphdef)
+    return lambda weights, maps: predict(*weights, maps)
 
 
 class SocialCostModel:

@@ -33,8 +33,9 @@ SOCIAL_FORCE_TARGET = "socialnav_social_force"
 # -fno-trapping-math: without it GCC 12 leaves the pair loop scalar on AVX2 ("control flow in
 # loop": the selects of max_of / fast_atan2 may not be if-converted when a comparison could trap),
 # and the kernel ran slower than the JAX force (bench_simulator, AVX2 build under
-# --xla_cpu_max_isa=AVX2: 2.14 M agent-steps/s at batch 1024 without the flag, 5.68 M with it,
-# JAX 4.37 M). AVX-512's masked instructions vectorised the loop either way. Nothing reads the
+# --xla_cpu_max_isa=AVX2, one run while another job shared the cores: 2.14 M agent-steps/s at
+# batch 1024 without the flag, 5.68 M with it, JAX 4.37 M; README "Speed" for quiet runs).
+# AVX-512's masked instructions vectorised the loop either way. Nothing reads the
 # floating-point exception flags, so the flag changes no result. -ffp-contract=off: no fused
 # multiply-adds, so that a world alone and a world in a block of worlds get the same bits.
 FLAGS = (
@@ -66,10 +67,10 @@ def flags() -> tuple[str, ...]:
 
 def cpu_isa() -> str:
     """The processor's widest x86 vector instructions: ``"AVX-512"``, ``"AVX2"``, or ``"other"``."""
-    flags = set(_cpu_flags().split())
-    if "avx512f" in flags:
+    names = set(_cpu_flags().split())
+    if "avx512f" in names:
         return "AVX-512"
-    return "AVX2" if "avx2" in flags else "other"
+    return "AVX2" if "avx2" in names else "other"
 
 
 def describe() -> str:
