@@ -41,7 +41,7 @@ from jaxsim.scenes import world as world_lib
 from jaxsim.scenes.actor import Actor, rollout
 from jaxsim.scenes.spec import SceneSpec
 from jaxsim.scenes.variant import Variant, padded_slots
-from planners import actors, costmap, stack
+from planners import actors, baselines, costmap, stack
 
 
 @dataclasses.dataclass(frozen=True)
@@ -293,3 +293,30 @@ def episode_function(
 @functools.lru_cache(maxsize=16)
 def _closed(predict: Callable) -> Callable:
     return lambda weights, maps: predict(maps)
+
+
+@functools.lru_cache(maxsize=64)
+def baseline_actor(name: str, grid: costmap.GridSpec, robot_radius_m: float, config: ArenaConfig = ArenaConfig()):
+    """A reactive baseline (:data:`planners.baselines.BASELINES`) as an actor (cached as
+    :func:`method_actor`)."""
+    return baselines.baseline_actor(
+        name, grid, robot_radius_m, config.dt_s, config.replan_every_steps, config.max_path_cells
+    )
+
+
+def baseline_function(
+    setup: SceneSetup,
+    name: str,
+    crowd: SimParams | None = None,
+    robot_params: robot_lib.RobotParams = robot_lib.RobotParams(),
+    config: ArenaConfig = ArenaConfig(),
+    rule_params=None,
+):
+    """``variants -> Trajectory`` of a reactive baseline (``orca``, ``social_force``, ``dwa``);
+    ``rule_params`` (default: the baseline's) are traced."""
+    env = setup.env.replace(robot=robot_params)
+    if crowd is not None:
+        env = env.replace(crowd=crowd)
+    actor = baseline_actor(name, setup.grid, float(robot_params.radius_m), config)
+    params = baselines.baseline_params(name, env, setup.map, rule_params, config.safety_margin_m)
+    return actor_function(setup, actor, params, env)

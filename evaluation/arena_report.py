@@ -22,6 +22,7 @@ from evaluation.arena_params import ArenaParams
 from jaxsim.scenes.actor import Actor
 from jaxsim.scenes.spec import SceneSpec, mirror
 from jaxsim.scenes.variant import Variant, sample_variants
+from planners.baselines import BASELINES
 from planners.stack import METHODS
 
 SUMMARY_MEANS = (
@@ -174,6 +175,8 @@ def run_scene(
             env = setup.env.replace(crowd=crowd, robot=robot)
             actor, actor_params = user_actor(user_actors[method], env)
             run = arena.actor_function(setup, actor, actor_params, env)
+        elif method in BASELINES:
+            run = arena.baseline_function(setup, method, crowd, robot, config)
         else:
             run = arena.episode_function(
                 setup,

@@ -186,6 +186,14 @@ def orca_velocity(
     dirs = jnp.concatenate([wd[None], d])
     valid = jnp.concatenate([wall_valid[None], near])
     hard = jnp.zeros_like(valid).at[0].set(True)
+    return solve(points, dirs, valid, hard, max_speed, pref_velocity)
+
+
+def solve(points, dirs, valid, hard, max_speed, pref_velocity):
+    """The velocity (2,) closest to ``pref_velocity`` inside the half-planes (L lines: ``points``
+    (L, 2) and ``dirs`` (L, 2), the allowed side left of each, ``valid`` (L,) bool) and the disc
+    of ``max_speed``; where they cannot all hold, the one that violates the soft lines least,
+    the ``hard`` ones (L,) bool kept (RVO2's linearProgram2, then linearProgram3)."""
     failed, result = _lp2(points, dirs, valid, max_speed, pref_velocity, False)
     n = points.shape[0]
     return jax.lax.cond(failed < n, lambda: _lp3(points, dirs, valid, hard, failed, max_speed, result), lambda: result)

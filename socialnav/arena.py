@@ -36,7 +36,18 @@ from socialnav.argtypes import comma_names, output_folder, positive_int, seed_in
 from socialnav.backend import add_backend_options
 from socialnav.locking import locks_folder
 
-DEFAULT_METHODS = ("navfn", "snl_small", "snl_large", "snl_matched", "casn", "snape_eband", "snape_social_eband")
+DEFAULT_METHODS = (
+    "navfn",
+    "snl_small",
+    "snl_large",
+    "snl_matched",
+    "casn",
+    "snape_eband",
+    "snape_social_eband",
+    "orca",
+    "social_force",
+    "dwa",
+)
 
 
 def add_parser(sub) -> None:
@@ -229,8 +240,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     from data import SCENES_DIR
     from jaxsim.scenario.errors import ScenarioError
     from jaxsim.scenes.spec import load_scene
+    from planners.baselines import BASELINES
     from planners.stack import METHODS
     from socialnav import backend as backend_lib
+
+    known = [*METHODS, *BASELINES]
 
     if str(args.out) in ("", "."):
         print("socialnav arena: --out must name a folder, not the working directory", file=sys.stderr)
@@ -241,17 +255,15 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         print("socialnav arena: --keep-trajectories must be >= 0", file=sys.stderr)
         return 2
     methods = list(args.methods) if args.methods else list(DEFAULT_METHODS) + (["gscl"] if args.gscl_run else [])
-    unknown = [m for m in methods if m not in METHODS]
+    unknown = [m for m in methods if m not in known]
     if unknown:
-        print(
-            f"socialnav arena: --methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})", file=sys.stderr
-        )
+        print(f"socialnav arena: --methods: unknown {', '.join(unknown)} (known: {', '.join(known)})", file=sys.stderr)
         return 2
     try:
         actor_specs = [_absolute_spec(spec) for spec in args.actor]
         actor_names = [actor_spec.name(spec) for spec in actor_specs]
         for spec, actor_name in zip(args.actor, actor_names, strict=True):
-            if actor_name in METHODS or actor_names.count(actor_name) > 1:
+            if actor_name in known or actor_names.count(actor_name) > 1:
                 raise actor_spec.ActorSpecError(
                     f"--actor {spec}: the name {actor_name!r} is taken (a built-in method or another --actor)"
                 )

@@ -1,0 +1,103 @@
+"""The dynamic window approach (Fox, Burgard and Thrun 1997) as the robot's rule, people as
+moving obstacles.
+
+Each control step samples (v, omega) on a grid over the *dynamic window*, the velocities the base
+can reach within one step from its current ones (its acceleration limits) inside its speed and
+turn-rate limits; rolls each out as a constant-command arc over ``horizon_s``; drops the arcs on
+which the body touches a wall or a seen person (the people moved at their estimated velocities:
+Fox's static obstacles made moving, as social-jym's DWA and Nav2's DWB with a people layer take
+them); and takes the best of the rest by Fox's objective::
+
+    G(v, omega) = heading_weight * heading + clearance_weight * clearance + velocity_weight * velocity
+
+``heading`` = 1 - |angle from the heading one step ahead to the carrot| / pi (Fox's: at the
+pose after the next control interval); ``clearance`` = the
+arc's smallest body-to-obstacle gap, capped at ``clearance_cap_m`` and divided by it;
+``velocity`` = v / v_max. Fox et al. weigh heading most (alpha = 2, beta = gamma = 0.2 in the
+paper's experiments), the defaults here. Where no arc is free the base brakes as hard as it can
+and turns towards the carrot (Nav2's rotate-in-place recovery, in one step).
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+from flax import struct
+
+from jaxsim.scenes.env import Observation
+from jaxsim.scenes.world import wall_distance
+from planners import reactive
+from planners.scene import wrap_angle
+
+
+@struct.dataclass
+class DWAParams:
+    """Sampling (static ints): v_samples 7, omega_samples 15, horizon_steps 10. Dynamic floats:
+    horizon_s 2.0 (the arcs' length in time; Nav2 DWB's sim_time is 1.7 s), heading_weight 2.0,
+    clearance_weight 0.2, velocity_weight 0.2 (Fox et al.), clearance_cap_m 1.0."""
+
+    horizon_s: float = 2.0
+    heading_weight: float = 2.0
+    clearance_weight: float = 0.2
+    velocity_weight: float = 0.2
+    clearance_cap_m: float = 1.0
+    v_samples: int = struct.field(pytree_node=False, default=7)
+    omega_samples: int = struct.field(pytree_node=False, default=15)
+    horizon_steps: int = struct.field(pytree_node=False, default=10)
+
+
+def window(p: DWAParams, ctx: reactive.ReactiveParams, speed, turn_rate, dt_s: float):
+    """The sampled dynamic window: (v (S,), omega (S,)), S = v_samples x omega_samples."""
+    r = ctx.robot
+    v_lo = jnp.maximum(0.0, speed - r.max_accel_mps2 * dt_s)
+    v_hi = jnp.minimum(r.max_speed_mps, speed + r.max_accel_mps2 * dt_s)
+    w_lo = jnp.maximum(-r.max_turn_rate_rps, turn_rate - r.max_turn_accel_rps2 * dt_s)
+    w_hi = jnp.minimum(r.max_turn_rate_rps, turn_rate + r.max_turn_accel_rps2 * dt_s)
+    v = v_lo + (v_hi - v_lo) * jnp.linspace(0.0, 1.0, p.v_samples)
+    w = w_lo + (w_hi - w_lo) * jnp.linspace(0.0, 1.0, p.omega_samples)
+    vv, ww = jnp.meshgrid(v, w, indexing="ij")
+    return vv.reshape(-1), ww.reshape(-1)
+
+
+def arcs(xy, yaw, v, w, horizon_s, steps: int):
+    """Poses along constant-command arcs: (xy (S, K, 2), yaw (S, K)) at times horizon_s * k / K,
+    k = 1..K, by exact unicycle integration (straight where omega is ~0)."""
+    t = horizon_s * jnp.arange(1, steps + 1, dtype=jnp.float32) / steps  # (K,)
+    yaw_t = yaw + w[:, None] * t[None]
+    turning = jnp.abs(w) > 1e-4
+    safe_w = jnp.where(turning, w, 1.0)[:, None]
+    radius = v[:, None] / safe_w
+    dx = jnp.where(turning[:, None], radius * (jnp.sin(yaw_t) - jnp.sin(yaw)), v[:, None] * t * jnp.cos(yaw))
+    dy = jnp.where(turning[:, None], -radius * (jnp.cos(yaw_t) - jnp.cos(yaw)), v[:, None] * t * jnp.sin(yaw))
+    return xy + jnp.stack([dx, dy], axis=-1), yaw_t
+
+
+def scores(p: DWAParams, ctx: reactive.ReactiveParams, obs: Observation, carrot_xy, v, w, dt_s: float):
+    """(objective (S,), free (S,) bool, heading (S,)) of the sampled commands."""
+    k = p.horizon_steps
+    xy, yaw = arcs(obs.robot_xy_m, obs.robot_yaw_rad, v, w, p.horizon_s, k)
+    t = p.horizon_s * jnp.arange(1, k + 1, dtype=jnp.float32) / k
+    to_walls = wall_distance(xy, ctx.guide.map.walls_m)[0] - ctx.robot.radius_m  # (S, K)
+    people = obs.people_xy_m[None] + t[:, None, None] * obs.people_velocity_mps[None]  # (K, P, 2)
+    d = jnp.linalg.norm(xy[:, :, None, :] - people[None], axis=-1) - ctx.robot.radius_m - ctx.guide.person_radius_m
+    to_people = jnp.min(jnp.where(obs.people_visible[None, None], d, jnp.inf), axis=-1)  # (S, K)
+    gap = jnp.min(jnp.minimum(to_walls, to_people), axis=-1)  # (S,)
+    # Fox et al.'s heading: at the pose one control step ahead (at the arc's end a slow arc that
+    # would pass the goal scores worse than standing still, and the base stalls short of it).
+    xy_next, yaw_next = arcs(obs.robot_xy_m, obs.robot_yaw_rad, v, w, dt_s, 1)
+    to_carrot = carrot_xy - xy_next[:, 0]
+    error = wrap_angle(jnp.arctan2(to_carrot[:, 1], to_carrot[:, 0]) - yaw_next[:, 0])
+    heading = 1.0 - jnp.abs(error) / jnp.pi
+    clearance = jnp.clip(gap, 0.0, p.clearance_cap_m) / p.clearance_cap_m
+    velocity = v / jnp.maximum(ctx.robot.max_speed_mps, 1e-6)
+    objective = p.heading_weight * heading + p.clearance_weight * clearance + p.velocity_weight * velocity
+    return objective, gap > -1e-3, heading  # a base slid along a wall stands at its radius exactly
+
+
+def command(p: DWAParams, ctx: reactive.ReactiveParams, obs: Observation, carrot_xy, dt_s: float):
+    """(v, omega): the best free arc of the dynamic window; none free: brake and turn."""
+    v, w = window(p, ctx, obs.robot_speed_mps, obs.robot_turn_rate_rps, dt_s)
+    objective, free, heading = scores(p, ctx, obs, carrot_xy, v, w, dt_s)
+    best = jnp.argmax(jnp.where(free, objective, -jnp.inf))
+    turn = jnp.argmax(heading)
+    any_free = jnp.any(free)
+    return jnp.where(any_free, v[best], 0.0), jnp.where(any_free, w[best], w[turn])
