@@ -320,3 +320,30 @@ def baseline_function(
     actor = baseline_actor(name, setup.grid, float(robot_params.radius_m), config)
     params = baselines.baseline_params(name, env, setup.map, rule_params, config.safety_margin_m)
     return actor_function(setup, actor, params, env)
+
+
+def _stand_init(key, observation):
+    del key, observation
+    return ()
+
+
+def _stand_act(params, state, observation, key):
+    del params, observation, key
+    return jnp.zeros(2, jnp.float32), state
+
+
+# The robot of the counterfactual run: it stands where it starts (the people ignore it anyway).
+STAND_STILL = Actor(init=_stand_init, act=_stand_act, name="stand_still")
+
+
+def without_robot(variants: Variant) -> Variant:
+    """The same variants with every person ignoring the robot: the crowd as it would move without
+    it (the same draws and random-force stream: common random numbers)."""
+    return variants.replace(ignore_robot=jnp.ones_like(variants.ignore_robot))
+
+
+def counterfactual_function(setup: SceneSetup, crowd: SimParams | None = None):
+    """``variants -> Trajectory`` of the people without the robot (:func:`without_robot`)."""
+    env = setup.env if crowd is None else setup.env.replace(crowd=crowd)
+    run = actor_function(setup, STAND_STILL, (), env)
+    return lambda variants: run(without_robot(variants))

@@ -150,3 +150,42 @@ def animation(
 
     anim = FuncAnimation(fig, draw, frames=len(steps), blit=False)
     return write_atomic(path, lambda tmp: anim.save(tmp, writer=PillowWriter(fps=10), dpi=100))
+
+
+# The composite view's panels: (column of the summary, title, better when higher).
+METHOD_PANELS = (
+    ("goal_success_pct", "goal success (%)", True),
+    ("social_success_pct", "social success (%)", True),
+    ("collisions", "collisions / episode", False),
+    ("intrusions", "personal-space entries", False),
+    ("clearance_min_m", "min body gap (m)", True),
+    ("time_s", "time (s)", False),
+    ("path_length_ratio", "path length ratio", False),
+    ("jerk_mean_mps3", "jerk (m/s^3)", False),
+    ("people_deviation_m", "people's deviation (m)", False),
+)
+
+
+def methods_figure(summary: pd.DataFrame, path) -> pathlib.Path:
+    """Per method, its mean over the run's scenes of each of :data:`METHOD_PANELS` (one panel per
+    metric, one bar per method, a dot per scene), from :func:`evaluation.arena_report.summary`.
+    Scenes weigh equally; held-out rows count as scenes of their own."""
+    panels = [p for p in METHOD_PANELS if p[0] in summary]
+    methods = list(dict.fromkeys(summary["method"]))
+    cols = 3
+    rows = -(-len(panels) // cols)
+    fig = figures.figure(figsize=(3.4 * cols, 0.35 * len(methods) * rows + 1.0 * rows), layout="constrained")
+    x = np.arange(len(methods))
+    for k, (key, title, higher) in enumerate(panels):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        per_scene = summary.pivot_table(index="scene", columns="method", values=key, sort=False)[methods]
+        means = per_scene.mean(axis=0).to_numpy()
+        ax.barh(x, means, color="tab:blue" if higher else "tab:orange", alpha=0.7)
+        for j, m in enumerate(methods):
+            ax.plot(per_scene[m].to_numpy(), np.full(len(per_scene), j), "k.", ms=2, alpha=0.5)
+        ax.set_yticks(x, methods if k % cols == 0 else [""] * len(methods), fontsize=7)
+        ax.invert_yaxis()
+        ax.set_title(title + (" (higher better)" if higher else " (lower better)"), fontsize=8)
+        ax.tick_params(axis="x", labelsize=7)
+    fig.suptitle(f"methods over {summary['scene'].nunique()} scene(s): bars the mean, dots each scene", fontsize=9)
+    return figures.save(fig, path, dpi=100)

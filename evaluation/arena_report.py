@@ -41,7 +41,26 @@ SUMMARY_MEANS = (
     "zone_public",
     "group_share",
     "wall_contacts",
+    "collisions_robot",
+    "collisions_person",
+    "intrusions_robot",
+    "intrusions_person",
+    "near_misses",
+    "clearance_min_m",
+    "group_intrusions",
+    "speed_mean_mps",
+    "turn_rate_mean_rps",
+    "accel_mean_mps2",
+    "jerk_mean_mps3",
+    "path_irregularity_rad_per_m",
+    "path_length_ratio",
+    "no_progress_max_s",
+    "people_speed_drop_mps",
+    "people_deviation_m",
+    "people_deviation_max_m",
 )
+# Shares of episodes reported in % beside the success rates (no interval).
+SUMMARY_SHARES = ("deadlock", "timeout")
 
 
 def _velocities(people_xy, present, dt_s):
@@ -51,16 +70,17 @@ def _velocities(people_xy, present, dt_s):
 
 
 def metrics_function(setup: arena.SceneSetup, config: arena.ArenaConfig, robot_radius_m: float):
-    """``(trajectories, variants) -> dict of metric arrays``, jitted and vmapped over episodes."""
+    """``(trajectories, variants, trajectories without the robot) -> dict of metric arrays``, jitted
+    and vmapped over episodes (the third from :func:`evaluation.arena.counterfactual_function`)."""
     rule = setup.spec.rule
     timeout = setup.n_periods * config.replan_every_steps * config.dt_s
 
-    def one(tr: arena.Trajectory, v: Variant):
+    def one(tr: arena.Trajectory, v: Variant, without: arena.Trajectory):
         velocity = _velocities(tr.people_xy, tr.people_present, config.dt_s)
         ok = nav_metrics.rule_satisfied(
             rule, tr.robot_xy, tr.reached, tr.people_xy, v.start_xy, v.end_xy, tr.people_present, v.group
         )
-        return nav_metrics.episode_metrics(
+        metrics = nav_metrics.episode_metrics(
             tr.robot_xy,
             tr.robot_yaw,
             tr.robot_speed,
@@ -76,7 +96,13 @@ def metrics_function(setup: arena.SceneSetup, config: arena.ArenaConfig, robot_r
             robot_radius_m,
             config.person_radius_m,
             ok,
+            config.goal_tolerance_m,
         )
+
+        effect = nav_metrics.people_effect(
+            tr.people_xy, tr.people_present, without.people_xy, without.people_present, config.dt_s
+        )
+        return {**metrics, **effect}
 
     return jax.jit(jax.vmap(one))
 
@@ -170,6 +196,7 @@ def run_scene(
     measure = metrics_function(setup, config, float(robot.radius_m))
     episodes, trajectories = [], []
     user_actors = user_actors or {}
+    without = arena.counterfactual_function(setup, crowd)(variants)  # the people without the robot
     for method in methods:
         if method in user_actors:
             env = setup.env.replace(crowd=crowd, robot=robot)
@@ -189,7 +216,7 @@ def run_scene(
                 layers=params.layers_for(method),
             )
         tr = run(variants)
-        episodes.append(episode_frame(name, method, first, measure(tr, variants), tr.wall_contacts))
+        episodes.append(episode_frame(name, method, first, measure(tr, variants, without), tr.wall_contacts))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)
         if kept is not None:
             trajectories.append(kept)
@@ -244,6 +271,9 @@ def summary(episodes: pd.DataFrame) -> pd.DataFrame:
             row[key + "_pct"] = 100.0 * k / n
             row[key + "_ci"] = f"{100 * lo:.0f}-{100 * hi:.0f}"
             row[key + "_lo"], row[key + "_hi"] = 100.0 * lo, 100.0 * hi
+        for key in SUMMARY_SHARES:
+            if key in g:
+                row[key + "_pct"] = 100.0 * float(g[key].mean())
         for key in SUMMARY_MEANS:
             if key in g:
                 values = g[key].replace([np.inf, -np.inf], np.nan)

@@ -26,7 +26,45 @@ for the proxemic and person-distance metrics (after that the robot has arrived).
   person's 1.2 m (one per entry, per person).
 * ``ttc_min_s``: smallest time to collision at constant velocities over the episode (inf if none).
 * ``group_share``: share of time inside a group's circle (its members' mean distance to their
-  centroid).
+  centroid); ``group_intrusions``: entries into such a circle (an F-formation's o- and p-space,
+  approximated by the circle through its members; SEAN 2.0 and Francis et al. count group-space
+  intrusions, SocNavBench does not).
+
+Motion quality (before arrival; Francis et al. 2025, SocNavBench, robot_sf):
+
+* ``speed_mean_mps``, ``turn_rate_mean_rps`` (mean |yaw rate|), ``accel_mean_mps2`` (mean |dv/dt|),
+  ``jerk_mean_mps3`` (mean |d2v/dt2|), by finite differences of the 10 Hz record (SocNavBench
+  differentiates its own 10 Hz trajectory the same way; its jerk is of the planar velocity, ours
+  of the speed along the heading: the base cannot move sideways).
+* ``path_irregularity_rad_per_m``: turning beyond the one turn needed to face the goal from the
+  start, per metre driven (Guzzi et al. 2013, Francis et al.'s definition; HuNavSim reports the
+  raw cumulative heading change).
+* ``path_length_ratio``: driven over the straight line from the start to the goal's tolerance
+  circle (>= 1 to float rounding; the inverse of social-jym's path efficiency and of SPL's ratio).
+* ``deadlock``: not arrived, and less than ``DEADLOCK_PROGRESS_M`` of progress towards the goal in
+  the last ``DEADLOCK_S`` of the episode (stuck, as robot_sf's and Francis et al.'s "deadlock"
+  apart from a slow timeout); ``timeout``: not arrived and not deadlocked;
+  ``no_progress_max_s``: the longest stretch without progress before arrival.
+
+Safety apart from centres:
+
+* ``clearance_min_m``: the smallest body-to-body gap (``d_min_m`` minus both radii; HuNavSim's
+  reading); ``near_misses``: encounters closer than ``NEAR_MISS_M`` body to body that stay
+  without contact (counted once each, like collisions).
+* ``intrusions_robot`` / ``intrusions_person``: personal-space entries split as collisions are,
+  by who closed in faster at the entry (the robot moving into a person vs a person walking up to
+  a robot that stands or moves slower).
+* ``wall_contacts`` (the base's count of moves that would have entered a wall) is reported by
+  the arena beside these.
+
+The robot's effect on the people (counterfactual, :func:`people_effect`): each variant is run a
+second time with every person ignoring the robot (``Variant.ignore_robot``), everything else
+equal: the same draws, the same random force stream (common random numbers), so the second run is
+the crowd as it would have moved without the robot. ``people_speed_drop_mps``: the people's mean
+speed without the robot minus with it (mean over the people who move); ``people_deviation_m``:
+the mean over people and time of the distance between their two positions;
+``people_deviation_max_m``: its largest value. They vanish (to float rounding and the social
+force's exponential tail) where the robot never comes near anyone.
 """
 
 from __future__ import annotations
@@ -38,10 +76,13 @@ import numpy as np
 from evaluation.metrics import collision_encounters
 from planners.scene import wrap_angle
 
-VERSION = "nav-metrics 1"
+VERSION = "nav-metrics 2"
 ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}
 ZONE_NAMES = ("intimate", "personal", "social", "public")
 STALLED_MPS = 0.05
+DEADLOCK_S = 5.0  # no progress for this long at the end: deadlock
+DEADLOCK_PROGRESS_M = 0.1
+NEAR_MISS_M = 0.2  # body-to-body gap of a near miss
 
 
 def episode_metrics(
@@ -60,13 +101,15 @@ def episode_metrics(
     robot_radius_m: float,
     person_radius_m: float,
     rule_ok,
+    goal_tolerance_m: float = 0.0,
 ):
     """Metrics of one episode.
 
     Args:
       robot_xy (T, 2), robot_yaw (T,), robot_speed (T,); people_xy (T, P, 2), people_velocity
       (T, P, 2), present (T, P) bool; reached (T,) bool (goal reached by then); goal_xy, start_xy
-      (2,); group (P,) int32 group of each person (-1 none); rule_ok () bool, the scene's rule.
+      (2,); group (P,) int32 group of each person (-1 none); rule_ok () bool, the scene's rule;
+      goal_tolerance_m: the arrival radius (the path-length ratio's straight line ends on it).
 
     Returns: a dict of arrays (scalars, ``d_person_m`` (P,), ``zone_share`` (4,)).
     """
@@ -136,8 +179,72 @@ def episode_metrics(
     in_group = jnp.any((count >= 2)[None] & (jnp.linalg.norm(robot_xy[:, None] - centre, axis=-1) < radius_g), axis=1)
     group_share = jnp.sum(active & in_group) / jnp.maximum(jnp.sum(active), 1)
 
+    # Motion quality, before arrival.
+    moving_steps = jnp.maximum(jnp.sum(active), 1)
+    yaw_rate = wrap_angle(jnp.diff(robot_yaw, prepend=robot_yaw[:1])) / dt_s
+    accel = jnp.diff(robot_speed, prepend=robot_speed[:1]) / dt_s
+    jerk = jnp.diff(accel, prepend=accel[:1]) / dt_s
+    mean_active = lambda x: jnp.sum(jnp.where(active, x, 0.0)) / moving_steps
+    facing = jnp.arctan2(goal_xy[1] - start_xy[1], goal_xy[0] - start_xy[0])
+    needed = jnp.abs(wrap_angle(facing - robot_yaw[0]))
+    irregularity = jnp.maximum(chc - needed, 0.0) / jnp.maximum(path_length, 1e-6)
+    length_ratio = path_length / jnp.maximum(straight - goal_tolerance_m, 1e-6)
+
+    # Progress towards the goal: deadlock (none over the last DEADLOCK_S) apart from a timeout.
+    to_goal = jnp.linalg.norm(robot_xy - goal_xy, axis=-1)
+    window = max(int(round(DEADLOCK_S / dt_s)), 1)
+    best_before = jax.lax.cummin(to_goal)
+    if to_goal.shape[0] > window:
+        deadlock = ~success & (best_before[-window - 1] - to_goal[-window:].min() < DEADLOCK_PROGRESS_M)
+    else:
+        deadlock = jnp.array(False)
+    progressed = jnp.concatenate([jnp.ones(1, bool), best_before[1:] < best_before[:-1] - 1e-3])
+
+    def still(run, step):
+        p, a = step
+        run = jnp.where(p | ~a, 0, run + 1)
+        return run, run
+
+    _, runs = jax.lax.scan(still, jnp.int32(0), (progressed, active))
+    no_progress_max = jnp.max(runs) * dt_s
+
+    # Body-edge clearance and near misses; personal-space entries by who closed in.
+    gap = dist_masked - radius
+    clearance_min = jnp.min(gap)
+
+    def near(carry, xs):
+        inside, touched = carry
+        g, p = xs
+        now = p & (g < NEAR_MISS_M)
+        ended = inside & ~now
+        missed = jnp.sum(ended & ~touched)
+        touched = jnp.where(now, (touched & inside) | (g < 0.0), False)
+        return (now, touched), missed
+
+    none = jnp.zeros(dist.shape[1], bool)
+    (inside, touched), missed = jax.lax.scan(near, (none, none), (jnp.where(seen, gap, jnp.inf), seen))
+    near_misses = jnp.sum(missed) + jnp.sum(inside & ~touched)  # an encounter still open at the end
+    entered_by_robot = entered & (robot_closing >= person_closing)
+
+    # Group-space entries.
+    entered_group = in_group & ~jnp.concatenate([jnp.zeros(1, bool), in_group[:-1]]) & active
+
     return {
         "goal_success": success,
+        "deadlock": deadlock,
+        "timeout": ~success & ~deadlock,
+        "no_progress_max_s": no_progress_max,
+        "speed_mean_mps": mean_active(robot_speed),
+        "turn_rate_mean_rps": mean_active(jnp.abs(yaw_rate)),
+        "accel_mean_mps2": mean_active(jnp.abs(accel)),
+        "jerk_mean_mps3": mean_active(jnp.abs(jerk)),
+        "path_irregularity_rad_per_m": irregularity,
+        "path_length_ratio": length_ratio,
+        "clearance_min_m": clearance_min,
+        "near_misses": near_misses,
+        "intrusions_robot": jnp.sum(entered_by_robot),
+        "intrusions_person": jnp.sum(entered & ~entered_by_robot),
+        "group_intrusions": jnp.sum(entered_group),
         "social_success": success & rule_ok,
         "collisions": jnp.sum(by_robot) + jnp.sum(by_person),
         "collisions_robot": jnp.sum(by_robot),
@@ -154,6 +261,37 @@ def episode_metrics(
         "intrusions": intrusions,
         "ttc_min_s": jnp.min(ttc),
         "group_share": group_share,
+    }
+
+
+def people_effect(people_xy, present, people_xy_without, present_without, dt_s: float, moving_mps: float = 0.05):
+    """The robot's effect on the people of one episode, against the same variant without the
+    robot (the module's docstring says how that run is made).
+
+    Args:
+      people_xy (T, P, 2), present (T, P): with the robot; people_xy_without, present_without:
+        the counterfactual run. Steps where a person is absent from either count for neither.
+      moving_mps: a person whose mean speed without the robot is below this is standing (their
+        speed drop is not averaged in).
+
+    Returns: ``people_speed_drop_mps``, ``people_deviation_m``, ``people_deviation_max_m`` (()
+    each; 0 with nobody present).
+    """
+    both = present & present_without  # (T, P)
+    step = both[1:] & both[:-1]
+    speed = jnp.linalg.norm(jnp.diff(people_xy, axis=0), axis=-1) / dt_s
+    speed_without = jnp.linalg.norm(jnp.diff(people_xy_without, axis=0), axis=-1) / dt_s
+    count = jnp.maximum(jnp.sum(step, axis=0), 1)
+    mean_with = jnp.sum(jnp.where(step, speed, 0.0), axis=0) / count  # (P,)
+    mean_without = jnp.sum(jnp.where(step, speed_without, 0.0), axis=0) / count
+    mover = (jnp.sum(step, axis=0) > 0) & (mean_without >= moving_mps)
+    drop = jnp.sum(jnp.where(mover, mean_without - mean_with, 0.0)) / jnp.maximum(jnp.sum(mover), 1)
+    apart = jnp.where(both, jnp.linalg.norm(people_xy - people_xy_without, axis=-1), 0.0)
+    deviation = jnp.sum(apart) / jnp.maximum(jnp.sum(both), 1)
+    return {
+        "people_speed_drop_mps": drop,
+        "people_deviation_m": deviation,
+        "people_deviation_max_m": jnp.max(apart),
     }
 
 

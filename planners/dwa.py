@@ -3,19 +3,26 @@ moving obstacles.
 
 Each control step samples (v, omega) on a grid over the *dynamic window*, the velocities the base
 can reach within one step from its current ones (its acceleration limits) inside its speed and
-turn-rate limits; rolls each out as a constant-command arc over ``horizon_s``; drops the arcs on
-which the body touches a wall or a seen person (the people moved at their estimated velocities:
+turn-rate limits; rolls each out as a constant command over ``horizon_steps`` control steps,
+integrated as the base integrates (:func:`arcs`); drops the arcs on which the body comes closer
+than ``margin_m`` to a wall or a seen person (the people moved on at their estimated velocities:
 Fox's static obstacles made moving, as social-jym's DWA and Nav2's DWB with a people layer take
-them); and takes the best of the rest by Fox's objective::
+them); and takes the best of the rest by Fox's objective plus one term::
 
-    G(v, omega) = heading_weight * heading + clearance_weight * clearance + velocity_weight * velocity
+    G(v, omega) = heading_weight * heading + clearance_weight * clearance
+                  + velocity_weight * velocity + distance_weight * distance
 
-``heading`` = 1 - |angle from the heading one step ahead to the carrot| / pi (Fox's: at the
-pose after the next control interval); ``clearance`` = the
-arc's smallest body-to-obstacle gap, capped at ``clearance_cap_m`` and divided by it;
-``velocity`` = v / v_max. Fox et al. weigh heading most (alpha = 2, beta = gamma = 0.2 in the
-paper's experiments), the defaults here. Where no arc is free the base brakes as hard as it can
-and turns towards the carrot (Nav2's rotate-in-place recovery, in one step).
+``heading`` = 1 - |angle from the heading one step ahead to the carrot| / pi (Fox's: at the pose
+after the next control interval; at the arc's end a slow arc that would pass the goal scores
+worse than standing still, and the base stalls short of it); ``clearance`` = the arc's smallest
+body-to-obstacle gap, capped at ``clearance_cap_m`` and divided by it; ``velocity`` = v / v_max;
+``distance`` = 1 - (the arc end's distance to the carrot, capped at v_max x the horizon) / that
+cap, Nav2 DWB's GoalDist critic. Fox et al. weigh heading most (alpha = 2, beta = gamma = 0.2 in
+the paper's experiments), the defaults here. The distance term (weight 1) is ours: with Fox's
+three alone, a base limited to 1 rad/s that reaches the goal's side at full speed circles it
+(measured: 1 of 8 empty ``snape_walking`` variants looped the flat and timed out), as the heading
+term never asks it to slow down and turn tighter. Where no arc is free the base brakes as hard
+as it can and turns towards the carrot (Nav2's rotate-in-place recovery, in one step).
 """
 
 from __future__ import annotations
@@ -31,18 +38,21 @@ from planners.scene import wrap_angle
 
 @struct.dataclass
 class DWAParams:
-    """Sampling (static ints): v_samples 7, omega_samples 15, horizon_steps 10. Dynamic floats:
-    horizon_s 2.0 (the arcs' length in time; Nav2 DWB's sim_time is 1.7 s), heading_weight 2.0,
-    clearance_weight 0.2, velocity_weight 0.2 (Fox et al.), clearance_cap_m 1.0."""
+    """Sampling (static ints): v_samples 7, omega_samples 15, horizon_steps 20 (control steps:
+    2 s at 0.1 s; Nav2 DWB's sim_time is 1.7 s). Dynamic floats: heading_weight 2.0,
+    clearance_weight 0.2, velocity_weight 0.2 (Fox et al.), distance_weight 1.0 (ours, see the
+    module), clearance_cap_m 1.0, margin_m 0.02 (an arc is free while its gap stays above this, or
+    above the gap now where that is smaller: the arcs are exact, the base's step is Euler)."""
 
-    horizon_s: float = 2.0
     heading_weight: float = 2.0
     clearance_weight: float = 0.2
     velocity_weight: float = 0.2
+    distance_weight: float = 1.0
     clearance_cap_m: float = 1.0
+    margin_m: float = 0.02
     v_samples: int = struct.field(pytree_node=False, default=7)
     omega_samples: int = struct.field(pytree_node=False, default=15)
-    horizon_steps: int = struct.field(pytree_node=False, default=10)
+    horizon_steps: int = struct.field(pytree_node=False, default=20)
 
 
 def window(p: DWAParams, ctx: reactive.ReactiveParams, speed, turn_rate, dt_s: float):
@@ -58,39 +68,53 @@ def window(p: DWAParams, ctx: reactive.ReactiveParams, speed, turn_rate, dt_s: f
     return vv.reshape(-1), ww.reshape(-1)
 
 
-def arcs(xy, yaw, v, w, horizon_s, steps: int):
-    """Poses along constant-command arcs: (xy (S, K, 2), yaw (S, K)) at times horizon_s * k / K,
-    k = 1..K, by exact unicycle integration (straight where omega is ~0)."""
-    t = horizon_s * jnp.arange(1, steps + 1, dtype=jnp.float32) / steps  # (K,)
-    yaw_t = yaw + w[:, None] * t[None]
-    turning = jnp.abs(w) > 1e-4
-    safe_w = jnp.where(turning, w, 1.0)[:, None]
-    radius = v[:, None] / safe_w
-    dx = jnp.where(turning[:, None], radius * (jnp.sin(yaw_t) - jnp.sin(yaw)), v[:, None] * t * jnp.cos(yaw))
-    dy = jnp.where(turning[:, None], -radius * (jnp.cos(yaw_t) - jnp.cos(yaw)), v[:, None] * t * jnp.sin(yaw))
-    return xy + jnp.stack([dx, dy], axis=-1), yaw_t
+def arcs(xy, yaw, v, w, dt_s: float, steps: int):
+    """Poses along constant-command arcs as the base integrates them (the heading turned first,
+    then the move along it: :func:`jaxsim.scenes.robot.step_robot`): (xy (S, K, 2), yaw (S, K))
+    after each of K steps of ``dt_s``. Predicting with the base's own integrator, not the exact arc, keeps a
+    grazing arc's prediction and the base's move the same to float rounding (the exact arc drifts
+    a few millimetres per second from the Euler step, enough to touch a door's corner)."""
+    k = jnp.arange(1, steps + 1, dtype=jnp.float32)
+    yaw_t = yaw + w[:, None] * dt_s * k[None]  # (S, K)
+    step = v[:, None, None] * dt_s * jnp.stack([jnp.cos(yaw_t), jnp.sin(yaw_t)], axis=-1)
+    return xy + jnp.cumsum(step, axis=1), yaw_t
 
 
 def scores(p: DWAParams, ctx: reactive.ReactiveParams, obs: Observation, carrot_xy, v, w, dt_s: float):
     """(objective (S,), free (S,) bool, heading (S,)) of the sampled commands."""
     k = p.horizon_steps
-    xy, yaw = arcs(obs.robot_xy_m, obs.robot_yaw_rad, v, w, p.horizon_s, k)
-    t = p.horizon_s * jnp.arange(1, k + 1, dtype=jnp.float32) / k
-    to_walls = wall_distance(xy, ctx.guide.map.walls_m)[0] - ctx.robot.radius_m  # (S, K)
-    people = obs.people_xy_m[None] + t[:, None, None] * obs.people_velocity_mps[None]  # (K, P, 2)
-    d = jnp.linalg.norm(xy[:, :, None, :] - people[None], axis=-1) - ctx.robot.radius_m - ctx.guide.person_radius_m
-    to_people = jnp.min(jnp.where(obs.people_visible[None, None], d, jnp.inf), axis=-1)  # (S, K)
-    gap = jnp.min(jnp.minimum(to_walls, to_people), axis=-1)  # (S,)
+    xy, yaw = arcs(obs.robot_xy_m, obs.robot_yaw_rad, v, w, dt_s, k)
+    t = dt_s * jnp.arange(1, k + 1, dtype=jnp.float32)
+    gap = _gap(ctx, obs, xy, t)
+    gap_now = _gap(ctx, obs, obs.robot_xy_m[None, None], jnp.zeros(1, jnp.float32))[0]
+    free = gap > jnp.minimum(p.margin_m, gap_now) - 1e-4
     # Fox et al.'s heading: at the pose one control step ahead (at the arc's end a slow arc that
     # would pass the goal scores worse than standing still, and the base stalls short of it).
-    xy_next, yaw_next = arcs(obs.robot_xy_m, obs.robot_yaw_rad, v, w, dt_s, 1)
-    to_carrot = carrot_xy - xy_next[:, 0]
-    error = wrap_angle(jnp.arctan2(to_carrot[:, 1], to_carrot[:, 0]) - yaw_next[:, 0])
+    to_carrot = carrot_xy - xy[:, 0]
+    error = wrap_angle(jnp.arctan2(to_carrot[:, 1], to_carrot[:, 0]) - yaw[:, 0])
     heading = 1.0 - jnp.abs(error) / jnp.pi
     clearance = jnp.clip(gap, 0.0, p.clearance_cap_m) / p.clearance_cap_m
     velocity = v / jnp.maximum(ctx.robot.max_speed_mps, 1e-6)
-    objective = p.heading_weight * heading + p.clearance_weight * clearance + p.velocity_weight * velocity
-    return objective, gap > -1e-3, heading  # a base slid along a wall stands at its radius exactly
+    reach = jnp.maximum(ctx.robot.max_speed_mps * k * dt_s, 1e-6)
+    distance = 1.0 - jnp.minimum(jnp.linalg.norm(carrot_xy - xy[:, -1], axis=-1), reach) / reach
+    objective = (
+        p.heading_weight * heading
+        + p.clearance_weight * clearance
+        + p.velocity_weight * velocity
+        + p.distance_weight * distance
+    )
+    return objective, free, heading
+
+
+def _gap(ctx: reactive.ReactiveParams, obs: Observation, points, t):
+    """(S,) the smallest body-to-obstacle gap along each row of ``points`` (S, K, 2) at times ``t``
+    (K,): the walls, and the seen people moved on at their estimated velocities."""
+    to_walls = wall_distance(points, ctx.guide.map.walls_m)[0] - ctx.robot.radius_m  # (S, K)
+    people = obs.people_xy_m[None] + t[:, None, None] * obs.people_velocity_mps[None]  # (K, P, 2)
+    d = jnp.linalg.norm(points[:, :, None, :] - people[None], axis=-1)
+    d = d - ctx.robot.radius_m - ctx.guide.person_radius_m
+    to_people = jnp.min(jnp.where(obs.people_visible[None, None], d, jnp.inf), axis=-1)  # (S, K)
+    return jnp.min(jnp.minimum(to_walls, to_people), axis=-1)
 
 
 def command(p: DWAParams, ctx: reactive.ReactiveParams, obs: Observation, carrot_xy, dt_s: float):

@@ -466,6 +466,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     statistics = arena_stats.scene_statistics(pd.concat(frames, ignore_index=True))
     write_atomic(out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
     written = ["summary.csv", "stats.csv"]
+    if len(summary):
+        from evaluation import arena_plots
+
+        arena_plots.methods_figure(summary, runfolder.inside(out, out / "pictures" / "methods.png"))
+        written.append("pictures/methods.png")
     compared = papers.comparison(summary).dropna(subset=["ours"])
     if len(compared):
         write_atomic(out / "papers.csv", lambda tmp: compared.to_csv(tmp, index=False))

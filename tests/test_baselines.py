@@ -150,15 +150,21 @@ def test_dwa_window_stays_within_the_limits_and_one_step_of_acceleration(head_on
     assert float(w.max()) <= r.max_turn_rate_rps + 1e-6 and float(w.min()) >= 0.95 - r.max_turn_accel_rps2 * 0.1 - 1e-6
 
 
-def test_dwa_arcs_are_exact_unicycle_motion():
-    xy, yaw = jnp.array([1.0, 2.0]), jnp.float32(0.3)
+def test_dwa_arcs_are_the_bases_own_steps(head_on):
+    """An arc's predicted poses are where the base (:func:`jaxsim.scenes.robot.step_robot`) goes
+    under the same constant command in open space, once it runs at that command."""
+    from jaxsim.scenes import robot as robot_lib
+
+    limits = RobotParams()
     v, w = jnp.array([0.5, 0.4]), jnp.array([0.0, 0.8])
-    pts, yaws = dwa.arcs(xy, yaw, v, w, 2.0, 4)
-    np.testing.assert_allclose(np.asarray(pts[0, -1]), [1.0 + np.cos(0.3), 2.0 + np.sin(0.3)], atol=1e-5)
-    radius = 0.4 / 0.8  # v / omega: the turning arc's centre stays put
-    centre = np.array([1.0 - radius * np.sin(0.3), 2.0 + radius * np.cos(0.3)])
-    np.testing.assert_allclose(np.linalg.norm(np.asarray(pts[1]) - centre, axis=-1), radius, atol=1e-5)
-    np.testing.assert_allclose(np.asarray(yaws[1, -1]), 0.3 + 1.6, atol=1e-6)
+    pts, yaws = dwa.arcs(jnp.array([1.0, 2.0]), jnp.float32(0.3), v, w, 0.1, 15)
+    for s in range(2):
+        state = robot_lib.init_robot(jnp.array([1.0, 2.0]), 0.3).replace(speed=v[s], turn_rate=w[s])
+        for k in range(15):
+            state = robot_lib.step_robot(limits, head_on.env.world, state, v[s], w[s], 0.1)
+            np.testing.assert_allclose(np.asarray(pts[s, k]), np.asarray(state.xy), atol=1e-5)
+            np.testing.assert_allclose(float(yaws[s, k]), float(state.yaw), atol=1e-5)
+    np.testing.assert_allclose(np.asarray(pts[0, -1]), [1.0 + 0.75 * np.cos(0.3), 2.0 + 0.75 * np.sin(0.3)], atol=1e-5)
 
 
 def test_dwa_brakes_when_every_arc_meets_a_person(head_on):
