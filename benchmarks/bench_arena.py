@@ -1,6 +1,7 @@
 """The social-navigation benchmark's speed on this machine: every scene x every method x N variants.
 
-    python benchmarks/bench_arena.py                     # 14 scenes x 8 methods x 100 variants
+    python benchmarks/bench_arena.py                     # 14 scenes x 10 methods x 100 variants
+    python benchmarks/bench_arena.py --held-out          # and every scene's held-out row
     python benchmarks/bench_arena.py --variants 20 --gscl-run runs/gscl
 
 Prints the whole run's wall time (compilation included, as a user meets it), episodes per second
@@ -27,9 +28,9 @@ from evaluation import arena, arena_report  # noqa: E402
 from jaxsim.scenes.spec import load_scene  # noqa: E402
 from jaxsim.scenes.variant import sample_variants  # noqa: E402
 from planners import costmap  # noqa: E402
+from planners.baselines import BASELINES  # noqa: E402
 from planners.stack import METHODS, global_plan  # noqa: E402
-
-DEFAULT = ("navfn", "snl_small", "snl_large", "snl_matched", "casn", "snape_eband", "snape_social_eband")
+from socialnav.arena import DEFAULT_METHODS  # noqa: E402
 
 
 def profile_scene(name: str, variants: int, methods) -> None:
@@ -39,7 +40,10 @@ def profile_scene(name: str, variants: int, methods) -> None:
     batch = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 0, variants))
     print(f"profile: {name}, {variants} variants, {setup.n_periods * 10} steps of 0.1 s, grid {setup.grid.shape}")
     for m in methods:
-        run = arena.episode_function(setup, METHODS[m], crowd)
+        if m in BASELINES:
+            run = arena.baseline_function(setup, m, crowd)
+        else:
+            run = arena.episode_function(setup, METHODS[m], crowd)
         t0 = time.perf_counter()
         jax.block_until_ready(run(batch))
         first = time.perf_counter() - t0
@@ -72,9 +76,10 @@ def main() -> None:
     parser.add_argument("--variants", type=int, default=100)
     parser.add_argument("--gscl-run", type=pathlib.Path, default=None)
     parser.add_argument("--profile-only", action="store_true")
+    parser.add_argument("--held-out", action="store_true", help="also every scene's held-out row")
     args = parser.parse_args()
     print(f"machine: {machine()}")
-    methods = list(DEFAULT)
+    methods = list(DEFAULT_METHODS)
     predict = None
     if args.gscl_run is not None:
         from models.inference import SocialCostModel
@@ -85,17 +90,19 @@ def main() -> None:
         specs = [load_scene(f) for f in sorted((DATA_DIR / "scenes").glob("*.json"))]
         t0 = time.perf_counter()
         episodes, simulated = 0, 0.0
+        rows = [False, True] if args.held_out else [False]
         for spec in specs:
-            frame, _ = arena_report.run_scene(spec, methods, args.variants, gscl_predict=predict)
-            episodes += len(frame)
-            setup_s = spec.timeout_s
-            simulated += len(frame) * setup_s
+            for held_out in rows:
+                frame, _ = arena_report.run_scene(spec, methods, args.variants, gscl_predict=predict, held_out=held_out)
+                episodes += len(frame)
+                simulated += len(frame) * spec.timeout_s
         wall = time.perf_counter() - t0
+        scenes = len(specs) * len(rows)
         print(
-            f"benchmark: {len(specs)} scenes x {len(methods)} methods x {args.variants} variants = {episodes} episodes "
+            f"benchmark: {scenes} scene rows x {len(methods)} methods x {args.variants} variants = {episodes} episodes "
             f"in {wall / 60:.1f} min: {episodes / wall:.1f} episodes/s, {simulated / wall:.0f} simulated s per wall s"
         )
-    profile_scene("gscl_group", args.variants, ["navfn", "casn", "snape_social_eband"])
+    profile_scene("gscl_group", args.variants, ["navfn", "casn", "snape_social_eband", *BASELINES])
 
 
 if __name__ == "__main__":

@@ -31,14 +31,15 @@ import jax.numpy as jnp
 from flax import struct
 
 from jaxsim.scenes.env import Observation
-from jaxsim.scenes.world import wall_distance
 from planners import reactive
 from planners.scene import wrap_angle
 
 
 @struct.dataclass
 class DWAParams:
-    """Sampling (static ints): v_samples 7, omega_samples 15, horizon_steps 20 (control steps:
+    """Sampling (static ints): v_samples 3 (one control step of the base's 0.5 m/s^2 spans 0.1 m/s:
+    its two ends and middle; 7 cost twice the time for the same runs), omega_samples 15,
+    horizon_steps 20 (control steps:
     2 s at 0.1 s; Nav2 DWB's sim_time is 1.7 s). Dynamic floats: heading_weight 2.0,
     clearance_weight 0.2, velocity_weight 0.2 (Fox et al.), distance_weight 1.0 (ours, see the
     module), clearance_cap_m 1.0, margin_m 0.02 (an arc is free while its gap stays above this, or
@@ -50,7 +51,7 @@ class DWAParams:
     distance_weight: float = 1.0
     clearance_cap_m: float = 1.0
     margin_m: float = 0.02
-    v_samples: int = struct.field(pytree_node=False, default=7)
+    v_samples: int = struct.field(pytree_node=False, default=3)
     omega_samples: int = struct.field(pytree_node=False, default=15)
     horizon_steps: int = struct.field(pytree_node=False, default=20)
 
@@ -106,10 +107,23 @@ def scores(p: DWAParams, ctx: reactive.ReactiveParams, obs: Observation, carrot_
     return objective, free, heading
 
 
+def wall_gap(points, walls_m):
+    """(...,) the signed distance from points (..., 2) to the nearest wall box (K, 4): the value of
+    :func:`jaxsim.scenes.world.wall_distance` without its normal (tested equal), at a third of
+    its cost in the arcs' inner loop."""
+    centre_x = (walls_m[:, 0] + walls_m[:, 1]) / 2
+    centre_y = (walls_m[:, 2] + walls_m[:, 3]) / 2
+    qx = jnp.abs(points[..., 0, None] - centre_x) - (walls_m[:, 1] - walls_m[:, 0]) / 2
+    qy = jnp.abs(points[..., 1, None] - centre_y) - (walls_m[:, 3] - walls_m[:, 2]) / 2
+    outside = jnp.sqrt(jnp.maximum(qx, 0.0) ** 2 + jnp.maximum(qy, 0.0) ** 2)
+    inside = jnp.minimum(jnp.maximum(qx, qy), 0.0)
+    return jnp.min(outside + inside, axis=-1)
+
+
 def _gap(ctx: reactive.ReactiveParams, obs: Observation, points, t):
     """(S,) the smallest body-to-obstacle gap along each row of ``points`` (S, K, 2) at times ``t``
     (K,): the walls, and the seen people moved on at their estimated velocities."""
-    to_walls = wall_distance(points, ctx.guide.map.walls_m)[0] - ctx.robot.radius_m  # (S, K)
+    to_walls = wall_gap(points, ctx.guide.map.walls_m) - ctx.robot.radius_m  # (S, K)
     people = obs.people_xy_m[None] + t[:, None, None] * obs.people_velocity_mps[None]  # (K, P, 2)
     d = jnp.linalg.norm(points[:, :, None, :] - people[None], axis=-1)
     d = d - ctx.robot.radius_m - ctx.guide.person_radius_m
