@@ -58,13 +58,14 @@ Safety apart from centres:
   the arena beside these.
 
 The robot's effect on the people (counterfactual, :func:`people_effect`): each variant is run a
-second time with every person ignoring the robot (``Variant.ignore_robot``), everything else
-equal: the same draws, the same random force stream (common random numbers), so the second run is
-the crowd as it would have moved without the robot. ``people_speed_drop_mps``: the people's mean
-speed without the robot minus with it (mean over the people who move); ``people_deviation_m``:
-the mean over people and time of the distance between their two positions;
-``people_deviation_max_m``: its largest value. They vanish (to float rounding and the social
-force's exponential tail) where the robot never comes near anyone.
+second time with the robot standing far away (:func:`evaluation.arena.without_robot`: its force
+exactly 0), everything else equal: the same draws, the same random force stream (common random
+numbers), so the second run is the crowd as it would have moved without the robot.
+``people_speed_drop_mps``: the people's mean speed without the robot minus with it (mean over the
+people who move; negative where detours make them walk faster); ``people_deviation_m``: the mean
+over people and time of the distance between their two positions; ``people_deviation_max_m``: its
+largest value. Exactly 0 where the people ignore the robot; nearly 0 where it never comes near
+anyone (the social force's exponential tail).
 """
 
 from __future__ import annotations

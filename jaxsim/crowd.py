@@ -74,13 +74,19 @@ def step_crowd(
     ys = jnp.concatenate([y, ry[None]])
     vxs = jnp.concatenate([vx, rvx[None]])
     vys = jnp.concatenate([vy, rvy[None]])
-    weight = jnp.concatenate([present.astype(x.dtype), jnp.full((1,), params.worker_robot_force_factor, x.dtype)])
-    sx, sy = sf.social_force(params, xs, ys, vxs, vys, weight)
-    sx, sy = sx[:-1], sy[:-1]
-    if ignores_robot is not None:  # take the robot's term out for those who do not feel it
+    if ignores_robot is None:  # everyone feels the robot: one agent more in the all-pairs sum
+        weight = jnp.concatenate([present.astype(x.dtype), jnp.full((1,), params.worker_robot_force_factor, x.dtype)])
+        sx, sy = sf.social_force(params, xs, ys, vxs, vys, weight)
+        sx, sy = sx[:-1], sy[:-1]
+    else:  # the people's sum without the robot, its term added for those who feel it: someone who
+        # ignores the robot gets exactly the sum of a world without it (a subtraction left a 1e-7 m
+        # rounding that a crowd's dynamics grew; the arena's counterfactual runs rely on this)
+        weight = jnp.concatenate([present.astype(x.dtype), jnp.zeros((1,), x.dtype)])
+        sx, sy = sf.social_force(params, xs, ys, vxs, vys, weight)
         fx, fy = sf.pair_force(params, rx - x, ry - y, vx - rvx, vy - rvy)
-        scale = ignores_robot.astype(x.dtype) * params.worker_robot_force_factor * params.worker_social_force_factor
-        sx, sy = sx - scale * fx, sy - scale * fy
+        feels = (~ignores_robot).astype(x.dtype)
+        scale = feels * params.worker_robot_force_factor * params.worker_social_force_factor
+        sx, sy = sx[:-1] + scale * fx, sy[:-1] + scale * fy
     ax, ay = ax + sx, ay + sy
 
     field = wall_field.lookup(x, y)

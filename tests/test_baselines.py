@@ -233,4 +233,7 @@ def test_the_baselines_are_methods_of_the_arena_command(tmp_path):
 
     summary = pd.read_csv(out / "summary.csv")
     assert set(summary["method"]) == {"orca", "social_force", "dwa"}
-    assert (summary["goal_success_pct"] >= 0).all()
+    for column in ("near_misses", "deadlock_pct", "people_deviation_m", "jerk_mean_mps3", "path_length_ratio"):
+        assert summary[column].notna().all(), column
+    assert (summary["path_length_ratio"] >= 0.99).all()
+    assert (out / "pictures" / "methods.png").stat().st_size > 10_000  # the composite view

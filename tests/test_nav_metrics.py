@@ -195,3 +195,17 @@ def test_the_counterfactual_is_nil_far_from_the_robot_and_positive_in_its_way():
     hit, _ = effect(near)
     assert hit["people_deviation_max_m"] > 0.3  # at least around the robot's body
     assert hit["people_deviation_m"] > 0.01
+
+
+def test_the_counterfactual_equals_a_run_whose_people_ignore_the_robot_bit_for_bit():
+    """casn_head_on's walker ignores the robot: the run with any robot and the counterfactual (the
+    robot far away) move them by the same arithmetic, so their tracks agree to the bit and every
+    effect is exactly 0 (the old counterfactual by ``ignore_robot`` differed by rounding, which a
+    crowd's dynamics grew to centimetres)."""
+    setup = arena.setup_scene(load_scene(SCENES_DIR / "casn_head_on.json"))
+    variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(setup.spec, 0, 4, 0, False, setup.n_slots))
+    assert bool(np.asarray(variants.ignore_robot)[:, 0].all())
+    tr = arena.baseline_function(setup, "orca", arena.crowd_params())(variants)
+    wo = arena.counterfactual_function(setup)(variants)
+    np.testing.assert_array_equal(np.asarray(tr.people_xy), np.asarray(wo.people_xy))
+    assert np.abs(np.asarray(wo.robot_xy) - arena.FAR_AWAY_M).max() < 1.0  # it stood far away
