@@ -6,8 +6,8 @@ the people's social force, the robot's base, its perception) stepped by an actor
 built-in methods are actors made from their stacks (:func:`planners.actors.stack_actor`: the
 social layer and global planner at 1 Hz, the local planner at 10 Hz); a user's own actor runs
 the same way (:func:`actor_function`). The physics knows nothing of stacks or metrics.
-:func:`episode_function` vmaps episodes over a scene's variants; the methods are a Python loop
-(each is another program).
+:func:`episode_function` vmaps episodes over a scene's variants; the methods are separate
+programs, run at the same time on the host devices, one per core (:func:`run_spread`).
 
 Compilation is shared across scenes: a scene's arrays (occupancy, walls, wall field, objects) are
 arguments of the episode program, not constants in it, and are padded to sizes that depend on the
@@ -25,7 +25,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 
 import jax
 import jax.numpy as jnp
@@ -228,7 +229,13 @@ def _episode_program(actor: Actor):
         # episodes dropped): XLA vectorises a vmap differently at different sizes, and unpadded a
         # variant's people drifted by float rounding between batches of 1, 4 and 8 (a one-element
         # vmap is even compiled as the unbatched program). Padded, a variant has the same bits
-        # alone and in batches of 1-100 (tested; measured on AVX2).
+        # alone and in batches of 1-100 for the go-to-goal actor, NavFn and DWA (tested; measured
+        # on AVX2), but not for every method: ORCA, SNL and SNAPE's bands differ by rounding
+        # between batches of 104 and 56 lanes, which the closed loop grows (casn_head_on, 100
+        # variants: SNL matched in 3 of them by up to 0.25 m, the social band in 99 by up to
+        # 4 cm). Every episode in a lax.map of 8-lane chunks gives the same bits for every
+        # method in any batch, but costs 28-90 % more time (gscl_group, 100 variants; the band
+        # alone no dearer), so it is not done.
         n = jax.tree_util.tree_leaves(variants)[0].shape[0]
         padded = -(-n // LANES) * LANES
         grown = jax.tree_util.tree_map(lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], padded - n, 0)]), variants)
@@ -236,6 +243,47 @@ def _episode_program(actor: Actor):
         return jax.tree_util.tree_map(lambda a: a[:n], out)
 
     return jax.jit(batch)
+
+
+def _call_on(function: Callable, variants: Variant, device, home):
+    """``function(variants)`` run on ``device`` (``None``: the default one, inputs left
+    uncommitted), waited for and moved to ``home``."""
+    if device is not None:
+        variants = jax.device_put(variants, device)
+    out = jax.block_until_ready(function(variants))
+    return out if device is None else jax.device_put(out, home)
+
+
+def run_spread(functions: list[Callable], variants: Variant, n_devices: int | None = None) -> Iterator:
+    """``function(variants)`` for each of ``functions`` (``variants -> Trajectory``, as
+    :func:`actor_function` gives), yielded in order, the functions spread over ``n_devices`` host
+    devices (default: every local one; ``socialnav`` asks XLA for one per core,
+    :func:`socialnav.runtime.request_host_devices`) that run at the same time, one thread each.
+
+    Function ``i`` always runs on device ``i % n_devices``, so a method keeps its device (and its
+    compiled program) from scene to scene. An episode program runs mostly on one core; two
+    methods on two cores, one compiling while the other runs, took the full table (28,000
+    episodes, 2 cores) from 14.4 to 12.6 min, the same episodes bit for bit. A program gives
+    the same bits on every device (the same compiled code; tested). Every result is on the first
+    device. With one device the functions run one after the other in the calling thread."""
+    devices = jax.local_devices()[: max(1, n_devices or jax.local_device_count())]
+    if len(devices) == 1:
+        for function in functions:
+            yield function(variants)
+        return
+    pools = [ThreadPoolExecutor(1, thread_name_prefix=f"arena-device-{d.id}") for d in devices]
+    try:
+        futures = [
+            pools[i % len(devices)].submit(
+                _call_on, function, variants, None if i % len(devices) == 0 else devices[i % len(devices)], devices[0]
+            )
+            for i, function in enumerate(functions)
+        ]
+        for future in futures:
+            yield future.result()
+    finally:
+        for pool in pools:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 @functools.lru_cache(maxsize=64)

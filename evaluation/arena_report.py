@@ -173,6 +173,7 @@ def run_scene(
     user_actors: dict[str, Callable] | None = None,
     params: ArenaParams | None = None,
     gscl_weights=None,
+    n_devices: int | None = None,
 ):
     """Every method on variants ``first .. first + n_variants - 1`` of one scene:
     ``(episodes frame, trajectories frame or None)``. ``held_out``: the scene mirrored
@@ -182,7 +183,8 @@ def run_scene(
     ``params``: the robot's limits and the layers' parameters (:mod:`evaluation.arena_params`;
     default: the seeds' values). ``gscl_weights``: with it, ``gscl_predict`` is ``(weights, maps)
     -> costs`` and the weights are traced (another checkpoint of the same network reuses the
-    compiled program); without it, ``maps -> costs``."""
+    compiled program); without it, ``maps -> costs``. ``n_devices``: host devices the methods run
+    on at the same time (:func:`evaluation.arena.run_spread`; default: every local one)."""
     name = spec.name + (HELD_OUT if held_out else "")
     if held_out:
         spec = mirror(spec)
@@ -196,26 +198,30 @@ def run_scene(
     measure = metrics_function(setup, config, float(robot.radius_m))
     episodes, trajectories = [], []
     user_actors = user_actors or {}
-    without = arena.counterfactual_function(setup, crowd)(variants)  # the people without the robot
+    runs = [arena.counterfactual_function(setup, crowd)]  # the people without the robot
     for method in methods:
         if method in user_actors:
             env = setup.env.replace(crowd=crowd, robot=robot)
             actor, actor_params = user_actor(user_actors[method], env)
-            run = arena.actor_function(setup, actor, actor_params, env)
+            runs.append(arena.actor_function(setup, actor, actor_params, env))
         elif method in BASELINES:
-            run = arena.baseline_function(setup, method, crowd, robot, config)
+            runs.append(arena.baseline_function(setup, method, crowd, robot, config))
         else:
-            run = arena.episode_function(
-                setup,
-                METHODS[method],
-                crowd,
-                robot,
-                config,
-                gscl_predict,
-                gscl_weights=gscl_weights,
-                layers=params.layers_for(method),
+            runs.append(
+                arena.episode_function(
+                    setup,
+                    METHODS[method],
+                    crowd,
+                    robot,
+                    config,
+                    gscl_predict,
+                    gscl_weights=gscl_weights,
+                    layers=params.layers_for(method),
+                )
             )
-        tr = run(variants)
+    results = arena.run_spread(runs, variants, n_devices)
+    without = next(results)
+    for method, tr in zip(methods, results):
         episodes.append(episode_frame(name, method, first, measure(tr, variants, without), tr.wall_contacts))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)
         if kept is not None:

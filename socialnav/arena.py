@@ -162,8 +162,9 @@ RESULTS = (
     "shards",
 )
 # Rough cost of one episode for the estimate printed before a run (this project's 2-core
-# machine, the default 100-variant table: 22,400 episodes in about 12 min, README "The arena").
-EPISODES_PER_S = 30.0
+# machine, the default table with --held-out, 100 variants: 28,000 episodes in 12.6 min with the
+# methods on both cores, compilation included; README "The arena").
+EPISODES_PER_S = 37.0
 # Bytes a finished episode's row costs in the joined tables: 146 measured in memory
 # (``memory_usage(deep=True)``, 26 columns, 80 episodes of casn_head_on and casn_crossing), times
 # about four for the copies the joins, the summary and the statistics make.

@@ -245,6 +245,48 @@ def test_episodes_are_deterministic_and_the_same_variant_for_every_method():
     np.testing.assert_array_equal(a.people_xy[:, 0], other.people_xy[:, 0])  # same start for both
 
 
+_SPREAD = """
+import sys; sys.path.insert(0, 'tests')
+import jax, numpy as np
+from data import DATA_DIR
+from evaluation import arena_report
+from jaxsim.scenes.spec import load_scene
+spec = load_scene(DATA_DIR / 'scenes' / 'casn_head_on.json')
+methods = ['navfn', 'orca', 'snape_social_eband']
+one, _ = arena_report.run_scene(spec, methods, 9, n_devices=1)
+two, _ = arena_report.run_scene(spec, methods, 9, n_devices=2)
+print(jax.local_device_count(), one.equals(two), one.method.tolist() == two.method.tolist(), len(two))
+"""
+
+
+@pytest.mark.slow
+def test_methods_spread_over_two_host_devices_give_the_same_table_as_one_after_the_other():
+    """``arena.run_spread``: with two XLA host devices the counterfactual and each method run on
+    devices 0, 1, 0, 1 at once; the episodes are the same bits as one after the other on one."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2", SOCIALNAV_JAX_CACHE="off")
+    root = DATA_DIR.parent
+    out = subprocess.run([sys.executable, "-c", _SPREAD], cwd=root, env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["2", "True", "True", "27"]
+
+
+def test_run_spread_yields_in_order_and_raises_a_methods_error():
+    variants = jnp.arange(4.0)
+    ok = list(arena.run_spread([lambda v: v + 1, lambda v: v * 2, lambda v: -v], variants))
+    np.testing.assert_array_equal(ok[1], [0, 2, 4, 6])
+    assert [float(r[3]) for r in ok] == [4.0, 6.0, -3.0]
+
+    def broken(v):
+        raise ValueError("method broke")
+
+    with pytest.raises(ValueError, match="method broke"):
+        list(arena.run_spread([lambda v: v, broken], variants))
+
+
 # ---------------------------------------------------------------- padding and shared programs
 
 
