@@ -246,12 +246,11 @@ def _episode_program(actor: Actor):
 
 
 def _call_on(function: Callable, variants: Variant, device, home):
-    """``function(variants)`` run on ``device`` (``None``: the default one, inputs left
-    uncommitted), waited for and moved to ``home``."""
-    if device is not None:
-        variants = jax.device_put(variants, device)
-    out = jax.block_until_ready(function(variants))
-    return out if device is None else jax.device_put(out, home)
+    """``function(variants)`` run on ``device``, waited for and on ``home``; on ``home`` itself
+    the inputs stay uncommitted (the default device, as a call without threads)."""
+    if device == home:
+        return jax.block_until_ready(function(variants))
+    return jax.device_put(jax.block_until_ready(function(jax.device_put(variants, device))), home)
 
 
 def run_spread(functions: list[Callable], variants: Variant, n_devices: int | None = None) -> Iterator:
@@ -273,12 +272,10 @@ def run_spread(functions: list[Callable], variants: Variant, n_devices: int | No
         return
     pools = [ThreadPoolExecutor(1, thread_name_prefix=f"arena-device-{d.id}") for d in devices]
     try:
-        futures = [
-            pools[i % len(devices)].submit(
-                _call_on, function, variants, None if i % len(devices) == 0 else devices[i % len(devices)], devices[0]
-            )
-            for i, function in enumerate(functions)
-        ]
+        futures = []
+        for i, function in enumerate(functions):
+            k = i % len(devices)
+            futures.append(pools[k].submit(_call_on, function, variants, devices[k], devices[0]))
         for future in futures:
             yield future.result()
     finally:

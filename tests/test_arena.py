@@ -246,8 +246,7 @@ def test_episodes_are_deterministic_and_the_same_variant_for_every_method():
 
 
 _SPREAD = """
-import sys; sys.path.insert(0, 'tests')
-import jax, numpy as np
+import jax
 from data import DATA_DIR
 from evaluation import arena_report
 from jaxsim.scenes.spec import load_scene
