@@ -41,8 +41,8 @@ import numpy as np  # noqa: E402
 
 from common.machine import cpu_model  # noqa: E402
 from jaxsim import native  # noqa: E402
-from jaxsim.robot import RouteFollower  # noqa: E402
 from jaxsim.rollout import init_batch, run_samples, world_keys  # noqa: E402
+from jaxsim.route_follower import route_follower  # noqa: E402
 from jaxsim.scenario import load_scenario  # noqa: E402
 from jaxsim.world import build_world  # noqa: E402
 from planners.routes import shortest_path_plan  # noqa: E402
@@ -61,7 +61,8 @@ def machine() -> str:
 
 def bench_jaxsim(scenario, batches, seconds):
     p = scenario.params
-    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(shortest_path_plan(scenario), world)
     agents = p.n_workers + 1
     every = int(round(1.0 / p.dt_s))
     rows = []

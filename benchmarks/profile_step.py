@@ -36,9 +36,10 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from jaxsim import robot as robot_lib  # noqa: E402
 from jaxsim import rollout, social_force  # noqa: E402
 from jaxsim import workers as workers_lib  # noqa: E402
-from jaxsim.robot import RouteFollower  # noqa: E402
+from jaxsim.route_follower import route_follower  # noqa: E402
 from jaxsim.scenario import load_scenario  # noqa: E402
 from jaxsim.world import build_world  # noqa: E402
 from planners.routes import shortest_path_plan  # noqa: E402
@@ -57,14 +58,14 @@ VARIANTS = {
     "social force -> dense reference": {"sf": social_force.social_force_dense},
     "social force -> JAX version": {"sf": social_force.social_force_xla},
     "worker context -> no-op": {"ctx": lambda params, world, w, *a: w},
-    "robot controller -> no-op": {"robot": lambda self, params, world, robot, *a: robot},
+    "robot update -> no-op": {"robot": lambda params, world, robot, *a: robot},
     "crowd move -> no-op": {"move": lambda params, world, w, *a: w},
 }
 _ORIGINAL = {
     "sf": workers_lib.sf.social_force,
     "ctx": workers_lib.update_context,
     "move": workers_lib.move,
-    "robot": RouteFollower.step,
+    "robot": robot_lib.update_robot,
 }
 
 
@@ -72,12 +73,13 @@ def _install(replace: dict) -> None:
     workers_lib.sf.social_force = replace.get("sf", _ORIGINAL["sf"])
     workers_lib.update_context = replace.get("ctx", _ORIGINAL["ctx"])
     workers_lib.move = replace.get("move", _ORIGINAL["move"])
-    RouteFollower.step = replace.get("robot", _ORIGINAL["robot"])
+    robot_lib.update_robot = replace.get("robot", _ORIGINAL["robot"])
 
 
 def ablation(scenario, batch: int, rounds: int) -> None:
     p = scenario.params
-    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(shortest_path_plan(scenario), world)
     keys = rollout.world_keys(0, batch)
     agents = p.n_workers + 1
     n_dev = rollout.devices_for(batch)
@@ -114,7 +116,8 @@ def ablation(scenario, batch: int, rounds: int) -> None:
 
 def kernels(scenario, top: int) -> None:
     p = scenario.params
-    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(shortest_path_plan(scenario), world)
     keys = rollout.world_keys(0, 64)
     fn = rollout._compiled(1, 10, 64, 1, False)  # one device: one thread's kernels in order
     states = rollout.init_batch(p, world, controller, keys)

@@ -151,7 +151,7 @@ def pick_route_example(result, waypoint_ids):
         return None
     rate = rate.dropna()
     ids = {n: i for i, n in enumerate(waypoint_ids)}
-    base, causal = result.plans["baseline"].plan, result.plans["causal"].plan
+    base, causal = result.plans["baseline"], result.plans["causal"]
     best, best_gap = None, -np.inf
     for (slot, start, goal), row in rate.iterrows():
         i, j = ids[start], ids[goal]
@@ -190,7 +190,7 @@ def route_figure(result, scenario, path) -> pathlib.Path:
     fig.colorbar(sc, ax=ax, shrink=0.6, label="E[D | do(S), W] (people/m²)")
     t = result.tasks[(result.tasks["slot"] == slot) & (result.tasks["start"] == start) & (result.tasks["goal"] == goal)]
     for name, offset in (("baseline", -0.12), ("causal", 0.12)):
-        plan = result.plans[name].plan
+        plan = result.plans[name]
         hops = int(plan.hops[slot, i, j])
         route = [i] + [int(k) for k in np.asarray(plan.routes[slot, i, j])[:hops]]
         share = 100 * (t[t["method"] == name]["outcome"] == "success").mean()

@@ -2,8 +2,11 @@
 
 The physics is the simulator's: every step calls :func:`jaxsim.step.crowd_step` with the draws
 of :func:`jaxsim.rng.step_uniforms`, exactly as the day simulation does, and moves the robot
-with :func:`jaxsim.robot.drive`; this module adds only the protocol (tasks, deadlines, battery
-resets, the Eq. 10 refusal of :func:`planners.waypoint.refuse_task`) and its measurements.
+with :func:`jaxsim.robot.drive` under the command of the method's actor (a
+:class:`jaxsim.actor.Driver`, as the day simulation takes: the route follower of a plan, the
+causal planner of :mod:`planners.warehouse_actors` with its Eq. 10 refusal, or a user's own);
+this module adds only the protocol (tasks, deadlines, battery resets, honouring a refusal) and
+its measurements.
 
 One *experiment* is one time slot played with its context frozen: the workers draw their
 destinations from that slot's probabilities for as long as it takes, and the robot runs the
@@ -24,8 +27,9 @@ route of the method's plan. The protocol's rules:
   threshold at the moment a task succeeds is reset too, and the task counts as a success;
 * a method that may refuse (the causal planner, Eq. 10) checks before each task whether the
   battery left after the route's predicted cost ``C_L`` would fall below the threshold; if so
-  the battery is reset to 100 % "as if the robot had been at the charging station" and the task
-  goes ahead (the refusal is logged);
+  its actor answers the task's first step with ``recharge``, the battery is reset to 100 % "as
+  if the robot had been at the charging station" and the task goes ahead (the refusal is
+  logged);
 * the experiment ends when the last task ends; the workers keep moving until every world of the
   batch is done, the finished robot stands still and is no longer measured.
 
@@ -65,12 +69,13 @@ from evaluation.metrics import collision_encounters
 from evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
 from jaxsim import robot as robot_lib
 from jaxsim import rollout
+from jaxsim.actor import Driver
 from jaxsim.params import SimParams
 from jaxsim.rng import hash_uniform16, step_uniforms, world_seed_u32
 from jaxsim.state import SimState
-from jaxsim.step import crowd_step, init_state
-from jaxsim.world import RobotPlan, World
-from planners.waypoint import MIN_BATTERY_PCT, refuse_task
+from jaxsim.step import actor_key, crowd_step, init_state
+from jaxsim.world import World
+from planners.waypoint import MIN_BATTERY_PCT
 
 # Stream constant that separates the per-task obstacle draws from the per-step ones.
 _OBSTACLE_STREAM = np.uint32(0x5BD1E995)
@@ -129,32 +134,6 @@ class ProtocolConfig:
 
 
 @struct.dataclass
-class Method:
-    """What one method brings to the experiment (replicated over the batch).
-
-    Attributes:
-      plan: its routes per slot.
-      battery_cost_pct: (S, W, W) predicted battery use C_L of each planned route (Eq. 10).
-      may_refuse: () bool, applies the abort decision of Eq. (10).
-    """
-
-    plan: RobotPlan
-    battery_cost_pct: jax.Array
-    may_refuse: jax.Array
-
-
-def make_method(plan: RobotPlan, battery_cost_pct: np.ndarray | None = None, may_refuse: bool = False) -> Method:
-    """A :class:`Method`; without a cost table it never refuses."""
-    if battery_cost_pct is None:
-        battery_cost_pct = np.zeros(plan.hops.shape, np.float32)
-        may_refuse = False
-    cost = jnp.asarray(battery_cost_pct, jnp.float32)
-    if cost.shape != plan.hops.shape:
-        raise ValueError(f"battery cost table shape {cost.shape}, expected {plan.hops.shape}")
-    return Method(plan=plan, battery_cost_pct=cost, may_refuse=jnp.bool_(may_refuse))
-
-
-@struct.dataclass
 class TaskLog:
     """Per-task results of one experiment (T = the longest task list; unused entries NOT_RUN).
 
@@ -186,11 +165,12 @@ class ExperimentState:
     """One experiment: the simulated world plus the protocol's bookkeeping.
 
     Attributes:
-      sim: workers, robot, step counter.
+      sim: workers, robot, the actor's state, step counter.
       slot: () int32 the frozen time slot.
       task: () int32 the current task (== n_tasks when done); n_tasks: () int32.
       leg_open: () bool, the current task's leg has begun.
-      hop_elapsed_s: time since the robot last reached a route waypoint (or began the task).
+      hop_elapsed_s: time since the robot last reached a new aim point short of the goal (a
+        route waypoint), or began the task; hop_x_m, hop_y_m: that point (NaN: none yet).
       leg_stalled_s, leg_battery_used_pct, leg_collisions: accumulators of the current task.
       in_contact: (N,) bool, person in a collision encounter now.
       log: :class:`TaskLog`.
@@ -205,6 +185,8 @@ class ExperimentState:
     n_tasks: jax.Array
     leg_open: jax.Array
     hop_elapsed_s: jax.Array
+    hop_x_m: jax.Array
+    hop_y_m: jax.Array
     leg_stalled_s: jax.Array
     leg_battery_used_pct: jax.Array
     leg_collisions: jax.Array
@@ -219,10 +201,10 @@ class ExperimentState:
 
 
 def init_experiment(
-    params: SimParams, cfg: ProtocolConfig, world: World, method: Method, slot: jax.Array, key: jax.Array
+    params: SimParams, cfg: ProtocolConfig, world: World, driver: Driver, slot: jax.Array, key: jax.Array
 ) -> ExperimentState:
     """An experiment of ``slot`` before its warm-up: workers about to arrive, battery full."""
-    sim = init_state(params, world, robot_lib.RouteFollower(method.plan), jax.random.fold_in(key, rollout.INIT_FOLD))
+    sim = init_state(params, world, driver, jax.random.fold_in(key, rollout.INIT_FOLD))
     w = sim.workers
     w = w.replace(
         arrive_s=w.arrive_s / params.slot_length_s * cfg.arrival_spread_s, depart_s=jnp.full_like(w.depart_s, jnp.inf)
@@ -250,6 +232,8 @@ def init_experiment(
         n_tasks=world.robot_goal_count[slot],
         leg_open=jnp.bool_(False),
         hop_elapsed_s=jnp.float32(0.0),
+        hop_x_m=jnp.float32(jnp.nan),
+        hop_y_m=jnp.float32(jnp.nan),
         leg_stalled_s=jnp.float32(0.0),
         leg_battery_used_pct=jnp.float32(0.0),
         leg_collisions=jnp.int32(0),
@@ -267,32 +251,22 @@ def task_endpoints(world: World, slot: jax.Array, k: jax.Array) -> tuple[jax.Arr
     return start.astype(jnp.int32), goal.astype(jnp.int32)
 
 
-def _begin_task(
-    params: SimParams, cfg: ProtocolConfig, world: World, method: Method, xs: ExperimentState, seed_u32
-) -> ExperimentState:
-    """Start task ``xs.task``: the refusal check of Eq. (10), then the leg with its obstacle draw."""
+def _begin_task(params: SimParams, world: World, xs: ExperimentState, seed_u32) -> ExperimentState:
+    """Start task ``xs.task``: the robot at its start, the leg with its obstacle draw (the actor
+    sees the new leg at this step, plans it and may refuse it)."""
     k, slot, r = xs.task, xs.slot, xs.sim.robot
     start, goal = task_endpoints(world, slot, k)
-    cost = method.battery_cost_pct[slot, start, goal]
-    refuse = method.may_refuse & refuse_task(r.battery_pct, cost, cfg.min_battery_pct)
-    r = r.replace(
-        battery_pct=jnp.where(refuse, jnp.float32(cfg.reset_battery_pct), r.battery_pct),
-        x_m=world.waypoint_x_m[start],
-        y_m=world.waypoint_y_m[start],
-    )
+    r = r.replace(x_m=world.waypoint_x_m[start], y_m=world.waypoint_y_m[start])
     u = hash_uniform16(seed_u32 ^ _OBSTACLE_STREAM, k, (3, 1))[:, 0]
-    r = robot_lib.begin_leg(params, method.plan, r, slot, start, goal, True, u)
-    log = xs.log.replace(
-        refused=xs.log.refused.at[k].set(refuse),
-        start_wp=xs.log.start_wp.at[k].set(start),
-        goal_wp=xs.log.goal_wp.at[k].set(goal),
-        planned_m=xs.log.planned_m.at[k].set(method.plan.length_m[slot, start, goal]),
-    )
+    r = robot_lib.begin_leg(params, r, slot, start, goal, True, u)
+    log = xs.log.replace(start_wp=xs.log.start_wp.at[k].set(start), goal_wp=xs.log.goal_wp.at[k].set(goal))
     return xs.replace(
         sim=xs.sim.replace(robot=r),
         log=log,
         leg_open=jnp.bool_(True),
         hop_elapsed_s=jnp.float32(0.0),
+        hop_x_m=jnp.float32(jnp.nan),
+        hop_y_m=jnp.float32(jnp.nan),
         leg_stalled_s=jnp.float32(0.0),
         leg_battery_used_pct=jnp.float32(0.0),
         leg_collisions=jnp.int32(0),
@@ -300,23 +274,41 @@ def _begin_task(
 
 
 def experiment_step(
-    params: SimParams, cfg: ProtocolConfig, world: World, method: Method, xs: ExperimentState, seed_u32: jax.Array
+    params: SimParams, cfg: ProtocolConfig, world: World, driver: Driver, xs: ExperimentState, seed_u32: jax.Array
 ) -> ExperimentState:
     """Advance one experiment by one step: the simulator's crowd step with the slot frozen, the
-    robot driven along the current task's route, then the protocol's bookkeeping."""
+    robot driven by the method's actor on the current task, then the protocol's bookkeeping."""
     sim = xs.sim
     time_s = sim.step.astype(jnp.float32) * params.dt_s
     started = sim.step >= cfg.warmup_steps(params)
     begin = started & ~xs.done & ~xs.leg_open
-    xs = select(begin, _begin_task(params, cfg, world, method, xs, seed_u32), xs)
+    xs = select(begin, _begin_task(params, world, xs, seed_u32), xs)
     running = started & ~xs.done
 
     u_workers, _ = step_uniforms(seed_u32, sim.step, params.n_workers)
     w, r = sim.workers, xs.sim.robot
     present = w.present
+    seen = robot_lib.observe(r, xs.slot, w.x_m, w.y_m, present)
+    command, actor_state = driver.actor.act(driver.params, sim.actor, seen, actor_key(seed_u32, sim.step))
+    actor_state = select(running, actor_state, sim.actor)
+    # A refusal (Eq. 10) counts on the task's first step: the battery is reset before it drives.
+    refuse = begin & command.recharge
+    r = r.replace(battery_pct=jnp.where(refuse, jnp.float32(cfg.reset_battery_pct), r.battery_pct))
+    k0 = jnp.minimum(xs.task, xs.log.outcome.shape[0] - 1)
+    xs = xs.replace(
+        log=xs.log.replace(
+            refused=xs.log.refused.at[k0].set(jnp.where(begin, refuse, xs.log.refused[k0])),
+            planned_m=xs.log.planned_m.at[k0].set(jnp.where(begin, command.planned_length_m, xs.log.planned_m[k0])),
+        )
+    )
     w = crowd_step(params, world, w, r, time_s, xs.slot, u_workers)
-    driven, arrived = robot_lib.drive(params, world, r, sim.workers.x_m, sim.workers.y_m, present)
-    hop_elapsed = jnp.where(driven.route_pos != r.route_pos, 0.0, xs.hop_elapsed_s + params.dt_s)
+    driven, arrived = robot_lib.drive(params, world, r, command, sim.workers.x_m, sim.workers.y_m, present)
+    # The hop deadline restarts when the robot reaches a new aim point short of the goal (the
+    # route's next waypoint; an actor that aims where it stands gains no time by it).
+    new_hop = driven.reached & ~arrived & ((command.aim_x_m != xs.hop_x_m) | (command.aim_y_m != xs.hop_y_m))
+    hop_elapsed = jnp.where(new_hop, 0.0, xs.hop_elapsed_s + params.dt_s)
+    hop_x = jnp.where(running & new_hop, command.aim_x_m, xs.hop_x_m)
+    hop_y = jnp.where(running & new_hop, command.aim_y_m, xs.hop_y_m)
     r = select(running, driven, r)
     arrived = running & arrived
     elapsed = hop_elapsed if cfg.deadline_per_hop else r.leg_elapsed_s
@@ -364,10 +356,12 @@ def experiment_step(
     task = xs.task + ended.astype(jnp.int32)
     end_step = jnp.where(ended & (task >= xs.n_tasks), sim.step + 1, xs.end_step)
     return xs.replace(
-        sim=SimState(workers=w, robot=r, step=sim.step + 1),
+        sim=SimState(workers=w, robot=r, step=sim.step + 1, actor=actor_state),
         task=task,
         leg_open=xs.leg_open & ~ended,
         hop_elapsed_s=jnp.where(running, hop_elapsed, xs.hop_elapsed_s),
+        hop_x_m=hop_x,
+        hop_y_m=hop_y,
         leg_stalled_s=leg_stalled,
         leg_battery_used_pct=leg_battery,
         leg_collisions=leg_collisions,
@@ -378,19 +372,19 @@ def experiment_step(
     )
 
 
-def _advance_one(params, cfg, world, method, xs, key, n_steps):
+def _advance_one(params, cfg, world, driver, xs, key, n_steps):
     seed = world_seed_u32(key)
 
     def body(s, _):
-        return experiment_step(params, cfg, world, method, s, seed), None
+        return experiment_step(params, cfg, world, driver, s, seed), None
 
     return jax.lax.scan(body, xs, None, length=n_steps)[0]
 
 
 @functools.lru_cache(maxsize=8)
 def _compiled_advance(cfg: ProtocolConfig, n_steps: int, world_chunk: int, n_dev: int) -> Callable:
-    def fn(params, world, method, states, keys):
-        run = functools.partial(_advance_one, params, cfg, world, method, n_steps=n_steps)
+    def fn(params, world, driver, states, keys):
+        run = functools.partial(_advance_one, params, cfg, world, driver, n_steps=n_steps)
         return rollout.map_worlds(run, (states, keys), world_chunk)
 
     return rollout.shard_worlds(fn, 3, 2, n_dev)
@@ -416,7 +410,7 @@ def experiment_keys(seed: int, slots: np.ndarray, replicas: np.ndarray) -> jax.A
 def run_experiments(
     params: SimParams,
     world: World,
-    method: Method,
+    driver: Driver,
     slots: np.ndarray,
     keys: jax.Array,
     cfg: ProtocolConfig | None = None,
@@ -435,6 +429,8 @@ def run_experiments(
     rounding, see :mod:`jaxsim.rollout`).
 
     Args:
+      driver: the method: its actor and params (replicated over the batch), e.g.
+        :func:`jaxsim.route_follower.route_follower` of a plan.
       slots: (B,) slot of each experiment.
       keys: (B,) keys (:func:`experiment_keys`); the same keys for two methods = common random numbers.
       cfg: protocol settings (default :meth:`ProtocolConfig.for_params`).
@@ -454,15 +450,16 @@ def run_experiments(
         raise ValueError("no experiments to run")
     if slots.min() < 0 or slots.max() >= world.n_slots:
         raise ValueError(f"slots must be in [0, {world.n_slots - 1}], got {sorted(set(slots.tolist()))}")
-    states = _compiled_init(cfg)(params, world, method, jnp.asarray(slots), keys)
+    states = _compiled_init(cfg)(params, world, driver, jnp.asarray(slots), keys)
     n_tasks = np.asarray(states.n_tasks)
     n_steps = max(1, int(round(segment_s / params.dt_s)))
-    # Every hop ends within the deadline, so this many segments always suffice.
-    hops = int(np.asarray(method.plan.hops).max()) if cfg.deadline_per_hop else 1
+    # Every hop ends within the deadline, so this many segments always suffice (a route has at
+    # most one hop per waypoint).
+    hops = world.n_waypoints if cfg.deadline_per_hop else 1
     limit_s = cfg.warmup_s + float(n_tasks.max()) * hops * (float(params.robot_leg_deadline_s) + params.dt_s)
     return rollout.run_until_done(
         lambda n_dev: _compiled_advance(cfg, n_steps, world_chunk, n_dev),
-        (params, world, method),
+        (params, world, driver),
         states,
         keys,
         is_done=lambda s: np.asarray(s.task) >= np.asarray(s.n_tasks),

@@ -28,11 +28,14 @@ from common.atomic import write_atomic, write_bytes_atomic, write_text_atomic
 from evaluation import metrics
 from evaluation import protocol as ex
 from evaluation.outcomes import OUTCOMES
+from jaxsim.actor import Driver
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import Scenario
-from jaxsim.world import build_world
+from jaxsim.world import RobotPlan, World, build_world
 from planners.routes import shortest_path_plan
 from planners.tables import CausalTables
-from planners.waypoint import CausalWeights, causal_plan
+from planners.warehouse_actors import causal_planner
+from planners.waypoint import MIN_BATTERY_PCT, CausalWeights, causal_plan
 
 METHODS = ("baseline", "causal")
 
@@ -49,7 +52,7 @@ class EvaluationResult:
         task's end.
       distance_bin_m: histogram bin width.
       wall_s: method -> wall-clock seconds (compilation included).
-      plans: method -> :class:`~evaluation.protocol.Method` (for pictures of routes).
+      plans: method -> its :class:`~jaxsim.world.RobotPlan` (for pictures of routes).
       density_ppm2: (S, W) the engine's E[D | do(S), W] the causal planner used.
       config: the protocol settings and sizes, JSON-ready.
     """
@@ -64,15 +67,25 @@ class EvaluationResult:
     config: dict
 
 
-def build_methods(
+def method_plans(
     scenario: Scenario, tables: CausalTables, weights: CausalWeights = CausalWeights(), speed_mps: float | None = None
-) -> dict[str, ex.Method]:
-    """The two methods: shortest path (never refuses) and causal (Eq. 8-10, refuses by Eq. 10)."""
+) -> dict[str, tuple[RobotPlan, np.ndarray | None]]:
+    """The two methods' routes: shortest path, and causal (Eq. 8-9) with its routes' predicted
+    battery use ``C_L`` (Eq. 10)."""
     speed = scenario.params.robot_max_speed_mps if speed_mps is None else speed_mps
     plan, cost = causal_plan(scenario, tables, speed_mps=speed, weights=weights)
+    return {"baseline": (shortest_path_plan(scenario), None), "causal": (plan, cost)}
+
+
+def build_methods(
+    plans: dict[str, tuple[RobotPlan, np.ndarray | None]], world: World, min_battery_pct: float = MIN_BATTERY_PCT
+) -> dict[str, Driver]:
+    """The methods as warehouse actors: a plan without a cost table is followed (the shortest
+    path never refuses), one with its table is the causal planner (Eq. 10 below
+    ``min_battery_pct``)."""
     return {
-        "baseline": ex.make_method(shortest_path_plan(scenario)),
-        "causal": ex.make_method(plan, cost, may_refuse=True),
+        name: route_follower(plan, world) if cost is None else causal_planner(plan, world, cost, min_battery_pct)
+        for name, (plan, cost) in plans.items()
     }
 
 
@@ -135,7 +148,8 @@ def run_evaluation(
     if slot_ids.size == 0 or slot_ids.min() < 0 or slot_ids.max() >= scenario.n_slots:
         raise ValueError(f"slots must be in [0, {scenario.n_slots - 1}], got {slots}")
     world = build_world(scenario)
-    methods = build_methods(scenario, tables, weights)
+    plans = method_plans(scenario, tables, weights)
+    methods = build_methods(plans, world, cfg.min_battery_pct)
     # Batch order: replica-major, so a slot's experiments spread over the devices evenly.
     rep_grid, slot_grid = np.meshgrid(np.arange(first_replica, first_replica + replicas), slot_ids, indexing="ij")
     b_slots, b_reps = slot_grid.ravel().astype(np.int32), rep_grid.ravel().astype(np.int32)
@@ -166,7 +180,7 @@ def run_evaluation(
         experiment_s=spans,
         distance_bin_m=cfg.distance_bin_m,
         wall_s=walls,
-        plans=methods,
+        plans={name: plan for name, (plan, _) in plans.items()},
         density_ppm2=tables.density_ppm2,
         config=config,
     )

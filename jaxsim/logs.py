@@ -37,9 +37,9 @@ from common import progress as progress_lib
 from common.atomic import atomic_path, write_text_atomic
 from common.logschema import LOG_FILE, META_FILE, density_column, distance_column, position_columns
 from jaxsim import native
+from jaxsim.actor import Driver
 from jaxsim.scenario import Scenario
 from jaxsim.state import ACTIVITY, WALKING
-from jaxsim.step import Controller
 
 # Device memory for one time chunk of records (all worlds); bounds the host memory too.
 CHUNK_BUDGET_BYTES = 256 * 2**20
@@ -207,7 +207,7 @@ def run_metadata(scenario: Scenario, *, final: dict, **fields) -> dict:
 def simulate_to_parquet(
     scenario: Scenario,
     out_dir: str | pathlib.Path,
-    controller: Controller,
+    driver: Driver,
     *,
     n_worlds: int,
     duration_s: float,
@@ -225,7 +225,9 @@ def simulate_to_parquet(
       scenario: the validated scenario (its params included).
       out_dir: output folder (created); each file is renamed into place when written (the
         command line stages the whole run and commits it at once: :mod:`common.runfolder`).
-      controller: the robot's controller, e.g. ``RouteFollower(planners.routes.shortest_path_plan(s))``.
+      driver: the robot's actor and its params, e.g.
+        ``route_follower(planners.routes.shortest_path_plan(s), world)``
+        (:func:`jaxsim.route_follower.route_follower`).
       n_worlds: batch size; world ``b`` is the same world bit for bit for a given seed whatever
         ``n_worlds`` and the number of host devices.
       duration_s: simulated time, a multiple of ``sample_interval_s``.
@@ -261,7 +263,7 @@ def simulate_to_parquet(
     start = time.perf_counter()
     world = world_lib.build_world(scenario)
     keys = rollout.world_keys(seed, n_worlds, first_world)
-    states = rollout.init_batch(p, world, controller, keys)
+    states = rollout.init_batch(p, world, driver, keys)
     per_sample = 4 * (scenario.n_waypoints + p.n_workers * (4 if log_positions else 2) + 32)
     chunk = chunk_samples(n_samples, per_sample * n_worlds, chunk_budget_bytes)
     n_chunks = n_samples // chunk
@@ -279,11 +281,11 @@ def simulate_to_parquet(
         progress_lib.bar(f"simulate {n_worlds} world(s)", unit="sim s", enabled=progress) as bar,
     ):
         try:
-            pending = rollout.run_samples(p, world, controller, states, keys, chunk, every)
+            pending = rollout.run_samples(p, world, driver, states, keys, chunk, every)
             for c in range(n_chunks):
                 states, rec = pending
                 if c + 1 < n_chunks:  # dispatch the next chunk before converting this one
-                    pending = rollout.run_samples(p, world, controller, states, keys, chunk, every)
+                    pending = rollout.run_samples(p, world, driver, states, keys, chunk, every)
                 rec = rollout.to_numpy(rec)
                 check_finite(rec, first_world)
                 if c == 0:

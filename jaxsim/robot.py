@@ -1,11 +1,14 @@
-"""The robot of the day simulation: follows the route given by a :class:`~jaxsim.world.RobotPlan`,
-slows and stalls behind people, meets static obstacles, runs its slot's task list and recharges.
-Pure JAX. :class:`RouteFollower` is this behaviour as the controller the step takes; protocols
-reuse :func:`drive` and :func:`begin_leg` with task logic of their own.
+"""The robot of the day simulation: its body (motion, blocking rule, obstacles, battery) and its
+working day (the slot's task list, deadlines, recharging). Pure JAX. Where it drives is its
+actor's choice (:mod:`jaxsim.actor`): each step the actor sees a :class:`WarehouseObservation`
+and answers a :class:`RobotCommand` (where to aim, how long its planned path is, whether to
+recharge first); :func:`jaxsim.route_follower.route_follower` follows a
+:class:`~jaxsim.world.RobotPlan`'s routes, as the paper's robot did. Protocols
+(:mod:`evaluation.protocol`) reuse :func:`drive` and :func:`begin_leg` with task logic of their own.
 
-* Motion: straight towards the next route waypoint at up to ``robot_max_speed_mps``, speeding
-  up at ``robot_accel_mps2`` (braking is immediate). A waypoint is reached within
-  ``robot_goal_tolerance_m``.
+* Motion: straight towards the actor's aim point (the next route waypoint) at up to
+  ``robot_max_speed_mps``, speeding up at ``robot_accel_mps2`` (braking is immediate). The
+  aim is reached within ``robot_goal_tolerance_m``.
 * Crowds (the blocking rule): a person is *in the lane* when ahead of the robot with a lateral
   offset below ``robot_radius + worker_radius + block_lane_margin``. With ``gap`` the free
   distance to the nearest person in the lane, the speed is scaled by
@@ -13,11 +16,13 @@ reuse :func:`drive` and :func:`begin_leg` with task logic of their own.
   the person moves (the workers' social force makes them step aside). Crowds cost time, as
   the paper's navigation stack did.
 * Obstacles: when a task leg starts, with ``robot_obstacle_probability`` a static obstacle lies
-  at a uniform point of the planned path. Once the robot reaches it, it maneuvers for
-  ``robot_obstacle_length_m`` at a share of its speed drawn per obstacle uniformly in
-  ``[robot_obstacle_speed_factor_min, 1]``, with ``O = 1`` (and ``K_o`` times the consumption).
+  at a uniform point of the planned path (a share of the actor's ``planned_length_m``). Once
+  the robot reaches it, it maneuvers for ``robot_obstacle_length_m`` at a share of its speed
+  drawn per obstacle uniformly in ``[robot_obstacle_speed_factor_min, 1]``, with ``O = 1`` (and
+  ``K_o`` times the consumption).
 * Tasks: goals come from the slot's list in order (the list restarts when a slot begins, and
-  wraps around). A leg not finished within ``robot_leg_deadline_s`` fails; with
+  wraps around). A leg is finished when the robot reaches the leg's goal waypoint as the point
+  it aimed at. A leg not finished within ``robot_leg_deadline_s`` fails; with
   ``robot_teleport_on_failure`` the robot is put at the leg's goal, which is the next task's
   start (the paper's protocol). After a leg, if the battery is below
   ``battery_recharge_below_pct`` the robot drives to the charging station and charges
@@ -34,12 +39,60 @@ from common.pytree import select
 from jaxsim import battery
 from jaxsim.params import SimParams
 from jaxsim.state import CHARGING, TASK, TO_CHARGER, RobotState
-from jaxsim.world import RobotPlan, World
+from jaxsim.world import World
+
+
+@struct.dataclass
+class RobotCommand:
+    """A warehouse actor's action for one step (all scalars).
+
+    Attributes:
+      aim_x_m, aim_y_m: the point to drive straight towards now (the route's next waypoint).
+      speed_mps: the speed asked for, capped at ``robot_max_speed_mps`` (the blocking rule,
+        obstacles and acceleration apply on top); inf (the route follower's) asks for the cap.
+      planned_length_m: length of the path the actor plans for the current leg: the leg's
+        obstacle, if any, lies at its drawn share of this distance.
+      recharge: bool, refuse the task that begins now and recharge first (Eq. 10). The protocol
+        (:mod:`evaluation.protocol`) honours it on a task's first step; the day simulation
+        recharges by its own rule and ignores it.
+    """
+
+    aim_x_m: jax.Array
+    aim_y_m: jax.Array
+    speed_mps: jax.Array
+    planned_length_m: jax.Array
+    recharge: jax.Array = False
+
+
+@struct.dataclass
+class WarehouseObservation:
+    """What a warehouse actor sees at a step (the simulator's state, exactly: no sensor model).
+
+    Attributes:
+      robot: the robot (pose, speed, battery, mode, the current leg: ``leg_start_wp``,
+        ``goal_wp``, ``leg_slot``, ``legs_started``, and ``reached``: its last aim reached).
+      slot: () int32 the current time slot.
+      workers_x_m, workers_y_m: (N,) the workers' positions before this step; workers_present (N,) bool.
+    """
+
+    robot: RobotState
+    slot: jax.Array
+    workers_x_m: jax.Array
+    workers_y_m: jax.Array
+    workers_present: jax.Array
+
+
+def observe(
+    robot: RobotState, slot: jax.Array, workers_x_m: jax.Array, workers_y_m: jax.Array, present: jax.Array
+) -> WarehouseObservation:
+    """The observation of a step (the workers' positions before it, as the robot's physics uses)."""
+    return WarehouseObservation(
+        robot=robot, slot=slot, workers_x_m=workers_x_m, workers_y_m=workers_y_m, workers_present=present
+    )
 
 
 def begin_leg(
     params: SimParams,
-    plan: RobotPlan,
     r: RobotState,
     slot: jax.Array,
     start_wp: jax.Array,
@@ -47,7 +100,8 @@ def begin_leg(
     is_task: jax.Array | bool,
     u: jax.Array,
 ) -> RobotState:
-    """Put the robot on the planned route ``start_wp -> goal_wp`` of ``slot`` (leg counters reset).
+    """Begin the leg ``start_wp -> goal_wp`` in ``slot`` (leg counters reset; the actor sees the
+    new leg by ``legs_started`` and plans its path).
 
     ``is_task``: a task leg (obstacles may appear; mode TASK) rather than the way to the charger.
     ``u``: (3,) uniforms: obstacle or not, where on the path, how much it slows the robot.
@@ -56,16 +110,13 @@ def begin_leg(
     has_obstacle = is_task & (u_obs < params.robot_obstacle_probability)
     return r.replace(
         mode=jnp.where(is_task, TASK, TO_CHARGER).astype(jnp.int32),
-        route=plan.routes[slot, start_wp, goal_wp],
-        route_pos=jnp.int32(0),
-        route_hops=plan.hops[slot, start_wp, goal_wp],
         leg_start_wp=jnp.asarray(start_wp, jnp.int32),
         goal_wp=jnp.asarray(goal_wp, jnp.int32),
+        leg_slot=jnp.asarray(slot, jnp.int32),
+        legs_started=r.legs_started + 1,
         leg_elapsed_s=jnp.float32(0.0),
         leg_dist_m=jnp.float32(0.0),
-        obstacle_at_m=jnp.where(has_obstacle, u_at * plan.length_m[slot, start_wp, goal_wp], jnp.inf).astype(
-            jnp.float32
-        ),
+        obstacle_at_share=jnp.where(has_obstacle, u_at, jnp.inf).astype(jnp.float32),
         obstacle_left_m=jnp.float32(params.robot_obstacle_length_m),
         obstacle_speed_factor=(
             params.robot_obstacle_speed_factor_min + u_speed * (1.0 - params.robot_obstacle_speed_factor_min)
@@ -77,7 +128,6 @@ def begin_leg(
 def start_leg(
     params: SimParams,
     world: World,
-    plan: RobotPlan,
     r: RobotState,
     slot: jax.Array,
     start_wp: jax.Array,
@@ -90,7 +140,7 @@ def start_leg(
     """
     idx = jnp.where(r.task_slot == slot, r.task_idx + 1, 0) % world.robot_goal_count[slot]
     goal = jnp.where(to_charger, world.charging_station, world.robot_goals[slot, idx])
-    r = begin_leg(params, plan, r, slot, start_wp, goal, ~jnp.asarray(to_charger), u)
+    r = begin_leg(params, r, slot, start_wp, goal, ~jnp.asarray(to_charger), u)
     return r.replace(
         task_idx=jnp.where(to_charger, r.task_idx, idx).astype(jnp.int32),
         task_slot=jnp.where(to_charger, r.task_slot, slot).astype(jnp.int32),
@@ -132,23 +182,35 @@ def keep_body_clear(params: SimParams, world: World, x_m: jax.Array, y_m: jax.Ar
     return x_m + push * nx, y_m + push * ny
 
 
-def drive(
-    params: SimParams, world: World, r: RobotState, wx: jax.Array, wy: jax.Array, present: jax.Array
-) -> tuple[RobotState, jax.Array]:
-    """One step of motion along the current route: crowds, obstacle, battery, route progress.
+def obstacle_at_m(r: RobotState, cmd: RobotCommand) -> jax.Array:
+    """The leg distance at which the obstacle is met (inf: none on this leg)."""
+    return jnp.where(jnp.isfinite(r.obstacle_at_share), r.obstacle_at_share * cmd.planned_length_m, jnp.inf)
 
-    ``wx, wy, present``: (N,) workers. Returns the moved robot and ``arrived`` (the last route
-    waypoint reached this step, while not charging). Task bookkeeping is the caller's.
+
+def drive(
+    params: SimParams,
+    world: World,
+    r: RobotState,
+    cmd: RobotCommand,
+    wx: jax.Array,
+    wy: jax.Array,
+    present: jax.Array,
+) -> tuple[RobotState, jax.Array]:
+    """One step of motion towards the command's aim point: crowds, obstacle, battery.
+
+    ``wx, wy, present``: (N,) workers. Returns the moved robot (``reached``: the aim point
+    reached this step, while not charging) and ``arrived``: reached, and the aim point is the
+    leg's goal waypoint. Task bookkeeping is the caller's.
     """
     moving = r.mode != CHARGING
-    aim = r.route[r.route_pos]
-    dx, dy = world.waypoint_x_m[aim] - r.x_m, world.waypoint_y_m[aim] - r.y_m
+    dx, dy = cmd.aim_x_m - r.x_m, cmd.aim_y_m - r.y_m
     dist = jnp.sqrt(dx * dx + dy * dy)
     hx = jnp.where(dist > 1e-6, dx / jnp.maximum(dist, 1e-6), r.heading_x)
     hy = jnp.where(dist > 1e-6, dy / jnp.maximum(dist, 1e-6), r.heading_y)
 
-    in_obstacle = (r.mode == TASK) & (r.leg_dist_m >= r.obstacle_at_m) & (r.obstacle_left_m > 0)
-    v_des = params.robot_max_speed_mps * crowd_speed_factor(params, r, hx, hy, wx, wy, present)
+    in_obstacle = (r.mode == TASK) & (r.leg_dist_m >= obstacle_at_m(r, cmd)) & (r.obstacle_left_m > 0)
+    v_max = jnp.minimum(params.robot_max_speed_mps, jnp.maximum(cmd.speed_mps, 0.0))
+    v_des = v_max * crowd_speed_factor(params, r, hx, hy, wx, wy, present)
     v_des = jnp.where(in_obstacle, v_des * r.obstacle_speed_factor, v_des)
     v_des = jnp.where(moving & (r.battery_pct > 0), v_des, 0.0)
     speed = jnp.minimum(v_des, r.speed_mps + params.robot_accel_mps2 * params.dt_s)
@@ -157,6 +219,7 @@ def drive(
     charging = r.mode == CHARGING
     change = battery.battery_change_pct(params, speed, charging, in_obstacle)
     x_m, y_m = keep_body_clear(params, world, r.x_m + travel * hx, r.y_m + travel * hy)
+    reached = moving & (dist - travel <= params.robot_goal_tolerance_m)
     new = r.replace(
         x_m=x_m,
         y_m=y_m,
@@ -167,31 +230,33 @@ def drive(
         battery_change_pct=change,
         charging=charging,
         obstacle=in_obstacle,
+        reached=reached,
         leg_elapsed_s=r.leg_elapsed_s + params.dt_s,
         leg_dist_m=r.leg_dist_m + travel,
         obstacle_left_m=jnp.where(in_obstacle, r.obstacle_left_m - travel, r.obstacle_left_m),
         stalled_s=r.stalled_s + jnp.where(moving & (speed <= 0), params.dt_s, 0.0),
     )
-
-    reached = moving & (dist - travel <= params.robot_goal_tolerance_m)
-    last = r.route_pos + 1 >= jnp.maximum(r.route_hops, 1)
-    new = new.replace(route_pos=jnp.where(reached & ~last, r.route_pos + 1, r.route_pos))
-    return new, reached & last
+    at_goal = (cmd.aim_x_m == world.waypoint_x_m[r.goal_wp]) & (cmd.aim_y_m == world.waypoint_y_m[r.goal_wp])
+    return new, reached & at_goal
 
 
 def update_robot(
     params: SimParams,
     world: World,
-    plan: RobotPlan,
     r: RobotState,
+    cmd: RobotCommand,
     slot: jax.Array,
     wx: jax.Array,
     wy: jax.Array,
     present: jax.Array,
     u: jax.Array,
 ) -> RobotState:
-    """One step of the robot's working day. ``wx, wy, present``: (N,) workers; ``u``: (3,) uniforms."""
-    new, arrived = drive(params, world, r, wx, wy, present)
+    """One step of the robot's working day under the actor's command ``cmd``.
+
+    ``wx, wy, present``: (N,) workers; ``u``: (3,) uniforms. ``cmd.recharge`` is not used: the
+    day's robot recharges by its battery rule.
+    """
+    new, arrived = drive(params, world, r, cmd, wx, wy, present)
     task_mode = r.mode == TASK
     success = task_mode & arrived
     failure = task_mode & ~arrived & (new.leg_elapsed_s >= params.robot_leg_deadline_s)
@@ -210,13 +275,13 @@ def update_robot(
 
     leg_over = success | failure
     need_charge = leg_over & (new.battery_pct < params.battery_recharge_below_pct)
-    next_leg = start_leg(params, world, plan, new, slot, r.goal_wp, need_charge, u)
-    resume = start_leg(params, world, plan, new, slot, jnp.int32(world.charging_station), False, u)
+    next_leg = start_leg(params, world, new, slot, r.goal_wp, need_charge, u)
+    resume = start_leg(params, world, new, slot, jnp.int32(world.charging_station), False, u)
     new = select(leg_over, next_leg, new)
     return select(full, resume, new)
 
 
-def init_robot(params: SimParams, world: World, plan: RobotPlan, u: jax.Array) -> RobotState:
+def init_robot(params: SimParams, world: World, u: jax.Array) -> RobotState:
     """The robot at its start waypoint with a full battery, starting slot 0's first task."""
     f = jnp.float32
     i = jnp.int32
@@ -232,16 +297,16 @@ def init_robot(params: SimParams, world: World, plan: RobotPlan, u: jax.Array) -
         mode=i(TASK),
         charging=jnp.bool_(False),
         obstacle=jnp.bool_(False),
-        route=plan.routes[0, start, start],
-        route_pos=i(0),
-        route_hops=i(0),
+        reached=jnp.bool_(False),
         leg_start_wp=i(start),
         goal_wp=i(start),
+        leg_slot=i(0),
+        legs_started=i(0),
         task_idx=i(-1),
         task_slot=i(0),
         leg_elapsed_s=f(0.0),
         leg_dist_m=f(0.0),
-        obstacle_at_m=f(jnp.inf),
+        obstacle_at_share=f(jnp.inf),
         obstacle_left_m=f(0.0),
         obstacle_speed_factor=f(1.0),
         tasks_started=i(0),
@@ -249,33 +314,4 @@ def init_robot(params: SimParams, world: World, plan: RobotPlan, u: jax.Array) -
         tasks_failed=i(0),
         stalled_s=f(0.0),
     )
-    return start_leg(params, world, plan, r, jnp.int32(0), jnp.int32(start), False, u)
-
-
-@struct.dataclass
-class RouteFollower:
-    """The day simulation's controller: the robot follows ``plan``'s routes through its slots'
-    task lists and recharges (:func:`update_robot`). A pytree, so a rollout compiled for one
-    plan serves every plan of the same shape.
-
-    Attributes:
-      plan: the routes per slot (a planner's output, e.g. ``planners.routes.shortest_path_plan``).
-    """
-
-    plan: RobotPlan
-
-    def init(self, params: SimParams, world: World, u: jax.Array) -> RobotState:
-        return init_robot(params, world, self.plan, u)
-
-    def step(
-        self,
-        params: SimParams,
-        world: World,
-        robot: RobotState,
-        slot: jax.Array,
-        workers_x_m: jax.Array,
-        workers_y_m: jax.Array,
-        present: jax.Array,
-        u: jax.Array,
-    ) -> RobotState:
-        return update_robot(params, world, self.plan, robot, slot, workers_x_m, workers_y_m, present, u)
+    return start_leg(params, world, r, jnp.int32(0), jnp.int32(start), False, u)

@@ -9,10 +9,11 @@ Layout of the compiled program for a batch of ``B`` worlds and ``n_samples`` sam
           scan over samples -> measure()                  (one Record per sample)
             scan over steps_per_sample -> step()
 
-The robot's controller (:class:`jaxsim.step.Controller`, e.g. :class:`jaxsim.robot.RouteFollower`)
-and the dynamic parameters are ordinary inputs of the compiled program: another plan of the
-same shape or another value of a float parameter reuses it. With ``params_batched`` every world
-has its own parameters (a sweep: :meth:`jaxsim.params.SimParams.stack`), still one compilation.
+The robot's driver (an actor and its params, :class:`jaxsim.actor.Driver`, e.g.
+:func:`jaxsim.route_follower.route_follower`) and the dynamic parameters are ordinary inputs of
+the compiled program: another plan of the same shape or another value of a float parameter
+reuses it. With ``params_batched`` every world has its own parameters (a sweep:
+:meth:`jaxsim.params.SimParams.stack`), still one compilation.
 
 Randomness is counter-based (:mod:`jaxsim.rng`): results do not depend on how time or worlds are
 chunked, and the same seed gives the same logs bit for bit, whatever the batch size and the
@@ -36,10 +37,11 @@ import numpy as np
 
 from common.pytree import put, take
 from common.pytree import to_numpy as _to_numpy
+from jaxsim.actor import Driver
 from jaxsim.params import SimParams
 from jaxsim.rng import world_seed_u32
 from jaxsim.state import Record, SimState
-from jaxsim.step import Controller, init_state, measure, step
+from jaxsim.step import init_state, measure, step
 from jaxsim.world import World
 
 DEFAULT_WORLD_CHUNK = 64
@@ -58,23 +60,23 @@ def world_keys(seed: int, n_worlds: int, first_world: int = 0) -> jax.Array:
 
 @functools.lru_cache(maxsize=4)
 def _init_fn(params_batched: bool):
-    def init(params, world, controller, key):
-        return init_state(params, world, controller, jax.random.fold_in(key, INIT_FOLD))
+    def init(params, world, driver, key):
+        return init_state(params, world, driver, jax.random.fold_in(key, INIT_FOLD))
 
     return jax.jit(jax.vmap(init, in_axes=(0 if params_batched else None, None, None, 0)))
 
 
 def init_batch(
-    params: SimParams, world: World, controller: Controller, keys: jax.Array, params_batched: bool = False
+    params: SimParams, world: World, driver: Driver, keys: jax.Array, params_batched: bool = False
 ) -> SimState:
     """Initial states of a batch of worlds, one per key (init key = ``fold_in(key, INIT_FOLD)``)."""
-    return _init_fn(params_batched)(params, world, controller, keys)
+    return _init_fn(params_batched)(params, world, driver, keys)
 
 
 def _run_one(
     params: SimParams,
     world: World,
-    controller: Controller,
+    driver: Driver,
     state: SimState,
     key: jax.Array,
     n_samples: int,
@@ -83,7 +85,7 @@ def _run_one(
     seed = world_seed_u32(key)
 
     def inner(s, _):
-        return step(params, world, controller, s, seed), None
+        return step(params, world, driver, s, seed), None
 
     def outer(s, _):
         s, _ = jax.lax.scan(inner, s, None, length=steps_per_sample)
@@ -164,8 +166,8 @@ def place(n_dev: int, shared: tuple, batched: tuple) -> tuple[tuple, tuple]:
 
 @functools.lru_cache(maxsize=16)
 def _compiled(n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: int, params_batched: bool):
-    def run(params, world, controller, states, keys):
-        one = lambda p, s, k: _run_one(p, world, controller, s, k, n_samples, steps_per_sample)
+    def run(params, world, driver, states, keys):
+        one = lambda p, s, k: _run_one(p, world, driver, s, k, n_samples, steps_per_sample)
         if params_batched:
             return map_worlds(one, (params, states, keys), world_chunk)
         return map_worlds(lambda s, k: one(params, s, k), (states, keys), world_chunk)
@@ -178,7 +180,7 @@ def _compiled(n_samples: int, steps_per_sample: int, world_chunk: int, n_dev: in
 def run_samples(
     params: SimParams,
     world: World,
-    controller: Controller,
+    driver: Driver,
     states: SimState,
     keys: jax.Array,
     n_samples: int,
@@ -191,7 +193,7 @@ def run_samples(
     Args:
       params: the parameters of every world, or with ``params_batched`` one set per world
         (leading axis B on every dynamic field).
-      controller: the robot's controller (replicated over the batch).
+      driver: the robot's driver (replicated over the batch).
       states: batched :class:`SimState` with leading axis B.
       keys: (B,) world keys (see :func:`world_keys`).
       n_samples: records to return per world.
@@ -204,16 +206,16 @@ def run_samples(
     n_dev = devices_for(keys.shape[0])
     fn = _compiled(n_samples, steps_per_sample, world_chunk, n_dev, params_batched)
     if params_batched:
-        shared, batched = place(n_dev, (world, controller), (params, states, keys))
+        shared, batched = place(n_dev, (world, driver), (params, states, keys))
     else:
-        shared, batched = place(n_dev, (params, world, controller), (states, keys))
+        shared, batched = place(n_dev, (params, world, driver), (states, keys))
     return fn(*shared, *batched)
 
 
 def rollout(
     params: SimParams,
     world: World,
-    controller: Controller,
+    driver: Driver,
     seed: int,
     n_worlds: int,
     n_steps: int,
@@ -227,11 +229,11 @@ def rollout(
     if n_steps % sample_every_steps:
         raise ValueError(f"n_steps={n_steps} is not a multiple of sample_every_steps={sample_every_steps}")
     keys = world_keys(seed, n_worlds)
-    states = init_batch(params, world, controller, keys, params_batched)
+    states = init_batch(params, world, driver, keys, params_batched)
     return run_samples(
         params,
         world,
-        controller,
+        driver,
         states,
         keys,
         n_steps // sample_every_steps,

@@ -5,6 +5,8 @@ Batching adds leading axes to every leaf; nothing here knows about batches.
 
 from __future__ import annotations
 
+from typing import Any
+
 import jax
 from flax import struct
 
@@ -56,7 +58,8 @@ class WorkerState:
 
 @struct.dataclass
 class RobotState:
-    """The robot (all scalars but ``route``).
+    """The robot's body and its working day (all scalars); how it gets there is its actor's
+    (:mod:`jaxsim.actor`).
 
     Attributes:
       x_m, y_m, heading_x, heading_y: pose (unit heading).
@@ -66,12 +69,14 @@ class RobotState:
       mode: TASK / TO_CHARGER / CHARGING.
       charging: C.
       obstacle: O, maneuvering around a static obstacle now.
-      route: (L,) int32 waypoints of the current leg; ``route_pos`` the index aimed at now;
-        ``route_hops`` its real length.
-      leg_start_wp, goal_wp: the current leg's start and goal.
+      reached: the point the actor aimed at was reached in the last step (within
+        ``robot_goal_tolerance_m``).
+      leg_start_wp, goal_wp: the current leg's start and goal; ``leg_slot`` the slot when it
+        began (whose routes apply); ``legs_started`` counts legs (an actor sees a new leg by it).
       task_idx, task_slot: position in the slot's goal list, and the slot it belongs to.
       leg_elapsed_s, leg_dist_m: time and distance on the current leg.
-      obstacle_at_m: leg distance at which the obstacle is met (inf: none on this leg).
+      obstacle_at_share: where on the planned path the obstacle is met, as a share of the
+        path's length (the actor's ``planned_length_m``); inf: none on this leg.
       obstacle_left_m: maneuver distance still to go once met.
       obstacle_speed_factor: share of the speed kept while maneuvering around this leg's obstacle.
       tasks_started, tasks_succeeded, tasks_failed: counters.
@@ -88,16 +93,16 @@ class RobotState:
     mode: jax.Array
     charging: jax.Array
     obstacle: jax.Array
-    route: jax.Array
-    route_pos: jax.Array
-    route_hops: jax.Array
+    reached: jax.Array
     leg_start_wp: jax.Array
     goal_wp: jax.Array
+    leg_slot: jax.Array
+    legs_started: jax.Array
     task_idx: jax.Array
     task_slot: jax.Array
     leg_elapsed_s: jax.Array
     leg_dist_m: jax.Array
-    obstacle_at_m: jax.Array
+    obstacle_at_share: jax.Array
     obstacle_left_m: jax.Array
     obstacle_speed_factor: jax.Array
     tasks_started: jax.Array
@@ -108,11 +113,12 @@ class RobotState:
 
 @struct.dataclass
 class SimState:
-    """One world: workers, robot and the step counter (time = step * dt)."""
+    """One world: workers, robot, its actor's state and the step counter (time = step * dt)."""
 
     workers: WorkerState
     robot: RobotState
     step: jax.Array  # () int32
+    actor: Any = ()  # the actor's own state (any pytree of fixed shapes)
 
 
 @struct.dataclass

@@ -2,9 +2,11 @@
 
 * :func:`crowd_step` moves the workers one step given the robot's previous pose: the one crowd
   step the day simulation and every protocol (``evaluation.protocol``) call.
-* :func:`step` is the day simulation's step: the crowd step, then the robot's ``controller``
-  (passed in, as waymax passes its actor; :class:`jaxsim.robot.RouteFollower` follows a plan). Workers
-  and robot see each other's previous pose.
+* :func:`step` is the day simulation's step: the crowd step, then the robot driven by its
+  actor (a :class:`jaxsim.actor.Driver` passed in, as waymax passes its actor:
+  :func:`jaxsim.route_follower.route_follower` follows a plan). The actor sees the robot and the
+  workers' previous positions (:class:`jaxsim.robot.WarehouseObservation`) and answers a
+  :class:`jaxsim.robot.RobotCommand`; workers and robot see each other's previous pose.
 * :func:`measure` computes what is logged; the rollout (:mod:`jaxsim.rollout`) calls it only at
   sampling instants, so the per-step cost is the dynamics alone.
 
@@ -13,39 +15,25 @@ Batching is the caller's business (``vmap`` over ``state`` and the seed).
 
 from __future__ import annotations
 
-from typing import Protocol
-
 import jax
 import jax.numpy as jnp
 
 from jaxsim import rng
+from jaxsim import robot as robot_lib
 from jaxsim import workers as workers_lib
+from jaxsim.actor import Driver
 from jaxsim.params import SimParams
 from jaxsim.state import Record, RobotState, SimState, WorkerState
 from jaxsim.world import World
 
+# Stream constant of the actors' keys (apart from the uniforms of jaxsim.rng).
+ACTOR_STREAM = 0x61637472
 
-class Controller(Protocol):
-    """What drives the robot: a pytree (its tables are leaves) with two pure methods.
 
-    ``init(params, world, u)`` gives the robot at time 0 (``u``: (3,) uniforms);
-    ``step(params, world, robot, slot, workers_x_m, workers_y_m, present, u)`` advances it one
-    step from the workers' previous positions ((N,) arrays) and the slot index.
-    """
-
-    def init(self, params: SimParams, world: World, u: jax.Array) -> RobotState: ...
-
-    def step(
-        self,
-        params: SimParams,
-        world: World,
-        robot: RobotState,
-        slot: jax.Array,
-        workers_x_m: jax.Array,
-        workers_y_m: jax.Array,
-        present: jax.Array,
-        u: jax.Array,
-    ) -> RobotState: ...
+def actor_key(seed_u32: jax.Array, step: jax.Array) -> jax.Array:
+    """The key the actor gets at ``step`` of the world with ``seed_u32`` (unused keys cost nothing:
+    XLA drops what no actor reads)."""
+    return jax.random.fold_in(jax.random.fold_in(jax.random.key(seed_u32), ACTOR_STREAM), step)
 
 
 def current_slot(params: SimParams, world: World, step: jax.Array) -> jax.Array:
@@ -53,12 +41,15 @@ def current_slot(params: SimParams, world: World, step: jax.Array) -> jax.Array:
     return jnp.minimum(step // params.steps_per_slot, world.n_slots - 1).astype(jnp.int32)
 
 
-def init_state(params: SimParams, world: World, controller: Controller, key: jax.Array) -> SimState:
-    """A world at time 0: workers waiting to arrive, the robot as the controller starts it."""
+def init_state(params: SimParams, world: World, driver: Driver, key: jax.Array) -> SimState:
+    """A world at time 0: workers waiting to arrive, the robot at its start on slot 0's first
+    task, the actor's state from its ``init``."""
     kw, kr = jax.random.split(key)
     workers = workers_lib.init_workers(params, world, jax.random.uniform(kw, (5, params.n_workers)))
-    robot = controller.init(params, world, jax.random.uniform(kr, (3,)))
-    return SimState(workers=workers, robot=robot, step=jnp.int32(0))
+    robot = robot_lib.init_robot(params, world, jax.random.uniform(kr, (3,)))
+    seen = robot_lib.observe(robot, jnp.int32(0), workers.x_m, workers.y_m, workers.present)
+    actor_state = driver.actor.init(jax.random.fold_in(key, ACTOR_STREAM), seen)
+    return SimState(workers=workers, robot=robot, step=jnp.int32(0), actor=actor_state)
 
 
 def crowd_step(
@@ -93,8 +84,8 @@ def crowd_step(
     )
 
 
-def step(params: SimParams, world: World, controller: Controller, state: SimState, seed_u32: jax.Array) -> SimState:
-    """Advance one world by one step (the crowd, then the robot's controller).
+def step(params: SimParams, world: World, driver: Driver, state: SimState, seed_u32: jax.Array) -> SimState:
+    """Advance one world by one step (the crowd, then the robot under its actor's command).
 
     ``seed_u32``: the world's uint32 seed (:func:`jaxsim.rng.world_seed_u32`); the step's random
     draws are hashed from it and the step counter.
@@ -104,8 +95,10 @@ def step(params: SimParams, world: World, controller: Controller, state: SimStat
     u_workers, u_robot = rng.step_uniforms(seed_u32, state.step, params.n_workers)
     w, r = state.workers, state.robot
     workers = crowd_step(params, world, w, r, time_s, slot, u_workers)
-    robot = controller.step(params, world, r, slot, w.x_m, w.y_m, w.present, u_robot)
-    return SimState(workers=workers, robot=robot, step=state.step + 1)
+    seen = robot_lib.observe(r, slot, w.x_m, w.y_m, w.present)
+    command, actor_state = driver.actor.act(driver.params, state.actor, seen, actor_key(seed_u32, state.step))
+    robot = robot_lib.update_robot(params, world, r, command, slot, w.x_m, w.y_m, w.present, u_robot)
+    return SimState(workers=workers, robot=robot, step=state.step + 1, actor=actor_state)
 
 
 def measure(params: SimParams, world: World, state: SimState) -> Record:

@@ -258,7 +258,7 @@ def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size
     result = warehouse.merge(parts)
     result = dataclasses.replace(
         result,
-        plans=warehouse.build_methods(scenario, tables),
+        plans={name: plan for name, (plan, _) in warehouse.method_plans(scenario, tables).items()},
         config={**result.config, "shard_replicas": size, **backend_lib.describe(args)},
     )
     return result

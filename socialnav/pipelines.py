@@ -21,7 +21,7 @@ from causal import ablation as causal_ablation
 from common import runfolder
 from jaxsim import rollout
 from jaxsim.params import SimParams
-from jaxsim.robot import RouteFollower
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
 from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
@@ -132,7 +132,7 @@ def ablation_series(
     settings = [base.params.replace(robot_obstacle_probability=float(p)) for p in probabilities]
     params = SimParams.stack([s for s in settings for _ in range(n_seeds)])
     world = build_world(base)
-    controller = RouteFollower(shortest_path_plan(base))
+    controller = route_follower(shortest_path_plan(base), world)
     keys = rollout.world_keys(seed, n_seeds)[jnp.tile(jnp.arange(n_seeds), len(settings))]
     states = rollout.init_batch(params, world, controller, keys, params_batched=True)
     every = int(round(sample_interval_s / base.params.dt_s))

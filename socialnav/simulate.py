@@ -10,8 +10,9 @@ from common import runfolder
 from common.logschema import LOG_FILE, META_FILE
 from common.memory import available_bytes
 from jaxsim import logs, viz
-from jaxsim.robot import RouteFollower
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
+from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
 from socialnav.argtypes import non_negative_float, output_folder, positive_float, positive_int, probability, seed_int
 from socialnav.backend import BackendError, add_backend_options
@@ -142,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
                 run = logs.simulate_to_parquet(
                     scenario,
                     stage,
-                    RouteFollower(shortest_path_plan(scenario)),
+                    route_follower(shortest_path_plan(scenario), build_world(scenario)),
                     n_worlds=args.worlds,
                     duration_s=duration_s,
                     seed=args.seed,

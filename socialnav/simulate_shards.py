@@ -30,8 +30,9 @@ STAGING = ".shards"
 def compute_shard(scenario_dir, overrides, first, n, duration_s, seed, sample_interval_s, log_positions, snap_t):
     """Simulate one shard of worlds (here or in a Ray worker): ``(Parquet bytes, summary dict)``."""
     from jaxsim import logs
-    from jaxsim.robot import RouteFollower
+    from jaxsim.route_follower import route_follower
     from jaxsim.scenario import WAREHOUSE_DIR, load_scenario
+    from jaxsim.world import build_world
     from planners.routes import shortest_path_plan
 
     scenario = load_scenario(scenario_dir or WAREHOUSE_DIR, **overrides)
@@ -39,7 +40,7 @@ def compute_shard(scenario_dir, overrides, first, n, duration_s, seed, sample_in
         run = logs.simulate_to_parquet(
             scenario,
             tmp,
-            RouteFollower(shortest_path_plan(scenario)),
+            route_follower(shortest_path_plan(scenario), build_world(scenario)),
             n_worlds=n,
             duration_s=duration_s,
             seed=seed,

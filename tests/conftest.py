@@ -21,7 +21,7 @@ if "SOCIALNAV_NATIVE_CACHE" not in os.environ:
 
 from plans import scipy_shortest_plan
 
-from jaxsim.robot import RouteFollower
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
 from jaxsim.world import build_world
 
@@ -53,7 +53,8 @@ def warehouse():
 def short_day():
     """The warehouse with 60 s slots (a whole day is 6600 steps), its world and a route follower."""
     scenario = load_scenario(slot_length_s=60.0)
-    return scenario, build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
+    world = build_world(scenario)
+    return scenario, world, route_follower(scipy_shortest_plan(scenario), world)
 
 
 @pytest.fixture(scope="session")
@@ -72,7 +73,7 @@ def learned_run(tmp_path_factory):
     simulate_to_parquet(
         scenario,
         run,
-        RouteFollower(shortest_path_plan(scenario)),
+        route_follower(shortest_path_plan(scenario), build_world(scenario)),
         n_worlds=2,
         duration_s=scenario.n_slots * 60.0,
         progress=False,

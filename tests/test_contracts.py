@@ -17,8 +17,9 @@ from causal import extract
 from causal.learn import write_tables
 from common import logschema
 from jaxsim import logs
-from jaxsim.robot import RouteFollower
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
+from jaxsim.world import build_world
 from planners.tables import CausalTables, TablesError
 
 
@@ -27,7 +28,12 @@ def run(tmp_path_factory):
     scenario = load_scenario(slot_length_s=20.0, n_workers=5)
     out = tmp_path_factory.mktemp("run")
     logs.simulate_to_parquet(
-        scenario, out, RouteFollower(scipy_shortest_plan(scenario)), n_worlds=2, duration_s=40.0, progress=False
+        scenario,
+        out,
+        route_follower(scipy_shortest_plan(scenario), build_world(scenario)),
+        n_worlds=2,
+        duration_s=40.0,
+        progress=False,
     )
     return scenario, out
 

@@ -19,8 +19,8 @@ import jax
 import numpy as np
 import pytest
 
-from jaxsim.robot import RouteFollower
 from jaxsim.rollout import rollout
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
 from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
@@ -32,7 +32,8 @@ N_STEPS, EVERY, COMPARED = 2600, 20, 2
 def day_digest(n_worlds: int) -> str:
     """SHA-256 of every logged field of worlds 0..COMPARED-1 of a batch of ``n_worlds``."""
     scenario = load_scenario()
-    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(shortest_path_plan(scenario), world)
     _, records = rollout(scenario.params, world, controller, 7, n_worlds, N_STEPS, EVERY)
     digest = hashlib.sha256()
     for leaf in jax.tree.leaves(records):
@@ -49,7 +50,8 @@ def test_same_day_whatever_the_batch_size():
 def test_a_world_alone_is_the_same_world_as_in_a_batch():
     """World 0 simulated alone against world 0 of a batch of 3 (the case that drifted)."""
     scenario = load_scenario()
-    world, controller = build_world(scenario), RouteFollower(shortest_path_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(shortest_path_plan(scenario), world)
     _, alone = rollout(scenario.params, world, controller, 7, 1, N_STEPS, EVERY)
     _, batch = rollout(scenario.params, world, controller, 7, 3, N_STEPS, EVERY)
     for a, b in zip(jax.tree.leaves(alone), jax.tree.leaves(batch), strict=True):

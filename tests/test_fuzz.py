@@ -111,13 +111,19 @@ def fuzz_scenarios(tmp_path: pathlib.Path, n: int, seed: int) -> dict[str, int]:
 def small_run(tmp_path_factory):
     """One world of two 60 s slots: logs.parquet and run.json."""
     from jaxsim.logs import simulate_to_parquet
-    from jaxsim.robot import RouteFollower
+    from jaxsim.route_follower import route_follower
+    from jaxsim.world import build_world
     from planners.routes import shortest_path_plan
 
     run = tmp_path_factory.mktemp("fuzz_run")
     scenario = load_scenario(slot_length_s=60.0)
     simulate_to_parquet(
-        scenario, run, RouteFollower(shortest_path_plan(scenario)), n_worlds=2, duration_s=120.0, progress=False
+        scenario,
+        run,
+        route_follower(shortest_path_plan(scenario), build_world(scenario)),
+        n_worlds=2,
+        duration_s=120.0,
+        progress=False,
     )
     return run
 

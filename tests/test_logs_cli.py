@@ -10,8 +10,9 @@ import pytest
 from plans import scipy_shortest_plan
 
 from jaxsim import logs
-from jaxsim.robot import RouteFollower
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
+from jaxsim.world import build_world
 from socialnav import cli
 
 
@@ -23,7 +24,9 @@ def small():
 def _run(scenario, out, **kw):
     args = dict(n_worlds=2, duration_s=40.0, seed=5, sample_interval_s=0.5, progress=False)
     args.update(kw)
-    return logs.simulate_to_parquet(scenario, out, RouteFollower(scipy_shortest_plan(scenario)), **args)
+    return logs.simulate_to_parquet(
+        scenario, out, route_follower(scipy_shortest_plan(scenario), build_world(scenario)), **args
+    )
 
 
 def test_logs_open_in_pandas_with_the_documented_columns(small, tmp_path):

@@ -9,7 +9,7 @@ import pytest
 
 from causal import ablation
 from jaxsim import rollout
-from jaxsim.robot import RouteFollower
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
 from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
@@ -25,7 +25,7 @@ def test_one_batched_sweep_equals_separate_runs():
         _, rec = rollout.rollout(
             s.params,
             build_world(s),
-            RouteFollower(shortest_path_plan(s)),
+            route_follower(shortest_path_plan(s), build_world(s)),
             seed=3,
             n_worlds=n_seeds,
             n_steps=int(duration_s / s.params.dt_s),

@@ -9,11 +9,13 @@ import pytest
 
 from evaluation import protocol as ex
 from evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
-from evaluation.warehouse import build_methods
+from evaluation.warehouse import build_methods, method_plans
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
 from jaxsim.world import build_world
 from planners.routes import shortest_path_plan
 from planners.tables import CausalTables
+from planners.warehouse_actors import causal_planner
 
 N_TASKS = 8
 CFG = dict(warmup_s=20.0, arrival_spread_s=10.0)
@@ -47,13 +49,16 @@ def _tables(scenario):
 
 @pytest.fixture(scope="module")
 def setup(warehouse):
-    return warehouse, _short(build_world(warehouse)), build_methods(warehouse, _tables(warehouse))
+    """The scenario, its world with short task lists, the two methods' drivers and their plans."""
+    world = _short(build_world(warehouse))
+    plans = method_plans(warehouse, _tables(warehouse))
+    return warehouse, world, build_methods(plans, world), {name: plan for name, (plan, _) in plans.items()}
 
 
 def test_off_slot_both_methods_take_the_same_routes_and_get_the_same_results(setup):
-    scenario, world, methods = setup
+    scenario, world, methods, plans = setup
     off = int(np.flatnonzero(~scenario.slot_working)[0])
-    base, causal = methods["baseline"].plan, methods["causal"].plan
+    base, causal = plans["baseline"], plans["causal"]
     np.testing.assert_array_equal(np.asarray(base.routes[off]), np.asarray(causal.routes[off]))
     working = int(np.flatnonzero(scenario.slot_working)[0])
     assert not np.array_equal(np.asarray(base.routes[working]), np.asarray(causal.routes[working]))
@@ -66,7 +71,7 @@ def test_off_slot_both_methods_take_the_same_routes_and_get_the_same_results(set
 
 
 def test_protocol_invariants_in_working_slots(setup):
-    scenario, world, methods = setup
+    scenario, world, methods, plans = setup
     p = scenario.params
     state = _run(scenario, world, methods["baseline"], [0, 5])
     log = state.log
@@ -78,7 +83,7 @@ def test_protocol_invariants_in_working_slots(setup):
     ok = log.outcome == SUCCESS
     # A success drives the planned route, short by at most the tolerance at each waypoint, long
     # by what its body slides round wall ends (jaxsim.robot.keep_body_clear; under 1 % here).
-    hops = np.asarray(methods["baseline"].plan.hops)[state.slot[:, None], log.start_wp, log.goal_wp]
+    hops = np.asarray(plans["baseline"].hops)[state.slot[:, None], log.start_wp, log.goal_wp]
     assert (log.distance_m[ok] >= log.planned_m[ok] - p.robot_goal_tolerance_m * hops[ok] - 1e-3).all()
     assert (log.distance_m[ok] <= 1.01 * log.planned_m[ok] + 1e-3).all()
     failed = log.outcome == CONGESTION
@@ -93,7 +98,7 @@ def test_protocol_invariants_in_working_slots(setup):
 def test_missed_deadlines_are_congestion_failures_and_the_robot_moves_on():
     scenario = load_scenario(robot_leg_deadline_s=1.0)
     world = _short(build_world(scenario), 4)
-    state = _run(scenario, world, ex.make_method(shortest_path_plan(scenario)), [1, 1])
+    state = _run(scenario, world, route_follower(shortest_path_plan(scenario), world), [1, 1])
     log = state.log
     assert (log.outcome[:, :4] == CONGESTION).all()
     np.testing.assert_allclose(log.time_s[:, :4], 1.0, atol=scenario.params.dt_s + 1e-4)
@@ -105,7 +110,7 @@ def test_battery_failures_reset_the_battery_and_refusals_prevent_them():
     scenario = load_scenario(battery_static_pct_per_s=4.0)
     world = _short(build_world(scenario), 6)
     plan = shortest_path_plan(scenario)
-    state = _run(scenario, world, ex.make_method(plan), [10, 10])
+    state = _run(scenario, world, route_follower(plan, world), [10, 10])
     log = state.log
     battery = log.outcome == BATTERY
     assert battery.any()
@@ -117,26 +122,25 @@ def test_battery_failures_reset_the_battery_and_refusals_prevent_them():
 
     # Eq. (10) with a cost that always exceeds what is left above 20 %: every task is refused
     # (the battery reset first), so none fails on the battery... unless the task alone needs more.
-    refusing = ex.make_method(plan, np.full(plan.hops.shape, 85.0), may_refuse=True)
+    refusing = causal_planner(plan, world, np.full(plan.hops.shape, 85.0))
     log = _run(scenario, world, refusing, [10, 10]).log
     assert log.refused[:, :6].all()
     assert (log.outcome[:, :6] != NOT_RUN).all()
-    never = ex.make_method(plan, np.zeros(plan.hops.shape), may_refuse=True)
+    never = causal_planner(plan, world, np.zeros(plan.hops.shape))
     assert not _run(scenario, world, never, [10, 10]).log.refused.any()
     # The threshold that runs is the one planners.waypoint.refuse_task applies: B_min = 20 % by default.
     assert ex.ProtocolConfig().min_battery_pct == 20.0
 
 
 def test_bad_input_is_rejected(setup):
-    scenario, world, methods = setup
+    scenario, world, methods, plans = setup
     keys = ex.experiment_keys(0, np.array([0]), np.array([0]))
     with pytest.raises(ValueError, match="slots must be in"):
         ex.run_experiments(scenario.params, world, methods["baseline"], np.array([99]), keys)
     with pytest.raises(ValueError, match="one slot per key"):
         ex.run_experiments(scenario.params, world, methods["baseline"], np.array([0, 1]), keys)
-    plan = methods["baseline"].plan
     with pytest.raises(ValueError, match="battery cost table shape"):
-        ex.make_method(plan, np.zeros((2, 2)), may_refuse=True)
+        causal_planner(plans["baseline"], world, np.zeros((2, 2)))
     for field, value in (
         ("collision_radius_m", 0.0),
         ("min_battery_pct", 120.0),
@@ -151,7 +155,7 @@ def test_bad_input_is_rejected(setup):
 def test_compacting_the_batch_keeps_every_experiment_in_its_place(warehouse):
     """Seven short experiments end early; the three long ones go on in a smaller batch."""
     world = build_world(warehouse).replace(robot_goal_count=jnp.array([2] * 10 + [30], jnp.int32))
-    method = ex.make_method(shortest_path_plan(warehouse))
+    method = route_follower(shortest_path_plan(warehouse), world)
     slots = np.array([10, 0, 0, 10, 0, 0, 0, 10, 0, 0])
     keys = ex.experiment_keys(0, slots, np.arange(len(slots)))
     cfg = ex.ProtocolConfig.for_params(warehouse.params, **CFG)

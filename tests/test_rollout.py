@@ -102,11 +102,12 @@ def test_a_new_dynamic_value_reuses_the_compiled_rollout(warehouse):
     """Dynamic parameters are inputs of the compiled program: another value compiles nothing new."""
     from plans import scipy_shortest_plan
 
-    from jaxsim.robot import RouteFollower
+    from jaxsim.route_follower import route_follower
     from jaxsim.world import build_world
 
     s = warehouse.replace_params(n_workers=2, slot_length_s=20.0)
-    world, controller = build_world(s), RouteFollower(scipy_shortest_plan(s))
+    world = build_world(s)
+    controller = route_follower(scipy_shortest_plan(s), world)
     fn = rollout._compiled(5, 2, rollout.DEFAULT_WORLD_CHUNK, 1, False)
     keys = rollout.world_keys(0, 1)
     states = rollout.init_batch(s.params, world, controller, keys)

@@ -8,8 +8,8 @@ import pytest
 from plans import scipy_shortest_plan
 
 from jaxsim import geometry
-from jaxsim.robot import RouteFollower
 from jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_keys
+from jaxsim.route_follower import route_follower
 from jaxsim.scenario import load_scenario
 from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING
 from jaxsim.world import build_world
@@ -97,7 +97,8 @@ def test_robot_works(day_rollout):
 def test_robot_charges_only_at_the_station_and_standing_still():
     """A robot that starts at 21 % must go and charge (below 20 % after its first legs)."""
     scenario = load_scenario(slot_length_s=60.0, n_workers=4, battery_initial_pct=21.0)
-    world, controller = build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(scipy_shortest_plan(scenario), world)
     _, rec = rollout(scenario.params, world, controller, seed=1, n_worlds=4, n_steps=6000, sample_every_steps=5)
     rec = to_numpy(rec)
     charging = rec.charging
@@ -130,7 +131,7 @@ def test_the_robot_follows_the_plan_it_is_given():
     _, rec = rollout(
         scenario.params,
         build_world(scenario),
-        RouteFollower(plan),
+        route_follower(plan, build_world(scenario)),
         seed=0,
         n_worlds=2,
         n_steps=1500,
@@ -146,7 +147,7 @@ def test_the_robot_follows_the_plan_it_is_given():
     _, direct = rollout(
         scenario.params,
         build_world(scenario),
-        RouteFollower(base),
+        route_follower(base, build_world(scenario)),
         seed=0,
         n_worlds=2,
         n_steps=1500,
@@ -181,7 +182,8 @@ def test_same_seed_same_rollout_and_chunk_invariance(short_day):
 def test_reduced_day_reproduces_the_schedule():
     """Each working slot's crowded waypoints are its high-probability ones (seed 000 Fig. 7)."""
     scenario = load_scenario(slot_length_s=300.0)
-    world, controller = build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(scipy_shortest_plan(scenario), world)
     p = scenario.params
     _, rec = rollout(
         p, world, controller, seed=11, n_worlds=4, n_steps=scenario.n_slots * p.steps_per_slot, sample_every_steps=10
@@ -205,7 +207,8 @@ def test_reduced_day_reproduces_the_schedule():
 def test_world_without_workers_runs():
     """The off slot and the Sec. 6 ablation use worlds with nobody in them."""
     scenario = load_scenario(n_workers=0, slot_length_s=30.0)
-    world, controller = build_world(scenario), RouteFollower(scipy_shortest_plan(scenario))
+    world = build_world(scenario)
+    controller = route_follower(scipy_shortest_plan(scenario), world)
     final, rec = rollout(scenario.params, world, controller, seed=0, n_worlds=4, n_steps=600, sample_every_steps=10)
     rec = to_numpy(rec)
     assert rec.worker_dist_m.shape == (4, 60, 0) and (rec.n_present == 0).all()

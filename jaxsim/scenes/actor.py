@@ -1,7 +1,7 @@
-"""Actors: whatever drives the robot (a navigation stack, a reactive rule, a learned policy, a
-user's own function), passed into the rollout, never written inside the physics.
+"""Actors in the arena's scenes: the rollout of an episode over an actor.
 
-An :class:`Actor` is two pure functions and two static numbers::
+:class:`Actor` is :class:`jaxsim.actor.Actor` (one kind for the arena and the warehouse), here
+with the arena's observation (:class:`jaxsim.scenes.env.Observation`) and action ``(v, omega)``::
 
     init(key, observation) -> actor_state
     act(params, actor_state, observation, key) -> (action (2,) = (v, omega), actor_state)
@@ -20,36 +20,16 @@ at 1 Hz. ``plan_every_steps = 0`` plans once, at the start (SNAPE's stack).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from typing import Any
 
 import jax
 from flax import struct
 
+from jaxsim.actor import Actor, ActorState, Params
 from jaxsim.scenes.env import Env, EnvState, Observation, TimeStep
 
-ActorState = Any
-Params = Any
-
-
-@dataclasses.dataclass(frozen=True)
-class Actor:
-    """A controller of the robot (static: hashable, compared by its functions).
-
-    Attributes:
-      init: ``(key, observation) -> actor_state``.
-      act: ``(params, actor_state, observation, key) -> (action (2,), actor_state)``.
-      plan: optional ``(params, actor_state, observation, key) -> actor_state`` run every
-        ``plan_every_steps`` control steps (0: once, at the start).
-      name: shown in tables and errors.
-    """
-
-    init: Callable[[jax.Array, Observation], ActorState]
-    act: Callable[[Params, ActorState, Observation, jax.Array], tuple[jax.Array, ActorState]]
-    plan: Callable[[Params, ActorState, Observation, jax.Array], ActorState] | None = None
-    plan_every_steps: int = 1
-    name: str = "actor"
+__all__ = ["Actor", "ActorState", "Params", "StepRecord", "default_record", "rollout"]
 
 
 @struct.dataclass
