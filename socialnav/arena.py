@@ -48,6 +48,7 @@ DEFAULT_METHODS = (
     "social_force",
     "dwa",
 )
+POLICY_METHOD = "ppo"  # the rows of --policy-run
 
 
 def add_parser(sub) -> None:
@@ -73,6 +74,13 @@ def add_parser(sub) -> None:
         metavar="MODULE:FUNCTION",
         help="also run your own actor (repeatable): FUNCTION(env) in MODULE (or in a file.py) returns a "
         "jaxsim.scenes.actor.Actor or (actor, params); its rows are named FUNCTION",
+    )
+    p.add_argument(
+        "--policy-run",
+        type=pathlib.Path,
+        default=None,
+        metavar="RUN",
+        help="also run the policy trained in RUN (socialnav policy train); its rows are named ppo",
     )
     p.add_argument(
         "--human-model",
@@ -229,7 +237,10 @@ def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str
         "human_model",
         "params",
     )
-    h.update(json.dumps({"held_out": held_out, **{k: settings.get(k) for k in keys}}, sort_keys=True).encode())
+    chosen = {k: settings.get(k) for k in keys}
+    if settings.get("policy_model") is not None:  # absent without --policy-run: earlier digests stay valid
+        chosen["policy_model"] = settings["policy_model"]
+    h.update(json.dumps({"held_out": held_out, **chosen}, sort_keys=True).encode())
     h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
     return h.hexdigest()[:16]
 
@@ -274,6 +285,19 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         print(f"socialnav arena: {e}", file=sys.stderr)
         return 2
     methods += actor_names
+    policy_digest = None
+    if args.policy_run is not None:
+        from planners import policy_run
+
+        try:
+            policy_digest = policy_run.weights_digest(policy_run.load_weights(args.policy_run)[2])
+        except policy_run.PolicyRunError as e:
+            print(f"socialnav arena: --policy-run {e}", file=sys.stderr)
+            return 2
+        if POLICY_METHOD in methods:
+            print(f"socialnav arena: --policy-run: the name {POLICY_METHOD!r} is taken by an --actor", file=sys.stderr)
+            return 2
+        methods.append(POLICY_METHOD)
     for scene_name, method in args.animate:
         if method not in methods:
             print(f"socialnav arena: --animate {scene_name}:{method}: {method} is not among --methods", file=sys.stderr)
@@ -293,7 +317,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         return 2
     files = _scene_files(args.scenes, SCENES_DIR)
     try:
-        runfolder.check_inputs(shown_as, [*files, args.gscl_run, args.params])
+        runfolder.check_inputs(shown_as, [*files, args.gscl_run, args.params, args.policy_run])
         specs = [load_scene(f) for f in files]
     except ScenarioError as e:
         print(f"socialnav arena: {e}", file=sys.stderr)
@@ -373,6 +397,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         "params": params.text or None,  # None without a file: earlier runs' digests stay valid
         "actors": actor_specs,
         "actor_sources": [actor_spec.source_digest(spec) for spec in actor_specs],
+        **({} if policy_digest is None else {"policy_run": str(args.policy_run), "policy_model": policy_digest}),
         "metrics_version": nav_metrics.VERSION,
         "socialnav_version": __version__,
     }
@@ -434,6 +459,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                         tuple(actor_specs),
                         args.human_model,
                         params.text or "",
+                        None if args.policy_run is None else str(args.policy_run.resolve()),
                     ),
                     work=n * len(methods),
                 )
@@ -554,17 +580,23 @@ def compute_shard(
     actor_specs=(),
     human_model="social_force",
     params_text="",
+    policy_run=None,
 ):
     """One shard: every method on variants ``first .. first + n - 1`` of a scene (a Ray task with
     ``--backend ray``): ``(episodes frame, trajectories frame or None)``. ``actor_specs``: the
     ``--actor`` factories, loaded here (in the worker); ``params_text``: the ``--params`` file's
-    text (parsed here, so a worker needs no access to the file). The GSCL weights enter the
+    text (parsed here, so a worker needs no access to the file); ``policy_run``: a trained
+    policy's run folder (``--policy-run``), restored here. The GSCL weights enter the
     episode program traced: a second checkpoint of the same network compiles nothing new."""
     from evaluation import arena_params, arena_report
     from evaluation.arena import ArenaConfig
 
     keep = max(0, min(n, keep_trajectories - first))
     users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
+    if policy_run is not None:
+        from planners.policy_run import actor_factory
+
+        users[POLICY_METHOD] = actor_factory(policy_run, POLICY_METHOD)
     model = _gscl_model(gscl_run)
     return arena_report.run_scene(
         spec,

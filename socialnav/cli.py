@@ -24,7 +24,7 @@ from socialnav import runtime
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
     from common import __version__
-    from socialnav import arena, evaluate, gscl, layers, learn, pipelines, simulate
+    from socialnav import arena, evaluate, gscl, layers, learn, pipelines, policy, simulate
 
     parser = argparse.ArgumentParser(
         prog="socialnav",
@@ -39,6 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     gscl.add_parser(sub)
     layers.add_parser(sub)
     arena.add_parser(sub)
+    policy.add_parser(sub)
     return parser
 
 

@@ -105,11 +105,21 @@ def padded_slots(n_slots: int) -> int:
     return max(2, 1 << (max(int(n_slots), 1) - 1).bit_length())
 
 
-def sample_variant(spec: SceneSpec, seed: int, k: int, held_out: bool = False, n_slots: int = 0) -> Variant:
+def sample_variant(
+    spec: SceneSpec, seed: int, k: int, held_out: bool = False, n_slots: int = 0, training: bool = False
+) -> Variant:
     """Variant ``k`` of ``spec`` under ``seed`` (numpy arrays); ``held_out`` draws every range just
     outside itself (:class:`_Drawer`); ``n_slots`` pads the people to that many slots (at least the
-    scene's own; the draws do not depend on it)."""
-    entropy = (int(seed), int(k), zlib.crc32(spec.name.encode())) + ((1,) if held_out else ())
+    scene's own; the draws do not depend on it).
+
+    ``training`` draws from a stream of its own (the ranges as usual): the random generator's
+    entropy gets a last word (2) that no evaluation draw has, so no training variant is ever a
+    variant the benchmark evaluates on, whatever the seeds."""
+    if held_out and training:
+        raise ValueError("a variant is drawn held out or for training, not both")
+    entropy = (
+        (int(seed), int(k), zlib.crc32(spec.name.encode())) + ((1,) if held_out else ()) + ((2,) if training else ())
+    )
     rng = np.random.default_rng(entropy)
     draw = _Drawer(rng, held_out)
     n = max(spec.n_people_slots, int(n_slots))
@@ -218,9 +228,15 @@ def sample_variant(spec: SceneSpec, seed: int, k: int, held_out: bool = False, n
 
 
 def sample_variants(
-    spec: SceneSpec, seed: int, n: int, first: int = 0, held_out: bool = False, n_slots: int = 0
+    spec: SceneSpec,
+    seed: int,
+    n: int,
+    first: int = 0,
+    held_out: bool = False,
+    n_slots: int = 0,
+    training: bool = False,
 ) -> Variant:
-    """Variants ``first .. first + n - 1``, stacked on a leading axis (``n_slots``: as
-    :func:`sample_variant`)."""
-    variants = [sample_variant(spec, seed, k, held_out, n_slots) for k in range(first, first + n)]
+    """Variants ``first .. first + n - 1``, stacked on a leading axis (``n_slots``, ``training``:
+    as :func:`sample_variant`)."""
+    variants = [sample_variant(spec, seed, k, held_out, n_slots, training) for k in range(first, first + n)]
     return Variant(**{f.name: np.stack([getattr(v, f.name) for v in variants]) for f in dataclasses.fields(Variant)})

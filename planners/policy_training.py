@@ -1,0 +1,464 @@
+"""PPO in the vectorised arena: the policy of :mod:`planners.policy` trained on many scenes at once.
+
+A single-file PPO in the purejaxrl style (Lu et al. 2022; clipped surrogate, GAE, value
+clipping, per-minibatch advantage normalisation, Adam with gradient clipping: Schulman et al.
+2017 and the "37 details" of Huang et al. 2022), written here rather than taken from rejax
+(0.1.3, the JAX RL library on the registry): rejax trains one gymnax environment of one shape in
+one jitted call, while this training steps scenes of different shapes (one compiled collector
+per scene, one update over all of their transitions) and must stop and resume between updates
+with nothing lost; rejax would also bring gymnax and distrax for a 100-line algorithm.
+
+One update:
+
+1. every scene's ``envs_per_scene`` episodes run ``rollout_steps`` steps under the current
+   policy (sampled actions), each ended episode restarting at once on a variant drawn from the
+   scene's *training* pool (:func:`jaxsim.scenes.variant.sample_variants` with ``training=True``:
+   a stream no evaluation draws from);
+2. the reward is the env's (CrowdNav's: goal, collision, discomfort, wall contact) with its
+   Euclidean progress term replaced by progress along the guidance field (metres of free-space
+   path gained; potential-based shaping, Ng et al. 1999, which keeps the optimal policy and,
+   unlike the straight-line distance, does not reward driving into the inner wall of a corner);
+   a time-limit truncation is treated as an end (purejaxrl's choice);
+3. advantages by GAE per scene, then ``epochs`` passes of ``minibatches`` shuffled minibatches
+   over all scenes' transitions together.
+
+The random keys of update ``u`` are ``fold_in(seed, u)``, so the state between updates
+(:class:`TrainState`) is all there is to save: a run resumed from a checkpoint continues with
+the same bits as one never stopped (tested).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from flax import struct
+
+from jaxsim.scenes import env as env_lib
+from jaxsim.scenes.spec import SceneSpec
+from jaxsim.scenes.variant import padded_slots, sample_variants
+from models import policy_net
+from planners import costmap
+from planners import policy as policy_lib
+
+
+@dataclasses.dataclass(frozen=True)
+class PPOConfig:
+    """Training settings (JSON in a run's ``config.json``; a resumed run must match).
+
+    Attributes:
+      scenes: the scene names trained on (the built-in scenes by default).
+      envs_per_scene, rollout_steps: episodes stepped at once per scene, steps per update
+        (64 x 64: 4,096 transitions per scene and update).
+      updates: updates in all.
+      epochs, minibatches: passes over an update's transitions and the minibatches of a pass.
+      learning_rate, max_grad_norm: Adam's step and the global gradient-norm clip.
+      gamma, gae_lambda, clip_eps, value_coef, entropy_coef: PPO's (purejaxrl's and CleanRL's
+        continuous-control defaults; entropy 0 as theirs).
+      progress_weight: reward per metre gained along the guidance field (robot_sf's progress
+        term; 0.1 keeps a whole crossing worth about CrowdNav's goal reward of 1).
+      pool_per_scene: training variants drawn per scene (resets draw among them).
+      seed: the run's seed (network initialisation, pools, every key).
+      checkpoint_every: updates between checkpoints.
+      policy: the network's and features' shape (:class:`planners.policy.PolicyConfig`).
+    """
+
+    scenes: tuple[str, ...] = ()
+    envs_per_scene: int = 64
+    rollout_steps: int = 64
+    updates: int = 300
+    epochs: int = 4
+    minibatches: int = 8
+    learning_rate: float = 3e-4
+    max_grad_norm: float = 0.5
+    gamma: float = 0.99
+    gae_lambda: float = 0.95
+    clip_eps: float = 0.2
+    value_coef: float = 0.5
+    entropy_coef: float = 0.0
+    progress_weight: float = 0.1
+    pool_per_scene: int = 256
+    seed: int = 0
+    checkpoint_every: int = 10
+    policy: policy_lib.PolicyConfig = policy_lib.PolicyConfig()
+
+    def __post_init__(self):
+        for name in ("envs_per_scene", "rollout_steps", "updates", "epochs", "minibatches", "pool_per_scene"):
+            if int(getattr(self, name)) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if self.checkpoint_every < 1:
+            raise ValueError(f"checkpoint_every must be >= 1, got {self.checkpoint_every}")
+
+    def to_json(self) -> dict:
+        return {**dataclasses.asdict(self), "scenes": list(self.scenes), "policy": self.policy.to_json()}
+
+    @classmethod
+    def from_json(cls, d: dict) -> PPOConfig:
+        d = dict(d)
+        d["scenes"] = tuple(d.get("scenes", ()))
+        d["policy"] = policy_lib.PolicyConfig.from_json(d["policy"])
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(d) - known)
+        if unknown:
+            raise ValueError(f"unknown setting(s) {', '.join(unknown)}")
+        return cls(**d)
+
+
+def reward_params() -> env_lib.RewardParams:
+    """The env's reward without its Euclidean progress (the guidance field's replaces it)."""
+    return env_lib.RewardParams(progress_weight=0.0)
+
+
+def scene_env(spec: SceneSpec) -> env_lib.Env:
+    """The environment of ``spec`` as the arena runs it (0.1 s steps, the timeout in whole
+    seconds), with :func:`reward_params`."""
+    config = env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, 0.1, 10))
+    return env_lib.make_env(spec, config, reward=reward_params())
+
+
+@struct.dataclass
+class Scene:
+    """One scene's fixed inputs: its ``env``, the training ``pool`` of N variants and their
+    guidance ``fields`` (N, H, W)."""
+
+    env: env_lib.Env
+    pool: object
+    fields: jax.Array
+
+
+@struct.dataclass
+class Runner:
+    """One scene's running episodes (B of them): ``env_state``, ``observation``, the pool index
+    of each one's variant (B,), and the episode's return (B,), length (B,) and whether it has
+    touched a person (B,) so far."""
+
+    env_state: env_lib.EnvState
+    observation: env_lib.Observation
+    pool_index: jax.Array
+    episode_return: jax.Array
+    episode_steps: jax.Array
+    episode_contact: jax.Array
+
+
+@struct.dataclass
+class TrainState:
+    """Everything an update changes: ``weights``, ``opt_state``, one :class:`Runner` per scene
+    (a tuple), ``update`` () int32 (updates done)."""
+
+    weights: object
+    opt_state: object
+    runners: tuple
+    update: jax.Array
+
+
+@struct.dataclass
+class Batch:
+    """Transitions (N of them): features (N, F), the sampled normalised action u (N, 2), its
+    log-probability, the value, the advantage and the return (N,)."""
+
+    features: jax.Array
+    u: jax.Array
+    log_prob: jax.Array
+    value: jax.Array
+    advantage: jax.Array
+    target: jax.Array
+
+
+def make_scene(spec: SceneSpec, config: PPOConfig) -> Scene:
+    """``spec``'s env and its training pool with the pool's guidance fields (host side)."""
+    env = scene_env(spec)
+    pool = sample_variants(
+        spec, config.seed, config.pool_per_scene, n_slots=padded_slots(spec.n_people_slots), training=True
+    )
+    pool = jax.tree_util.tree_map(jnp.asarray, pool)
+    grid = policy_lib.scene_grid(env)
+    t = policy_lib.traversal(env)
+    fields = jax.jit(jax.vmap(lambda g: policy_lib.guidance_field(t, g, grid)))(pool.goal_xy)
+    return Scene(env=env, pool=pool, fields=fields)
+
+
+def _optimizer(config: PPOConfig):
+    return optax.chain(optax.clip_by_global_norm(config.max_grad_norm), optax.adam(config.learning_rate, eps=1e-5))
+
+
+def _take(pool, index):
+    return jax.tree_util.tree_map(lambda a: a[index], pool)
+
+
+def _reset(scene: Scene, key, index):
+    keys = jax.random.split(key, index.shape[0])
+    state, ts = jax.vmap(scene.env.reset)(keys, _take(scene.pool, index))
+    return state, ts.observation
+
+
+def init_runner(scene: Scene, config: PPOConfig, key) -> Runner:
+    """``envs_per_scene`` episodes of the scene at time 0 on random pool variants."""
+    k_pick, k_reset = jax.random.split(key)
+    index = jax.random.randint(k_pick, (config.envs_per_scene,), 0, config.pool_per_scene)
+    state, obs = _reset(scene, k_reset, index)
+    zeros = jnp.zeros(config.envs_per_scene, jnp.float32)
+    return Runner(state, obs, index, zeros, jnp.zeros(config.envs_per_scene, jnp.int32), zeros.astype(bool))
+
+
+def _features(config: PPOConfig, scene: Scene, grid, obs, index):
+    def one(o, i):
+        return policy_lib.features(config.policy, o, scene.fields[i], grid, scene.env.robot)
+
+    return jax.vmap(one)(obs, index)
+
+
+def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec) -> Callable:
+    """``collect(scene, weights, runner, key) -> (runner, batch, stats)``: ``rollout_steps``
+    steps of the runner's episodes and their GAE, jitted (one program per scene shape).
+
+    ``stats``: the episodes that ended, ``(count, sum of returns, reached, touched a person,
+    sum of lengths)``."""
+
+    def collect(scene: Scene, weights, runner: Runner, key):
+        env = scene.env
+
+        def one_step(carry, step_key):
+            runner, stats = carry
+            k_act, k_pick, k_reset = jax.random.split(step_key, 3)
+            x = _features(config, scene, grid, runner.observation, runner.pool_index)
+            mean, log_std, value = policy_net.apply(graphdef, weights, x)
+            u = policy_net.sample(k_act, mean, log_std)
+            log_prob = policy_net.gaussian_log_prob(u, mean, log_std)
+            action = policy_lib.command(u, env.robot)
+            state, ts = jax.vmap(env.step)(runner.env_state, action)
+            fields = scene.fields[runner.pool_index]
+            before = jax.vmap(policy_lib.field_at, (0, 0, None))(fields, runner.env_state.robot.xy, grid)
+            after = jax.vmap(policy_lib.field_at, (0, 0, None))(fields, state.robot.xy, grid)
+            progress = jnp.where(jnp.isfinite(before) & jnp.isfinite(after), jnp.clip(before - after, -0.5, 0.5), 0.0)
+            reward = ts.reward + config.progress_weight * progress
+            done = ts.done
+            ep_return = runner.episode_return + reward
+            ep_steps = runner.episode_steps + 1
+            ep_contact = runner.episode_contact | ts.info.person_contact
+            stats = (
+                stats[0] + done.sum(),
+                stats[1] + jnp.where(done, ep_return, 0.0).sum(),
+                stats[2] + (done & ts.terminated).sum(),
+                stats[3] + (done & ep_contact).sum(),
+                stats[4] + jnp.where(done, ep_steps, 0).sum(),
+            )
+
+            def restart(_):
+                index = jax.random.randint(k_pick, done.shape, 0, config.pool_per_scene)
+                fresh, fresh_obs = _reset(scene, k_reset, index)
+
+                def pick(a, b):
+                    return jnp.where(done.reshape((-1,) + (1,) * (a.ndim - 1)), a, b)
+
+                return jax.tree_util.tree_map(
+                    pick, (fresh, fresh_obs, index), (state, ts.observation, runner.pool_index)
+                )
+
+            def carry_on(_):
+                return state, ts.observation, runner.pool_index
+
+            state, obs, index = jax.lax.cond(jnp.any(done), restart, carry_on, None)
+            keep = ~done
+            new_runner = Runner(
+                state,
+                obs,
+                index,
+                jnp.where(keep, ep_return, 0.0),
+                jnp.where(keep, ep_steps, 0),
+                keep & ep_contact,
+            )
+            return (new_runner, stats), (x, u, log_prob, value, reward, done)
+
+        zero_stats = (jnp.int32(0), jnp.float32(0.0), jnp.int32(0), jnp.int32(0), jnp.int32(0))
+        keys = jax.random.split(key, config.rollout_steps)
+        (runner, stats), (x, u, log_prob, value, reward, done) = jax.lax.scan(one_step, (runner, zero_stats), keys)
+        last_x = _features(config, scene, grid, runner.observation, runner.pool_index)
+        _, _, last_value = policy_net.apply(graphdef, weights, last_x)
+        advantage = gae(value, reward, done, last_value, config.gamma, config.gae_lambda)
+        flat = lambda a: a.reshape((-1,) + a.shape[2:])
+        batch = Batch(flat(x), flat(u), flat(log_prob), flat(value), flat(advantage), flat(advantage + value))
+        return runner, batch, stats
+
+    return jax.jit(collect)
+
+
+def gae(values, rewards, dones, last_value, gamma: float, lam: float):
+    """(T, B) generalised advantage estimates (Schulman et al. 2016) of T steps of B episodes;
+    ``dones[t]``: the episode ended at step t (its successor is another episode's start)."""
+
+    def step(carry, t):
+        advantage_next, value_next = carry
+        value, reward, done = t
+        not_done = 1.0 - done.astype(jnp.float32)
+        delta = reward + gamma * value_next * not_done - value
+        advantage = delta + gamma * lam * not_done * advantage_next
+        return (advantage, value), advantage
+
+    _, advantages = jax.lax.scan(step, (jnp.zeros_like(last_value), last_value), (values, rewards, dones), reverse=True)
+    return advantages
+
+
+def make_update(config: PPOConfig, graphdef) -> Callable:
+    """``update(weights, opt_state, batch, key) -> (weights, opt_state, losses)``: ``epochs``
+    passes of ``minibatches`` shuffled minibatches, jitted. ``losses``: the last pass's mean
+    (policy, value, entropy, approximate KL)."""
+    optimizer = _optimizer(config)
+
+    def loss_fn(weights, b: Batch):
+        mean, log_std, value = policy_net.apply(graphdef, weights, b.features)
+        log_prob = policy_net.gaussian_log_prob(b.u, mean, log_std)
+        ratio = jnp.exp(log_prob - b.log_prob)
+        adv = (b.advantage - b.advantage.mean()) / (b.advantage.std() + 1e-8)
+        clipped = jnp.clip(ratio, 1.0 - config.clip_eps, 1.0 + config.clip_eps)
+        policy_loss = -jnp.minimum(ratio * adv, clipped * adv).mean()
+        value_clipped = b.value + jnp.clip(value - b.value, -config.clip_eps, config.clip_eps)
+        value_loss = 0.5 * jnp.maximum((value - b.target) ** 2, (value_clipped - b.target) ** 2).mean()
+        entropy = policy_net.gaussian_entropy(log_std)
+        total = policy_loss + config.value_coef * value_loss - config.entropy_coef * entropy
+        kl = ((ratio - 1.0) - jnp.log(ratio)).mean()
+        return total, jnp.stack([policy_loss, value_loss, entropy, kl])
+
+    grad_fn = jax.grad(loss_fn, has_aux=True)
+
+    def update(weights, opt_state, batch: Batch, key):
+        n = batch.u.shape[0]
+        size = n // config.minibatches
+
+        def epoch(carry, k):
+            perm = jax.random.permutation(k, n)[: size * config.minibatches]
+            shaped = jax.tree_util.tree_map(lambda a: a[perm].reshape((config.minibatches, size) + a.shape[1:]), batch)
+
+            def minibatch(carry, b):
+                weights, opt_state = carry
+                grads, losses = grad_fn(weights, b)
+                updates, opt_state = optimizer.update(grads, opt_state, weights)
+                return (optax.apply_updates(weights, updates), opt_state), losses
+
+            return jax.lax.scan(minibatch, carry, shaped)
+
+        (weights, opt_state), losses = jax.lax.scan(epoch, (weights, opt_state), jax.random.split(key, config.epochs))
+        return weights, opt_state, losses[-1].mean(axis=0)
+
+    return jax.jit(update)
+
+
+class Trainer:
+    """PPO over ``specs`` with ``config``: :meth:`initial_state`, then :meth:`step` per update.
+
+    Host-side bookkeeping only; the work is in the jitted collectors (one per scene) and the
+    update. ``graphdef`` is the network's static structure.
+    """
+
+    def __init__(self, specs: Sequence[SceneSpec], config: PPOConfig):
+        if not specs:
+            raise ValueError("PPO needs at least one scene")
+        self.config = config
+        self.specs = list(specs)
+        self.scenes = [make_scene(s, config) for s in self.specs]
+        window = self.scenes[0].env.config.window_cells
+        self.n_features = config.policy.n_features(window)
+        self.graphdef, self._weights0 = policy_net.init_weights(
+            self.n_features, config.policy.hidden, config.seed, config.policy.initial_log_std
+        )
+        self.grids = [policy_lib.scene_grid(s.env) for s in self.scenes]
+        self._collect = [make_collect(config, self.graphdef, g) for g in self.grids]
+        self._update = make_update(config, self.graphdef)
+        self.transitions_per_update = len(self.scenes) * config.envs_per_scene * config.rollout_steps
+
+    def _key(self, update: int, *path: int):
+        key = jax.random.fold_in(jax.random.PRNGKey(self.config.seed), update)
+        for p in path:
+            key = jax.random.fold_in(key, p)
+        return key
+
+    def initial_state(self) -> TrainState:
+        runners = tuple(
+            init_runner(scene, self.config, jax.random.fold_in(jax.random.PRNGKey(self.config.seed + 1), k))
+            for k, scene in enumerate(self.scenes)
+        )
+        opt_state = _optimizer(self.config).init(self._weights0)
+        return TrainState(self._weights0, opt_state, runners, jnp.int32(0))
+
+    def step(self, state: TrainState) -> tuple[TrainState, dict]:
+        """One update: ``(new state, metrics)``; metrics are host floats (episodes ended in this
+        update's rollouts, their mean return, goal and person-contact rates, the losses)."""
+        u = int(state.update)
+        runners, batches = [], []
+        totals = np.zeros(5)
+        for k, (scene, collect) in enumerate(zip(self.scenes, self._collect, strict=True)):
+            runner, batch, stats = collect(scene, state.weights, state.runners[k], self._key(u, 0, k))
+            runners.append(runner)
+            batches.append(batch)
+            totals += np.array([float(s) for s in stats])
+        batch = jax.tree_util.tree_map(lambda *a: jnp.concatenate(a), *batches)
+        weights, opt_state, losses = self._update(state.weights, state.opt_state, batch, self._key(u, 1))
+        ended = totals[0]
+        metrics = {
+            "update": u + 1,
+            "env_steps": (u + 1) * self.transitions_per_update,
+            "episodes": int(ended),
+            "return": float(totals[1] / ended) if ended else float("nan"),
+            "goal_rate": float(totals[2] / ended) if ended else float("nan"),
+            "contact_rate": float(totals[3] / ended) if ended else float("nan"),
+            "episode_s": float(totals[4] / ended * 0.1) if ended else float("nan"),
+            "policy_loss": float(losses[0]),
+            "value_loss": float(losses[1]),
+            "entropy": float(losses[2]),
+            "approx_kl": float(losses[3]),
+        }
+        return TrainState(weights, opt_state, tuple(runners), jnp.int32(u + 1)), metrics
+
+
+def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int = 7) -> float:
+    """Mean return of the deterministic (mean-action) policy over ``n_variants`` training-pool
+    variants of each scene, one episode each (the training's reward)."""
+    config = trainer.config
+    totals = []
+    for scene, grid in zip(trainer.scenes, trainer.grids, strict=True):
+        actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid)
+        params = policy_lib.PolicyParams(weights, policy_lib.traversal(scene.env), scene.env.robot)
+        index = jnp.arange(n_variants) % config.pool_per_scene
+        variants = _take(scene.pool, index)
+        fields = scene.fields[index]
+        keys = jax.random.split(jax.random.PRNGKey(seed), n_variants)
+        totals.append(_episode_returns(scene.env, actor, params, variants, fields, keys, grid, config.progress_weight))
+    return float(np.mean(np.concatenate(totals)))
+
+
+def _episode_returns(env, actor, params, variants, fields, keys, grid, progress_weight):
+    from jaxsim.scenes.actor import rollout
+
+    @jax.jit
+    def run(variants, fields, keys):
+        def one(variant, field, key):
+            (_, _), rec = rollout(env, actor, params, variant, key)
+            xy = jnp.concatenate([variant.robot_xy[None], rec.robot_xy_m])
+            phi = policy_lib.field_at(field, xy, grid)
+            ok = jnp.isfinite(phi[:-1]) & jnp.isfinite(phi[1:])
+            progress = jnp.where(ok, jnp.clip(phi[:-1] - phi[1:], -0.5, 0.5), 0.0)
+            was_reached = jnp.concatenate([jnp.zeros(1, bool), rec.reached[:-1]])
+            return jnp.sum(rec.reward + jnp.where(was_reached, 0.0, progress_weight * progress))
+
+        return jax.vmap(one)(variants, fields, keys)
+
+    return np.asarray(run(variants, fields, keys))
+
+
+__all__ = [
+    "Batch",
+    "PPOConfig",
+    "Runner",
+    "Scene",
+    "TrainState",
+    "Trainer",
+    "evaluate_return",
+    "gae",
+    "make_collect",
+    "make_update",
+    "reward_params",
+    "scene_env",
+]

@@ -1,0 +1,127 @@
+"""``socialnav policy``: a navigation policy trained by PPO in the vectorised arena.
+
+socialnav policy train --out runs/ppo                       # every built-in scene; run again to resume
+socialnav policy train --out runs/ppo-hallway --scenes gscl_l_hallway --updates 50
+socialnav arena --out runs/arena --policy-run runs/ppo       # its rows beside the other methods
+
+The run folder holds ``config.json``, orbax ``checkpoints/``, ``metrics.jsonl`` (one line per
+update) and ``curve.png`` (:mod:`planners.policy_run`). Training uses the scenes' training
+variants (a random stream the benchmark never draws from).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+import sys
+import time
+
+from common import runfolder
+from common.runfolder import RunFolderError
+from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
+from socialnav.locking import locks_folder
+
+TRAIN_JOB = "socialnav policy train"
+TRAIN_RESULTS = ("config.json", "checkpoints", "metrics.jsonl", "curve.png")
+
+
+def add_parser(top) -> None:
+    parser = top.add_parser(
+        "policy",
+        help="train a navigation policy by reinforcement learning (PPO) in the arena's scenes",
+        description="A learned policy (PPO) trained in the vectorised arena; benchmark it with "
+        "socialnav arena --policy-run RUN.",
+    )
+    sub = parser.add_subparsers(dest="policy_command", required=True)
+    tr = sub.add_parser("train", help="train (or resume) a PPO policy in --out")
+    tr.add_argument("--out", type=output_folder, required=True, help="the run folder (resumed if it holds one)")
+    tr.add_argument(
+        "--scenes",
+        type=comma_names,
+        default=None,
+        help="comma-separated built-in scene names to train on (default: all of them)",
+    )
+    tr.add_argument("--updates", type=positive_int, default=None, help="PPO updates in all (default 300)")
+    tr.add_argument(
+        "--envs-per-scene", type=positive_int, default=None, help="episodes stepped at once per scene (default 64)"
+    )
+    tr.add_argument("--rollout-steps", type=positive_int, default=None, help="steps per update (default 64)")
+    tr.add_argument("--seed", type=seed_int, default=None, help="random seed of the run (default 0)")
+    tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    tr.set_defaults(handler=_train)
+
+
+def _config(args, scene_names: tuple[str, ...]):
+    from planners.policy_run import read_config
+    from planners.policy_training import PPOConfig
+
+    given = {
+        "updates": args.updates,
+        "envs_per_scene": args.envs_per_scene,
+        "rollout_steps": args.rollout_steps,
+        "seed": args.seed,
+    }
+    given = {k: v for k, v in given.items() if v is not None}
+    if (args.out / "config.json").exists():
+        stored, _ = read_config(args.out)
+        if args.scenes is None and not given:
+            return stored  # resume with the stored settings
+        if args.updates is not None and not (set(given) - {"updates"}) and args.scenes is None:
+            return dataclasses.replace(stored, updates=args.updates)  # train on for longer
+    return PPOConfig(scenes=scene_names, **given)
+
+
+@locks_folder(lambda args: args.out, "policy train")
+def _train(args) -> int:
+    from data import SCENES_DIR
+    from jaxsim.scenario import ScenarioError
+    from jaxsim.scenes.spec import load_scene
+    from planners import policy_run
+
+    try:
+        runfolder.claim(args.out, TRAIN_JOB, TRAIN_RESULTS)
+    except RunFolderError as err:
+        print(f"socialnav policy train: {err}", file=sys.stderr)
+        return 2
+    available = sorted(p.stem for p in SCENES_DIR.glob("*.json"))
+    try:
+        config = _config(args, tuple(args.scenes) if args.scenes else ())
+    except (ValueError, policy_run.PolicyRunError) as err:
+        print(f"socialnav policy train: {err}", file=sys.stderr)
+        return 2
+    names = list(config.scenes) or available
+    unknown = [n for n in names if n not in available]
+    if unknown:
+        print(
+            f"socialnav policy train: --scenes: unknown {', '.join(unknown)} (known: {', '.join(available)})",
+            file=sys.stderr,
+        )
+        return 2
+    try:
+        specs = [load_scene(SCENES_DIR / f"{n}.json") for n in names]
+    except ScenarioError as err:
+        print(f"socialnav policy train: {err}", file=sys.stderr)
+        return 2
+    runfolder.record(args.out, TRAIN_JOB, ["config.json", "checkpoints/", "metrics.jsonl", "curve.png"])
+    per_update = len(specs) * config.envs_per_scene * config.rollout_steps
+    print(
+        f"PPO on {len(specs)} scene(s): {config.updates} updates of {per_update:,} env-steps "
+        f"({config.envs_per_scene} episodes x {config.rollout_steps} steps per scene) -> {args.out}"
+    )
+    t0 = time.perf_counter()
+    try:
+        history = policy_run.train(specs, config, args.out, progress=not args.no_progress)
+    except policy_run.PolicyRunError as err:
+        print(f"socialnav policy train: {err}", file=sys.stderr)
+        return 2
+    if history:
+        last = history[-1]
+        steps = last["env_steps"]
+        print(
+            f"update {last['update']}: return {last['return']:.3f}, goal {100 * last['goal_rate']:.0f} %, "
+            f"touched a person {100 * last['contact_rate']:.0f} % of ended episodes; "
+            f"{steps:,} env-steps in {last['wall_s']:.0f} s of training ({steps / max(last['wall_s'], 1e-9):,.0f}/s); "
+            f"{time.perf_counter() - t0:.0f} s in this call"
+        )
+    print(f"curve: {pathlib.Path(args.out) / 'curve.png'}")
+    return 0

@@ -1,0 +1,206 @@
+"""The learned policy (planners/policy.py) and its PPO training (planners/policy_training.py,
+planners/policy_run.py): features on hand-made observations, GAE on a known answer, training that
+improves the return, a resumed run equal to an uninterrupted one, the arena's --policy-run."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pandas as pd
+import pytest
+
+from data import SCENES_DIR
+from jaxsim.scenes import env as env_lib
+from jaxsim.scenes.robot import RobotParams
+from jaxsim.scenes.spec import load_scene
+from jaxsim.scenes.variant import sample_variant
+from planners import costmap, policy_run, policy_training
+from planners import policy as policy_lib
+from socialnav.cli import main
+
+EASY = "snape_static_person"  # untrained, the robot drives into the person and stays
+
+
+def _observation(people_xy, people_velocity, visible, yaw=0.0, goal=(5.0, 0.0)):
+    p = len(people_xy)
+    return env_lib.Observation(
+        robot_xy_m=jnp.zeros(2),
+        robot_yaw_rad=jnp.float32(yaw),
+        robot_speed_mps=jnp.float32(0.25),
+        robot_turn_rate_rps=jnp.float32(-0.5),
+        goal_xy_m=jnp.asarray(goal, jnp.float32),
+        people_xy_m=jnp.asarray(people_xy, jnp.float32).reshape(p, 2),
+        people_heading_rad=jnp.zeros(p),
+        people_velocity_mps=jnp.asarray(people_velocity, jnp.float32).reshape(p, 2),
+        people_visible=jnp.asarray(visible),
+        occupancy=jnp.zeros((16, 16)),
+        time_s=jnp.float32(0.0),
+    )
+
+
+def test_features_read_the_goal_own_motion_and_nearest_people_in_the_robots_frame():
+    config = policy_lib.PolicyConfig(n_people=2)
+    grid = costmap.GridSpec(40, 40, 0.25, -5.0, -5.0)
+    field = jnp.zeros((40, 40))
+    robot = RobotParams()
+    # Facing +y (yaw pi/2): the goal 5 m along +y is straight ahead; the person at (-2, 0) is
+    # on the robot's left at 2 m, walking along +x (to the robot's right); the person at (0, 1)
+    # is unseen, the one at (3, 3) seen but farther.
+    obs = _observation(
+        [(-2.0, 0.0), (0.0, 1.0), (3.0, 3.0)],
+        [(1.0, 0.0), (0.0, 0.0), (0.0, 0.0)],
+        [True, False, True],
+        yaw=math.pi / 2,
+        goal=(0.0, 5.0),
+    )
+    x = np.asarray(policy_lib.features(config, obs, field, grid, robot))
+    assert x.shape == (config.n_features(16),)
+    np.testing.assert_allclose(x[:3], [0.5, 1.0, 0.0], atol=1e-6)  # 5 m ahead
+    np.testing.assert_allclose(x[3:5], [0.25 / 0.5, -0.5 / 1.0], atol=1e-6)
+    people = x[-12:].reshape(2, 6)
+    gap = 2.0 - robot.radius_m
+    np.testing.assert_allclose(people[0], [0.0, 2.0 / 4, 0.0, -1.0 / 1.5, gap / 4, 1.0], atol=1e-6)
+    far = math.hypot(3, 3)
+    np.testing.assert_allclose(people[1][:2], [3 / 4, -3 / 4], atol=1e-6)  # ahead and to the right
+    np.testing.assert_allclose(people[1][4:], [(far - robot.radius_m) / 4, 1.0], atol=1e-6)
+    # Nobody seen: the people's slots are all zero.
+    none = policy_lib.features(config, obs.replace(people_visible=jnp.zeros(3, bool)), field, grid, robot)
+    assert np.all(np.asarray(none)[-12:] == 0.0)
+
+
+def test_guidance_field_is_zero_at_the_goal_and_no_shorter_than_the_straight_line():
+    spec = load_scene(SCENES_DIR / f"{EASY}.json")
+    env = env_lib.make_env(spec)
+    grid = policy_lib.scene_grid(env)
+    t = policy_lib.traversal(env)
+    goal = jnp.asarray(sample_variant(spec, 0, 0).goal_xy)
+    field = policy_lib.guidance_field(t, goal, grid)
+    assert float(policy_lib.field_at(field, goal, grid)) == 0.0
+    start = jnp.asarray(sample_variant(spec, 0, 0).robot_xy)
+    along = float(policy_lib.field_at(field, start, grid))
+    assert along >= float(jnp.linalg.norm(start - goal)) - 2 * grid.resolution_m
+    assert math.isinf(float(policy_lib.field_at(field, jnp.array([1e3, 1e3]), grid)))  # off the map
+
+
+def test_command_maps_the_normalised_action_onto_the_bases_limits():
+    robot = RobotParams(max_speed_mps=0.8, max_turn_rate_rps=1.2)
+    u = jnp.array([[-1.0, 0.0], [1.0, 1.0], [0.0, -0.5], [3.0, -7.0]])
+    np.testing.assert_allclose(policy_lib.command(u, robot), [[0, 0], [0.8, 1.2], [0.4, -0.6], [0.8, -1.2]], atol=1e-6)
+
+
+def test_gae_on_a_hand_computed_case():
+    # One episode of 3 steps ending at step 1, then a new one; gamma 0.5, lambda 1 (Monte Carlo):
+    # step 0: r0 + g r1 - v0 (the episode ends at 1); step 1: r1 - v1; step 2: r2 + g V_last - v2.
+    values = jnp.array([[1.0], [2.0], [3.0]])
+    rewards = jnp.array([[1.0], [4.0], [2.0]])
+    dones = jnp.array([[False], [True], [False]])
+    adv = policy_training.gae(values, rewards, dones, jnp.array([10.0]), 0.5, 1.0)
+    np.testing.assert_allclose(adv[:, 0], [1 + 0.5 * 4 - 1, 4 - 2, 2 + 0.5 * 10 - 3], atol=1e-6)
+    # lambda 0: one-step TD errors.
+    adv0 = policy_training.gae(values, rewards, dones, jnp.array([10.0]), 0.5, 0.0)
+    np.testing.assert_allclose(adv0[:, 0], [1 + 0.5 * 2 - 1, 4 - 2, 2 + 0.5 * 10 - 3], atol=1e-6)
+
+
+def test_training_variants_are_a_stream_of_their_own():
+    spec = load_scene(SCENES_DIR / f"{EASY}.json")
+    for k in range(5):
+        train = sample_variant(spec, 0, k, training=True)
+        for other in (sample_variant(spec, 0, k), sample_variant(spec, 0, k, held_out=True)):
+            assert not np.array_equal(train.robot_xy, other.robot_xy) or not np.array_equal(
+                train.goal_xy, other.goal_xy
+            )
+    with pytest.raises(ValueError, match="not both"):
+        sample_variant(spec, 0, 0, held_out=True, training=True)
+
+
+def test_config_round_trips_and_refuses_bad_values():
+    config = policy_training.PPOConfig(scenes=("a", "b"), updates=7, policy=policy_lib.PolicyConfig(hidden=(16,)))
+    assert policy_training.PPOConfig.from_json(json.loads(json.dumps(config.to_json()))) == config
+    with pytest.raises(ValueError, match="envs_per_scene"):
+        policy_training.PPOConfig(envs_per_scene=0)
+    with pytest.raises(ValueError, match="unknown setting"):
+        policy_training.PPOConfig.from_json({**config.to_json(), "learning_rat": 1.0})
+
+
+def _tiny(updates: int, seed: int = 0) -> policy_training.PPOConfig:
+    return policy_training.PPOConfig(
+        scenes=(EASY,),
+        envs_per_scene=32,
+        rollout_steps=64,
+        updates=updates,
+        minibatches=4,
+        pool_per_scene=32,
+        seed=seed,
+        checkpoint_every=100,
+        policy=policy_lib.PolicyConfig(hidden=(64, 64)),
+    )
+
+
+@pytest.mark.slow
+def test_a_tiny_training_run_improves_the_return():
+    spec = load_scene(SCENES_DIR / f"{EASY}.json")
+    trainer = policy_training.Trainer([spec], _tiny(15))
+    state = trainer.initial_state()
+    before = policy_training.evaluate_return(trainer, state.weights, 16)
+    for _ in range(15):
+        state, metrics = trainer.step(state)
+    after = policy_training.evaluate_return(trainer, state.weights, 16)
+    assert np.isfinite(metrics["policy_loss"]) and metrics["env_steps"] == 15 * 32 * 64
+    assert after > before + 1.0, (before, after)  # measured: -20.0 -> 0.4
+
+
+@pytest.mark.slow
+def test_a_run_resumed_after_a_stop_equals_one_never_stopped(tmp_path):
+    spec = load_scene(SCENES_DIR / f"{EASY}.json")
+    config = _tiny(4)
+    whole = policy_run.train([spec], config, tmp_path / "whole", progress=False)
+    cut = tmp_path / "cut"
+    first = policy_run.train([spec], config, cut, progress=False, stop_after_updates=2)
+    assert len(first) == 2 and (cut / "checkpoints" / "2").is_dir()
+    rest = policy_run.train([spec], config, cut, progress=False, log=lambda _: None)
+    assert [h["update"] for h in rest] == [1, 2, 3, 4]
+    for a, b in zip(whole, rest, strict=True):  # NaN (no episode ended yet) compares equal as JSON
+        assert json.dumps({k: v for k, v in a.items() if k != "wall_s"}) == json.dumps(
+            {k: v for k, v in b.items() if k != "wall_s"}
+        )
+    _, _, w_whole, step_whole = policy_run.load_weights(tmp_path / "whole")
+    _, _, w_cut, step_cut = policy_run.load_weights(cut)
+    assert step_whole == step_cut == 4
+    for a, b in zip(jax.tree.leaves(w_whole), jax.tree.leaves(w_cut), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    lines = (cut / "metrics.jsonl").read_text().splitlines()
+    assert len(lines) == 4 and (cut / "curve.png").stat().st_size > 0
+    # Another configuration in the same folder is refused, naming the file.
+    with pytest.raises(policy_run.PolicyRunError, match="config.json"):
+        policy_run.train([spec], _tiny(4, seed=1), cut, progress=False)
+
+
+@pytest.mark.slow
+def test_policy_train_and_arena_policy_run_from_the_command_line(tmp_path, capsys):
+    run = tmp_path / "ppo"
+    argv = ["policy", "train", "--out", str(run), "--scenes", EASY, "--updates", "2", "--envs-per-scene", "8"]
+    assert main([*argv, "--rollout-steps", "16", "--no-progress"]) == 0
+    assert "update 2:" in capsys.readouterr().out
+    out = tmp_path / "arena"
+    code = main(
+        ["arena", "--out", str(out), "--scenes", EASY, "--methods", "navfn", "--variants", "3"]
+        + ["--policy-run", str(run), "--no-progress"]
+    )
+    assert code == 0
+    summary = pd.read_csv(out / "summary.csv")
+    assert set(summary.method) == {"navfn", "ppo"}
+    assert json.loads((out / "run.json").read_text())["policy_model"]
+
+
+def test_bad_input_to_policy_train_and_arena_policy_run_is_one_line(tmp_path, capsys):
+    code = main(["policy", "train", "--out", str(tmp_path / "r"), "--scenes", "no_such_scene", "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2 and "unknown no_such_scene" in err and len(err.strip().splitlines()) == 1
+    (tmp_path / "notarun").mkdir()
+    code = main(["arena", "--out", str(tmp_path / "a"), "--scenes", EASY, "--policy-run", str(tmp_path / "notarun")])
+    err = capsys.readouterr().err
+    assert code == 2 and "config.json" in err and len(err.strip().splitlines()) == 1
