@@ -376,9 +376,9 @@ class Trainer:
         return key
 
     def initial_state(self) -> TrainState:
+        start = jax.random.fold_in(jax.random.PRNGKey(self.config.seed), 2**31 - 1)  # no update's key
         runners = tuple(
-            init_runner(scene, self.config, jax.random.fold_in(jax.random.PRNGKey(self.config.seed + 1), k))
-            for k, scene in enumerate(self.scenes)
+            init_runner(scene, self.config, jax.random.fold_in(start, k)) for k, scene in enumerate(self.scenes)
         )
         opt_state = _optimizer(self.config).init(self._weights0)
         return TrainState(self._weights0, opt_state, runners, jnp.int32(0))
