@@ -13,8 +13,12 @@ people are not in it), and at every step it sees:
   around it, turned with it, minus the field under it, over ``field_scale_m`` and clipped to
   [-1, 1] (walls and unreachable cells read 1): the way to the goal and the walls near it;
 * ``occupancy``: the env's occupancy window (:class:`jaxsim.scenes.env.Observation`);
+* ``social`` (optional, ``PolicyConfig.social_layer``): a social cost layer (SNL, small, large
+  or matched; :mod:`planners.snl`) drawn from the people it sees, on the guidance window's
+  points, over Nav2's 254: so a learned policy can use a cost map as an input channel;
 * ``people``: the ``n_people`` nearest people it sees, in its frame: position (/4 m), velocity
-  (/1.5 m/s), distance between bodies (/4 m), and a flag (1 seen; all 0 for an empty slot).
+  (/1.5 m/s), the distance from its body to their centre (/4 m), and a flag (1 seen; all 0 for
+  an empty slot).
 
 Everything is what the robot perceives (the env's observation) and its map; nothing is read
 from the simulator. The network's normalised output ``u`` (2,) becomes the command ``v =
@@ -34,7 +38,10 @@ from jaxsim.scenes.actor import Actor
 from jaxsim.scenes.env import Env, Observation
 from jaxsim.scenes.robot import RobotParams
 from models import policy_net
-from planners import costmap, grid_planner
+from planners import costmap, grid_planner, snl, stack
+from planners.scene import Scene
+
+SOCIAL_LAYERS = ("none", "snl_small", "snl_large", "snl_matched")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,6 +55,9 @@ class PolicyConfig:
         reach of the env's occupancy window).
       field_scale_m: field differences are divided by this (2 m: the window's half width).
       initial_log_std: the exploration noise at the start of training.
+      social_layer: ``"none"`` or a social layer seen on the guidance window
+        (:data:`SOCIAL_LAYERS`: SNL with the small, large or CASN-matched covariances, their
+        parameters the stacks' own); it adds ``field_cells ** 2`` features.
     """
 
     hidden: tuple[int, ...] = (128, 128)
@@ -56,10 +66,16 @@ class PolicyConfig:
     field_resolution_m: float = 0.5
     field_scale_m: float = 2.0
     initial_log_std: float = -0.5
+    social_layer: str = "none"
+
+    def __post_init__(self):
+        if self.social_layer not in SOCIAL_LAYERS:
+            raise ValueError(f"social_layer must be one of {', '.join(SOCIAL_LAYERS)}, got {self.social_layer!r}")
 
     def n_features(self, window_cells: int) -> int:
         """F, the feature vector's length with the env's occupancy window of ``window_cells``."""
-        return 3 + 2 + self.field_cells**2 + window_cells**2 + 6 * self.n_people
+        social = 0 if self.social_layer == "none" else self.field_cells**2
+        return 3 + 2 + self.field_cells**2 + social + window_cells**2 + 6 * self.n_people
 
     def to_json(self) -> dict:
         return {**dataclasses.asdict(self), "hidden": list(self.hidden)}
@@ -148,6 +164,7 @@ def features(config: PolicyConfig, obs: Observation, field, grid: costmap.GridSp
     window = field_at(field, points, grid)
     diff = jnp.where(jnp.isfinite(window) & jnp.isfinite(here), (window - here) / config.field_scale_m, 1.0)
     guide = jnp.clip(diff, -1.0, 1.0).reshape(-1)
+    social = _social_window(config, obs, points)
 
     rel = _to_robot_frame(obs.people_xy_m - xy, yaw)
     vel = _to_robot_frame(obs.people_velocity_mps, yaw)
@@ -161,7 +178,28 @@ def features(config: PolicyConfig, obs: Observation, field, grid: costmap.GridSp
     )
     person = jnp.where(seen[:, None], person, 0.0)
     person = jnp.pad(person, ((0, config.n_people - k), (0, 0))).reshape(-1)
-    return jnp.concatenate([goal, own, guide, obs.occupancy.reshape(-1), person]).astype(jnp.float32)
+    return jnp.concatenate([goal, own, guide, social, obs.occupancy.reshape(-1), person]).astype(jnp.float32)
+
+
+def _social_window(config: PolicyConfig, obs: Observation, points):
+    """(field_cells ** 2,) the social layer at ``points`` (c, c, 2) over 254 (empty without one)."""
+    if config.social_layer == "none":
+        return jnp.zeros((0,), jnp.float32)
+    scene = Scene(
+        people_xy_m=obs.people_xy_m,
+        people_heading_rad=obs.people_heading_rad,
+        people_velocity_mps=obs.people_velocity_mps,
+        people_valid=obs.people_visible,
+        objects_xy_m=jnp.zeros((1, 3, 2), jnp.float32),
+        objects_cost=jnp.zeros((1,), jnp.float32),
+        objects_valid=jnp.zeros((1,), bool),
+        robot_xy_m=obs.robot_xy_m,
+        robot_yaw_rad=obs.robot_yaw_rad,
+        goal_xy_m=obs.goal_xy_m,
+    )
+    params = stack.layer_params(stack.METHODS[config.social_layer]).snl
+    cost = snl.snl_layer(scene, points[..., 0], points[..., 1], params)
+    return (cost / costmap.LETHAL).reshape(-1).astype(jnp.float32)
 
 
 def command(u, robot: RobotParams):

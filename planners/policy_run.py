@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import pathlib
@@ -181,7 +182,8 @@ def train(
     stop_after_updates: int | None = None,
     log=print,
 ) -> list[dict]:
-    """Train (or resume) the run in ``out`` up to ``config.updates``; returns the history.
+    """Train (or resume) the run in ``out`` up to ``config.updates``; returns the history. A
+    run may be resumed with more (or fewer) updates than it was started with, nothing else changed.
 
     A checkpoint every ``config.checkpoint_every`` updates and at the end; ``metrics.jsonl`` and
     ``curve.png`` follow each checkpoint. ``stop_after_updates`` stops early after that many
@@ -197,11 +199,11 @@ def train(
     trainer = Trainer(specs, config)
     if (out / CONFIG).exists():
         stored, n_features = read_config(out)
-        if stored != config or n_features != trainer.n_features:
+        if dataclasses.replace(stored, updates=config.updates) != config or n_features != trainer.n_features:
             raise PolicyRunError(
                 f"{out / CONFIG} holds a run with other settings: resume it with the same ones or choose another --out"
             )
-    else:
+    if not (out / CONFIG).exists() or stored.updates != config.updates:  # a new run, or one trained on for longer
         write_config(out, config, trainer.n_features)
     state = trainer.initial_state()
     history: list[dict] = []
@@ -220,11 +222,12 @@ def train(
                 history.append(metrics)
                 done_here += 1
                 bar.update(int(state.update), config.updates)
-                bar.set_postfix(
-                    ret=f"{metrics['return']:.2f}",
-                    goal=f"{100 * metrics['goal_rate']:.0f}%",
-                    contact=f"{100 * metrics['contact_rate']:.0f}%",
-                )
+                if metrics["episodes"]:  # the episodes that ended in this update
+                    bar.set_postfix(
+                        ret=f"{metrics['return']:.2f}",
+                        goal=f"{100 * metrics['goal_rate']:.0f}%",
+                        contact=f"{100 * metrics['contact_rate']:.0f}%",
+                    )
                 last = int(state.update) >= config.updates
                 stop = stop_after_updates is not None and done_here >= stop_after_updates
                 if last or stop or int(state.update) % config.checkpoint_every == 0:

@@ -47,11 +47,18 @@ def add_parser(top) -> None:
     )
     tr.add_argument("--rollout-steps", type=positive_int, default=None, help="steps per update (default 64)")
     tr.add_argument("--seed", type=seed_int, default=None, help="random seed of the run (default 0)")
+    tr.add_argument(
+        "--social-layer",
+        choices=("none", "snl_small", "snl_large", "snl_matched"),
+        default=None,
+        help="also give the policy a social cost layer around the robot as an input (default none)",
+    )
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     tr.set_defaults(handler=_train)
 
 
 def _config(args, scene_names: tuple[str, ...]):
+    from planners.policy import PolicyConfig
     from planners.policy_run import read_config
     from planners.policy_training import PPOConfig
 
@@ -62,6 +69,8 @@ def _config(args, scene_names: tuple[str, ...]):
         "seed": args.seed,
     }
     given = {k: v for k, v in given.items() if v is not None}
+    if args.social_layer is not None:
+        given["policy"] = PolicyConfig(social_layer=args.social_layer)
     if (args.out / "config.json").exists():
         stored, _ = read_config(args.out)
         if args.scenes is None and not given:
@@ -117,9 +126,14 @@ def _train(args) -> int:
     if history:
         last = history[-1]
         steps = last["env_steps"]
+        ended = (
+            f"return {last['return']:.3f}, goal {100 * last['goal_rate']:.0f} %, "
+            f"touched a person {100 * last['contact_rate']:.0f} % of the episodes that ended in it"
+            if last["episodes"]
+            else "no episode ended in it"
+        )
         print(
-            f"update {last['update']}: return {last['return']:.3f}, goal {100 * last['goal_rate']:.0f} %, "
-            f"touched a person {100 * last['contact_rate']:.0f} % of ended episodes; "
+            f"update {last['update']}: {ended}; "
             f"{steps:,} env-steps in {last['wall_s']:.0f} s of training ({steps / max(last['wall_s'], 1e-9):,.0f}/s); "
             f"{time.perf_counter() - t0:.0f} s in this call"
         )

@@ -72,6 +72,24 @@ def test_features_read_the_goal_own_motion_and_nearest_people_in_the_robots_fram
     assert np.all(np.asarray(none)[-12:] == 0.0)
 
 
+def test_the_optional_social_layer_channel_shows_a_person_ahead():
+    grid = costmap.GridSpec(40, 40, 0.25, -5.0, -5.0)
+    obs = _observation([(1.0, 0.0)], [(0.0, 0.0)], [True])
+    plain = policy_lib.PolicyConfig(n_people=2)
+    social = policy_lib.PolicyConfig(n_people=2, social_layer="snl_large")
+    assert social.n_features(16) == plain.n_features(16) + 81
+    x = np.asarray(policy_lib.features(social, obs, jnp.zeros((40, 40)), grid, RobotParams()))
+    channel = x[5 + 81 : 5 + 162].reshape(9, 9)  # rows: forward offsets -2..2 m; columns: left
+    assert x.shape == (social.n_features(16),) and 0.0 <= channel.min() and channel.max() <= 1.0
+    assert channel[6, 4] == channel.max() > 0.2 and channel[0, 4] == 0.0  # peak 1 m ahead, none 2 m behind
+    unseen = policy_lib.features(
+        social, obs.replace(people_visible=jnp.array([False])), jnp.zeros((40, 40)), grid, RobotParams()
+    )
+    assert np.all(np.asarray(unseen)[5 + 81 : 5 + 162] == 0.0)
+    with pytest.raises(ValueError, match="social_layer"):
+        policy_lib.PolicyConfig(social_layer="casn")
+
+
 def test_guidance_field_is_zero_at_the_goal_and_no_shorter_than_the_straight_line():
     spec = load_scene(SCENES_DIR / f"{EASY}.json")
     env = env_lib.make_env(spec)
@@ -174,6 +192,9 @@ def test_a_run_resumed_after_a_stop_equals_one_never_stopped(tmp_path):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     lines = (cut / "metrics.jsonl").read_text().splitlines()
     assert len(lines) == 4 and (cut / "curve.png").stat().st_size > 0
+    # Trained on for longer: the same run with more updates continues it.
+    longer = policy_run.train([spec], _tiny(5), cut, progress=False, log=lambda _: None)
+    assert [h["update"] for h in longer] == [1, 2, 3, 4, 5] and policy_run.read_config(cut)[0].updates == 5
     # Another configuration in the same folder is refused, naming the file.
     with pytest.raises(policy_run.PolicyRunError, match="config.json"):
         policy_run.train([spec], _tiny(4, seed=1), cut, progress=False)
