@@ -130,6 +130,18 @@ def guidance_field(traversal_per_m, goal_xy_m, grid: costmap.GridSpec):
     return grid_planner.potential(traversal_per_m, goal_ij, grid.resolution_m)
 
 
+@struct.dataclass
+class PoolField:
+    """One field of a stack (N, H, W) by its index: ``field[r, c]`` reads ``fields[index, r, c]``
+    without gathering the whole (H, W) field (the trainer's episodes each index the pool's)."""
+
+    fields: jax.Array
+    index: jax.Array
+
+    def __getitem__(self, rc):
+        return self.fields[self.index, rc[0], rc[1]]
+
+
 def field_at(field, xy_m, grid: costmap.GridSpec):
     """The field at points ``xy_m`` (..., 2) (nearest cell; off the grid: ``inf``)."""
     col = jnp.floor((xy_m[..., 0] - grid.origin_x_m) / grid.resolution_m)

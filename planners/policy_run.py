@@ -197,13 +197,14 @@ def train(
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     trainer = Trainer(specs, config)
-    if (out / CONFIG).exists():
-        stored, n_features = read_config(out)
-        if dataclasses.replace(stored, updates=config.updates) != config or n_features != trainer.n_features:
-            raise PolicyRunError(
-                f"{out / CONFIG} holds a run with other settings: resume it with the same ones or choose another --out"
-            )
-    if not (out / CONFIG).exists() or stored.updates != config.updates:  # a new run, or one trained on for longer
+    stored = read_config(out) if (out / CONFIG).exists() else None
+    if stored is not None and (
+        dataclasses.replace(stored[0], updates=config.updates) != config or stored[1] != trainer.n_features
+    ):
+        raise PolicyRunError(
+            f"{out / CONFIG} holds a run with other settings: resume it with the same ones or choose another --out"
+        )
+    if stored is None or stored[0].updates != config.updates:  # a new run, or one trained on for longer
         write_config(out, config, trainer.n_features)
     state = trainer.initial_state()
     history: list[dict] = []

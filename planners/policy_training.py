@@ -206,7 +206,7 @@ def init_runner(scene: Scene, config: PPOConfig, key) -> Runner:
 
 def _features(config: PPOConfig, scene: Scene, grid, obs, index):
     def one(o, i):
-        return policy_lib.features(config.policy, o, scene.fields[i], grid, scene.env.robot)
+        return policy_lib.features(config.policy, o, policy_lib.PoolField(scene.fields, i), grid, scene.env.robot)
 
     return jax.vmap(one)(obs, index)
 
@@ -230,9 +230,12 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec) -> Callabl
             log_prob = policy_net.gaussian_log_prob(u, mean, log_std)
             action = policy_lib.command(u, env.robot)
             state, ts = jax.vmap(env.step)(runner.env_state, action)
-            fields = scene.fields[runner.pool_index]
-            before = jax.vmap(policy_lib.field_at, (0, 0, None))(fields, runner.env_state.robot.xy, grid)
-            after = jax.vmap(policy_lib.field_at, (0, 0, None))(fields, state.robot.xy, grid)
+
+            def field_here(i, xy):  # the episode's own field, read at xy
+                return policy_lib.field_at(policy_lib.PoolField(scene.fields, i), xy, grid)
+
+            before = jax.vmap(field_here)(runner.pool_index, runner.env_state.robot.xy)
+            after = jax.vmap(field_here)(runner.pool_index, state.robot.xy)
             progress = jnp.where(jnp.isfinite(before) & jnp.isfinite(after), jnp.clip(before - after, -0.5, 0.5), 0.0)
             reward = ts.reward + config.progress_weight * progress
             done = ts.done
@@ -387,16 +390,20 @@ class Trainer:
         """One update: ``(new state, metrics)``; metrics are host floats (episodes ended in this
         update's rollouts, their mean return, goal and person-contact rates, the losses)."""
         u = int(state.update)
-        runners, batches = [], []
-        totals = np.zeros(5)
+        runners, batches, stats = [], [], []
         for k, (scene, collect) in enumerate(zip(self.scenes, self._collect, strict=True)):
-            runner, batch, stats = collect(scene, state.weights, state.runners[k], self._key(u, 0, k))
+            runner, batch, scene_stats = collect(scene, state.weights, state.runners[k], self._key(u, 0, k))
             runners.append(runner)
             batches.append(batch)
-            totals += np.array([float(s) for s in stats])
+            stats.append(scene_stats)
         batch = jax.tree_util.tree_map(lambda *a: jnp.concatenate(a), *batches)
         weights, opt_state, losses = self._update(state.weights, state.opt_state, batch, self._key(u, 1))
+        # Read back once everything is dispatched (a float() per scene would wait on each collector).
+        totals = np.zeros(5)
+        for scene_stats in stats:
+            totals += np.array([float(s) for s in scene_stats])
         ended = totals[0]
+        dt_s = self.scenes[0].env.config.dt_s
         metrics = {
             "update": u + 1,
             "env_steps": (u + 1) * self.transitions_per_update,
@@ -404,7 +411,7 @@ class Trainer:
             "return": float(totals[1] / ended) if ended else float("nan"),
             "goal_rate": float(totals[2] / ended) if ended else float("nan"),
             "contact_rate": float(totals[3] / ended) if ended else float("nan"),
-            "episode_s": float(totals[4] / ended * 0.1) if ended else float("nan"),
+            "episode_s": float(totals[4] / ended * dt_s) if ended else float("nan"),
             "policy_loss": float(losses[0]),
             "value_loss": float(losses[1]),
             "entropy": float(losses[2]),
@@ -420,7 +427,7 @@ def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int =
     totals = []
     for scene, grid in zip(trainer.scenes, trainer.grids, strict=True):
         actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid)
-        params = policy_lib.PolicyParams(weights, policy_lib.traversal(scene.env), scene.env.robot)
+        params = policy_lib.policy_params(scene.env, weights)
         index = jnp.arange(n_variants) % config.pool_per_scene
         variants = _take(scene.pool, index)
         fields = scene.fields[index]
