@@ -37,7 +37,8 @@ person leaves for ``exit`` and the rest step up; a **stream** is ``count`` walke
 course.
 
 Rules (what "socially successful" means in the scene, checked on the trajectory by
-:mod:`evaluation.social_metrics`): ``min_distance`` (never closer than ``distance_m`` to anyone,
+:func:`evaluation.nav_metrics.rule_satisfied`, and step by step by
+:mod:`jaxsim.scenes.rule_monitor`): ``min_distance`` (never closer than ``distance_m`` to anyone,
 centre to centre), ``avoid_group`` (never inside group ``group``'s circle), ``avoid_circle`` (never
 within ``radius_m`` of ``centre``: a corner taken wide), ``keep_right``
 (inside ``box``, travelling along ``direction_deg``, at least ``min_share`` of the time on the right
