@@ -2,6 +2,8 @@
 
     python benchmarks/bench_policy.py                     # the 14 built-in scenes, the defaults
     python benchmarks/bench_policy.py --scenes gscl_group --envs-per-scene 256
+    python benchmarks/bench_policy.py --social-layer casn          # the cost of an input channel
+    python benchmarks/bench_policy.py --social-layer gscl --gscl-run runs/gscl
 
 Builds the trainer, runs ``--warmup`` updates (compilation: one collector per scene and the
 update), then times ``--updates`` more. Prints env-steps per second for the whole update
@@ -29,6 +31,8 @@ from benchmarks.bench_simulator import machine  # noqa: E402
 from data import SCENES_DIR  # noqa: E402
 from jaxsim.scenes.spec import load_scene  # noqa: E402
 from planners import policy_training  # noqa: E402
+from planners.policy import PolicyConfig  # noqa: E402
+from planners.policy_social import SOCIAL_LAYERS  # noqa: E402
 
 PUBLISHED = (
     ("CrowdNav_HEIGHT (PPO, 2e8 steps in ~50 h; i9-13900K + RTX 4090)", 1_100),
@@ -44,11 +48,18 @@ def main() -> None:
     parser.add_argument("--rollout-steps", type=int, default=64)
     parser.add_argument("--warmup", type=int, default=2)
     parser.add_argument("--updates", type=int, default=5)
+    parser.add_argument("--social-layer", choices=SOCIAL_LAYERS, default="none")
+    parser.add_argument("--gscl-run", type=pathlib.Path, default=None, help="the GSCL run of --social-layer gscl")
     args = parser.parse_args()
     names = [n for n in args.scenes.split(",") if n] or sorted(p.stem for p in SCENES_DIR.glob("*.json"))
     specs = [load_scene(SCENES_DIR / f"{n}.json") for n in names]
-    config = policy_training.PPOConfig(envs_per_scene=args.envs_per_scene, rollout_steps=args.rollout_steps)
+    gscl_run = "" if args.gscl_run is None else str(args.gscl_run.resolve())
+    policy = PolicyConfig(social_layer=args.social_layer, gscl_run=gscl_run)
+    config = policy_training.PPOConfig(
+        envs_per_scene=args.envs_per_scene, rollout_steps=args.rollout_steps, policy=policy
+    )
     print(machine())
+    print(f"social channel: {args.social_layer}" + (f" ({gscl_run})" if gscl_run else ""))
     t0 = time.perf_counter()
     trainer = policy_training.Trainer(specs, config)
     state = trainer.initial_state()

@@ -13,9 +13,10 @@ people are not in it), and at every step it sees:
   around it, turned with it, minus the field under it, over ``field_scale_m`` and clipped to
   [-1, 1] (walls and unreachable cells read 1): the way to the goal and the walls near it;
 * ``occupancy``: the env's occupancy window (:class:`jaxsim.scenes.env.Observation`);
-* ``social`` (optional, ``PolicyConfig.social_layer``): a social cost layer (SNL, small, large
-  or matched; :mod:`planners.snl`) drawn from the people it sees, on the guidance window's
-  points, over Nav2's 254: so a learned policy can use a cost map as an input channel;
+* ``social`` (optional, ``PolicyConfig.social_layer``): a social cost layer (SNL small, large
+  or matched; CASN; a trained GSCL network) drawn from the people it sees, on the guidance
+  window's points, over Nav2's 254: so a learned policy can use a cost map as an input channel
+  (:mod:`planners.policy_social`);
 * ``people``: the ``n_people`` nearest people it sees, in its frame: position (/4 m), velocity
   (/1.5 m/s), the distance from its body to their centre (/4 m), and a flag (1 seen; all 0 for
   an empty slot).
@@ -29,6 +30,7 @@ benchmark the actor takes the mean action (deterministic); training samples arou
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
@@ -38,10 +40,8 @@ from jaxsim.scenes.actor import Actor
 from jaxsim.scenes.env import Env, Observation
 from jaxsim.scenes.robot import RobotParams
 from models import policy_net
-from planners import costmap, grid_planner, snl, stack
-from planners.scene import Scene
-
-SOCIAL_LAYERS = ("none", "snl_small", "snl_large", "snl_matched")
+from planners import costmap, grid_planner, policy_social
+from planners.policy_social import SOCIAL_LAYERS, SocialState
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,8 +56,13 @@ class PolicyConfig:
       field_scale_m: field differences are divided by this (2 m: the window's half width).
       initial_log_std: the exploration noise at the start of training.
       social_layer: ``"none"`` or a social layer seen on the guidance window
-        (:data:`SOCIAL_LAYERS`: SNL with the small, large or CASN-matched covariances, their
-        parameters the stacks' own); it adds ``field_cells ** 2`` features.
+        (:data:`~planners.policy_social.SOCIAL_LAYERS`: SNL with the small, large or
+        CASN-matched covariances, their parameters the stacks' own; CASN; ``gscl``, a trained
+        U-Net); it adds ``field_cells ** 2`` features.
+      gscl_run: the trained GSCL run folder (``socialnav gscl train --out``) of ``social_layer
+        = "gscl"``, an absolute path (empty otherwise).
+      gscl_every_steps: the GSCL window is recomputed every this many steps (10: 1 Hz, the
+        arena's layer rate; :mod:`planners.policy_social`).
     """
 
     hidden: tuple[int, ...] = (128, 128)
@@ -67,10 +72,16 @@ class PolicyConfig:
     field_scale_m: float = 2.0
     initial_log_std: float = -0.5
     social_layer: str = "none"
+    gscl_run: str = ""
+    gscl_every_steps: int = 10
 
     def __post_init__(self):
         if self.social_layer not in SOCIAL_LAYERS:
             raise ValueError(f"social_layer must be one of {', '.join(SOCIAL_LAYERS)}, got {self.social_layer!r}")
+        if (self.social_layer == "gscl") != bool(self.gscl_run):
+            raise ValueError("gscl_run names the GSCL model of social_layer 'gscl' and nothing else")
+        if not isinstance(self.gscl_every_steps, int) or self.gscl_every_steps < 1:
+            raise ValueError(f"gscl_every_steps must be a whole number >= 1, got {self.gscl_every_steps!r}")
 
     def n_features(self, window_cells: int) -> int:
         """F, the feature vector's length with the env's occupancy window of ``window_cells``."""
@@ -88,19 +99,24 @@ class PolicyConfig:
 @struct.dataclass
 class PolicyParams:
     """The actor's dynamic inputs: the network's ``weights`` (an ``nnx.State``), the scene's
-    ``traversal_per_m`` (H, W) (the guide's cell costs, ``inf`` impassable) and the base's
-    limits ``robot``."""
+    ``traversal_per_m`` (H, W) (the guide's cell costs, ``inf`` impassable), the base's limits
+    ``robot``, the map's ``occupancy`` (H, W) in [0, 1] (the GSCL network's walls) and the GSCL
+    network's ``gscl_weights`` (None without that layer)."""
 
     weights: object
     traversal_per_m: jax.Array
     robot: RobotParams
+    occupancy: jax.Array
+    gscl_weights: object = None
 
 
 @struct.dataclass
 class PolicyState:
-    """field (H, W): cost-to-goal in metres of free space (:func:`guidance_field`)."""
+    """field (H, W): cost-to-goal in metres of free space (:func:`guidance_field`); social: the
+    social channel's state (:class:`~planners.policy_social.SocialState`)."""
 
     field: jax.Array
+    social: SocialState
 
 
 def scene_grid(env: Env) -> costmap.GridSpec:
@@ -159,8 +175,24 @@ def _to_robot_frame(vectors, yaw):
     )
 
 
-def features(config: PolicyConfig, obs: Observation, field, grid: costmap.GridSpec, robot: RobotParams):
-    """(F,) the policy's input from one observation and the episode's guidance field."""
+def window_points(config: PolicyConfig, obs: Observation):
+    """(c, c, 2) the guidance window's points in the world: ``field_cells`` forward offsets
+    (rows, -half to +half) by as many leftward ones (columns), turned with the robot."""
+    c = config.field_cells
+    offsets = (jnp.arange(c, dtype=jnp.float32) - (c - 1) / 2) * config.field_resolution_m
+    fwd, left = jnp.meshgrid(offsets, offsets, indexing="ij")
+    yaw = obs.robot_yaw_rad
+    rotated = jnp.stack([jnp.cos(yaw) * fwd - jnp.sin(yaw) * left, jnp.sin(yaw) * fwd + jnp.cos(yaw) * left], -1)
+    return obs.robot_xy_m + rotated
+
+
+def features(config: PolicyConfig, obs: Observation, field, grid: costmap.GridSpec, robot: RobotParams, social=None):
+    """(F,) the policy's input from one observation and the episode's guidance field.
+
+    ``social``: the social channel's window ((field_cells ** 2,),
+    :func:`planners.policy_social.window`); left out, a stateless layer (none, SNL) is computed
+    here, while CASN and GSCL, which carry state, must be given.
+    """
     xy, yaw = obs.robot_xy_m, obs.robot_yaw_rad
     to_goal = _to_robot_frame(obs.goal_xy_m - xy, yaw)
     distance = jnp.linalg.norm(to_goal)
@@ -168,15 +200,15 @@ def features(config: PolicyConfig, obs: Observation, field, grid: costmap.GridSp
     goal = jnp.concatenate([jnp.minimum(distance / 10.0, 1.0)[None], bearing])
     own = jnp.stack([obs.robot_speed_mps / robot.max_speed_mps, obs.robot_turn_rate_rps / robot.max_turn_rate_rps])
 
-    c = config.field_cells
-    offsets = (jnp.arange(c, dtype=jnp.float32) - (c - 1) / 2) * config.field_resolution_m
-    fwd, left = jnp.meshgrid(offsets, offsets, indexing="ij")
-    points = xy + jnp.stack([jnp.cos(yaw) * fwd - jnp.sin(yaw) * left, jnp.sin(yaw) * fwd + jnp.cos(yaw) * left], -1)
+    points = window_points(config, obs)
     here = field_at(field, xy, grid)
     window = field_at(field, points, grid)
     diff = jnp.where(jnp.isfinite(window) & jnp.isfinite(here), (window - here) / config.field_scale_m, 1.0)
     guide = jnp.clip(diff, -1.0, 1.0).reshape(-1)
-    social = _social_window(config, obs, points)
+    if social is None:
+        if config.social_layer in ("casn", "gscl"):
+            raise ValueError(f"features: the {config.social_layer} channel carries state: pass its window")
+        social, _ = policy_social.window(config.social_layer, obs, points, policy_social.initial_state(1))
 
     rel = _to_robot_frame(obs.people_xy_m - xy, yaw)
     vel = _to_robot_frame(obs.people_velocity_mps, yaw)
@@ -193,27 +225,6 @@ def features(config: PolicyConfig, obs: Observation, field, grid: costmap.GridSp
     return jnp.concatenate([goal, own, guide, social, obs.occupancy.reshape(-1), person]).astype(jnp.float32)
 
 
-def _social_window(config: PolicyConfig, obs: Observation, points):
-    """(field_cells ** 2,) the social layer at ``points`` (c, c, 2) over 254 (empty without one)."""
-    if config.social_layer == "none":
-        return jnp.zeros((0,), jnp.float32)
-    scene = Scene(
-        people_xy_m=obs.people_xy_m,
-        people_heading_rad=obs.people_heading_rad,
-        people_velocity_mps=obs.people_velocity_mps,
-        people_valid=obs.people_visible,
-        objects_xy_m=jnp.zeros((1, 3, 2), jnp.float32),
-        objects_cost=jnp.zeros((1,), jnp.float32),
-        objects_valid=jnp.zeros((1,), bool),
-        robot_xy_m=obs.robot_xy_m,
-        robot_yaw_rad=obs.robot_yaw_rad,
-        goal_xy_m=obs.goal_xy_m,
-    )
-    params = stack.layer_params(stack.METHODS[config.social_layer]).snl
-    cost = snl.snl_layer(scene, points[..., 0], points[..., 1], params)
-    return (cost / costmap.LETHAL).reshape(-1).astype(jnp.float32)
-
-
 def command(u, robot: RobotParams):
     """(2,) ``(v, omega)`` of a normalised action ``u`` (..., 2), clipped to the base's limits."""
     v = jnp.clip((u[..., 0] + 1.0) / 2.0, 0.0, 1.0) * robot.max_speed_mps
@@ -221,28 +232,59 @@ def command(u, robot: RobotParams):
     return jnp.stack([v, w], -1).astype(jnp.float32)
 
 
-def policy_actor(config: PolicyConfig, graphdef, grid: costmap.GridSpec, name: str = "ppo") -> Actor:
+def observe(config: PolicyConfig, obs: Observation, field, grid, robot: RobotParams, social: SocialState):
+    """``(features (F,), next social state)``: the social channel's window, then :func:`features`."""
+    window, social = policy_social.window(config.social_layer, obs, window_points(config, obs), social)
+    return features(config, obs, field, grid, robot, window), social
+
+
+def policy_actor(
+    config: PolicyConfig, graphdef, grid: costmap.GridSpec, name: str = "ppo", gscl_apply: Callable | None = None
+) -> Actor:
     """The policy as an :class:`~jaxsim.scenes.actor.Actor` with :class:`PolicyParams`: it
     computes the guidance field once, at the start (``plan_every_steps = 0``), and then acts
-    with the network's mean action (deterministic)."""
+    with the network's mean action (deterministic). With the GSCL channel (``gscl_apply``:
+    ``(weights, maps (B, 40, 40)) -> costs``, its weights ``PolicyParams.gscl_weights``) it plans
+    every ``config.gscl_every_steps`` steps instead: the network's window each time, the
+    guidance field once."""
+    gscl = config.social_layer == "gscl"
+    if gscl and gscl_apply is None:
+        raise ValueError("policy_actor: the gscl channel needs the trained network (gscl_apply)")
 
     def init(key, obs: Observation):
-        del key, obs
-        return PolicyState(field=jnp.zeros((grid.height, grid.width), jnp.float32))
+        del key
+        return PolicyState(
+            field=jnp.full((grid.height, grid.width), jnp.nan, jnp.float32),
+            social=policy_social.initial_state(obs.people_xy_m.shape[0]),
+        )
 
-    def plan(params: PolicyParams, state, obs: Observation, key):
-        del state, key
-        return PolicyState(field=guidance_field(params.traversal_per_m, obs.goal_xy_m, grid))
+    def plan(params: PolicyParams, state: PolicyState, obs: Observation, key):
+        del key
+        fresh = jnp.isnan(state.field[0, 0])  # the episode's first plan
+        field = jax.lax.cond(
+            fresh, lambda: guidance_field(params.traversal_per_m, obs.goal_xy_m, grid), lambda: state.field
+        )
+        social = state.social
+        if gscl:
+            predict = lambda maps: gscl_apply(params.gscl_weights, maps)
+            social = policy_social.gscl_refresh(predict, params.occupancy, grid, obs, social)
+        return PolicyState(field=field, social=social)
 
     def act(params: PolicyParams, state: PolicyState, obs: Observation, key):
         del key
-        x = features(config, obs, state.field, grid, params.robot)
+        x, social = observe(config, obs, state.field, grid, params.robot, state.social)
         mean, _, _ = policy_net.apply(graphdef, params.weights, x)
-        return command(mean, params.robot), state
+        return command(mean, params.robot), state.replace(social=social)
 
-    return Actor(init=init, act=act, plan=plan, plan_every_steps=0, name=name)
+    return Actor(init=init, act=act, plan=plan, plan_every_steps=config.gscl_every_steps if gscl else 0, name=name)
 
 
-def policy_params(env: Env, weights) -> PolicyParams:
-    """The actor's params in ``env`` with the network's ``weights``."""
-    return PolicyParams(weights=weights, traversal_per_m=traversal(env), robot=env.robot)
+def policy_params(env: Env, weights, gscl_weights=None) -> PolicyParams:
+    """The actor's params in ``env`` with the network's ``weights`` (and the GSCL network's)."""
+    return PolicyParams(
+        weights=weights,
+        traversal_per_m=traversal(env),
+        robot=env.robot,
+        occupancy=jnp.asarray(env.occupancy.values, jnp.float32),
+        gscl_weights=gscl_weights,
+    )

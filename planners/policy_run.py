@@ -21,6 +21,7 @@ import numpy as np
 
 from common.atomic import write_text_atomic
 from planners import policy as policy_lib
+from planners import policy_social
 from planners.policy_training import PPOConfig, TrainState
 
 CONFIG = "config.json"
@@ -85,14 +86,22 @@ def restore(mgr, template: TrainState) -> tuple[TrainState, list[dict]] | None:
     if step is None:
         return None
     rest_template = (template.opt_state, template.runners, template.update)
-    got = mgr.restore(
-        step,
-        args=ocp.args.Composite(
-            weights=ocp.args.StandardRestore(_host(template.weights)),
-            rest=ocp.args.StandardRestore(_host(rest_template)),
-            meta=ocp.args.JsonRestore(),
-        ),
-    )
+    try:
+        got = mgr.restore(
+            step,
+            args=ocp.args.Composite(
+                weights=ocp.args.StandardRestore(_host(template.weights)),
+                rest=ocp.args.StandardRestore(_host(rest_template)),
+                meta=ocp.args.JsonRestore(),
+            ),
+        )
+    except Exception as e:  # orbax raises ValueError on another tree, others on a damaged file
+        first = (str(e).strip().splitlines() or [type(e).__name__])[0][:160]
+        raise PolicyRunError(
+            f"{mgr.directory}/{step}: cannot resume training from it ({first}); a run written by an "
+            "earlier version of the trainer still serves socialnav arena --policy-run but cannot train "
+            "on: start a new run in another --out"
+        ) from None
     opt_state, runners, update = jax.tree.map(jax.numpy.asarray, got["rest"])
     weights = jax.tree.map(jax.numpy.asarray, got["weights"])
     return TrainState(weights, opt_state, runners, update), got["meta"]["history"]
@@ -129,6 +138,24 @@ def load_weights(out) -> tuple[PPOConfig, object, object, int]:
     return config, graphdef, weights, step
 
 
+def _gscl(config: PPOConfig, out) -> tuple:
+    """The GSCL channel's ``(apply, weights)`` of a run (``(None, None)`` without it)."""
+    if config.policy.social_layer != "gscl":
+        return None, None
+    try:
+        return policy_social.load_gscl(config.policy.gscl_run)
+    except ValueError as e:
+        raise PolicyRunError(f"{pathlib.Path(out) / CONFIG}: policy.gscl_run: {e}") from None
+
+
+def run_digest(out) -> str:
+    """The digest of what a run's actor computes with: its weights, and the GSCL channel's
+    network's weights where it has one."""
+    config, _, weights, _ = load_weights(out)
+    _, gscl_weights = _gscl(config, out)
+    return weights_digest(weights if gscl_weights is None else (weights, gscl_weights))
+
+
 def weights_digest(weights) -> str:
     """sha256 of the weights' bytes (a changed network is a changed benchmark run)."""
     h = hashlib.sha256()
@@ -142,21 +169,24 @@ def actor_factory(out, name: str = "ppo"):
     form), the network restored once."""
     config, graphdef, weights, _ = load_weights(out)
     _, n_features = read_config(out)
+    gscl_apply, gscl_weights = _gscl(config, out)
 
     def factory(env):
         window = env.config.window_cells
         if config.policy.n_features(window) != n_features:
             raise PolicyRunError(f"{out}: the policy was trained with another observation window than {window} cells")
         grid = policy_lib.scene_grid(env)
-        return policy_lib.policy_actor(config.policy, graphdef, grid, name), policy_lib.policy_params(env, weights)
+        actor = policy_lib.policy_actor(config.policy, graphdef, grid, name, gscl_apply)
+        return actor, policy_lib.policy_params(env, weights, gscl_weights)
 
     factory.__name__ = name
     return factory
 
 
 def plot_curve(history: list[dict], path: pathlib.Path) -> pathlib.Path:
-    """The training curve: the mean return and the goal and person-contact rates of the episodes
-    that ended in each update, against environment steps."""
+    """The training curve: the mean return and the goal, social success and person-contact rates
+    of the episodes that ended in each update, against environment steps (a history from before
+    social success was recorded draws no social line)."""
     from common import figures
 
     fig = figures.figure(figsize=(9, 3.4))
@@ -165,6 +195,7 @@ def plot_curve(history: list[dict], path: pathlib.Path) -> pathlib.Path:
     ax1.plot(steps, [h["return"] for h in history], color="tab:blue")
     ax1.set(xlabel="environment steps (M)", ylabel="mean episode return", title="return (training reward)")
     ax2.plot(steps, [100 * h["goal_rate"] for h in history], label="goal reached", color="tab:green")
+    ax2.plot(steps, [100 * h.get("social_rate", np.nan) for h in history], label="social success", color="tab:purple")
     ax2.plot(steps, [100 * h["contact_rate"] for h in history], label="touched a person", color="tab:red")
     ax2.set(xlabel="environment steps (M)", ylabel="% of ended episodes", ylim=(-2, 102), title="episodes")
     ax2.legend(loc="center right")
@@ -196,7 +227,10 @@ def train(
 
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    trainer = Trainer(specs, config)
+    try:
+        trainer = Trainer(specs, config)
+    except ValueError as e:  # the GSCL channel's run is not one
+        raise PolicyRunError(str(e)) from None
     stored = read_config(out) if (out / CONFIG).exists() else None
     if stored is not None and (
         dataclasses.replace(stored[0], updates=config.updates) != config or stored[1] != trainer.n_features
@@ -227,6 +261,7 @@ def train(
                     bar.set_postfix(
                         ret=f"{metrics['return']:.2f}",
                         goal=f"{100 * metrics['goal_rate']:.0f}%",
+                        social=f"{100 * metrics['social_rate']:.0f}%",
                         contact=f"{100 * metrics['contact_rate']:.0f}%",
                     )
                 last = int(state.update) >= config.updates

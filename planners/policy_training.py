@@ -19,6 +19,8 @@ One update:
    path gained; potential-based shaping, Ng et al. 1999, which keeps the optimal policy and,
    unlike the straight-line distance, does not reward driving into the inner wall of a corner);
    a time-limit truncation is treated as an end (purejaxrl's choice);
+   each episode's scene rule is checked as it runs (:mod:`jaxsim.scenes.rule_monitor`), so
+   the ended episodes' social success (the arena's: goal and rule) is known at every update;
 3. advantages by GAE per scene, then ``epochs`` passes of ``minibatches`` shuffled minibatches
    over all scenes' transitions together.
 
@@ -39,10 +41,11 @@ import optax
 from flax import struct
 
 from jaxsim.scenes import env as env_lib
+from jaxsim.scenes import rule_monitor
 from jaxsim.scenes.spec import SceneSpec
 from jaxsim.scenes.variant import padded_slots, sample_variants
 from models import policy_net
-from planners import costmap
+from planners import costmap, policy_social
 from planners import policy as policy_lib
 
 
@@ -122,19 +125,23 @@ def scene_env(spec: SceneSpec) -> env_lib.Env:
 
 @struct.dataclass
 class Scene:
-    """One scene's fixed inputs: its ``env``, the training ``pool`` of N variants and their
-    guidance ``fields`` (N, H, W)."""
+    """One scene's fixed inputs: its ``env``, the training ``pool`` of N variants, their
+    guidance ``fields`` (N, H, W), and the GSCL network's weights of the GSCL channel (else
+    None)."""
 
     env: env_lib.Env
     pool: object
     fields: jax.Array
+    gscl_weights: object = None
 
 
 @struct.dataclass
 class Runner:
     """One scene's running episodes (B of them): ``env_state``, ``observation``, the pool index
-    of each one's variant (B,), and the episode's return (B,), length (B,) and whether it has
-    touched a person (B,) so far."""
+    of each one's variant (B,), and the episode's return (B,), length (B,), whether it has
+    touched a person (B,) so far, its scene rule's running check ``rule_state``
+    (:func:`jaxsim.scenes.rule_monitor.monitor`, batched) and its social channel's state
+    ``social`` (:class:`planners.policy_social.SocialState`, batched)."""
 
     env_state: env_lib.EnvState
     observation: env_lib.Observation
@@ -142,6 +149,8 @@ class Runner:
     episode_return: jax.Array
     episode_steps: jax.Array
     episode_contact: jax.Array
+    rule_state: rule_monitor.MonitorState
+    social: policy_social.SocialState
 
 
 @struct.dataclass
@@ -168,7 +177,7 @@ class Batch:
     target: jax.Array
 
 
-def make_scene(spec: SceneSpec, config: PPOConfig) -> Scene:
+def make_scene(spec: SceneSpec, config: PPOConfig, gscl_weights=None) -> Scene:
     """``spec``'s env and its training pool with the pool's guidance fields (host side)."""
     env = scene_env(spec)
     pool = sample_variants(
@@ -178,7 +187,7 @@ def make_scene(spec: SceneSpec, config: PPOConfig) -> Scene:
     grid = policy_lib.scene_grid(env)
     t = policy_lib.traversal(env)
     fields = jax.jit(jax.vmap(lambda g: policy_lib.guidance_field(t, g, grid)))(pool.goal_xy)
-    return Scene(env=env, pool=pool, fields=fields)
+    return Scene(env=env, pool=pool, fields=fields, gscl_weights=gscl_weights)
 
 
 def _optimizer(config: PPOConfig):
@@ -195,36 +204,80 @@ def _reset(scene: Scene, key, index):
     return state, ts.observation
 
 
-def init_runner(scene: Scene, config: PPOConfig, key) -> Runner:
-    """``envs_per_scene`` episodes of the scene at time 0 on random pool variants."""
+def _batched(tree, n: int):
+    return jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,) + a.shape), tree)
+
+
+def _fresh_rules(rule: dict, n: int) -> rule_monitor.MonitorState:
+    return _batched(rule_monitor.monitor(rule)[0](), n)
+
+
+def _fresh_social(obs, n: int) -> policy_social.SocialState:
+    return _batched(policy_social.initial_state(obs.people_xy_m.shape[-2]), n)
+
+
+def init_runner(scene: Scene, config: PPOConfig, key, rule: dict) -> Runner:
+    """``envs_per_scene`` episodes of the scene at time 0 on random pool variants (``rule``: the
+    scene's social rule, :attr:`jaxsim.scenes.spec.SceneSpec.rule`)."""
     k_pick, k_reset = jax.random.split(key)
     index = jax.random.randint(k_pick, (config.envs_per_scene,), 0, config.pool_per_scene)
     state, obs = _reset(scene, k_reset, index)
     zeros = jnp.zeros(config.envs_per_scene, jnp.float32)
-    return Runner(state, obs, index, zeros, jnp.zeros(config.envs_per_scene, jnp.int32), zeros.astype(bool))
+    return Runner(
+        state,
+        obs,
+        index,
+        zeros,
+        jnp.zeros(config.envs_per_scene, jnp.int32),
+        zeros.astype(bool),
+        _fresh_rules(rule, config.envs_per_scene),
+        _fresh_social(obs, config.envs_per_scene),
+    )
 
 
-def _features(config: PPOConfig, scene: Scene, grid, obs, index):
-    def one(o, i):
-        return policy_lib.features(config.policy, o, policy_lib.PoolField(scene.fields, i), grid, scene.env.robot)
+def _observe(config: PPOConfig, scene: Scene, grid, obs, index, social):
+    def one(o, i, s):
+        field = policy_lib.PoolField(scene.fields, i)
+        return policy_lib.observe(config.policy, o, field, grid, scene.env.robot, s)
 
-    return jax.vmap(one)(obs, index)
+    return jax.vmap(one)(obs, index, social)
 
 
-def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec) -> Callable:
+def make_collect(
+    config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict, gscl_apply: Callable | None = None
+) -> Callable:
     """``collect(scene, weights, runner, key) -> (runner, batch, stats)``: ``rollout_steps``
-    steps of the runner's episodes and their GAE, jitted (one program per scene shape).
+    steps of the runner's episodes and their GAE, jitted (one program per scene shape and rule).
 
     ``stats``: the episodes that ended, ``(count, sum of returns, reached, touched a person,
-    sum of lengths)``."""
+    sum of lengths, socially successful)``; socially successful is the arena's
+    ``social_success``: the goal reached and the scene's ``rule`` kept
+    (:mod:`jaxsim.scenes.rule_monitor`). ``gscl_apply``: ``(weights, maps) -> costs`` of the
+    GSCL channel (its weights ``scene.gscl_weights``), run for every episode at once on the
+    rollout's steps ``0, k, 2k, ...`` (``k = gscl_every_steps``)."""
+    _, rule_update, rule_verdict = rule_monitor.monitor(rule)
+    gscl = config.policy.social_layer == "gscl"
+    if gscl and gscl_apply is None:
+        raise ValueError("make_collect: the gscl channel needs the trained network (gscl_apply)")
 
     def collect(scene: Scene, weights, runner: Runner, key):
         env = scene.env
 
-        def one_step(carry, step_key):
+        occupancy = jnp.asarray(env.occupancy.values, jnp.float32)
+
+        def refresh(social, obs, t):
+            if not gscl:
+                return social
+            predict = lambda maps: gscl_apply(scene.gscl_weights, maps)
+            renew = jax.vmap(lambda o, s: policy_social.gscl_refresh(predict, occupancy, grid, o, s))
+            return jax.lax.cond(t % config.policy.gscl_every_steps == 0, renew, lambda o, s: s, obs, social)
+
+        def one_step(carry, xs):
             runner, stats = carry
+            step_key, t = xs
             k_act, k_pick, k_reset = jax.random.split(step_key, 3)
-            x = _features(config, scene, grid, runner.observation, runner.pool_index)
+            social = refresh(runner.social, runner.observation, t)
+            x, social = _observe(config, scene, grid, runner.observation, runner.pool_index, social)
             mean, log_std, value = policy_net.apply(graphdef, weights, x)
             u = policy_net.sample(k_act, mean, log_std)
             log_prob = policy_net.gaussian_log_prob(u, mean, log_std)
@@ -242,12 +295,20 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec) -> Callabl
             ep_return = runner.episode_return + reward
             ep_steps = runner.episode_steps + 1
             ep_contact = runner.episode_contact | ts.info.person_contact
+            variant = _take(scene.pool, runner.pool_index)
+            rule_state = jax.vmap(rule_update)(
+                runner.rule_state,
+                rule_monitor.Step(state.robot.xy, ts.info.reached, ts.info.people_xy_m, ts.info.people_present),
+                rule_monitor.Episode(variant.start_xy, variant.end_xy, variant.group),
+            )
+            social_success = ts.terminated & jax.vmap(rule_verdict)(rule_state)
             stats = (
                 stats[0] + done.sum(),
                 stats[1] + jnp.where(done, ep_return, 0.0).sum(),
                 stats[2] + (done & ts.terminated).sum(),
                 stats[3] + (done & ep_contact).sum(),
                 stats[4] + jnp.where(done, ep_steps, 0).sum(),
+                stats[5] + (done & social_success).sum(),
             )
 
             def restart(_):
@@ -266,6 +327,8 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec) -> Callabl
 
             state, obs, index = jax.lax.cond(jnp.any(done), restart, carry_on, None)
             keep = ~done
+            fresh_rules = _fresh_rules(rule, done.shape[0])
+            fresh_social = _fresh_social(obs, done.shape[0])
             new_runner = Runner(
                 state,
                 obs,
@@ -273,13 +336,21 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec) -> Callabl
                 jnp.where(keep, ep_return, 0.0),
                 jnp.where(keep, ep_steps, 0),
                 keep & ep_contact,
+                *jax.tree_util.tree_map(
+                    lambda a, b: jnp.where(keep.reshape((-1,) + (1,) * (a.ndim - 1)), a, b),
+                    (rule_state, social),
+                    (fresh_rules, fresh_social),
+                ),
             )
             return (new_runner, stats), (x, u, log_prob, value, reward, done)
 
-        zero_stats = (jnp.int32(0), jnp.float32(0.0), jnp.int32(0), jnp.int32(0), jnp.int32(0))
+        zero_stats = (jnp.int32(0), jnp.float32(0.0), jnp.int32(0), jnp.int32(0), jnp.int32(0), jnp.int32(0))
         keys = jax.random.split(key, config.rollout_steps)
-        (runner, stats), (x, u, log_prob, value, reward, done) = jax.lax.scan(one_step, (runner, zero_stats), keys)
-        last_x = _features(config, scene, grid, runner.observation, runner.pool_index)
+        steps = jnp.arange(config.rollout_steps)
+        (runner, stats), (x, u, log_prob, value, reward, done) = jax.lax.scan(
+            one_step, (runner, zero_stats), (keys, steps)
+        )
+        last_x, _ = _observe(config, scene, grid, runner.observation, runner.pool_index, runner.social)
         _, _, last_value = policy_net.apply(graphdef, weights, last_x)
         advantage = gae(value, reward, done, last_value, config.gamma, config.gae_lambda)
         flat = lambda a: a.reshape((-1,) + a.shape[2:])
@@ -353,7 +424,8 @@ class Trainer:
     """PPO over ``specs`` with ``config``: :meth:`initial_state`, then :meth:`step` per update.
 
     Host-side bookkeeping only; the work is in the jitted collectors (one per scene) and the
-    update. ``graphdef`` is the network's static structure.
+    update. ``graphdef`` is the network's static structure. The GSCL channel's network is
+    loaded from ``config.policy.gscl_run`` (``ValueError`` naming the folder if it is not a run).
     """
 
     def __init__(self, specs: Sequence[SceneSpec], config: PPOConfig):
@@ -361,14 +433,21 @@ class Trainer:
             raise ValueError("PPO needs at least one scene")
         self.config = config
         self.specs = list(specs)
-        self.scenes = [make_scene(s, config) for s in self.specs]
+        gscl_apply, gscl_weights = None, None
+        if config.policy.social_layer == "gscl":
+            gscl_apply, gscl_weights = policy_social.load_gscl(config.policy.gscl_run)
+        self.gscl_apply = gscl_apply
+        self.scenes = [make_scene(s, config, gscl_weights) for s in self.specs]
         window = self.scenes[0].env.config.window_cells
         self.n_features = config.policy.n_features(window)
         self.graphdef, self._weights0 = policy_net.init_weights(
             self.n_features, config.policy.hidden, config.seed, config.policy.initial_log_std
         )
         self.grids = [policy_lib.scene_grid(s.env) for s in self.scenes]
-        self._collect = [make_collect(config, self.graphdef, g) for g in self.grids]
+        self._collect = [
+            make_collect(config, self.graphdef, g, spec.rule, gscl_apply)
+            for g, spec in zip(self.grids, self.specs, strict=True)
+        ]
         self._update = make_update(config, self.graphdef)
         self.transitions_per_update = len(self.scenes) * config.envs_per_scene * config.rollout_steps
 
@@ -381,14 +460,16 @@ class Trainer:
     def initial_state(self) -> TrainState:
         start = jax.random.fold_in(jax.random.PRNGKey(self.config.seed), 2**31 - 1)  # no update's key
         runners = tuple(
-            init_runner(scene, self.config, jax.random.fold_in(start, k)) for k, scene in enumerate(self.scenes)
+            init_runner(scene, self.config, jax.random.fold_in(start, k), spec.rule)
+            for k, (scene, spec) in enumerate(zip(self.scenes, self.specs, strict=True))
         )
         opt_state = _optimizer(self.config).init(self._weights0)
         return TrainState(self._weights0, opt_state, runners, jnp.int32(0))
 
     def step(self, state: TrainState) -> tuple[TrainState, dict]:
         """One update: ``(new state, metrics)``; metrics are host floats (episodes ended in this
-        update's rollouts, their mean return, goal and person-contact rates, the losses)."""
+        update's rollouts, their mean return, goal, person-contact and social success rates, the
+        losses)."""
         u = int(state.update)
         runners, batches, stats = [], [], []
         for k, (scene, collect) in enumerate(zip(self.scenes, self._collect, strict=True)):
@@ -399,7 +480,7 @@ class Trainer:
         batch = jax.tree_util.tree_map(lambda *a: jnp.concatenate(a), *batches)
         weights, opt_state, losses = self._update(state.weights, state.opt_state, batch, self._key(u, 1))
         # Read back once everything is dispatched (a float() per scene would wait on each collector).
-        totals = np.zeros(5)
+        totals = np.zeros(6)
         for scene_stats in stats:
             totals += np.array([float(s) for s in scene_stats])
         ended = totals[0]
@@ -411,6 +492,7 @@ class Trainer:
             "return": float(totals[1] / ended) if ended else float("nan"),
             "goal_rate": float(totals[2] / ended) if ended else float("nan"),
             "contact_rate": float(totals[3] / ended) if ended else float("nan"),
+            "social_rate": float(totals[5] / ended) if ended else float("nan"),
             "episode_s": float(totals[4] / ended * dt_s) if ended else float("nan"),
             "policy_loss": float(losses[0]),
             "value_loss": float(losses[1]),
@@ -426,8 +508,8 @@ def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int =
     config = trainer.config
     totals = []
     for scene, grid in zip(trainer.scenes, trainer.grids, strict=True):
-        actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid)
-        params = policy_lib.policy_params(scene.env, weights)
+        actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid, gscl_apply=trainer.gscl_apply)
+        params = policy_lib.policy_params(scene.env, weights, scene.gscl_weights)
         index = jnp.arange(n_variants) % config.pool_per_scene
         variants = _take(scene.pool, index)
         fields = scene.fields[index]

@@ -290,7 +290,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         from planners import policy_run
 
         try:
-            policy_digest = policy_run.weights_digest(policy_run.load_weights(args.policy_run)[2])
+            policy_digest = policy_run.run_digest(args.policy_run)
         except policy_run.PolicyRunError as e:
             print(f"socialnav arena: --policy-run {e}", file=sys.stderr)
             return 2

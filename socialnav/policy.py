@@ -49,9 +49,16 @@ def add_parser(top) -> None:
     tr.add_argument("--seed", type=seed_int, default=None, help="random seed of the run (default 0)")
     tr.add_argument(
         "--social-layer",
-        choices=("none", "snl_small", "snl_large", "snl_matched"),
+        choices=("none", "snl_small", "snl_large", "snl_matched", "casn", "gscl"),
         default=None,
-        help="also give the policy a social cost layer around the robot as an input (default none)",
+        help="also give the policy a social cost layer around the robot as an input (default none; gscl needs "
+        "--gscl-run)",
+    )
+    tr.add_argument(
+        "--gscl-run",
+        type=pathlib.Path,
+        default=None,
+        help="the trained GSCL run (socialnav gscl train --out) of --social-layer gscl",
     )
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     tr.set_defaults(handler=_train)
@@ -69,8 +76,13 @@ def _config(args, scene_names: tuple[str, ...]):
         "seed": args.seed,
     }
     given = {k: v for k, v in given.items() if v is not None}
+    if (args.gscl_run is not None) != (args.social_layer == "gscl"):
+        raise ValueError("--gscl-run goes with --social-layer gscl, and that layer needs it")
+    if args.gscl_run is not None and not (args.gscl_run / "checkpoints").is_dir():
+        raise ValueError(f"--gscl-run {args.gscl_run}: no checkpoints/ folder (train one with socialnav gscl train)")
     if args.social_layer is not None:
-        given["policy"] = PolicyConfig(social_layer=args.social_layer)
+        gscl_run = "" if args.gscl_run is None else str(args.gscl_run.resolve())
+        given["policy"] = PolicyConfig(social_layer=args.social_layer, gscl_run=gscl_run)
     if (args.out / "config.json").exists():
         stored, _ = read_config(args.out)
         if args.scenes is None and not given:
@@ -128,6 +140,7 @@ def _train(args) -> int:
         steps = last["env_steps"]
         ended = (
             f"return {last['return']:.3f}, goal {100 * last['goal_rate']:.0f} %, "
+            f"social success {100 * last.get('social_rate', float('nan')):.0f} %, "
             f"touched a person {100 * last['contact_rate']:.0f} % of the episodes that ended in it"
             if last["episodes"]
             else "no episode ended in it"

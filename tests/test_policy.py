@@ -18,7 +18,7 @@ from jaxsim.scenes import env as env_lib
 from jaxsim.scenes.robot import RobotParams
 from jaxsim.scenes.spec import load_scene
 from jaxsim.scenes.variant import sample_variant
-from planners import costmap, policy_run, policy_training
+from planners import costmap, policy_run, policy_social, policy_training
 from planners import policy as policy_lib
 from socialnav.cli import main
 
@@ -87,7 +87,61 @@ def test_the_optional_social_layer_channel_shows_a_person_ahead():
     )
     assert np.all(np.asarray(unseen)[5 + 81 : 5 + 162] == 0.0)
     with pytest.raises(ValueError, match="social_layer"):
-        policy_lib.PolicyConfig(social_layer="casn")
+        policy_lib.PolicyConfig(social_layer="snl_huge")
+    with pytest.raises(ValueError, match="gscl_run"):
+        policy_lib.PolicyConfig(social_layer="gscl")
+    with pytest.raises(ValueError, match="carries state"):
+        policy_lib.features(policy_lib.PolicyConfig(social_layer="casn"), obs, jnp.zeros((40, 40)), grid, RobotParams())
+
+
+def test_the_casn_channel_shows_a_walker_at_its_collision_point_and_freezes_it():
+    # A person 3 m ahead walking at the robot at 1 m/s: CASN puts their discs at the collision
+    # point h - p (h - r), p = 1 / (1 + 0.5) (CASN's robot speed): 1 m ahead, inside 2 m: frozen.
+    obs = _observation([(3.0, 0.0)], [(-1.0, 0.0)], [True])
+    config = policy_lib.PolicyConfig(n_people=2, social_layer="casn")
+    state = policy_social.initial_state(1)
+    window, state = policy_social.window("casn", obs, policy_lib.window_points(config, obs), state)
+    channel = np.asarray(window).reshape(9, 9)
+    assert channel[6, 4] == pytest.approx(252 / 254)  # 1 m ahead: intimate + personal discs
+    assert channel[0, 4] == 0.0 and channel[8, 0] == 0.0  # 2 m behind; 2 m ahead, 2 m left (> 1.2 m)
+    assert bool(state.casn.frozen[0]) and np.allclose(np.asarray(state.casn.frozen_xy_m[0]), (1.0, 0.0), atol=1e-5)
+    # The person keeps walking (now 2 m ahead, their collision point 0.67 m): the frozen point stays.
+    later = obs.replace(people_xy_m=jnp.array([[2.0, 0.0]]))
+    again, state = policy_social.window("casn", later, policy_lib.window_points(config, later), state)
+    np.testing.assert_array_equal(np.asarray(again), np.asarray(window))
+    x, _ = policy_lib.observe(
+        config,
+        obs,
+        jnp.zeros((40, 40)),
+        costmap.GridSpec(40, 40, 0.25, -5, -5),
+        RobotParams(),
+        policy_social.initial_state(1),
+    )
+    np.testing.assert_array_equal(np.asarray(x)[5 + 81 : 5 + 162], np.asarray(window))
+
+
+def test_the_gscl_channel_reads_the_networks_window_where_it_was_computed():
+    # A stand-in network that puts 0.5 on two cells of its 40 x 40 window of 0.4 m: rows 19-20,
+    # column 22 hold x in [0.8, 1.2), y in [-0.4, 0.4) from the window's centre, where only the
+    # policy's point 1 m ahead (0.5 m spacing) falls.
+    def predict(maps):
+        assert maps.shape[1:] == (40, 40) and maps.dtype == jnp.uint8
+        return jnp.zeros(maps.shape, jnp.float32).at[:, 19:21, 22].set(0.5)
+
+    config = policy_lib.PolicyConfig(n_people=2, social_layer="gscl", gscl_run="/runs/gscl")
+    obs = _observation([(1.0, 0.0)], [(0.0, 0.0)], [True])
+    spec = costmap.GridSpec(40, 40, 0.25, -5.0, -5.0)
+    state = policy_social.initial_state(1)
+    before, _ = policy_social.window("gscl", obs, policy_lib.window_points(config, obs), state)
+    assert np.all(np.asarray(before) == 0.0)  # nothing computed yet
+    state = policy_social.gscl_refresh(predict, jnp.zeros((40, 40)), spec, obs, state)
+    window, _ = policy_social.window("gscl", obs, policy_lib.window_points(config, obs), state)
+    channel = np.asarray(window).reshape(9, 9)
+    assert channel[6, 4] == pytest.approx(0.5 * 252 / 254) and np.count_nonzero(channel) == 1  # (1.0, 0.0)
+    # The robot moves 0.5 m forward: the same world cell is now 0.5 m ahead of it.
+    moved = obs.replace(robot_xy_m=jnp.array([0.5, 0.0]))
+    channel = np.asarray(policy_social.window("gscl", moved, policy_lib.window_points(config, moved), state)[0])
+    assert channel.reshape(9, 9)[5, 4] == pytest.approx(0.5 * 252 / 254)
 
 
 def test_guidance_field_is_zero_at_the_goal_and_no_shorter_than_the_straight_line():
@@ -168,6 +222,7 @@ def test_a_tiny_training_run_improves_the_return():
         state, metrics = trainer.step(state)
     after = policy_training.evaluate_return(trainer, state.weights, 16)
     assert np.isfinite(metrics["policy_loss"]) and metrics["env_steps"] == 15 * 32 * 64
+    assert 0.0 <= metrics["social_rate"] <= metrics["goal_rate"]  # social success: the goal and the rule
     assert after > before + 1.0, (before, after)  # measured: -20.0 -> 0.4
 
 
@@ -225,3 +280,38 @@ def test_bad_input_to_policy_train_and_arena_policy_run_is_one_line(tmp_path, ca
     code = main(["arena", "--out", str(tmp_path / "a"), "--scenes", EASY, "--policy-run", str(tmp_path / "notarun")])
     err = capsys.readouterr().err
     assert code == 2 and "config.json" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_a_policy_with_the_gscl_channel_trains_and_runs_in_the_arena(tmp_path, capsys):
+    from models import train as gscl_train
+    from models.config import TrainConfig
+
+    gscl = tmp_path / "gscl"
+    tiny = TrainConfig(
+        features=(4, 4, 8, 8), epochs=1, batch_size=16, train_fraction=0.01, test_fraction=0.004, warmup_steps=1
+    )
+    gscl_train.train(tiny, gscl, progress=False, max_steps=2, log=lambda *_: None)
+    run = tmp_path / "ppo"
+    argv = ["policy", "train", "--out", str(run), "--scenes", EASY, "--updates", "1", "--envs-per-scene", "4"]
+    argv += ["--rollout-steps", "12", "--social-layer", "gscl", "--gscl-run", str(gscl), "--no-progress"]
+    assert main(argv) == 0
+    config, _ = policy_run.read_config(run)
+    assert config.policy.social_layer == "gscl" and config.policy.gscl_run == str(gscl.resolve())
+    out = tmp_path / "arena"
+    code = main(
+        ["arena", "--out", str(out), "--scenes", EASY, "--methods", "navfn", "--variants", "2"]
+        + ["--policy-run", str(run), "--no-progress"]
+    )
+    assert code == 0
+    assert set(pd.read_csv(out / "summary.csv").method) == {"navfn", "ppo"}
+    # The benchmark's digest covers the GSCL network the policy reads, not only its own weights.
+    digest = json.loads((out / "run.json").read_text())["policy_model"]
+    assert digest == policy_run.run_digest(run) != policy_run.weights_digest(policy_run.load_weights(run)[2])
+    capsys.readouterr()
+    # The layer and its run go together; a folder that is no run is named.
+    not_a_run = ["--social-layer", "gscl", "--gscl-run", str(tmp_path)]
+    for extra in (["--social-layer", "gscl"], ["--gscl-run", str(gscl)], not_a_run):
+        code = main(["policy", "train", "--out", str(tmp_path / "bad"), "--scenes", EASY, "--no-progress", *extra])
+        err = capsys.readouterr().err
+        assert code == 2 and "--gscl-run" in err and len(err.strip().splitlines()) == 1
