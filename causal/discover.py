@@ -148,7 +148,9 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
 
     A predicted link counts as right when its cause, effect and lag are in ``truth``. SHD adds
     one per missing adjacency, one per extra adjacency and one per adjacency with the wrong or
-    no orientation.
+    no orientation. Recall is over ``truth``'s adjacencies: a same-time pair that causes itself
+    both ways (feedback within a sampling period, :func:`causal.simulator_graph.pipeline_truth`)
+    is one adjacency, found right in either orientation.
     """
     adj = lambda a, b, lag: (frozenset((a, b)), lag) if lag == 0 else ((a, b), lag)
     truth_adj = {adj(*t): t for t in truth}
@@ -163,7 +165,7 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
     ]
     return {
         "precision": right / max(len(links), 1),
-        "recall": right / max(len(truth), 1),
+        "recall": right / max(len(truth_adj), 1),
         "shd": len(missing) + len(extra) + len(misoriented),
         "missing": [f"{c}(t-{lag})->{e}" if lag else f"{c}->{e}" for c, e, lag in sorted(missing)],
         "extra": [k.label for k in extra],
