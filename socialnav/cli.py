@@ -24,7 +24,7 @@ from socialnav import runtime
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
     from common import __version__
-    from socialnav import arena, evaluate, gscl, layers, learn, pipelines, policy, simulate
+    from socialnav import arena, evaluate, gscl, layers, learn, pipelines, policy, referee, simulate
 
     parser = argparse.ArgumentParser(
         prog="socialnav",
@@ -40,6 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     layers.add_parser(sub)
     arena.add_parser(sub)
     policy.add_parser(sub)
+    referee.add_parser(sub)
     return parser
 
 
