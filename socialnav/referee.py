@@ -37,9 +37,13 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "referee",
         help="seed 000's discovery scored against the simulator's own causal graph, over seeds and world counts",
-        description=__doc__.split("\n\n")[0],
+        description="Seed 000's discovery (simulate a day per seed, socialnav learn on its first N worlds) scored "
+        "against the paper's Fig. 8 and against the simulator's own causal graph (causal/simulator_graph.py); "
+        "writes referee.csv, edges.csv and referee.md to --out, and resumes a stopped study.",
     )
-    p.add_argument("--out", type=output_folder, default=pathlib.Path("runs/referee"), help="output folder")
+    p.add_argument(
+        "--out", type=output_folder, default=pathlib.Path("runs/referee"), help="output folder (default runs/referee)"
+    )
     p.add_argument("--seeds", type=comma_ints, default=[0, 1, 2, 3, 4], help="simulation seeds (default 0,1,2,3,4)")
     p.add_argument("--worlds", type=comma_ints, default=[1, 2], help="world counts learned from (default 1,2)")
     p.add_argument("--slots", type=positive_int, default=None, help="simulated slots from 08:00 (default: the day)")
