@@ -55,6 +55,10 @@ class RobotCommand:
       recharge: bool, refuse the task that begins now and recharge first (Eq. 10). The protocol
         (:mod:`evaluation.protocol`) honours it on a task's first step; the day simulation
         recharges by its own rule and ignores it.
+      force_speed: bool, an experimenter's do(V = speed_mps): the robot moves at exactly
+        ``speed_mps`` (capped at ``robot_max_speed_mps``), whatever the crowd, the obstacle or
+        the acceleration limit (a charging robot or an empty battery still stands). The
+        referee of the causal engine's do()-queries uses it (``socialnav referee``).
     """
 
     aim_x_m: jax.Array
@@ -62,6 +66,7 @@ class RobotCommand:
     speed_mps: jax.Array
     planned_length_m: jax.Array
     recharge: jax.Array = False
+    force_speed: jax.Array = False
 
 
 @struct.dataclass
@@ -214,6 +219,7 @@ def drive(
     v_des = jnp.where(in_obstacle, v_des * r.obstacle_speed_factor, v_des)
     v_des = jnp.where(moving & (r.battery_pct > 0), v_des, 0.0)
     speed = jnp.minimum(v_des, r.speed_mps + params.robot_accel_mps2 * params.dt_s)
+    speed = jnp.where(cmd.force_speed & moving & (r.battery_pct > 0), v_max, speed)  # do(V = v)
     travel = jnp.minimum(speed * params.dt_s, dist)
 
     charging = r.mode == CHARGING

@@ -13,10 +13,18 @@ against the simulator's graph sampled at the run's period
 (:func:`causal.simulator_graph.pipeline_truth`) and against the part of it J-PCMCI+ can return
 with the pipeline's context declarations (:func:`causal.simulator_graph.findable`).
 
+The engine's do()-queries are refereed too: for every speed bin of each seed's engine learned
+from the fewest worlds, ``E[L | do(V = v), C = 0]`` (:meth:`causal.engine.CausalEngine.expected_battery_do`,
+``v`` the bin's mean speed) against the mean of L in ``--do-worlds`` simulated worlds (2 h from
+08:00) whose robot is forced to drive at exactly ``v`` (:attr:`jaxsim.robot.RobotCommand.force_speed`,
+on the route follower's routes), at the engine's sampling period, over the samples with C = 0,
+with a 95 % t-interval over the worlds; the engine's plain conditional ``E[L | V = v]`` beside it.
+
 Writes ``referee.csv`` (one row per seed and world count, with the run times), ``edges.csv``
 (for every edge either graph has or discovery found: in which graphs it is and in how many runs
-it was found) and ``referee.md`` (both as tables). A stopped study resumes: a seed's logs and a
-learn whose ``report.json`` exists are kept.
+it was found), ``do.csv`` (the do()-queries against the simulator's interventions) and
+``referee.md`` (the three as tables). A stopped study resumes: a seed's logs and a learn whose
+``report.json`` exists are kept.
 """
 
 from __future__ import annotations
@@ -53,6 +61,9 @@ def add_parser(sub) -> None:
         type=positive_float,
         default=None,
         help="the robot's battery at 08:00 (default from params.json; a short day needs a low one to charge at all)",
+    )
+    p.add_argument(
+        "--do-worlds", type=positive_int, default=8, help="simulated worlds per forced speed (default 8; 0: skip)"
     )
     p.add_argument("--no-progress", action="store_true", help="print one line per run only")
     p.set_defaults(handler=run)
@@ -153,14 +164,26 @@ def run(args: argparse.Namespace) -> int:
             print(f"seed {seed}, {n} world(s): {said}; discovery {row['discover_s']:.0f} s", flush=True)
     table = pd.DataFrame(rows)
     write_text_atomic(out / "referee.csv", table.to_csv(index=False))
+    do_rows = []
+    if args.do_worlds:
+        from causal.engine import CausalEngine
+
+        fewest = min(args.worlds)
+        for seed in args.seeds:
+            engine = CausalEngine.load(out / f"seed{seed}" / f"learn_w{fewest}")
+            do_rows += _do_check(engine, scenario, driver, args.do_worlds, seed, fewest)
+            print(f"seed {seed}: the engine's do()-queries against forced speeds in the simulator", flush=True)
+    do_table = pd.DataFrame(do_rows)
+    write_text_atomic(out / "do.csv", do_table.to_csv(index=False))
     edges = _edge_table(
         found_by_run,
         GROUND_TRUTH,
         simulator_graph.pipeline_truth(simulator_graph.sampling_steps(float(table.period_s.iloc[0]))),
     )
     write_text_atomic(out / "edges.csv", edges.to_csv(index=False))
-    write_text_atomic(out / "referee.md", _markdown(table) + "\n" + _markdown(edges))
-    print(f"wrote {out}/referee.csv, edges.csv, referee.md")
+    markdown = _markdown(table) + "\n" + _markdown(edges) + ("\n" + _markdown(do_table) if do_rows else "")
+    write_text_atomic(out / "referee.md", markdown)
+    print(f"wrote {out}/referee.csv, edges.csv, do.csv, referee.md")
     return 0
 
 
@@ -193,3 +216,65 @@ def _markdown(frame) -> str:
     cells = [[f"{v:.2f}" if isinstance(v, float) else str(v) for v in row] for row in frame.itertuples(index=False)]
     lines = ["| " + " | ".join(frame.columns) + " |", "|" + "---|" * len(frame.columns)]
     return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in cells]) + "\n"
+
+
+DO_HOURS = 2.0  # simulated per forced speed, from 08:00
+
+
+def forced_speed_driver(driver):
+    """``driver`` (the route follower) with its command's speed forced: params ``(driver's params,
+    v)``, v () m/s, traced (one compiled program for every speed)."""
+    import jax.numpy as jnp
+
+    from jaxsim.actor import Actor, Driver
+
+    inner = driver.actor
+
+    def act(params, state, obs, key):
+        command, state = inner.act(params[0], state, obs, key)
+        return command.replace(speed_mps=params[1], force_speed=jnp.array(True)), state
+
+    actor = Actor(init=inner.init, act=act, plan=inner.plan, plan_every_steps=inner.plan_every_steps, name="forced")
+    return lambda v: Driver(actor=actor, params=(driver.params, jnp.float32(v)))
+
+
+def _do_check(engine, scenario, driver, n_worlds: int, seed: int, worlds: int) -> list[dict]:
+    """One row per speed bin: the engine's do() and conditional answers and the simulator's
+    interventional mean of L (per sampling period, C = 0) with its 95 % interval over worlds."""
+    import numpy as np
+    from scipy import stats
+
+    from jaxsim import rollout
+    from jaxsim.world import build_world
+
+    params = scenario.params
+    period_steps = max(1, round(engine.period_s / params.dt_s))
+    n_steps = int(DO_HOURS * 3600 / params.dt_s) // period_steps * period_steps
+    world = build_world(scenario)
+    forced = forced_speed_driver(driver)
+    rows = []
+    for k, v in enumerate(engine.bins["V"].means):
+        _, rec = rollout.rollout(params, world, forced(float(v)), 10_000 + seed, n_worlds, n_steps, period_steps)
+        battery = np.asarray(rec.battery_pct, np.float64)
+        charging = np.asarray(rec.charging, bool)
+        change = np.diff(battery, axis=1)  # L_t = B_t - B_{t-1} over one period
+        keep = ~charging[:, 1:]
+        per_world = np.array([change[w][keep[w]].mean() for w in range(n_worlds) if keep[w].any()])
+        mean = float(per_world.mean())
+        half = float(stats.t.ppf(0.975, len(per_world) - 1) * per_world.std(ddof=1) / np.sqrt(len(per_world)))
+        engine_do = engine.expected_battery_do(k, 0)
+        rows.append(
+            {
+                "seed": seed,
+                "worlds": worlds,
+                "speed_bin": k,
+                "v_mps": round(float(v), 3),
+                "engine_do": engine_do,
+                "engine_given": engine.expected_battery_given(k),
+                "simulated_do": mean,
+                "simulated_lo": mean - half,
+                "simulated_hi": mean + half,
+                "inside": abs(engine_do - mean) <= half,
+            }
+        )
+    return rows

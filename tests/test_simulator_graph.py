@@ -220,7 +220,7 @@ def test_referee_command_scores_discovery_against_both_graphs_and_resumes(tmp_pa
     from socialnav.cli import main
 
     argv = ["referee", "--out", str(tmp_path / "r"), "--seeds", "0", "--worlds", "2"]  # world 0 alone: no obstacle
-    argv += ["--slot-length-s", "60", "--battery-initial-pct", "21", "--no-progress"]
+    argv += ["--slot-length-s", "60", "--battery-initial-pct", "21", "--do-worlds", "2", "--no-progress"]
     assert main(argv) == 0
     table = pd.read_csv(tmp_path / "r" / "referee.csv")
     assert len(table) == 1 and table.loc[0, "samples"] > 0 and table.loc[0, "simulate_s"] > 0
@@ -229,8 +229,27 @@ def test_referee_command_scores_discovery_against_both_graphs_and_resumes(tmp_pa
     edges = pd.read_csv(tmp_path / "r" / "edges.csv").set_index("edge")
     assert edges.loc["O->V", "fig8"] and edges.loc["O->V", "simulator"] and not edges.loc["C(t-1)->C", "fig8"]
     assert "| seed |" in (tmp_path / "r" / "referee.md").read_text()
+    do = pd.read_csv(tmp_path / "r" / "do.csv")
+    assert len(do) >= 2 and np.all(np.isfinite(do[["engine_do", "simulated_do"]].to_numpy()))
+    # Forced faster, the battery drains faster in the simulator (Eq. 1).
+    do = do.sort_values("v_mps")
+    assert do.simulated_do.iloc[-1] < do.simulated_do.iloc[0]
     capsys.readouterr()
     assert main(argv) == 0  # resumed: the logs and the learned run are kept
     assert np.isnan(pd.read_csv(tmp_path / "r" / "referee.csv").loc[0, "simulate_s"])
     assert main(["referee", "--out", str(tmp_path / "bad"), "--worlds", "0"]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_a_forced_speed_is_the_speed_whatever_the_crowd_or_the_obstacle(worlds):
+    from socialnav.referee import forced_speed_driver
+
+    params, world, driver, state, seeds = worlds
+    state = _with_obstacle(params, state)  # every task leg in an obstacle (speed factor 0.5)
+    can_move = (np.asarray(state.robot.mode) != CHARGING) & (np.asarray(state.robot.battery_pct) > 0)
+    forced = forced_speed_driver(driver)(0.3)
+    after, _ = _two_steps(params, world, state, seeds, forced, forced)
+    speed = np.asarray(after["V"])
+    np.testing.assert_allclose(speed[can_move], 0.3, rtol=1e-6)
+    free, _ = _two_steps(params, world, state, seeds, driver, driver)
+    assert np.any(np.asarray(free["V"])[can_move] < 0.29)  # unforced: the obstacle and the crowd slow it
