@@ -18,6 +18,7 @@ import time
 
 from common import runfolder
 from common.runfolder import RunFolderError
+from planners.policy_social import SOCIAL_LAYERS
 from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.locking import locks_folder
 
@@ -49,7 +50,7 @@ def add_parser(top) -> None:
     tr.add_argument("--seed", type=seed_int, default=None, help="random seed of the run (default 0)")
     tr.add_argument(
         "--social-layer",
-        choices=("none", "snl_small", "snl_large", "snl_matched", "casn", "gscl"),
+        choices=SOCIAL_LAYERS,
         default=None,
         help="also give the policy a social cost layer around the robot as an input (default none; gscl needs "
         "--gscl-run)",
