@@ -45,17 +45,22 @@ def window_input(occupancy, spec: GridSpec, scene: Scene, robot_frame: bool = Fa
     )
 
 
+def read_window(window_costs, dx_m, dy_m):
+    """float32 costs, 252 x the (40, 40) network costs in [0, 1] at offsets ``dx_m``, ``dy_m`` (any
+    shape) from the window's centre in its own axes (nearest 0.4 m cell; 0 outside the window)."""
+    row, col = grid.cell_of(dx_m, dy_m)
+    on = grid.inside(row, col)
+    value = window_costs[jnp.clip(row, 0, grid.GRID - 1), jnp.clip(col, 0, grid.GRID - 1)]
+    return jnp.where(on, MAX_GRADED * jnp.clip(value, 0.0, 1.0), 0.0).astype(jnp.float32)
+
+
 def place_window(window_costs, spec: GridSpec, scene: Scene, robot_frame: bool = False):
     """(H, W) float32: the (40, 40) network costs in [0, 1] placed into the planner's grid, 252 x."""
     x_m, y_m = spec.cell_centres()
     dx, dy = x_m - scene.robot_xy_m[0], y_m - scene.robot_xy_m[1]
     yaw = scene.robot_yaw_rad if robot_frame else 0.0
     c, s = jnp.cos(yaw), jnp.sin(yaw)
-    lx, ly = c * dx + s * dy, -s * dx + c * dy
-    row, col = grid.cell_of(lx, ly)
-    on = grid.inside(row, col)
-    value = window_costs[jnp.clip(row, 0, grid.GRID - 1), jnp.clip(col, 0, grid.GRID - 1)]
-    return jnp.where(on, MAX_GRADED * jnp.clip(value, 0.0, 1.0), 0.0).astype(jnp.float32)
+    return read_window(window_costs, c * dx + s * dy, -s * dx + c * dy)
 
 
 def gscl_layers(predict: Callable, occupancy, spec: GridSpec, scenes: Scene, robot_frame: bool = False) -> jax.Array:

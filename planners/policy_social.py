@@ -84,10 +84,10 @@ def window(layer: str, obs: Observation, points_m, state: SocialState):
         return jnp.zeros((0,), jnp.float32), state
     x_m, y_m = points_m[..., 0], points_m[..., 1]
     if layer == "gscl":
-        row, col = gscl_grid.cell_of(x_m - state.gscl_centre_xy_m[0], y_m - state.gscl_centre_xy_m[1])
-        on = gscl_grid.inside(row, col) & state.gscl_ready
-        value = state.gscl_costs[jnp.clip(row, 0, gscl_grid.GRID - 1), jnp.clip(col, 0, gscl_grid.GRID - 1)]
-        cost = jnp.where(on, costmap.MAX_GRADED * jnp.clip(value, 0.0, 1.0), 0.0)
+        cost = gscl_layer.read_window(
+            state.gscl_costs, x_m - state.gscl_centre_xy_m[0], y_m - state.gscl_centre_xy_m[1]
+        )
+        cost = jnp.where(state.gscl_ready, cost, 0.0)
         return (cost / costmap.LETHAL).reshape(-1).astype(jnp.float32), state
     scene = perceived_scene(obs)
     if layer == "casn":

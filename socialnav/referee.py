@@ -108,7 +108,8 @@ def run(args: argparse.Namespace) -> int:
     n_worlds = max(args.worlds)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    driver = route_follower(shortest_path_plan(scenario), build_world(scenario))
+    world = build_world(scenario)
+    driver = route_follower(shortest_path_plan(scenario), world)
     rows, found_by_run = [], []
     for seed in args.seeds:
         logs_dir = out / f"seed{seed}"
@@ -171,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
         fewest = min(args.worlds)
         for seed in args.seeds:
             engine = CausalEngine.load(out / f"seed{seed}" / f"learn_w{fewest}")
-            do_rows += _do_check(engine, scenario, driver, args.do_worlds, seed, fewest)
+            do_rows += _do_check(engine, scenario.params, world, driver, args.do_worlds, seed, fewest)
             print(f"seed {seed}: the engine's do()-queries against forced speeds in the simulator", flush=True)
     do_table = pd.DataFrame(do_rows)
     write_text_atomic(out / "do.csv", do_table.to_csv(index=False))
@@ -238,19 +239,16 @@ def forced_speed_driver(driver):
     return lambda v: Driver(actor=actor, params=(driver.params, jnp.float32(v)))
 
 
-def _do_check(engine, scenario, driver, n_worlds: int, seed: int, worlds: int) -> list[dict]:
+def _do_check(engine, params, world, driver, n_worlds: int, seed: int, worlds: int) -> list[dict]:
     """One row per speed bin: the engine's do() and conditional answers and the simulator's
     interventional mean of L (per sampling period, C = 0) with its 95 % interval over worlds."""
     import numpy as np
     from scipy import stats
 
     from jaxsim import rollout
-    from jaxsim.world import build_world
 
-    params = scenario.params
     period_steps = max(1, round(engine.period_s / params.dt_s))
     n_steps = int(DO_HOURS * 3600 / params.dt_s) // period_steps * period_steps
-    world = build_world(scenario)
     forced = forced_speed_driver(driver)
     rows = []
     for k, v in enumerate(engine.bins["V"].means):
