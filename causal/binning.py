@@ -13,30 +13,42 @@ import numpy as np
 
 
 def quantile_edges(x: np.ndarray, k: int) -> np.ndarray:
-    """Quantile bin edges (``k`` bins, fewer where ties merge them), with every atom isolated.
+    """Bin edges for ``k`` bins (fewer where ties merge them): every atom in a bin of its own, the
+    other values in quantile bins of their own distribution.
 
     An atom is a value holding more than ``1/k`` of the data (a robot cruising at exactly its
-    top speed, a waypoint that is empty most of the time). Plain quantiles would bury it in a
-    wide bin; it gets a bin of its own, between the mid-points to its neighbouring values, as
-    in the paper's networks (top speed bin [0.499; 0.509)). At least two bins when ``x`` varies.
+    top speed, a waypoint that is empty most of the time). It gets a bin of its own, between the
+    mid-points to its neighbouring values, as in the paper's networks (top speed bin [0.499;
+    0.509)). The remaining ``k - atoms`` bins are quantile bins of the values that are not atoms:
+    quantiles of all the data would put most of their edges inside an atom holding 87 % of it
+    (the density of a waypoint that is empty 87 % of the time then had two bins, empty and not,
+    whatever ``k``). Those edges are values of the data (``inverted_cdf``), so none falls inside
+    an atom's bin. At least two bins when ``x`` varies.
     """
     x = np.asarray(x, np.float64)
-    edges = np.quantile(x, np.linspace(0, 1, k + 1))
+    lo, hi = float(x.min()), float(x.max())
+    if lo == hi:
+        raise ValueError("cannot bin a constant series")
     values, counts = np.unique(x, return_counts=True)
-    for i in np.flatnonzero(counts > len(x) / k):
+    is_atom = counts > len(x) / k
+    edges = [lo, hi]
+    for i in np.flatnonzero(is_atom):
         if i > 0:
-            edges = np.append(edges, (values[i - 1] + values[i]) / 2)
+            edges.append((values[i - 1] + values[i]) / 2)
         if i + 1 < len(values):
-            edges = np.append(edges, (values[i] + values[i + 1]) / 2)
-    edges = np.unique(edges)
-    if len(edges) < 3:  # a spike (e.g. many zeros): split the distinct values in two
-        lo, hi = float(x.min()), float(x.max())
-        if lo == hi:
-            raise ValueError("cannot bin a constant series")
+            edges.append((values[i] + values[i + 1]) / 2)
+    rest = x[~np.isin(x, values[is_atom])]
+    n_rest = k - int(is_atom.sum())
+    if rest.size and n_rest >= 2:
+        inner = np.quantile(rest, np.linspace(0, 1, n_rest + 1)[1:-1], method="inverted_cdf")
+        # an edge at a value puts it in the upper bin; one just above the rest's minimum would
+        # leave that value alone in a bin
+        edges.extend(inner[inner > rest.min()])
+    edges = np.unique(np.asarray(edges, np.float64))
+    if len(edges) < 3:  # one atom and nothing else to split: split the distinct values in two
         above = x[x > lo]
-        mid = float(above.min()) if above.size else (lo + hi) / 2
-        edges = np.array([lo, (lo + mid) / 2 if mid > lo else (lo + hi) / 2, hi])
-        edges = np.unique(edges)
+        mid = float(above.min())
+        edges = np.unique(np.array([lo, (lo + mid) / 2, hi]))
     return edges
 
 

@@ -15,8 +15,10 @@ discovered structure, maximum likelihood parameters, and the do-queries of seed 
   (J-PCMCI+ reports such conflicts as 'x-x').
 * Parameters: MLE with a negligible smoothing prior (1e-6) so unseen parent combinations do
   not stop the learner.
-* Queries: ``E[L | do(V = v), C = c]`` (backdoor over O) and ``E[D | do(S = s), W = w]`` as a
-  sustained intervention on S0 and St knowing W0 and Wt (a do on St alone is biased by D0).
+* Queries: ``E[L | do(V = v), C = c]`` (truncated factorisation, sustained over both slices,
+  over the parent configurations of L seen in the data: :meth:`CausalEngine.battery_do`) and
+  ``E[D | do(S = s), W = w]`` as a sustained intervention on S0 and St knowing W0 and Wt (a do
+  on St alone is biased by D0).
 """
 
 from __future__ import annotations
@@ -48,6 +50,23 @@ def discretized_variable(name: str, binning: Binning):
     var = gum.DiscretizedVariable(name, name, [float(e) for e in binning.edges])
     var.setEmpirical(True)
     return var
+
+
+@dataclasses.dataclass(frozen=True)
+class BatteryDo:
+    """E[L | do(V = v), C = c] per period, and the probability of L's parent configurations
+    (under the intervention) that the data cover."""
+
+    value: float
+    seen_share: float
+
+
+def _state_index(column: pd.Series, variable, binning: Binning | None) -> np.ndarray:
+    """The state index of every value of a learning-table column in its pyAgrum variable."""
+    if binning is not None:
+        return binning.index(column.to_numpy(np.float64))
+    labels = {variable.label(i): i for i in range(variable.domainSize())}
+    return np.array([labels[str(v)] for v in column.to_numpy()], np.int64)
 
 
 def learn_mle(bn, data: pd.DataFrame):
@@ -119,6 +138,9 @@ class CausalEngine:
       arcs: the network's arcs.
       support_vc: (V bins, 2) samples seen with each speed bin and charging state.
       support_sw: (S, W labels) samples seen in each slot at each learned waypoint.
+      do_support: the rows of Lt's table (its parents' configurations) seen in the data, for
+        the positivity of E[L | do(V), C] (:meth:`battery_do`): ``{"axes": Lt's parents,
+        "cells": flat indices}``; None for an engine saved before it existed.
     """
 
     bn: object
@@ -128,6 +150,7 @@ class CausalEngine:
     arcs: list[tuple[str, str]]
     support_vc: np.ndarray
     support_sw: np.ndarray
+    do_support: dict | None = None
 
     @classmethod
     def fit(
@@ -196,7 +219,11 @@ class CausalEngine:
             (table["St"].to_numpy().astype(int), np.searchsorted(w_codes, table["Wt"].to_numpy().astype(int))),
             1,
         )
-        return cls(learned, binning, labels, datasets.period_s, arcs, support_vc, support_sw)
+        axes = sorted(learned.variable(p).name() for p in learned.parents("Lt"))
+        states = [_state_index(data[n], learned.variable(n), binning.get(n[:-1])) for n in axes]
+        flat = np.ravel_multi_index(states, [learned.variable(n).domainSize() for n in axes]) if axes else [0]
+        do_support = {"axes": axes, "cells": np.unique(flat).tolist()}
+        return cls(learned, binning, labels, datasets.period_s, arcs, support_vc, support_sw, do_support)
 
     # -- queries ---------------------------------------------------------------------------
     def _expect(self, tensor, var: str) -> float:
@@ -207,12 +234,25 @@ class CausalEngine:
         return self.bn.variable(node).label(int(index))
 
     def expected_battery_do(self, speed_bin: int, charging: int) -> float:
-        """E[L | do(V = v), C = c] per sampling period (Eq. 5-6, backdoor over O).
+        """E[L | do(V = v), C = c] per sampling period (Eq. 5-6): :meth:`battery_do`'s sustained
+        intervention over the data's support; where its joint would not fit in memory, pyAgrum's
+        one-step ``causalImpact`` over every configuration (:meth:`expected_battery_do_pyagrum`)."""
+        try:
+            return self.battery_do(speed_bin, charging).value
+        except MemoryError:
+            return self.expected_battery_do_pyagrum(speed_bin, charging)
 
-        pyAgrum's ``causalImpact`` identifies the query; on some learned graphs (density links
-        into V and L, whose parents include the 69-state W) its formula does not fit in memory
-        (``std::bad_alloc``), and the same quantity is computed by the parent adjustment
-        (:meth:`expected_battery_do_by_parents`) instead.
+    def expected_battery_do_pyagrum(self, speed_bin: int, charging: int) -> float:
+        """E[L | do(V = v), C = c] as pyAgrum's ``causalImpact`` identifies it (backdoor over O),
+        over every parent configuration, seen or not.
+
+        Where ``v`` was never seen with some parent configuration ``z`` (positivity violated:
+        an obstacle always slows the robot below top speed, so top speed never meets O = 1),
+        L's table row for ``(v, z)`` is the smoothing prior's uniform distribution, and the
+        adjustment still weights it by ``P(z | c)``; :meth:`battery_do` leaves those out.
+        On some learned graphs (density links into V and L, whose parents include the 69-state
+        W) the formula does not fit in memory (``std::bad_alloc``) and the parent adjustment
+        without the support restriction is computed instead.
         """
         import pyagrum as gum
 
@@ -228,43 +268,106 @@ class CausalEngine:
         except (MemoryError, Exception) as e:  # pyAgrum raises a bare Exception("std::bad_alloc")
             if "bad_alloc" not in str(e) and not isinstance(e, MemoryError):
                 raise
-            return self.expected_battery_do_by_parents(speed_bin, charging)
+            return self.battery_do(speed_bin, charging, sustained=False, seen_only=False).value
         return self._expect(tensor, "L")
 
-    def expected_battery_do_by_parents(self, speed_bin: int, charging: int, max_cells: int = 20_000_000) -> float:
-        """E[L | do(V = v), C = c] by the backdoor adjustment over V's parents Z:
-        ``sum_z E[L | v, z, c] P(z | c)``, from one joint posterior P(L, V, Z | C = c).
+    def battery_do(
+        self,
+        speed_bin: int,
+        charging: int,
+        *,
+        sustained: bool = True,
+        seen_only: bool = True,
+        obstacle: int | None = None,
+        max_cells: int = 20_000_000,
+    ) -> BatteryDo:
+        """E[L | do(V = v), C = c] per period by the truncated factorisation of the network: the
+        arcs into the intervened speed nodes are cut, they are set to ``v``, and E[Lt] is read
+        from the joint posterior of Lt and its parents given ``C = c``.
 
-        Valid because the parents of the treatment block every backdoor path, and C (a context
-        whose only parent is its previous slice) is neither a descendant of V nor a collider.
+        ``sustained`` (the default) intervenes on both slices, do(V0 = v, Vt = v): the robot
+        *travels* at ``v`` (the planner's arc, the simulator's forced speed), as the engine's
+        density query holds S in both slices. ``sustained=False`` is the one-step do(Vt = v)
+        of seed 000 Eq. 5, where V0 keeps its observed distribution; on the warehouse at a 1 s
+        period, L over the last second then still carries the previous second's speed (a robot
+        braking to a stop), and "do(V = 0)" drains more than standing does.
+
+        ``seen_only`` (the default) keeps the sum to the parent configurations of Lt seen in the
+        data the engine learnt from (:attr:`do_support`), their probability renormalised: L's
+        row for an unseen configuration (top speed with an obstacle: an obstacle always slows
+        the robot) is learnt from nothing (the smoothing prior makes it the mean of L's bins),
+        and no estimator can identify it from these data (positivity). The answer is then the
+        effect where the data speak; :attr:`BatteryDo.seen_share` is the probability they cover.
+
+        ``obstacle`` also conditions on O (in the intervened slices): the engine takes O as an
+        exogenous context, so its do(V = v) keeps O's observed distribution, while in the
+        simulator the robot meets obstacles by driving (``causal/simulator_graph.py``: V -> O).
 
         Raises:
-          MemoryError: the joint over L, V and Z has more than ``max_cells`` cells.
+          MemoryError: the joint over Lt and its free parents has more than ``max_cells`` cells.
         """
         import pyagrum as gum
 
-        parents = sorted(self.bn.variable(p).name() for p in self.bn.parents("Vt"))
-        z = [n for n in parents if n != "Ct"]
-        target = ["Lt", "Vt", *z]
+        treated = ["V0", "Vt"] if sustained else ["Vt"]
+        bn = gum.BayesNet(self.bn)
+        for node in treated:
+            for parent in list(bn.parents(node)):
+                bn.eraseArc(parent, bn.idFromName(node))
+            bn.cpt(node).fillWith(1.0).normalizeAsCPT()
+        evidence = {node: self._label(node, speed_bin) for node in treated} | {"Ct": str(charging)}
+        if obstacle is not None:
+            evidence |= {f"O{node[1]}": str(obstacle) for node in treated}
+        parents = sorted(self.bn.variable(p).name() for p in self.bn.parents("Lt"))
+        free = [n for n in parents if n not in evidence]
+        target = ["Lt", *free]
         cells = int(np.prod([self.bn.variable(n).domainSize() for n in target]))
         if cells > max_cells:
             raise MemoryError(f"E[L | do(V), C]: the joint over {target} has {cells} cells (more than {max_cells})")
+        ie = gum.LazyPropagation(bn)
+        if free:
+            ie.addJointTarget(set(target))
+        ie.setEvidence(evidence)
+        ie.makeInference()
+        tensor = ie.jointPosterior(set(target)) if free else ie.posterior("Lt")
+        reversed_names = list(tensor.names)[::-1]  # tolist()'s axes run in the reverse order of tensor.names
+        arr = np.transpose(np.asarray(tensor.tolist(), np.float64), [reversed_names.index(n) for n in target])
+        arr = (arr / arr.sum()).reshape(arr.shape[0], -1)  # (L, free parent configurations)
+        p_parents = arr.sum(axis=0)
+        weight = p_parents
+        if seen_only and self.do_support is not None:
+            weight = p_parents * self._seen_rows(evidence, free).ravel()
+        share = float(weight.sum() / p_parents.sum())
+        if share <= 0:
+            return BatteryDo(float("nan"), 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            p_l_given = np.where(p_parents > 0, arr / p_parents, 0.0)  # L's rows at the given parents
+        p_l = p_l_given @ weight
+        return BatteryDo(float(np.dot(p_l / p_l.sum(), self.bins["L"].means)), share)
+
+    def _seen_rows(self, evidence: dict[str, str], free: list[str]) -> np.ndarray:
+        """(free parents...) bool: Lt's parent configurations seen in the data, the parents in
+        ``evidence`` at their given labels."""
+        axes = self.do_support["axes"]
+        if set(axes) != {self.bn.variable(p).name() for p in self.bn.parents("Lt")}:
+            raise ValueError(f"the engine's do_support runs over {axes}, not Lt's parents")
+        shape = [self.bn.variable(n).domainSize() for n in axes]
+        seen = np.zeros(int(np.prod(shape)), bool)
+        seen[np.asarray(self.do_support["cells"], np.int64)] = True
+        seen = seen.reshape(shape)
+        index = tuple(self.bn.variable(n).index(evidence[n]) if n in evidence else slice(None) for n in axes)
+        seen = seen[index]
+        kept = [n for n in axes if n not in evidence]
+        return np.transpose(seen, [kept.index(n) for n in free]) if free else seen
+
+    def obstacle_share(self, charging: int) -> float:
+        """P(Ot = 1 | Ct = c): how often the data's robot has an obstacle, whatever its speed."""
+        import pyagrum as gum
+
         ie = gum.LazyPropagation(self.bn)
-        ie.addJointTarget(set(target))
         ie.setEvidence({"Ct": str(charging)})
         ie.makeInference()
-        tensor = ie.jointPosterior(set(target))
-        names = list(tensor.names)
-        arr = np.asarray(tensor.tolist(), np.float64)  # axes in the reverse order of tensor.names
-        arr = np.moveaxis(arr, [len(names) - 1 - names.index(n) for n in ("Lt", "Vt")], [0, 1])
-        arr = arr / arr.sum()
-        p_vz = arr.sum(axis=0)  # (V, Z...)
-        p_z = p_vz.sum(axis=0)  # (Z...)
-        joint_v = arr[:, speed_bin]  # (L, Z...): P(L, v, z | c)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            p_l = np.where(p_vz[speed_bin] > 0, joint_v / p_vz[speed_bin], 0.0)  # P(L | v, z, c)
-        p_l = (p_l * p_z).reshape(len(self.bins["L"].means), -1).sum(axis=1)
-        return float(np.dot(p_l / p_l.sum(), self.bins["L"].means))
+        p = np.asarray(ie.posterior("Ot").tolist(), np.float64)
+        return float(p[1] / p.sum())
 
     def expected_battery_given(self, speed_bin: int, evidence: dict[str, int] | None = None) -> float:
         """E[L | V = v, ...] by plain conditioning (the Bayesian estimate of seed 000 Eq. 11)."""
@@ -381,6 +484,7 @@ class CausalEngine:
             "arcs": self.arcs,
             "support_vc": self.support_vc.tolist(),
             "support_sw": self.support_sw.tolist(),
+            "do_support": self.do_support,
             "bins": {k: {"edges": b.edges.tolist(), "means": b.means.tolist()} for k, b in self.bins.items()},
         }
         write_text_atomic(folder / META_FILE, json.dumps(meta, indent=1))
@@ -402,4 +506,5 @@ class CausalEngine:
             [tuple(a) for a in meta["arcs"]],
             np.asarray(meta["support_vc"]),
             np.asarray(meta["support_sw"]),
+            meta.get("do_support"),
         )

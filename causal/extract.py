@@ -9,8 +9,12 @@ density at ``w``), ``W`` (= w, constant), ``S`` (slot), ``C`` (charging) and ``O
 in the order of :data:`causal.variables.VARIABLES`.
 
 Subsampling follows the paper's Nyquist rule (:func:`nyquist_step`): the highest significant
-frequency over the series sets the rate. Waypoints where nobody ever stands carry a constant
-``D`` and are dropped (reported); asking for one by name is an error.
+frequency over the series sets the rate, and nothing coarsens it. J-PCMCI+'s time grows with
+its samples, so a sample budget chooses *which datasets* discovery sees
+(:func:`discovery_subset`), never the rate: a coarser step would alias the dynamics the rule
+keeps (people crossing a waypoint's disc make D broadband, so on the warehouse the rule keeps
+every logged second). Waypoints where nobody ever stands carry a constant ``D`` and are dropped
+(reported); asking for one by name is an error.
 """
 
 from __future__ import annotations
@@ -45,8 +49,7 @@ class Datasets:
       waypoints: waypoint name of each dataset, same keys.
       worlds: world id of each dataset.
       step: subsampling step (in logged samples); ``sample_interval_s * step`` is the period.
-      nyquist_step: the step the paper's rule asked for (``step`` is larger when the sample
-        budget forced it).
+      nyquist_step: the step the paper's rule asks for (``step`` differs only when given).
       sample_interval_s: the logs' sampling interval.
       dropped_waypoints: waypoints left out because their density never changes.
       frequencies_hz: highest significant frequency found per variable.
@@ -130,7 +133,6 @@ def build_datasets(
     *,
     waypoints: list[str] | None = None,
     step: int | None = None,
-    max_samples: int | None = None,
     worlds: list[int] | None = None,
     energy: float = SIGNIFICANT_ENERGY,
 ) -> Datasets:
@@ -141,8 +143,7 @@ def build_datasets(
       waypoint_names: all waypoint names of the scenario (index = W's value).
       waypoints: waypoints to keep (default: every waypoint whose density ever changes).
       step: subsampling step in samples (default: :func:`nyquist_step` over V, L, D, C, O of
-        the first world, raised if needed to keep at most ``max_samples`` samples in all).
-      max_samples: sample budget over all datasets (J-PCMCI+ time grows with it).
+        the first world). A larger one decimates without a low-pass filter.
       worlds: world ids to use (default: all).
     """
     if worlds is not None:
@@ -176,12 +177,7 @@ def build_datasets(
     densest = max(kept, key=lambda w: first[density_column(w)].var())
     probe["D"] = first[density_column(densest)].to_numpy()
     auto_step, freqs = nyquist_step(probe, dt, energy)
-    if step is None:
-        step = auto_step
-        if max_samples:
-            total = len(df) * len(kept)
-            step = max(step, int(np.ceil(total / max_samples)))
-    step = int(step)
+    step = int(auto_step if step is None else step)
     if step < 1:
         raise LogError(f"step must be >= 1, got {step}")
     shortest = int(df.groupby("world", sort=False).size().min())
@@ -212,6 +208,23 @@ def build_datasets(
             names[k] = w
             world_of[k] = int(world)
     return Datasets(data, names, world_of, step, auto_step, dt, tuple(dropped), freqs)
+
+
+def discovery_subset(datasets: Datasets, max_samples: int | None) -> list[int]:
+    """The datasets discovery runs on: all of them within ``max_samples`` samples, else as many
+    as the budget holds (at least 2, so that W varies), evenly spaced over the (world, waypoint)
+    order, so over the warehouse and the worlds.
+
+    The graph is one for every dataset (J-PCMCI+'s premise), so a subset at the full rate loses
+    no dynamics; the engine's parameters still learn from every dataset.
+    """
+    keys = sorted(datasets.data)
+    total = sum(len(datasets.data[k]) for k in keys)
+    if not max_samples or total <= max_samples:
+        return keys
+    per_dataset = total / len(keys)
+    n = min(len(keys), max(2, int(max_samples // per_dataset)))
+    return [keys[i] for i in np.unique(np.linspace(0, len(keys) - 1, n).round().astype(int))]
 
 
 def read_run(logs_dir: str | pathlib.Path, waypoints: list[str] | None = None) -> tuple[pd.DataFrame, dict]:

@@ -58,12 +58,13 @@ def learn(
     Args:
       logs_dir: a folder written by ``socialnav simulate`` (:mod:`common.logschema`).
       test, alpha: J-PCMCI+ settings (see :func:`causal.discover.run_jpcmciplus`).
-      step: subsampling step in logged samples (default: the Nyquist rule, coarsened if needed
-        to keep ``max_samples`` samples over all datasets).
-      max_samples: discovery's sample budget (J-PCMCI+ time grows with it).
+      step: subsampling step in logged samples (default: the Nyquist rule).
+      max_samples: discovery's sample budget (J-PCMCI+ time grows with it): discovery runs on
+        the datasets it holds (:func:`causal.extract.discovery_subset`), the engine on all;
+        None or 0 for no budget.
       worlds: world ids to learn from (default: all).
       waypoints: waypoints to learn (default: all whose density changes).
-      compare_subsampling: also run discovery at the Nyquist step (no budget) and report both.
+      compare_subsampling: also run discovery on every dataset (no budget) and report both.
       shown_as: the folder named in the closing message (default ``out_dir``; the command line
         writes into a staging folder that becomes ``out_dir`` when the run is complete).
 
@@ -78,21 +79,27 @@ def learn(
     say("reading logs ...", flush=True)
     df, meta = extract.read_run(logs_dir, waypoints)
     names, slots = meta["waypoints"], meta["slots"]
-    datasets = extract.build_datasets(df, names, waypoints=waypoints, step=step, max_samples=max_samples, worlds=worlds)
+    datasets = extract.build_datasets(df, names, waypoints=waypoints, step=step, worlds=worlds)
     timings["extract_s"] = time.perf_counter() - t0
     n_samples = sum(len(a) for a in datasets.data.values())
+    subset = extract.discovery_subset(datasets, max_samples)
+    n_discovery = sum(len(datasets.data[k]) for k in subset)
     say(
         f"  {len(datasets.data)} datasets ({len(set(datasets.waypoints.values()))} waypoints x "
         f"{len(set(datasets.worlds.values()))} worlds), {n_samples} samples after subsampling every "
-        f"{datasets.step} sample(s) ({datasets.period_s:g} s; the Nyquist rule asked for "
+        f"{datasets.step} sample(s) ({datasets.period_s:g} s; the Nyquist rule asks for "
         f"{datasets.nyquist_step}); dropped empty waypoints: "
         f"{', '.join(datasets.dropped_waypoints) or 'none'}",
         flush=True,
     )
 
-    say(f"J-PCMCI+ ({test}, alpha {alpha}) ...", flush=True)
+    say(
+        f"J-PCMCI+ ({test}, alpha {alpha}) on {len(subset)} of the {len(datasets.data)} datasets "
+        f"({n_discovery} samples; the sample budget --max-samples {max_samples or 'none'}) ...",
+        flush=True,
+    )
     t = time.perf_counter()
-    found = discover.run_jpcmciplus(datasets.data, test=test, alpha=alpha)
+    found = discover.run_jpcmciplus({k: datasets.data[k] for k in subset}, test=test, alpha=alpha)
     timings["discover_s"] = time.perf_counter() - t
     quality = discover.score(found.links)
     simulator_truth = simulator_graph.pipeline_truth(simulator_graph.sampling_steps(datasets.period_s))
@@ -106,14 +113,14 @@ def learn(
     )
 
     comparison = None
-    if compare_subsampling and datasets.step > datasets.nyquist_step:
-        say(f"J-PCMCI+ at the Nyquist step {datasets.nyquist_step}, for comparison ...", flush=True)
-        full = extract.build_datasets(df, names, waypoints=waypoints, step=datasets.nyquist_step, worlds=worlds)
-        found_full = discover.run_jpcmciplus(full.data, test=test, alpha=alpha)
+    if compare_subsampling and len(subset) < len(datasets.data):
+        say(f"J-PCMCI+ on all {len(datasets.data)} datasets, for comparison ...", flush=True)
+        found_full = discover.run_jpcmciplus(datasets.data, test=test, alpha=alpha)
         comparison = {
-            "step": datasets.nyquist_step,
+            "datasets": len(datasets.data),
             "links": [k.label for k in found_full.links],
             "score": discover.score(found_full.links),
+            "score_against_simulator": discover.score(found_full.links, simulator_truth),
             "seconds": found_full.seconds,
         }
 
@@ -142,10 +149,12 @@ def learn(
         "dropped_waypoints": list(datasets.dropped_waypoints),
         "datasets": len(datasets.data),
         "samples": n_samples,
+        "discovery_datasets": [f"{datasets.waypoints[k]}@world{datasets.worlds[k]}" for k in subset],
+        "discovery_samples": n_discovery,
         "links": [k.label for k in found.links],
         "score": quality,
         "score_against_simulator": against_simulator,
-        "at_nyquist_step": comparison,
+        "on_all_datasets": comparison,
         "bins": {k: len(b.means) for k, b in eng.bins.items()},
         "battery_pct_per_s": tables["battery_pct_per_s"].tolist(),
         "speed_mps": tables["speed_mps"].tolist(),

@@ -10,7 +10,14 @@ from causal.extract import LogError
 from causal.learn import learn
 from common import runfolder
 from common.logschema import LOG_FILE, META_FILE
-from socialnav.argtypes import comma_ints, comma_names, open_unit_interval, output_folder, positive_int
+from socialnav.argtypes import (
+    comma_ints,
+    comma_names,
+    non_negative_int,
+    open_unit_interval,
+    output_folder,
+    positive_int,
+)
 from socialnav.locking import locks_folder
 
 
@@ -40,9 +47,10 @@ def add_parser(sub) -> None:
     )
     lrn.add_argument(
         "--max-samples",
-        type=positive_int,
+        type=non_negative_int,
         default=200_000,
-        help="discovery's sample budget over all datasets (default 200000); coarsens the step",
+        help="discovery's sample budget (default 200000): J-PCMCI+ runs on as many datasets as it holds, "
+        "evenly spaced; the engine learns from all; 0: no budget",
     )
     lrn.add_argument(
         "--worlds", type=comma_ints, default=None, help="comma-separated world ids to learn from (default: all)"
@@ -56,7 +64,7 @@ def add_parser(sub) -> None:
     lrn.add_argument(
         "--compare-subsampling",
         action="store_true",
-        help="also run discovery at the Nyquist step (no sample budget) and report both",
+        help="also run discovery on every dataset (no sample budget) and report both",
     )
     lrn.add_argument(
         "--overwrite", action="store_true", help="replace the engine in --out whole (only once the new one is complete)"

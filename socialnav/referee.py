@@ -18,7 +18,11 @@ from the fewest worlds, ``E[L | do(V = v), C = 0]`` (:meth:`causal.engine.Causal
 ``v`` the bin's mean speed) against the mean of L in ``--do-worlds`` simulated worlds (2 h from
 08:00) whose robot is forced to drive at exactly ``v`` (:attr:`jaxsim.robot.RobotCommand.force_speed`,
 on the route follower's routes), at the engine's sampling period, over the samples with C = 0,
-with a 95 % t-interval over the worlds; the engine's plain conditional ``E[L | V = v]`` beside it.
+with a 95 % t-interval over the worlds. Beside it: the engine's plain conditional ``E[L | V = v]``,
+its one-step do(Vt) and pyAgrum's ``causalImpact`` (the query before the sustained, seen-cells
+one), the share of the parent configurations the data cover, how often an obstacle is present
+(the engine's P(O = 1 | C = 0) against the forced robot's share of periods), and both sides
+without obstacles (the engine given O = 0, the simulator's periods with no obstacle).
 
 Writes ``referee.csv`` (one row per seed and world count, with the run times), ``edges.csv``
 (for every edge either graph has or discovery found: in which graphs it is and in how many runs
@@ -239,11 +243,23 @@ def forced_speed_driver(driver):
     return lambda v: Driver(actor=actor, params=(driver.params, jnp.float32(v)))
 
 
+def _mean_interval(values, mask) -> tuple[float, float]:
+    """Mean over worlds of each world's mean of ``values[mask]`` (worlds, periods), with the
+    half-width of its 95 % t-interval."""
+    import numpy as np
+    from scipy import stats
+
+    per_world = np.array([values[w][mask[w]].mean() for w in range(len(values)) if mask[w].any()])
+    if len(per_world) < 2:
+        return (float(per_world.mean()) if len(per_world) else float("nan")), float("nan")
+    half = stats.t.ppf(0.975, len(per_world) - 1) * per_world.std(ddof=1) / np.sqrt(len(per_world))
+    return float(per_world.mean()), float(half)
+
+
 def _do_check(engine, params, world, driver, n_worlds: int, seed: int, worlds: int) -> list[dict]:
     """One row per speed bin: the engine's do() and conditional answers and the simulator's
     interventional mean of L (per sampling period, C = 0) with its 95 % interval over worlds."""
     import numpy as np
-    from scipy import stats
 
     from jaxsim import rollout
 
@@ -255,11 +271,12 @@ def _do_check(engine, params, world, driver, n_worlds: int, seed: int, worlds: i
         _, rec = rollout.rollout(params, world, forced(float(v)), 10_000 + seed, n_worlds, n_steps, period_steps)
         battery = np.asarray(rec.battery_pct, np.float64)
         charging = np.asarray(rec.charging, bool)
+        obstacle = np.asarray(rec.obstacle, bool)
         change = np.diff(battery, axis=1)  # L_t = B_t - B_{t-1} over one period
         keep = ~charging[:, 1:]
-        per_world = np.array([change[w][keep[w]].mean() for w in range(n_worlds) if keep[w].any()])
-        mean = float(per_world.mean())
-        half = float(stats.t.ppf(0.975, len(per_world) - 1) * per_world.std(ddof=1) / np.sqrt(len(per_world)))
+        clear = keep & ~obstacle[:, 1:] & ~obstacle[:, :-1]
+        mean, half = _mean_interval(change, keep)
+        mean_clear, half_clear = _mean_interval(change, clear)
         engine_do = engine.expected_battery_do(k, 0)
         rows.append(
             {
@@ -268,11 +285,19 @@ def _do_check(engine, params, world, driver, n_worlds: int, seed: int, worlds: i
                 "speed_bin": k,
                 "v_mps": round(float(v), 3),
                 "engine_do": engine_do,
+                "engine_do_one_step": engine.battery_do(k, 0, sustained=False).value,
+                "engine_do_pyagrum": engine.expected_battery_do_pyagrum(k, 0),
+                "seen_share": engine.battery_do(k, 0).seen_share,
                 "engine_given": engine.expected_battery_given(k),
                 "simulated_do": mean,
                 "simulated_lo": mean - half,
                 "simulated_hi": mean + half,
                 "inside": abs(engine_do - mean) <= half,
+                "obstacle_share_engine": engine.obstacle_share(0),
+                "obstacle_share_simulated": float(obstacle[:, 1:][keep].mean()),
+                "engine_do_no_obstacle": engine.battery_do(k, 0, obstacle=0).value,
+                "simulated_no_obstacle": mean_clear,
+                "simulated_no_obstacle_half": half_clear,
             }
         )
     return rows

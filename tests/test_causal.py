@@ -71,11 +71,62 @@ def test_do_differs_from_conditioning_and_matches_the_backdoor():
     assert do == pytest.approx(backdoor, abs=1e-5)
     assert given == pytest.approx(conditional, abs=1e-5)
     assert abs(do - given) > 0.005  # conditioning on "fast" hides the obstacles' cost
-    # The parent adjustment (the fallback when causalImpact runs out of memory) gives the same answer.
+    # Every (speed, obstacle) cell is seen: the parent adjustment is pyAgrum's causalImpact.
     for v in range(len(eng.bins["V"].means)):
-        assert eng.expected_battery_do_by_parents(v, 0) == pytest.approx(eng.expected_battery_do(v, 0), abs=1e-9)
+        assert eng.battery_do(v, 0).seen_share == 1.0
+        assert eng.expected_battery_do(v, 0) == pytest.approx(eng.expected_battery_do_pyagrum(v, 0), abs=1e-9)
     with pytest.raises(MemoryError, match="cells"):
-        eng.expected_battery_do_by_parents(int(fast), 0, max_cells=10)
+        eng.battery_do(int(fast), 0, max_cells=10)
+
+
+def test_do_leaves_out_parent_configurations_never_seen_with_the_speed():
+    """Positivity: an obstacle always slows the robot, so "fast" never meets O = 1. pyAgrum's
+    adjustment weights L's unlearnt row (fast, O = 1), the smoothing prior's uniform guess, by
+    P(O = 1); the engine's answer is the adjustment over O = 0 alone, and says it covers P(O = 0)."""
+    rng = np.random.default_rng(1)
+    n = 20000
+    o = (rng.random(n) < 0.3).astype(float)
+    v = np.where((o == 0) & (rng.random(n) < 0.7), 0.5, 0.1)
+    l_pct = -0.01 - 0.02 * v - 0.05 * o + 0.001 * rng.standard_normal(n)
+    data = {0: np.stack([v, l_pct, rng.random(n), np.zeros(n), np.zeros(n), np.zeros(n), o], 1)}
+    links = [discover.Link("O", "V", 0, 1, 0), discover.Link("O", "L", 0, 1, 0), discover.Link("V", "L", 0, 1, 0)]
+    found = discover.Discovery(links, "given", 0.01, 1, n, 0.0)
+    eng = engine_lib.CausalEngine.fit(_datasets(data), found, n_slots=1, bins={"V": 2, "L": 6, "D": 2})
+    arr = data[0][1:]
+    fast = int(eng.bins["V"].index(np.array([0.5]))[0])
+    l_rep = eng.bins["L"].means[eng.bins["L"].index(arr[:, 1])]
+    seen = eng.battery_do(fast, 0)
+    assert seen.seen_share == pytest.approx(np.mean(arr[:, 6] == 0), abs=1e-3)
+    assert seen.value == pytest.approx(l_rep[(arr[:, 0] == 0.5) & (arr[:, 6] == 0)].mean(), abs=1e-5)
+    uniform_guess = eng.bins["L"].means.mean()
+    untrimmed = eng.expected_battery_do_pyagrum(fast, 0)
+    assert untrimmed == pytest.approx(seen.value * seen.seen_share + uniform_guess * (1 - seen.seen_share), abs=1e-5)
+    assert eng.battery_do(fast, 0, seen_only=False).value == pytest.approx(untrimmed, abs=1e-9)
+    assert eng.battery_do(fast, 0, sustained=False, seen_only=False).value == pytest.approx(untrimmed, abs=1e-9)
+
+
+def test_sustained_do_holds_the_speed_in_both_slices():
+    """L over a period reflects the speed of the previous sample too (V(t-1) -> L): a robot that
+    stops after driving fast still pays for the motion. One-step do(Vt = 0) averages over the
+    observed previous speeds; the sustained do(V0 = 0, Vt = 0), a robot that stands, does not."""
+    rng = np.random.default_rng(2)
+    n = 30000
+    v = np.where(rng.random(n) < 0.5, 0.5, 0.0)
+    l_pct = np.empty(n)
+    l_pct[0] = -0.01
+    l_pct[1:] = -0.01 - 0.02 * v[1:] - 0.04 * v[:-1] + 0.001 * rng.standard_normal(n - 1)
+    data = {0: np.stack([v, l_pct, rng.random(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)], 1)}
+    links = [discover.Link("V", "L", 0, 1, 0), discover.Link("V", "L", 1, 1, 0)]
+    found = discover.Discovery(links, "given", 0.01, 1, n, 0.0)
+    eng = engine_lib.CausalEngine.fit(_datasets(data), found, n_slots=1, bins={"V": 2, "L": 4, "D": 2})
+    arr = data[0]
+    l_rep = eng.bins["L"].means[eng.bins["L"].index(arr[1:, 1])]
+    v0, vt = arr[:-1, 0], arr[1:, 0]
+    for k, speed in enumerate((0.0, 0.5)):
+        assert eng.battery_do(k, 0).value == pytest.approx(l_rep[(v0 == speed) & (vt == speed)].mean(), abs=1e-5)
+        one_step = sum(l_rep[(v0 == u) & (vt == speed)].mean() * np.mean(v0 == u) for u in (0.0, 0.5))
+        assert eng.battery_do(k, 0, sustained=False).value == pytest.approx(one_step, abs=1e-5)
+    assert eng.battery_do(0, 0).value > eng.battery_do(0, 0, sustained=False).value + 0.01
 
 
 def test_engine_density_query_and_persistence(tmp_path):
@@ -96,9 +147,11 @@ def test_engine_density_query_and_persistence(tmp_path):
     np.testing.assert_allclose(eng.expected_density_do_all(6), fast, rtol=1e-9)
     del eng._slot_is_exogenous
     eng.save(tmp_path)
-    again = engine_lib.CausalEngine.load(tmp_path).tables(names)
+    loaded = engine_lib.CausalEngine.load(tmp_path)
+    assert loaded.do_support == eng.do_support and "Vt" in eng.do_support["axes"]
+    again = loaded.tables(names)
     for k in tables:
-        np.testing.assert_allclose(again[k], tables[k], rtol=1e-5, equal_nan=True)  # BIF stores ~7 digits
+        np.testing.assert_allclose(again[k], tables[k], rtol=1e-4, equal_nan=True)  # BIF stores ~7 digits
 
 
 def test_elbow_finds_three_clusters_and_bins_cover_the_data():
@@ -217,3 +270,27 @@ def test_unoriented_links_are_oriented_without_closing_a_cycle():
         bn.addArc(a, b)  # raises on a directed cycle
     plain = discover.Discovery([link("L", "D", False)], "parcorr", 0.01, 1, 100, 0.0)
     assert ("Lt", "Dt") in engine_lib.dag_arcs(plain)  # no conflict: the V, L, D order
+
+
+def test_quantile_edges_keep_their_bins_for_the_values_beside_a_large_atom():
+    """A waypoint empty 87 % of the time: the empty atom gets one bin and the occupied values
+    the other k - 1, at their own quantiles (quantiles of all the data gave two bins whatever k)."""
+    rng = np.random.default_rng(3)
+    occupied = rng.uniform(0.1, 2.0, 1300)
+    x = np.concatenate([np.zeros(8700), occupied])
+    edges = binning.quantile_edges(x, 4)
+    assert len(edges) == 5 and edges[0] == 0 and edges[-1] == x.max()
+    b = binning.Binning.from_edges(x, edges)
+    assert b.index(np.array([0.0]))[0] == 0 and b.means[0] == 0
+    counts = np.bincount(b.index(occupied), minlength=4)[1:]
+    assert counts.min() >= 1300 // 3 - 2 and counts.max() <= 1300 // 3 + 2  # equal thirds of the occupied
+
+
+def test_discovery_subset_spreads_the_budget_over_the_datasets():
+    data = {k: np.zeros((100, len(VARIABLES))) for k in range(10)}
+    datasets = _datasets(data, {k: f"wp{k}" for k in data})
+    assert extract.discovery_subset(datasets, None) == list(range(10))
+    assert extract.discovery_subset(datasets, 0) == list(range(10))
+    assert extract.discovery_subset(datasets, 1000) == list(range(10))
+    assert extract.discovery_subset(datasets, 300) == [0, 4, 9]
+    assert extract.discovery_subset(datasets, 10) == [0, 9]  # at least two, so that W varies

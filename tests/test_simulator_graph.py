@@ -234,6 +234,9 @@ def test_referee_command_scores_discovery_against_both_graphs_and_resumes(tmp_pa
     # Forced faster, the battery drains faster in the simulator (Eq. 1).
     do = do.sort_values("v_mps")
     assert do.simulated_do.iloc[-1] < do.simulated_do.iloc[0]
+    # ... and meets obstacles at least as often (V -> O, which the engine's context O does not have)
+    assert do.obstacle_share_simulated.iloc[-1] >= do.obstacle_share_simulated.iloc[0]
+    assert ((do.seen_share > 0) & (do.seen_share <= 1)).all() and do.obstacle_share_engine.between(0, 1).all()
     capsys.readouterr()
     assert main(argv) == 0  # resumed: the logs and the learned run are kept
     assert np.isnan(pd.read_csv(tmp_path / "r" / "referee.csv").loc[0, "simulate_s"])
