@@ -25,6 +25,7 @@ import jax.numpy as jnp  # noqa: E402
 from benchmarks.bench_simulator import machine  # noqa: E402
 from data import DATA_DIR  # noqa: E402
 from evaluation import arena, arena_report  # noqa: E402
+from jaxsim.params import TIAGO_RADIUS_M  # noqa: E402
 from jaxsim.scenes.spec import load_scene  # noqa: E402
 from jaxsim.scenes.variant import sample_variants  # noqa: E402
 from planners import costmap  # noqa: E402
@@ -62,7 +63,7 @@ def profile_scene(name: str, variants: int, methods) -> None:
     for _ in range(setup.n_periods):
         jax.block_until_ready(plan(costs, starts, goals))
     print(f"  global planner alone ({setup.n_periods} replans x {variants}): {time.perf_counter() - t0:5.2f} s")
-    obstacle = jax.jit(jax.vmap(lambda o: costmap.obstacle_layer(o, setup.grid, 0.275)))
+    obstacle = jax.jit(jax.vmap(lambda o: costmap.obstacle_layer(o, setup.grid, TIAGO_RADIUS_M)))
     occ = jnp.broadcast_to(jnp.asarray(setup.occupancy), (variants,) + setup.grid.shape)
     jax.block_until_ready(obstacle(occ))
     t0 = time.perf_counter()

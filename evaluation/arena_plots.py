@@ -12,6 +12,7 @@ import pandas as pd
 
 from common import figures
 from common.atomic import write_atomic
+from jaxsim.params import TIAGO_RADIUS_M
 from jaxsim.scenes.spec import SceneSpec
 
 
@@ -131,7 +132,7 @@ def animation(
     ax = fig.subplots()
     _draw_scene(ax, spec)
     trail = ax.plot([], [], color="tab:blue", lw=1)[0]
-    robot = Circle((0, 0), 0.275, color="tab:blue")
+    robot = Circle((0, 0), TIAGO_RADIUS_M, color="tab:blue")
     ax.add_patch(robot)
     people = [Circle((0, 0), 0.25, color="tab:red") for _ in range(n_people)]
     for c in people:

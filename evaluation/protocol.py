@@ -70,7 +70,7 @@ from evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
 from jaxsim import robot as robot_lib
 from jaxsim import rollout
 from jaxsim.actor import Driver
-from jaxsim.params import SimParams
+from jaxsim.params import TIAGO_RADIUS_M, SimParams
 from jaxsim.rng import hash_uniform16, step_uniforms, world_seed_u32
 from jaxsim.state import SimState
 from jaxsim.step import actor_key, crowd_step, init_state
@@ -100,7 +100,7 @@ class ProtocolConfig:
 
     min_battery_pct: float = MIN_BATTERY_PCT
     reset_battery_pct: float = 100.0
-    collision_radius_m: float = 0.275
+    collision_radius_m: float = TIAGO_RADIUS_M
     collision_release_m: float = 0.05
     deadline_per_hop: bool = True
     warmup_s: float = 300.0

@@ -33,39 +33,56 @@ class DistanceField:
     normal_y: np.ndarray
 
 
+def box_distance(xy, boxes_m, xp=np):
+    """Exact signed distance from points to the union of axis-aligned boxes, and the unit
+    normal pointing away from the nearest one. One formula for the host (``xp=numpy``, float64:
+    the precomputed fields) and for traced code (``xp=jax.numpy``: the scenes' robot and band).
+
+    Args:
+      xy: (..., 2) points.
+      boxes_m: (B, 4) boxes ``xmin, xmax, ymin, ymax``.
+      xp: the array module, ``numpy`` or ``jax.numpy``.
+
+    Returns:
+      ((...,) distance to the nearest box surface, negative inside; (..., 2) unit vector from
+      that surface towards the point: outside along the offset from the box, inside along the
+      axis of the closest face).
+    """
+    centre = xp.stack([(boxes_m[:, 0] + boxes_m[:, 1]) / 2, (boxes_m[:, 2] + boxes_m[:, 3]) / 2], axis=-1)
+    half = xp.stack([(boxes_m[:, 1] - boxes_m[:, 0]) / 2, (boxes_m[:, 3] - boxes_m[:, 2]) / 2], axis=-1)
+    offset = xy[..., None, :] - centre  # (..., B, 2)
+    q = xp.abs(offset) - half
+    outside = xp.linalg.norm(xp.maximum(q, 0.0), axis=-1)
+    inside = xp.minimum(xp.max(q, axis=-1), 0.0)
+    sd = outside + inside
+    sign = xp.where(offset >= 0, 1.0, -1.0)
+    out_dir = sign * xp.maximum(q, 0.0) / xp.maximum(outside, 1e-9)[..., None]
+    face_x = q[..., 0] >= q[..., 1]
+    in_dir = xp.where(
+        face_x[..., None],
+        xp.stack([sign[..., 0], 0.0 * sign[..., 0]], -1),
+        xp.stack([0.0 * sign[..., 1], sign[..., 1]], -1),
+    )
+    normal = xp.where((outside > 0)[..., None], out_dir, in_dir)
+    k = xp.argmin(sd, axis=-1)
+    nearest = xp.take_along_axis(sd, k[..., None], axis=-1)[..., 0]
+    n = xp.take_along_axis(normal, k[..., None, None], axis=-2)[..., 0, :]
+    return nearest, n
+
+
 def box_signed_distance(px: np.ndarray, py: np.ndarray, boxes_m: np.ndarray):
-    """Signed distance from points to the union of boxes, and the outward unit normal.
+    """:func:`box_distance` on the host in float64, the coordinates and normal apart.
 
     Args:
       px, py: (...,) point coordinates.
       boxes_m: (B, 4) boxes ``xmin, xmax, ymin, ymax``.
 
     Returns:
-      (sd, nx, ny), each shaped like ``px``: distance to the nearest box surface (negative
-      inside), and the unit vector from that surface towards the point.
+      (sd, nx, ny), each shaped like ``px``.
     """
-    px = np.asarray(px, np.float64)[..., None]
-    py = np.asarray(py, np.float64)[..., None]
-    cx = (boxes_m[:, 0] + boxes_m[:, 1]) / 2
-    cy = (boxes_m[:, 2] + boxes_m[:, 3]) / 2
-    hx = (boxes_m[:, 1] - boxes_m[:, 0]) / 2
-    hy = (boxes_m[:, 3] - boxes_m[:, 2]) / 2
-    dx, dy = px - cx, py - cy
-    qx, qy = np.abs(dx) - hx, np.abs(dy) - hy
-    ox, oy = np.maximum(qx, 0), np.maximum(qy, 0)
-    outside = np.hypot(ox, oy)
-    inside = np.minimum(np.maximum(qx, qy), 0)
-    sd = outside + inside
-    # Normal: outside, along (ox, oy) with the sign of the offset; inside, along the axis of
-    # the closest face.
-    sx, sy = np.where(dx >= 0, 1.0, -1.0), np.where(dy >= 0, 1.0, -1.0)
-    safe = np.maximum(outside, 1e-12)
-    x_face = qx >= qy
-    nx = np.where(outside > 0, sx * ox / safe, np.where(x_face, sx, 0.0))
-    ny = np.where(outside > 0, sy * oy / safe, np.where(x_face, 0.0, sy))
-    best = np.argmin(sd, axis=-1)[..., None]
-    take = lambda a: np.take_along_axis(a, best, axis=-1)[..., 0]
-    return take(sd), take(nx), take(ny)
+    xy = np.stack([np.asarray(px, np.float64), np.asarray(py, np.float64)], axis=-1)
+    sd, normal = box_distance(xy, np.asarray(boxes_m, np.float64))
+    return sd, normal[..., 0], normal[..., 1]
 
 
 def build_distance_field(

@@ -75,12 +75,17 @@ _NON_NEGATIVE = (
 )
 
 
+# TIAGo's circumscribed radius, the robot of seed 000 and of the warehouse's params.json
+# (PeopleFlow's local_planner.yaml: a circular footprint of radius 0.275 m). The default robot
+# body of the scenes, the warehouse protocol's collision radius and the figures' robot.
+TIAGO_RADIUS_M = 0.275
+
 # Physical ranges of the bodies' radii, checked by :meth:`SimParams.validate`.
 BODY_RADIUS_M = {"worker_radius_m": (0.1, 0.5), "robot_radius_m": (0.05, 1.5)}
 BODY_RADIUS_SOURCE = {
     "worker_radius_m": "a person: adults' shoulder breadth is about 0.4-0.5 m; the social force model of Helbing, "
     "Farkas and Vicsek (2000) draws 0.25-0.35 m, CrowdNav uses 0.3 m, this warehouse 0.2 m",
-    "robot_radius_m": "a mobile base: TIAGo 0.275 m (seed 000), a wheelchair or a cart about 0.5-0.8 m",
+    "robot_radius_m": f"a mobile base: TIAGo {TIAGO_RADIUS_M} m (seed 000), a wheelchair or a cart about 0.5-0.8 m",
 }
 
 

@@ -19,11 +19,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from common import figures
+from jaxsim.params import TIAGO_RADIUS_M
 from planners import casn, costmap, grid_planner, snape, snl
 from planners.scene import Scene, make_scene
 
 SPEC = costmap.GridSpec(height=80, width=120, resolution_m=0.1, origin_x_m=-6.0, origin_y_m=-4.0)
-ROBOT_RADIUS_M = 0.275  # the warehouse robot's (TIAGo-like) radius: the inscribed radius of the obstacle layer
+ROBOT_RADIUS_M = TIAGO_RADIUS_M  # the inscribed radius of the obstacle layer
 
 
 @dataclasses.dataclass(frozen=True)

@@ -71,11 +71,13 @@ def test_paths_descend_the_potential_and_avoid_impassable_cells():
     costs[:, 1, 1] = costs[:, h - 2, w - 2] = 0.0
     traversal = costmap.navfn_traversal(costs)
     plan = grid_planner.plans(traversal, starts, goals, 0.1, max_steps=4 * (h + w))
+    reachable = [k for k in range(batch) if np.isfinite(np.asarray(plan.potential[k])[1, 1])]
+    assert len(reachable) >= batch // 2  # the paths' checks below are not vacuous
     for k in range(batch):
         n = int(plan.path_length[k])
         path = np.asarray(plan.path_ij[k, :n])
         phi = np.asarray(plan.potential[k])
-        if not np.isfinite(phi[1, 1]):
+        if k not in reachable:
             assert not bool(plan.reached[k]) and np.isinf(float(plan.cost[k]))
             continue
         assert bool(plan.reached[k]) and tuple(path[-1]) == (h - 2, w - 2)

@@ -8,7 +8,10 @@ import shutil
 import numpy as np
 import pytest
 
+from evaluation.protocol import ProtocolConfig
+from jaxsim.params import TIAGO_RADIUS_M
 from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
+from jaxsim.scenes.robot import RobotParams
 
 
 def test_builtin_warehouse_matches_the_reference(warehouse):
@@ -26,6 +29,8 @@ def test_builtin_warehouse_matches_the_reference(warehouse):
     assert p.battery_static_pct_per_s * 5 * 3600 == pytest.approx(100)
     assert (p.battery_static_pct_per_s + 0.5 * p.battery_dynamic_pct_per_m) * 4 * 3600 == pytest.approx(100)
     assert p.battery_charge_pct_per_s * 2 * 3600 == pytest.approx(100)
+    # the warehouse's robot is the TIAGo the protocol's collision radius and the scenes' robot take
+    assert p.robot_radius_m == TIAGO_RADIUS_M == ProtocolConfig().collision_radius_m == RobotParams().radius_m
 
 
 def test_param_overrides(warehouse):

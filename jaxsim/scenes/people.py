@@ -15,7 +15,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from jaxsim import crowd, orca, rng
-from jaxsim.params import SimParams
+from jaxsim.params import TIAGO_RADIUS_M, SimParams
 from jaxsim.scenes.spec import KIND
 from jaxsim.scenes.variant import Variant
 from jaxsim.scenes.world import SceneWorld
@@ -84,7 +84,7 @@ def step_people(
     step,
     model: str = "social_force",
     orca_params: orca.ORCAParams | None = None,
-    robot_radius_m: float = 0.275,
+    robot_radius_m: float = TIAGO_RADIUS_M,
 ) -> PeopleState:
     """One step of ``params.dt_s``: behaviours, then the human model on the mobile people.
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
+from jaxsim.params import TIAGO_RADIUS_M
 from jaxsim.scenes.world import SceneWorld, wall_distance
 
 
@@ -25,7 +26,7 @@ class RobotParams:
     max_turn_rate_rps: float = 1.0
     max_accel_mps2: float = 0.5
     max_turn_accel_rps2: float = 2.0
-    radius_m: float = 0.275
+    radius_m: float = TIAGO_RADIUS_M
 
 
 @struct.dataclass

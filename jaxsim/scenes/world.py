@@ -62,28 +62,10 @@ def occupancy(spec: SceneSpec, resolution_m: float) -> tuple[np.ndarray, tuple[f
 
 def wall_distance(xy, walls_m):
     """Exact signed distance from points (..., 2) to the nearest wall box, and the unit normal
-    pointing away from it: ((...,), (..., 2)). Pure JAX (the robot and its band use it: the
-    0.05 m distance field's rounding lets a body creep into corners)."""
-    centre = jnp.stack([(walls_m[:, 0] + walls_m[:, 1]) / 2, (walls_m[:, 2] + walls_m[:, 3]) / 2], axis=-1)
-    half = jnp.stack([(walls_m[:, 1] - walls_m[:, 0]) / 2, (walls_m[:, 3] - walls_m[:, 2]) / 2], axis=-1)
-    offset = xy[..., None, :] - centre  # (..., K, 2)
-    q = jnp.abs(offset) - half
-    outside = jnp.linalg.norm(jnp.maximum(q, 0.0), axis=-1)
-    inside = jnp.minimum(jnp.max(q, axis=-1), 0.0)
-    sd = outside + inside
-    sign = jnp.where(offset >= 0, 1.0, -1.0)
-    out_dir = sign * jnp.maximum(q, 0.0) / jnp.maximum(outside, 1e-9)[..., None]
-    face_x = q[..., 0] >= q[..., 1]
-    in_dir = jnp.where(
-        face_x[..., None],
-        jnp.stack([sign[..., 0], 0.0 * sign[..., 0]], -1),
-        jnp.stack([0.0 * sign[..., 1], sign[..., 1]], -1),
-    )
-    normal = jnp.where((outside > 0)[..., None], out_dir, in_dir)
-    k = jnp.argmin(sd, axis=-1)
-    nearest = jnp.take_along_axis(sd, k[..., None], axis=-1)[..., 0]
-    n = jnp.take_along_axis(normal, k[..., None, None], axis=-2)[..., 0, :]
-    return nearest, n
+    pointing away from it: ((...,), (..., 2)). Pure JAX (:func:`jaxsim.geometry.box_distance`;
+    the robot and its band use it: the 0.05 m distance field's rounding lets a body creep into
+    corners)."""
+    return geometry.box_distance(xy, walls_m, xp=jnp)
 
 
 def segment_blocked(p0, p1, walls_m):
