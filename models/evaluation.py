@@ -104,3 +104,32 @@ def rules_run(
     report["table"] = rules.table(suite)
     report["out"] = str(out)
     return report
+
+
+def check_model(model, baselines: dict, scenes_per_kind: int = 100, seed: int | None = None) -> dict:
+    """A loaded :class:`models.inference.SocialCostModel` against the quality bar (its recipe's
+    held-out test set, ``baselines`` the trivial predictors' errors there) and the held-out rule
+    suite (``scenes_per_kind`` of each kind from ``seed``, the suite's own by default): what
+    ``socialnav gscl export`` writes into ``model.json`` and the shipped model's test re-checks.
+
+    Returns:
+      ``{"test_mse", "test_mse_by_family", "meets_quality", "rules_pass_by_check", "meets_rules",
+      "rules_scenes_per_kind", "rules_seed"}``.
+    """
+    config = model.config
+    params, batch_stats = model.weights
+    test = test_data(config)
+    predict = compiled(config)[3]
+    mse = per_sample_mse(predict, params, batch_stats, test["inputs"], test["targets"])
+    by_family = mse_by_family(mse, test["family"], test["names"])
+    seed = rules.SUITE_SEED if seed is None else seed
+    suite = rules.evaluate(model.function, rules.build_suite(scenes_per_kind, seed=seed))
+    return {
+        "test_mse": float(mse.mean()),
+        "test_mse_by_family": by_family,
+        "meets_quality": meets_quality(float(mse.mean()), by_family, baselines),
+        "rules_pass_by_check": {k: v["pass_share"] for k, v in suite["by_check"].items()},
+        "meets_rules": rules.passes(suite),
+        "rules_scenes_per_kind": scenes_per_kind,
+        "rules_seed": seed,
+    }

@@ -13,6 +13,8 @@
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 import math
 import pathlib
 
@@ -20,6 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from data import DATA_DIR
 from models import grid
 
 OCCUPIED_ABOVE = 0.6  # the paper's threshold on occupancy values
@@ -167,26 +170,112 @@ def _apply_for(graphdef):
     return lambda weights, maps: predict(*weights, maps)
 
 
+WEIGHTS_FILE = "weights.msgpack"
+CARD_FILE = "model.json"
+# The model shipped with the package (made by the recipe in its model.json; socialnav gscl export).
+DEFAULT_MODEL = DATA_DIR / "gscl" / "default"
+
+
+def _leaves(*trees):
+    return jax.tree_util.tree_flatten_with_path(trees)[0]
+
+
+def model_problem(path) -> str | None:
+    """None when ``path`` holds a GSCL model :meth:`SocialCostModel.load` can read (a training
+    run's folder with ``checkpoints/``, or an exported model with ``weights.msgpack``), else
+    what is wrong, naming the folder."""
+    path = pathlib.Path(path)
+    if (path / "checkpoints").is_dir() or (path / WEIGHTS_FILE).is_file():
+        if not (path / "config.json").is_file():
+            return f"{path}: no config.json beside the weights"
+        return None
+    return (
+        f"{path}: neither a GSCL training run (checkpoints/, made by socialnav gscl train) nor an "
+        f"exported model ({WEIGHTS_FILE}, made by socialnav gscl export)"
+    )
+
+
+def model_identity(path=None) -> str:
+    """What makes a model this one (16 hex digits): an exported model's configuration and
+    weights, or a run's configuration and its checkpoints' steps."""
+    path = DEFAULT_MODEL if path is None else pathlib.Path(path)
+    h = hashlib.sha256((path / "config.json").read_bytes() if (path / "config.json").is_file() else b"")
+    if (path / WEIGHTS_FILE).is_file():
+        h.update((path / WEIGHTS_FILE).read_bytes())
+    else:
+        h.update(",".join(sorted(p.name for p in (path / "checkpoints").iterdir() if p.name.isdigit())).encode())
+    return h.hexdigest()[:16]
+
+
 class SocialCostModel:
     """A trained U-Net in evaluation mode: ``model(maps)`` (B, 40, 40) codes -> (B, 40, 40) costs.
 
     Build it with :meth:`load` from a training run's folder (``socialnav gscl train --out``).
     """
 
-    def __init__(self, graphdef, params, batch_stats):
+    def __init__(self, graphdef, params, batch_stats, config=None):
         from models.steps import make_predict
 
         self._predict = make_predict(graphdef)  # jitted, batch norm in eval mode
         self._graphdef = graphdef
         self._params, self._batch_stats = params, batch_stats
+        self.config = config
 
     @classmethod
-    def load(cls, run_dir, step: int | None = None) -> SocialCostModel:
-        """The model of a run's latest checkpoint (or of ``step``)."""
-        from models.checkpoints import restore
+    def load(cls, path=None, step: int | None = None) -> SocialCostModel:
+        """The model of a training run's latest checkpoint (or of ``step``), or of an exported
+        model folder (:meth:`export`); ``path=None`` loads the model shipped with the package
+        (:data:`DEFAULT_MODEL`).
 
-        _, graphdef, state, _ = restore(pathlib.Path(run_dir), step)
-        return cls(graphdef, state["params"], state["batch_stats"])
+        Raises:
+          ValueError: ``path`` is neither (:func:`model_problem` says why).
+        """
+        from models.checkpoints import load_config, restore
+        from models.steps import compiled, initial_state
+
+        path = DEFAULT_MODEL if path is None else pathlib.Path(path)
+        problem = model_problem(path)
+        if problem:
+            raise ValueError(problem)
+        if (path / WEIGHTS_FILE).is_file():
+            from flax import serialization
+
+            config = load_config(path)
+            template = initial_state(config)
+            params, batch_stats = template["params"], template["batch_stats"]
+            want = [(jax.tree_util.keystr(k), np.shape(a)) for k, a in _leaves(params, batch_stats)]
+            try:
+                pure = serialization.msgpack_restore((path / WEIGHTS_FILE).read_bytes())
+                params.replace_by_pure_dict(pure["params"])
+                batch_stats.replace_by_pure_dict(pure["batch_stats"])
+            except Exception as e:  # msgpack's, flax's and a wrong tree's errors have no common base
+                raise ValueError(f"{path / WEIGHTS_FILE}: not the weights of {path / 'config.json'} ({e})") from None
+            got = [(jax.tree_util.keystr(k), np.shape(a)) for k, a in _leaves(params, batch_stats)]
+            if got != want:
+                wrong = next(g for g, w in zip(got, want, strict=False) if g != w)
+                raise ValueError(f"{path / WEIGHTS_FILE}: {wrong[0]} is not shaped as {path / 'config.json'} says")
+            return cls(compiled(config)[0], params, batch_stats, config)
+        config, graphdef, state, _ = restore(path, step)
+        return cls(graphdef, state["params"], state["batch_stats"], config)
+
+    def export(self, folder, card: dict | None = None) -> pathlib.Path:
+        """Write the model alone (no optimiser state): ``config.json``, ``weights.msgpack`` (the
+        weights and batch statistics, flax's msgpack) and ``model.json`` (``card``: how it was
+        made and what it reached), each atomically; :meth:`load` reads the folder back."""
+        from flax import serialization
+
+        from common.atomic import write_bytes_atomic, write_text_atomic
+
+        folder = pathlib.Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        pure = {
+            "params": jax.tree.map(np.asarray, self._params.to_pure_dict()),
+            "batch_stats": jax.tree.map(np.asarray, self._batch_stats.to_pure_dict()),
+        }
+        write_text_atomic(folder / "config.json", json.dumps(self.config.to_json(), indent=1))
+        write_bytes_atomic(folder / WEIGHTS_FILE, lambda h: h.write(serialization.msgpack_serialize(pure)))
+        write_text_atomic(folder / CARD_FILE, json.dumps(card or {}, indent=1))
+        return folder
 
     def function(self, maps):
         """The prediction as a function of the maps alone (closes over the weights): use it inside

@@ -111,14 +111,10 @@ def gscl_refresh(predict: Callable, occupancy, spec: costmap.GridSpec, obs: Obse
 
 
 def load_gscl(run) -> tuple[Callable, object]:
-    """``(apply, weights)`` of a trained GSCL run's latest checkpoint (``apply(weights, maps)``:
-    :attr:`models.inference.SocialCostModel.apply`); ``ValueError`` naming the folder otherwise."""
-    import pathlib
-
+    """``(apply, weights)`` of a GSCL model: a training run's latest checkpoint or an exported
+    model (``apply(weights, maps)``: :attr:`models.inference.SocialCostModel.apply`); ``ValueError``
+    naming the folder otherwise."""
     from models.inference import SocialCostModel
 
-    run = pathlib.Path(run)
-    if not (run / "checkpoints").is_dir():
-        raise ValueError(f"{run}: no checkpoints/ folder (a GSCL run is made by socialnav gscl train)")
     model = SocialCostModel.load(run)
     return model.apply, model.weights

@@ -3,7 +3,7 @@
 socialnav arena --out runs/arena                                   # every scene, every method, 100 variants
 socialnav arena --scenes casn_static_person,casn_head_on --methods navfn,casn --variants 20
 socialnav arena --scenes my_scene.json --out runs/mine             # a scene file of your own
-socialnav arena --gscl-run runs/gscl                               # adds the GSCL method
+socialnav arena --gscl-run runs/gscl                               # GSCL with your own model, not the shipped one
 socialnav arena --params my_params.toml                            # the robot's and layers' parameters
 socialnav arena --held-out                                         # and every scene mirrored, ranges exceeded
 socialnav arena --backend ray --shard-variants 25                  # a Ray task per 25 variants of a scene
@@ -47,6 +47,7 @@ DEFAULT_METHODS = (
     "orca",
     "social_force",
     "dwa",
+    "gscl",
 )
 POLICY_METHOD = "ppo"  # the rows of --policy-run
 
@@ -65,7 +66,8 @@ def add_parser(sub) -> None:
         "--methods",
         type=comma_names,
         default=None,
-        help=f"methods (default: {','.join(DEFAULT_METHODS)}; gscl too with --gscl-run)",
+        help=f"methods (default: {','.join(DEFAULT_METHODS)}; gscl runs the model shipped with the package "
+        "unless --gscl-run names another)",
     )
     p.add_argument(
         "--actor",
@@ -93,7 +95,13 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--out", type=output_folder, default=pathlib.Path("runs/arena"), help="output folder (default runs/arena)"
     )
-    p.add_argument("--gscl-run", type=pathlib.Path, default=None, help="a trained GSCL run folder (enables 'gscl')")
+    p.add_argument(
+        "--gscl-run",
+        type=pathlib.Path,
+        default=None,
+        help="the GSCL model of method 'gscl': a socialnav gscl train run folder or a socialnav gscl export folder "
+        "(default: the model shipped with the package, data/gscl/default)",
+    )
     p.add_argument(
         "--params",
         type=pathlib.Path,
@@ -213,10 +221,11 @@ class _Failed(Exception):
 
 
 def _gscl_identity(run: pathlib.Path) -> str:
-    """What makes a GSCL run's model this one: its configuration and its checkpoints' steps."""
-    config = (run / "config.json").read_bytes() if (run / "config.json").is_file() else b""
-    steps = sorted(p.name for p in (run / "checkpoints").iterdir() if p.name.isdigit())
-    return hashlib.sha256(config + ",".join(steps).encode()).hexdigest()[:16]
+    """What makes a GSCL model this one (:func:`models.inference.model_identity`): for a run, its
+    configuration and its checkpoints' steps, as before exported models existed."""
+    from models.inference import model_identity
+
+    return model_identity(run)
 
 
 def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str:
@@ -266,7 +275,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     if args.keep_trajectories < 0:
         print("socialnav arena: --keep-trajectories must be >= 0", file=sys.stderr)
         return 2
-    methods = list(args.methods) if args.methods else list(DEFAULT_METHODS) + (["gscl"] if args.gscl_run else [])
+    methods = list(args.methods) if args.methods else list(DEFAULT_METHODS)
     unknown = [m for m in methods if m not in known]
     if unknown:
         print(f"socialnav arena: --methods: unknown {', '.join(unknown)} (known: {', '.join(known)})", file=sys.stderr)
@@ -306,8 +315,9 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         print("socialnav arena: --animate needs --keep-trajectories >= 1", file=sys.stderr)
         return 2
     if "gscl" in methods and args.gscl_run is None:
-        print("socialnav arena: --methods gscl needs --gscl-run RUN (a trained GSCL run folder)", file=sys.stderr)
-        return 2
+        from models.inference import DEFAULT_MODEL
+
+        args.gscl_run = DEFAULT_MODEL
     from evaluation import arena_params
 
     try:
@@ -363,11 +373,10 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         )
         return 2
     if args.gscl_run is not None:
-        if not (args.gscl_run / "checkpoints").is_dir():
-            print(
-                f"socialnav arena: {args.gscl_run}: no checkpoints/ folder (train one with socialnav gscl train)",
-                file=sys.stderr,
-            )
+        from models.inference import model_problem
+
+        if model_problem(args.gscl_run):
+            print(f"socialnav arena: --gscl-run {model_problem(args.gscl_run)}", file=sys.stderr)
             return 2
         args.gscl_run = args.gscl_run.resolve()  # a Ray worker may start elsewhere
         try:

@@ -6,6 +6,7 @@ socialnav gscl train --out runs/gscl                        # the CPU recipe; ru
 socialnav gscl train --out runs/gscl-paper --paper          # the paper's recipe (for a GPU)
 socialnav gscl evaluate --run runs/gscl                     # MSE per family + predictions.png
 socialnav gscl rules --run runs/gscl                        # the held-out rule suite + rules.png
+socialnav gscl export --run runs/gscl --out my_model         # the model alone, checked, for --gscl-run
 """
 
 from __future__ import annotations
@@ -198,6 +199,28 @@ def add_parser(top) -> None:
         help="score the model averaged over the 4 quarter turns of its input (default 1: the model alone)",
     )
     ru.add_argument("--out", type=output_folder, default=None, help="output folder (default RUN/evaluation)")
+    ex = sub.add_parser(
+        "export",
+        help="a run's model alone (no optimiser state, ~2 MB), checked against the quality bar and the rule suite",
+        description="Write a training run's model (the latest checkpoint, or --step) to --out as config.json, "
+        "weights.msgpack and model.json (how it was made and what it reached: the quality bar on the recipe's "
+        "test set and the held-out rule suite, both measured here). --gscl-run of arena, layers and policy train "
+        "takes the folder; the model shipped with the package (data/gscl/default) was made this way.",
+    )
+    ex.add_argument(
+        "--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
+    )
+    ex.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
+    ex.add_argument("--out", type=output_folder, required=True, help="the model's folder")
+    ex.add_argument("--scenes", type=positive_int, default=400, help="rule-suite scenes of each kind (default 400)")
+    ex.add_argument(
+        "--seed",
+        type=non_negative_int,
+        default=1,
+        help="the rule suite's draw (default 1: scenes no training epoch is scored on; the suite's own seed "
+        "is the one training checks every epoch)",
+    )
+    ex.set_defaults(handler=_export)
     ru.set_defaults(handler=_rules)
     gen.set_defaults(handler=_generate)
     tr.set_defaults(handler=_train)
@@ -474,5 +497,54 @@ def _rules(args) -> int:
     print(
         f"step {report['step']}: {'every' if report['meets_rules'] else 'not every'} check passes on "
         f">= {100 * rules.RULES_BAR:.0f} % of its scenes; -> {report['out']}"
+    )
+    return 0
+
+
+EXPORT_JOB = "socialnav gscl export"
+EXPORT_FILES = ("config.json", "weights.msgpack", "model.json")
+
+
+def _export(args) -> int:
+    """The run's model alone, with a card of how it was made and what it reaches."""
+    import datetime
+
+    import jax
+
+    from models import evaluation
+    from models.checkpoints import restore
+    from models.inference import SocialCostModel
+    from socialnav import __version__
+
+    try:
+        runfolder.claim(args.out, EXPORT_JOB, EXPORT_FILES)
+        runfolder.check_writable(args.out)
+        config, graphdef, state, meta = restore(args.run, args.step)
+    except runfolder.RunFolderError as err:
+        raise SystemExit(f"socialnav gscl export: --out {err}") from None
+    except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
+        raise SystemExit(f"socialnav gscl export: {err}") from None
+    model = SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
+    print(f"checking step {int(meta['step'])} against the quality bar and the rule suite ...", flush=True)
+    checks = evaluation.check_model(model, meta["baselines"], scenes_per_kind=args.scenes, seed=args.seed)
+    card = {
+        "made_by": "socialnav gscl train --out RUN (the recipe in config.json), then socialnav gscl export --run RUN",
+        "run": args.run.name,
+        "step": int(meta["step"]),
+        "epoch": int(meta["step"]) // config.steps_per_epoch,
+        "parameters": _parameters(config),
+        "baselines": meta["baselines"],
+        **checks,
+        "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "socialnav_version": __version__,
+        "jax_version": jax.__version__,
+    }
+    model.export(args.out, card)
+    runfolder.record(args.out, EXPORT_JOB, EXPORT_FILES)
+    worst = min(checks["rules_pass_by_check"].items(), key=lambda kv: kv[1])
+    print(
+        f"test MSE {checks['test_mse']:.5f}: {'meets' if checks['meets_quality'] else 'does not meet'} the quality "
+        f"bar; rule suite: {'every' if checks['meets_rules'] else 'not every'} check on >= 95 % of its scenes "
+        f"(the lowest: {worst[0]} {100 * worst[1]:.0f} %); wrote {args.out}/{{{', '.join(EXPORT_FILES)}}}"
     )
     return 0

@@ -1,7 +1,7 @@
 """``socialnav layers``: pictures of every social cost layer and the path its planner finds.
 
 socialnav layers --out docs/img                          # SNL (two settings), CASN, SNAPE's map
-socialnav layers --out docs/img --gscl-run runs/gscl     # and the GSCL layer of a trained run
+socialnav layers --out docs/img --gscl-run runs/gscl     # the GSCL panel from your own model
 """
 
 from __future__ import annotations
@@ -20,7 +20,11 @@ def add_parser(top) -> None:
     )
     parser.add_argument("--out", type=output_folder, default=pathlib.Path("docs/img"), help="folder (default docs/img)")
     parser.add_argument(
-        "--gscl-run", type=pathlib.Path, default=None, help="a trained GSCL run folder: adds the GSCL layer's panel"
+        "--gscl-run",
+        type=pathlib.Path,
+        default=None,
+        help="the GSCL model of the GSCL panel: a socialnav gscl train run or a socialnav gscl export folder "
+        "(default: the model shipped with the package)",
     )
     parser.set_defaults(handler=run)
 
@@ -39,21 +43,13 @@ def run(args) -> int:
     except runfolder.RunFolderError as e:
         print(f"socialnav layers: --out: {e}", file=sys.stderr)
         return 2
-    predict = None
-    if args.gscl_run is not None:
-        if not (args.gscl_run / "checkpoints").is_dir():
-            print(
-                f"socialnav layers: {args.gscl_run}: no checkpoints/ folder (train one with socialnav gscl train)",
-                file=sys.stderr,
-            )
-            return 2
-        from models.inference import SocialCostModel
+    from models.inference import SocialCostModel
 
-        try:
-            predict = SocialCostModel.load(args.gscl_run).function
-        except (FileNotFoundError, ValueError) as e:  # no checkpoint, none restorable, a bad config.json
-            print(f"socialnav layers: --gscl-run: {e}", file=sys.stderr)
-            return 2
+    try:
+        predict = SocialCostModel.load(args.gscl_run).function
+    except (FileNotFoundError, ValueError) as e:  # not a model, no checkpoint restorable, a bad config.json
+        print(f"socialnav layers: --gscl-run {e}", file=sys.stderr)
+        return 2
     for path in plots.write_all(args.out, predict):
         runfolder.record(args.out, JOB, [path.name])
         print(f"wrote {path}", file=sys.stdout)

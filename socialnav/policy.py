@@ -52,14 +52,15 @@ def add_parser(top) -> None:
         "--social-layer",
         choices=SOCIAL_LAYERS,
         default=None,
-        help="also give the policy a social cost layer around the robot as an input (default none; gscl needs "
-        "--gscl-run)",
+        help="also give the policy a social cost layer around the robot as an input (default none; gscl runs "
+        "the model shipped with the package unless --gscl-run names another)",
     )
     tr.add_argument(
         "--gscl-run",
         type=pathlib.Path,
         default=None,
-        help="the trained GSCL run (socialnav gscl train --out) of --social-layer gscl",
+        help="the GSCL model of --social-layer gscl: a socialnav gscl train run or a socialnav gscl export folder "
+        "(default: the model shipped with the package)",
     )
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     tr.set_defaults(handler=_train)
@@ -77,10 +78,17 @@ def _config(args, scene_names: tuple[str, ...]):
         "seed": args.seed,
     }
     given = {k: v for k, v in given.items() if v is not None}
-    if (args.gscl_run is not None) != (args.social_layer == "gscl"):
-        raise ValueError("--gscl-run goes with --social-layer gscl, and that layer needs it")
-    if args.gscl_run is not None and not (args.gscl_run / "checkpoints").is_dir():
-        raise ValueError(f"--gscl-run {args.gscl_run}: no checkpoints/ folder (train one with socialnav gscl train)")
+    if args.gscl_run is not None and args.social_layer != "gscl":
+        raise ValueError("--gscl-run goes with --social-layer gscl")
+    if args.social_layer == "gscl" and args.gscl_run is None:
+        from models.inference import DEFAULT_MODEL
+
+        args.gscl_run = DEFAULT_MODEL
+    if args.gscl_run is not None:
+        from models.inference import model_problem
+
+        if model_problem(args.gscl_run):
+            raise ValueError(f"--gscl-run {model_problem(args.gscl_run)}")
     if args.social_layer is not None:
         gscl_run = "" if args.gscl_run is None else str(args.gscl_run.resolve())
         given["policy"] = PolicyConfig(social_layer=args.social_layer, gscl_run=gscl_run)

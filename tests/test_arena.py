@@ -455,8 +455,8 @@ def test_arena_command_refuses_bad_input(tmp_path, capsys):
 
     assert cli.main(["arena", "--out", str(tmp_path / "a"), "--methods", "teleport"]) == 2
     assert "unknown teleport" in capsys.readouterr().err
-    assert cli.main(["arena", "--out", str(tmp_path / "a"), "--methods", "gscl"]) == 2
-    assert "needs --gscl-run" in capsys.readouterr().err
+    assert cli.main(["arena", "--out", str(tmp_path / "a"), "--methods", "gscl", "--gscl-run", str(tmp_path)]) == 2
+    assert "neither a GSCL training run" in capsys.readouterr().err
     assert cli.main(["arena", "--out", str(tmp_path / "a"), "--scenes", "nowhere"]) == 2
     assert "nowhere.json" in capsys.readouterr().err
     assert not (tmp_path / "a").exists()

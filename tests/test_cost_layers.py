@@ -297,7 +297,7 @@ def test_layers_command_rejects_a_run_without_checkpoints(tmp_path, capsys):
     from socialnav import cli
 
     assert cli.main(["layers", "--out", str(tmp_path / "img"), "--gscl-run", str(tmp_path)]) == 2
-    assert "no checkpoints/ folder" in capsys.readouterr().err
+    assert "neither a GSCL training run" in capsys.readouterr().err
     assert not (tmp_path / "img").exists()
 
 

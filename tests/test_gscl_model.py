@@ -397,3 +397,42 @@ def test_an_epoch_carries_its_contrast_through_the_shuffle():
     assert data["contrast"].max() > 0.3
     streams.epoch_data.cache_clear()
     assert "contrast" not in streams.epoch_data(TrainConfig(**{**TINY, "composites": 0, "pair_weight": 0.0}), 1)
+
+
+def test_an_exported_model_predicts_what_the_run_predicts_and_bad_folders_are_named(tmp_path):
+    """socialnav gscl export's folder: the weights alone (no optimiser state), read back into the
+    same predictions; a folder that is no model, or weights of another network, fail in one line."""
+    config = TrainConfig(**TINY)
+    state = steps.initial_state(config)
+    # weights that are not the initial ones, so that a load that kept the template would differ
+    params = jax.tree.map(lambda a: a + 0.01 * jnp.arange(a.size, dtype=a.dtype).reshape(a.shape), state["params"])
+    model = inference.SocialCostModel(steps.compiled(config)[0], params, state["batch_stats"], config)
+    model.export(tmp_path / "m", {"note": "tiny"})
+    assert inference.model_problem(tmp_path / "m") is None
+    again = inference.SocialCostModel.load(tmp_path / "m")
+    maps = dataset.generate(0, {"group": 2, "queue": 2})["inputs"]
+    np.testing.assert_array_equal(np.asarray(again(maps)), np.asarray(model(maps)))
+    assert json.loads((tmp_path / "m" / inference.CARD_FILE).read_text()) == {"note": "tiny"}
+    assert inference.model_identity(tmp_path / "m") == inference.model_identity(tmp_path / "m")
+    with pytest.raises(ValueError, match="neither a GSCL training run"):
+        inference.SocialCostModel.load(tmp_path)
+    other = TrainConfig(**{**TINY, "features": (4, 4, 8, 16)})
+    (tmp_path / "m" / "config.json").write_text(json.dumps(other.to_json()))
+    with pytest.raises(ValueError, match="weights.msgpack"):
+        inference.SocialCostModel.load(tmp_path / "m")
+    (tmp_path / "m" / inference.WEIGHTS_FILE).write_bytes(b"not msgpack")
+    with pytest.raises(ValueError, match="weights.msgpack"):
+        inference.SocialCostModel.load(tmp_path / "m")
+
+
+@pytest.mark.slow
+def test_the_shipped_model_meets_the_quality_bar_and_the_rule_suite_as_its_card_says():
+    """The model the package ships (data/gscl/default, what 'gscl' runs without --gscl-run):
+    measured again here on its recipe's held-out test set and the held-out rule suite."""
+    model = inference.SocialCostModel.load()
+    card = json.loads((inference.DEFAULT_MODEL / inference.CARD_FILE).read_text())
+    checks = evaluation.check_model(model, card["baselines"], card["rules_scenes_per_kind"], card["rules_seed"])
+    assert checks["meets_quality"] and checks["test_mse"] <= quality.PAPER_TEST_MSE
+    assert checks["meets_rules"], min(checks["rules_pass_by_check"].values())
+    assert checks["test_mse"] == pytest.approx(card["test_mse"], rel=1e-3)
+    assert model.config == checkpoints.load_config(inference.DEFAULT_MODEL)

@@ -309,9 +309,9 @@ def test_a_policy_with_the_gscl_channel_trains_and_runs_in_the_arena(tmp_path, c
     digest = json.loads((out / "run.json").read_text())["policy_model"]
     assert digest == policy_run.run_digest(run) != policy_run.weights_digest(policy_run.load_weights(run)[2])
     capsys.readouterr()
-    # The layer and its run go together; a folder that is no run is named.
+    # --gscl-run goes with --social-layer gscl; a folder that is no model is named.
     not_a_run = ["--social-layer", "gscl", "--gscl-run", str(tmp_path)]
-    for extra in (["--social-layer", "gscl"], ["--gscl-run", str(gscl)], not_a_run):
+    for extra in (["--gscl-run", str(gscl)], not_a_run):
         code = main(["policy", "train", "--out", str(tmp_path / "bad"), "--scenes", EASY, "--no-progress", *extra])
         err = capsys.readouterr().err
         assert code == 2 and "--gscl-run" in err and len(err.strip().splitlines()) == 1
