@@ -294,3 +294,13 @@ def test_discovery_subset_spreads_the_budget_over_the_datasets():
     assert extract.discovery_subset(datasets, 1000) == list(range(10))
     assert extract.discovery_subset(datasets, 300) == [0, 4, 9]
     assert extract.discovery_subset(datasets, 10) == [0, 9]  # at least two, so that W varies
+
+
+def test_a_learn_too_large_for_the_memory_is_refused_before_any_work():
+    from causal.learn import ENGINE_BYTES_PER_SAMPLE, check_memory
+
+    check_memory(2_771_930, None)  # unknown memory: no check
+    check_memory(2_771_930, 24 * 10**9)
+    with pytest.raises(extract.LogError, match=r"2,771,930 samples need about 2.3 GB.*--worlds"):
+        check_memory(2_771_930, 2 * 10**9)
+    assert 2_771_930 * ENGINE_BYTES_PER_SAMPLE > 2.2e9  # the figure measured for one warehouse world
