@@ -61,6 +61,14 @@ class BatteryDo:
     seen_share: float
 
 
+def _tensor_array(tensor, order) -> np.ndarray:
+    """A pyAgrum tensor as a float64 array whose first axes are the nodes ``order`` names, in
+    that order (``tolist()`` gives the axes in the reverse order of ``tensor.names``)."""
+    names = list(tensor.names)[::-1]
+    arr = np.asarray(tensor.tolist(), np.float64)
+    return np.moveaxis(arr, [names.index(n) for n in order], list(range(len(order))))
+
+
 def _state_index(column: pd.Series, variable, binning: Binning | None) -> np.ndarray:
     """The state index of every value of a learning-table column in its pyAgrum variable."""
     if binning is not None:
@@ -329,8 +337,7 @@ class CausalEngine:
         ie.setEvidence(evidence)
         ie.makeInference()
         tensor = ie.jointPosterior(set(target)) if free else ie.posterior("Lt")
-        reversed_names = list(tensor.names)[::-1]  # tolist()'s axes run in the reverse order of tensor.names
-        arr = np.transpose(np.asarray(tensor.tolist(), np.float64), [reversed_names.index(n) for n in target])
+        arr = _tensor_array(tensor, target)
         arr = (arr / arr.sum()).reshape(arr.shape[0], -1)  # (L, free parent configurations)
         p_parents = arr.sum(axis=0)
         weight = p_parents
@@ -423,9 +430,7 @@ class CausalEngine:
             _, tensor, _ = gum.causalImpact(
                 cm, on="Dt", doing={"S0", "St"}, knowing={"W0", "Wt"}, values={"S0": s, "St": s}
             )
-        names = list(tensor.names)
-        arr = np.asarray(tensor.tolist(), np.float64)  # axes in the reverse order of tensor.names
-        arr = np.moveaxis(arr, [len(names) - 1 - names.index(n) for n in ("W0", "Wt", "Dt")], [0, 1, 2])
+        arr = _tensor_array(tensor, ("W0", "Wt", "Dt"))
         n_w = arr.shape[0]
         p = arr[np.arange(n_w), np.arange(n_w)]  # W0 = Wt = w: (W, D bins)
         p = p / p.sum(axis=1, keepdims=True)

@@ -19,6 +19,15 @@ from models.steps import compiled, per_sample_mse
 from models.streams import test_data
 
 
+def _test_errors(config, params, batch_stats):
+    """``(test set, predict, per-sample MSE, MSE per family)`` of weights on their recipe's
+    held-out test set (:func:`models.streams.test_data`)."""
+    test = test_data(config)
+    predict = compiled(config)[3]
+    mse = per_sample_mse(predict, params, batch_stats, test["inputs"], test["targets"])
+    return test, predict, mse, mse_by_family(mse, test["family"], test["names"])
+
+
 def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> dict:
     """Evaluate a run's checkpoint (the latest by default) on the run's held-out test set.
 
@@ -28,10 +37,7 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
     """
     run = pathlib.Path(run)
     config, graphdef, state, meta = restore(run, step)
-    test = test_data(config)
-    predict = compiled(config)[3]
-    mse = per_sample_mse(predict, state["params"], state["batch_stats"], test["inputs"], test["targets"])
-    by_family = mse_by_family(mse, test["family"], test["names"])
+    test, predict, mse, by_family = _test_errors(config, state["params"], state["batch_stats"])
     baselines = meta["baselines"]
     report = {
         "run": str(run),
@@ -116,12 +122,7 @@ def check_model(model, baselines: dict, scenes_per_kind: int = 100, seed: int | 
       ``{"test_mse", "test_mse_by_family", "meets_quality", "rules_pass_by_check", "meets_rules",
       "rules_scenes_per_kind", "rules_seed"}``.
     """
-    config = model.config
-    params, batch_stats = model.weights
-    test = test_data(config)
-    predict = compiled(config)[3]
-    mse = per_sample_mse(predict, params, batch_stats, test["inputs"], test["targets"])
-    by_family = mse_by_family(mse, test["family"], test["names"])
+    _, _, mse, by_family = _test_errors(model.config, *model.weights)
     seed = rules.SUITE_SEED if seed is None else seed
     suite = rules.evaluate(model.function, rules.build_suite(scenes_per_kind, seed=seed))
     return {

@@ -220,14 +220,6 @@ class _Failed(Exception):
         self.code = code
 
 
-def _gscl_identity(run: pathlib.Path) -> str:
-    """What makes a GSCL model this one (:func:`models.inference.model_identity`): for a run, its
-    configuration and its checkpoints' steps, as before exported models existed."""
-    from models.inference import model_identity
-
-    return model_identity(run)
-
-
 def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str:
     """A scene's results are these when this digest matches: the scene file's bytes, the held-out
     flag, and every setting that changes an episode (methods, variants, seed, shard layout, the
@@ -375,8 +367,9 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     if args.gscl_run is not None:
         from models.inference import model_problem
 
-        if model_problem(args.gscl_run):
-            print(f"socialnav arena: --gscl-run {model_problem(args.gscl_run)}", file=sys.stderr)
+        problem = model_problem(args.gscl_run)
+        if problem:
+            print(f"socialnav arena: --gscl-run {problem}", file=sys.stderr)
             return 2
         args.gscl_run = args.gscl_run.resolve()  # a Ray worker may start elsewhere
         try:
@@ -389,6 +382,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
 
     from common import __version__
     from evaluation import arena_report, arena_stats, nav_metrics, papers
+    from models.inference import model_identity
 
     settings = {
         "scenes": [s.name for s in specs],
@@ -400,7 +394,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         "held_out": args.held_out,
         "shard_variants": args.shard_variants,
         "gscl_run": None if args.gscl_run is None else str(args.gscl_run),
-        "gscl_model": None if args.gscl_run is None else _gscl_identity(args.gscl_run),
+        "gscl_model": None if args.gscl_run is None else model_identity(args.gscl_run),
         "human_model": args.human_model,
         "params_file": None if args.params is None else str(args.params),
         "params": params.text or None,  # None without a file: earlier runs' digests stay valid

@@ -87,8 +87,9 @@ def _config(args, scene_names: tuple[str, ...]):
     if args.gscl_run is not None:
         from models.inference import model_problem
 
-        if model_problem(args.gscl_run):
-            raise ValueError(f"--gscl-run {model_problem(args.gscl_run)}")
+        problem = model_problem(args.gscl_run)
+        if problem:
+            raise ValueError(f"--gscl-run {problem}")
     if args.social_layer is not None:
         gscl_run = "" if args.gscl_run is None else str(args.gscl_run.resolve())
         given["policy"] = PolicyConfig(social_layer=args.social_layer, gscl_run=gscl_run)

@@ -277,7 +277,8 @@ def _do_check(engine, params, world, driver, n_worlds: int, seed: int, worlds: i
         clear = keep & ~obstacle[:, 1:] & ~obstacle[:, :-1]
         mean, half = _mean_interval(change, keep)
         mean_clear, half_clear = _mean_interval(change, clear)
-        engine_do = engine.expected_battery_do(k, 0)
+        sustained = engine.battery_do(k, 0)
+        engine_do = sustained.value
         rows.append(
             {
                 "seed": seed,
@@ -287,7 +288,7 @@ def _do_check(engine, params, world, driver, n_worlds: int, seed: int, worlds: i
                 "engine_do": engine_do,
                 "engine_do_one_step": engine.battery_do(k, 0, sustained=False).value,
                 "engine_do_pyagrum": engine.expected_battery_do_pyagrum(k, 0),
-                "seen_share": engine.battery_do(k, 0).seen_share,
+                "seen_share": sustained.seen_share,
                 "engine_given": engine.expected_battery_given(k),
                 "simulated_do": mean,
                 "simulated_lo": mean - half,
