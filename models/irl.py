@@ -1,0 +1,171 @@
+"""Social costs learned from demonstrated paths: maximum-entropy IRL through the soft planner.
+
+A cost map ``c`` (H, W) in [0, 1] (a GSCL network's output, or a free grid) prices a move on the
+network's 0.4 m grid at NavFn's cell cost, as the GSCL layer's planner does
+(:func:`traversal_per_m`: ``50 + 0.8 * 252 c`` per metre, walls impassable). The soft-min
+planner (:func:`planners.smooth_planner.soft_potential_implicit`) at temperature ``tau`` defines a
+stochastic policy ``pi(a | s) = exp(-(w(s, a) + phi(s')) / tau) / exp(-phi(s) / tau)``: maximum
+entropy IRL's soft value iteration (Ziebart et al., AAAI 2008). The log-likelihood of a path
+``s_0 .. s_T`` ending at the goal telescopes, because ``phi(goal) = 0``:
+
+    -log P(path) = (C(path) - phi(s_0)) / tau
+
+the path's cost minus the soft cost-to-go of its start, in units of the temperature; it is >= 0
+(the soft-min lies below every path's cost) and 0 only when the path is the policy's certain
+choice. Its gradient in the move weights is the demonstrated moves minus the soft policy's
+expected moves (the implicit gradient of ``phi`` is the expected visitation, computed by the
+adjoint recursion in bounded memory). Everything here is batched with ``vmap``.
+
+A demonstration is a fixed-shape pytree (:class:`Demonstrations`): the number of times each move
+is taken from each cell (K, H, W), the number of paths starting in each cell (H, W), and the
+goal (one per demonstration; several paths may share it and then share one potential).
+
+Where they come from:
+
+* :func:`planned_demonstrations`: exact plans (:mod:`planners.grid_planner`) on known cost maps
+  (the GSCL generator's targets): the map that made them is known, so the learned one can be
+  checked against it. A map with a goal pixel is planned to that goal, from the robot's cell and
+  from ``paths_per_map - 1`` random free cells; a map without (the generator's families with no
+  goal) gets a random free goal.
+* :func:`track_demonstrations`: a walked trajectory (metres, in the map's frame) made a chain of
+  8-connected cells (:mod:`models.tracks` reads a user's file of them).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import struct
+
+from models import grid
+from planners import grid_planner, smooth_planner
+from planners.costmap import MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
+
+CONNECTIVITY = 8
+K = CONNECTIVITY
+# Cost units. The cheapest move (0.4 m of free space) costs 20 and the soft-min converges for
+# tau < 20 / ln 8 = 9.6. Exact plans are noise-free demonstrations, and a lower temperature fits
+# them better: a free 40 x 40 grid learnt from 512 exact plans on a known map planned held-out
+# pairs 1.56 / 1.58 / 1.91 % above the optimum at tau 2 / 4 / 8 (README, "Costs learned from
+# paths"). Noisier demonstrations (people's tracks) may want a higher one.
+TEMPERATURE = 2.0
+ITERATIONS = 2 * (grid.GRID + grid.GRID)  # Jacobi steps of the soft recursion and of its adjoint
+CEILING = smooth_planner.BLOCKED * grid.CELL_M * 2 * grid.GRID  # the potential of an unreachable cell
+_MOVE_INDEX = {m: k for k, m in enumerate(grid_planner.moves(CONNECTIVITY))}
+# (di + 1) * 3 + (dj + 1) -> move index (-1: no move)
+_MOVE_LOOKUP = np.array([_MOVE_INDEX.get((di, dj), -1) for di in (-1, 0, 1) for dj in (-1, 0, 1)], np.int32)
+
+
+@struct.dataclass
+class Demonstrations:
+    """Demonstrated paths on one map (leading batch axes allowed on every field).
+
+    Attributes:
+      moves: (K, H, W) float32, how many times the move ``k`` (:func:`planners.grid_planner.moves`
+        order) is taken out of each cell.
+      starts: (H, W) float32, how many paths start in each cell.
+      goal_ij: (2,) int32, the goal cell every path ends in.
+      n_paths: () float32, the number of paths (0: nothing demonstrated; the loss ignores it).
+    """
+
+    moves: jnp.ndarray
+    starts: jnp.ndarray
+    goal_ij: jnp.ndarray
+    n_paths: jnp.ndarray
+
+
+def traversal_per_m(maps, costs):
+    """(..., H, W) cost per metre of entering a cell: NavFn's ``50 + 0.8 * 252 c`` for a cost ``c``
+    in [0, 1] (the GSCL layer's scale in the planner), :data:`planners.smooth_planner.BLOCKED`
+    on the input map's walls."""
+    costs = jnp.asarray(costs)
+    return jnp.where(
+        jnp.asarray(maps) == grid.WALL, smooth_planner.BLOCKED, NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * costs
+    )
+
+
+def path_moves(path_ij, shape=(grid.GRID, grid.GRID)):
+    """(K, H, W) move counts of one path of cells (L, 2), consecutive cells 8-neighbours or equal
+    (repeats, e.g. after the goal, count nothing)."""
+    path_ij = jnp.asarray(path_ij, jnp.int32)
+    step = path_ij[1:] - path_ij[:-1]
+    k = jnp.asarray(_MOVE_LOOKUP)[(step[:, 0] + 1) * 3 + (step[:, 1] + 1)]
+    moved = k >= 0
+    counts = jnp.zeros((K, *shape), jnp.float32)
+    return counts.at[jnp.maximum(k, 0), path_ij[:-1, 0], path_ij[:-1, 1]].add(moved.astype(jnp.float32))
+
+
+def path_nll(costs, maps, demo: Demonstrations, temperature: float = TEMPERATURE, iterations: int = ITERATIONS):
+    """Mean negative log-likelihood per path of one map's demonstrations under the soft policy of
+    ``costs`` (H, W) in [0, 1] on input map ``maps`` (H, W): ``(sum of the paths' costs - sum of
+    phi at their starts) / (tau n_paths)``; 0 when ``n_paths`` is 0."""
+    weights = smooth_planner.soft_weights(traversal_per_m(maps, costs), grid.CELL_M, CONNECTIVITY)
+    phi = smooth_planner.soft_potential_implicit(weights, demo.goal_ij, temperature, iterations, CEILING, CONNECTIVITY)
+    nll = (jnp.sum(demo.moves * weights) - jnp.sum(demo.starts * phi)) / temperature
+    return jnp.where(demo.n_paths > 0, nll / jnp.maximum(demo.n_paths, 1.0), 0.0)
+
+
+def batch_nll(costs, maps, demos: Demonstrations, temperature: float = TEMPERATURE, iterations: int = ITERATIONS):
+    """(B,) :func:`path_nll` of a batch: costs and maps (B, H, W), demonstrations with axis B."""
+    return jax.vmap(lambda c, m, d: path_nll(c, m, d, temperature, iterations))(costs, maps, demos)
+
+
+def _goal_cell(maps):
+    """(row, col) of the map's goal pixel and whether it has one."""
+    flat = (maps == grid.GOAL).reshape(-1)
+    index = jnp.argmax(flat)
+    return jnp.stack([index // grid.GRID, index % grid.GRID]).astype(jnp.int32), flat[index]
+
+
+def _random_cell(key, allowed):
+    """A cell drawn uniformly from the True cells of ``allowed`` (H, W) (cell (0, 0) if none)."""
+    logits = jnp.where(allowed.reshape(-1), 0.0, -jnp.inf)
+    index = jax.random.categorical(key, jnp.where(jnp.any(allowed), logits, 0.0))
+    return jnp.stack([index // allowed.shape[1], index % allowed.shape[1]]).astype(jnp.int32)
+
+
+def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4) -> Demonstrations:
+    """Exact plans on one known cost map: ``paths_per_map`` paths to the map's goal pixel (the
+    first from the robot's cell, the others from random free cells that reach the goal), or, on
+    a map without a goal pixel, to a random free cell. Jit and vmap it."""
+    maps = jnp.asarray(maps)
+    free = (maps != grid.WALL) & (maps != grid.PERSON) & (maps != grid.HEADING)
+    k_goal, k_starts = jax.random.split(key)
+    goal_pixel, has_goal = _goal_cell(maps)
+    goal = jnp.where(has_goal, goal_pixel, _random_cell(k_goal, free))
+    t = traversal_per_m(maps, target_costs)
+    exact = jnp.where(t >= smooth_planner.BLOCKED, jnp.inf, t)
+    phi = grid_planner.potential(exact, goal, grid.CELL_M, CONNECTIVITY)
+    rows, cols = jnp.arange(grid.GRID)[:, None], jnp.arange(grid.GRID)[None, :]
+    reach = jnp.isfinite(phi) & free & ~((rows == goal[0]) & (cols == goal[1]))
+    robot = jnp.stack(grid.cell_of(0.0, 0.0)).astype(jnp.int32)
+    others = jax.vmap(lambda k: _random_cell(k, reach))(jax.random.split(k_starts, paths_per_map))
+    starts = others.at[0].set(jnp.where(has_goal & reach[robot[0], robot[1]], robot, others[0]))
+    paths, _, reached = jax.vmap(lambda s: grid_planner.descend(phi, exact, s, goal, grid.CELL_M, CONNECTIVITY))(starts)
+    ok = reached & reach[starts[:, 0], starts[:, 1]]
+    moves = jnp.sum(jax.vmap(path_moves)(paths) * ok[:, None, None, None], axis=0)
+    start_counts = jnp.zeros((grid.GRID, grid.GRID), jnp.float32).at[starts[:, 0], starts[:, 1]].add(ok)
+    return Demonstrations(moves, start_counts, goal, jnp.sum(ok).astype(jnp.float32))
+
+
+def planned_demonstrations(key, maps, target_costs, paths_per_map: int = 4) -> Demonstrations:
+    """:func:`planned_demonstration` of a batch: maps and targets (B, H, W), one key per map."""
+    keys = jax.random.split(key, len(maps))
+    return jax.vmap(lambda k, m, c: planned_demonstration(k, m, c, paths_per_map))(keys, maps, target_costs)
+
+
+def exact_path_cost(true_costs, maps, plan_costs, start_ij, goal_ij):
+    """The cost under ``true_costs`` of the exact plan on ``plan_costs`` from ``start_ij`` to
+    ``goal_ij`` (one map, (H, W) each), and the optimum under ``true_costs``: ``(cost, optimum)``
+    (``inf`` when the plan does not reach the goal)."""
+    true_t = traversal_per_m(maps, true_costs)
+    true_t = jnp.where(true_t >= smooth_planner.BLOCKED, jnp.inf, true_t)
+    plan_t = traversal_per_m(maps, plan_costs)
+    plan_t = jnp.where(plan_t >= smooth_planner.BLOCKED, jnp.inf, plan_t)
+    planned = grid_planner.plan(plan_t, start_ij, goal_ij, grid.CELL_M, CONNECTIVITY)
+    weights = jnp.stack(list(grid_planner.move_costs(true_t, grid.CELL_M, CONNECTIVITY).values()))
+    moves = path_moves(planned.path_ij, plan_t.shape)
+    cost = jnp.where(planned.reached, jnp.sum(moves * jnp.where(moves > 0, weights, 0.0)), jnp.inf)
+    optimum = grid_planner.plan(true_t, start_ij, goal_ij, grid.CELL_M, CONNECTIVITY).cost
+    return cost, optimum

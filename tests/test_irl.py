@@ -1,0 +1,222 @@
+"""Learning costs through the planner (models.irl): the implicit gradient equals the unrolled one
+and finite differences, the likelihood's known properties, a demonstrated corridor becomes
+cheaper, a known cost map is recovered well enough to plan on it."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+import pytest
+
+from models import grid, irl
+from planners import grid_planner, smooth_planner
+
+
+def _two_corridor_map(h=9, w=13):
+    """A block in the middle: from the left end to the right end the way is over it or under it,
+    the two corridors equally long."""
+    maps = np.zeros((h, w), np.uint8)
+    maps[2 : h - 2, 3 : w - 3] = grid.WALL
+    return maps
+
+
+def _demo(path_cells, shape):
+    path = jnp.asarray(path_cells, jnp.int32)
+    starts = jnp.zeros(shape, jnp.float32).at[path[0, 0], path[0, 1]].add(1.0)
+    return irl.Demonstrations(irl.path_moves(path, shape), starts, path[-1], jnp.float32(1.0))
+
+
+def _corridor_path(row, h=9, w=13):
+    """From (h // 2, 0) up or down to ``row``, along it, and back to (h // 2, w - 1)."""
+    mid = h // 2
+    step = -1 if row < mid else 1
+    down = [(r, 0) for r in range(mid, row, step)]
+    along = [(row, c) for c in range(0, w)]
+    back = [(r, w - 1) for r in range(row - step, mid - step, -step)]
+    return down + along + back
+
+
+def test_implicit_gradient_equals_the_unrolled_one_and_finite_differences():
+    rng = np.random.default_rng(3)
+    with jax.enable_x64(True):
+        t = jnp.asarray(50 + 200 * rng.random((8, 10)))
+        t = t.at[4, 2:7].set(smooth_planner.BLOCKED)
+        weights = smooth_planner.soft_weights(t, 0.4)
+        goal, start, tau = (1, 8), (6, 1), 3.0
+
+        def unrolled(w):
+            return smooth_planner._iterate(w, smooth_planner._goal_mask((8, 10), goal), tau, 1e9, 8, 300)[start]
+
+        def implicit(w):
+            return smooth_planner.soft_potential_implicit(w, goal, tau, 300, 1e9)[start]
+
+        assert float(unrolled(weights)) == pytest.approx(float(implicit(weights)), rel=1e-12)
+        g_unrolled, g_implicit = jax.grad(unrolled)(weights), jax.grad(implicit)(weights)
+        np.testing.assert_allclose(g_implicit, g_unrolled, atol=1e-10)
+        # The weights' gradient is the soft policy's expected moves: one unit of flow leaves the
+        # start, and every unit arrives at the goal.
+        assert float(jnp.sum(g_implicit)) > 1.0  # a path takes more than one move
+        out_of_start = float(jnp.sum(g_implicit[:, start[0], start[1]]))
+        assert out_of_start == pytest.approx(1.0, abs=1e-9)
+
+
+def test_path_likelihood_gradient_equals_finite_differences():
+    rng = np.random.default_rng(4)
+    maps = _two_corridor_map()
+    path = _corridor_path(0)
+    with jax.enable_x64(True):
+        costs = jnp.asarray(rng.uniform(0.05, 0.6, maps.shape))
+        demo = _demo(path, maps.shape)
+
+        def nll(c):
+            return irl.path_nll(c, maps, demo, temperature=3.0, iterations=300)
+
+        value = float(nll(costs))
+        assert value > 0  # the soft-min lies below every path's cost
+        grad = np.asarray(jax.grad(nll)(costs))
+        assert np.all(grad[maps == grid.WALL] == 0)
+        eps = 1e-5
+        cells = [(0, 5), (8, 5), (4, 0), (1, 2), (7, 11), (4, 12)]
+        for i, j in cells:
+            fd = (float(nll(costs.at[i, j].add(eps))) - float(nll(costs.at[i, j].add(-eps)))) / (2 * eps)
+            assert grad[i, j] == pytest.approx(fd, rel=1e-5, abs=1e-8)
+        # Demonstrated cells (not the start, which no expected visit outweighs) are pushed down in
+        # cost, the other corridor up.
+        assert grad[0, 6] > 0 and grad[8, 6] < 0
+
+
+def test_likelihood_is_zero_only_for_a_certain_choice_and_ignores_empty_demonstrations():
+    maps = _two_corridor_map()
+    cheap_top = np.ones(maps.shape, np.float32)
+    cheap_top[:2, :] = 0.0
+    t = np.where(maps == grid.WALL, np.inf, np.asarray(irl.traversal_per_m(maps, cheap_top)))
+    best = grid_planner.plan(t, (4, 0), (4, 12), grid.CELL_M)
+    demo = _demo(np.asarray(best.path_ij)[: int(best.path_length)], maps.shape)
+    assert np.asarray(best.path_ij)[:, 0].min() <= 1  # over the block
+    even = np.full(maps.shape, 0.3, np.float32)
+    sharp = float(irl.path_nll(jnp.asarray(cheap_top), maps, demo, temperature=0.5))
+    tie = float(irl.path_nll(jnp.asarray(even), maps, demo, temperature=0.5))
+    # On an even map the path and its mirror image under the block tie: the demonstrated one has
+    # probability 1/2 at most.
+    assert tie >= np.log(2) - 1e-4
+    assert -1e-3 < sharp < 1e-2  # 0 up to float32 rounding of costs near 500
+    empty = irl.Demonstrations(demo.moves * 0, demo.starts * 0, demo.goal_ij, jnp.float32(0.0))
+    assert float(irl.path_nll(jnp.asarray(even), maps, empty)) == 0.0
+
+
+def test_path_moves_counts_each_step_once_and_ignores_repeats():
+    path = [(2, 2), (2, 3), (3, 4), (3, 4), (3, 4)]
+    moves = np.asarray(irl.path_moves(jnp.asarray(path), (6, 6)))
+    assert moves.sum() == 2
+    k_right = grid_planner.moves(8).index((0, 1))
+    k_diag = grid_planner.moves(8).index((1, 1))
+    assert moves[k_right, 2, 2] == 1 and moves[k_diag, 2, 3] == 1
+
+
+def test_a_demonstrated_corridor_becomes_the_cheaper_one():
+    maps = _two_corridor_map()
+    demo = _demo(_corridor_path(0), maps.shape)
+    theta = jnp.zeros(maps.shape)
+    opt = optax.adam(0.05)
+    state = opt.init(theta)
+
+    @jax.jit
+    def step(theta, state):
+        grad = jax.grad(lambda th: irl.path_nll(jax.nn.sigmoid(th), maps, demo))(theta)
+        updates, state = opt.update(grad, state)
+        return optax.apply_updates(theta, updates), state
+
+    for _ in range(30):
+        theta, state = step(theta, state)
+    learned = np.asarray(jax.nn.sigmoid(theta))
+    top, bottom = learned[0, 3:10].mean(), learned[-1, 3:10].mean()
+    assert top < 0.5 < bottom
+
+
+def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
+    rng = np.random.default_rng(5)
+    maps = np.zeros((grid.GRID, grid.GRID), np.uint8)
+    maps[10, 5:30] = grid.WALL
+    maps[30, 8] = grid.GOAL
+    costs = rng.uniform(0, 1, maps.shape).astype(np.float32)
+    demo = irl.planned_demonstration(jax.random.key(0), jnp.asarray(maps), jnp.asarray(costs), paths_per_map=3)
+    assert float(demo.n_paths) == 3 and tuple(np.asarray(demo.goal_ij)) == (30, 8)
+    robot = tuple(int(v) for v in grid.cell_of(0.0, 0.0))
+    assert demo.starts[robot] >= 1  # the first path leaves from the robot's cell
+    # Every path costs its exact optimum: the demonstrations' total cost equals the sum of the
+    # exact potentials at their starts.
+    t = np.asarray(irl.traversal_per_m(maps, costs))
+    t = np.where(t >= smooth_planner.BLOCKED, np.inf, t)
+    phi = np.asarray(grid_planner.potential(t, (30, 8), grid.CELL_M))
+    weights = np.stack(list(grid_planner.move_costs(t, grid.CELL_M).values()))
+    moves = np.asarray(demo.moves)
+    total = float(np.sum(moves * np.where(moves > 0, weights, 0.0)))
+    assert total == pytest.approx(float(np.sum(np.asarray(demo.starts) * phi)), rel=1e-5)
+    assert np.all(moves[:, maps == grid.WALL] == 0)
+    # Flow is conserved: at every cell but the goal, moves out = moves in + starts.
+    out_flow = moves.sum(0)
+    in_flow = np.zeros_like(out_flow)
+    for k, (di, dj) in enumerate(grid_planner.moves(8)):
+        in_flow += np.roll(np.roll(moves[k], di, 0), dj, 1)
+    balance = out_flow - in_flow - np.asarray(demo.starts)
+    balance[30, 8] += 3
+    np.testing.assert_allclose(balance, 0, atol=1e-6)
+
+
+def test_a_known_cost_map_is_recovered_from_its_exact_plans():
+    """Known answer: learn a free cost grid from exact plans on a known one; held-out start and
+    goal pairs planned on the learned grid cost, under the true grid, within 5 % of the optimum
+    (the all-zero grid is further off), and the learned grid correlates with the true one."""
+    h = 16
+    maps = np.zeros((h, h), np.uint8)
+    maps[5, 2:11] = grid.WALL
+    yy, xx = np.mgrid[0:h, 0:h]
+    true = np.maximum(np.exp(-((yy - 10) ** 2 + (xx - 6) ** 2) / 8.0), np.exp(-((yy - 3) ** 2 + (xx - 12) ** 2) / 6.0))
+    true = jnp.asarray(true, jnp.float32)
+    maps_j = jnp.asarray(maps)
+
+    def demos(key, n):
+        def one(k):
+            kg, ks = jax.random.split(k)
+            free = maps_j != grid.WALL
+            goal = irl._random_cell(kg, free)
+            start = irl._random_cell(ks, free & ~((jnp.arange(h)[:, None] == goal[0]) & (jnp.arange(h) == goal[1])))
+            t = irl.traversal_per_m(maps_j, true)
+            t = jnp.where(t >= smooth_planner.BLOCKED, jnp.inf, t)
+            p = grid_planner.plan(t, start, goal, grid.CELL_M)
+            starts = jnp.zeros((h, h)).at[start[0], start[1]].add(1.0)
+            return irl.Demonstrations(irl.path_moves(p.path_ij, (h, h)), starts, goal, jnp.float32(1.0)), start
+
+        return jax.vmap(one)(jax.random.split(key, n))
+
+    train, _ = demos(jax.random.key(1), 96)
+    test, test_starts = demos(jax.random.key(2), 32)
+    opt = optax.adam(0.1)
+    theta = jnp.full((h, h), -2.0)
+    state = opt.init(theta)
+
+    @jax.jit
+    def step(theta, state):
+        def loss(th):
+            return jnp.mean(
+                jax.vmap(lambda d: irl.path_nll(jax.nn.sigmoid(th), maps_j, d, temperature=2.0, iterations=64))(train)
+            )
+
+        grad = jax.grad(loss)(theta)
+        updates, state = opt.update(grad, state)
+        return optax.apply_updates(theta, updates), state
+
+    for _ in range(300):
+        theta, state = step(theta, state)
+    learned = jax.nn.sigmoid(theta)
+
+    def excess(plan_costs):
+        cost, best = jax.vmap(lambda s, g: irl.exact_path_cost(true, maps_j, plan_costs, s, g))(
+            test_starts, test.goal_ij
+        )
+        return float(jnp.mean(cost / best - 1))
+
+    assert excess(learned) < 0.05
+    assert excess(learned) < excess(jnp.zeros_like(true))
+    visited = np.asarray(train.moves.sum((0, 1))) > 0
+    assert np.corrcoef(np.asarray(learned)[visited], np.asarray(true)[visited])[0, 1] > 0.5
