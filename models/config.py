@@ -16,7 +16,24 @@ from flax import nnx
 from models import dataset, unet
 
 # Settings added after runs were saved, with the value those runs used.
-ADDED_LATER = {"composites": 0, "cost_weight": 0.0, "group_scale": 1, "pair_weight": 0.0}
+ADDED_LATER = {
+    "composites": 0,
+    "cost_weight": 0.0,
+    "group_scale": 1,
+    "pair_weight": 0.0,
+    "objective": "maps",
+    "temperature": 2.0,
+    "paths_per_map": 4,
+}
+OBJECTIVES = ("maps", "paths")
+# The soft planner's temperature of the "paths" objective, in NavFn cost units on the network's
+# 0.4 m grid (the cheapest move, 0.4 m of free space, costs 20; the soft-min converges for
+# tau < 20 / ln 8 = 9.6). Exact plans are noise-free demonstrations and a low temperature fits
+# them best: a free 40 x 40 grid learnt from 512 exact plans on a known map planned held-out
+# pairs 1.56 / 1.58 / 1.91 % above the optimum at tau 2 / 4 / 8 (README, "Costs learned from
+# paths"). People's tracks, which are noisier, may want a higher one.
+PATH_TEMPERATURE = 2.0
+MAX_PATH_TEMPERATURE = 20.0 / math.log(8.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,6 +74,16 @@ class TrainConfig:
         facing-out one). 20 by default: on 400 fresh scenes of each kind every held-out check
         passed (the zone beside a hallway 92.8 -> 96.0 %, beside a queue 94.8 -> 97.2 %); 0: no
         pair term (runs saved before it, ``--paper``).
+      objective: ``"maps"`` (seed 002: regression on the generator's target maps, the loss
+        above) or ``"paths"`` (maximum-entropy IRL through the soft planner,
+        :mod:`planners.irl`: the targets are used only to plan ``paths_per_map`` exact
+        demonstrations per map, and the loss is their negative log-likelihood under the soft
+        planner of the network's costs; the test MSE is then a diagnostic, not the objective).
+        A "paths" run is trained by :func:`models.train.train` with the objective passed in
+        (``planners.irl.PathObjective``): ``models`` never imports the planners.
+      temperature: the soft planner's temperature of the "paths" objective
+        (:data:`PATH_TEMPERATURE`, below :data:`MAX_PATH_TEMPERATURE`).
+      paths_per_map: demonstrations planned on each map by the "paths" objective.
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
       keep_checkpoints: how many checkpoints orbax keeps.
@@ -77,6 +104,9 @@ class TrainConfig:
     group_scale: int = 2
     cost_weight: float = 10.0
     pair_weight: float = 20.0
+    objective: str = "maps"
+    temperature: float = PATH_TEMPERATURE
+    paths_per_map: int = 4
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2
@@ -96,6 +126,12 @@ class TrainConfig:
         for name in ("cost_weight", "pair_weight"):
             if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {getattr(self, name)}")
+        if self.objective not in OBJECTIVES:
+            raise ValueError(f"objective must be one of {OBJECTIVES}, got {self.objective!r}")
+        if not 0 < self.temperature < MAX_PATH_TEMPERATURE:
+            raise ValueError(f"temperature must be in (0, {MAX_PATH_TEMPERATURE:.2f}), got {self.temperature}")
+        if self.paths_per_map < 1:
+            raise ValueError(f"paths_per_map must be >= 1, got {self.paths_per_map}")
         if self.composites < 0:
             raise ValueError(f"composites must be >= 0, got {self.composites}")
         if self.group_scale < 1:
@@ -168,7 +204,7 @@ class TrainConfig:
         missing = sorted(set(fields) - set(d))
         if missing:
             raise ValueError(f"{source}: field '{missing[0]}': missing")
-        kinds = {"features": list, "coords": bool, "fresh_samples": bool, "schedule": str}
+        kinds = {"features": list, "coords": bool, "fresh_samples": bool, "schedule": str, "objective": str}
         for name, value in d.items():
             want = kinds.get(name, type(getattr(cls, name)))
             ok = isinstance(value, want) and not (want is not bool and isinstance(value, bool))

@@ -21,6 +21,7 @@ import pathlib
 import jax
 import jax.numpy as jnp
 import numpy as np
+from flax import nnx
 
 from data import DATA_DIR
 from models import grid
@@ -246,8 +247,8 @@ class SocialCostModel:
             want = [(jax.tree_util.keystr(k), np.shape(a)) for k, a in _leaves(params, batch_stats)]
             try:
                 pure = serialization.msgpack_restore((path / WEIGHTS_FILE).read_bytes())
-                params.replace_by_pure_dict(pure["params"])
-                batch_stats.replace_by_pure_dict(pure["batch_stats"])
+                nnx.replace_by_pure_dict(params, pure["params"])
+                nnx.replace_by_pure_dict(batch_stats, pure["batch_stats"])
             except Exception as e:  # msgpack's, flax's and a wrong tree's errors have no common base
                 raise ValueError(f"{path / WEIGHTS_FILE}: not the weights of {path / 'config.json'} ({e})") from None
             got = [(jax.tree_util.keystr(k), np.shape(a)) for k, a in _leaves(params, batch_stats)]
@@ -269,8 +270,8 @@ class SocialCostModel:
         folder = pathlib.Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         pure = {
-            "params": jax.tree.map(np.asarray, self._params.to_pure_dict()),
-            "batch_stats": jax.tree.map(np.asarray, self._batch_stats.to_pure_dict()),
+            "params": jax.tree.map(np.asarray, nnx.to_pure_dict(self._params)),
+            "batch_stats": jax.tree.map(np.asarray, nnx.to_pure_dict(self._batch_stats)),
         }
         write_text_atomic(folder / "config.json", json.dumps(self.config.to_json(), indent=1))
         write_bytes_atomic(folder / WEIGHTS_FILE, lambda h: h.write(serialization.msgpack_serialize(pure)))

@@ -38,21 +38,33 @@ def batch_sharding(batch_size: int):
 
 
 def make_train_step(
-    graphdef, tx: optax.GradientTransformation, n_families: int, cost_weight: float = 0.0, pair_weight: float = 0.0
+    graphdef,
+    tx: optax.GradientTransformation,
+    n_families: int,
+    cost_weight: float = 0.0,
+    pair_weight: float = 0.0,
+    objective=None,
 ):
-    """``step(state, inputs, targets, family, contrast=None) -> (state, loss)``; ``state`` is a
-    dict with ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and ``family_count``
-    (F,); ``contrast`` (B, 40, 40) is :func:`models.dataset.pair_contrast` of the batch.
+    """``step(state, inputs, targets, family, contrast=None, key=None) -> (state, loss)``; ``state``
+    is a dict with ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and
+    ``family_count`` (F,); ``contrast`` (B, 40, 40) is :func:`models.dataset.pair_contrast` of the
+    batch.
 
-    The loss is the mean over pixels of ``(1 + cost_weight * target + pair_weight * contrast) *
-    error**2`` (the plain MSE with both at 0 or no contrast given); ``loss`` and the per-family
-    accumulators are the plain MSE whatever the weights."""
+    With ``objective`` None (the "maps" objective) the loss is the mean over pixels of ``(1 +
+    cost_weight * target + pair_weight * contrast) * error**2`` (the plain MSE with both at 0 or no
+    contrast given), and ``loss`` is the plain MSE. With an ``objective`` (the "paths" one,
+    ``planners.irl.PathObjective``: ``prepare(key, inputs, targets)`` and ``loss(costs, inputs,
+    prepared) -> (B,)``), ``key`` draws the batch's demonstrations and the loss and ``loss`` are
+    the mean of ``objective.loss``. The per-family accumulators are the plain MSE either way."""
 
-    def loss_fn(params, batch_stats, inputs, targets, contrast):
+    def loss_fn(params, batch_stats, inputs, targets, contrast, prepared):
         model = nnx.merge(graphdef, params, batch_stats, copy=True)
         model.train()
-        squared = (model(inputs) - targets) ** 2
+        costs = model(inputs)
+        squared = (costs - targets) ** 2
         per_sample = jnp.mean(squared, axis=(1, 2))
+        if objective is not None:
+            return jnp.mean(objective.loss(costs, inputs, prepared)), (per_sample, nnx.state(model, nnx.BatchStat))
         weight = 1.0 + cost_weight * targets
         if pair_weight and contrast is not None:
             weight = weight + pair_weight * contrast
@@ -60,9 +72,12 @@ def make_train_step(
         return weighted, (per_sample, nnx.state(model, nnx.BatchStat))
 
     @jax.jit
-    def step(state, inputs, targets, family, contrast=None):
-        (_, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
-            state["params"], state["batch_stats"], inputs, targets, contrast
+    def step(state, inputs, targets, family, contrast=None, key=None):
+        prepared = None
+        if objective is not None:
+            prepared = jax.lax.stop_gradient(objective.prepare(key, inputs, targets))
+        (value, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
+            state["params"], state["batch_stats"], inputs, targets, contrast, prepared
         )
         updates, opt_state = tx.update(grads, state["opt_state"], state["params"])
         onehot = jax.nn.one_hot(family, n_families, dtype=jnp.float32)
@@ -72,7 +87,7 @@ def make_train_step(
             "opt_state": opt_state,
             "family_sse": state["family_sse"] + onehot.T @ per_sample,
             "family_count": state["family_count"] + onehot.sum(0),
-        }, jnp.mean(per_sample)
+        }, (value if objective is not None else jnp.mean(per_sample))
 
     return step
 
@@ -113,15 +128,16 @@ def per_sample_mse(
 
 
 @functools.lru_cache(maxsize=8)
-def compiled(config: TrainConfig):
-    """``(graphdef, tx, train_step, predict)`` of a configuration, built once per process so that
-    resuming, restoring and evaluating in one process do not compile again."""
+def compiled(config: TrainConfig, objective=None):
+    """``(graphdef, tx, train_step, predict)`` of a configuration (and training objective, see
+    :func:`make_train_step`), built once per process so that resuming, restoring and evaluating in
+    one process do not compile again."""
     graphdef = nnx.graphdef(make_model(config))
     tx = optax.adam(learning_rate_schedule(config))
     return (
         graphdef,
         tx,
-        make_train_step(graphdef, tx, len(config.counts), config.cost_weight, config.pair_weight),
+        make_train_step(graphdef, tx, len(config.counts), config.cost_weight, config.pair_weight, objective),
         make_predict(graphdef),
     )
 

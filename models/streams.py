@@ -19,7 +19,13 @@ from models.config import TrainConfig
 
 
 def _stream_key(seed: int, stream: str, index: int = 0) -> jax.Array:
-    return jax.random.fold_in(jax.random.fold_in(jax.random.key(seed), ("train", "test").index(stream)), index)
+    streams = ("train", "test", "demonstrations")
+    return jax.random.fold_in(jax.random.fold_in(jax.random.key(seed), streams.index(stream)), index)
+
+
+def demonstration_key(config: TrainConfig, step: int) -> jax.Array:
+    """The key of step ``step``'s demonstrations (the "paths" objective: random starts and goals)."""
+    return _stream_key(config.seed, "demonstrations", step)
 
 
 @functools.lru_cache(maxsize=1)  # epoch 0 serves the trivial baselines and then the first epoch

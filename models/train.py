@@ -34,7 +34,7 @@ from models.checkpoints import check_run_folder, checkpoint_manager, host, resto
 from models.config import TrainConfig, learning_rate_schedule
 from models.quality import by_family, meets_quality, trivial_baselines
 from models.steps import batch_sharding, compiled, initial_state, per_sample_mse
-from models.streams import epoch_data, test_data
+from models.streams import demonstration_key, epoch_data, test_data
 
 RULE_SCENES = 100  # scenes of each kind of the rule suite checked at every epoch's end
 
@@ -46,6 +46,7 @@ def train(
     progress: bool = True,
     stop_when_good: bool = False,
     max_steps: int | None = None,
+    objective=None,
     log=print,
 ) -> dict[str, Any]:
     """Train (or resume) a run in ``out``; returns the last epoch's metrics line.
@@ -56,9 +57,20 @@ def train(
         kind) passes on 95 % of its cases (for benchmarks).
       max_steps: stop after this many steps in all (a checkpoint is written there), e.g. to
         test resuming; the run resumes from it when called again.
+      objective: the training objective of a ``config.objective == "paths"`` run
+        (``planners.irl.PathObjective.of(config)``; see :func:`models.steps.make_train_step`);
+        None for the "maps" objective.
+
+    Raises:
+      ValueError: ``objective`` does not match ``config.objective``.
     """
     import orbax.checkpoint as ocp
 
+    if (objective is None) != (config.objective == "maps"):
+        raise ValueError(
+            f"objective: a {config.objective!r} run needs "
+            + ("planners.irl.PathObjective.of(config)" if objective is None else "no objective")
+        )
     data_sharding, replicated = batch_sharding(config.batch_size)  # a bad batch size fails before any file
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -71,7 +83,7 @@ def train(
     # The family index of a training sample counts the families this run draws, in FAMILIES order
     # (as dataset.generate numbers them).
     names = [f for f in dataset.FAMILIES if config.train_counts.get(f, 0) > 0]
-    _, _, train_step, predict = compiled(config)
+    _, _, train_step, predict = compiled(config, objective)
     state = initial_state(config)
     test = test_data(config)
     meta = {"step": 0, "wall_s": 0.0, "history": [], "baselines": None}
@@ -110,11 +122,11 @@ def train(
             for b in range(step % spe, spe):
                 sl = slice(b * config.batch_size, (b + 1) * config.batch_size)
                 batch = (data["inputs"][sl], data["targets"][sl], data["family"][sl].astype(np.int32))
-                if "contrast" in data:
-                    batch = (*batch, data["contrast"][sl])
+                batch = (*batch, data["contrast"][sl] if "contrast" in data else None)
                 if data_sharding is not None:
                     batch = jax.device_put(batch, data_sharding)
-                state, loss = train_step(state, *batch)
+                key = demonstration_key(config, step) if objective is not None else None
+                state, loss = train_step(state, *batch, key)
                 step += 1
                 bar.update(step, config.total_steps)
                 if step % 20 == 0:

@@ -68,6 +68,9 @@ _TRAIN_OPTIONS = (
     "group_scale",
     "cost_weight",
     "pair_weight",
+    "objective",
+    "temperature",
+    "paths_per_map",
 )
 
 
@@ -161,6 +164,25 @@ def add_parser(top) -> None:
         "facing out, a queue and the same queue with the goal elsewhere (default 20; --paper: 0)",
     )
     tr.add_argument(
+        "--objective",
+        choices=("maps", "paths"),
+        default=None,
+        help="maps: regression on the generator's target maps (seed 002, the default); paths: maximum-entropy "
+        "IRL through the soft planner from exact plans on those maps, the maps themselves never in the loss",
+    )
+    tr.add_argument(
+        "--temperature",
+        type=positive_float,
+        default=None,
+        help="--objective paths: the soft planner's temperature in NavFn cost units (default 2; below 9.6)",
+    )
+    tr.add_argument(
+        "--paths-per-map",
+        type=positive_int,
+        default=None,
+        help="--objective paths: demonstrations planned on each map (default 4)",
+    )
+    tr.add_argument(
         "--stop-when-good",
         action="store_true",
         help="stop at the first epoch that meets the quality bar (test MSE <= 0.0033 and <= 1/10 of "
@@ -221,6 +243,31 @@ def add_parser(top) -> None:
         "is the one training checks every epoch)",
     )
     ex.set_defaults(handler=_export)
+
+    ft = sub.add_parser(
+        "fit-tracks",
+        help="a cost model learnt from people's tracks by maximum-entropy IRL through the soft planner",
+        description="Read tracks (CSV or Parquet: frame, id, x, y in metres) and the walls (a ROS map_server "
+        "YAML and its image), make each track a demonstration on the GSCL network's 16 m window from where the "
+        "person starts (planners.tracks), and fit the U-Net to them (planners.irl_fit). Writes an exported model "
+        "(config.json, weights.msgpack, model.json with the report of tracks used and left out) that --gscl-run "
+        "of arena, layers and policy train takes.",
+    )
+    ft.add_argument("--tracks", type=pathlib.Path, required=True, help="CSV or Parquet with frame, id, x, y")
+    ft.add_argument("--map", type=pathlib.Path, required=True, help="ROS map YAML (image, resolution, origin)")
+    ft.add_argument("--out", type=output_folder, required=True, help="the model's folder")
+    ft.add_argument("--steps", type=positive_int, default=2000, help="gradient steps (default 2000)")
+    ft.add_argument("--batch-size", type=positive_int, default=32, help="tracks per step (default 32)")
+    ft.add_argument(
+        "--temperature",
+        type=positive_float,
+        default=4.0,
+        help="the soft planner's temperature in NavFn cost units (default 4: people are noisier than exact "
+        "plans; below 9.6)",
+    )
+    ft.add_argument("--seed", type=seed_int, default=0)
+    ft.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    ft.set_defaults(handler=_fit_tracks)
     ru.set_defaults(handler=_rules)
     gen.set_defaults(handler=_generate)
     tr.set_defaults(handler=_train)
@@ -405,11 +452,23 @@ def _train(args) -> int:
     print(
         f"training on {jax.devices()[0].platform} x {len(jax.devices())}: features {config.features}, "
         f"{config.epochs} epochs x {config.steps_per_epoch} steps of {config.batch_size}, "
+        f"objective {config.objective}, "
         f"{_parameters(config):,} parameters -> {args.out}"
     )
     t0 = time.perf_counter()
     try:
-        line = train.train(config, args.out, progress=not args.no_progress, stop_when_good=args.stop_when_good)
+        objective = None
+        if config.objective == "paths":
+            from planners.irl import PathObjective
+
+            objective = PathObjective.of(config)
+        line = train.train(
+            config,
+            args.out,
+            progress=not args.no_progress,
+            stop_when_good=args.stop_when_good,
+            objective=objective,
+        )
     except ValueError as err:
         raise SystemExit(f"socialnav gscl train: {err}") from None
     baselines = json.loads((args.out / "baselines.json").read_text())
@@ -503,6 +562,54 @@ def _rules(args) -> int:
 
 EXPORT_JOB = "socialnav gscl export"
 EXPORT_FILES = ("config.json", "weights.msgpack", "model.json")
+
+
+FIT_TRACKS_JOB = "socialnav gscl fit-tracks"
+
+
+def _fit_tracks(args) -> int:
+    """A model fitted to a user's tracks, exported with a card of what went into it."""
+    import datetime
+
+    from models.config import TrainConfig
+    from planners import tracks
+    from planners.irl_fit import fit_demonstrations
+
+    try:
+        config = TrainConfig(
+            objective="paths", temperature=args.temperature, batch_size=args.batch_size, seed=args.seed
+        )
+        runfolder.claim(args.out, FIT_TRACKS_JOB, EXPORT_FILES)
+        runfolder.check_writable(args.out)
+        people = tracks.read_tracks(args.tracks)
+        occupancy, resolution, origin = tracks.read_ros_map(args.map)
+    except runfolder.RunFolderError as err:
+        raise SystemExit(f"socialnav gscl fit-tracks: --out {err}") from None
+    except ValueError as err:
+        raise SystemExit(f"socialnav gscl fit-tracks: {err}") from None
+    maps, demos, report = tracks.track_demonstrations(people, occupancy, resolution, origin)
+    left = ", ".join(f"{n} {why}" for why, n in report["left_out"].items()) or "none"
+    print(f"{report['used']} of {report['tracks']} tracks made demonstrations (left out: {left})", flush=True)
+    try:
+        model, history = fit_demonstrations(maps, demos, config, steps=args.steps, progress=not args.no_progress)
+    except ValueError as err:
+        raise SystemExit(f"socialnav gscl fit-tracks: {err}") from None
+    card = {
+        "made_by": f"socialnav gscl fit-tracks --tracks {args.tracks.name} --map {args.map.name} --steps {args.steps}",
+        "objective": "maximum-entropy IRL through the soft planner (planners.irl)",
+        "temperature": args.temperature,
+        "steps": args.steps,
+        "tracks": {k: v for k, v in report.items() if k != "ids"},
+        "nll_per_path_first_last": [history[0], history[-1]],
+        "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    }
+    model.export(args.out, card)
+    runfolder.record(args.out, FIT_TRACKS_JOB, EXPORT_FILES)
+    print(
+        f"negative log-likelihood per path {history[0]:.2f} -> {history[-1]:.2f} nats; wrote "
+        f"{args.out}/{{{', '.join(EXPORT_FILES)}}}"
+    )
+    return 0
 
 
 def _export(args) -> int:

@@ -27,11 +27,14 @@ Where they come from:
   checked against it. A map with a goal pixel is planned to that goal, from the robot's cell and
   from ``paths_per_map - 1`` random free cells; a map without (the generator's families with no
   goal) gets a random free goal.
-* :func:`track_demonstrations`: a walked trajectory (metres, in the map's frame) made a chain of
-  8-connected cells (:mod:`models.tracks` reads a user's file of them).
+
+:class:`PathObjective` is the "paths" objective of a GSCL training run (``TrainConfig.objective``):
+:func:`models.train.train` calls it with each batch, so ``models`` needs no planner import.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import jax
 import jax.numpy as jnp
@@ -39,17 +42,13 @@ import numpy as np
 from flax import struct
 
 from models import grid
+from models.config import PATH_TEMPERATURE
 from planners import grid_planner, smooth_planner
 from planners.costmap import MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
 
 CONNECTIVITY = 8
 K = CONNECTIVITY
-# Cost units. The cheapest move (0.4 m of free space) costs 20 and the soft-min converges for
-# tau < 20 / ln 8 = 9.6. Exact plans are noise-free demonstrations, and a lower temperature fits
-# them better: a free 40 x 40 grid learnt from 512 exact plans on a known map planned held-out
-# pairs 1.56 / 1.58 / 1.91 % above the optimum at tau 2 / 4 / 8 (README, "Costs learned from
-# paths"). Noisier demonstrations (people's tracks) may want a higher one.
-TEMPERATURE = 2.0
+TEMPERATURE = PATH_TEMPERATURE  # cost units (its reason: models.config.PATH_TEMPERATURE)
 ITERATIONS = 2 * (grid.GRID + grid.GRID)  # Jacobi steps of the soft recursion and of its adjoint
 CEILING = smooth_planner.BLOCKED * grid.CELL_M * 2 * grid.GRID  # the potential of an unreachable cell
 _MOVE_INDEX = {m: k for k, m in enumerate(grid_planner.moves(CONNECTIVITY))}
@@ -169,3 +168,30 @@ def exact_path_cost(true_costs, maps, plan_costs, start_ij, goal_ij):
     cost = jnp.where(planned.reached, jnp.sum(moves * jnp.where(moves > 0, weights, 0.0)), jnp.inf)
     optimum = grid_planner.plan(true_t, start_ij, goal_ij, grid.CELL_M, CONNECTIVITY).cost
     return cost, optimum
+
+
+@dataclasses.dataclass(frozen=True)
+class PathObjective:
+    """The "paths" training objective of the GSCL U-Net (``TrainConfig.objective == "paths"``).
+
+    :meth:`prepare` plans the demonstrations of a batch on its target maps (outside the
+    gradient); :meth:`loss` is the per-sample negative log-likelihood of a batch's predicted
+    costs. Both jit; :func:`models.train.train` takes an instance.
+    """
+
+    temperature: float = TEMPERATURE
+    paths_per_map: int = 4
+    iterations: int = ITERATIONS
+
+    @classmethod
+    def of(cls, config) -> PathObjective:
+        """The objective of a :class:`models.config.TrainConfig`."""
+        return cls(float(config.temperature), int(config.paths_per_map))
+
+    def prepare(self, key, maps, target_costs) -> Demonstrations:
+        """(B,) demonstrations planned on a batch's target maps (B, H, W)."""
+        return planned_demonstrations(key, maps, target_costs, self.paths_per_map)
+
+    def loss(self, costs, maps, demos: Demonstrations):
+        """(B,) mean negative log-likelihood per path of each map's demonstrations."""
+        return batch_nll(costs, maps, demos, self.temperature, self.iterations)

@@ -1,0 +1,260 @@
+"""People's tracks as demonstrations for learning costs through the planner (:mod:`planners.irl`).
+
+**The file formats** (a user's own data):
+
+* Tracks: CSV or Parquet with one row per person and frame and at least the columns ``frame``
+  (integer), ``id`` (any label), ``x`` and ``y`` (metres, in the map's frame). Other columns are
+  ignored; rows may come in any order. The frame rate does not matter (only the order of a
+  person's positions is used).
+* The walls: a ROS ``map_server`` map, the format every ROS and Nav2 user has: a YAML file with
+  ``image`` (a PGM or PNG beside it), ``resolution`` (m per pixel), ``origin`` ([x, y, yaw] of the
+  image's lower-left pixel; yaw must be 0), and optionally ``negate`` (0), ``occupied_thresh``
+  (0.65). A pixel is occupied where ``(255 - value) / 255`` (``value / 255`` with ``negate``)
+  exceeds ``occupied_thresh``.
+
+**What a track becomes** (:func:`track_demonstrations`): the GSCL network's view of the scene
+from where the person starts, as the robot sees it from the centre of its 16 m window
+(:func:`models.inference.input_map`, in the world's axes like the GSCL layer's default): the
+walls, the other people present at that frame with their headings (from their next position),
+and as the goal the last position of the track before it first leaves the window. The
+demonstrated path is the chain of 0.4 m cells the person crossed up to there (segments between
+positions sampled every 5 cm, so consecutive cells are 8-neighbours; two straight steps around a
+cell corner become the diagonal move, as the planner would make it). A track is left out, and
+counted in the report by reason, when it crosses fewer than two cells, enters a wall cell, or
+moves diagonally past a wall's corner (a move the planner cannot make).
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from models import grid
+from models.inference import input_map
+from planners import grid_planner
+from planners.irl import Demonstrations, path_moves
+
+REQUIRED_COLUMNS = ("frame", "id", "x", "y")
+SAMPLE_M = 0.05  # spacing of the points a segment between two positions is sampled at
+
+
+class TrackFileError(ValueError):
+    """A tracks or map file that cannot be used; the message names the file and the field."""
+
+
+def read_tracks(path) -> dict[object, np.ndarray]:
+    """``{id: (T, 3) float64 [frame, x, y]}`` sorted by frame, from a CSV or Parquet file.
+
+    Raises:
+      TrackFileError: unreadable file, a missing column, a non-integer frame, a non-finite
+        position, or a person twice in one frame (naming the file, the column and the row).
+    """
+    import pandas as pd
+
+    path = pathlib.Path(path)
+    try:
+        if path.suffix.lower() == ".parquet":
+            df = pd.read_parquet(path)
+        elif path.suffix.lower() == ".csv":
+            df = pd.read_csv(path)
+        else:
+            raise TrackFileError(f"{path}: tracks must be a .csv or .parquet file")
+    except TrackFileError:
+        raise
+    except Exception as e:  # pandas' and pyarrow's parse errors have no common base
+        raise TrackFileError(f"{path}: cannot read ({type(e).__name__}: {e})") from None
+    missing = [c for c in REQUIRED_COLUMNS if c not in df.columns]
+    if missing:
+        raise TrackFileError(f"{path}: column '{missing[0]}' is missing (need {', '.join(REQUIRED_COLUMNS)})")
+    if df.empty:
+        raise TrackFileError(f"{path}: no rows")
+    frame = pd.to_numeric(df["frame"], errors="coerce")
+    bad = ~np.isfinite(frame.to_numpy(float)) | (frame.to_numpy(float) % 1 != 0)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        raise TrackFileError(f"{path}: column 'frame', row {row + 2}: {df['frame'].iloc[row]!r} is not a whole number")
+    for col in ("x", "y"):
+        v = pd.to_numeric(df[col], errors="coerce").to_numpy(float)
+        if not np.isfinite(v).all():
+            row = int(np.flatnonzero(~np.isfinite(v))[0])
+            raise TrackFileError(f"{path}: column '{col}', row {row + 2}: {df[col].iloc[row]!r} is not a finite number")
+    dup = df.duplicated(subset=["frame", "id"])
+    if dup.any():
+        row = int(np.flatnonzero(dup.to_numpy())[0])
+        raise TrackFileError(
+            f"{path}: columns 'frame', 'id', row {row + 2}: person {df['id'].iloc[row]!r} appears twice in frame "
+            f"{df['frame'].iloc[row]}"
+        )
+    table = pd.DataFrame(
+        {"frame": frame.astype(np.int64), "id": df["id"], "x": df["x"].astype(float), "y": df["y"].astype(float)}
+    )
+    return {
+        pid: g.sort_values("frame")[["frame", "x", "y"]].to_numpy(np.float64)
+        for pid, g in table.groupby("id", sort=True)
+    }
+
+
+def read_ros_map(path) -> tuple[np.ndarray, float, tuple[float, float]]:
+    """``(occupancy (H, W) float32 in {0, 1}, resolution_m, origin_xy_m)`` of a ROS map YAML, in
+    the OccupancyGrid layout (row 0 at the bottom, :func:`models.inference.input_map`).
+
+    Raises:
+      TrackFileError: a missing or malformed field, an unreadable image (naming the file and field).
+    """
+    import yaml
+    from PIL import Image
+
+    path = pathlib.Path(path)
+    try:
+        meta = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as e:
+        raise TrackFileError(f"{path}: cannot read ({type(e).__name__}: {e})") from None
+    if not isinstance(meta, dict):
+        raise TrackFileError(f"{path}: not a ROS map YAML (a mapping with image, resolution, origin)")
+    for field in ("image", "resolution", "origin"):
+        if field not in meta:
+            raise TrackFileError(f"{path}: field '{field}' is missing")
+    resolution = meta["resolution"]
+    if not isinstance(resolution, (int, float)) or not (math.isfinite(resolution) and resolution > 0):
+        raise TrackFileError(f"{path}: field 'resolution': must be a positive number of metres, got {resolution!r}")
+    origin = meta["origin"]
+    if not (isinstance(origin, list) and len(origin) in (2, 3) and all(isinstance(v, (int, float)) for v in origin)):
+        raise TrackFileError(f"{path}: field 'origin': must be [x, y, yaw], got {origin!r}")
+    if len(origin) == 3 and origin[2] != 0:
+        raise TrackFileError(f"{path}: field 'origin': a rotated map (yaw {origin[2]}) is not supported")
+    threshold = meta.get("occupied_thresh", 0.65)
+    if not isinstance(threshold, (int, float)) or not 0 <= threshold <= 1:
+        raise TrackFileError(f"{path}: field 'occupied_thresh': must be in [0, 1], got {threshold!r}")
+    image_path = path.parent / str(meta["image"])
+    try:
+        pixels = np.asarray(Image.open(image_path).convert("L"), np.float32)
+    except (OSError, ValueError) as e:
+        raise TrackFileError(f"{path}: field 'image': cannot read {image_path} ({e})") from None
+    p = pixels / 255.0 if meta.get("negate", 0) else (255.0 - pixels) / 255.0
+    occupancy = (p > threshold).astype(np.float32)[::-1]  # the image's top row is the map's last
+    return np.ascontiguousarray(occupancy), float(resolution), (float(origin[0]), float(origin[1]))
+
+
+def _cells(points_local_m: np.ndarray) -> np.ndarray:
+    """(N, 2) int cells crossed by the polyline of local points (M, 2), consecutive repeats dropped."""
+    dense = [points_local_m[:1]]
+    for a, b in zip(points_local_m[:-1], points_local_m[1:], strict=True):
+        n = max(1, math.ceil(np.linalg.norm(b - a) / SAMPLE_M))
+        dense.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
+    xy = np.concatenate(dense)
+    row, col = (np.asarray(v) for v in grid.cell_of(xy[:, 0], xy[:, 1]))
+    cells = np.stack([row, col], axis=1)
+    keep = np.concatenate([[True], np.any(cells[1:] != cells[:-1], axis=1)])
+    return cells[keep]
+
+
+def _shortcut(cells: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """The chain with each corner step made a diagonal move where the planner has it: a track
+    crossing a cell corner (exactly, or by a few centimetres) becomes one diagonal move instead
+    of two straight ones through a side cell."""
+    out = [cells[0]]
+    i = 0
+    while i < len(cells) - 1:
+        a = out[-1]
+        if i + 2 < len(cells):
+            c = cells[i + 2]
+            d = c - a
+            if np.abs(d).max() == 1 and d.all() and not (walls[a[0] + d[0], a[1]] or walls[a[0], a[1] + d[1]]):
+                out.append(c)
+                i += 2
+                continue
+        out.append(cells[i + 1])
+        i += 1
+    return np.stack(out)
+
+
+def _feasible(cells: np.ndarray, walls: np.ndarray) -> str | None:
+    """None when the planner's graph has every move of the chain, else why not."""
+    if len(cells) < 2:
+        return "fewer than 2 cells"
+    if walls[cells[:, 0], cells[:, 1]].any():
+        return "enters a wall cell"
+    step = cells[1:] - cells[:-1]
+    if np.abs(step).max() > 1:
+        return "jumps a cell"  # cannot happen with SAMPLE_M < CELL_M; kept as a guard
+    diag = (step[:, 0] != 0) & (step[:, 1] != 0)
+    a = cells[:-1][diag]
+    s = step[diag]
+    if (walls[a[:, 0] + s[:, 0], a[:, 1]] | walls[a[:, 0], a[:, 1] + s[:, 1]]).any():
+        return "cuts a wall's corner"
+    return None
+
+
+def track_demonstrations(tracks: dict, occupancy, resolution_m: float, origin_xy_m, min_cells: int = 2):
+    """Input maps and demonstrations of every usable track.
+
+    Args:
+      tracks: ``{id: (T, 3) [frame, x, y]}`` (:func:`read_tracks`).
+      occupancy, resolution_m, origin_xy_m: the walls (:func:`read_ros_map`, or any OccupancyGrid
+        layout array in [0, 1]).
+      min_cells: the fewest cells a track must cross inside its window.
+
+    Returns:
+      ``(maps (N, 40, 40) uint8, Demonstrations with axis N, report)``; ``report`` counts the
+      tracks used and those left out by reason, and lists the ids used in order.
+    """
+    ids = list(tracks)
+    frames = {pid: {int(f): (x, y) for f, x, y in tracks[pid]} for pid in ids}
+    heading = {}
+    for pid in ids:
+        t = tracks[pid]
+        d = np.diff(t[:, 1:], axis=0)
+        h = np.arctan2(d[:, 1], d[:, 0]) if len(d) else np.zeros(0)
+        heading[pid] = {int(f): float(h[min(i, len(h) - 1)]) if len(h) else 0.0 for i, f in enumerate(t[:, 0])}
+    p_max = max(1, len(ids) - 1)
+    occupancy = jnp.asarray(occupancy, jnp.float32)
+    origin = jnp.asarray(origin_xy_m, jnp.float32)
+    draw = jax.jit(
+        lambda centre, people, headings, valid, goal: input_map(
+            occupancy, resolution_m, origin, centre, people, headings, goal, people_valid=valid
+        )
+    )
+    maps, demos, used = [], [], []
+    skipped: dict[str, int] = {}
+    for pid in ids:
+        t = tracks[pid]
+        centre = t[0, 1:]
+        local = t[:, 1:] - centre
+        inside = np.all(np.abs(local) < grid.HALF_M - 1e-6, axis=1)
+        last = len(t) if inside.all() else int(np.argmin(inside))
+        path_local = local[:last]
+        first = int(t[0, 0])
+        others = [q for q in ids if q != pid and first in frames[q]]
+        people = np.zeros((p_max, 2), np.float32)
+        headings = np.zeros(p_max, np.float32)
+        valid = np.zeros(p_max, bool)
+        for k, q in enumerate(others):
+            people[k], headings[k], valid[k] = frames[q][first], heading[q][first], True
+        image = np.asarray(draw(centre, people, headings, valid, t[last - 1, 1:]))
+        walls = image == grid.WALL
+        cells = _shortcut(_cells(path_local), walls)
+        why = _feasible(cells, walls) if len(cells) >= min_cells else f"fewer than {min_cells} cells"
+        if why:
+            skipped[why] = skipped.get(why, 0) + 1
+            continue
+        moves = np.asarray(path_moves(jnp.asarray(cells)))
+        starts = np.zeros((grid.GRID, grid.GRID), np.float32)
+        starts[cells[0, 0], cells[0, 1]] = 1.0
+        maps.append(image)
+        demos.append(Demonstrations(moves, starts, cells[-1].astype(np.int32), np.float32(1.0)))
+        used.append(pid)
+    report = {"tracks": len(ids), "used": len(used), "left_out": skipped, "ids": used}
+    if not demos:
+        empty = Demonstrations(
+            np.zeros((0, len(grid_planner.moves(8)), grid.GRID, grid.GRID), np.float32),
+            np.zeros((0, grid.GRID, grid.GRID), np.float32),
+            np.zeros((0, 2), np.int32),
+            np.zeros(0, np.float32),
+        )
+        return np.zeros((0, grid.GRID, grid.GRID), np.uint8), empty, report
+    stacked = jax.tree.map(lambda *a: np.stack(a), *demos)
+    return np.stack(maps), stacked, report

@@ -1,0 +1,162 @@
+"""People's tracks as demonstrations (planners.tracks): a planned path written as a track file
+comes back as the same moves; the map and the other people are drawn; bad files are named."""
+
+import jax.numpy as jnp
+import numpy as np
+import pandas as pd
+import pytest
+from PIL import Image
+
+from models import grid
+from planners import grid_planner, irl, tracks
+
+
+def _write_map(folder, occupied_xy_m, size_m=30.0, resolution_m=0.1):
+    """A ROS map_server pair: walls at the given (x0, y0, x1, y1) boxes, origin (0, 0)."""
+    n = int(size_m / resolution_m)
+    occ = np.zeros((n, n), bool)  # row 0 at y = 0
+    for x0, y0, x1, y1 in occupied_xy_m:
+        occ[int(y0 / resolution_m) : int(y1 / resolution_m), int(x0 / resolution_m) : int(x1 / resolution_m)] = True
+    pixels = np.where(occ, 0, 254).astype(np.uint8)[::-1]  # black = occupied, top row = highest y
+    Image.fromarray(pixels).save(folder / "map.pgm")
+    (folder / "map.yaml").write_text(
+        f"image: map.pgm\nresolution: {resolution_m}\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\n"
+    )
+    return folder / "map.yaml"
+
+
+def test_a_planned_path_written_as_a_track_comes_back_as_the_same_demonstration(tmp_path):
+    yaml_path = _write_map(tmp_path, [(12.0, 16.0, 18.0, 16.6)])  # a wall 1-1.6 m above the start
+    occupancy, resolution, origin = tracks.read_ros_map(yaml_path)
+    assert occupancy.shape == (300, 300) and resolution == 0.1 and occupancy[160, 150] == 1 and occupancy[100, 150] == 0
+    start = np.array([15.0, 15.0])
+    # The window the tracks module will draw, and an exact plan on it from the centre over the wall.
+    from models.inference import input_map
+
+    window = np.asarray(
+        input_map(occupancy, resolution, origin, start, np.zeros((0, 2)), np.zeros(0), start + [0.5, 4.0])
+    )
+    walls = window == grid.WALL
+    assert walls.any()
+    goal_cell = tuple(int(v) for v in grid.cell_of(0.5 + 0.01, 4.0 + 0.01))
+    t = np.where(walls, np.inf, 50.0)
+    plan = grid_planner.plan(t, grid.cell_of(0.0, 0.0), goal_cell, grid.CELL_M)
+    assert bool(plan.reached)
+    cells = np.asarray(plan.path_ij)[: int(plan.path_length)]
+    local = np.stack([grid.CELL_X_M[cells[:, 0], cells[:, 1]], grid.CELL_Y_M[cells[:, 0], cells[:, 1]]], axis=1)
+    points = np.concatenate([[start], start + local[1:]])
+    walker = pd.DataFrame({"frame": np.arange(len(points)), "id": "w", "x": points[:, 0], "y": points[:, 1]})
+    bystander = pd.DataFrame({"frame": [0, 1], "id": "b", "x": [13.0, 13.0], "y": [14.0, 13.9]})
+    file = tmp_path / "tracks.csv"
+    pd.concat([bystander, walker]).sample(frac=1.0, random_state=0).to_csv(file, index=False)
+
+    read = tracks.read_tracks(file)
+    assert sorted(read) == ["b", "w"] and np.all(np.diff(read["w"][:, 0]) > 0)
+    maps, demos, report = tracks.track_demonstrations(read, occupancy, resolution, origin)
+    assert report["ids"] == ["w"] and report["left_out"] == {"fewer than 2 cells": 1}  # b steps 0.1 m in its cell
+    np.testing.assert_array_equal(demos.moves[0], np.asarray(irl.path_moves(jnp.asarray(cells))))
+    assert tuple(demos.goal_ij[0]) == goal_cell and demos.starts[0][tuple(cells[0])] == 1
+    # The walker's view: the wall, the bystander 2 m left and 1 m down heading down, the goal.
+    assert np.array_equal(maps[0] == grid.WALL, walls)
+    person = tuple(int(v) for v in grid.cell_of(-2.0, -1.0))
+    assert maps[0][person] == grid.PERSON and maps[0][person[0] + 1, person[1]] == grid.HEADING
+    assert maps[0][goal_cell] == grid.GOAL
+    # The likelihood of the demonstration is finite and positive on any cost map.
+    nll = float(
+        irl.path_nll(
+            jnp.full((40, 40), 0.1),
+            maps[0],
+            irl.Demonstrations(*[a[0] for a in (demos.moves, demos.starts, demos.goal_ij, demos.n_paths)]),
+        )
+    )
+    assert 0 < nll < 1e3
+
+
+def test_a_track_through_a_wall_is_left_out_and_counted(tmp_path):
+    yaml_path = _write_map(tmp_path, [(14.0, 16.0, 16.0, 16.6)])
+    occupancy, resolution, origin = tracks.read_ros_map(yaml_path)
+    ys = np.linspace(15.0, 18.0, 7)
+    through = {"t": np.stack([np.arange(7), np.full(7, 15.0), ys], axis=1)}
+    maps, demos, report = tracks.track_demonstrations(through, occupancy, resolution, origin)
+    assert len(maps) == 0 and report["left_out"] == {"enters a wall cell": 1}
+    around = {"a": np.stack([np.arange(7), np.full(7, 17.0), ys], axis=1)}
+    maps, demos, report = tracks.track_demonstrations(around, occupancy, resolution, origin)
+    assert len(maps) == 1 and report["used"] == 1 and float(demos.n_paths[0]) == 1
+
+
+def test_a_track_that_leaves_the_window_ends_where_it_leaves(tmp_path):
+    yaml_path = _write_map(tmp_path, [])
+    occupancy, resolution, origin = tracks.read_ros_map(yaml_path)
+    xs = np.linspace(5.0, 25.0, 41)  # 20 m straight east: the window reaches 8 m
+    maps, demos, _ = tracks.track_demonstrations(
+        {"e": np.stack([np.arange(41), xs, np.full(41, 15.0)], axis=1)}, occupancy, resolution, origin
+    )
+    goal = tuple(int(v) for v in demos.goal_ij[0])
+    assert goal[0] == 20 and goal[1] >= 38 and maps[0][goal] == grid.GOAL
+    assert float(demos.moves[0].sum()) == goal[1] - 20
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("frame,id,x\n0,a,1.0\n", "column 'y' is missing"),
+        ("frame,id,x,y\n0,a,1.0,nan\n", "column 'y', row 2"),
+        ("frame,id,x,y\n0.5,a,1.0,2.0\n", "column 'frame', row 2"),
+        ("frame,id,x,y\n0,a,1.0,2.0\n1,a,1,2\n0,a,3,3\n", "appears twice in frame 0"),
+        ("frame,id,x,y\n", "no rows"),
+    ],
+)
+def test_bad_track_files_are_named_with_their_field(tmp_path, content, message):
+    file = tmp_path / "t.csv"
+    file.write_text(content)
+    with pytest.raises(tracks.TrackFileError, match=message) as err:
+        tracks.read_tracks(file)
+    assert str(file) in str(err.value) and "\n" not in str(err.value)
+
+
+def test_bad_map_files_are_named_with_their_field(tmp_path):
+    good = _write_map(tmp_path, [])
+    text = good.read_text()
+    for broken, message in (
+        (text.replace("resolution: 0.1", "resolution: -1"), "field 'resolution'"),
+        (text.replace("image: map.pgm\n", ""), "field 'image' is missing"),
+        (text.replace("image: map.pgm", "image: none.pgm"), "field 'image': cannot read"),
+        (text.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0, 1.0]"), "rotated map"),
+        ("just text", "not a ROS map"),
+    ):
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(broken)
+        with pytest.raises(tracks.TrackFileError, match=message) as err:
+            tracks.read_ros_map(bad)
+        assert str(bad) in str(err.value)
+    with pytest.raises(tracks.TrackFileError, match=r"\.csv or \.parquet"):
+        tracks.read_tracks(tmp_path / "t.txt")
+
+
+@pytest.mark.slow
+def test_fit_tracks_command_fits_exports_a_loadable_model_and_names_bad_files(tmp_path, capsys):
+    from models.inference import SocialCostModel
+    from socialnav import cli
+
+    yaml_path = _write_map(tmp_path, [(14.0, 13.0, 16.0, 15.5)])  # a pillar people pass on its north side
+    rows = []
+    rng = np.random.default_rng(0)
+    for person in range(24):
+        y0 = 14.5 + rng.uniform(-0.3, 0.3)
+        xs = np.linspace(9.0, 21.0, 49)
+        ys = y0 + 2.8 * np.exp(-(((xs - 15.0) / 2.0) ** 2))  # up and over the pillar
+        rows += [(f, person, x, y) for f, (x, y) in enumerate(zip(xs, ys, strict=True))]
+    pd.DataFrame(rows, columns=["frame", "id", "x", "y"]).to_parquet(tmp_path / "tracks.parquet")
+    out = tmp_path / "model"
+    argv = ["gscl", "fit-tracks", "--tracks", str(tmp_path / "tracks.parquet"), "--map", str(yaml_path)]
+    assert cli.main([*argv, "--out", str(out), "--steps", "60", "--batch-size", "8", "--no-progress"]) == 0
+    printed = capsys.readouterr().out
+    assert "24 of 24 tracks made demonstrations" in printed
+    first, last = (float(v) for v in printed.split("per path ")[1].split(" nats")[0].split(" -> "))
+    assert last < first
+    model = SocialCostModel.load(out)
+    assert model.config.objective == "paths" and model(np.zeros((40, 40), np.uint8)).shape == (40, 40)
+    with pytest.raises(SystemExit, match="tracks.csv: column 'x' is missing"):
+        (tmp_path / "tracks.csv").write_text("frame,id,y\n0,a,1\n")
+        cli.main([*argv[:3], str(tmp_path / "tracks.csv"), *argv[4:], "--out", str(tmp_path / "m2")])
+    assert not (tmp_path / "m2" / "weights.msgpack").exists()
