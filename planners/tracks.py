@@ -1,5 +1,9 @@
 """People's tracks as demonstrations for learning costs through the planner (:mod:`planners.irl`).
 
+Two sources: a user's files (below), and the arena's own people (:func:`simulated_tracks`: the
+crowd model walking a scene's variants with no robot among them, the tracks and the scene's
+occupancy in the same form as a file's).
+
 **The file formats** (a user's own data):
 
 * Tracks: CSV or Parquet with one row per person and frame and at least the columns ``frame``
@@ -258,3 +262,74 @@ def track_demonstrations(tracks: dict, occupancy, resolution_m: float, origin_xy
         return np.zeros((0, grid.GRID, grid.GRID), np.uint8), empty, report
     stacked = jax.tree.map(lambda *a: np.stack(a), *demos)
     return np.stack(maps), stacked, report
+
+
+def concatenate(parts):
+    """One ``(maps, demonstrations, report)`` from several :func:`track_demonstrations` results
+    (the reports' counts summed, their ids listed in order)."""
+    maps = np.concatenate([p[0] for p in parts])
+    demos = jax.tree.map(lambda *a: np.concatenate(a), *[p[1] for p in parts])
+    left: dict[str, int] = {}
+    for p in parts:
+        for why, n in p[2]["left_out"].items():
+            left[why] = left.get(why, 0) + n
+    report = {
+        "tracks": sum(p[2]["tracks"] for p in parts),
+        "used": sum(p[2]["used"] for p in parts),
+        "left_out": left,
+        "ids": [i for p in parts for i in p[2]["ids"]],
+    }
+    return maps, demos, report
+
+
+ROBOT_AWAY_M = 1.0e4  # where the robot is while people walk alone: too far for any force
+TRACK_PERIOD_S = 0.4  # one position per person this often (a 0.4 m cell at a walker's 1 m/s)
+
+
+def simulated_tracks(spec, seed: int = 0, variants: int = 20, seconds: float | None = None, resolution_m: float = 0.1):
+    """People's tracks in ``variants`` variants of an arena scene (a ``jaxsim.scenes.spec.SceneSpec``),
+    walked by the arena's crowd model (:func:`jaxsim.scenes.people.step_people`, social force)
+    with the robot far away, for ``seconds`` (the scene's timeout by default).
+
+    Returns:
+      ``(tracks, occupancy, resolution_m, origin_xy_m)`` as :func:`read_tracks` and
+      :func:`read_ros_map` give them: ids ``"variant:person"``, the frames of variant ``k``
+      offset by ``k`` times the frames per variant so that people of two variants never share a
+      frame (each demonstration's map shows only its own variant's people).
+    """
+    from data import WAREHOUSE_DIR
+    from jaxsim.scenario.loader import load_scenario
+    from jaxsim.scenes import people as people_lib
+    from jaxsim.scenes.variant import sample_variants
+    from jaxsim.scenes.world import build_scene_world, occupancy
+
+    params = load_scenario(WAREHOUSE_DIR).params
+    world = build_scene_world(spec)
+    stacked = jax.tree.map(jnp.asarray, sample_variants(spec, seed, variants))
+    every = max(1, round(TRACK_PERIOD_S / float(params.dt_s)))
+    frames = int((spec.timeout_s if seconds is None else seconds) / (every * float(params.dt_s)))
+    away = jnp.full(2, ROBOT_AWAY_M, jnp.float32)
+
+    def walk(v):
+        def tick(people, step):
+            people = people_lib.step_people(params, world, v, people, away, jnp.zeros(2), step)
+            return people, None
+
+        def frame(people, f):
+            people, _ = jax.lax.scan(tick, people, f * every + jnp.arange(every, dtype=jnp.int32))
+            return people, (people.xy, people.present & ~people.done)
+
+        start = people_lib.init_people(v)
+        _, (xy, present) = jax.lax.scan(frame, start, jnp.arange(frames, dtype=jnp.int32))
+        return jnp.concatenate([start.xy[None], xy]), jnp.concatenate([start.present[None], present])
+
+    xy, present = (np.asarray(a) for a in jax.jit(jax.vmap(walk))(stacked))
+    out = {}
+    per_variant = frames + 1
+    for k in range(variants):
+        for p in range(xy.shape[2]):
+            on = np.flatnonzero(present[k, :, p])
+            if len(on):
+                out[f"{k}:{p}"] = np.column_stack([k * per_variant + on, xy[k, on, p]]).astype(np.float64)
+    occ, origin = occupancy(spec, resolution_m)
+    return out, occ, resolution_m, origin

@@ -248,13 +248,24 @@ def add_parser(top) -> None:
         "fit-tracks",
         help="a cost model learnt from people's tracks by maximum-entropy IRL through the soft planner",
         description="Read tracks (CSV or Parquet: frame, id, x, y in metres) and the walls (a ROS map_server "
-        "YAML and its image), make each track a demonstration on the GSCL network's 16 m window from where the "
+        "YAML and its image), or walk the people of arena scenes with no robot (--scene), make each track a "
+        "demonstration on the GSCL network's 16 m window from where the "
         "person starts (planners.tracks), and fit the U-Net to them (planners.irl_fit). Writes an exported model "
         "(config.json, weights.msgpack, model.json with the report of tracks used and left out) that --gscl-run "
         "of arena, layers and policy train takes.",
     )
-    ft.add_argument("--tracks", type=pathlib.Path, required=True, help="CSV or Parquet with frame, id, x, y")
-    ft.add_argument("--map", type=pathlib.Path, required=True, help="ROS map YAML (image, resolution, origin)")
+    ft.add_argument("--tracks", type=pathlib.Path, default=None, help="CSV or Parquet with frame, id, x, y")
+    ft.add_argument("--map", type=pathlib.Path, default=None, help="ROS map YAML (image, resolution, origin)")
+    ft.add_argument(
+        "--scene",
+        action="append",
+        default=None,
+        help="instead of --tracks and --map: the people of this arena scene (a built-in name or a JSON file; "
+        "repeatable), walked by the arena's crowd model with no robot",
+    )
+    ft.add_argument(
+        "--variants", type=positive_int, default=50, help="--scene: variants of each scene walked (default 50)"
+    )
     ft.add_argument("--out", type=output_folder, required=True, help="the model's folder")
     ft.add_argument("--steps", type=positive_int, default=2000, help="gradient steps (default 2000)")
     ft.add_argument("--batch-size", type=positive_int, default=32, help="tracks per step (default 32)")
@@ -567,6 +578,19 @@ EXPORT_FILES = ("config.json", "weights.msgpack", "model.json")
 FIT_TRACKS_JOB = "socialnav gscl fit-tracks"
 
 
+def _scene_specs(names):
+    """The arena scenes named (built-in names or JSON files), loaded and validated."""
+    from data import DATA_DIR
+    from jaxsim.scenes.spec import load_scene
+
+    files = [pathlib.Path(n) if n.endswith(".json") else DATA_DIR / "scenes" / f"{n}.json" for n in names]
+    missing = [f for f in files if not f.is_file()]
+    if missing:
+        builtin = ", ".join(sorted(p.stem for p in (DATA_DIR / "scenes").glob("*.json")))
+        raise ValueError(f"--scene: no scene {missing[0]} (built-in: {builtin})")
+    return [load_scene(f) for f in files]
+
+
 def _fit_tracks(args) -> int:
     """A model fitted to a user's tracks, exported with a card of what went into it."""
     import datetime
@@ -579,15 +603,23 @@ def _fit_tracks(args) -> int:
         config = TrainConfig(
             objective="paths", temperature=args.temperature, batch_size=args.batch_size, seed=args.seed
         )
+        if (args.scene is None) == (args.tracks is None or args.map is None) or (
+            args.scene and (args.tracks or args.map)
+        ):
+            raise ValueError("give --tracks and --map, or --scene")
+        if args.scene:
+            specs = _scene_specs(args.scene)
+        else:
+            sources = [(tracks.read_tracks(args.tracks), *tracks.read_ros_map(args.map))]
         runfolder.claim(args.out, FIT_TRACKS_JOB, EXPORT_FILES)
         runfolder.check_writable(args.out)
-        people = tracks.read_tracks(args.tracks)
-        occupancy, resolution, origin = tracks.read_ros_map(args.map)
     except runfolder.RunFolderError as err:
         raise SystemExit(f"socialnav gscl fit-tracks: --out {err}") from None
     except ValueError as err:
         raise SystemExit(f"socialnav gscl fit-tracks: {err}") from None
-    maps, demos, report = tracks.track_demonstrations(people, occupancy, resolution, origin)
+    if args.scene:
+        sources = [tracks.simulated_tracks(spec, args.seed, args.variants) for spec in specs]
+    maps, demos, report = tracks.concatenate([tracks.track_demonstrations(*source) for source in sources])
     left = ", ".join(f"{n} {why}" for why, n in report["left_out"].items()) or "none"
     print(f"{report['used']} of {report['tracks']} tracks made demonstrations (left out: {left})", flush=True)
     try:
@@ -595,7 +627,13 @@ def _fit_tracks(args) -> int:
     except ValueError as err:
         raise SystemExit(f"socialnav gscl fit-tracks: {err}") from None
     card = {
-        "made_by": f"socialnav gscl fit-tracks --tracks {args.tracks.name} --map {args.map.name} --steps {args.steps}",
+        "made_by": "socialnav gscl fit-tracks "
+        + (
+            " ".join(f"--scene {n}" for n in args.scene) + f" --variants {args.variants}"
+            if args.scene
+            else f"--tracks {args.tracks.name} --map {args.map.name}"
+        )
+        + f" --steps {args.steps} --seed {args.seed}",
         "objective": "maximum-entropy IRL through the soft planner (planners.irl)",
         "temperature": args.temperature,
         "steps": args.steps,

@@ -160,3 +160,35 @@ def test_fit_tracks_command_fits_exports_a_loadable_model_and_names_bad_files(tm
         (tmp_path / "tracks.csv").write_text("frame,id,y\n0,a,1\n")
         cli.main([*argv[:3], str(tmp_path / "tracks.csv"), *argv[4:], "--out", str(tmp_path / "m2")])
     assert not (tmp_path / "m2" / "weights.msgpack").exists()
+
+
+def test_simulated_tracks_keep_variants_apart_and_walkers_make_demonstrations():
+    from data import DATA_DIR
+    from jaxsim.scenes.spec import load_scene
+
+    spec = load_scene(DATA_DIR / "scenes" / "casn_crossing.json")
+    people, occupancy, resolution, origin = tracks.simulated_tracks(spec, seed=0, variants=3, seconds=8.0)
+    variant_frames = {}
+    for pid, t in people.items():
+        variant_frames.setdefault(pid.split(":")[0], set()).update(t[:, 0].astype(int))
+        assert np.all(np.diff(t[:, 0]) > 0) and np.isfinite(t).all()
+    assert sorted(variant_frames) == ["0", "1", "2"]
+    frames = list(variant_frames.values())
+    assert all(not (a & b) for i, a in enumerate(frames) for b in frames[i + 1 :])  # no shared frame
+    maps, demos, report = tracks.track_demonstrations(people, occupancy, resolution, origin)
+    assert report["used"] >= 3 and len(maps) == report["used"]
+    # A walker starts in its window's centre and never stands in a wall cell.
+    robot = tuple(int(v) for v in grid.cell_of(0.0, 0.0))
+    assert np.all(demos.starts[:, robot[0], robot[1]] == 1)
+    assert np.all(demos.moves.sum(1)[maps == grid.WALL] == 0)
+
+
+def test_fit_tracks_refuses_an_unknown_scene_or_missing_sources_before_writing(tmp_path):
+    from socialnav import cli
+
+    out = tmp_path / "m"
+    with pytest.raises(SystemExit, match="--scene: no scene .*no_such_scene.json \\(built-in: casn_crossing"):
+        cli.main(["gscl", "fit-tracks", "--scene", "no_such_scene", "--out", str(out)])
+    with pytest.raises(SystemExit, match="give --tracks and --map, or --scene"):
+        cli.main(["gscl", "fit-tracks", "--tracks", "t.csv", "--out", str(out)])
+    assert not out.exists()
