@@ -83,3 +83,28 @@ def fit_demonstrations(
     finally:
         bar.close()
     return SocialCostModel(graphdef, params, batch_stats, config), history
+
+
+def demonstrations_figure(model: SocialCostModel, maps: np.ndarray, demos: Demonstrations, path, count: int = 6):
+    """A PNG of ``count`` demonstrations (evenly spread over the set): each window's input map and
+    the learnt costs with the demonstrated cells over them."""
+    from common import figures
+    from models.plots import input_rgb
+
+    pick = np.unique(np.linspace(0, len(maps) - 1, min(count, len(maps))).astype(int))
+    costs = np.asarray(model(maps[pick]))
+    fig = figures.figure(figsize=(2.2 * len(pick), 4.6))
+    axes = fig.subplots(2, len(pick), squeeze=False)
+    for col, (i, c) in enumerate(zip(pick, costs, strict=True)):
+        visited = np.asarray(demos.moves[i]).sum(0) > 0
+        rows, cols = np.nonzero(visited)
+        axes[0, col].imshow(input_rgb(maps[i]), interpolation="nearest")
+        axes[0, col].set_title(f"demonstration {i}", fontsize=8)
+        axes[1, col].imshow(c, cmap="magma", vmin=0.0, vmax=1.0, interpolation="nearest")
+        for ax in axes[:, col]:
+            ax.plot(cols, rows, "c.", markersize=2.5)
+            ax.set_xticks([])
+            ax.set_yticks([])
+    axes[1, 0].set_ylabel("learnt costs", fontsize=8)
+    axes[0, 0].set_ylabel("input, path", fontsize=8)
+    return figures.save(fig, path)

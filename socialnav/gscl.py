@@ -576,6 +576,7 @@ EXPORT_FILES = ("config.json", "weights.msgpack", "model.json")
 
 
 FIT_TRACKS_JOB = "socialnav gscl fit-tracks"
+FIT_TRACKS_FILES = ("config.json", "weights.msgpack", "model.json", "demonstrations.png")
 
 
 def _scene_specs(names):
@@ -597,7 +598,7 @@ def _fit_tracks(args) -> int:
 
     from models.config import TrainConfig
     from planners import tracks
-    from planners.irl_fit import fit_demonstrations
+    from planners.irl_fit import demonstrations_figure, fit_demonstrations
 
     try:
         config = TrainConfig(
@@ -611,7 +612,7 @@ def _fit_tracks(args) -> int:
             specs = _scene_specs(args.scene)
         else:
             sources = [(tracks.read_tracks(args.tracks), *tracks.read_ros_map(args.map))]
-        runfolder.claim(args.out, FIT_TRACKS_JOB, EXPORT_FILES)
+        runfolder.claim(args.out, FIT_TRACKS_JOB, FIT_TRACKS_FILES)
         runfolder.check_writable(args.out)
     except runfolder.RunFolderError as err:
         raise SystemExit(f"socialnav gscl fit-tracks: --out {err}") from None
@@ -642,10 +643,11 @@ def _fit_tracks(args) -> int:
         "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
     model.export(args.out, card)
-    runfolder.record(args.out, FIT_TRACKS_JOB, EXPORT_FILES)
+    demonstrations_figure(model, maps, demos, args.out / "demonstrations.png")
+    runfolder.record(args.out, FIT_TRACKS_JOB, FIT_TRACKS_FILES)
     print(
         f"negative log-likelihood per path {history[0]:.2f} -> {history[-1]:.2f} nats; wrote "
-        f"{args.out}/{{{', '.join(EXPORT_FILES)}}}"
+        f"{args.out}/{{{', '.join(FIT_TRACKS_FILES)}}}"
     )
     return 0
 

@@ -163,6 +163,7 @@ def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
     np.testing.assert_allclose(balance, 0, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_a_known_cost_map_is_recovered_from_its_exact_plans():
     """Known answer: learn a free cost grid from exact plans on a known one; held-out start and
     goal pairs planned on the learned grid cost, under the true grid, within 5 % of the optimum

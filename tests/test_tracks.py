@@ -154,6 +154,7 @@ def test_fit_tracks_command_fits_exports_a_loadable_model_and_names_bad_files(tm
     assert "24 of 24 tracks made demonstrations" in printed
     first, last = (float(v) for v in printed.split("per path ")[1].split(" nats")[0].split(" -> "))
     assert last < first
+    assert (out / "demonstrations.png").stat().st_size > 1000
     model = SocialCostModel.load(out)
     assert model.config.objective == "paths" and model(np.zeros((40, 40), np.uint8)).shape == (40, 40)
     with pytest.raises(SystemExit, match="tracks.csv: column 'x' is missing"):
