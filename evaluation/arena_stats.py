@@ -61,8 +61,8 @@ def scene_statistics(episodes: pd.DataFrame) -> pd.DataFrame:
     for scene, g in episodes.groupby("scene", sort=False):
         proposed = next((m for prefix, m in PROPOSED.items() if scene.startswith(prefix)), None)
         methods = list(dict.fromkeys(g["method"]))
-        if proposed not in methods:
-            continue
+        if proposed not in methods or len(methods) < 2:
+            continue  # nothing to compare the scene's proposed method with
         others = [m for m in methods if m != proposed]
         by = {m: g[g["method"] == m] for m in methods}
         for other in others:

@@ -30,8 +30,8 @@ OBJECTIVES = ("maps", "paths")
 # 0.4 m grid (the cheapest move, 0.4 m of free space, costs 20; the soft-min converges for
 # tau < 20 / ln 8 = 9.6). Exact plans are noise-free demonstrations and a low temperature fits
 # them best: a free 40 x 40 grid learnt from 512 exact plans on a known map planned held-out
-# pairs 1.56 / 1.58 / 1.91 % above the optimum at tau 2 / 4 / 8 (README, "Costs learned from
-# paths"). People's tracks, which are noisier, may want a higher one.
+# pairs 1.52 / 1.60 / 2.31 % above the optimum at tau 2 / 4 / 8 (scripts/irl_known_map.py;
+# README, "Costs learned from paths"). People's tracks, which are noisier, may want a higher one.
 PATH_TEMPERATURE = 2.0
 MAX_PATH_TEMPERATURE = 20.0 / math.log(8.0)
 

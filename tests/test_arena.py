@@ -589,6 +589,9 @@ def test_scene_statistics_compare_the_proposed_method_with_the_others():
     gh = table[(table["measure"] == "zone_personal") & (table["test"] == "Games-Howell")].iloc[0]
     assert gh["p"] < 1e-6 and gh["effect"] < -3
     assert not ((table["measure"] == "zone_intimate").any())  # the same constant everywhere: not tested
+    # A run of the proposed method alone (socialnav arena --methods casn) has nothing to compare.
+    alone = arena_stats.scene_statistics(pd.DataFrame([r for r in rows if r["method"] == "casn"]))
+    assert alone.empty
 
 
 def test_held_out_variants_leave_the_ranges_and_the_mirror_keeps_the_rule():
