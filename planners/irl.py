@@ -27,6 +27,8 @@ Where they come from:
   checked against it. A map with a goal pixel is planned to that goal, from the robot's cell and
   from ``paths_per_map - 1`` random free cells; a map without (the generator's families with no
   goal) gets a random free goal.
+* :func:`planners.tracks.track_demonstrations`: people's tracks, from a user's file or the
+  arena's walkers (:func:`planners.tracks.simulated_tracks`).
 
 :class:`PathObjective` is the "paths" objective of a GSCL training run (``TrainConfig.objective``):
 :func:`models.train.train` calls it with each batch, so ``models`` needs no planner import.

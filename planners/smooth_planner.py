@@ -15,6 +15,12 @@ differentiation needs a fixed trip count; the default, ``2 (H + W)``, covers pat
 turns); the temperature must stay below ``w_min / ln 8`` (``w_min`` the cheapest move's cost),
 where the sum over walks that the soft-min takes converges. Impassable cells cost
 :data:`BLOCKED` per metre instead of ``inf`` so that gradients stay finite.
+
+Two gradients: :func:`soft_potential` is differentiated through every Jacobi step (memory grows
+with the steps); :func:`soft_potential_implicit` differentiates the fixed point by the implicit
+function theorem (an adjoint recursion: the soft policy's expected visits), in memory of one
+potential whatever the steps. :mod:`planners.irl` learns costs from demonstrated paths with the
+second.
 """
 
 from __future__ import annotations
