@@ -75,7 +75,7 @@ def make_train_step(
     def step(state, inputs, targets, family, contrast=None, key=None):
         prepared = None
         if objective is not None:
-            prepared = jax.lax.stop_gradient(objective.prepare(key, inputs, targets))
+            prepared = objective.prepare(key, inputs, targets)  # data: outside the differentiated arguments
         (value, (per_sample, batch_stats)), grads = jax.value_and_grad(loss_fn, has_aux=True)(
             state["params"], state["batch_stats"], inputs, targets, contrast, prepared
         )

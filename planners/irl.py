@@ -76,14 +76,12 @@ class Demonstrations:
     n_paths: jnp.ndarray
 
 
-def traversal_per_m(maps, costs):
+def traversal_per_m(maps, costs, impassable: float = smooth_planner.BLOCKED):
     """(..., H, W) cost per metre of entering a cell: NavFn's ``50 + 0.8 * 252 c`` for a cost ``c``
-    in [0, 1] (the GSCL layer's scale in the planner), :data:`planners.smooth_planner.BLOCKED`
-    on the input map's walls."""
+    in [0, 1] (the GSCL layer's scale in the planner), ``impassable`` on the input map's walls
+    (:data:`planners.smooth_planner.BLOCKED` for the soft planner, ``inf`` for the exact one)."""
     costs = jnp.asarray(costs)
-    return jnp.where(
-        jnp.asarray(maps) == grid.WALL, smooth_planner.BLOCKED, NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * costs
-    )
+    return jnp.where(jnp.asarray(maps) == grid.WALL, impassable, NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * costs)
 
 
 def path_moves(path_ij, shape=(grid.GRID, grid.GRID)):
@@ -135,8 +133,7 @@ def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4) -> De
     k_goal, k_starts = jax.random.split(key)
     goal_pixel, has_goal = _goal_cell(maps)
     goal = jnp.where(has_goal, goal_pixel, _random_cell(k_goal, free))
-    t = traversal_per_m(maps, target_costs)
-    exact = jnp.where(t >= smooth_planner.BLOCKED, jnp.inf, t)
+    exact = traversal_per_m(maps, target_costs, jnp.inf)
     phi = grid_planner.potential(exact, goal, grid.CELL_M, CONNECTIVITY)
     rows, cols = jnp.arange(grid.GRID)[:, None], jnp.arange(grid.GRID)[None, :]
     reach = jnp.isfinite(phi) & free & ~((rows == goal[0]) & (cols == goal[1]))
@@ -160,10 +157,8 @@ def exact_path_cost(true_costs, maps, plan_costs, start_ij, goal_ij):
     """The cost under ``true_costs`` of the exact plan on ``plan_costs`` from ``start_ij`` to
     ``goal_ij`` (one map, (H, W) each), and the optimum under ``true_costs``: ``(cost, optimum)``
     (``inf`` when the plan does not reach the goal)."""
-    true_t = traversal_per_m(maps, true_costs)
-    true_t = jnp.where(true_t >= smooth_planner.BLOCKED, jnp.inf, true_t)
-    plan_t = traversal_per_m(maps, plan_costs)
-    plan_t = jnp.where(plan_t >= smooth_planner.BLOCKED, jnp.inf, plan_t)
+    true_t = traversal_per_m(maps, true_costs, jnp.inf)
+    plan_t = traversal_per_m(maps, plan_costs, jnp.inf)
     planned = grid_planner.plan(plan_t, start_ij, goal_ij, grid.CELL_M, CONNECTIVITY)
     weights = jnp.stack(list(grid_planner.move_costs(true_t, grid.CELL_M, CONNECTIVITY).values()))
     moves = path_moves(planned.path_ij, plan_t.shape)

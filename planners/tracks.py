@@ -39,8 +39,7 @@ import numpy as np
 
 from models import grid
 from models.inference import input_map
-from planners import grid_planner
-from planners.irl import Demonstrations, path_moves
+from planners.irl import Demonstrations, K, path_moves
 
 REQUIRED_COLUMNS = ("frame", "id", "x", "y")
 SAMPLE_M = 0.05  # spacing of the points a segment between two positions is sampled at
@@ -207,61 +206,62 @@ def track_demonstrations(tracks: dict, occupancy, resolution_m: float, origin_xy
       tracks used and those left out by reason, and lists the ids used in order.
     """
     ids = list(tracks)
-    frames = {pid: {int(f): (x, y) for f, x, y in tracks[pid]} for pid in ids}
-    heading = {}
+    heading, present_at = {}, {}
     for pid in ids:
         t = tracks[pid]
         d = np.diff(t[:, 1:], axis=0)
-        h = np.arctan2(d[:, 1], d[:, 0]) if len(d) else np.zeros(0)
-        heading[pid] = {int(f): float(h[min(i, len(h) - 1)]) if len(h) else 0.0 for i, f in enumerate(t[:, 0])}
-    p_max = max(1, len(ids) - 1)
-    occupancy = jnp.asarray(occupancy, jnp.float32)
-    origin = jnp.asarray(origin_xy_m, jnp.float32)
-    draw = jax.jit(
-        lambda centre, people, headings, valid, goal: input_map(
-            occupancy, resolution_m, origin, centre, people, headings, goal, people_valid=valid
-        )
-    )
-    maps, demos, used = [], [], []
-    skipped: dict[str, int] = {}
+        h = np.arctan2(d[:, 1], d[:, 0]) if len(d) else np.zeros(1)
+        heading[pid] = np.append(h, h[-1])  # a position's heading: towards the next one (the last: as before it)
+        for i, f in enumerate(t[:, 0].astype(int)):
+            present_at.setdefault(f, []).append((pid, i))
+
+    # Each track's window: its centre (the first position), how far it stays inside, the others then.
+    views = []
     for pid in ids:
         t = tracks[pid]
-        centre = t[0, 1:]
-        local = t[:, 1:] - centre
+        local = t[:, 1:] - t[0, 1:]
         inside = np.all(np.abs(local) < grid.HALF_M - 1e-6, axis=1)
         last = len(t) if inside.all() else int(np.argmin(inside))
-        path_local = local[:last]
-        first = int(t[0, 0])
-        others = [q for q in ids if q != pid and first in frames[q]]
-        people = np.zeros((p_max, 2), np.float32)
-        headings = np.zeros(p_max, np.float32)
-        valid = np.zeros(p_max, bool)
-        for k, q in enumerate(others):
-            people[k], headings[k], valid[k] = frames[q][first], heading[q][first], True
-        image = np.asarray(draw(centre, people, headings, valid, t[last - 1, 1:]))
-        walls = image == grid.WALL
-        cells = _shortcut(_cells(path_local), walls)
+        others = [(q, i) for q, i in present_at[int(t[0, 0])] if q != pid]
+        views.append((local[:last], others))
+    p_max = max(1, max(len(others) for _, others in views))
+    people = np.zeros((len(ids), p_max, 2), np.float32)
+    headings = np.zeros((len(ids), p_max), np.float32)
+    valid = np.zeros((len(ids), p_max), bool)
+    for n, (_, others) in enumerate(views):
+        for k, (q, i) in enumerate(others):
+            people[n, k], headings[n, k], valid[n, k] = tracks[q][i, 1:], heading[q][i], True
+    centres = np.stack([tracks[pid][0, 1:] for pid in ids])
+    goals = np.stack([tracks[pid][len(path) - 1, 1:] for pid, (path, _) in zip(ids, views, strict=True)])
+    occupancy = jnp.asarray(occupancy, jnp.float32)
+    origin = jnp.asarray(origin_xy_m, jnp.float32)
+    images = np.asarray(
+        jax.jit(jax.vmap(lambda c, p, h, v, g: input_map(occupancy, resolution_m, origin, c, p, h, g, people_valid=v)))(
+            centres, people, headings, valid, goals
+        )
+    )
+
+    chains, used = [], []
+    skipped: dict[str, int] = {}
+    for n, (path, _) in enumerate(views):
+        walls = images[n] == grid.WALL
+        cells = _shortcut(_cells(path), walls)
         why = _feasible(cells, walls) if len(cells) >= min_cells else f"fewer than {min_cells} cells"
         if why:
             skipped[why] = skipped.get(why, 0) + 1
             continue
-        moves = np.asarray(path_moves(jnp.asarray(cells)))
-        starts = np.zeros((grid.GRID, grid.GRID), np.float32)
-        starts[cells[0, 0], cells[0, 1]] = 1.0
-        maps.append(image)
-        demos.append(Demonstrations(moves, starts, cells[-1].astype(np.int32), np.float32(1.0)))
-        used.append(pid)
-    report = {"tracks": len(ids), "used": len(used), "left_out": skipped, "ids": used}
-    if not demos:
-        empty = Demonstrations(
-            np.zeros((0, len(grid_planner.moves(8)), grid.GRID, grid.GRID), np.float32),
-            np.zeros((0, grid.GRID, grid.GRID), np.float32),
-            np.zeros((0, 2), np.int32),
-            np.zeros(0, np.float32),
-        )
-        return np.zeros((0, grid.GRID, grid.GRID), np.uint8), empty, report
-    stacked = jax.tree.map(lambda *a: np.stack(a), *demos)
-    return np.stack(maps), stacked, report
+        chains.append(cells)
+        used.append(n)
+    report = {"tracks": len(ids), "used": len(used), "left_out": skipped, "ids": [ids[n] for n in used]}
+    length = max((len(c) for c in chains), default=1)
+    padded = np.zeros((len(chains), length, 2), np.int32)
+    for n, c in enumerate(chains):
+        padded[n] = np.concatenate([c, np.repeat(c[-1:], length - len(c), axis=0)])  # a repeated cell is no move
+    moves = np.asarray(jax.vmap(path_moves)(padded)) if chains else np.zeros((0, K, grid.GRID, grid.GRID), np.float32)
+    starts = np.zeros((len(chains), grid.GRID, grid.GRID), np.float32)
+    starts[np.arange(len(chains)), padded[:, 0, 0], padded[:, 0, 1]] = 1.0
+    demos = Demonstrations(moves, starts, padded[:, -1], np.ones(len(chains), np.float32))
+    return images[used], demos, report
 
 
 def concatenate(parts):
