@@ -23,15 +23,15 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from data import DATA_DIR  # noqa: E402
-from evaluation import arena, arena_report  # noqa: E402
-from jaxsim.params import TIAGO_RADIUS_M  # noqa: E402
-from jaxsim.scenes.spec import load_scene  # noqa: E402
-from jaxsim.scenes.variant import sample_variants  # noqa: E402
-from planners import costmap  # noqa: E402
-from planners.baselines import BASELINES  # noqa: E402
-from planners.stack import METHODS, global_plan  # noqa: E402
 from socialnav.arena import DEFAULT_METHODS  # noqa: E402
+from socialnav.data import DATA_DIR  # noqa: E402
+from socialnav.evaluation import arena, arena_report  # noqa: E402
+from socialnav.jaxsim.params import TIAGO_RADIUS_M  # noqa: E402
+from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
+from socialnav.jaxsim.scenes.variant import sample_variants  # noqa: E402
+from socialnav.planners import costmap  # noqa: E402
+from socialnav.planners.baselines import BASELINES  # noqa: E402
+from socialnav.planners.stack import METHODS, global_plan  # noqa: E402
 
 
 def profile_scene(name: str, variants: int, methods) -> None:
@@ -83,7 +83,7 @@ def main() -> None:
     methods = list(DEFAULT_METHODS)
     predict = None
     if args.gscl_run is not None:
-        from models.inference import SocialCostModel
+        from socialnav.models.inference import SocialCostModel
 
         predict = SocialCostModel.load(args.gscl_run).function
         methods.append("gscl")

@@ -36,11 +36,11 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from jaxsim.scenes import env as env_lib  # noqa: E402
-from jaxsim.scenes.actor import rollout  # noqa: E402
-from jaxsim.scenes.spec import load_scene  # noqa: E402
-from jaxsim.scenes.variant import sample_variants  # noqa: E402
-from planners import actors  # noqa: E402
+from socialnav.jaxsim.scenes import env as env_lib  # noqa: E402
+from socialnav.jaxsim.scenes.actor import rollout  # noqa: E402
+from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
+from socialnav.jaxsim.scenes.variant import sample_variants  # noqa: E402
+from socialnav.planners import actors  # noqa: E402
 
 N_PEOPLE = 10
 RADIUS_M = 7.0

@@ -28,9 +28,9 @@ request_wide_vectors()
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from evaluation import warehouse  # noqa: E402
-from jaxsim.scenario import load_scenario  # noqa: E402
-from planners.tables import CausalTables  # noqa: E402
+from socialnav.evaluation import warehouse  # noqa: E402
+from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
+from socialnav.planners.tables import CausalTables  # noqa: E402
 
 
 def schedule_tables(scenario) -> CausalTables:

@@ -36,10 +36,10 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from models import dataset, train, unet  # noqa: E402
-from models.config import TrainConfig, make_model  # noqa: E402
-from models.quality import quality_table  # noqa: E402
-from models.steps import batch_sharding, compiled, initial_state  # noqa: E402
+from socialnav.models import dataset, train, unet  # noqa: E402
+from socialnav.models.config import TrainConfig, make_model  # noqa: E402
+from socialnav.models.quality import quality_table  # noqa: E402
+from socialnav.models.steps import batch_sharding, compiled, initial_state  # noqa: E402
 
 
 def _generate_in_new_process(cache_dir: str | None) -> float:

@@ -38,10 +38,10 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from models import dataset, grid  # noqa: E402
-from models.config import TrainConfig  # noqa: E402
-from models.steps import batch_sharding, compiled, initial_state  # noqa: E402
-from planners import irl, smooth_planner  # noqa: E402
+from socialnav.models import dataset, grid  # noqa: E402
+from socialnav.models.config import TrainConfig  # noqa: E402
+from socialnav.models.steps import batch_sharding, compiled, initial_state  # noqa: E402
+from socialnav.planners import irl, smooth_planner  # noqa: E402
 
 
 def _rate(fn, args, seconds: float) -> tuple[float, float]:

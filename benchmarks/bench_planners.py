@@ -28,8 +28,8 @@ import scipy.sparse as sp  # noqa: E402
 from scipy.sparse.csgraph import dijkstra  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from planners import casn, costmap, grid_planner, snape, snl  # noqa: E402
-from planners.scene import make_scene  # noqa: E402
+from socialnav.planners import casn, costmap, grid_planner, snape, snl  # noqa: E402
+from socialnav.planners.scene import make_scene  # noqa: E402
 
 RESOLUTION_M = 0.05
 

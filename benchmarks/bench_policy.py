@@ -28,11 +28,11 @@ sys.path.insert(0, str(ROOT))
 import jax  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from data import SCENES_DIR  # noqa: E402
-from jaxsim.scenes.spec import load_scene  # noqa: E402
-from planners import policy_training  # noqa: E402
-from planners.policy import PolicyConfig  # noqa: E402
-from planners.policy_social import SOCIAL_LAYERS  # noqa: E402
+from socialnav.data import SCENES_DIR  # noqa: E402
+from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
+from socialnav.planners import policy_training  # noqa: E402
+from socialnav.planners.policy import PolicyConfig  # noqa: E402
+from socialnav.planners.policy_social import SOCIAL_LAYERS  # noqa: E402
 
 PUBLISHED = (
     ("CrowdNav_HEIGHT (PPO, 2e8 steps in ~50 h; i9-13900K + RTX 4090)", 1_100),

@@ -39,13 +39,13 @@ request_wide_vectors()
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
-from common.machine import cpu_model  # noqa: E402
-from jaxsim import native  # noqa: E402
-from jaxsim.rollout import init_batch, run_samples, world_keys  # noqa: E402
-from jaxsim.route_follower import route_follower  # noqa: E402
-from jaxsim.scenario import load_scenario  # noqa: E402
-from jaxsim.world import build_world  # noqa: E402
-from planners.routes import shortest_path_plan  # noqa: E402
+from socialnav.common.machine import cpu_model  # noqa: E402
+from socialnav.jaxsim import native  # noqa: E402
+from socialnav.jaxsim.rollout import init_batch, run_samples, world_keys  # noqa: E402
+from socialnav.jaxsim.route_follower import route_follower  # noqa: E402
+from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
+from socialnav.jaxsim.world import build_world  # noqa: E402
+from socialnav.planners.routes import shortest_path_plan  # noqa: E402
 
 WARMUP_S = 200.0  # simulated seconds before timing: the workers have arrived
 

@@ -36,13 +36,13 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from jaxsim import robot as robot_lib  # noqa: E402
-from jaxsim import rollout, social_force  # noqa: E402
-from jaxsim import workers as workers_lib  # noqa: E402
-from jaxsim.route_follower import route_follower  # noqa: E402
-from jaxsim.scenario import load_scenario  # noqa: E402
-from jaxsim.world import build_world  # noqa: E402
-from planners.routes import shortest_path_plan  # noqa: E402
+from socialnav.jaxsim import robot as robot_lib  # noqa: E402
+from socialnav.jaxsim import rollout, social_force  # noqa: E402
+from socialnav.jaxsim import workers as workers_lib  # noqa: E402
+from socialnav.jaxsim.route_follower import route_follower  # noqa: E402
+from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
+from socialnav.jaxsim.world import build_world  # noqa: E402
+from socialnav.planners.routes import shortest_path_plan  # noqa: E402
 
 SAMPLES, EVERY = 10, 10  # one call: 100 steps
 

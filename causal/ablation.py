@@ -27,11 +27,11 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from causal import discover
-from causal.binning import Binning
-from causal.engine import discretized_variable, learn_mle
-from common import progress as progress_lib
-from common.atomic import write_atomic, write_text_atomic
+from socialnav.causal import discover
+from socialnav.causal.binning import Binning
+from socialnav.causal.engine import discretized_variable, learn_mle
+from socialnav.common import progress as progress_lib
+from socialnav.common.atomic import write_atomic, write_text_atomic
 
 DISTANCE_M = 60.0
 SPEED_MPS = 0.5
@@ -133,7 +133,7 @@ def run(
       series: obstacle probability -> its :class:`Series`.
       period_s: sampling period of the series.
     """
-    from causal import plots
+    from socialnav.causal import plots
 
     out = pathlib.Path(out_dir)
     results, structure = [], None

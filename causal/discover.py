@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from causal.variables import CONTEXTS, GROUND_TRUTH, VARIABLES, node_classification
-from common.atomic import write_text_atomic
+from socialnav.causal.variables import CONTEXTS, GROUND_TRUTH, VARIABLES, node_classification
+from socialnav.common.atomic import write_text_atomic
 
 TESTS = ("parcorr", "regression")
 

@@ -30,11 +30,11 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from causal.binning import Binning
-from causal.discover import Discovery
-from causal.extract import Datasets
-from causal.variables import CONTEXTS, VARIABLES
-from common.atomic import write_atomic, write_text_atomic
+from socialnav.causal.binning import Binning
+from socialnav.causal.discover import Discovery
+from socialnav.causal.extract import Datasets
+from socialnav.causal.variables import CONTEXTS, VARIABLES
+from socialnav.common.atomic import write_atomic, write_text_atomic
 
 CONTINUOUS = ("V", "L", "D")
 SMOOTHING = 1e-6
@@ -447,7 +447,7 @@ class CausalEngine:
           battery_pct_per_s: (V bins, 2) E[L | do(V), C] divided by the sampling period.
           speed_mps: (V bins,) mean speed in each bin; speed_edges_mps: (V bins + 1,).
         """
-        from common import progress as progress_lib
+        from socialnav.common import progress as progress_lib
 
         n_s = len(self.labels["S"])
         density = np.full((n_s, len(all_waypoints)), np.nan)

@@ -26,9 +26,9 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from causal.variables import VARIABLES
-from common import logschema
-from common.logschema import density_column
+from socialnav.causal.variables import VARIABLES
+from socialnav.common import logschema
+from socialnav.common.logschema import density_column
 
 # The log columns the causal variables come from (all in the schema: the contract test checks it).
 LOG_COLUMNS = ("world", "time_s", "slot", "robot_speed_mps", "battery_pct", "charging", "obstacle")

@@ -17,10 +17,10 @@ import time
 
 import numpy as np
 
-from causal import discover, extract, plots, simulator_graph
-from causal import engine as engine_lib
-from common.atomic import write_bytes_atomic, write_text_atomic
-from common.memory import available_bytes
+from socialnav.causal import discover, extract, plots, simulator_graph
+from socialnav.causal import engine as engine_lib
+from socialnav.common.atomic import write_bytes_atomic, write_text_atomic
+from socialnav.common.memory import available_bytes
 
 
 def write_tables(

@@ -9,9 +9,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Circle, FancyArrowPatch
 
-from causal.discover import Discovery
-from causal.variables import CONTEXTS, VARIABLES
-from common import figures
+from socialnav.causal.discover import Discovery
+from socialnav.causal.variables import CONTEXTS, VARIABLES
+from socialnav.common import figures
 
 # Fig. 8 layout: battery subgraph left, density subgraph right; contexts on the outside.
 LAYOUT = {

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from causal.variables import SYSTEM
+from socialnav.causal.variables import SYSTEM
 
 NODES = ("V", "L", "B", "C", "O", "D", "W", "S")
 STEP_S = 0.1  # the warehouse simulator's step (data/warehouse/params.json dt_s; tested equal)

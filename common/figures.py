@@ -8,7 +8,7 @@ import pathlib
 
 from matplotlib.figure import Figure
 
-from common.atomic import write_atomic
+from socialnav.common.atomic import write_atomic
 
 
 def figure(**kwargs) -> Figure:

@@ -50,8 +50,8 @@ import shutil
 import sys
 from collections.abc import Callable, Iterable, Iterator, Sequence
 
-from common.names import check_name
-from common.runlock import LOCK_FILE, RunFolderError
+from socialnav.common.names import check_name
+from socialnav.common.runlock import LOCK_FILE, RunFolderError
 
 MANIFEST = ".socialnav-run.json"
 MANIFEST_FORMAT = "socialnav-run/1"
@@ -127,7 +127,7 @@ def read_manifest(folder: str | pathlib.Path) -> Manifest | None:
 
 def write_manifest(folder: pathlib.Path, manifest: Manifest) -> None:
     """Write ``folder``'s manifest atomically (a temporary beside it, then a rename)."""
-    from common.atomic import write_text_atomic
+    from socialnav.common.atomic import write_text_atomic
 
     write_text_atomic(pathlib.Path(folder) / MANIFEST, manifest.to_json())
 

@@ -29,8 +29,8 @@ import math
 import pathlib
 import tomllib
 
-from jaxsim.scenes.robot import RobotParams
-from planners import stack
+from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.planners import stack
 
 # The layer sections: their names are LayerParams' fields.
 LAYER_SECTIONS = tuple(f.name for f in dataclasses.fields(stack.LayerParams))

@@ -10,10 +10,10 @@ import pathlib
 import numpy as np
 import pandas as pd
 
-from common import figures
-from common.atomic import write_atomic
-from jaxsim.params import TIAGO_RADIUS_M
-from jaxsim.scenes.spec import SceneSpec
+from socialnav.common import figures
+from socialnav.common.atomic import write_atomic
+from socialnav.jaxsim.params import TIAGO_RADIUS_M
+from socialnav.jaxsim.scenes.spec import SceneSpec
 
 
 def _people_columns(frame: pd.DataFrame) -> int:

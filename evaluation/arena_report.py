@@ -16,14 +16,14 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from common.intervals import wilson
-from evaluation import arena, nav_metrics
-from evaluation.arena_params import ArenaParams
-from jaxsim.scenes.actor import Actor
-from jaxsim.scenes.spec import SceneSpec, mirror
-from jaxsim.scenes.variant import Variant, sample_variants
-from planners.baselines import BASELINES
-from planners.stack import METHODS
+from socialnav.common.intervals import wilson
+from socialnav.evaluation import arena, nav_metrics
+from socialnav.evaluation.arena_params import ArenaParams
+from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
+from socialnav.jaxsim.scenes.variant import Variant, sample_variants
+from socialnav.planners.baselines import BASELINES
+from socialnav.planners.stack import METHODS
 
 SUMMARY_MEANS = (
     "collisions",

@@ -34,9 +34,9 @@ import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 
-from evaluation import statistics
-from evaluation.outcomes import OUTCOME_NAMES, OUTCOMES, SUCCESS
-from evaluation.statistics import mean_ci
+from socialnav.evaluation import statistics
+from socialnav.evaluation.outcomes import OUTCOME_NAMES, OUTCOMES, SUCCESS
+from socialnav.evaluation.statistics import mean_ci
 
 # Hall's proxemic zones (outer radius, m), as in seed 000's Fig. 10.
 HALL_ZONES_M = {"intimate": 0.5, "personal": 1.2, "social": 3.6, "public": 7.6}

@@ -74,8 +74,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from evaluation.metrics import collision_encounters
-from planners.scene import wrap_angle
+from socialnav.evaluation.metrics import collision_encounters
+from socialnav.planners.scene import wrap_angle
 
 VERSION = "nav-metrics 2"
 ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}

@@ -145,7 +145,7 @@ def directions(episodes: pd.DataFrame) -> pd.DataFrame:
     difference, ``reproduced`` when our interval holds 0,
     else ``differs``.
     """
-    from evaluation.arena_report import mean_interval
+    from socialnav.evaluation.arena_report import mean_interval
 
     paper = {(src, scene, method, metric): value for src, scene, method, metric, value in PAPER_ROWS}
     have = set(zip(episodes["scene"], episodes["method"], strict=True))

@@ -6,9 +6,9 @@ import pathlib
 
 import numpy as np
 
-from common import figures
-from evaluation import metrics
-from jaxsim import viz
+from socialnav.common import figures
+from socialnav.evaluation import metrics
+from socialnav.jaxsim import viz
 
 METHOD_COLOURS = {"baseline": "#1f77b4", "causal": "#ff7f0e"}
 ZONE_COLOURS = {"intimate": "#f4a3a3", "personal": "#fbe3a0", "social": "#b9d3f0", "public": "#c6e8c1"}

@@ -64,18 +64,18 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from common.pytree import select
-from evaluation.metrics import collision_encounters
-from evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
-from jaxsim import robot as robot_lib
-from jaxsim import rollout
-from jaxsim.actor import Driver
-from jaxsim.params import TIAGO_RADIUS_M, SimParams
-from jaxsim.rng import hash_uniform16, step_uniforms, world_seed_u32
-from jaxsim.state import SimState
-from jaxsim.step import actor_key, crowd_step, init_state
-from jaxsim.world import World
-from planners.waypoint import MIN_BATTERY_PCT
+from socialnav.common.pytree import select
+from socialnav.evaluation.metrics import collision_encounters
+from socialnav.evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
+from socialnav.jaxsim import robot as robot_lib
+from socialnav.jaxsim import rollout
+from socialnav.jaxsim.actor import Driver
+from socialnav.jaxsim.params import TIAGO_RADIUS_M, SimParams
+from socialnav.jaxsim.rng import hash_uniform16, step_uniforms, world_seed_u32
+from socialnav.jaxsim.state import SimState
+from socialnav.jaxsim.step import actor_key, crowd_step, init_state
+from socialnav.jaxsim.world import World
+from socialnav.planners.waypoint import MIN_BATTERY_PCT
 
 # Stream constant that separates the per-task obstacle draws from the per-step ones.
 _OBSTACLE_STREAM = np.uint32(0x5BD1E995)

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
 
-from evaluation.outcomes import OUTCOME_NAMES, SUCCESS
+from socialnav.evaluation.outcomes import OUTCOME_NAMES, SUCCESS
 
 
 def mean_ci(values, confidence: float = 0.95) -> tuple[float, float, float]:

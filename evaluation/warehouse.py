@@ -4,9 +4,9 @@
 ``replicas`` independent replicas with both methods, the same keys for both (common random
 numbers), and returns one row per task; :func:`write_report` writes the tables, tests and figures.
 
-    from jaxsim.scenario import load_scenario
-    from evaluation import warehouse
-    from planners.tables import CausalTables
+    from socialnav.jaxsim.scenario import load_scenario
+    from socialnav.evaluation import warehouse
+    from socialnav.planners.tables import CausalTables
     scenario = load_scenario()
     tables = CausalTables.load("runs/warehouse/causal/engine_tables.npz")
     result = warehouse.run_evaluation(scenario, tables, replicas=32)
@@ -23,19 +23,19 @@ import time
 import numpy as np
 import pandas as pd
 
-from common import progress as progress_lib
-from common.atomic import write_atomic, write_bytes_atomic, write_text_atomic
-from evaluation import metrics
-from evaluation import protocol as ex
-from evaluation.outcomes import OUTCOMES
-from jaxsim.actor import Driver
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import Scenario
-from jaxsim.world import RobotPlan, World, build_world
-from planners.routes import shortest_path_plan
-from planners.tables import CausalTables
-from planners.warehouse_actors import causal_planner
-from planners.waypoint import MIN_BATTERY_PCT, CausalWeights, causal_plan
+from socialnav.common import progress as progress_lib
+from socialnav.common.atomic import write_atomic, write_bytes_atomic, write_text_atomic
+from socialnav.evaluation import metrics
+from socialnav.evaluation import protocol as ex
+from socialnav.evaluation.outcomes import OUTCOMES
+from socialnav.jaxsim.actor import Driver
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import Scenario
+from socialnav.jaxsim.world import RobotPlan, World, build_world
+from socialnav.planners.routes import shortest_path_plan
+from socialnav.planners.tables import CausalTables
+from socialnav.planners.warehouse_actors import causal_planner
+from socialnav.planners.waypoint import MIN_BATTERY_PCT, CausalWeights, causal_plan
 
 METHODS = ("baseline", "causal")
 
@@ -251,7 +251,7 @@ def write_report(result: EvaluationResult, scenario: Scenario, out_dir: str | pa
     Every file is written to a temporary name and renamed, so an interrupted report leaves no
     half-written file.
     """
-    from evaluation import plots
+    from socialnav.evaluation import plots
 
     out = pathlib.Path(out_dir)
     table = per_slot_table(result)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxsim.params import SimParams
+from socialnav.jaxsim.params import SimParams
 
 
 def battery_change_pct(params: SimParams, speed_mps: jax.Array, charging: jax.Array, obstacle: jax.Array) -> jax.Array:

@@ -24,9 +24,9 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxsim import social_force as sf
-from jaxsim.params import SimParams
-from jaxsim.world import Grid
+from socialnav.jaxsim import social_force as sf
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.world import Grid
 
 # Minimum clearance kept from wall surfaces by the hard wall constraint (m).
 WALL_CLEARANCE_M = 0.1

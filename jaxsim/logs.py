@@ -32,14 +32,14 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from common import logschema
-from common import progress as progress_lib
-from common.atomic import atomic_path, write_text_atomic
-from common.logschema import LOG_FILE, META_FILE, density_column, distance_column, position_columns
-from jaxsim import native
-from jaxsim.actor import Driver
-from jaxsim.scenario import Scenario
-from jaxsim.state import ACTIVITY, WALKING
+from socialnav.common import logschema
+from socialnav.common import progress as progress_lib
+from socialnav.common.atomic import atomic_path, write_text_atomic
+from socialnav.common.logschema import LOG_FILE, META_FILE, density_column, distance_column, position_columns
+from socialnav.jaxsim import native
+from socialnav.jaxsim.actor import Driver
+from socialnav.jaxsim.scenario import Scenario
+from socialnav.jaxsim.state import ACTIVITY, WALKING
 
 # Device memory for one time chunk of records (all worlds); bounds the host memory too.
 CHUNK_BUDGET_BYTES = 256 * 2**20
@@ -109,7 +109,7 @@ def estimate_memory_bytes(scenario: Scenario, n_worlds: int, log_positions: bool
     one chunk of records on the device and on the host (at least one sample per world), and the
     social force's pair arrays of one chunk of worlds (N/2 x N floats, about ten live at once).
     Measured: 3.2 kB of state per world for 50 workers."""
-    from jaxsim.rollout import DEFAULT_WORLD_CHUNK
+    from socialnav.jaxsim.rollout import DEFAULT_WORLD_CHUNK
 
     n = scenario.params.n_workers
     state = 64 * n + 400
@@ -172,7 +172,7 @@ def reproducibility() -> dict:
     import jax
     import jaxlib
 
-    from common.machine import cpu_model
+    from socialnav.common.machine import cpu_model
 
     return {
         "independent_of": ["batch size", "shards", "number of host devices"],
@@ -241,8 +241,8 @@ def simulate_to_parquet(
       ValueError: on inconsistent sizes, before anything is written.
     """
 
-    from jaxsim import rollout
-    from jaxsim import world as world_lib
+    from socialnav.jaxsim import rollout
+    from socialnav.jaxsim import world as world_lib
 
     p = scenario.params
     every = sample_interval_s / p.dt_s

@@ -23,8 +23,8 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.crowd import wall_constraint
-from jaxsim.world import Grid
+from socialnav.jaxsim.crowd import wall_constraint
+from socialnav.jaxsim.world import Grid
 
 _EPS = 1e-5
 

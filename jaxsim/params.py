@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 from flax import struct
 
-from common.pytree import stack
+from socialnav.common.pytree import stack
 
 SECTION_PREFIX = {"sim": "", "workers": "worker_", "robot": "robot_", "battery": "battery_"}
 # Fields that shape the compiled program; every other field is a dynamic float.

@@ -35,11 +35,11 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from common.pytree import select
-from jaxsim import battery
-from jaxsim.params import SimParams
-from jaxsim.state import CHARGING, TASK, TO_CHARGER, RobotState
-from jaxsim.world import World
+from socialnav.common.pytree import select
+from socialnav.jaxsim import battery
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.state import CHARGING, TASK, TO_CHARGER, RobotState
+from socialnav.jaxsim.world import World
 
 
 @struct.dataclass

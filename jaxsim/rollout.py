@@ -35,14 +35,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from common.pytree import put, take
-from common.pytree import to_numpy as _to_numpy
-from jaxsim.actor import Driver
-from jaxsim.params import SimParams
-from jaxsim.rng import world_seed_u32
-from jaxsim.state import Record, SimState
-from jaxsim.step import init_state, measure, step
-from jaxsim.world import World
+from socialnav.common.pytree import put, take
+from socialnav.common.pytree import to_numpy as _to_numpy
+from socialnav.jaxsim.actor import Driver
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.rng import world_seed_u32
+from socialnav.jaxsim.state import Record, SimState
+from socialnav.jaxsim.step import init_state, measure, step
+from socialnav.jaxsim.world import World
 
 DEFAULT_WORLD_CHUNK = 64
 # The fewest worlds vectorised together (see map_worlds: one alone compiles differently).

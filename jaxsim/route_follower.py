@@ -17,9 +17,9 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.actor import Actor, Driver
-from jaxsim.robot import RobotCommand, WarehouseObservation
-from jaxsim.world import RobotPlan, World
+from socialnav.jaxsim.actor import Actor, Driver
+from socialnav.jaxsim.robot import RobotCommand, WarehouseObservation
+from socialnav.jaxsim.world import RobotPlan, World
 
 
 @struct.dataclass

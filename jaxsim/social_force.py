@@ -18,8 +18,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxsim import native
-from jaxsim.params import SimParams
+from socialnav.jaxsim import native
+from socialnav.jaxsim.params import SimParams
 
 _EPS = 1e-6
 

@@ -18,13 +18,13 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from jaxsim import rng
-from jaxsim import robot as robot_lib
-from jaxsim import workers as workers_lib
-from jaxsim.actor import Driver
-from jaxsim.params import SimParams
-from jaxsim.state import Record, RobotState, SimState, WorkerState
-from jaxsim.world import World
+from socialnav.jaxsim import rng
+from socialnav.jaxsim import robot as robot_lib
+from socialnav.jaxsim import workers as workers_lib
+from socialnav.jaxsim.actor import Driver
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.state import Record, RobotState, SimState, WorkerState
+from socialnav.jaxsim.world import World
 
 # Stream constant of the actors' keys (apart from the uniforms of jaxsim.rng).
 ACTOR_STREAM = 0x61637472

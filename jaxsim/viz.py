@@ -9,9 +9,9 @@ import numpy as np
 from matplotlib.collections import LineCollection, PatchCollection
 from matplotlib.patches import Circle, Rectangle
 
-from common import figures
-from jaxsim.scenario import Scenario
-from jaxsim.state import ACTIVITY, WALKING
+from socialnav.common import figures
+from socialnav.jaxsim.scenario import Scenario
+from socialnav.jaxsim.state import ACTIVITY, WALKING
 
 BOX_COLOURS = {"wall": "#333333", "shelf": "#8c6d46", "table": "#b08850", "tray": "#3a7d44"}
 

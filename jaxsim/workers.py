@@ -24,11 +24,11 @@ import jax
 import jax.numpy as jnp
 import jax.scipy.special as jss
 
-from jaxsim import crowd
-from jaxsim import social_force as sf
-from jaxsim.params import SimParams
-from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING, WorkerState
-from jaxsim.world import World
+from socialnav.jaxsim import crowd
+from socialnav.jaxsim import social_force as sf
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING, WorkerState
+from socialnav.jaxsim.world import World
 
 # Share of the destination disc's radius within which a worker's activity spot is drawn.
 SPOT_RADIUS_FRACTION = 0.7

@@ -15,8 +15,8 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from jaxsim import geometry, graph
-from jaxsim.scenario import Scenario
+from socialnav.jaxsim import geometry, graph
+from socialnav.jaxsim.scenario import Scenario
 
 # Area simulated around the walls: the building plus the open parking lot north of its door.
 MARGIN_M = 1.0

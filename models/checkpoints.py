@@ -15,9 +15,9 @@ import pathlib
 import jax
 import numpy as np
 
-from common.atomic import write_text_atomic
-from models.config import TrainConfig
-from models.steps import compiled, initial_state
+from socialnav.common.atomic import write_text_atomic
+from socialnav.models.config import TrainConfig
+from socialnav.models.steps import compiled, initial_state
 
 
 def write_metrics(out: pathlib.Path, meta: dict) -> None:

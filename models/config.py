@@ -13,7 +13,7 @@ from typing import Any
 import optax
 from flax import nnx
 
-from models import dataset, unet
+from socialnav.models import dataset, unet
 
 # Settings added after runs were saved, with the value those runs used.
 ADDED_LATER = {

@@ -16,9 +16,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from common.atomic import write_bytes_atomic
-from models import grid
-from models.families import COMPOSITE, FAMILIES, PAIRED_WITH, composite_contrast
+from socialnav.common.atomic import write_bytes_atomic
+from socialnav.models import grid
+from socialnav.models.families import COMPOSITE, FAMILIES, PAIRED_WITH, composite_contrast
 
 # Paper's sample counts per family (Sec. 4.1; the hallway's 5000 split over its three kinds).
 PAPER_COUNTS = {

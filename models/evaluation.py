@@ -9,14 +9,14 @@ import pathlib
 
 import numpy as np
 
-from common.atomic import write_text_atomic
-from models import plots, rules
-from models.checkpoints import restore
-from models.inference import rotation_averaged
-from models.quality import by_family as mse_by_family
-from models.quality import meets_quality, quality_table
-from models.steps import compiled, per_sample_mse
-from models.streams import test_data
+from socialnav.common.atomic import write_text_atomic
+from socialnav.models import plots, rules
+from socialnav.models.checkpoints import restore
+from socialnav.models.inference import rotation_averaged
+from socialnav.models.quality import by_family as mse_by_family
+from socialnav.models.quality import meets_quality, quality_table
+from socialnav.models.steps import compiled, per_sample_mse
+from socialnav.models.streams import test_data
 
 
 def _test_errors(config, params, batch_stats):

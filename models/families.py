@@ -53,8 +53,8 @@ import functools
 import jax
 import jax.numpy as jnp
 
-from models import grid
-from models import social_costs as sc
+from socialnav.models import grid
+from socialnav.models import social_costs as sc
 
 WALL_LENGTH_M = 24.0  # long enough to cross the 16 m image from anywhere inside it
 # Ranges widened beyond the first generator's (in brackets), still short of the held-out rule

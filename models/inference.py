@@ -23,8 +23,8 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from data import DATA_DIR
-from models import grid
+from socialnav.data import DATA_DIR
+from socialnav.models import grid
 
 OCCUPIED_ABOVE = 0.6  # the paper's threshold on occupancy values
 
@@ -165,7 +165,7 @@ def rotation_averaged(predict, rotations: int = 4):
 @functools.lru_cache(maxsize=8)
 def _apply_for(graphdef):
     """``(weights, maps) -> costs`` over :func:`models.steps.make_predict`, one per structure."""
-    from models.steps import make_predict
+    from socialnav.models.steps import make_predict
 
     predict = make_predict(graphdef)
     return lambda weights, maps: predict(*weights, maps)
@@ -215,7 +215,7 @@ class SocialCostModel:
     """
 
     def __init__(self, graphdef, params, batch_stats, config=None):
-        from models.steps import make_predict
+        from socialnav.models.steps import make_predict
 
         self._predict = make_predict(graphdef)  # jitted, batch norm in eval mode
         self._graphdef = graphdef
@@ -231,8 +231,8 @@ class SocialCostModel:
         Raises:
           ValueError: ``path`` is neither (:func:`model_problem` says why).
         """
-        from models.checkpoints import load_config, restore
-        from models.steps import compiled, initial_state
+        from socialnav.models.checkpoints import load_config, restore
+        from socialnav.models.steps import compiled, initial_state
 
         path = DEFAULT_MODEL if path is None else pathlib.Path(path)
         problem = model_problem(path)
@@ -265,7 +265,7 @@ class SocialCostModel:
         made and what it reached), each atomically; :meth:`load` reads the folder back."""
         from flax import serialization
 
-        from common.atomic import write_bytes_atomic, write_text_atomic
+        from socialnav.common.atomic import write_bytes_atomic, write_text_atomic
 
         folder = pathlib.Path(folder)
         folder.mkdir(parents=True, exist_ok=True)

@@ -6,9 +6,9 @@ import pathlib
 
 import numpy as np
 
-from common import figures
-from common.atomic import write_atomic
-from models import grid
+from socialnav.common import figures
+from socialnav.common.atomic import write_atomic
+from socialnav.models import grid
 
 _CODE_COLOURS = {
     grid.FREE: (1.0, 1.0, 1.0),

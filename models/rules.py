@@ -56,10 +56,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from common.intervals import wilson
-from models import grid
-from models import social_costs as sc
-from models.families import QUEUE_BODY_M
+from socialnav.common.intervals import wilson
+from socialnav.models import grid
+from socialnav.models import social_costs as sc
+from socialnav.models.families import QUEUE_BODY_M
 
 PASS_FRACTION = 0.5  # a case passes when the model's contrast is >= this share of the expected one
 MIN_EXPECTED_CONTRAST = 0.1  # every case's expected contrast is at least this (checked when built)
@@ -770,9 +770,9 @@ def table(report: dict) -> str:
 def plot(cases, report: dict, path):
     """A PNG with one row per (scene, rule): its first failing case (else its first case), input /
     expected / prediction of map 0 and of map 1, region A outlined on map 0 and region B on map 1."""
-    from common import figures
-    from common.atomic import write_atomic
-    from models.plots import input_rgb
+    from socialnav.common import figures
+    from socialnav.common.atomic import write_atomic
+    from socialnav.models.plots import input_rgb
 
     keys = list(report["by_check"])
     fig = figures.figure(figsize=(9.5, 1.6 * len(keys)))

@@ -23,7 +23,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from models.grid import CELL_X_M, CELL_Y_M
+from socialnav.models.grid import CELL_X_M, CELL_Y_M
 
 PROXEMIC_SIGMA_M = 0.5
 FRONT_STRETCH_PER_MPS = 2.0

@@ -15,7 +15,7 @@ import numpy as np
 import optax
 from flax import nnx
 
-from models.config import TrainConfig, learning_rate_schedule, make_model
+from socialnav.models.config import TrainConfig, learning_rate_schedule, make_model
 
 
 def batch_sharding(batch_size: int):

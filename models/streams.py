@@ -14,8 +14,8 @@ import functools
 import jax
 import numpy as np
 
-from models import dataset
-from models.config import TrainConfig
+from socialnav.models import dataset
+from socialnav.models.config import TrainConfig
 
 
 def _stream_key(seed: int, stream: str, index: int = 0) -> jax.Array:

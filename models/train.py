@@ -27,14 +27,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from common import progress as progress_lib
-from common.atomic import write_text_atomic
-from models import dataset, rules
-from models.checkpoints import check_run_folder, checkpoint_manager, host, restore_state, write_metrics
-from models.config import TrainConfig, learning_rate_schedule
-from models.quality import by_family, meets_quality, trivial_baselines
-from models.steps import batch_sharding, compiled, initial_state, per_sample_mse
-from models.streams import demonstration_key, epoch_data, test_data
+from socialnav.common import progress as progress_lib
+from socialnav.common.atomic import write_text_atomic
+from socialnav.models import dataset, rules
+from socialnav.models.checkpoints import check_run_folder, checkpoint_manager, host, restore_state, write_metrics
+from socialnav.models.config import TrainConfig, learning_rate_schedule
+from socialnav.models.quality import by_family, meets_quality, trivial_baselines
+from socialnav.models.steps import batch_sharding, compiled, initial_state, per_sample_mse
+from socialnav.models.streams import demonstration_key, epoch_data, test_data
 
 RULE_SCENES = 100  # scenes of each kind of the rule suite checked at every epoch's end
 
@@ -69,7 +69,7 @@ def train(
     if (objective is None) != (config.objective == "maps"):
         raise ValueError(
             f"objective: a {config.objective!r} run needs "
-            + ("planners.irl.PathObjective.of(config)" if objective is None else "no objective")
+            + ("socialnav.planners.irl.PathObjective.of(config)" if objective is None else "no objective")
         )
     data_sharding, replicated = batch_sharding(config.batch_size)  # a bad batch size fails before any file
     out = pathlib.Path(out)

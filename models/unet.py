@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from models import grid
+from socialnav.models import grid
 
 PAPER_FEATURES = (32, 64, 128, 256)
 CPU_FEATURES = (16, 32, 64, 128)

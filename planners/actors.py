@@ -22,11 +22,11 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from jaxsim.scenes import world as world_lib
-from jaxsim.scenes.actor import Actor
-from jaxsim.scenes.env import Env, Observation
-from planners import casn, costmap, gscl_layer, stack
-from planners.scene import Scene
+from socialnav.jaxsim.scenes import world as world_lib
+from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.env import Env, Observation
+from socialnav.planners import casn, costmap, gscl_layer, stack
+from socialnav.planners.scene import Scene
 
 
 @struct.dataclass

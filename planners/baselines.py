@@ -11,8 +11,8 @@ import dataclasses
 from collections.abc import Callable
 from typing import Any
 
-from jaxsim.scenes.env import Env
-from planners import actors, costmap, dwa, orca_robot, reactive, social_force_robot
+from socialnav.jaxsim.scenes.env import Env
+from socialnav.planners import actors, costmap, dwa, orca_robot, reactive, social_force_robot
 
 
 @dataclasses.dataclass(frozen=True)

@@ -30,9 +30,9 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.scenes.env import Observation
-from planners import reactive
-from planners.scene import wrap_angle
+from socialnav.jaxsim.scenes.env import Observation
+from socialnav.planners import reactive
+from socialnav.planners.scene import wrap_angle
 
 
 @struct.dataclass

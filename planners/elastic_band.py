@@ -39,7 +39,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from planners.snape import SNAPEParams, person_gaussian
+from socialnav.planners.snape import SNAPEParams, person_gaussian
 
 
 @struct.dataclass

@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from planners.costmap import GridSpec, navfn_traversal, weighted_traversal
+from socialnav.planners.costmap import GridSpec, navfn_traversal, weighted_traversal
 
 MOVES_8 = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 MOVES_4 = ((-1, 0), (0, -1), (0, 1), (1, 0))

@@ -24,10 +24,10 @@ from collections.abc import Callable
 import jax
 import jax.numpy as jnp
 
-from models import grid
-from models.inference import input_map
-from planners.costmap import MAX_GRADED, GridSpec
-from planners.scene import Scene
+from socialnav.models import grid
+from socialnav.models.inference import input_map
+from socialnav.planners.costmap import MAX_GRADED, GridSpec
+from socialnav.planners.scene import Scene
 
 
 def window_input(occupancy, spec: GridSpec, scene: Scene, robot_frame: bool = False):

@@ -43,10 +43,10 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from models import grid
-from models.config import PATH_TEMPERATURE
-from planners import grid_planner, smooth_planner
-from planners.costmap import MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
+from socialnav.models import grid
+from socialnav.models.config import PATH_TEMPERATURE
+from socialnav.planners import grid_planner, smooth_planner
+from socialnav.planners.costmap import MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
 
 CONNECTIVITY = 8
 K = CONNECTIVITY

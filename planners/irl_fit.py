@@ -17,10 +17,10 @@ import numpy as np
 import optax
 from flax import nnx
 
-from common import progress as progress_lib
-from models.config import TrainConfig, make_model
-from models.inference import SocialCostModel
-from planners.irl import Demonstrations, PathObjective
+from socialnav.common import progress as progress_lib
+from socialnav.models.config import TrainConfig, make_model
+from socialnav.models.inference import SocialCostModel
+from socialnav.planners.irl import Demonstrations, PathObjective
 
 
 def fit_demonstrations(
@@ -88,8 +88,8 @@ def fit_demonstrations(
 def demonstrations_figure(model: SocialCostModel, maps: np.ndarray, demos: Demonstrations, path, count: int = 6):
     """A PNG of ``count`` demonstrations (evenly spread over the set): each window's input map and
     the learnt costs with the demonstrated cells over them."""
-    from common import figures
-    from models.plots import input_rgb
+    from socialnav.common import figures
+    from socialnav.models.plots import input_rgb
 
     pick = np.unique(np.linspace(0, len(maps) - 1, min(count, len(maps))).astype(int))
     costs = np.asarray(model(maps[pick]))

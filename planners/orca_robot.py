@@ -23,9 +23,9 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim import orca
-from jaxsim.scenes.env import Observation
-from planners import reactive
+from socialnav.jaxsim import orca
+from socialnav.jaxsim.scenes.env import Observation
+from socialnav.planners import reactive
 
 
 @struct.dataclass

@@ -18,10 +18,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from common import figures
-from jaxsim.params import TIAGO_RADIUS_M
-from planners import casn, costmap, grid_planner, snape, snl
-from planners.scene import Scene, make_scene
+from socialnav.common import figures
+from socialnav.jaxsim.params import TIAGO_RADIUS_M
+from socialnav.planners import casn, costmap, grid_planner, snape, snl
+from socialnav.planners.scene import Scene, make_scene
 
 SPEC = costmap.GridSpec(height=80, width=120, resolution_m=0.1, origin_x_m=-6.0, origin_y_m=-4.0)
 ROBOT_RADIUS_M = TIAGO_RADIUS_M  # the inscribed radius of the obstacle layer
@@ -115,7 +115,7 @@ def layer_functions(gscl_predict: Callable | None = None) -> dict[str, tuple[Cal
         "SNAPE map (Dijkstra)": (lambda s, occ: snape.snape_layer(s, x, y), "weighted"),
     }
     if gscl_predict is not None:
-        from planners.gscl_layer import gscl_layer
+        from socialnav.planners.gscl_layer import gscl_layer
 
         out["GSCL"] = (lambda s, occ: gscl_layer(gscl_predict, occ, SPEC, s), "navfn")
     return out

@@ -36,12 +36,12 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.scenes.actor import Actor
-from jaxsim.scenes.env import Env, Observation
-from jaxsim.scenes.robot import RobotParams
-from models import policy_net
-from planners import costmap, grid_planner, policy_social
-from planners.policy_social import SOCIAL_LAYERS, SocialState
+from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.env import Env, Observation
+from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.models import policy_net
+from socialnav.planners import costmap, grid_planner, policy_social
+from socialnav.planners.policy_social import SOCIAL_LAYERS, SocialState
 
 
 @dataclasses.dataclass(frozen=True)

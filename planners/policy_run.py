@@ -19,10 +19,10 @@ import pathlib
 import jax
 import numpy as np
 
-from common.atomic import write_text_atomic
-from planners import policy as policy_lib
-from planners import policy_social
-from planners.policy_training import PPOConfig, TrainState
+from socialnav.common.atomic import write_text_atomic
+from socialnav.planners import policy as policy_lib
+from socialnav.planners import policy_social
+from socialnav.planners.policy_training import PPOConfig, TrainState
 
 CONFIG = "config.json"
 CHECKPOINTS = "checkpoints"
@@ -115,7 +115,7 @@ def load_weights(out) -> tuple[PPOConfig, object, object, int]:
     """``(config, graphdef, weights, update)`` of a run's newest checkpoint (the network only)."""
     import orbax.checkpoint as ocp
 
-    from models import policy_net
+    from socialnav.models import policy_net
 
     out = pathlib.Path(out)
     config, n_features = read_config(out)
@@ -187,7 +187,7 @@ def plot_curve(history: list[dict], path: pathlib.Path) -> pathlib.Path:
     """The training curve: the mean return and the goal, social success and person-contact rates
     of the episodes that ended in each update, against environment steps (a history from before
     social success was recorded draws no social line)."""
-    from common import figures
+    from socialnav.common import figures
 
     fig = figures.figure(figsize=(9, 3.4))
     steps = np.array([h["env_steps"] for h in history], float) / 1e6
@@ -222,8 +222,8 @@ def train(
     """
     import time
 
-    from common import progress as progress_lib
-    from planners.policy_training import Trainer
+    from socialnav.common import progress as progress_lib
+    from socialnav.planners.policy_training import Trainer
 
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -30,10 +30,10 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.scenes.env import Observation
-from models import grid as gscl_grid
-from planners import casn, costmap, gscl_layer, snl, stack
-from planners.scene import Scene
+from socialnav.jaxsim.scenes.env import Observation
+from socialnav.models import grid as gscl_grid
+from socialnav.planners import casn, costmap, gscl_layer, snl, stack
+from socialnav.planners.scene import Scene
 
 SOCIAL_LAYERS = ("none", "snl_small", "snl_large", "snl_matched", "casn", "gscl")
 
@@ -114,7 +114,7 @@ def load_gscl(run) -> tuple[Callable, object]:
     """``(apply, weights)`` of a GSCL model: a training run's latest checkpoint or an exported
     model (``apply(weights, maps)``: :attr:`models.inference.SocialCostModel.apply`); ``ValueError``
     naming the folder otherwise."""
-    from models.inference import SocialCostModel
+    from socialnav.models.inference import SocialCostModel
 
     model = SocialCostModel.load(run)
     return model.apply, model.weights

@@ -40,13 +40,13 @@ import numpy as np
 import optax
 from flax import struct
 
-from jaxsim.scenes import env as env_lib
-from jaxsim.scenes import rule_monitor
-from jaxsim.scenes.spec import SceneSpec
-from jaxsim.scenes.variant import padded_slots, sample_variants
-from models import policy_net
-from planners import costmap, policy_social
-from planners import policy as policy_lib
+from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes import rule_monitor
+from socialnav.jaxsim.scenes.spec import SceneSpec
+from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
+from socialnav.models import policy_net
+from socialnav.planners import costmap, policy_social
+from socialnav.planners import policy as policy_lib
 
 
 @dataclasses.dataclass(frozen=True)
@@ -519,7 +519,7 @@ def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int =
 
 
 def _episode_returns(env, actor, params, variants, fields, keys, grid, progress_weight):
-    from jaxsim.scenes.actor import rollout
+    from socialnav.jaxsim.scenes.actor import rollout
 
     @jax.jit
     def run(variants, fields, keys):

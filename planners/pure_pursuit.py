@@ -12,7 +12,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from planners.scene import wrap_angle
+from socialnav.planners.scene import wrap_angle
 
 
 @struct.dataclass

@@ -24,11 +24,11 @@ from typing import Any
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.scenes.actor import Actor
-from jaxsim.scenes.env import Observation
-from jaxsim.scenes.robot import RobotParams
-from planners import actors, costmap, pure_pursuit, stack
-from planners.scene import wrap_angle
+from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.env import Observation
+from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.planners import actors, costmap, pure_pursuit, stack
+from socialnav.planners.scene import wrap_angle
 
 GUIDES = ("path", "goal")
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from jaxsim import graph
-from jaxsim.scenario import Scenario
-from jaxsim.world import RobotPlan
+from socialnav.jaxsim import graph
+from socialnav.jaxsim.scenario import Scenario
+from socialnav.jaxsim.world import RobotPlan
 
 UNREACHABLE = graph.UNREACHABLE
 

@@ -31,8 +31,8 @@ import math
 import jax
 import jax.numpy as jnp
 
-from planners.costmap import INSCRIBED, NAVFN_FACTOR, NAVFN_NEUTRAL, GridSpec
-from planners.grid_planner import move_costs, moves
+from socialnav.planners.costmap import INSCRIBED, NAVFN_FACTOR, NAVFN_NEUTRAL, GridSpec
+from socialnav.planners.grid_planner import move_costs, moves
 
 BLOCKED = 1e7  # cost per metre of an impassable cell in the smooth planner
 

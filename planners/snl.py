@@ -43,7 +43,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from planners.scene import Scene, wrap_angle
+from socialnav.planners.scene import Scene, wrap_angle
 
 PASSING_OFFSET_RAD = 1.51  # passing_layer.cpp
 

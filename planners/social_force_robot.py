@@ -20,11 +20,11 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim import social_force as sf
-from jaxsim.params import SimParams
-from jaxsim.scenes.env import Observation
-from jaxsim.scenes.world import wall_distance
-from planners import reactive
+from socialnav.jaxsim import social_force as sf
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.scenes.env import Observation
+from socialnav.jaxsim.scenes.world import wall_distance
+from socialnav.planners import reactive
 
 
 @struct.dataclass

@@ -14,8 +14,8 @@ import dataclasses
 import jax.numpy as jnp
 from flax import struct
 
-from planners import casn, costmap, elastic_band, grid_planner, pure_pursuit, snape, snl
-from planners.scene import Scene
+from socialnav.planners import casn, costmap, elastic_band, grid_planner, pure_pursuit, snape, snl
+from socialnav.planners.scene import Scene
 
 LAYERS = ("none", "snl_small", "snl_large", "snl_matched", "casn", "snape", "gscl")
 GLOBAL_PLANNERS = ("navfn", "weighted")

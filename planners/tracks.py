@@ -37,9 +37,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from models import grid
-from models.inference import input_map
-from planners.irl import Demonstrations, K, path_moves
+from socialnav.models import grid
+from socialnav.models.inference import input_map
+from socialnav.planners.irl import Demonstrations, K, path_moves
 
 REQUIRED_COLUMNS = ("frame", "id", "x", "y")
 SAMPLE_M = 0.05  # spacing of the points a segment between two positions is sampled at
@@ -297,11 +297,11 @@ def simulated_tracks(spec, seed: int = 0, variants: int = 20, seconds: float | N
       offset by ``k`` times the frames per variant so that people of two variants never share a
       frame (each demonstration's map shows only its own variant's people).
     """
-    from data import WAREHOUSE_DIR
-    from jaxsim.scenario.loader import load_scenario
-    from jaxsim.scenes import people as people_lib
-    from jaxsim.scenes.variant import sample_variants
-    from jaxsim.scenes.world import build_scene_world, occupancy
+    from socialnav.data import WAREHOUSE_DIR
+    from socialnav.jaxsim.scenario.loader import load_scenario
+    from socialnav.jaxsim.scenes import people as people_lib
+    from socialnav.jaxsim.scenes.variant import sample_variants
+    from socialnav.jaxsim.scenes.world import build_scene_world, occupancy
 
     params = load_scenario(WAREHOUSE_DIR).params
     world = build_scene_world(spec)

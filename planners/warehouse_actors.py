@@ -15,12 +15,12 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from jaxsim.actor import Actor, Driver
-from jaxsim.robot import WarehouseObservation
-from jaxsim.route_follower import RouteParams, RouteState, route_follower_actor, route_params
-from jaxsim.state import TASK
-from jaxsim.world import RobotPlan, World
-from planners.waypoint import MIN_BATTERY_PCT, refuse_task
+from socialnav.jaxsim.actor import Actor, Driver
+from socialnav.jaxsim.robot import WarehouseObservation
+from socialnav.jaxsim.route_follower import RouteParams, RouteState, route_follower_actor, route_params
+from socialnav.jaxsim.state import TASK
+from socialnav.jaxsim.world import RobotPlan, World
+from socialnav.planners.waypoint import MIN_BATTERY_PCT, refuse_task
 
 
 @struct.dataclass

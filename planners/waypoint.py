@@ -30,10 +30,10 @@ import heapq
 import jax
 import numpy as np
 
-from jaxsim.scenario import Scenario
-from jaxsim.world import RobotPlan
-from planners.routes import arc_lengths_m, plan_from_costs
-from planners.tables import CausalTables
+from socialnav.jaxsim.scenario import Scenario
+from socialnav.jaxsim.world import RobotPlan
+from socialnav.planners.routes import arc_lengths_m, plan_from_costs
+from socialnav.planners.tables import CausalTables
 
 # B_min of Eq. (10), the critical battery level (seed 000 Sec. 5.2).
 MIN_BATTERY_PCT = 20.0

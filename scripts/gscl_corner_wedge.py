@@ -17,8 +17,8 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
 import numpy as np
 
-from models import families, rules
-from models.inference import SocialCostModel
+from socialnav.models import families, rules
+from socialnav.models.inference import SocialCostModel
 
 
 def main(argv=None):

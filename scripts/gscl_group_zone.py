@@ -31,9 +31,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from models import families, grid, rules
-from models import social_costs as sc
-from models.inference import SocialCostModel
+from socialnav.models import families, grid, rules
+from socialnav.models import social_costs as sc
+from socialnav.models.inference import SocialCostModel
 
 BANDS_M = ((0.8, 0.9), (0.9, 1.0), (1.0, 1.2), (1.2, 1.5), (1.5, 1.8))
 

@@ -217,7 +217,7 @@ def _gscl_predict(values: str) -> Callable[[pathlib.Path], list[str]]:
         run = tiny_gscl_run()
         code = (
             "import numpy as np\n"
-            "from models.inference import SocialCostModel\n"
+            "from socialnav.models.inference import SocialCostModel\n"
             f"model = SocialCostModel.load({str(run)!r})\n"
             f"print(np.asarray(model({values})).mean())\n"
         )
@@ -230,7 +230,7 @@ def tiny_gscl_run() -> pathlib.Path:
     run = FIXTURES / "gscl"
     if not (run / "config.json").exists():
         code = (
-            "from models.config import TrainConfig; from models.train import train\n"
+            "from socialnav.models.config import TrainConfig; from models.train import train\n"
             "train(TrainConfig(features=(4, 4, 8, 8), epochs=1, batch_size=16, train_fraction=0.01, "
             f"test_fraction=0.004, warmup_steps=2), {str(run)!r}, progress=False)\n"
         )
@@ -311,7 +311,7 @@ def _overwrite(tmp):
     (out / "causal").mkdir()
     (out / "causal" / "stale.txt").write_text("from the old run")
     sys.path.insert(0, str(ROOT))
-    from common import runfolder
+    from socialnav.common import runfolder
 
     runfolder.record(out / "causal", "socialnav learn", ["stale.txt"])  # a later job's run inside it
     return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY, "--seed", "5", "--overwrite"]

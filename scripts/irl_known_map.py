@@ -27,8 +27,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from models import grid
-from planners import irl
+from socialnav.models import grid
+from socialnav.planners import irl
 
 PATHS_PER_GOAL = 4
 

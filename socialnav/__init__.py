@@ -5,6 +5,6 @@ The ``socialnav`` command (:mod:`socialnav.cli`) with one subcommand per job, th
 that join parts (:mod:`socialnav.pipelines`). It may import every part; no part imports it.
 """
 
-from common import __version__
+from socialnav.common import __version__
 
 __all__ = ["__version__"]

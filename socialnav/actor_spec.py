@@ -15,7 +15,7 @@ import pathlib
 import sys
 from collections.abc import Callable
 
-from common.names import is_safe_name
+from socialnav.common.names import is_safe_name
 
 
 class ActorSpecError(ValueError):

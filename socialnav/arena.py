@@ -75,7 +75,7 @@ def add_parser(sub) -> None:
         default=[],
         metavar="MODULE:FUNCTION",
         help="also run your own actor (repeatable): FUNCTION(env) in MODULE (or in a file.py) returns a "
-        "jaxsim.scenes.actor.Actor or (actor, params); its rows are named FUNCTION",
+        "socialnav.jaxsim.scenes.actor.Actor or (actor, params); its rows are named FUNCTION",
     )
     p.add_argument(
         "--policy-run",
@@ -189,7 +189,7 @@ EPISODE_ROW_BYTES = 600
 
 @locks_folder(lambda args: args.out, "arena")
 def run(args) -> int:
-    from common import runfolder
+    from socialnav.common import runfolder
 
     try:
         if args.overwrite:
@@ -247,15 +247,15 @@ def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str
 
 
 def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
-    from common import runfolder
-    from common.atomic import write_atomic, write_text_atomic
-    from common.memory import available_bytes
-    from data import SCENES_DIR
-    from jaxsim.scenario.errors import ScenarioError
-    from jaxsim.scenes.spec import load_scene
-    from planners.baselines import BASELINES
-    from planners.stack import METHODS
     from socialnav import backend as backend_lib
+    from socialnav.common import runfolder
+    from socialnav.common.atomic import write_atomic, write_text_atomic
+    from socialnav.common.memory import available_bytes
+    from socialnav.data import SCENES_DIR
+    from socialnav.jaxsim.scenario.errors import ScenarioError
+    from socialnav.jaxsim.scenes.spec import load_scene
+    from socialnav.planners.baselines import BASELINES
+    from socialnav.planners.stack import METHODS
 
     known = [*METHODS, *BASELINES]
 
@@ -288,7 +288,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     methods += actor_names
     policy_digest = None
     if args.policy_run is not None:
-        from planners import policy_run
+        from socialnav.planners import policy_run
 
         try:
             policy_digest = policy_run.run_digest(args.policy_run)
@@ -307,10 +307,10 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         print("socialnav arena: --animate needs --keep-trajectories >= 1", file=sys.stderr)
         return 2
     if "gscl" in methods and args.gscl_run is None:
-        from models.inference import DEFAULT_MODEL
+        from socialnav.models.inference import DEFAULT_MODEL
 
         args.gscl_run = DEFAULT_MODEL
-    from evaluation import arena_params
+    from socialnav.evaluation import arena_params
 
     try:
         params = arena_params.ArenaParams() if args.params is None else arena_params.load(args.params)
@@ -328,8 +328,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         print(f"socialnav arena: {e}", file=sys.stderr)
         return 2
     if actor_specs:  # each factory called once here: a bad one fails before any work
-        from evaluation import arena as arena_lib
-        from evaluation import arena_report as report_lib
+        from socialnav.evaluation import arena as arena_lib
+        from socialnav.evaluation import arena_report as report_lib
 
         env = arena_lib.setup_scene(specs[0]).env
         for spec in actor_specs:
@@ -365,7 +365,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         )
         return 2
     if args.gscl_run is not None:
-        from models.inference import model_problem
+        from socialnav.models.inference import model_problem
 
         problem = model_problem(args.gscl_run)
         if problem:
@@ -380,9 +380,9 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
 
     import pandas as pd
 
-    from common import __version__
-    from evaluation import arena_report, arena_stats, nav_metrics, papers
-    from models.inference import model_identity
+    from socialnav.common import __version__
+    from socialnav.evaluation import arena_report, arena_stats, nav_metrics, papers
+    from socialnav.models.inference import model_identity
 
     settings = {
         "scenes": [s.name for s in specs],
@@ -497,7 +497,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     write_atomic(out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
     written = ["summary.csv", "stats.csv"]
     if len(summary):
-        from evaluation import arena_plots
+        from socialnav.evaluation import arena_plots
 
         arena_plots.methods_figure(summary, runfolder.inside(out, out / "pictures" / "methods.png"))
         written.append("pictures/methods.png")
@@ -526,7 +526,7 @@ def _memory_bytes(specs, args, n_methods: int) -> float:
     """What a run holds at once: every episode's row in the joined tables, and one shard's
     variants in flight (their trajectories, T steps of the robot and every person slot, and the
     planner's grids, a few (H, W) float32 maps per variant)."""
-    from evaluation.arena import ArenaConfig
+    from socialnav.evaluation.arena import ArenaConfig
 
     config = ArenaConfig()
     scenes = len(specs) * (2 if args.held_out else 1)
@@ -566,7 +566,7 @@ def _shard_file(out: pathlib.Path, name: str, digest: str, first: int) -> pathli
 def _gscl_model(run: pathlib.Path | None):
     if run is None:
         return None
-    from models.inference import SocialCostModel
+    from socialnav.models.inference import SocialCostModel
 
     return SocialCostModel.load(run)
 
@@ -591,13 +591,13 @@ def compute_shard(
     text (parsed here, so a worker needs no access to the file); ``policy_run``: a trained
     policy's run folder (``--policy-run``), restored here. The GSCL weights enter the
     episode program traced: a second checkpoint of the same network compiles nothing new."""
-    from evaluation import arena_params, arena_report
-    from evaluation.arena import ArenaConfig
+    from socialnav.evaluation import arena_params, arena_report
+    from socialnav.evaluation.arena import ArenaConfig
 
     keep = max(0, min(n, keep_trajectories - first))
     users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
     if policy_run is not None:
-        from planners.policy_run import actor_factory
+        from socialnav.planners.policy_run import actor_factory
 
         users[POLICY_METHOD] = actor_factory(policy_run, POLICY_METHOD)
     model = _gscl_model(gscl_run)
@@ -626,7 +626,7 @@ def _absolute_spec(spec: str) -> str:
 
 
 def _save_shard(shard, result) -> None:
-    from common.atomic import write_atomic
+    from socialnav.common.atomic import write_atomic
 
     episodes, trajectories = result
     if trajectories is not None:
@@ -642,10 +642,10 @@ def _finish_scene(args, out, spec, held_out, name, methods, digest) -> None:
 
     import pandas as pd
 
-    from common import runfolder
-    from common.atomic import write_atomic
-    from evaluation import arena_plots
-    from jaxsim.scenes.spec import mirror
+    from socialnav.common import runfolder
+    from socialnav.common.atomic import write_atomic
+    from socialnav.evaluation import arena_plots
+    from socialnav.jaxsim.scenes.spec import mirror
 
     folder = runfolder.inside(out, out / "shards" / f"{name}-{digest}")
     parts = sorted(folder.glob("[0-9]*[0-9].parquet"))

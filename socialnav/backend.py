@@ -28,7 +28,7 @@ import re
 import sys
 from collections.abc import Callable, Sequence
 
-from common.progress import bar
+from socialnav.common.progress import bar
 
 BACKENDS = ("local", "ray")
 
@@ -266,8 +266,8 @@ def staging_folder(folder: pathlib.Path, layout: dict) -> pathlib.Path:
     import json
     import shutil
 
-    from common.atomic import write_text_atomic
-    from common.runfolder import NotOurs
+    from socialnav.common.atomic import write_text_atomic
+    from socialnav.common.runfolder import NotOurs
 
     if folder.exists() or folder.is_symlink():
         recorded = _is_staging(folder) if folder.is_dir() and not folder.is_symlink() else None

@@ -23,8 +23,8 @@ from socialnav import runtime
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
-    from common import __version__
     from socialnav import arena, evaluate, gscl, layers, learn, pipelines, policy, referee, simulate
+    from socialnav.common import __version__
 
     parser = argparse.ArgumentParser(
         prog="socialnav",

@@ -7,16 +7,16 @@ import json
 import pathlib
 import sys
 
-from common import runfolder
-from common.memory import available_bytes
-from evaluation import warehouse
-from evaluation.protocol import ProtocolConfig
-from jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
-from planners.tables import TABLES_FILE, CausalTables, TablesError
 from socialnav import backend as backend_lib
 from socialnav.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
 from socialnav.backend import add_backend_options
+from socialnav.common import runfolder
+from socialnav.common.memory import available_bytes
+from socialnav.evaluation import warehouse
+from socialnav.evaluation.protocol import ProtocolConfig
+from socialnav.jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
 from socialnav.locking import locks_folder
+from socialnav.planners.tables import TABLES_FILE, CausalTables, TablesError
 
 STAGING = ".shards"
 
@@ -220,7 +220,7 @@ def compute_shard(scenario_dir, tables_file, first, n, slots, seed, settings) ->
 def _save_shard(shard, result) -> None:
     import pickle
 
-    from common.atomic import write_bytes_atomic
+    from socialnav.common.atomic import write_bytes_atomic
 
     write_bytes_atomic(shard.output, lambda handle: pickle.dump(result, handle))
 

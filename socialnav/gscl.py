@@ -16,10 +16,6 @@ import json
 import pathlib
 import time
 
-from common import runfolder
-from common.atomic import write_text_atomic
-from common.memory import available_bytes
-from common.runfolder import RunFolderError
 from socialnav import backend as backend_lib
 from socialnav.argtypes import (
     non_negative_float,
@@ -30,6 +26,10 @@ from socialnav.argtypes import (
     seed_int,
 )
 from socialnav.backend import BackendError, add_backend_options
+from socialnav.common import runfolder
+from socialnav.common.atomic import write_text_atomic
+from socialnav.common.memory import available_bytes
+from socialnav.common.runfolder import RunFolderError
 from socialnav.locking import locks_folder
 
 
@@ -286,7 +286,7 @@ def add_parser(top) -> None:
 
 
 def _generate(args) -> int:
-    from models import dataset
+    from socialnav.models import dataset
 
     if args.out.suffix != ".npz":
         raise SystemExit(f"socialnav gscl generate: --out must end in .npz, got {args.out}")
@@ -338,7 +338,7 @@ def _generate(args) -> int:
     for i, name in enumerate(data["names"]):
         print(f"  {name:<18}{int((data['family'] == i).sum()):>7}")
     if args.preview is not None:
-        from models import plots
+        from socialnav.models import plots
 
         plots.family_grid(data["inputs"], data["targets"], data["family"], data["names"], args.preview)
         print(f"preview -> {args.preview}")
@@ -357,7 +357,7 @@ def _check_dataset_target(out: pathlib.Path, overwrite: bool) -> None:
     """``--out`` may be written: new, or (with ``--overwrite``) a dataset this command wrote
     (its ``.json`` provenance beside it); never a folder or a user's file. Checked before any work,
     the folder's writability included."""
-    from common.runfolder import RunFolderError, check_writable
+    from socialnav.common.runfolder import RunFolderError, check_writable
 
     provenance = out.with_suffix(".json")
     if out.is_dir():
@@ -386,7 +386,7 @@ def _staging(out: pathlib.Path) -> pathlib.Path:
 
 def generate_shard(seed: int, name: str, start: int, stop: int):
     """Samples ``start .. stop - 1`` of one family (here or in a Ray worker)."""
-    from models import dataset
+    from socialnav.models import dataset
 
     return dataset.generate_range(seed, name, start, stop)
 
@@ -394,7 +394,7 @@ def generate_shard(seed: int, name: str, start: int, stop: int):
 def _save_shard(shard, result) -> None:
     import numpy as np
 
-    from common.atomic import write_bytes_atomic
+    from socialnav.common.atomic import write_bytes_atomic
 
     x, y = result
     write_bytes_atomic(shard.output, lambda handle: np.savez(handle, inputs=x, targets=y))
@@ -407,7 +407,7 @@ def _generate_sharded(args, counts: dict[str, int]):
 
     import numpy as np
 
-    from models import dataset
+    from socialnav.models import dataset
 
     chunk = dataset.CHUNK
     size = max(chunk, -(-(args.shard_samples or max(counts.values(), default=chunk)) // chunk) * chunk)
@@ -436,8 +436,8 @@ def _generate_sharded(args, counts: dict[str, int]):
 
 
 def _train_config(args):
-    from models.checkpoints import load_config
-    from models.config import TrainConfig
+    from socialnav.models.checkpoints import load_config
+    from socialnav.models.config import TrainConfig
 
     given = {k: getattr(args, k) for k in _TRAIN_OPTIONS if getattr(args, k) is not None}
     if (args.out / "config.json").exists() and not given and not args.paper:
@@ -447,9 +447,9 @@ def _train_config(args):
 
 @locks_folder(lambda args: args.out, "gscl train")
 def _train(args) -> int:
-    from models import train
-    from models.checkpoints import check_run_folder
-    from models.quality import quality_table
+    from socialnav.models import train
+    from socialnav.models.checkpoints import check_run_folder
+    from socialnav.models.quality import quality_table
 
     try:
         runfolder.claim(args.out, TRAIN_JOB, TRAIN_RESULTS, adopt=_an_earlier_training_run)
@@ -470,7 +470,7 @@ def _train(args) -> int:
     try:
         objective = None
         if config.objective == "paths":
-            from planners.irl import PathObjective
+            from socialnav.planners.irl import PathObjective
 
             objective = PathObjective.of(config)
         line = train.train(
@@ -500,7 +500,7 @@ EVALUATION_JOB = "socialnav gscl evaluation"  # evaluate and rules share RUN/eva
 def _an_earlier_training_run(folder: pathlib.Path) -> bool:
     """A training run of socialnav before 0.3 (no manifest): a config.json that reads as a
     TrainConfig (its checkpoints, if any, are orbax's)."""
-    from models.checkpoints import load_config
+    from socialnav.models.checkpoints import load_config
 
     try:
         load_config(folder)
@@ -522,14 +522,14 @@ def _evaluation_folder(args, names: tuple[str, ...]) -> pathlib.Path:
 
 
 def _parameters(config) -> int:
-    from models import unet
-    from models.config import make_model
+    from socialnav.models import unet
+    from socialnav.models.config import make_model
 
     return unet.parameter_count(make_model(config))
 
 
 def _evaluate(args) -> int:
-    from models import evaluation
+    from socialnav.models import evaluation
 
     names = ("evaluation.json", "predictions.png")
     out = _evaluation_folder(args, names)
@@ -547,7 +547,7 @@ def _evaluate(args) -> int:
 
 
 def _rules(args) -> int:
-    from models import evaluation, rules
+    from socialnav.models import evaluation, rules
 
     names = ("rules.json", "rules.png")
     out = _evaluation_folder(args, names)
@@ -581,8 +581,8 @@ FIT_TRACKS_FILES = ("config.json", "weights.msgpack", "model.json", "demonstrati
 
 def _scene_specs(names):
     """The arena scenes named (built-in names or JSON files), loaded and validated."""
-    from data import DATA_DIR
-    from jaxsim.scenes.spec import load_scene
+    from socialnav.data import DATA_DIR
+    from socialnav.jaxsim.scenes.spec import load_scene
 
     files = [pathlib.Path(n) if n.endswith(".json") else DATA_DIR / "scenes" / f"{n}.json" for n in names]
     missing = [f for f in files if not f.is_file()]
@@ -596,9 +596,9 @@ def _fit_tracks(args) -> int:
     """A model fitted to a user's tracks, exported with a card of what went into it."""
     import datetime
 
-    from models.config import TrainConfig
-    from planners import tracks
-    from planners.irl_fit import demonstrations_figure, fit_demonstrations
+    from socialnav.models.config import TrainConfig
+    from socialnav.planners import tracks
+    from socialnav.planners.irl_fit import demonstrations_figure, fit_demonstrations
 
     try:
         config = TrainConfig(
@@ -658,10 +658,10 @@ def _export(args) -> int:
 
     import jax
 
-    from models import evaluation
-    from models.checkpoints import restore
-    from models.inference import SocialCostModel
     from socialnav import __version__
+    from socialnav.models import evaluation
+    from socialnav.models.checkpoints import restore
+    from socialnav.models.inference import SocialCostModel
 
     try:
         runfolder.claim(args.out, EXPORT_JOB, EXPORT_FILES)

@@ -33,8 +33,8 @@ JOB = "socialnav layers"
 
 
 def run(args) -> int:
-    from common import runfolder
-    from planners import plots
+    from socialnav.common import runfolder
+    from socialnav.planners import plots
 
     names = tuple(f"layers_{name}.png" for name in plots.demo_scenes())
     try:
@@ -43,7 +43,7 @@ def run(args) -> int:
     except runfolder.RunFolderError as e:
         print(f"socialnav layers: --out: {e}", file=sys.stderr)
         return 2
-    from models.inference import SocialCostModel
+    from socialnav.models.inference import SocialCostModel
 
     try:
         predict = SocialCostModel.load(args.gscl_run).function

@@ -6,10 +6,6 @@ import argparse
 import pathlib
 import sys
 
-from causal.extract import LogError
-from causal.learn import learn
-from common import runfolder
-from common.logschema import LOG_FILE, META_FILE
 from socialnav.argtypes import (
     comma_ints,
     comma_names,
@@ -18,6 +14,10 @@ from socialnav.argtypes import (
     output_folder,
     positive_int,
 )
+from socialnav.causal.extract import LogError
+from socialnav.causal.learn import learn
+from socialnav.common import runfolder
+from socialnav.common.logschema import LOG_FILE, META_FILE
 from socialnav.locking import locks_folder
 
 

@@ -13,8 +13,8 @@ import pathlib
 import sys
 from collections.abc import Callable
 
-from common import runfolder
-from common.runlock import RunFolderError, run_lock
+from socialnav.common import runfolder
+from socialnav.common.runlock import RunFolderError, run_lock
 
 
 def locks_folder(folder_of: Callable[[object], pathlib.Path | None], name: str):

@@ -17,18 +17,18 @@ import sys
 import jax.numpy as jnp
 import numpy as np
 
-from causal import ablation as causal_ablation
-from common import runfolder
-from jaxsim import rollout
-from jaxsim.params import SimParams
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world
-from planners.routes import shortest_path_plan
-from planners.tables import TABLES_FILE
 from socialnav import arena, evaluate, learn, simulate
 from socialnav.argtypes import comma_ints, comma_probabilities, output_folder, positive_int, seed_int
+from socialnav.causal import ablation as causal_ablation
+from socialnav.common import runfolder
+from socialnav.jaxsim import rollout
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.world import build_world
 from socialnav.locking import locks_folder
+from socialnav.planners.routes import shortest_path_plan
+from socialnav.planners.tables import TABLES_FILE
 
 
 def add_parsers(sub) -> None:

@@ -16,11 +16,11 @@ import pathlib
 import sys
 import time
 
-from common import runfolder
-from common.runfolder import RunFolderError
-from planners.policy_social import SOCIAL_LAYERS
 from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
+from socialnav.common import runfolder
+from socialnav.common.runfolder import RunFolderError
 from socialnav.locking import locks_folder
+from socialnav.planners.policy_social import SOCIAL_LAYERS
 
 TRAIN_JOB = "socialnav policy train"
 TRAIN_RESULTS = ("config.json", "checkpoints", "metrics.jsonl", "curve.png")
@@ -67,9 +67,9 @@ def add_parser(top) -> None:
 
 
 def _config(args, scene_names: tuple[str, ...]):
-    from planners.policy import PolicyConfig
-    from planners.policy_run import read_config
-    from planners.policy_training import PPOConfig
+    from socialnav.planners.policy import PolicyConfig
+    from socialnav.planners.policy_run import read_config
+    from socialnav.planners.policy_training import PPOConfig
 
     given = {
         "updates": args.updates,
@@ -81,11 +81,11 @@ def _config(args, scene_names: tuple[str, ...]):
     if args.gscl_run is not None and args.social_layer != "gscl":
         raise ValueError("--gscl-run goes with --social-layer gscl")
     if args.social_layer == "gscl" and args.gscl_run is None:
-        from models.inference import DEFAULT_MODEL
+        from socialnav.models.inference import DEFAULT_MODEL
 
         args.gscl_run = DEFAULT_MODEL
     if args.gscl_run is not None:
-        from models.inference import model_problem
+        from socialnav.models.inference import model_problem
 
         problem = model_problem(args.gscl_run)
         if problem:
@@ -104,10 +104,10 @@ def _config(args, scene_names: tuple[str, ...]):
 
 @locks_folder(lambda args: args.out, "policy train")
 def _train(args) -> int:
-    from data import SCENES_DIR
-    from jaxsim.scenario import ScenarioError
-    from jaxsim.scenes.spec import load_scene
-    from planners import policy_run
+    from socialnav.data import SCENES_DIR
+    from socialnav.jaxsim.scenario import ScenarioError
+    from socialnav.jaxsim.scenes.spec import load_scene
+    from socialnav.planners import policy_run
 
     try:
         runfolder.claim(args.out, TRAIN_JOB, TRAIN_RESULTS)

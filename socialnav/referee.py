@@ -81,16 +81,16 @@ def _edge(c: str, e: str, lag: int) -> str:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from causal import discover, simulator_graph
-    from causal.extract import LogError
-    from causal.learn import learn
-    from causal.variables import GROUND_TRUTH
-    from common.atomic import write_text_atomic
-    from jaxsim import logs
-    from jaxsim.route_follower import route_follower
-    from jaxsim.scenario import ScenarioError, load_scenario
-    from jaxsim.world import build_world
-    from planners.routes import shortest_path_plan
+    from socialnav.causal import discover, simulator_graph
+    from socialnav.causal.extract import LogError
+    from socialnav.causal.learn import learn
+    from socialnav.causal.variables import GROUND_TRUTH
+    from socialnav.common.atomic import write_text_atomic
+    from socialnav.jaxsim import logs
+    from socialnav.jaxsim.route_follower import route_follower
+    from socialnav.jaxsim.scenario import ScenarioError, load_scenario
+    from socialnav.jaxsim.world import build_world
+    from socialnav.planners.routes import shortest_path_plan
 
     if any(n < 1 for n in args.worlds) or any(s < 0 for s in args.seeds):
         print("socialnav referee: --worlds must be >= 1 and --seeds >= 0", file=sys.stderr)
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
     write_text_atomic(out / "referee.csv", table.to_csv(index=False))
     do_rows = []
     if args.do_worlds:
-        from causal.engine import CausalEngine
+        from socialnav.causal.engine import CausalEngine
 
         fewest = min(args.worlds)
         for seed in args.seeds:
@@ -231,7 +231,7 @@ def forced_speed_driver(driver):
     v)``, v () m/s, traced (one compiled program for every speed)."""
     import jax.numpy as jnp
 
-    from jaxsim.actor import Actor, Driver
+    from socialnav.jaxsim.actor import Actor, Driver
 
     inner = driver.actor
 
@@ -261,7 +261,7 @@ def _do_check(engine, params, world, driver, n_worlds: int, seed: int, worlds: i
     interventional mean of L (per sampling period, C = 0) with its 95 % interval over worlds."""
     import numpy as np
 
-    from jaxsim import rollout
+    from socialnav.jaxsim import rollout
 
     period_steps = max(1, round(engine.period_s / params.dt_s))
     n_steps = int(DO_HOURS * 3600 / params.dt_s) // period_steps * period_steps

@@ -6,17 +6,17 @@ import argparse
 import pathlib
 import sys
 
-from common import runfolder
-from common.logschema import LOG_FILE, META_FILE
-from common.memory import available_bytes
-from jaxsim import logs, viz
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
-from jaxsim.world import build_world
-from planners.routes import shortest_path_plan
 from socialnav.argtypes import non_negative_float, output_folder, positive_float, positive_int, probability, seed_int
 from socialnav.backend import BackendError, add_backend_options
+from socialnav.common import runfolder
+from socialnav.common.logschema import LOG_FILE, META_FILE
+from socialnav.common.memory import available_bytes
+from socialnav.jaxsim import logs, viz
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
+from socialnav.jaxsim.world import build_world
 from socialnav.locking import locks_folder
+from socialnav.planners.routes import shortest_path_plan
 
 
 def add_parser(sub) -> None:

@@ -20,20 +20,20 @@ import time
 
 import numpy as np
 
-from common.atomic import write_atomic, write_text_atomic
-from common.logschema import LOG_FILE, META_FILE
 from socialnav import backend as backend_lib
+from socialnav.common.atomic import write_atomic, write_text_atomic
+from socialnav.common.logschema import LOG_FILE, META_FILE
 
 STAGING = ".shards"
 
 
 def compute_shard(scenario_dir, overrides, first, n, duration_s, seed, sample_interval_s, log_positions, snap_t):
     """Simulate one shard of worlds (here or in a Ray worker): ``(Parquet bytes, summary dict)``."""
-    from jaxsim import logs
-    from jaxsim.route_follower import route_follower
-    from jaxsim.scenario import WAREHOUSE_DIR, load_scenario
-    from jaxsim.world import build_world
-    from planners.routes import shortest_path_plan
+    from socialnav.jaxsim import logs
+    from socialnav.jaxsim.route_follower import route_follower
+    from socialnav.jaxsim.scenario import WAREHOUSE_DIR, load_scenario
+    from socialnav.jaxsim.world import build_world
+    from socialnav.planners.routes import shortest_path_plan
 
     scenario = load_scenario(scenario_dir or WAREHOUSE_DIR, **overrides)
     with tempfile.TemporaryDirectory(prefix="socialnav-shard-") as tmp:
@@ -78,7 +78,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
     """Run the shards with the chosen backend, then write ``logs.parquet`` and ``run.json`` into
     ``dest`` (the run's staging folder, :func:`common.runfolder.staged`); returns a
     :class:`jaxsim.logs.RunSummary` for the command's report."""
-    from jaxsim import logs
+    from socialnav.jaxsim import logs
 
     out = pathlib.Path(args.out)
     size = args.shard_worlds or args.worlds

@@ -21,9 +21,9 @@ if "SOCIALNAV_NATIVE_CACHE" not in os.environ:
 
 from plans import scipy_shortest_plan
 
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.world import build_world
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -64,9 +64,9 @@ def learned_run(tmp_path_factory):
     The robot starts at 21 % battery so that it charges and C varies. Returns the run folder;
     the engine's tables are in ``causal/engine_tables.npz``.
     """
-    from causal.learn import learn
-    from jaxsim.logs import simulate_to_parquet
-    from planners.routes import shortest_path_plan
+    from socialnav.causal.learn import learn
+    from socialnav.jaxsim.logs import simulate_to_parquet
+    from socialnav.planners.routes import shortest_path_plan
 
     run = tmp_path_factory.mktemp("learned_run")
     scenario = load_scenario(slot_length_s=60.0, battery_initial_pct=21.0)
@@ -81,7 +81,7 @@ def learned_run(tmp_path_factory):
     learn(run, run / "causal", max_samples=60_000, progress=False)
     # Written from Python, not by the commands: give the folders the manifests the commands write,
     # so that the commands treat them as their runs.
-    from common import runfolder
+    from socialnav.common import runfolder
 
     for folder, job, marker in (
         (run, "socialnav simulate", "run.json"),

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 from scipy.sparse.csgraph import shortest_path
 
-from jaxsim.world import RobotPlan
+from socialnav.jaxsim.world import RobotPlan
 
 
 def scipy_shortest_plan(scenario) -> RobotPlan:

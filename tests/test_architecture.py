@@ -1,9 +1,12 @@
 """The arrows between the parts run one way: a test that reads every import of every module.
 
-Allowed (DESIGN.md): ``socialnav`` may import everything and nothing imports it; ``evaluation``
-imports jaxsim, planners, models; ``planners`` may import jaxsim (the plan format) and models
-(inference); ``jaxsim``, ``models`` and ``causal`` import none of the other parts; ``causal`` and
-``planners`` never import each other; ``common`` and ``data`` are leaves every part may use.
+The parts are folders at the top of the repository installed under one name: ``jaxsim/`` is
+``socialnav.jaxsim``, ``models/`` is ``socialnav.models``, and ``socialnav/`` itself holds the
+command line (the composition root). Allowed (DESIGN.md): ``socialnav`` may import everything
+and nothing imports it; ``evaluation`` imports jaxsim, planners, models; ``planners`` may import
+jaxsim (the plan format) and models (inference); ``jaxsim``, ``models`` and ``causal`` import none
+of the other parts; ``causal`` and ``planners`` never import each other; ``common`` and ``data``
+are leaves every part may use.
 """
 
 from __future__ import annotations
@@ -28,8 +31,18 @@ ALLOWED = {
 }
 
 
+def part_of(module: str) -> str | None:
+    """The part a module name belongs to: ``socialnav.models.config`` -> ``models``,
+    ``socialnav.cli`` -> ``socialnav``; a bare part name (``models.config``: the layout before the
+    namespace, which an installed package no longer has) -> ``bare models``; anything else None."""
+    names = module.split(".")
+    if names[0] == "socialnav":
+        return names[1] if len(names) > 1 and names[1] in PARTS else "socialnav"
+    return f"bare {names[0]}" if names[0] in PARTS else None
+
+
 def imported_parts(file: pathlib.Path) -> dict[str, int]:
-    """Top-level project packages imported anywhere in ``file`` (also inside functions): part -> line."""
+    """Project parts imported anywhere in ``file`` (also inside functions): part -> line."""
     found = {}
     for node in ast.walk(ast.parse(file.read_text(), str(file))):
         if isinstance(node, ast.Import):
@@ -39,9 +52,9 @@ def imported_parts(file: pathlib.Path) -> dict[str, int]:
         else:
             continue
         for name in names:
-            top = name.split(".")[0]
-            if top in PARTS:
-                found.setdefault(top, node.lineno)
+            part = part_of(name)
+            if part is not None:
+                found.setdefault(part, node.lineno)
     return found
 
 
@@ -85,9 +98,21 @@ def test_the_check_catches_a_forbidden_import(tmp_path, part, other):
     """The checker itself: a module that imports a forbidden part, even inside a function, is reported."""
     for p in PARTS:
         (tmp_path / p).mkdir()
-    (tmp_path / part / "bad.py").write_text(f"import numpy\n\n\ndef f():\n    from {other} import something\n")
-    (tmp_path / part / "good.py").write_text("from common import pytree\n")
+    module = "socialnav" if other == "socialnav" else f"socialnav.{other}"
+    (tmp_path / part / "bad.py").write_text(f"import numpy\n\n\ndef f():\n    from {module} import something\n")
+    (tmp_path / part / "good.py").write_text("from socialnav.common import pytree\n")
     assert forbidden_arrows(tmp_path) == [f"{part}/bad.py:5 imports {other}"]
+
+
+def test_the_check_catches_a_bare_part_name(tmp_path):
+    """``from models import x`` works only from the source tree, never in an installed package."""
+    for p in PARTS:
+        (tmp_path / p).mkdir()
+    (tmp_path / "planners" / "old.py").write_text("from models.config import TrainConfig\n")
+    (tmp_path / "socialnav" / "cli.py").write_text(
+        "import socialnav.models.config as config\nfrom socialnav import cli\n"
+    )
+    assert forbidden_arrows(tmp_path) == ["planners/old.py:1 imports bare models"]
 
 
 def test_only_the_backend_module_imports_ray():

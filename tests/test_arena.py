@@ -10,16 +10,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from data import DATA_DIR
-from evaluation import arena, arena_report, nav_metrics
-from jaxsim.scenario.errors import ScenarioError
-from jaxsim.scenes import perception
-from jaxsim.scenes import robot as robot_lib
-from jaxsim.scenes import world as world_lib
-from jaxsim.scenes.spec import load_scene
-from jaxsim.scenes.variant import padded_slots, sample_variant, sample_variants
-from planners import elastic_band, snape
-from planners.stack import METHODS
+from socialnav.data import DATA_DIR
+from socialnav.evaluation import arena, arena_report, nav_metrics
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenes import perception
+from socialnav.jaxsim.scenes import robot as robot_lib
+from socialnav.jaxsim.scenes import world as world_lib
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import padded_slots, sample_variant, sample_variants
+from socialnav.planners import elastic_band, snape
+from socialnav.planners.stack import METHODS
 
 SCENES = sorted((DATA_DIR / "scenes").glob("*.json"))
 
@@ -217,7 +217,7 @@ def _empty_scene(tmp_path):
 def test_every_method_reaches_the_goal_of_a_scene_without_people_and_stays_out_of_walls(tmp_path):
     from flax import nnx
 
-    from models import unet
+    from socialnav.models import unet
 
     model = unet.UNet((4, 4, 8, 8), rngs=nnx.Rngs(0))
     model.eval()
@@ -247,9 +247,9 @@ def test_episodes_are_deterministic_and_the_same_variant_for_every_method():
 
 _SPREAD = """
 import jax
-from data import DATA_DIR
-from evaluation import arena_report
-from jaxsim.scenes.spec import load_scene
+from socialnav.data import DATA_DIR
+from socialnav.evaluation import arena_report
+from socialnav.jaxsim.scenes.spec import load_scene
 spec = load_scene(DATA_DIR / 'scenes' / 'casn_head_on.json')
 methods = ['navfn', 'orca', 'snape_social_eband']
 one, _ = arena_report.run_scene(spec, methods, 9, n_devices=1)
@@ -482,8 +482,8 @@ def test_arena_command_writes_tables_resumes_and_refuses_other_settings(tmp_path
 
 
 def test_the_papers_rows_name_known_scenes_and_methods_and_take_ours_from_a_summary():
-    from evaluation import papers
-    from jaxsim.scenes.spec import load_scene as load
+    from socialnav.evaluation import papers
+    from socialnav.jaxsim.scenes.spec import load_scene as load
 
     scenes = {load(f).name for f in SCENES}
     assert {row[1] for row in papers.PAPER_ROWS} <= scenes
@@ -499,7 +499,7 @@ def test_the_papers_rows_name_known_scenes_and_methods_and_take_ours_from_a_summ
 
 
 def test_the_comparison_gives_our_interval_and_whether_the_paper_lies_in_it():
-    from evaluation import papers
+    from socialnav.evaluation import papers
 
     summary = pd.DataFrame(
         [
@@ -524,7 +524,7 @@ def _paired_episodes(scene, metric, proposed, baseline, a, b):
 def test_directions_pair_by_variant_and_give_a_verdict():
     from scipy import stats
 
-    from evaluation import papers
+    from socialnav.evaluation import papers
 
     rng = np.random.default_rng(1)
     base = rng.uniform(0.5, 1.5, 40)
@@ -557,7 +557,7 @@ def test_directions_pair_by_variant_and_give_a_verdict():
 def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_hand():
     from scipy import stats
 
-    from evaluation import arena_stats
+    from socialnav.evaluation import arena_stats
 
     rng = np.random.default_rng(0)
     a, b = rng.normal(0, 1, 30), rng.normal(0.5, 2, 40)
@@ -573,7 +573,7 @@ def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_ha
 
 
 def test_scene_statistics_compare_the_proposed_method_with_the_others():
-    from evaluation import arena_stats
+    from socialnav.evaluation import arena_stats
 
     rng = np.random.default_rng(1)
     rows = []
@@ -595,7 +595,7 @@ def test_scene_statistics_compare_the_proposed_method_with_the_others():
 
 
 def test_held_out_variants_leave_the_ranges_and_the_mirror_keeps_the_rule():
-    from jaxsim.scenes.spec import mirror
+    from socialnav.jaxsim.scenes.spec import mirror
 
     spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
     inside = sample_variants(spec, 0, 40)

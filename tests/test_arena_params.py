@@ -9,11 +9,11 @@ import re
 import numpy as np
 import pytest
 
-from data import SCENES_DIR
-from evaluation import arena, arena_params, arena_report
-from jaxsim.scenes.robot import RobotParams
-from jaxsim.scenes.spec import load_scene
-from planners import stack
+from socialnav.data import SCENES_DIR
+from socialnav.evaluation import arena, arena_params, arena_report
+from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.planners import stack
 
 README = pathlib.Path(__file__).parent.parent / "README.md"
 
@@ -93,7 +93,7 @@ def test_the_files_values_reach_the_episodes_without_a_new_compilation():
 
 def test_a_users_actor_before_a_built_in_method_keeps_the_files_values():
     """The user's actor gets the file's robot limits, and the built-in after it its layers."""
-    from jaxsim.scenes.actor import Actor
+    from socialnav.jaxsim.scenes.actor import Actor
 
     seen = {}
 

@@ -19,7 +19,7 @@ from socialnav import backend, cli
 
 
 def _write_number(shard, result) -> None:
-    from common.atomic import write_text_atomic
+    from socialnav.common.atomic import write_text_atomic
 
     write_text_atomic(shard.output, json.dumps(result))
 

@@ -10,14 +10,14 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from data import SCENES_DIR
-from evaluation import arena
-from jaxsim import social_force as sf
-from jaxsim.scenes.env import Observation
-from jaxsim.scenes.robot import RobotParams
-from jaxsim.scenes.spec import load_scene
-from jaxsim.scenes.variant import sample_variants
-from planners import baselines, dwa, orca_robot, reactive, social_force_robot
+from socialnav.data import SCENES_DIR
+from socialnav.evaluation import arena
+from socialnav.jaxsim import social_force as sf
+from socialnav.jaxsim.scenes.env import Observation
+from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variants
+from socialnav.planners import baselines, dwa, orca_robot, reactive, social_force_robot
 
 FAR_WALL = np.array([[1e4, 1e4 + 1, 1e4, 1e4 + 1]], np.float32)  # no wall within reach
 
@@ -153,7 +153,7 @@ def test_dwa_window_stays_within_the_limits_and_one_step_of_acceleration(head_on
 def test_dwa_arcs_are_the_bases_own_steps(head_on):
     """An arc's predicted poses are where the base (:func:`jaxsim.scenes.robot.step_robot`) goes
     under the same constant command in open space, once it runs at that command."""
-    from jaxsim.scenes import robot as robot_lib
+    from socialnav.jaxsim.scenes import robot as robot_lib
 
     limits = RobotParams()
     v, w = jnp.array([0.5, 0.4]), jnp.array([0.0, 0.8])

@@ -8,9 +8,9 @@ import pandas as pd
 import pytest
 from synthetic import seed000_datasets
 
-from causal import binning, discover, extract
-from causal import engine as engine_lib
-from causal.variables import GROUND_TRUTH, VARIABLES
+from socialnav.causal import binning, discover, extract
+from socialnav.causal import engine as engine_lib
+from socialnav.causal.variables import GROUND_TRUTH, VARIABLES
 
 
 def _datasets(data, names=None):
@@ -214,9 +214,9 @@ def test_extraction_shapes_and_bad_input():
 def test_learn_job_end_to_end(tmp_path, monkeypatch):
     import json
 
-    from jaxsim.scenario import load_scenario
     from socialnav import cli
     from socialnav import simulate as simulate_command
+    from socialnav.jaxsim.scenario import load_scenario
 
     logs = tmp_path / "run"
     # A short day in which the robot starts low on battery, so that it charges (C varies).
@@ -297,7 +297,7 @@ def test_discovery_subset_spreads_the_budget_over_the_datasets():
 
 
 def test_a_learn_too_large_for_the_memory_is_refused_before_any_work():
-    from causal.learn import ENGINE_BYTES_PER_SAMPLE, check_memory
+    from socialnav.causal.learn import ENGINE_BYTES_PER_SAMPLE, check_memory
 
     check_memory(2_771_930, None)  # unknown memory: no check
     check_memory(2_771_930, 24 * 10**9)

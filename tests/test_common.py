@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from common import atomic, progress, pytree
+from socialnav.common import atomic, progress, pytree
 
 
 def test_atomic_write_replaces_whole_or_not_at_all(tmp_path):

@@ -13,14 +13,14 @@ import pyarrow.parquet as pq
 import pytest
 from plans import scipy_shortest_plan
 
-from causal import extract
-from causal.learn import write_tables
-from common import logschema
-from jaxsim import logs
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world
-from planners.tables import CausalTables, TablesError
+from socialnav.causal import extract
+from socialnav.causal.learn import write_tables
+from socialnav.common import logschema
+from socialnav.jaxsim import logs
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.world import build_world
+from socialnav.planners.tables import CausalTables, TablesError
 
 
 @pytest.fixture(scope="module")

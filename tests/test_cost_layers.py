@@ -9,9 +9,9 @@ import pytest
 from flax import nnx
 from scipy import ndimage
 
-from models import unet
-from planners import casn, costmap, gscl_layer, snape, snl
-from planners.scene import make_scene
+from socialnav.models import unet
+from socialnav.planners import casn, costmap, gscl_layer, snape, snl
+from socialnav.planners.scene import make_scene
 
 SPEC = costmap.GridSpec(height=60, width=80, resolution_m=0.1, origin_x_m=-4.0, origin_y_m=-3.0)
 X, Y = SPEC.cell_centres()
@@ -303,8 +303,8 @@ def test_layers_command_rejects_a_run_without_checkpoints(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_layers_command_writes_one_picture_per_scene_type(tmp_path):
-    from planners import plots
     from socialnav import cli
+    from socialnav.planners import plots
 
     assert cli.main(["layers", "--out", str(tmp_path)]) == 0
     written = sorted(p.name for p in tmp_path.glob("*.png"))
@@ -314,7 +314,7 @@ def test_layers_command_writes_one_picture_per_scene_type(tmp_path):
 
 @pytest.mark.slow
 def test_demo_paths_reach_the_goal_and_keep_off_lethal_cells():
-    from planners import plots
+    from socialnav.planners import plots
 
     demo = plots.demo_scenes()["group_facing_in"]
     for name, costs, path, reached in plots.plan_panels(demo, plots.layer_functions()):

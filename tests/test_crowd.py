@@ -7,14 +7,14 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from data import DATA_DIR
-from evaluation import arena
-from jaxsim import crowd, orca, rng
-from jaxsim.scenario import load_scenario
-from jaxsim.scenes import people as people_lib
-from jaxsim.scenes.spec import load_scene
-from jaxsim.scenes.variant import sample_variant
-from jaxsim.world import Grid
+from socialnav.data import DATA_DIR
+from socialnav.evaluation import arena
+from socialnav.jaxsim import crowd, orca, rng
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.scenes import people as people_lib
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variant
+from socialnav.jaxsim.world import Grid
 
 # No walls within reach: a distance field 100 m from everything.
 OPEN = Grid(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), origin_x_m=-50.0, origin_y_m=-50.0, resolution_m=30.0)
@@ -27,7 +27,7 @@ def params():
 
 
 def test_the_warehouse_and_the_arena_move_people_with_one_function(monkeypatch, short_day, params):
-    from jaxsim import step as step_lib
+    from socialnav.jaxsim import step as step_lib
 
     calls = []
     original = crowd.step_crowd
@@ -125,7 +125,7 @@ def test_orca_a_person_stops_before_a_standing_one():
 
 @pytest.mark.slow
 def test_the_arena_runs_with_orca_humans():
-    from planners import actors
+    from socialnav.planners import actors
 
     spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
     sf = arena.setup_scene(spec)

@@ -12,14 +12,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from data import DATA_DIR
-from evaluation import arena
-from jaxsim.scenes import env as env_lib
-from jaxsim.scenes.actor import Actor, rollout
-from jaxsim.scenes.spec import load_scene
-from jaxsim.scenes.variant import sample_variant, sample_variants
-from planners import actors
 from socialnav import cli
+from socialnav.data import DATA_DIR
+from socialnav.evaluation import arena
+from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes.actor import Actor, rollout
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variant, sample_variants
+from socialnav.planners import actors
 
 ROOT = DATA_DIR.parent
 
@@ -160,7 +160,7 @@ def test_the_readme_actor_quickstart_runs():
 
 MY_ACTOR = '''
 import jax.numpy as jnp
-from jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.actor import Actor
 
 
 def creep(env):
@@ -232,7 +232,7 @@ def test_an_actor_is_an_immutable_pair_of_functions():
 
 
 def test_the_gymnasium_env_passes_the_env_checker():
-    gym_env = pytest.importorskip("jaxsim.scenes.gym_env")
+    gym_env = pytest.importorskip("socialnav.jaxsim.scenes.gym_env")
     from gymnasium.utils.env_checker import check_env
 
     env = gym_env.SocialNavEnv(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"), pool=8)
@@ -242,7 +242,7 @@ def test_the_gymnasium_env_passes_the_env_checker():
 
 
 def test_the_vector_env_steps_a_batch_and_resets_an_ended_episode_on_the_next_step():
-    gym_env = pytest.importorskip("jaxsim.scenes.gym_env")
+    gym_env = pytest.importorskip("socialnav.jaxsim.scenes.gym_env")
     spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
     venv = gym_env.SocialNavVectorEnv(spec, num_envs=3, pool=8, config=env_lib.EnvConfig(max_steps=5))
     obs, _ = venv.reset(seed=1)
@@ -264,7 +264,7 @@ def test_the_vector_env_steps_a_batch_and_resets_an_ended_episode_on_the_next_st
 @pytest.mark.slow
 def test_a_layer_parameter_sweep_reuses_the_stacks_program(setup):
     """The SNL covariance is a traced leaf: a wider one changes the episodes, not the program."""
-    from planners import snl, stack
+    from socialnav.planners import snl, stack
 
     variants = _variants(setup, 2)
     method = stack.METHODS["snl_small"]

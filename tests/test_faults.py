@@ -22,7 +22,7 @@ import textwrap
 
 import pytest
 
-from common import runfolder
+from socialnav.common import runfolder
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -55,7 +55,7 @@ KILLER = textwrap.dedent(
 JOB = textwrap.dedent(
     """
     import pathlib, sys
-    from common import runfolder
+    from socialnav.common import runfolder
     folder = pathlib.Path(sys.argv[1])
     runfolder.prepare(folder, ("run.json", "logs.parquet", "snapshot.png", "causal"), overwrite=True, job="test")
     with runfolder.staged(folder, "run.json", overwrite=True, job="test") as stage:

@@ -20,11 +20,11 @@ import shutil
 import numpy as np
 import pytest
 
-from causal.extract import LogError, read_run
-from data import WAREHOUSE_DIR
-from jaxsim.scenario import ScenarioError, load_scenario
-from models.config import TrainConfig
-from planners.tables import CausalTables, TablesError
+from socialnav.causal.extract import LogError, read_run
+from socialnav.data import WAREHOUSE_DIR
+from socialnav.jaxsim.scenario import ScenarioError, load_scenario
+from socialnav.models.config import TrainConfig
+from socialnav.planners.tables import CausalTables, TablesError
 
 FAST_CASES = int(os.environ.get("FUZZ_CASES", "40"))
 SLOW_CASES = 400
@@ -110,10 +110,10 @@ def fuzz_scenarios(tmp_path: pathlib.Path, n: int, seed: int) -> dict[str, int]:
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
     """One world of two 60 s slots: logs.parquet and run.json."""
-    from jaxsim.logs import simulate_to_parquet
-    from jaxsim.route_follower import route_follower
-    from jaxsim.world import build_world
-    from planners.routes import shortest_path_plan
+    from socialnav.jaxsim.logs import simulate_to_parquet
+    from socialnav.jaxsim.route_follower import route_follower
+    from socialnav.jaxsim.world import build_world
+    from socialnav.planners.routes import shortest_path_plan
 
     run = tmp_path_factory.mktemp("fuzz_run")
     scenario = load_scenario(slot_length_s=60.0)
@@ -259,8 +259,8 @@ def fuzz_configs(n: int, seed: int) -> dict[str, int]:
 
 
 def fuzz_maps(n: int, seed: int) -> dict[str, int]:
-    from models import grid
-    from models.inference import check_maps
+    from socialnav.models import grid
+    from socialnav.models.inference import check_maps
 
     rng = np.random.default_rng(seed)
     tally = {"refused": 0, "accepted": 0}

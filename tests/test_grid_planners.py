@@ -8,8 +8,8 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from planners import costmap, grid_planner, smooth_planner, snl
-from planners.scene import make_scene
+from socialnav.planners import costmap, grid_planner, smooth_planner, snl
+from socialnav.planners.scene import make_scene
 
 
 def scipy_potential(traversal, goal, resolution_m, connectivity=8):

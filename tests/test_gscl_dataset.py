@@ -7,7 +7,7 @@ import jax
 import numpy as np
 import pytest
 
-from models import dataset, families, grid
+from socialnav.models import dataset, families, grid
 
 N = 64
 

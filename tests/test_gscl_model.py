@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from flax import nnx
 
-from models import checkpoints, dataset, evaluation, grid, inference, quality, steps, streams, train, unet
-from models.config import TrainConfig
 from socialnav import cli
+from socialnav.models import checkpoints, dataset, evaluation, grid, inference, quality, steps, streams, train, unet
+from socialnav.models.config import TrainConfig
 
 TINY = dict(
     features=(4, 4, 8, 8),

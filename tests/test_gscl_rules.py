@@ -8,9 +8,9 @@ import json
 import numpy as np
 import pytest
 
-from models import dataset, families, grid, rules, steps, train
-from models import social_costs as sc
-from models.config import TrainConfig
+from socialnav.models import dataset, families, grid, rules, steps, train
+from socialnav.models import social_costs as sc
+from socialnav.models.config import TrainConfig
 
 SCENES = 12
 

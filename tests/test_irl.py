@@ -8,8 +8,8 @@ import numpy as np
 import optax
 import pytest
 
-from models import grid
-from planners import grid_planner, irl, smooth_planner
+from socialnav.models import grid
+from socialnav.planners import grid_planner, irl, smooth_planner
 
 
 def _two_corridor_map(h=9, w=13):
@@ -239,9 +239,9 @@ TINY_PATHS = dict(
 
 @pytest.mark.slow
 def test_a_paths_run_lowers_the_demonstrations_likelihood_and_loads_as_a_gscl_model(tmp_path):
-    from models import dataset, steps, train
-    from models.config import TrainConfig
-    from models.inference import SocialCostModel
+    from socialnav.models import dataset, steps, train
+    from socialnav.models.config import TrainConfig
+    from socialnav.models.inference import SocialCostModel
 
     config = TrainConfig(**TINY_PATHS)
     objective = irl.PathObjective.of(config)

@@ -9,11 +9,11 @@ import pandas as pd
 import pytest
 from plans import scipy_shortest_plan
 
-from jaxsim import logs
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world
 from socialnav import cli
+from socialnav.jaxsim import logs
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.world import build_world
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from evaluation import metrics, statistics
+from socialnav.evaluation import metrics, statistics
 
 
 def _tasks(rng, n=400):

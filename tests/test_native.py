@@ -11,8 +11,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxsim import native
-from jaxsim import social_force as sf
+from socialnav.jaxsim import native
+from socialnav.jaxsim import social_force as sf
 
 needs_compiler = pytest.mark.skipif(
     native.disabled() or shutil.which("c++") is None, reason="no C++ compiler, or SOCIALNAV_NATIVE=off"

@@ -10,10 +10,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from data import SCENES_DIR
-from evaluation import arena, nav_metrics
-from jaxsim.scenes.spec import load_scene
-from jaxsim.scenes.variant import sample_variants
+from socialnav.data import SCENES_DIR
+from socialnav.evaluation import arena, nav_metrics
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variants
 
 DT = 0.1
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.sparse.csgraph import shortest_path
 
-from jaxsim import battery, geometry, graph
-from jaxsim import social_force as sf
+from socialnav.jaxsim import battery, geometry, graph
+from socialnav.jaxsim import social_force as sf
 
 
 def test_two_walkers_head_on_repel(warehouse):
@@ -167,7 +167,7 @@ def test_pairwise_social_force_equals_dense(warehouse, n, force):
 
 
 def test_hash_uniforms_are_uniform_and_independent():
-    from jaxsim.rng import hash_uniform16
+    from socialnav.jaxsim.rng import hash_uniform16
 
     draws = jax.vmap(lambda s: hash_uniform16(jnp.uint32(12345), s, (6, 51)))(jnp.arange(2000))
     u = np.asarray(draws)  # (steps, streams, agents)
@@ -198,7 +198,7 @@ def test_no_robot_waypoint_within_the_robots_radius_of_a_wall(warehouse):
 def test_robot_body_stays_out_of_walls(short_day):
     """A whole short day of 4 worlds: the robot's body (its radius, not only its centre) never
     overlaps a wall box, to the field's first-order error (1 mm), and it still does its tasks."""
-    from jaxsim.rollout import rollout
+    from socialnav.jaxsim.rollout import rollout
 
     scenario, world, controller = short_day
     _, rec = rollout(scenario.params, world, controller, 3, 4, scenario.n_slots * 600, 5)

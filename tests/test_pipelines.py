@@ -7,13 +7,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from causal import ablation
-from jaxsim import rollout
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world
-from planners.routes import shortest_path_plan
+from socialnav.causal import ablation
+from socialnav.jaxsim import rollout
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.world import build_world
 from socialnav.pipelines import ablation_series
+from socialnav.planners.routes import shortest_path_plan
 
 
 def test_one_batched_sweep_equals_separate_runs():

@@ -13,14 +13,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from data import SCENES_DIR
-from jaxsim.scenes import env as env_lib
-from jaxsim.scenes.robot import RobotParams
-from jaxsim.scenes.spec import load_scene
-from jaxsim.scenes.variant import sample_variant
-from planners import costmap, policy_run, policy_social, policy_training
-from planners import policy as policy_lib
 from socialnav.cli import main
+from socialnav.data import SCENES_DIR
+from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variant
+from socialnav.planners import costmap, policy_run, policy_social, policy_training
+from socialnav.planners import policy as policy_lib
 
 EASY = "snape_static_person"  # untrained, the robot drives into the person and stays
 
@@ -284,8 +284,8 @@ def test_bad_input_to_policy_train_and_arena_policy_run_is_one_line(tmp_path, ca
 
 @pytest.mark.slow
 def test_a_policy_with_the_gscl_channel_trains_and_runs_in_the_arena(tmp_path, capsys):
-    from models import train as gscl_train
-    from models.config import TrainConfig
+    from socialnav.models import train as gscl_train
+    from socialnav.models.config import TrainConfig
 
     gscl = tmp_path / "gscl"
     tiny = TrainConfig(

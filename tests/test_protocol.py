@@ -7,15 +7,15 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from evaluation import protocol as ex
-from evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
-from evaluation.warehouse import build_methods, method_plans
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world
-from planners.routes import shortest_path_plan
-from planners.tables import CausalTables
-from planners.warehouse_actors import causal_planner
+from socialnav.evaluation import protocol as ex
+from socialnav.evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
+from socialnav.evaluation.warehouse import build_methods, method_plans
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.world import build_world
+from socialnav.planners.routes import shortest_path_plan
+from socialnav.planners.tables import CausalTables
+from socialnav.planners.warehouse_actors import causal_planner
 
 N_TASKS = 8
 CFG = dict(warmup_s=20.0, arrival_spread_s=10.0)

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from flax import struct
 
-from jaxsim import rollout
-from jaxsim.params import SimParams
+from socialnav.jaxsim import rollout
+from socialnav.jaxsim.params import SimParams
 
 
 @struct.dataclass
@@ -102,8 +102,8 @@ def test_a_new_dynamic_value_reuses_the_compiled_rollout(warehouse):
     """Dynamic parameters are inputs of the compiled program: another value compiles nothing new."""
     from plans import scipy_shortest_plan
 
-    from jaxsim.route_follower import route_follower
-    from jaxsim.world import build_world
+    from socialnav.jaxsim.route_follower import route_follower
+    from socialnav.jaxsim.world import build_world
 
     s = warehouse.replace_params(n_workers=2, slot_length_s=20.0)
     world = build_world(s)

@@ -9,11 +9,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from data import SCENES_DIR
-from evaluation import nav_metrics
-from jaxsim.scenes import rule_monitor
-from jaxsim.scenes.spec import load_scene, mirror
-from jaxsim.scenes.variant import sample_variants
+from socialnav.data import SCENES_DIR
+from socialnav.evaluation import nav_metrics
+from socialnav.jaxsim.scenes import rule_monitor
+from socialnav.jaxsim.scenes.spec import load_scene, mirror
+from socialnav.jaxsim.scenes.variant import sample_variants
 
 T = 80
 

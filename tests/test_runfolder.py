@@ -8,8 +8,8 @@ import json
 
 import pytest
 
-from common import runfolder
 from socialnav import cli
+from socialnav.common import runfolder
 
 SHORT = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
 
@@ -144,9 +144,9 @@ def test_names_that_reach_paths_are_checked(tmp_path):
 
 
 def test_a_scene_whose_name_would_leave_the_folder_is_refused(tmp_path):
-    from data import SCENES_DIR
-    from jaxsim.scenario.errors import ScenarioError
-    from jaxsim.scenes.spec import load_scene
+    from socialnav.data import SCENES_DIR
+    from socialnav.jaxsim.scenario.errors import ScenarioError
+    from socialnav.jaxsim.scenes.spec import load_scene
 
     obj = json.loads((SCENES_DIR / "casn_static_person.json").read_text())
     for name in ("../../victim", "a/b", ""):

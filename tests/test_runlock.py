@@ -10,8 +10,8 @@ import textwrap
 
 import pytest
 
-from common.runlock import LOCK_FILE, RunLocked, run_lock
 from socialnav import cli
+from socialnav.common.runlock import LOCK_FILE, RunLocked, run_lock
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -21,7 +21,7 @@ def _holder(folder: pathlib.Path) -> subprocess.Popen:
     code = textwrap.dedent(
         f"""
         import sys
-        from common.runlock import run_lock
+        from socialnav.common.runlock import run_lock
         with run_lock({str(folder)!r}, "socialnav simulate"):
             print("held", flush=True)
             sys.stdin.read()

@@ -8,10 +8,10 @@ import shutil
 import numpy as np
 import pytest
 
-from evaluation.protocol import ProtocolConfig
-from jaxsim.params import TIAGO_RADIUS_M
-from jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
-from jaxsim.scenes.robot import RobotParams
+from socialnav.evaluation.protocol import ProtocolConfig
+from socialnav.jaxsim.params import TIAGO_RADIUS_M
+from socialnav.jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
+from socialnav.jaxsim.scenes.robot import RobotParams
 
 
 def test_builtin_warehouse_matches_the_reference(warehouse):

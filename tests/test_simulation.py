@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from plans import scipy_shortest_plan
 
-from jaxsim import geometry
-from jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_keys
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING
-from jaxsim.world import build_world
+from socialnav.jaxsim import geometry
+from socialnav.jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_keys
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING
+from socialnav.jaxsim.world import build_world
 
 # The wall constraint (jaxsim.crowd.wall_constraint) is first order along the wall normal before
 # the move: exact at a straight wall, but at an inside corner, where the nearest surface changes
@@ -218,7 +218,7 @@ def test_world_without_workers_runs():
 def test_a_diverged_state_stops_the_run(day_rollout):
     """NaN in a logged signal (as extreme force parameters can cause) is an error naming the
     field, the world and the time; absent workers' positions do not count."""
-    from jaxsim import logs
+    from socialnav.jaxsim import logs
 
     _, _, rec = day_rollout
     logs.check_finite(rec)  # a normal day passes

@@ -11,15 +11,15 @@ import numpy as np
 import pytest
 from plans import scipy_shortest_plan
 
-from causal import discover, simulator_graph
-from causal.variables import GROUND_TRUTH
-from jaxsim import step as step_lib
-from jaxsim.actor import Actor, Driver
-from jaxsim.rng import world_seed_u32
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.state import CHARGING, TASK
-from jaxsim.world import build_world
+from socialnav.causal import discover, simulator_graph
+from socialnav.causal.variables import GROUND_TRUTH
+from socialnav.jaxsim import step as step_lib
+from socialnav.jaxsim.actor import Actor, Driver
+from socialnav.jaxsim.rng import world_seed_u32
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.state import CHARGING, TASK
+from socialnav.jaxsim.world import build_world
 
 N_WORLDS = 24
 WARM_STEPS = 1200  # 2 min of the day: some robots charging, some in an obstacle, workers about

@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 from PIL import Image
 
-from models import grid
-from planners import grid_planner, irl, tracks
+from socialnav.models import grid
+from socialnav.planners import grid_planner, irl, tracks
 
 
 def _write_map(folder, occupied_xy_m, size_m=30.0, resolution_m=0.1):
@@ -31,7 +31,7 @@ def test_a_planned_path_written_as_a_track_comes_back_as_the_same_demonstration(
     assert occupancy.shape == (300, 300) and resolution == 0.1 and occupancy[160, 150] == 1 and occupancy[100, 150] == 0
     start = np.array([15.0, 15.0])
     # The window the tracks module will draw, and an exact plan on it from the centre over the wall.
-    from models.inference import input_map
+    from socialnav.models.inference import input_map
 
     window = np.asarray(
         input_map(occupancy, resolution, origin, start, np.zeros((0, 2)), np.zeros(0), start + [0.5, 4.0])
@@ -135,8 +135,8 @@ def test_bad_map_files_are_named_with_their_field(tmp_path):
 
 @pytest.mark.slow
 def test_fit_tracks_command_fits_exports_a_loadable_model_and_names_bad_files(tmp_path, capsys):
-    from models.inference import SocialCostModel
     from socialnav import cli
+    from socialnav.models.inference import SocialCostModel
 
     yaml_path = _write_map(tmp_path, [(14.0, 13.0, 16.0, 15.5)])  # a pillar people pass on its north side
     rows = []
@@ -164,8 +164,8 @@ def test_fit_tracks_command_fits_exports_a_loadable_model_and_names_bad_files(tm
 
 
 def test_simulated_tracks_keep_variants_apart_and_walkers_make_demonstrations():
-    from data import DATA_DIR
-    from jaxsim.scenes.spec import load_scene
+    from socialnav.data import DATA_DIR
+    from socialnav.jaxsim.scenes.spec import load_scene
 
     spec = load_scene(DATA_DIR / "scenes" / "casn_crossing.json")
     people, occupancy, resolution, origin = tracks.simulated_tracks(spec, seed=0, variants=3, seconds=8.0)

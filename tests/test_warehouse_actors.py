@@ -11,16 +11,16 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from evaluation import protocol as ex
-from evaluation.outcomes import CONGESTION, NOT_RUN, SUCCESS
-from jaxsim.actor import Actor, Driver
-from jaxsim.robot import RobotCommand
-from jaxsim.rollout import rollout, to_numpy
-from jaxsim.route_follower import route_follower
-from jaxsim.scenario import load_scenario
-from jaxsim.world import build_world
-from planners.routes import shortest_path_plan
-from planners.warehouse_actors import causal_planner
+from socialnav.evaluation import protocol as ex
+from socialnav.evaluation.outcomes import CONGESTION, NOT_RUN, SUCCESS
+from socialnav.jaxsim.actor import Actor, Driver
+from socialnav.jaxsim.robot import RobotCommand
+from socialnav.jaxsim.rollout import rollout, to_numpy
+from socialnav.jaxsim.route_follower import route_follower
+from socialnav.jaxsim.scenario import load_scenario
+from socialnav.jaxsim.world import build_world
+from socialnav.planners.routes import shortest_path_plan
+from socialnav.planners.warehouse_actors import causal_planner
 
 README = pathlib.Path(__file__).parent.parent / "README.md"
 

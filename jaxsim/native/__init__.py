@@ -162,6 +162,6 @@ def social_force_available() -> bool:
         library = ctypes.cdll.LoadLibrary(str(build()))
         jax.ffi.register_ffi_target(SOCIAL_FORCE_TARGET, jax.ffi.pycapsule(library.SocialForce), platform="cpu")
     except (RuntimeError, OSError) as e:
-        warnings.warn(f"jaxsim.native: the social force runs in XLA's slower code ({e})", stacklevel=2)
+        warnings.warn(f"socialnav.jaxsim.native: the social force runs in XLA's slower code ({e})", stacklevel=2)
         return False
     return True

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenario.errors import ScenarioError
 
 
 def read_json(file: pathlib.Path) -> dict:

@@ -19,17 +19,17 @@ from typing import Any
 
 import numpy as np
 
-from data import DATA_DIR, WAREHOUSE_DIR
-from jaxsim.params import SimParams
-from jaxsim.scenario.errors import ScenarioError
-from jaxsim.scenario.graph import FILE as GRAPH_FILE
-from jaxsim.scenario.graph import check_connected, load_graph
-from jaxsim.scenario.schedule import load_schedule
-from jaxsim.scenario.tasks import load_tasks
-from jaxsim.scenario.walls import FILE as WALLS_FILE
-from jaxsim.scenario.walls import load_walls
-from jaxsim.scenario.waypoints import FILE as WAYPOINTS_FILE
-from jaxsim.scenario.waypoints import load_waypoints
+from socialnav.data import DATA_DIR, WAREHOUSE_DIR
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenario.graph import FILE as GRAPH_FILE
+from socialnav.jaxsim.scenario.graph import check_connected, load_graph
+from socialnav.jaxsim.scenario.schedule import load_schedule
+from socialnav.jaxsim.scenario.tasks import load_tasks
+from socialnav.jaxsim.scenario.walls import FILE as WALLS_FILE
+from socialnav.jaxsim.scenario.walls import load_walls
+from socialnav.jaxsim.scenario.waypoints import FILE as WAYPOINTS_FILE
+from socialnav.jaxsim.scenario.waypoints import load_waypoints
 
 # The largest map (bounding box of walls and waypoints) a scenario may span: the simulator
 # precomputes a wall distance field over it at 5 cm (200 m x 200 m: 16 M cells, 190 MB).

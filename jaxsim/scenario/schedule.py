@@ -7,8 +7,8 @@ import pathlib
 
 import numpy as np
 
-from jaxsim.scenario.errors import ScenarioError
-from jaxsim.scenario.jsonio import field, list_field, read_json
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenario.jsonio import field, list_field, read_json
 
 FILE = "schedule.json"
 PROBABILITY_TOLERANCE = 1e-6

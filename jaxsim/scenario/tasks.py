@@ -8,8 +8,8 @@ import pathlib
 
 import numpy as np
 
-from jaxsim.scenario.errors import ScenarioError
-from jaxsim.scenario.jsonio import field, list_field, read_json, waypoint_field
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenario.jsonio import field, list_field, read_json, waypoint_field
 
 FILE = "tasks.json"
 

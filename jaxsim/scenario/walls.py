@@ -6,10 +6,10 @@ import pathlib
 
 import numpy as np
 
-from jaxsim.scenario.errors import ScenarioError
-from jaxsim.scenario.jsonio import field, list_field, number, read_json
-from jaxsim.scenario.waypoints import FILE as WAYPOINTS_FILE
-from jaxsim.scenario.waypoints import Waypoints
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenario.jsonio import field, list_field, number, read_json
+from socialnav.jaxsim.scenario.waypoints import FILE as WAYPOINTS_FILE
+from socialnav.jaxsim.scenario.waypoints import Waypoints
 
 FILE = "walls.json"
 

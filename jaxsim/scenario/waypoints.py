@@ -7,9 +7,9 @@ import pathlib
 
 import numpy as np
 
-from common.names import SAFE_NAME_RULE, is_safe_name
-from jaxsim.scenario.errors import ScenarioError
-from jaxsim.scenario.jsonio import field, list_field, number, read_json
+from socialnav.common.names import SAFE_NAME_RULE, is_safe_name
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenario.jsonio import field, list_field, number, read_json
 
 FILE = "waypoints.json"
 

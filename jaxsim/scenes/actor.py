@@ -26,8 +26,8 @@ from typing import Any
 import jax
 from flax import struct
 
-from jaxsim.actor import Actor, ActorState, Params
-from jaxsim.scenes.env import Env, EnvState, Observation, TimeStep
+from socialnav.jaxsim.actor import Actor, ActorState, Params
+from socialnav.jaxsim.scenes.env import Env, EnvState, Observation, TimeStep
 
 __all__ = ["Actor", "ActorState", "Params", "StepRecord", "default_record", "rollout"]
 

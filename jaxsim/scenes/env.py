@@ -33,17 +33,17 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from data import WAREHOUSE_DIR
-from jaxsim.orca import ORCAParams
-from jaxsim.params import SimParams
-from jaxsim.scenario.loader import load_scenario
-from jaxsim.scenes import people as people_lib
-from jaxsim.scenes import perception
-from jaxsim.scenes import robot as robot_lib
-from jaxsim.scenes import world as world_lib
-from jaxsim.scenes.variant import Variant
-from jaxsim.scenes.world import SceneWorld
-from jaxsim.world import Grid
+from socialnav.data import WAREHOUSE_DIR
+from socialnav.jaxsim.orca import ORCAParams
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.scenario.loader import load_scenario
+from socialnav.jaxsim.scenes import people as people_lib
+from socialnav.jaxsim.scenes import perception
+from socialnav.jaxsim.scenes import robot as robot_lib
+from socialnav.jaxsim.scenes import world as world_lib
+from socialnav.jaxsim.scenes.variant import Variant
+from socialnav.jaxsim.scenes.world import SceneWorld
+from socialnav.jaxsim.world import Grid
 
 
 @dataclasses.dataclass(frozen=True)

@@ -21,9 +21,9 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
-from jaxsim.scenes import env as env_lib
-from jaxsim.scenes.spec import SceneSpec
-from jaxsim.scenes.variant import padded_slots, sample_variants
+from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes.spec import SceneSpec
+from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
 
 # Bounds of the unbounded fields (the yaw is not wrapped: it counts whole turns).
 _BOUND = {

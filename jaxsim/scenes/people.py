@@ -14,11 +14,11 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim import crowd, orca, rng
-from jaxsim.params import TIAGO_RADIUS_M, SimParams
-from jaxsim.scenes.spec import KIND
-from jaxsim.scenes.variant import Variant
-from jaxsim.scenes.world import SceneWorld
+from socialnav.jaxsim import crowd, orca, rng
+from socialnav.jaxsim.params import TIAGO_RADIUS_M, SimParams
+from socialnav.jaxsim.scenes.spec import KIND
+from socialnav.jaxsim.scenes.variant import Variant
+from socialnav.jaxsim.scenes.world import SceneWorld
 
 ARRIVED_M = 0.3  # a walker within this distance of its target has arrived
 STOP_RAMP_M = 0.5

@@ -7,7 +7,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.scenes.world import SceneWorld, segment_blocked
+from socialnav.jaxsim.scenes.world import SceneWorld, segment_blocked
 
 RANGE_M = 8.0  # GSCL's window reaches 8 m from the robot; the seeds' RGB-D sensors about as far
 WINDOW = 5  # positions kept per person: 0.4 s at 10 Hz

@@ -12,8 +12,8 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from jaxsim.params import TIAGO_RADIUS_M
-from jaxsim.scenes.world import SceneWorld, wall_distance
+from socialnav.jaxsim.params import TIAGO_RADIUS_M
+from socialnav.jaxsim.scenes.world import SceneWorld, wall_distance
 
 
 @struct.dataclass

@@ -56,8 +56,8 @@ from typing import Any
 
 import numpy as np
 
-from common.names import SAFE_NAME_RULE, is_safe_name
-from jaxsim.scenario.errors import ScenarioError
+from socialnav.common.names import SAFE_NAME_RULE, is_safe_name
+from socialnav.jaxsim.scenario.errors import ScenarioError
 
 BEHAVIOURS = ("standing", "walk", "group", "queue", "stream")
 KIND = {"standing": 0, "walk": 1, "queue": 2, "stream": 3}  # a group's members are standing
@@ -303,7 +303,7 @@ def _placed_at_start(person: dict) -> list[tuple[str, tuple]]:
 def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
     """Refuse what no episode can use: the goal at the start, a person on the robot's start
     (or on its circle, for a group), two people in one place at the start."""
-    from jaxsim.scenes.robot import RobotParams
+    from socialnav.jaxsim.scenes.robot import RobotParams
 
     robot_radius = RobotParams().radius_m
     if _range_gap_m(robot["start"], robot["goal"]) < MIN_START_GOAL_M:

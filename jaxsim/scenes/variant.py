@@ -15,7 +15,7 @@ import zlib
 import numpy as np
 from flax import struct
 
-from jaxsim.scenes.spec import KIND, SceneSpec
+from socialnav.jaxsim.scenes.spec import KIND, SceneSpec
 
 
 @struct.dataclass

@@ -7,9 +7,9 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from jaxsim import geometry
-from jaxsim.scenes.spec import SceneSpec
-from jaxsim.world import Grid
+from socialnav.jaxsim import geometry
+from socialnav.jaxsim.scenes.spec import SceneSpec
+from socialnav.jaxsim.world import Grid
 
 FIELD_RESOLUTION_M = 0.05
 
