@@ -1,8 +1,8 @@
-"""common: the leaf every part may import, importing no part itself.
+"""socialnav.common: the leaf every part may import, importing no part itself.
 
 One home each for what several parts need and none owns: atomic file writes
-(:mod:`common.atomic`), progress reporting (:mod:`common.progress`), pytree helpers
-(:mod:`common.pytree`) and the simulator log's file contract (:mod:`common.logschema`), which
+(:mod:`~socialnav.common.atomic`), progress reporting (:mod:`~socialnav.common.progress`), pytree helpers
+(:mod:`~socialnav.common.pytree`) and the simulator log's file contract (:mod:`~socialnav.common.logschema`), which
 the simulator writes and the causal pipeline reads without importing each other.
 """
 
@@ -12,3 +12,7 @@ try:
     __version__ = version("socialnav-jax")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree that is not installed
     __version__ = "0+unknown"
+
+from socialnav.common.atomic import write_atomic, write_bytes_atomic, write_text_atomic
+
+__all__ = ["__version__", "write_atomic", "write_bytes_atomic", "write_text_atomic"]

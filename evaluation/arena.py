@@ -33,16 +33,17 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from data import WAREHOUSE_DIR
-from jaxsim.params import SimParams
-from jaxsim.scenario.loader import load_scenario
-from jaxsim.scenes import env as env_lib
-from jaxsim.scenes import robot as robot_lib
-from jaxsim.scenes import world as world_lib
-from jaxsim.scenes.actor import Actor, rollout
-from jaxsim.scenes.spec import SceneSpec
-from jaxsim.scenes.variant import Variant, padded_slots
-from planners import actors, baselines, costmap, stack
+from socialnav.data import WAREHOUSE_DIR
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.scenario.loader import load_scenario
+from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes import robot as robot_lib
+from socialnav.jaxsim.scenes import world as world_lib
+from socialnav.jaxsim.scenes.actor import Actor, rollout
+from socialnav.jaxsim.scenes.spec import SceneSpec
+from socialnav.jaxsim.scenes.variant import Variant, padded_slots
+from socialnav.planners import actors, baselines, costmap, policy_social, stack
+from socialnav.planners.scene import Scene
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,6 +70,11 @@ class ArenaConfig:
     person_radius_m: float = 0.25
     max_path_cells: int = 256
     human_model: str = "social_force"
+
+
+# The look-ahead of the trajectory's predicted distance to the nearest seen person (the pictures'
+# and the social band's horizon, seed 004 Sec. 3.3).
+PREDICTION_HORIZON_S = 2.0
 
 
 @struct.dataclass
@@ -100,11 +106,13 @@ class SceneSetup:
     """What an episode needs of a scene, built once on the host (:func:`setup_scene`).
 
     Attributes:
-      spec: the scene; grid: the planner grid (static); env: the scene as an environment
-      (:class:`jaxsim.scenes.env.Env`, its walls padded); map: what a stack knows of it
-      (:class:`planners.actors.StackMap`); obstacle_costs: (H, W) the walls' inflated layer
-      (profiling); n_periods: replanning periods per episode; n_slots: people slots the variants
-      are padded to.
+      spec: the scene.
+      grid: the planner grid (static).
+      env: the scene as an environment (:class:`socialnav.jaxsim.scenes.env.Env`, its walls padded).
+      map: what a stack knows of it (:class:`socialnav.planners.actors.StackMap`).
+      obstacle_costs: (H, W) the walls' inflated layer on ``grid``.
+      n_periods: replanning periods per episode.
+      n_slots: people slots the variants are padded to.
     """
 
     spec: SceneSpec
@@ -165,13 +173,63 @@ def setup_scene(
     )
 
 
+def planner_scene(setup: SceneSetup, variant: Variant, time_s: float = 0.0, perceived: bool = False) -> Scene:
+    """The planner's :class:`~socialnav.planners.scene.Scene` of one variant of a scene at
+    ``time_s`` (the people walked by the crowd model with the robot standing at its start).
+
+    ``perceived=False`` gives the truth: every person present, with their true velocity and
+    heading. ``perceived=True`` gives what the robot's sensors report (people in range and in
+    line of sight, velocities estimated from their tracks: zero at time 0), as the stacks see it.
+    The scene's objects (SNAPE's interaction spaces) come from the scene file either way.
+    ``variant``: one draw (:func:`socialnav.jaxsim.scenes.variant.sample_variant`, padded to
+    ``setup.n_slots`` people or not)."""
+    env = setup.env
+    variant = jax.tree_util.tree_map(jnp.asarray, variant)
+    state, timestep = env.reset(episode_key(variant), variant)
+    step = jax.jit(env.step)
+    for _ in range(int(round(time_s / env.config.dt_s))):
+        state, timestep = step(state, jnp.zeros(2, jnp.float32))
+    objects = dict(
+        objects_xy_m=setup.map.objects_xy_m, objects_cost=setup.map.objects_cost, objects_valid=setup.map.objects_valid
+    )
+    if perceived:
+        return policy_social.perceived_scene(timestep.observation).replace(**objects)
+    return Scene(
+        people_xy_m=state.people.xy,
+        people_heading_rad=state.people.heading,
+        people_velocity_mps=state.people.velocity,
+        people_valid=state.people.present,
+        robot_xy_m=state.robot.xy,
+        robot_yaw_rad=state.robot.yaw,
+        goal_xy_m=variant.goal_xy,
+        **objects,
+    )
+
+
+def scene_from_file(
+    file, variant: int = 0, seed: int = 0, time_s: float = 0.0, perceived: bool = False, held_out: bool = False
+) -> tuple[Scene, SceneSetup]:
+    """A scene file's variant ``variant`` (drawn under ``seed``, as ``socialnav arena --seed`` draws
+    it) as the planner's :class:`~socialnav.planners.scene.Scene`, with the scene's
+    :class:`SceneSetup` (its planner ``grid``, ``occupancy`` and environment). ``time_s``,
+    ``perceived``: as :func:`planner_scene`; ``held_out`` draws the variant just outside the
+    file's ranges. Raises ``ValueError`` naming the file and field for a bad file."""
+    from socialnav.jaxsim.scenes.spec import load_scene
+    from socialnav.jaxsim.scenes.variant import sample_variant
+
+    spec = load_scene(file)
+    setup = setup_scene(spec)
+    draw = sample_variant(spec, seed, variant, held_out=held_out, n_slots=setup.n_slots)
+    return planner_scene(setup, draw, time_s, perceived), setup
+
+
 def _record(seen: env_lib.Observation, action, actor_state, timestep: env_lib.TimeStep):
     """One step of a :class:`Trajectory` (before stacking)."""
     o, info = timestep.observation, timestep.info
-    # The nearest seen person's predicted distance 2 s ahead, from what the actor saw.
+    # The nearest seen person's predicted distance PREDICTION_HORIZON_S ahead, from what the actor saw.
     heading = jnp.stack([jnp.cos(seen.robot_yaw_rad), jnp.sin(seen.robot_yaw_rad)])
-    ahead = seen.robot_xy_m + 2.0 * seen.robot_speed_mps * heading
-    predicted = seen.people_xy_m + 2.0 * seen.people_velocity_mps
+    ahead = seen.robot_xy_m + PREDICTION_HORIZON_S * seen.robot_speed_mps * heading
+    predicted = seen.people_xy_m + PREDICTION_HORIZON_S * seen.people_velocity_mps
     pred_d = jnp.min(jnp.where(seen.people_visible, jnp.linalg.norm(predicted - ahead, axis=-1), jnp.inf))
     gain = getattr(actor_state, "speed_gain", jnp.float32(1.0))
     return (

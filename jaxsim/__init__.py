@@ -1,8 +1,34 @@
-"""jaxsim: the simulator alone. The PeopleFlow warehouse as a batched, pure-JAX simulation.
+"""socialnav.jaxsim: the simulator alone. The PeopleFlow warehouse as a batched, pure-JAX simulation,
+and the social-navigation scenes (:mod:`socialnav.jaxsim.scenes`).
 
-Import what you need from the submodules: :mod:`jaxsim.scenario` (the scenario files, loaded
-and validated), :mod:`jaxsim.world` (its static arrays), :mod:`jaxsim.step` (the crowd step, the
-day step with the robot's controller passed in, the measurement), :mod:`jaxsim.robot` (the
-day's controller), :mod:`jaxsim.rollout` (scan, vmap, sharding, batch compaction) and
-:mod:`jaxsim.logs` (Parquet logs). This package imports none of the toolkit's other parts.
+:mod:`~socialnav.jaxsim.scenario` (the scenario files, loaded and validated),
+:mod:`~socialnav.jaxsim.world` (its static arrays), :mod:`~socialnav.jaxsim.step` (the crowd step,
+the day step with the robot's actor passed in, the measurement), :mod:`~socialnav.jaxsim.robot`
+(the robot's body and day), :mod:`~socialnav.jaxsim.rollout` (scan, vmap, sharding) and
+:mod:`~socialnav.jaxsim.logs` (Parquet logs). Imports none of the toolkit's other parts.
+
+Re-exported here: what a script needs to simulate worlds and read their logs (the functions
+``rollout.rollout`` and ``route_follower.route_follower`` keep their modules' names, so import
+them from their modules).
 """
+
+from socialnav.jaxsim.actor import Actor, Driver
+from socialnav.jaxsim.logs import record_table, simulate_to_parquet
+from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.rollout import to_numpy
+from socialnav.jaxsim.scenario import Scenario, ScenarioError, load_scenario
+from socialnav.jaxsim.world import World, build_world
+
+__all__ = [
+    "Actor",
+    "Driver",
+    "Scenario",
+    "ScenarioError",
+    "SimParams",
+    "World",
+    "build_world",
+    "load_scenario",
+    "record_table",
+    "simulate_to_parquet",
+    "to_numpy",
+]

@@ -321,3 +321,46 @@ def test_demo_paths_reach_the_goal_and_keep_off_lethal_cells():
         assert reached, name
         ij = np.asarray(plots.SPEC.cell_of(path))
         assert np.all(costs[ij[1:, 0], ij[1:, 1]] < costmap.INSCRIBED), name
+
+
+# ---------------------------------------------------------------- one shape for every layer (planners.layers)
+
+
+def test_every_layer_in_one_shape_equals_its_own_function():
+    """``layer(scene, grid, state) -> (costs, state)`` gives each paper's layer exactly, CASN's state
+    carried (its frozen points), the others' ``()``; under jit with the grid static too."""
+    from socialnav.planners import layers
+
+    scene = make_scene([[1.0, 0.5], [-1.0, -0.5]], people_velocity_mps=[[-1.0, 0.0], [0.0, 0.0]], goal_xy_m=(3, 0))
+    x, y = jnp.asarray(X), jnp.asarray(Y)
+    expected = {
+        "snl": snl.snl_layer(scene, x, y),
+        "casn": casn.casn_layer(scene, x, y)[0],
+        "snape": snape.snape_layer(scene, x, y),
+    }
+    for name, make in layers.BY_NAME.items():
+        layer = make()
+        costs, state = layer(scene, SPEC)
+        np.testing.assert_array_equal(np.asarray(costs), np.asarray(expected[name]))
+        assert costs.shape == SPEC.shape and costs.dtype == jnp.float32
+        jitted = jax.jit(layer.apply, static_argnums=2)(layer.params, scene, SPEC, layer.init(scene))
+        np.testing.assert_allclose(np.asarray(jitted[0]), np.asarray(costs), atol=1e-4)
+        if name == "casn":
+            assert isinstance(state, casn.CASNState)
+        else:
+            assert state == ()
+    # Parameters are traced: another radius changes the costs through the same function.
+    wider = layers.casn(casn.CASNParams(personal_radius_m=1.5))(scene, SPEC)[0]
+    assert float(jnp.sum(wider > 0)) > float(jnp.sum(expected["casn"] > 0))
+
+
+def test_the_gscl_layer_in_one_shape_equals_gscl_layer():
+    from socialnav.planners import layers
+
+    predict = small_unet_predict()
+    scene = make_scene([[1.0, 0.5]], people_heading_rad=[math.pi], robot_xy_m=(0.0, 0.0), goal_xy_m=(3.0, 0.0))
+    occupancy = np.zeros(SPEC.shape, np.float32)
+    occupancy[:, :3] = 1.0
+    costs, state = layers.gscl(predict, occupancy)(scene, SPEC)
+    np.testing.assert_array_equal(np.asarray(costs), np.asarray(gscl_layer.gscl_layer(predict, occupancy, SPEC, scene)))
+    assert state == () and float(costs.max()) > 0.0

@@ -4,7 +4,6 @@ and a user's own actor from Python and from the command line."""
 from __future__ import annotations
 
 import json
-import re
 
 import jax
 import jax.numpy as jnp
@@ -20,8 +19,6 @@ from socialnav.jaxsim.scenes.actor import Actor, rollout
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant, sample_variants
 from socialnav.planners import actors
-
-ROOT = DATA_DIR.parent
 
 
 @pytest.fixture(scope="module")
@@ -143,21 +140,6 @@ def test_a_parameter_sweep_reuses_the_compiled_program(setup):
     assert arena._episode_program(actor)._cache_size() == 1  # the speed limit is traced
 
 
-def _readme_quickstart() -> str:
-    text = (ROOT / "README.md").read_text()
-    match = re.search(r"<!-- actor-quickstart -->\s*```python\n(.*?)```", text, re.S)
-    assert match, "README: the actor quickstart block is missing"
-    return match.group(1)
-
-
-def test_the_readme_actor_quickstart_runs():
-    namespace: dict = {}
-    exec(compile(_readme_quickstart(), "README.md (actor quickstart)", "exec"), namespace)
-    summary = namespace["summary"]
-    assert {"keep_right", "navfn"} <= set(summary["method"])
-    assert np.all(summary["n"] == 4)
-
-
 MY_ACTOR = '''
 import jax.numpy as jnp
 from socialnav.jaxsim.scenes.actor import Actor
@@ -274,3 +256,39 @@ def test_a_layer_parameter_sweep_reuses_the_stacks_program(setup):
     actor = arena.method_actor(method, setup.grid, float(setup.env.robot.radius_m), arena.ArenaConfig(), None)
     assert arena._episode_program(actor)._cache_size() == 1
     assert not np.array_equal(np.asarray(small.robot_xy), np.asarray(large.robot_xy))
+
+
+# ---------------------------------------------------------------- a scene file to the planner's Scene
+
+
+def test_planner_scene_is_the_variant_at_its_start_and_moves_with_time(setup):
+    variant = _one(_variants(setup, 2, seed=3), 1)
+    truth = arena.planner_scene(setup, variant)
+    present = np.asarray(truth.people_valid)
+    assert present.any()
+    np.testing.assert_allclose(np.asarray(truth.people_xy_m)[present], np.asarray(variant.xy0)[present], atol=1e-6)
+    np.testing.assert_array_equal(np.asarray(truth.robot_xy_m), np.asarray(variant.robot_xy))
+    np.testing.assert_array_equal(np.asarray(truth.goal_xy_m), np.asarray(variant.goal_xy))
+    later = arena.planner_scene(setup, variant, time_s=2.0)
+    moved = np.linalg.norm(np.asarray(later.people_xy_m) - np.asarray(truth.people_xy_m), axis=-1)[present]
+    assert moved.max() > 0.5  # walkers at about 1 m/s for 2 s
+    np.testing.assert_array_equal(np.asarray(later.robot_xy_m), np.asarray(truth.robot_xy_m))  # it stood
+    # What the sensors report is a subset of the truth, at the true places, velocities unknown at t = 0.
+    seen = arena.planner_scene(setup, variant, perceived=True)
+    visible = np.asarray(seen.people_valid)
+    assert not (visible & ~present).any()
+    np.testing.assert_allclose(np.asarray(seen.people_xy_m)[visible], np.asarray(truth.people_xy_m)[visible])
+
+
+def test_scene_from_file_draws_the_arenas_variant_and_names_a_bad_file(setup, tmp_path):
+    from socialnav.evaluation import scene_from_file
+
+    scene, file_setup = scene_from_file(DATA_DIR / "scenes" / "casn_head_on.json", variant=1, seed=3)
+    expected = arena.planner_scene(setup, _one(_variants(setup, 2, seed=3), 1))
+    for a, b in zip(_leaves(scene), _leaves(expected)):
+        np.testing.assert_array_equal(a, b)
+    assert file_setup.grid == setup.grid
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"name": "bad"}))
+    with pytest.raises(ValueError, match="bad.json"):
+        scene_from_file(bad)

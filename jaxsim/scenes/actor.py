@@ -40,7 +40,7 @@ class StepRecord:
       robot_xy_m (T, 2), robot_yaw_rad (T,), robot_speed_mps (T,): after the step.
       people_xy_m (T, P, 2), people_heading_rad (T, P), people_present (T, P): after the step.
       people_visible (T, P): what the actor saw when it chose its action.
-      action (T, 2); reward (T,); reached (T,) bool (by the end of the step).
+      action (T, 2), reward (T,), reached (T,) bool: by the end of the step.
     """
 
     robot_xy_m: jax.Array

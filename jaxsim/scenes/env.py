@@ -109,12 +109,12 @@ class Observation:
     Attributes:
       robot_xy_m (2,), robot_yaw_rad (), robot_speed_mps (), robot_turn_rate_rps (): its own
         pose and velocity (odometry).
-      goal_xy_m (2,).
+      goal_xy_m (2,): where the robot must go.
       people_xy_m (P, 2), people_heading_rad (P,), people_velocity_mps (P, 2): the people as
         sensed (zeros where not seen); the velocity is the estimate from the track window.
       people_visible (P,) bool: in range and in line of sight now.
       occupancy (C, C) float32: the walls around the robot, in its frame (``window_cells``).
-      time_s ().
+      time_s (): the episode's time.
     """
 
     robot_xy_m: jax.Array
@@ -169,7 +169,7 @@ class EnvState:
 
     variant: Variant
     people: people_lib.PeopleState
-    robot: robot_lib.RobotState
+    robot: robot_lib.BaseState
     tracks: perception.Tracks
     step: jax.Array
     reached: jax.Array
