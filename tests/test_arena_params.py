@@ -15,7 +15,7 @@ from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.planners import stack
 
-README = pathlib.Path(__file__).parent.parent / "README.md"
+ARENA_PAGE = pathlib.Path(__file__).parent.parent / "docs" / "arena.md"
 
 
 def test_no_file_gives_every_methods_defaults():
@@ -121,12 +121,12 @@ def test_the_command_refuses_a_bad_file_before_any_work(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and not out.exists()
 
 
-def test_the_readme_example_file_parses(tmp_path):
-    """The README's example parameter file is a valid one (its values reach the stacks)."""
-    text = README.read_text()
+def test_the_docs_example_file_parses(tmp_path):
+    """The arena page's example parameter file is a valid one (its values reach the stacks)."""
+    text = ARENA_PAGE.read_text()
     match = re.search(r"<!-- arena-params-example -->\s*```toml\n(.*?)```", text, re.S)
-    assert match, "README: the arena parameter example is missing"
-    params = arena_params.parse(match.group(1), "README")
+    assert match, "docs/arena.md: the arena parameter example is missing"
+    params = arena_params.parse(match.group(1), "docs/arena.md")
     assert params.robot != RobotParams() or params.layers or params.methods
     for method in stack.METHODS:
         params.layers_for(method)  # every section applies to its stacks

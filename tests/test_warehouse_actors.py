@@ -1,5 +1,5 @@
 """The warehouse's robot driven by actors (jaxsim/actor.py): the route follower and the causal
-planner as actors, a user's own actor through the day and the protocol, and the README's
+planner as actors, a user's own actor through the day and the protocol, and the docs'
 quickstart."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from socialnav.jaxsim.world import build_world
 from socialnav.planners.routes import shortest_path_plan
 from socialnav.planners.warehouse_actors import causal_planner
 
-README = pathlib.Path(__file__).parent.parent / "README.md"
+SIMULATOR_PAGE = pathlib.Path(__file__).parent.parent / "docs" / "simulator.md"
 
 
 def _stand_still(key, obs):
@@ -111,11 +111,11 @@ def test_the_causal_planner_refuses_by_eq_10_and_the_follower_never(quiet):
 
 
 @pytest.mark.slow
-def test_the_readme_warehouse_actor_quickstart_runs(capsys):
-    text = README.read_text()
+def test_the_docs_warehouse_actor_quickstart_runs(capsys):
+    text = SIMULATOR_PAGE.read_text()
     match = re.search(r"<!-- warehouse-actor-quickstart -->\s*```python\n(.*?)```", text, re.S)
-    assert match, "README: the warehouse actor quickstart is missing"
-    exec(compile(match.group(1), "README warehouse-actor-quickstart", "exec"), {})
+    assert match, "docs/simulator.md: the warehouse actor quickstart is missing"
+    exec(compile(match.group(1), "docs/simulator.md warehouse-actor-quickstart", "exec"), {})
     lines = dict(line.split(" ", 1) for line in capsys.readouterr().out.strip().splitlines())
     times = {name: float(re.search(r"mean task time ([\d.]+) s", rest).group(1)) for name, rest in lines.items()}
     assert set(times) == {"follower", "cautious"} and times["cautious"] > times["follower"]
