@@ -102,35 +102,33 @@ def build_distance_field(
     )
 
 
-def segment_hits_boxes(p0: np.ndarray, p1: np.ndarray, boxes_m: np.ndarray) -> np.ndarray:
-    """Whether segments cross any box (slab test).
+def segment_hits_boxes(p0, p1, boxes_m, xp=np):
+    """Whether segments cross any box (slab test): one formula for numpy (``xp=np``, float64: the
+    warehouse's waypoint grid) and ``jax.numpy`` (``xp=jnp``, traced: the arena's line of sight).
 
     Args:
       p0, p1: (..., 2) segment end points.
-      boxes_m: (B, 4) boxes.
+      boxes_m: (B, 4) boxes ``(xmin, xmax, ymin, ymax)``.
+      xp: the array module.
 
     Returns:
       (...,) bool.
     """
-    p0 = np.asarray(p0, np.float64)[..., None, :]
-    d = np.asarray(p1, np.float64)[..., None, :] - p0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / d
-        t1x = (boxes_m[:, 0] - p0[..., 0]) * inv[..., 0]
-        t2x = (boxes_m[:, 1] - p0[..., 0]) * inv[..., 0]
-        t1y = (boxes_m[:, 2] - p0[..., 1]) * inv[..., 1]
-        t2y = (boxes_m[:, 3] - p0[..., 1]) * inv[..., 1]
+    if xp is np:
+        p0, p1, boxes_m = (np.asarray(a, np.float64) for a in (p0, p1, boxes_m))
+    p0 = p0[..., None, :]
+    d = p1[..., None, :] - p0
+    low, high = boxes_m[:, [0, 2]], boxes_m[:, [1, 3]]
     # A zero direction component: the slab is either always (inside) or never crossed.
-    in_x = (boxes_m[:, 0] <= p0[..., 0]) & (p0[..., 0] <= boxes_m[:, 1])
-    in_y = (boxes_m[:, 2] <= p0[..., 1]) & (p0[..., 1] <= boxes_m[:, 3])
-    zero_x, zero_y = d[..., 0] == 0, d[..., 1] == 0
-    tminx = np.where(zero_x, np.where(in_x, -np.inf, np.inf), np.minimum(t1x, t2x))
-    tmaxx = np.where(zero_x, np.where(in_x, np.inf, -np.inf), np.maximum(t1x, t2x))
-    tminy = np.where(zero_y, np.where(in_y, -np.inf, np.inf), np.minimum(t1y, t2y))
-    tmaxy = np.where(zero_y, np.where(in_y, np.inf, -np.inf), np.maximum(t1y, t2y))
-    tmin = np.maximum(np.maximum(tminx, tminy), 0.0)
-    tmax = np.minimum(np.minimum(tmaxx, tmaxy), 1.0)
-    return (tmin <= tmax).any(axis=-1)
+    zero = d == 0
+    safe = xp.where(zero, 1.0, d)
+    t_low, t_high = (low - p0) / safe, (high - p0) / safe
+    inside = (low <= p0) & (p0 <= high)
+    t_enter = xp.where(zero, xp.where(inside, -xp.inf, xp.inf), xp.minimum(t_low, t_high))
+    t_exit = xp.where(zero, xp.where(inside, xp.inf, -xp.inf), xp.maximum(t_low, t_high))
+    t_enter = xp.maximum(xp.max(t_enter, axis=-1), 0.0)
+    t_exit = xp.minimum(xp.min(t_exit, axis=-1), 1.0)
+    return xp.any(t_enter <= t_exit, axis=-1)
 
 
 @dataclasses.dataclass(frozen=True)

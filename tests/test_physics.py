@@ -53,6 +53,26 @@ def test_segment_hits_boxes():
     p0 = np.array([[-1.0, 0.5], [-1.0, 2.0], [0.5, -1.0], [2.0, 2.0]])
     p1 = np.array([[2.0, 0.5], [2.0, 2.0], [0.5, -0.5], [0.5, 0.5]])
     assert geometry.segment_hits_boxes(p0, p1, boxes).tolist() == [True, False, False, True]
+    # Axis-parallel and degenerate segments (a direction component exactly 0): along the box's
+    # edge touches it, a point inside hits, a point outside does not.
+    p0 = np.array([[0.0, -1.0], [1.5, -1.0], [0.5, 0.5], [1.5, 1.5]])
+    p1 = np.array([[0.0, 2.0], [1.5, 2.0], [0.5, 0.5], [1.5, 1.5]])
+    assert geometry.segment_hits_boxes(p0, p1, boxes).tolist() == [True, False, True, False]
+
+
+def test_segment_hits_boxes_is_one_formula_in_numpy_and_jax():
+    """The arena's line of sight (jax.numpy, float32) and the warehouse's grid (numpy, float64)
+    agree on random and grid-aligned segments, where exact zeros and edge contacts are common."""
+    rng = np.random.default_rng(0)
+    boxes = np.round(rng.uniform(-5, 5, (12, 2, 2)), 1)
+    boxes = np.concatenate([np.sort(boxes[:, :, 0], 1), np.sort(boxes[:, :, 1], 1)], axis=1).astype(np.float32)
+    ends = np.round(rng.uniform(-6, 6, (2, 20000, 2)), 1).astype(np.float32)
+    ends[1, :5000, 0] = ends[0, :5000, 0]  # vertical
+    ends[1, 5000:10000, 1] = ends[0, 5000:10000, 1]  # horizontal
+    numpy_says = geometry.segment_hits_boxes(ends[0], ends[1], boxes)
+    jax_says = jax.jit(lambda a, b, w: geometry.segment_hits_boxes(a, b, w, xp=jnp))(ends[0], ends[1], boxes)
+    np.testing.assert_array_equal(np.asarray(jax_says), numpy_says)
+    assert 0.1 < numpy_says.mean() < 0.9
 
 
 def test_battery_hand_computed(warehouse):

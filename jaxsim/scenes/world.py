@@ -69,11 +69,6 @@ def wall_distance(xy, walls_m):
 
 
 def segment_blocked(p0, p1, walls_m):
-    """(...,) bool: the segments p0 -> p1 (..., 2) cross a wall box (slab test, pure JAX)."""
-    d = p1 - p0
-    safe = jnp.where(jnp.abs(d) < 1e-9, 1e-9, d)
-    lo = (walls_m[:, [0, 2]] - p0[..., None, :]) / safe[..., None, :]
-    hi = (walls_m[:, [1, 3]] - p0[..., None, :]) / safe[..., None, :]
-    t_enter = jnp.max(jnp.minimum(lo, hi), axis=-1)
-    t_exit = jnp.min(jnp.maximum(lo, hi), axis=-1)
-    return jnp.any((t_enter <= t_exit) & (t_exit >= 0.0) & (t_enter <= 1.0), axis=-1)
+    """(...,) bool: the segments p0 -> p1 (..., 2) cross a wall box (pure JAX;
+    :func:`jaxsim.geometry.segment_hits_boxes`, the warehouse's test)."""
+    return geometry.segment_hits_boxes(p0, p1, walls_m, xp=jnp)
