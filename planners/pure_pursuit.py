@@ -14,6 +14,8 @@ from flax import struct
 
 from socialnav.planners.scene import wrap_angle
 
+GOAL_SLOWDOWN_M = 0.5  # the speed falls linearly over the last half metre to the pursued point
+
 
 @struct.dataclass
 class PursuitParams:
@@ -43,5 +45,5 @@ def pursue(target_xy, robot_xy, robot_yaw, max_speed_mps, p: PursuitParams = Pur
     delta = target_xy - robot_xy
     error = wrap_angle(jnp.arctan2(delta[1], delta[0]) - robot_yaw)
     v = max_speed_mps * jnp.where(jnp.abs(error) < p.align_rad, jnp.cos(error), 0.0)
-    v = jnp.minimum(v, jnp.linalg.norm(delta) / 0.5 * max_speed_mps)  # slow down onto the goal
+    v = jnp.minimum(v, jnp.linalg.norm(delta) / GOAL_SLOWDOWN_M * max_speed_mps)  # slow down onto the goal
     return v, p.turn_gain * error

@@ -19,6 +19,9 @@ from socialnav.planners.scene import Scene
 
 LAYERS = ("none", "snl_small", "snl_large", "snl_matched", "casn", "snape", "gscl")
 GLOBAL_PLANNERS = ("navfn", "weighted")
+# The social band's speed gain is read at no less than this speed: a robot standing still would
+# predict itself nowhere and never meet anyone (seed 004 Sec. 3.3 gives no floor; ours).
+GAIN_MIN_SPEED_MPS = 0.1
 LOCAL_PLANNERS = ("pursuit", "eband", "social_eband")
 
 # Seed 001's SNL: "the radius of the gradient matches the radius of our cost model" (CASN's
@@ -164,7 +167,7 @@ def local_command(
     if social:
         gain = elastic_band.speed_gain(
             band,
-            jnp.maximum(robot_speed, 0.1),
+            jnp.maximum(robot_speed, GAIN_MIN_SPEED_MPS),
             people.people_xy_m,
             people.people_velocity_mps,
             people.people_valid,

@@ -21,8 +21,10 @@ from socialnav.jaxsim.scenes.variant import Variant
 from socialnav.jaxsim.scenes.world import SceneWorld
 
 ARRIVED_M = 0.3  # a walker within this distance of its target has arrived
-STOP_RAMP_M = 0.5
-HUMAN_MODELS = ("social_force", "orca")  # a queue member slows down over the last half metre to its place
+STOP_RAMP_M = 0.5  # a queue member slows down over the last half metre to its place
+AT_PLACE_M = 0.05  # a queue member this close to its place stands there
+MOVING_MPS = 0.1  # slower than this a person keeps their heading (a standing body does not turn to its drift)
+HUMAN_MODELS = ("social_force", "orca")
 
 
 @struct.dataclass
@@ -70,7 +72,7 @@ def targets(v: Variant, s: PeopleState, time_s):
     distance = jnp.linalg.norm(target - s.xy, axis=-1)
     queue_speed = v.speed_mps * jnp.clip(distance / STOP_RAMP_M, 0.0, 1.0)
     speed = jnp.where(queue, jnp.where(place >= 0, queue_speed, v.speed_mps), v.speed_mps)
-    mobile = s.present & ~s.done & (((walk | stream) & started) | (queue & (distance > 0.05)))
+    mobile = s.present & ~s.done & (((walk | stream) & started) | (queue & (distance > AT_PLACE_M)))
     return target, speed, mobile
 
 
@@ -118,7 +120,7 @@ def step_people(
     xy = jnp.stack([x, y], axis=-1)
     new_v = jnp.stack([vx, vy], axis=-1)
 
-    moving = jnp.linalg.norm(new_v, axis=-1) > 0.1
+    moving = jnp.linalg.norm(new_v, axis=-1) > MOVING_MPS
     turned = jnp.where(time_s >= v.turn_at_s, v.heading_turned, v.heading0)
     heading = jnp.where(moving, jnp.arctan2(new_v[:, 1], new_v[:, 0]), jnp.where(v.kind == 0, turned, s.heading))
 

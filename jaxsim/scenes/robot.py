@@ -30,8 +30,9 @@ class RobotParams:
 
 
 @struct.dataclass
-class RobotState:
-    """xy (2,), yaw (), speed (), turn_rate (), wall_contacts () int32."""
+class BaseState:
+    """The arena's differential-drive base (the warehouse's robot is :class:`jaxsim.state.RobotState`):
+    xy (2,) m, yaw () rad, speed () m/s, turn_rate () rad/s, wall_contacts () int32."""
 
     xy: jnp.ndarray
     yaw: jnp.ndarray
@@ -44,8 +45,8 @@ class RobotState:
         return self.speed * jnp.stack([jnp.cos(self.yaw), jnp.sin(self.yaw)])
 
 
-def init_robot(xy, yaw) -> RobotState:
-    return RobotState(
+def init_robot(xy, yaw) -> BaseState:
+    return BaseState(
         xy=jnp.asarray(xy, jnp.float32),
         yaw=jnp.asarray(yaw, jnp.float32),
         speed=jnp.float32(0.0),
@@ -54,7 +55,7 @@ def init_robot(xy, yaw) -> RobotState:
     )
 
 
-def step_robot(p: RobotParams, world: SceneWorld, s: RobotState, v_cmd, omega_cmd, dt_s: float) -> RobotState:
+def step_robot(p: RobotParams, world: SceneWorld, s: BaseState, v_cmd, omega_cmd, dt_s: float) -> BaseState:
     """Apply a command for one step: limits, then the move unless it ends in a wall."""
     v_target = jnp.clip(v_cmd, 0.0, p.max_speed_mps)
     w_target = jnp.clip(omega_cmd, -p.max_turn_rate_rps, p.max_turn_rate_rps)
@@ -72,7 +73,7 @@ def step_robot(p: RobotParams, world: SceneWorld, s: RobotState, v_cmd, omega_cm
     slid = slid + jnp.maximum(allowed - gap, 0.0) * slid_normal  # back out to the allowed clearance
     still_in = wall_distance(slid, world.walls_m)[0] < allowed - 1e-4
     xy = jnp.where(hits, jnp.where(still_in, s.xy, slid), s.xy + move)
-    return RobotState(
+    return BaseState(
         xy=xy,
         yaw=yaw,
         speed=jnp.where(hits, jnp.linalg.norm(xy - s.xy) / dt_s, speed),
