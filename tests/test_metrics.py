@@ -83,7 +83,11 @@ def test_chi_square_and_intervals():
     all_ok = tasks.assign(outcome="success")
     assert statistics.chi_square_success(all_ok, "baseline", "causal")["p_value"] == 1.0
     mean, lo, hi = statistics.mean_ci([1.0, 2.0, 3.0, 4.0])
-    assert mean == 2.5 and lo < 2.5 < hi and hi - 2.5 == pytest.approx(2.5 - lo)
+    # By hand: s = sqrt(5/3), se = s / 2, t(0.975, 3 dof) = 3.182446 (a t-table): 2.5 -+ 2.054260.
+    assert mean == 2.5 and (lo, hi) == pytest.approx((2.5 - 2.054260, 2.5 + 2.054260), abs=1e-5)
+    assert statistics.mean_ci([1.0, 2.0, 3.0, 4.0], confidence=0.90)[2] == pytest.approx(
+        2.5 + 2.353363 * 0.645497, abs=1e-5
+    )
     assert statistics.mean_ci([7.0]) == (7.0, 7.0, 7.0)
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from plans import scipy_shortest_plan
 
-from socialnav.jaxsim import geometry
+from socialnav.jaxsim import battery, geometry
 from socialnav.jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_keys
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
@@ -35,15 +35,39 @@ def day_rollout(short_day):
     return scenario, to_numpy(final), to_numpy(rec)
 
 
-def test_no_nan_and_battery_in_range(day_rollout):
+def test_no_nan_and_the_battery_discharges(day_rollout):
     _, final, rec = day_rollout
     for leaf in jax.tree.leaves(final):
         if np.issubdtype(leaf.dtype, np.floating):
             assert not np.isnan(leaf).any()
     for name in ("robot_x_m", "robot_y_m", "robot_speed_mps", "battery_pct", "density_ppm2", "worker_x_m"):
         assert not np.isnan(getattr(rec, name)).any(), name
-    assert (rec.battery_pct >= 0).all() and (rec.battery_pct <= 100).all()
-    assert (np.diff(rec.battery_pct, axis=1) < 0).any()  # it does discharge
+    assert (np.diff(rec.battery_pct, axis=1) < 0).any()  # it does discharge (its law: the next test)
+
+
+def test_the_battery_follows_eq_1_and_2_step_by_step():
+    """Every step's change is Eq. (1) of that step's speed, charging and obstacle, and the next
+    level is the last plus that change (Eq. 2), clipped only at 0 and 100 (known answers, not
+    bounds a clip guarantees). A robot starting at 21 % so that it also charges."""
+    scenario = load_scenario(slot_length_s=60.0, n_workers=4, battery_initial_pct=21.0)
+    world = build_world(scenario)
+    controller = route_follower(scipy_shortest_plan(scenario), world)
+    p = scenario.params
+    _, rec = rollout(p, world, controller, seed=5, n_worlds=2, n_steps=6000, sample_every_steps=1)
+    rec = to_numpy(rec)
+    law = lambda speed: np.asarray(battery.battery_change_pct(p, speed, rec.charging, rec.obstacle))
+    same = np.isclose(rec.battery_change_pct, law(rec.robot_speed_mps), rtol=1e-6, atol=1e-9)
+    # Where the day's bookkeeping stops the robot after its move (a leg's end), the step drove at
+    # some speed and the record shows 0: the change is then a discharge at a speed in [0, v_max].
+    stopped = (rec.robot_speed_mps == 0) & ~rec.charging & ~same
+    fastest = law(np.full_like(rec.robot_speed_mps, p.robot_max_speed_mps))
+    assert (same | stopped).all() and stopped.mean() < 2e-3
+    assert (rec.battery_change_pct[stopped] <= law(np.zeros_like(rec.robot_speed_mps))[stopped] + 1e-9).all()
+    assert (rec.battery_change_pct[stopped] >= fastest[stopped] - 1e-9).all()
+    before, change, after = rec.battery_pct[:, :-1], rec.battery_change_pct[:, 1:], rec.battery_pct[:, 1:]
+    inside = (before + change > 0.0) & (before + change < 100.0)
+    np.testing.assert_allclose(after[inside], (before + change)[inside], atol=2e-5)
+    assert inside.mean() > 0.9 and rec.charging.any() and (~rec.charging).any()
 
 
 @pytest.mark.slow

@@ -1,0 +1,49 @@
+"""What the robot senses and how its base moves in the arena's scenes: line of sight, velocities
+estimated from tracks, the exact wall distance, a body that never enters a wall."""
+
+import jax.numpy as jnp
+import numpy as np
+
+from socialnav.data import DATA_DIR
+from socialnav.jaxsim.scenes import perception
+from socialnav.jaxsim.scenes import robot as robot_lib
+from socialnav.jaxsim.scenes import world as world_lib
+from socialnav.jaxsim.scenes.spec import load_scene
+
+
+def test_the_l_hallways_person_is_hidden_until_the_corner():
+    spec = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
+    world = world_lib.build_scene_world(spec)
+    person = jnp.array([[1.4, 2.3]])
+    present = jnp.array([True])
+    assert not bool(perception.visible(world, jnp.array([-5.0, 0.0]), person, present)[0])
+    assert not bool(perception.visible(world, jnp.array([-3.0, 0.0]), person, present)[0])
+    assert bool(perception.visible(world, jnp.array([1.0, 0.0]), person, present)[0])
+
+
+def test_velocity_is_estimated_from_the_window_of_positions():
+    tracks = perception.init_tracks(1)
+    for k in range(perception.WINDOW):
+        tracks, v = perception.observe(tracks, jnp.array([[0.1 * k, 0.0]]), jnp.array([True]), 0.1)
+    np.testing.assert_allclose(v[0], [1.0, 0.0], atol=1e-5)
+    tracks, v = perception.observe(tracks, jnp.array([[9.0, 9.0]]), jnp.array([False]), 0.1)
+    np.testing.assert_array_equal(v[0], [0.0, 0.0])  # not seen now: no estimate
+
+
+def test_wall_distance_is_exact():
+    walls = jnp.array([[0.0, 1.0, 0.0, 1.0]])
+    d, n = world_lib.wall_distance(jnp.array([[2.0, 0.5], [1.3, 1.4], [0.5, 0.4]]), walls)
+    np.testing.assert_allclose(d, [1.0, 0.5, -0.4], atol=1e-6)
+    np.testing.assert_allclose(n[0], [1.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(n[1], [0.6, 0.8], atol=1e-6)
+
+
+def test_the_base_never_puts_its_body_into_a_wall():
+    spec = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
+    world = world_lib.build_scene_world(spec)
+    params = robot_lib.RobotParams()
+    state = robot_lib.init_robot(jnp.array([-3.0, 0.0]), jnp.float32(1.2))  # heading into the wall
+    for _ in range(80):
+        state = robot_lib.step_robot(params, world, state, 0.5, 0.0, 0.1)
+        assert float(world_lib.wall_distance(state.xy, world.walls_m)[0]) >= params.radius_m - 1e-4
+    assert int(state.wall_contacts) > 0

@@ -1,0 +1,106 @@
+"""Scene files and their variants: every shipped scene loads and draws, draws are seeded, a bad file
+is refused in one line naming file and field, held-out draws leave the ranges, the mirror keeps
+the rule."""
+
+import json
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from socialnav.data import DATA_DIR
+from socialnav.evaluation import nav_metrics
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variant, sample_variants
+
+SCENES = sorted((DATA_DIR / "scenes").glob("*.json"))
+
+
+def test_every_scene_loads_and_draws_variants():
+    assert len(SCENES) == 14
+    for file in SCENES:
+        spec = load_scene(file)
+        v = sample_variants(spec, 0, 3)
+        assert v.valid.shape == (3, spec.n_people_slots)
+        assert np.all(v.valid.sum(axis=1) >= 1)
+        xmin, xmax, ymin, ymax = spec.bounds_m
+        assert np.all((v.robot_xy[:, 0] > xmin) & (v.robot_xy[:, 0] < xmax))
+
+
+def test_variants_are_seeded_and_do_not_depend_on_how_many_are_drawn():
+    spec = load_scene(DATA_DIR / "scenes" / "gscl_group.json")
+    a = sample_variants(spec, 7, 5)
+    b = sample_variant(spec, 7, 3)
+    np.testing.assert_array_equal(a.xy0[3], b.xy0)
+    assert not np.array_equal(a.xy0[0], a.xy0[1])
+    assert not np.array_equal(sample_variant(spec, 8, 3).xy0, b.xy0)
+
+
+def _mutated(tmp_path, mutate):
+    obj = json.loads((DATA_DIR / "scenes" / "gscl_group.json").read_text())
+    mutate(obj)
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(obj))
+    return path
+
+
+@pytest.mark.parametrize(
+    "mutate, field",
+    [
+        (lambda o: o.pop("timeout_s"), "timeout_s"),
+        (lambda o: o.update(timeout_s="long"), "timeout_s"),
+        (lambda o: o["people"][0].update(behaviour="dancing"), "people[0].behaviour"),
+        (lambda o: o["people"][0].update(size=[5, 3]), "people[0].size"),
+        (lambda o: o["people"][0].update(size=9), "people[0].size"),
+        (lambda o: o["people"][1].update(speed_mps=-1), "people[1].speed_mps"),
+        (lambda o: o["people"][1].update(to=[100, 0]), "people[1].to"),
+        (lambda o: o["robot"].update(goal=[1]), "robot.goal"),
+        (lambda o: o.update(walls=[[0, -1, 0, 1]]), "walls[0]"),
+        (lambda o: o.update(rule={"type": "avoid_group", "group": 3}), "rule.group"),
+        (lambda o: o.update(rule={"type": "teleport"}), "rule.type"),
+        (lambda o: o.update(objects=[{"polygon": [[0, 0], [1, 1], [1, 0]], "cost": 10}]), "objects[0].polygon"),
+        (lambda o: o.update(bounds_m=[0, 100, 0, 100]), "bounds_m"),
+        (
+            lambda o: o.update(walls=o["walls"] + [[o["robot"]["goal"][0] - 0.1, o["robot"]["goal"][0] + 0.1, -9, 9]]),
+            "robot.goal",
+        ),
+    ],
+)
+def test_a_bad_scene_file_gives_one_error_naming_file_and_field(tmp_path, mutate, field):
+    path = _mutated(tmp_path, mutate)
+    with pytest.raises(ScenarioError) as e:
+        load_scene(path)
+    assert e.value.field == field and str(path) in str(e.value)
+
+
+def test_not_json_and_missing_file(tmp_path):
+    (tmp_path / "bad.json").write_text("{oops")
+    with pytest.raises(ScenarioError, match="invalid JSON"):
+        load_scene(tmp_path / "bad.json")
+    with pytest.raises(ScenarioError, match="missing"):
+        load_scene(tmp_path / "none.json")
+
+
+def test_held_out_variants_leave_the_ranges_and_the_mirror_keeps_the_rule():
+    from socialnav.jaxsim.scenes.spec import mirror
+
+    spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
+    inside = sample_variants(spec, 0, 40)
+    outside = sample_variants(spec, 0, 40, held_out=True)
+    assert np.all((inside.speed_mps[:, 0] >= 0.4) & (inside.speed_mps[:, 0] <= 1.35))
+    assert np.all((outside.speed_mps[:, 0] < 0.4) | (outside.speed_mps[:, 0] > 1.35))
+    assert np.all(outside.speed_mps[:, 0] >= 0.05)
+    hall = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
+    flipped = mirror(hall)
+    c = hall.bounds_m[2] + hall.bounds_m[3]
+    np.testing.assert_allclose(flipped.walls_m[:, 2], c - hall.walls_m[:, 3])
+    assert mirror(flipped).rule["rules"][0]["direction_deg"] == hall.rule["rules"][0]["direction_deg"]
+    # A path keeping right in the original keeps right in the mirror image of the hallway.
+    x = np.linspace(-5.5, -0.5, 30)
+    right = jnp.asarray(np.stack([x, -0.5 + 0 * x], 1), jnp.float32)
+    mirrored_path = right.at[:, 1].set(c - right[:, 1])
+    rule = hall.rule["rules"][0]
+    none = jnp.zeros((30, 1, 2)), jnp.zeros((1, 2)), jnp.zeros((1, 2)), jnp.zeros((30, 1), bool), jnp.full(1, -1)
+    assert bool(nav_metrics.rule_satisfied(rule, right, jnp.zeros(30, bool), *none))
+    assert not bool(nav_metrics.rule_satisfied(flipped.rule["rules"][0], mirrored_path, jnp.zeros(30, bool), *none))
