@@ -14,7 +14,10 @@ import pathlib
 import shutil
 import tomllib
 
+from mkdocs.plugins import event_priority
 
+
+@event_priority(100)  # before mkdocstrings reads its paths (it drops one that does not exist yet)
 def on_config(config, **kwargs):
     root = pathlib.Path(config.config_file_path).resolve().parent
     mapping = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
