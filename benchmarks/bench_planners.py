@@ -3,11 +3,12 @@
     python benchmarks/bench_planners.py                 # 100x100 and 320x320, batches 1, 64, 1024
     python benchmarks/bench_planners.py --quick         # batches 1 and 64 only
 
-Plans per second of the exact planner (NavFn-like cells; SNAPE's weighted grid is the same
+Milliseconds per plan of the exact planner (NavFn-like cells; SNAPE's weighted grid is the same
 solver on other cell costs) for batches of grids with random costs and 10 % random lethal cells,
-each with its own goal; scipy's ``dijkstra`` from the same goal on the same graph in the same run
-(its graph built beforehand, not timed: the comparison favours scipy). The JAX figure is the
-second call (the first compiles; its time is printed apart). Then layer evaluations per second
+each with its own goal, by both solvers (the JAX sweeps; the C++ Dijkstra, plans with their
+paths and the potential alone); scipy's ``dijkstra`` from the same goal on the same graph in the
+same run (its graph built beforehand, not timed: the comparison favours scipy). Each JAX figure
+is the second call (the first compiles; the sweeps' compile time is printed apart). Then layer evaluations per second
 for 1000 scenes of 10 people on a 100x100 grid.
 """
 
@@ -59,21 +60,34 @@ def scipy_graph(traversal: np.ndarray):
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(h * w, h * w))
 
 
-def bench_planner(rng, n: int, batch: int) -> tuple[float, float, float, int]:
-    """(compile s, JAX s per plan, scipy s per plan, rounds of four sweeps the batch took)."""
+def _timed(fn, *args) -> tuple[float, float]:
+    """(first call s, second call s) of a jitted function (the first compiles)."""
+    t0 = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    return first, time.perf_counter() - t0
+
+
+def bench_planner(rng, n: int, batch: int) -> dict:
+    """Per plan (s): the sweeps' plans (potential and path) and the C++ Dijkstra's, the Dijkstra
+    potential alone (what scipy computes), scipy's; the sweeps' compile time and their rounds."""
     costs = random_costs(rng, batch, n)
     goals = rng.integers(0, n, (batch, 2))
     starts = rng.integers(0, n, (batch, 2))
     costs[np.arange(batch), goals[:, 0], goals[:, 1]] = 0.0
     traversal = costmap.navfn_traversal(costs)
-    fn = jax.jit(lambda t, s, g: grid_planner.plans(t, s, g, RESOLUTION_M))
-    t0 = time.perf_counter()
-    jax.block_until_ready(fn(traversal, starts, goals))
-    first = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    jax.block_until_ready(fn(traversal, starts, goals))
-    run = time.perf_counter() - t0
-    _, rounds = jax.jit(lambda t, g: grid_planner.potentials(t, g, RESOLUTION_M, return_rounds=True))(traversal, goals)
+    out = {}
+    for solver in ("sweeps", "dijkstra"):
+        fn = jax.jit(lambda t, s, g, solver=solver: grid_planner.plans(t, s, g, RESOLUTION_M, solver=solver))
+        first, run = _timed(fn, traversal, starts, goals)
+        out[solver] = run / batch
+        out[f"{solver} compile"] = first - run
+    potential = jax.jit(lambda t, g: grid_planner.potentials(t, g, RESOLUTION_M, solver="dijkstra"))
+    out["dijkstra potential"] = _timed(potential, traversal, goals)[1] / batch
+    sweeps = jax.jit(lambda t, g: grid_planner.potentials(t, g, RESOLUTION_M, return_rounds=True, solver="sweeps"))
+    out["rounds"] = int(sweeps(traversal, goals)[1])
 
     t_np = np.asarray(traversal)
     sample = min(batch, 16)
@@ -81,8 +95,8 @@ def bench_planner(rng, n: int, batch: int) -> tuple[float, float, float, int]:
     t0 = time.perf_counter()
     for k in range(sample):
         dijkstra(graphs[k], directed=True, indices=int(goals[k, 0] * n + goals[k, 1]))
-    scipy_per = (time.perf_counter() - t0) / sample
-    return first - run, run / batch, scipy_per, int(rounds)
+    out["scipy"] = (time.perf_counter() - t0) / sample
+    return out
 
 
 def bench_layers(rng, scenes: int = 1000, people: int = 10, n: int = 100) -> dict[str, float]:
@@ -119,16 +133,19 @@ def main() -> None:
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     print(f"machine: {machine()}")
-    print("grid planner (exact, 8-connected), plans per second; scipy.sparse.csgraph.dijkstra on the same graphs")
-    header = f"{'grid':>9} {'batch':>6} {'compile s':>10} {'JAX ms/plan':>12} {'scipy ms/plan':>14}"
-    print(f"{header} {'JAX/scipy':>10} {'rounds':>7}")
+    print(f"grid planner: {grid_planner.DIJKSTRA_TARGET} built: {grid_planner.dijkstra_available()}")
+    print("grid planner (exact, 8-connected), ms per plan; scipy.sparse.csgraph.dijkstra on the same graphs")
+    header = f"{'grid':>9} {'batch':>6} {'sweeps':>8} {'(rounds)':>8} {'Dijkstra':>9} {'potential':>10} {'scipy':>8}"
+    print(f"{header} {'sweeps/scipy':>13} {'Dijkstra/scipy':>15} {'potential/scipy':>16} {'compile s':>10}")
     batches = (1, 64) if args.quick else (1, 64, 1024)
     for n in (100, 320):
         for batch in batches:
-            compile_s, jax_s, scipy_s, rounds = bench_planner(rng, n, batch)
+            r = bench_planner(rng, n, batch)
             print(
-                f"{n:>4}x{n:<4} {batch:>6} {compile_s:>10.2f} {jax_s * 1e3:>12.2f} {scipy_s * 1e3:>14.2f} "
-                f"{jax_s / scipy_s:>10.2f} {rounds:>7}",
+                f"{n:>4}x{n:<4} {batch:>6} {r['sweeps'] * 1e3:>8.2f} {r['rounds']:>8} {r['dijkstra'] * 1e3:>9.3f} "
+                f"{r['dijkstra potential'] * 1e3:>10.3f} {r['scipy'] * 1e3:>8.2f} {r['sweeps'] / r['scipy']:>13.2f} "
+                f"{r['dijkstra'] / r['scipy']:>15.3f} {r['dijkstra potential'] / r['scipy']:>16.3f} "
+                f"{r['sweeps compile']:>10.2f}",
                 flush=True,
             )
     print("cost layers, 1000 scenes of 10 people on 100x100 cells (0.1 m), scenes per second")

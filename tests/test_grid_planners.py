@@ -43,8 +43,9 @@ def random_grid(rng, h, w, wall_share):
     return costs
 
 
+@pytest.mark.parametrize("solver", ["sweeps", "dijkstra"])
 @pytest.mark.parametrize("connectivity", [8, 4])
-def test_potentials_equal_scipy_dijkstra_on_random_walled_grids(connectivity):
+def test_potentials_equal_scipy_dijkstra_on_random_walled_grids(connectivity, solver):
     rng = np.random.default_rng(connectivity)
     batch, h, w = 6, 23, 31
     costs = np.stack([random_grid(rng, h, w, share) for share in np.linspace(0.0, 0.35, batch)])
@@ -54,7 +55,8 @@ def test_potentials_equal_scipy_dijkstra_on_random_walled_grids(connectivity):
     goals = np.stack([rng.integers(0, h, batch), rng.integers(0, w, batch)], axis=1)
     costs[np.arange(batch), goals[:, 0], goals[:, 1]] = 0.0
     traversal = np.asarray(costmap.navfn_traversal(costs))
-    phi = np.asarray(jax.jit(grid_planner.potentials, static_argnums=(2, 3))(traversal, goals, 0.05, connectivity))
+    potentials = jax.jit(grid_planner.potentials, static_argnames=("resolution_m", "connectivity", "solver"))
+    phi = np.asarray(potentials(traversal, goals, resolution_m=0.05, connectivity=connectivity, solver=solver))
     for k in range(batch):
         ref = scipy_potential(traversal[k], goals[k], 0.05, connectivity)
         reachable = np.isfinite(ref)
@@ -157,3 +159,62 @@ def test_smooth_planner_tends_to_the_exact_potential_and_its_gradient_is_right()
             plus, minus = c64.at[i, j].add(eps), c64.at[i, j].add(-eps)
             fd = (float(cost(plus)) - float(cost(minus))) / (2 * eps)
             assert grad[i, j] == pytest.approx(fd, rel=1e-5, abs=1e-9)
+
+
+# ---------------------------------------------------------------- the C++ Dijkstra against the sweeps
+
+
+def _random_batch(rng, batch, h, w, wall_share, low=1.0, high=5.0):
+    t = rng.uniform(low, high, (batch, h, w)).astype(np.float32)
+    t[rng.uniform(size=t.shape) < wall_share] = np.inf
+    ij = lambda: np.stack([rng.integers(0, h, batch), rng.integers(0, w, batch)], axis=1).astype(np.int32)
+    return t, ij(), ij()
+
+
+@pytest.mark.parametrize("connectivity", [8, 4])
+def test_dijkstra_plans_are_the_sweeps_plans_bit_for_bit(connectivity):
+    """Both solvers reach the same float32 fixed point (Dijkstra settles each cell as the min of
+    the same sums), so potentials, paths (the same moves and ties), lengths and costs are equal
+    bit for bit, also for a goal off the grid, a start on the goal and cut paths."""
+    if not grid_planner.dijkstra_available():
+        pytest.skip("no C++ compiler: the sweeps are the only solver")
+    rng = np.random.default_rng(connectivity)
+    t, start, goal = _random_batch(rng, 8, 37, 29, 0.25)
+    goal[0] = (-1, 3)
+    start[1] = goal[1]
+    for max_steps in (0, 12):
+        a = grid_planner.plans(t, start, goal, 0.2, connectivity, max_steps, solver="sweeps")
+        b = jax.jit(grid_planner.plans, static_argnums=(3, 4, 5, 6))(
+            t, start, goal, 0.2, connectivity, max_steps, "dijkstra"
+        )
+        for field in ("potential", "path_ij", "path_length", "reached", "cost"):
+            np.testing.assert_array_equal(np.asarray(getattr(b, field)), np.asarray(getattr(a, field)), err_msg=field)
+        assert np.asarray(a.reached).any() and not np.asarray(a.reached).all()
+    # A vmap over single grids (the arena's stacks) gives the batch's paths.
+    one = jax.vmap(
+        lambda tt, s, g: grid_planner.plans(tt[None], s[None], g[None], 0.2, connectivity, solver="dijkstra")
+    )
+    whole = grid_planner.plans(t, start, goal, 0.2, connectivity, solver="sweeps")
+    np.testing.assert_array_equal(np.asarray(one(t, start, goal).path_ij[:, 0]), np.asarray(whole.path_ij))
+
+
+@pytest.mark.parametrize("low,high", [(0.0, 5.0), (1.0, 1e6)])
+def test_dijkstra_falls_back_to_a_heap_where_buckets_do_not_fit(low, high):
+    """Free moves (cost 0: no bucket width) and costs spread over a million-fold range (too many
+    buckets) use the heap: the same answers."""
+    if not grid_planner.dijkstra_available():
+        pytest.skip("no C++ compiler: the sweeps are the only solver")
+    t, _, goal = _random_batch(np.random.default_rng(7), 4, 25, 25, 0.2, low, high)
+    t[:, :5, :5] = low
+    sweeps = grid_planner.potentials(t, goal, 0.1, solver="sweeps")
+    np.testing.assert_array_equal(
+        np.asarray(grid_planner.potentials(t, goal, 0.1, solver="dijkstra")), np.asarray(sweeps)
+    )
+
+
+def test_the_solver_is_checked_and_the_sweeps_keep_their_options():
+    t = np.ones((1, 5, 5), np.float32)
+    with pytest.raises(ValueError, match="solver must be one of"):
+        grid_planner.potentials(t, [[0, 0]], 0.1, solver="bfs")
+    phi, rounds = grid_planner.potentials(t, [[0, 0]], 0.1, return_rounds=True)  # auto: the sweeps
+    assert int(rounds) >= 1 and float(phi[0, 4, 4]) == pytest.approx(4 * 0.1 * np.sqrt(2), rel=1e-6)
