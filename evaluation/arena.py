@@ -212,12 +212,16 @@ def scene_from_file(
     """A scene file's variant ``variant`` (drawn under ``seed``, as ``socialnav arena --seed`` draws
     it) as the planner's :class:`~socialnav.planners.scene.Scene`, with the scene's
     :class:`SceneSetup` (its planner ``grid``, ``occupancy`` and environment). ``time_s``,
-    ``perceived``: as :func:`planner_scene`; ``held_out`` draws the variant just outside the
-    file's ranges. Raises ``ValueError`` naming the file and field for a bad file."""
-    from socialnav.jaxsim.scenes.spec import load_scene
+    ``perceived``: as :func:`planner_scene`; ``held_out``: the arena's held-out row (the scene
+    mirrored, the variant drawn just outside the file's ranges). Raises ``ValueError`` naming the
+    file and field for a bad file, and for a negative variant or time."""
+    from socialnav.jaxsim.scenes.spec import load_scene, mirror
     from socialnav.jaxsim.scenes.variant import sample_variant
 
+    if int(variant) != variant or variant < 0 or not time_s >= 0:
+        raise ValueError(f"scene_from_file: variant must be an integer >= 0 and time_s >= 0, got {variant}, {time_s}")
     spec = load_scene(file)
+    spec = mirror(spec) if held_out else spec
     setup = setup_scene(spec)
     draw = sample_variant(spec, seed, variant, held_out=held_out, n_slots=setup.n_slots)
     return planner_scene(setup, draw, time_s, perceived), setup

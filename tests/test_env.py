@@ -292,3 +292,10 @@ def test_scene_from_file_draws_the_arenas_variant_and_names_a_bad_file(setup, tm
     bad.write_text(json.dumps({"name": "bad"}))
     with pytest.raises(ValueError, match="bad.json"):
         scene_from_file(bad)
+    with pytest.raises(ValueError, match="variant must be an integer >= 0"):
+        scene_from_file(DATA_DIR / "scenes" / "casn_head_on.json", variant=-1)
+    # The held-out row is the mirrored scene: the goal's y flips about the bounds' middle.
+    mirrored, _ = scene_from_file(DATA_DIR / "scenes" / "gscl_l_hallway.json", held_out=True)
+    plain, hall = scene_from_file(DATA_DIR / "scenes" / "gscl_l_hallway.json")
+    middle = hall.spec.bounds_m[2] + hall.spec.bounds_m[3]
+    assert float(mirrored.goal_xy_m[1]) == pytest.approx(middle - float(plain.goal_xy_m[1]), abs=1.0)
