@@ -1,6 +1,6 @@
 """The social-navigation benchmark's speed on this machine: every scene x every method x N variants.
 
-    python benchmarks/bench_arena.py                     # 14 scenes x 10 methods x 100 variants
+    python benchmarks/bench_arena.py                     # 14 scenes x 11 methods x 100 variants
     python benchmarks/bench_arena.py --held-out          # and every scene's held-out row
     python benchmarks/bench_arena.py --variants 20 --gscl-run runs/gscl
 
@@ -81,12 +81,10 @@ def main() -> None:
     args = parser.parse_args()
     print(f"machine: {machine()}")
     methods = list(DEFAULT_METHODS)
-    predict = None
-    if args.gscl_run is not None:
-        from socialnav.models.inference import SocialCostModel
+    from socialnav.models.inference import SocialCostModel
 
-        predict = SocialCostModel.load(args.gscl_run).function
-        methods.append("gscl")
+    # The default methods include gscl: the model shipped with the package unless --gscl-run names one.
+    predict = SocialCostModel.load(args.gscl_run).function
     if not args.profile_only:
         specs = [load_scene(f) for f in sorted((DATA_DIR / "scenes").glob("*.json"))]
         t0 = time.perf_counter()
