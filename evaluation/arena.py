@@ -186,9 +186,10 @@ def planner_scene(setup: SceneSetup, variant: Variant, time_s: float = 0.0, perc
     env = setup.env
     variant = jax.tree_util.tree_map(jnp.asarray, variant)
     state, timestep = env.reset(episode_key(variant), variant)
-    step = jax.jit(env.step)
-    for _ in range(int(round(time_s / env.config.dt_s))):
-        state, timestep = step(state, jnp.zeros(2, jnp.float32))
+    steps = int(round(time_s / env.config.dt_s))
+    if steps:  # the robot stands (action 0) while the crowd walks: one scan, not a Python loop
+        stand = lambda carry, _: (env.step(carry[0], jnp.zeros(2, jnp.float32)), None)
+        state, timestep = jax.jit(lambda c: jax.lax.scan(stand, c, None, length=steps)[0])((state, timestep))
     objects = dict(
         objects_xy_m=setup.map.objects_xy_m, objects_cost=setup.map.objects_cost, objects_valid=setup.map.objects_valid
     )
