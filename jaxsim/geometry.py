@@ -65,7 +65,7 @@ def box_distance(xy, boxes_m, xp=np):
     )
     normal = xp.where((outside > 0)[..., None], out_dir, in_dir)
     k = xp.argmin(sd, axis=-1)
-    nearest = xp.take_along_axis(sd, k[..., None], axis=-1)[..., 0]
+    nearest = xp.min(sd, axis=-1)  # = sd at k, without a gather
     n = xp.take_along_axis(normal, k[..., None, None], axis=-2)[..., 0, :]
     return nearest, n
 

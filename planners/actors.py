@@ -204,9 +204,13 @@ def stack_actor(
         person_r = params.person_radius_m
 
         def clearance(q):
-            to_walls = world_lib.wall_distance(q, walls)[0]
-            d = jnp.linalg.norm(q[:, None, :] - obs.people_xy_m[None], axis=-1) - person_r
-            return jnp.minimum(to_walls, jnp.min(jnp.where(obs.people_visible[None], d, jnp.inf), axis=1))
+            # Walls, then each seen person's body, one at a time (elementwise over the band's
+            # points: see world_lib.wall_clearance).
+            nearest = world_lib.wall_clearance(q, walls)
+            for i in range(obs.people_xy_m.shape[0]):
+                to_body = jnp.linalg.norm(q - obs.people_xy_m[i], axis=-1) - person_r
+                nearest = jnp.minimum(nearest, jnp.where(obs.people_visible[i], to_body, jnp.inf))
+            return nearest
 
         v, w, _, gain = stack.local_command(
             method,

@@ -30,6 +30,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
+from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.env import Observation
 from socialnav.planners import reactive
 from socialnav.planners.scene import wrap_angle
@@ -107,23 +108,10 @@ def scores(p: DWAParams, ctx: reactive.ReactiveParams, obs: Observation, carrot_
     return objective, free, heading
 
 
-def wall_gap(points, walls_m):
-    """(...,) the signed distance from points (..., 2) to the nearest wall box (K, 4): the value of
-    :func:`jaxsim.scenes.world.wall_distance` without its normal (tested equal), at a third of
-    its cost in the arcs' inner loop."""
-    centre_x = (walls_m[:, 0] + walls_m[:, 1]) / 2
-    centre_y = (walls_m[:, 2] + walls_m[:, 3]) / 2
-    qx = jnp.abs(points[..., 0, None] - centre_x) - (walls_m[:, 1] - walls_m[:, 0]) / 2
-    qy = jnp.abs(points[..., 1, None] - centre_y) - (walls_m[:, 3] - walls_m[:, 2]) / 2
-    outside = jnp.sqrt(jnp.maximum(qx, 0.0) ** 2 + jnp.maximum(qy, 0.0) ** 2)
-    inside = jnp.minimum(jnp.maximum(qx, qy), 0.0)
-    return jnp.min(outside + inside, axis=-1)
-
-
 def _gap(ctx: reactive.ReactiveParams, obs: Observation, points, t):
     """(S,) the smallest body-to-obstacle gap along each row of ``points`` (S, K, 2) at times ``t``
     (K,): the walls, and the seen people moved on at their estimated velocities."""
-    to_walls = wall_gap(points, ctx.guide.map.walls_m) - ctx.robot.radius_m  # (S, K)
+    to_walls = world_lib.wall_clearance(points, ctx.guide.map.walls_m, per_box=False) - ctx.robot.radius_m  # (S, K)
     people = obs.people_xy_m[None] + t[:, None, None] * obs.people_velocity_mps[None]  # (K, P, 2)
     d = jnp.linalg.norm(points[:, :, None, :] - people[None], axis=-1)
     d = d - ctx.robot.radius_m - ctx.guide.person_radius_m

@@ -77,7 +77,7 @@ def band_from_path(path_xy, path_len, robot_xy, horizon_m: float, n_points: int)
 
 def _interpolate(pts, s, targets):
     """Points at arc lengths ``targets`` along the polyline ``pts`` with arc lengths ``s``."""
-    k = jnp.clip(jnp.searchsorted(s, targets, side="right") - 1, 0, pts.shape[0] - 2)
+    k = jnp.clip(jnp.searchsorted(s, targets, side="right", method="compare_all") - 1, 0, pts.shape[0] - 2)
     span = jnp.maximum(s[k + 1] - s[k], 1e-9)
     t = jnp.clip((targets - s[k]) / span, 0.0, 1.0)[:, None]
     return pts[k] + t * (pts[k + 1] - pts[k])
@@ -91,7 +91,8 @@ def resample(band):
 
 
 def _gradient(fn, p, delta):
-    """Central differences of a scalar field ``fn`` at points p (N, 2): (N, 2)."""
+    """Central differences of a scalar field ``fn`` at points p (N, 2): (..., N, 2) where ``fn``
+    gives (..., N) (one field per leading index: the social term's people at once)."""
     dx = jnp.array([delta, 0.0])
     dy = jnp.array([0.0, delta])
     gx = (fn(p + dx) - fn(p - dx)) / (2 * delta)
@@ -124,9 +125,7 @@ def relax(
         d = clearance_fn(cur)
         f_r = jnp.where((d < p.d0_m)[:, None], (p.d0_m - d)[:, None] * _gradient(clearance_fn, cur, p.delta_m), 0.0)
         l_i = social_distance(cur)  # (P, N)
-        grad_l = jax.vmap(lambda k: _gradient(lambda q: social_distance(q)[k], cur, p.delta_m))(
-            jnp.arange(l_i.shape[0])
-        )
+        grad_l = _gradient(social_distance, cur, p.delta_m)  # (P, N, 2)
         grad_l = jnp.where(jnp.isfinite(grad_l), grad_l, 0.0)
         f_s = jnp.sum(jnp.where((l_i < p.l0_m)[..., None], (p.l0_m - l_i)[..., None] * grad_l, 0.0), axis=0)
         external = p.k_f * f_r + p.k_s * f_s

@@ -167,13 +167,6 @@ def test_dwa_arcs_are_the_bases_own_steps(head_on):
     np.testing.assert_allclose(np.asarray(pts[0, -1]), [1.0 + 0.75 * np.cos(0.3), 2.0 + 0.75 * np.sin(0.3)], atol=1e-5)
 
 
-def test_dwa_wall_gap_equals_the_worlds_wall_distance(head_on):
-    walls = head_on.env.world.walls_m
-    points = jax.random.uniform(jax.random.key(0), (7, 9, 2), minval=-6.0, maxval=6.0)
-    expected = arena.world_lib.wall_distance(points, walls)[0]
-    np.testing.assert_allclose(np.asarray(dwa.wall_gap(points, walls)), np.asarray(expected), atol=1e-5)
-
-
 def test_dwa_brakes_when_every_arc_meets_a_person(head_on):
     ctx = _context(head_on)
     blocked = _observation((0, 0), 0.0, 0.5, (5, 0), [(0.6, 0.0)], [(-1.2, 0.0)])

@@ -38,6 +38,26 @@ def test_wall_distance_is_exact():
     np.testing.assert_allclose(n[1], [0.6, 0.8], atol=1e-6)
 
 
+def test_wall_clearance_is_the_wall_distance_in_both_layouts():
+    spec = load_scene(DATA_DIR / "scenes" / "snape_static_table_fridge.json")  # 7 boxes, one inside
+    walls = world_lib.build_scene_world(spec).walls_m
+    xmin, xmax, ymin, ymax = spec.bounds_m
+    rng = np.random.default_rng(0)
+    points = jnp.asarray(
+        np.stack([rng.uniform(xmin - 1, xmax + 1, (50, 14)), rng.uniform(ymin - 1, ymax + 1, (50, 14))], -1),
+        jnp.float32,
+    )
+    expected = np.asarray(world_lib.wall_distance(points, walls)[0])
+    assert (expected < 0).any() and (expected > 0.5).any()  # inside and well outside boxes
+    per_box = np.asarray(world_lib.wall_clearance(points, walls))
+    at_once = np.asarray(world_lib.wall_clearance(points, walls, per_box=False))
+    assert per_box.shape == at_once.shape == (50, 14)
+    np.testing.assert_allclose(per_box, expected, atol=1e-6)
+    np.testing.assert_allclose(at_once, expected, atol=1e-6)
+    corner = world_lib.wall_clearance(jnp.array([[1.3, 1.4]]), jnp.array([[0.0, 1.0, 0.0, 1.0]]))
+    np.testing.assert_allclose(corner, [0.5], atol=1e-6)  # 0.3-0.4-0.5 off the corner
+
+
 def test_the_base_never_puts_its_body_into_a_wall():
     spec = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
     world = world_lib.build_scene_world(spec)

@@ -68,6 +68,37 @@ def wall_distance(xy, walls_m):
     return geometry.box_distance(xy, walls_m, xp=jnp)
 
 
+def wall_clearance(xy, walls_m, per_box: bool = True):
+    """(...,) the signed distance from points (..., 2) to the nearest wall box (K, 4): the value
+    of :func:`wall_distance` without its normal (tested equal).
+
+    Args:
+      per_box: take the boxes one at a time (their count is static), keeping the running
+        minimum, so that every operation is elementwise over the points: fastest for a few
+        points called often (the elastic band's 14 points, 6 times per relaxation: 2.2x faster
+        than :func:`wall_distance` there). ``False``: one (..., K) array and a minimum over it,
+        fastest for many points at once (the dynamic window's arcs: the per-box loop was 4.5x
+        slower there). Both give the same values.
+    """
+    if not per_box:
+        centre_x = (walls_m[:, 0] + walls_m[:, 1]) / 2
+        centre_y = (walls_m[:, 2] + walls_m[:, 3]) / 2
+        qx = jnp.abs(xy[..., 0, None] - centre_x) - (walls_m[:, 1] - walls_m[:, 0]) / 2
+        qy = jnp.abs(xy[..., 1, None] - centre_y) - (walls_m[:, 3] - walls_m[:, 2]) / 2
+        outside = jnp.sqrt(jnp.maximum(qx, 0.0) ** 2 + jnp.maximum(qy, 0.0) ** 2)
+        return jnp.min(outside + jnp.minimum(jnp.maximum(qx, qy), 0.0), axis=-1)
+    x, y = xy[..., 0], xy[..., 1]
+    nearest = None
+    for k in range(walls_m.shape[0]):
+        xmin, xmax, ymin, ymax = walls_m[k, 0], walls_m[k, 1], walls_m[k, 2], walls_m[k, 3]
+        qx = jnp.abs(x - (xmin + xmax) / 2) - (xmax - xmin) / 2
+        qy = jnp.abs(y - (ymin + ymax) / 2) - (ymax - ymin) / 2
+        outside = jnp.sqrt(jnp.maximum(qx, 0.0) ** 2 + jnp.maximum(qy, 0.0) ** 2)
+        signed = outside + jnp.minimum(jnp.maximum(qx, qy), 0.0)
+        nearest = signed if nearest is None else jnp.minimum(nearest, signed)
+    return nearest
+
+
 def segment_blocked(p0, p1, walls_m):
     """(...,) bool: the segments p0 -> p1 (..., 2) cross a wall box (pure JAX;
     :func:`jaxsim.geometry.segment_hits_boxes`, the warehouse's test)."""
