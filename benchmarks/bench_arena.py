@@ -3,6 +3,7 @@
     python benchmarks/bench_arena.py                     # 14 scenes x 11 methods x 100 variants
     python benchmarks/bench_arena.py --held-out          # and every scene's held-out row
     python benchmarks/bench_arena.py --variants 20 --gscl-run runs/gscl
+    python benchmarks/bench_arena.py --held-out --summary summary.csv   # and the table it timed
 
 Prints the whole run's wall time (compilation included, as a user meets it), episodes per second
 and simulated seconds per wall second, then where the time goes on one scene: compilation, one
@@ -21,6 +22,7 @@ sys.path.insert(0, str(ROOT))
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
+import pandas as pd  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.arena import DEFAULT_METHODS  # noqa: E402
@@ -78,6 +80,9 @@ def main() -> None:
     parser.add_argument("--gscl-run", type=pathlib.Path, default=None)
     parser.add_argument("--profile-only", action="store_true")
     parser.add_argument("--held-out", action="store_true", help="also every scene's held-out row")
+    parser.add_argument(
+        "--summary", type=pathlib.Path, default=None, help="write the table's summary.csv here (what was timed)"
+    )
     args = parser.parse_args()
     print(f"machine: {machine()}")
     methods = list(DEFAULT_METHODS)
@@ -88,14 +93,17 @@ def main() -> None:
     if not args.profile_only:
         specs = [load_scene(f) for f in sorted((DATA_DIR / "scenes").glob("*.json"))]
         t0 = time.perf_counter()
-        episodes, simulated = 0, 0.0
+        episodes, simulated, frames = 0, 0.0, []
         rows = [False, True] if args.held_out else [False]
         for spec in specs:
             for held_out in rows:
                 frame, _ = arena_report.run_scene(spec, methods, args.variants, gscl_predict=predict, held_out=held_out)
                 episodes += len(frame)
                 simulated += len(frame) * spec.timeout_s
+                frames.append(frame)
         wall = time.perf_counter() - t0
+        if args.summary is not None:
+            arena_report.summary(pd.concat(frames, ignore_index=True)).to_csv(args.summary, index=False)
         scenes = len(specs) * len(rows)
         print(
             f"benchmark: {scenes} scene rows x {len(methods)} methods x {args.variants} variants = {episodes} episodes "

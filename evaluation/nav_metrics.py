@@ -299,6 +299,41 @@ def people_effect(people_xy, present, people_xy_without, present_without, dt_s: 
 # ------------------------------------------------------------------ the scenes' rules
 
 
+# A rule's fields that are numbers (traced in a compiled check) and those that shape the program.
+RULE_NUMBERS = ("distance_m", "centre", "radius_m", "box", "min_share")
+RULE_STRUCTURE = ("type", "group", "person")
+
+
+def right_of(direction_deg) -> np.ndarray:
+    """(2,) float32 unit vector on the right of travel along ``direction_deg`` (host side: the
+    same bits whether the rule's numbers are constants or arguments of a compiled check)."""
+    angle = np.radians(direction_deg)
+    return np.array([np.sin(angle), -np.cos(angle)], np.float32)
+
+
+def split_rule(rule: dict):
+    """A scene's rule as ``(structure, numbers)``: the hashable structure (the kinds, the person
+    and group indices: what changes the program) and a pytree of float32 arrays (boxes, centres,
+    distances, shares, a keep-right's right-hand vector: what changes only the values), so that one
+    compiled check serves every scene whose rule has the same structure (a scene and its mirror).
+    :func:`join_rule` puts them back together; :func:`rule_satisfied` takes either form."""
+    if rule["type"] == "all":
+        parts = [split_rule(sub) for sub in rule["rules"]]
+        return ("all", tuple(structure for structure, _ in parts)), [numbers for _, numbers in parts]
+    structure = tuple(sorted((k, v) for k, v in rule.items() if k in RULE_STRUCTURE))
+    numbers = {k: np.asarray(v, np.float32) for k, v in rule.items() if k in RULE_NUMBERS}
+    if "direction_deg" in rule:
+        numbers["right"] = right_of(rule["direction_deg"])
+    return structure, numbers
+
+
+def join_rule(structure, numbers) -> dict:
+    """The rule dict of :func:`split_rule`'s parts (its numbers may be traced arrays)."""
+    if structure[0] == "all":
+        return {"type": "all", "rules": [join_rule(s, n) for s, n in zip(structure[1], numbers, strict=True)]}
+    return {**dict(structure), **numbers}
+
+
 def rule_satisfied(rule: dict, robot_xy, reached, people_xy, people_start_xy, people_end_xy, present, group):
     """() bool: the trajectory obeys a scene's rule (:mod:`jaxsim.scenes.spec`), over the steps
     before the goal is reached. ``people_start_xy``, ``people_end_xy``: (P, 2) walkers' legs."""
@@ -333,8 +368,7 @@ def rule_satisfied(rule: dict, robot_xy, reached, people_xy, people_start_xy, pe
         ) & active
         if kind == "visit":
             return jnp.any(inside)
-        angle = np.radians(rule["direction_deg"])
-        right = jnp.array([np.sin(angle), -np.cos(angle)], robot_xy.dtype)
+        right = jnp.asarray(rule["right"] if "right" in rule else right_of(rule["direction_deg"]), robot_xy.dtype)
         centre = jnp.array([(box[0] + box[1]) / 2, (box[2] + box[3]) / 2])
         on_right = jnp.sum((robot_xy - centre) * right, axis=-1) > 0
         share = jnp.sum(inside & on_right) / jnp.maximum(jnp.sum(inside), 1)

@@ -1,6 +1,7 @@
 """The streaming rule monitor (jaxsim/scenes/rule_monitor.py) against the batch check the arena
 uses (evaluation.nav_metrics.rule_satisfied): the same verdict on random trajectories of every
-built-in scene, mirrored ones included, and on hand-made ones for each rule kind."""
+built-in scene, mirrored ones included, and on hand-made ones for each rule kind; and the batch
+check with the rule's numbers as arguments (the arena's compiled form) against it with constants."""
 
 from __future__ import annotations
 
@@ -68,6 +69,12 @@ def test_monitor_equals_the_batch_check_on_every_scene(name):
         streamed = jax.vmap(lambda *a, rule=s.rule: _streamed(rule, *a))(*args, group)
         batch = jax.vmap(lambda *a, rule=s.rule: _batch(rule, *a))(*args, group)
         np.testing.assert_array_equal(np.asarray(streamed), np.asarray(batch), err_msg=f"{s.name}: {s.rule}")
+        # The arena's form: the rule's numbers as arguments of one program per rule structure.
+        structure, numbers = nav_metrics.split_rule(s.rule)
+        assert nav_metrics.split_rule(mirror(s).rule)[0] == structure  # a scene and its mirror share it
+        check = lambda nums, *a, st=structure: _batch(nav_metrics.join_rule(st, nums), *a)
+        traced = jax.jit(jax.vmap(check, in_axes=(None,) + (0,) * 7))(numbers, *args, group)
+        np.testing.assert_array_equal(np.asarray(traced), np.asarray(batch), err_msg=f"{s.name}: split")
 
 
 def _line(y0, y1, n=T):
