@@ -178,9 +178,9 @@ RESULTS = (
     "shards",
 )
 # Rough cost of one episode for the estimate printed before a run (this project's 2-core
-# machine, the default table with --held-out, 100 variants: 28,000 episodes in 12.6 min with the
-# methods on both cores, compilation included; README "The arena").
-EPISODES_PER_S = 37.0
+# machine, the default table with --held-out, 100 variants, 11 methods: 30,800 episodes in 11.7
+# min with the methods on both cores, compilation included, at af14b97; docs/arena-results.md).
+EPISODES_PER_S = 44.0
 # Bytes a finished episode's row costs in the joined tables: 146 measured in memory
 # (``memory_usage(deep=True)``, 26 columns, 80 episodes of casn_head_on and casn_crossing), times
 # about four for the copies the joins, the summary and the statistics make.
@@ -431,7 +431,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     took = f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
     print(
         f"arena: {len(runs)} scene run(s) x {len(methods)} method(s) x {args.variants} variant(s) = {n_episodes:,} "
-        f"episodes; about {took} at {EPISODES_PER_S:.0f} episodes/s (2 cores, compilation not counted), at most "
+        f"episodes; about {took} at {EPISODES_PER_S:.0f} episodes/s (2 cores, compilation included), at most "
         f"{needed / 1e9:.2f} GB at once",
         flush=True,
     )
