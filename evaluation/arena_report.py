@@ -79,7 +79,7 @@ def metrics_function(setup: arena.SceneSetup, config: arena.ArenaConfig, robot_r
     (compiling it took 1.6 s a scene row)."""
     structure, numbers = nav_metrics.split_rule(setup.spec.rule)
     program = _metrics_program(structure, setup.n_periods, config, float(robot_radius_m))
-    return functools.partial(program, numbers=numbers)
+    return lambda tr, variants, without: program(tr, variants, without, numbers)
 
 
 @functools.lru_cache(maxsize=64)
@@ -117,8 +117,7 @@ def _metrics_program(rule_structure, n_periods: int, config: arena.ArenaConfig, 
         )
         return {**metrics, **effect}
 
-    vmapped = jax.vmap(one, in_axes=(0, 0, 0, None))
-    return jax.jit(lambda tr, v, without, numbers: vmapped(tr, v, without, numbers))
+    return jax.jit(jax.vmap(one, in_axes=(0, 0, 0, None)))
 
 
 def episode_frame(scene: str, method: str, first: int, metrics: dict, wall_contacts) -> pd.DataFrame:

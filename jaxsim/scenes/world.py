@@ -86,18 +86,22 @@ def wall_clearance(xy, walls_m, per_box: bool = True):
         centre_y = (walls_m[:, 2] + walls_m[:, 3]) / 2
         qx = jnp.abs(xy[..., 0, None] - centre_x) - (walls_m[:, 1] - walls_m[:, 0]) / 2
         qy = jnp.abs(xy[..., 1, None] - centre_y) - (walls_m[:, 3] - walls_m[:, 2]) / 2
-        outside = jnp.sqrt(jnp.maximum(qx, 0.0) ** 2 + jnp.maximum(qy, 0.0) ** 2)
-        return jnp.min(outside + jnp.minimum(jnp.maximum(qx, qy), 0.0), axis=-1)
+        return jnp.min(_signed_from_offsets(qx, qy), axis=-1)
     x, y = xy[..., 0], xy[..., 1]
     nearest = None
     for k in range(walls_m.shape[0]):
         xmin, xmax, ymin, ymax = walls_m[k, 0], walls_m[k, 1], walls_m[k, 2], walls_m[k, 3]
         qx = jnp.abs(x - (xmin + xmax) / 2) - (xmax - xmin) / 2
         qy = jnp.abs(y - (ymin + ymax) / 2) - (ymax - ymin) / 2
-        outside = jnp.sqrt(jnp.maximum(qx, 0.0) ** 2 + jnp.maximum(qy, 0.0) ** 2)
-        signed = outside + jnp.minimum(jnp.maximum(qx, qy), 0.0)
+        signed = _signed_from_offsets(qx, qy)
         nearest = signed if nearest is None else jnp.minimum(nearest, signed)
     return nearest
+
+
+def _signed_from_offsets(qx, qy):
+    """A box's signed distance from a point's offsets beyond its half-widths (``|d| - half``)."""
+    outside = jnp.sqrt(jnp.maximum(qx, 0.0) ** 2 + jnp.maximum(qy, 0.0) ** 2)
+    return outside + jnp.minimum(jnp.maximum(qx, qy), 0.0)
 
 
 def segment_blocked(p0, p1, walls_m):
