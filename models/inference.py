@@ -232,7 +232,7 @@ class SocialCostModel:
           ValueError: ``path`` is neither (:func:`model_problem` says why).
         """
         from socialnav.models.checkpoints import load_config, restore
-        from socialnav.models.steps import compiled, initial_state
+        from socialnav.models.steps import compiled, weight_shapes
 
         path = DEFAULT_MODEL if path is None else pathlib.Path(path)
         problem = model_problem(path)
@@ -242,8 +242,7 @@ class SocialCostModel:
             from flax import serialization
 
             config = load_config(path)
-            template = initial_state(config)
-            params, batch_stats = template["params"], template["batch_stats"]
+            params, batch_stats = weight_shapes(config)
             want = [(jax.tree_util.keystr(k), np.shape(a)) for k, a in _leaves(params, batch_stats)]
             try:
                 pure = serialization.msgpack_restore((path / WEIGHTS_FILE).read_bytes())
@@ -251,6 +250,11 @@ class SocialCostModel:
                 nnx.replace_by_pure_dict(batch_stats, pure["batch_stats"])
             except Exception as e:  # msgpack's, flax's and a wrong tree's errors have no common base
                 raise ValueError(f"{path / WEIGHTS_FILE}: not the weights of {path / 'config.json'} ({e})") from None
+            missing = [
+                jax.tree_util.keystr(k) for k, a in _leaves(params, batch_stats) if isinstance(a, jax.ShapeDtypeStruct)
+            ]
+            if missing:  # the template holds shapes only: a leaf not in the file would stay one
+                raise ValueError(f"{path / WEIGHTS_FILE}: has no {missing[0]}, which {path / 'config.json'} needs")
             got = [(jax.tree_util.keystr(k), np.shape(a)) for k, a in _leaves(params, batch_stats)]
             if got != want:
                 wrong = next(g for g, w in zip(got, want, strict=False) if g != w)

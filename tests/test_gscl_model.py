@@ -8,7 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from flax import nnx
+from flax import nnx, serialization
 
 from socialnav import cli
 from socialnav.models import checkpoints, dataset, evaluation, grid, inference, quality, steps, streams, train, unet
@@ -418,6 +418,13 @@ def test_an_exported_model_predicts_what_the_run_predicts_and_bad_folders_are_na
     assert inference.model_identity(tmp_path / "m") == inference.model_identity(tmp_path / "m")
     with pytest.raises(ValueError, match="neither a GSCL training run"):
         inference.SocialCostModel.load(tmp_path)
+    weights = (tmp_path / "m" / inference.WEIGHTS_FILE).read_bytes()
+    pure = serialization.msgpack_restore(weights)
+    del pure["params"][next(iter(pure["params"]))]  # a layer missing: named, not left unset
+    (tmp_path / "m" / inference.WEIGHTS_FILE).write_bytes(serialization.msgpack_serialize(pure))
+    with pytest.raises(ValueError, match="weights.msgpack: has no"):
+        inference.SocialCostModel.load(tmp_path / "m")
+    (tmp_path / "m" / inference.WEIGHTS_FILE).write_bytes(weights)
     other = TrainConfig(**{**TINY, "features": (4, 4, 8, 16)})
     (tmp_path / "m" / "config.json").write_text(json.dumps(other.to_json()))
     with pytest.raises(ValueError, match="weights.msgpack"):
