@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 
@@ -317,20 +316,6 @@ def _call_on(function: Callable, variants: Variant, device, home):
     return jax.device_put(jax.block_until_ready(function(jax.device_put(variants, device))), home)
 
 
-_DEVICE_THREADS: dict[int, ThreadPoolExecutor] = {}
-_DEVICE_THREADS_LOCK = threading.Lock()
-
-
-def _device_thread(device) -> ThreadPoolExecutor:
-    """The one thread that runs the arena's programs on ``device``, shared by every caller: two
-    scenes in flight (:func:`socialnav.backend.run_shards`'s ``in_flight``) queue on a device
-    instead of running on it at once."""
-    with _DEVICE_THREADS_LOCK:
-        if device.id not in _DEVICE_THREADS:
-            _DEVICE_THREADS[device.id] = ThreadPoolExecutor(1, thread_name_prefix=f"arena-device-{device.id}")
-        return _DEVICE_THREADS[device.id]
-
-
 def run_spread(functions: list[Callable], variants: Variant, n_devices: int | None = None) -> Iterator:
     """``function(variants)`` for each of ``functions`` (``variants -> Trajectory``, as
     :func:`actor_function` gives), yielded in order, the functions spread over ``n_devices`` host
@@ -342,24 +327,23 @@ def run_spread(functions: list[Callable], variants: Variant, n_devices: int | No
     methods on two cores, one compiling while the other runs, took the full table (28,000
     episodes, 2 cores) from 14.4 to 12.6 min, the same episodes bit for bit. A program gives
     the same bits on every device (the same compiled code; tested). Every result is on the first
-    device. A device's thread is shared by every call (:func:`_device_thread`): calls from two
-    threads queue their functions behind each other's on each device. With one device the
-    functions run one after the other in the calling thread."""
+    device. With one device the functions run one after the other in the calling thread."""
     devices = jax.local_devices()[: max(1, n_devices or jax.local_device_count())]
     if len(devices) == 1:
         for function in functions:
             yield function(variants)
         return
-    futures = []
+    pools = [ThreadPoolExecutor(1, thread_name_prefix=f"arena-device-{d.id}") for d in devices]
     try:
+        futures = []
         for i, function in enumerate(functions):
-            device = devices[i % len(devices)]
-            futures.append(_device_thread(device).submit(_call_on, function, variants, device, devices[0]))
+            k = i % len(devices)
+            futures.append(pools[k].submit(_call_on, function, variants, devices[k], devices[0]))
         for future in futures:
             yield future.result()
     finally:
-        for future in futures:
-            future.cancel()  # those not started yet; a running one finishes, its result dropped
+        for pool in pools:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 @functools.lru_cache(maxsize=64)

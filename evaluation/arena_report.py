@@ -9,7 +9,6 @@ intervals (``scipy.stats.binomtest``), the rest as means.
 from __future__ import annotations
 
 import functools
-import threading
 from collections.abc import Callable
 
 import jax
@@ -175,41 +174,6 @@ def trajectory_frame(scene: str, method: str, first: int, tr: arena.Trajectory, 
 HELD_OUT = "@held_out"
 
 
-# Two scenes built at once (two shards in flight, socialnav.backend.run_shards) must get the same
-# cached actors and metrics program, hence the same compiled programs, not one each.
-_BUILDING = threading.Lock()
-
-
-def _scene_functions(setup, crowd, config, methods, params, gscl_predict, gscl_weights, user_actors):
-    """``(measure, runs)`` of :func:`run_scene`: the metrics function and ``variants ->
-    Trajectory`` per run, the people without the robot first, then each method."""
-    robot = params.robot
-    measure = metrics_function(setup, config, float(robot.radius_m))
-    user_actors = user_actors or {}
-    runs = [arena.counterfactual_function(setup, crowd)]  # the people without the robot
-    for method in methods:
-        if method in user_actors:
-            env = setup.env.replace(crowd=crowd, robot=robot)
-            actor, actor_params = user_actor(user_actors[method], env)
-            runs.append(arena.actor_function(setup, actor, actor_params, env))
-        elif method in BASELINES:
-            runs.append(arena.baseline_function(setup, method, crowd, robot, config))
-        else:
-            runs.append(
-                arena.episode_function(
-                    setup,
-                    METHODS[method],
-                    crowd,
-                    robot,
-                    config,
-                    gscl_predict,
-                    gscl_weights=gscl_weights,
-                    layers=params.layers_for(method),
-                )
-            )
-    return measure, runs
-
-
 def run_scene(
     spec: SceneSpec,
     methods: list[str],
@@ -245,11 +209,33 @@ def run_scene(
         jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out, setup.n_slots)
     )
     params = ArenaParams() if params is None else params
-    with _BUILDING:
-        measure, runs = _scene_functions(setup, crowd, config, methods, params, gscl_predict, gscl_weights, user_actors)
+    robot = params.robot
+    measure = metrics_function(setup, config, float(robot.radius_m))
+    episodes, trajectories = [], []
+    user_actors = user_actors or {}
+    runs = [arena.counterfactual_function(setup, crowd)]  # the people without the robot
+    for method in methods:
+        if method in user_actors:
+            env = setup.env.replace(crowd=crowd, robot=robot)
+            actor, actor_params = user_actor(user_actors[method], env)
+            runs.append(arena.actor_function(setup, actor, actor_params, env))
+        elif method in BASELINES:
+            runs.append(arena.baseline_function(setup, method, crowd, robot, config))
+        else:
+            runs.append(
+                arena.episode_function(
+                    setup,
+                    METHODS[method],
+                    crowd,
+                    robot,
+                    config,
+                    gscl_predict,
+                    gscl_weights=gscl_weights,
+                    layers=params.layers_for(method),
+                )
+            )
     results = arena.run_spread(runs, variants, n_devices)
     without = next(results)
-    episodes, trajectories = [], []
     for method, tr in zip(methods, results):
         episodes.append(episode_frame(name, method, first, measure(tr, variants, without), tr.wall_contacts))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)

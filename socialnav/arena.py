@@ -25,13 +25,11 @@ the missing shards and scenes.
 from __future__ import annotations
 
 import argparse
-import collections
 import functools
 import hashlib
 import json
 import pathlib
 import sys
-import threading
 
 from socialnav import actor_spec
 from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
@@ -442,7 +440,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     write_text_atomic(meta, json.dumps({**settings, **backend_lib.describe(args)}, indent=1) + "\n")
     runfolder.record(out, JOB, ["run.json", "shards/"])
 
-    shards, scene_of = [], {}
+    shards = []
     for (spec, held_out), name in zip(runs, names, strict=True):
         if _finished(out, name, digests[name]):
             continue  # the whole scene is done, with these settings
@@ -469,20 +467,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                     work=n * len(methods),
                 )
             )
-            scene_of[shards[-1].output] = (spec, held_out, name)
-    unsaved = collections.Counter(name for _, _, name in scene_of.values())  # a scene's shards to save
-
-    def save(shard, result):
-        # A scene is joined and drawn as soon as its last shard is saved, while the next
-        # scenes compute (the local backend keeps two scenes in flight).
-        _save_shard(shard, result)
-        spec, held_out, name = scene_of[shard.output]
-        unsaved[name] -= 1
-        if unsaved[name] == 0 and not _finished(out, name, digests[name]):
-            _finish_scene(args, out, spec, held_out, name, methods, digests[name])
-
     try:
-        backend_lib.run_with_args(compute_shard, save, shards, args, desc="arena", unit="episodes", in_flight=2)
+        backend_lib.run_with_args(compute_shard, _save_shard, shards, args, desc="arena", unit="episodes")
     except backend_lib.BackendError as e:
         print(f"socialnav arena: {e}", file=sys.stderr)
         return 2
@@ -576,16 +562,8 @@ def _shard_file(out: pathlib.Path, name: str, digest: str, first: int) -> pathli
     return out / "shards" / f"{name}-{digest}" / f"{first:06d}.parquet"
 
 
-_LOADING = threading.Lock()  # two shards in flight load a model once: one model, one compiled program
-
-
-def _gscl_model(run: pathlib.Path | None):
-    with _LOADING:
-        return _gscl_model_cached(run)
-
-
 @functools.lru_cache(maxsize=4)
-def _gscl_model_cached(run: pathlib.Path | None):
+def _gscl_model(run: pathlib.Path | None):
     if run is None:
         return None
     from socialnav.models.inference import SocialCostModel

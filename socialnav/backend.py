@@ -169,7 +169,6 @@ def run_shards(
     progress: bool = True,
     desc: str = "shards",
     unit: str = "shards",
-    in_flight: int = 1,
 ) -> int:
     """Compute every shard whose output is missing and save it; returns how many were computed.
 
@@ -179,10 +178,6 @@ def run_shards(
       backend: ``local`` or ``ray``.
       address, cpus_per_task: the Ray cluster and the CPUs each task reserves.
       max_retries: Ray's retries of a task whose worker died.
-      in_flight: ``local``: how many shards compute at once, each in a thread of this process
-        (``compute`` must be thread-safe); saved in order all the same. The arena's 2: its
-        programs queue on the host devices' own threads, so the next scene's start while the
-        last programs of this one finish (no device waits for the slower one at a scene's end).
 
     Raises:
       BackendError: Ray missing, the cluster unreachable, or its workers lacking the package.
@@ -196,8 +191,8 @@ def run_shards(
     with bar(desc, unit=unit, enabled=progress) as progress_bar:
         progress_bar.update(done, total)
         if ray is None:
-            for shard, result in _computed_locally(compute, todo, in_flight):
-                save(shard, result)
+            for shard in todo:
+                save(shard, compute(*shard.args))
                 done += shard.work
                 progress_bar.update(done, total)
             return len(todo)
@@ -226,40 +221,11 @@ def run_shards(
     return len(todo)
 
 
-def _computed_locally(compute: Callable, shards: Sequence[Shard], in_flight: int):
-    """``(shard, compute(*shard.args))`` in the shards' order, up to ``in_flight`` of them
-    computing at once in threads (1: in this thread, one after another). A failure is raised
-    where its shard comes in order; the shards not started yet are dropped then."""
-    if in_flight <= 1:
-        for shard in shards:
-            yield shard, compute(*shard.args)
-        return
-    import itertools
-    from collections import deque
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(in_flight, thread_name_prefix="shard") as pool:
-        waiting = iter(shards)
-        running = deque((shard, pool.submit(compute, *shard.args)) for shard in itertools.islice(waiting, in_flight))
-        try:
-            while running:
-                shard, future = running.popleft()
-                result = future.result()
-                following = next(waiting, None)  # started before this one is saved
-                if following is not None:
-                    running.append((following, pool.submit(compute, *following.args)))
-                yield shard, result
-        finally:
-            for _, future in running:
-                future.cancel()
-
-
 def run_with_args(
-    compute: Callable, save: Callable[[Shard, object], None], shards: Sequence[Shard], args, **options
+    compute: Callable, save: Callable[[Shard, object], None], shards: Sequence[Shard], args, **bar
 ) -> int:
     """:func:`run_shards` with the backend options of a parsed command line (``--backend``,
-    ``--ray-address``, ``--ray-cpus-per-task``, ``--no-progress``); ``options``: ``desc``, ``unit``,
-    ``in_flight``."""
+    ``--ray-address``, ``--ray-cpus-per-task``, ``--no-progress``); ``bar``: ``desc``, ``unit``."""
     return run_shards(
         compute,
         save,
@@ -268,7 +234,7 @@ def run_with_args(
         address=getattr(args, "ray_address", None),
         cpus_per_task=getattr(args, "ray_cpus_per_task", None),
         progress=not getattr(args, "no_progress", False),
-        **options,
+        **bar,
     )
 
 
