@@ -1,33 +1,42 @@
-"""The social-navigation benchmark's speed on this machine: every scene x every method x N variants.
+"""The social-navigation benchmark's speed on this machine: ``socialnav arena`` itself, timed.
 
     python benchmarks/bench_arena.py                     # 14 scenes x 11 methods x 100 variants
     python benchmarks/bench_arena.py --held-out          # and every scene's held-out row
     python benchmarks/bench_arena.py --variants 20 --gscl-run runs/gscl
     python benchmarks/bench_arena.py --held-out --summary summary.csv   # and the table it timed
 
-Prints the whole run's wall time (compilation included, as a user meets it), episodes per second
-and simulated seconds per wall second, then where the time goes on one scene: compilation, one
-run of each method, and the global planner alone (the same number of replans as the episodes).
+Runs the command a user runs (``socialnav arena --held-out`` into a temporary folder, in this
+process) with JAX's on-disk compilation cache off, so every program is compiled in the run, as on
+a user's first run; prints its wall time (compilation, the files and pictures included),
+episodes per second and simulated seconds per wall second. Then where the time goes on one
+scene: compilation, one run of each method, and the global planner alone (the same number of
+replans as the episodes).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import os
 import pathlib
+import shutil
 import sys
+import tempfile
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+os.environ["SOCIALNAV_JAX_CACHE"] = "off"  # every program compiled in the run, as on a first run
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
-import pandas as pd  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from socialnav import cli  # noqa: E402
 from socialnav.arena import DEFAULT_METHODS  # noqa: E402
 from socialnav.data import DATA_DIR  # noqa: E402
-from socialnav.evaluation import arena, arena_report  # noqa: E402
+from socialnav.evaluation import arena  # noqa: E402
 from socialnav.jaxsim.params import TIAGO_RADIUS_M  # noqa: E402
 from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
 from socialnav.jaxsim.scenes.variant import sample_variants  # noqa: E402
@@ -85,29 +94,29 @@ def main() -> None:
     )
     args = parser.parse_args()
     print(f"machine: {machine()}")
-    methods = list(DEFAULT_METHODS)
-    from socialnav.models.inference import SocialCostModel
-
-    # The default methods include gscl: the model shipped with the package unless --gscl-run names one.
-    predict = SocialCostModel.load(args.gscl_run).function
     if not args.profile_only:
         specs = [load_scene(f) for f in sorted((DATA_DIR / "scenes").glob("*.json"))]
-        t0 = time.perf_counter()
-        episodes, simulated, frames = 0, 0.0, []
-        rows = [False, True] if args.held_out else [False]
-        for spec in specs:
-            for held_out in rows:
-                frame, _ = arena_report.run_scene(spec, methods, args.variants, gscl_predict=predict, held_out=held_out)
-                episodes += len(frame)
-                simulated += len(frame) * spec.timeout_s
-                frames.append(frame)
-        wall = time.perf_counter() - t0
-        if args.summary is not None:
-            arena_report.summary(pd.concat(frames, ignore_index=True)).to_csv(args.summary, index=False)
-        scenes = len(specs) * len(rows)
+        rows = 2 if args.held_out else 1
+        episodes = len(specs) * rows * len(DEFAULT_METHODS) * args.variants
+        simulated = sum(s.timeout_s for s in specs) * rows * len(DEFAULT_METHODS) * args.variants
+        with tempfile.TemporaryDirectory() as tmp:
+            argv = ["arena", "--out", f"{tmp}/run", "--variants", str(args.variants), "--no-progress"]
+            if args.held_out:
+                argv.append("--held-out")
+            if args.gscl_run is not None:
+                argv += ["--gscl-run", str(args.gscl_run)]
+            t0 = time.perf_counter()
+            with contextlib.redirect_stdout(io.StringIO()):  # the command's tables
+                code = cli.main(argv)
+            wall = time.perf_counter() - t0
+            if code != 0:
+                sys.exit(f"socialnav {' '.join(argv)} failed ({code})")
+            if args.summary is not None:
+                shutil.copyfile(f"{tmp}/run/summary.csv", args.summary)
         print(
-            f"benchmark: {scenes} scene rows x {len(methods)} methods x {args.variants} variants = {episodes} episodes "
-            f"in {wall / 60:.1f} min: {episodes / wall:.1f} episodes/s, {simulated / wall:.0f} simulated s per wall s"
+            f"socialnav arena: {len(specs) * rows} scene rows x {len(DEFAULT_METHODS)} methods x {args.variants} "
+            f"variants = {episodes} episodes in {wall / 60:.1f} min: {episodes / wall:.1f} episodes/s, "
+            f"{simulated / wall:.0f} simulated s per wall s"
         )
     profile_scene("gscl_group", args.variants, ["navfn", "casn", "snape_social_eband", *BASELINES])
 
