@@ -2,6 +2,7 @@
 is refused in one line naming file and field, held-out draws leave the ranges, the mirror keeps
 the rule."""
 
+import dataclasses
 import json
 
 import jax.numpy as jnp
@@ -59,6 +60,7 @@ def _mutated(tmp_path, mutate):
         (lambda o: o.update(walls=[[0, -1, 0, 1]]), "walls[0]"),
         (lambda o: o.update(rule={"type": "avoid_group", "group": 3}), "rule.group"),
         (lambda o: o.update(rule={"type": "teleport"}), "rule.type"),
+        (lambda o: o.update(held_out_rule={"type": "all", "rules": []}), "held_out_rule.rules"),
         (lambda o: o.update(objects=[{"polygon": [[0, 0], [1, 1], [1, 0]], "cost": 10}]), "objects[0].polygon"),
         (lambda o: o.update(bounds_m=[0, 100, 0, 100]), "bounds_m"),
         (
@@ -104,3 +106,34 @@ def test_held_out_variants_leave_the_ranges_and_the_mirror_keeps_the_rule():
     none = jnp.zeros((30, 1, 2)), jnp.zeros((1, 2)), jnp.zeros((1, 2)), jnp.zeros((30, 1), bool), jnp.full(1, -1)
     assert bool(nav_metrics.rule_satisfied(rule, right, jnp.zeros(30, bool), *none))
     assert not bool(nav_metrics.rule_satisfied(flipped.rule["rules"][0], mirrored_path, jnp.zeros(30, bool), *none))
+
+
+def test_the_l_hallways_held_out_rule_is_one_a_right_turn_can_keep():
+    """The mirrored L-hallway turns right: its rule is the file's held_out_rule (keep right in both
+    legs, no wide corner), mirrored; a walk keeping right round the right turn, 0.35 m off the inner
+    walls, obeys it, where the left turn's rule mirrored refused it (the wide corner lies across the
+    lane one keeps to). Mirroring twice gives the file's rules back."""
+    from socialnav.jaxsim.scenes.spec import mirror
+
+    hall = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
+    assert [r["type"] for r in hall.held_out_rule["rules"]] == ["keep_right", "keep_right", "min_distance"]
+    flipped = mirror(hall)
+    c = hall.bounds_m[2] + hall.bounds_m[3]
+    assert [r["type"] for r in flipped.rule["rules"]] == ["keep_right", "keep_right", "min_distance"]
+    box = np.asarray(hall.held_out_rule["rules"][1]["box"])
+    np.testing.assert_allclose(flipped.rule["rules"][1]["box"], [box[0], box[1], c - box[3], c - box[2]])
+    twice = mirror(flipped)
+    assert [r["type"] for r in twice.rule["rules"]] == [r["type"] for r in hall.rule["rules"]]
+    np.testing.assert_allclose(twice.rule["rules"][2]["centre"], hall.rule["rules"][2]["centre"])
+    np.testing.assert_allclose(twice.held_out_rule["rules"][1]["box"], box)
+
+    # The mirrored hallway: along +x at y in [c - 1, c + 1], then down x in [0, 2]; the inner corner at (0, c - 1).
+    inner_y = c - 1.0
+    first = np.stack([np.linspace(-5.5, 0.35, 40), np.full(40, inner_y + 0.35)], 1)
+    second = np.stack([np.full(40, 0.35), np.linspace(inner_y + 0.35, -0.8, 40)], 1)
+    walk = jnp.asarray(np.concatenate([first, second]), jnp.float32)
+    t = walk.shape[0]
+    none = jnp.zeros((t, 1, 2)), jnp.zeros((1, 2)), jnp.zeros((1, 2)), jnp.zeros((t, 1), bool), jnp.full(1, -1)
+    assert bool(nav_metrics.rule_satisfied(flipped.rule, walk, jnp.zeros(t, bool), *none))
+    left_turn_rule_mirrored = mirror(dataclasses.replace(hall, held_out_rule=None)).rule
+    assert not bool(nav_metrics.rule_satisfied(left_turn_rule_mirrored, walk, jnp.zeros(t, bool), *none))

@@ -24,7 +24,8 @@ Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[
         "advance_every_s": N, "exit": P},
        {"behaviour": "stream", "from": P, "to": P, "count": 2, "start_s": N, "interval_s": N, "speed_mps": N}
      ],
-     "rule": {"type": "min_distance", "distance_m": 1.2}}
+     "rule": {"type": "min_distance", "distance_m": 1.2},
+     "held_out_rule": {...}}                                    # optional, see below
 
 Behaviours: a **standing** person stays put; a **walker** goes from ``from`` to ``to`` at
 ``speed_mps`` from ``start_s`` on (back and forth if asked), by the social force; a **group** is
@@ -44,6 +45,13 @@ within ``radius_m`` of ``centre``: a corner taken wide), ``keep_right``
 (inside ``box``, travelling along ``direction_deg``, at least ``min_share`` of the time on the right
 half of the box), ``visit`` (pass through ``box`` before the goal), ``pass_behind`` (cross walker
 ``person``'s line behind them), ``all`` (every rule in ``rules``).
+
+``held_out_rule`` (optional; default ``rule``): the rule of the held-out layout (:func:`mirror`),
+written in this file's frame and mirrored with the layout, for a scene where mirroring changes
+what a person would do. The L-hallway's left turn becomes a right turn there: keeping right then
+puts the blind inner corner on the robot's own side, so "take the corner wide" would mean leaving
+its lane, and the two rules together are ones no walker satisfies; its held-out rule keeps right
+in both legs and keeps the distance to people, without the wide corner.
 """
 
 from __future__ import annotations
@@ -81,6 +89,7 @@ class SceneSpec:
     people: tuple[dict, ...]
     rule: dict
     n_people_slots: int
+    held_out_rule: dict | None = None  # the mirrored layout's rule, in this frame (None: ``rule``)
 
 
 # ------------------------------------------------------------------ typed reads
@@ -402,6 +411,8 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     if slots > 64:
         r.fail("people", f"{slots} people at most: 64 allowed")
     rule = _rule(r, r.get(obj, "", "rule"), "rule", people)
+    held_out = r.get(obj, "", "held_out_rule", None)
+    held_out_rule = None if held_out is None else _rule(r, held_out, "held_out_rule", people)
     _check_placements(r, robot, people)
     return SceneSpec(
         file=file,
@@ -415,14 +426,17 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         people=tuple(people),
         rule=rule,
         n_people_slots=max(slots, 1),
+        held_out_rule=held_out_rule,
     )
 
 
 def mirror(spec: SceneSpec) -> SceneSpec:
     """The scene mirrored across the horizontal line through its bounds' centre (y -> c - y):
     walls, objects, people, the robot, headings and the rule's geometry; "keep right" stays keep
-    right of the (mirrored) direction of travel. Used for held-out variants: a method that learnt
-    a layout's handedness rather than its rule shows it here."""
+    right of the (mirrored) direction of travel. The rule is the file's ``held_out_rule`` where it
+    gives one (mirrored the same way), and the original rule becomes the mirror's held-out rule, so
+    that mirroring twice gives the scene back. Used for held-out variants: a method that learnt a
+    layout's handedness rather than its rule shows it here."""
     c = spec.bounds_m[2] + spec.bounds_m[3]
 
     def y_range(r):
@@ -476,5 +490,6 @@ def mirror(spec: SceneSpec) -> SceneSpec:
         objects=objects,
         robot=robot,
         people=tuple(people),
-        rule=rule(spec.rule),
+        rule=rule(spec.rule if spec.held_out_rule is None else spec.held_out_rule),
+        held_out_rule=None if spec.held_out_rule is None else rule(spec.rule),
     )
