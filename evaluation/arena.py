@@ -322,8 +322,11 @@ def run_spread(functions: list[Callable], variants: Variant, n_devices: int | No
     devices (default: every local one; ``socialnav`` asks XLA for one per core,
     :func:`socialnav.runtime.request_host_devices`) that run at the same time, one thread each.
 
-    Function ``i`` always runs on device ``i % n_devices``, so a method keeps its device (and its
-    compiled program) from scene to scene. An episode program runs mostly on one core; two
+    The functions' programs (an :func:`actor_function`'s jitted episode program; any other
+    function is its own) are dealt to the devices in turn, in order of first appearance, and a
+    function runs on its program's device: a method keeps its device from scene to scene, and
+    methods sharing a program (the SNL variants, :func:`planners.stack.program_config`) compile
+    it once. An episode program runs mostly on one core; two
     methods on two cores, one compiling while the other runs, took the full table (28,000
     episodes, 2 cores) from 14.4 to 12.6 min, the same episodes bit for bit. A program gives
     the same bits on every device (the same compiled code; tested). Every result is on the first
@@ -336,8 +339,9 @@ def run_spread(functions: list[Callable], variants: Variant, n_devices: int | No
     pools = [ThreadPoolExecutor(1, thread_name_prefix=f"arena-device-{d.id}") for d in devices]
     try:
         futures = []
-        for i, function in enumerate(functions):
-            k = i % len(devices)
+        dealt = {}  # program -> device index
+        for function in functions:
+            k = dealt.setdefault(getattr(function, "func", function), len(dealt) % len(devices))
             futures.append(pools[k].submit(_call_on, function, variants, devices[k], devices[0]))
         for future in futures:
             yield future.result()
@@ -391,7 +395,7 @@ def episode_function(
         apply = gscl_predict if gscl_weights is not None else _closed(gscl_predict)
     if method.layer == "gscl" and apply is None:
         raise ValueError("method 'gscl' needs a trained GSCL model")
-    actor = method_actor(method, setup.grid, float(robot_params.radius_m), config, apply)
+    actor = method_actor(stack.program_config(method), setup.grid, float(robot_params.radius_m), config, apply)
     params = actors.stack_params(
         env, setup.map, config.safety_margin_m, config.person_radius_m, gscl_weights, layers, method
     )

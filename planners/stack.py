@@ -88,6 +88,16 @@ class LayerParams:
     pursuit: pure_pursuit.PursuitParams = pure_pursuit.PursuitParams()
 
 
+def program_config(config: StackConfig) -> StackConfig:
+    """The stack whose compiled episode program runs ``config``: the three SNL variants differ only
+    in their covariances, which enter the program traced (:class:`LayerParams`), so they run the
+    ``snl_small`` program with their own :func:`layer_params` (one compilation instead of three
+    per scene shape, the same episodes bit for bit)."""
+    if config.layer in ("snl_large", "snl_matched"):
+        return dataclasses.replace(config, layer="snl_small")
+    return config
+
+
 def layer_params(config: StackConfig) -> LayerParams:
     """A stack's default parameters: its SNL variant's covariances (small, large or matched to
     CASN's radius), every other part's defaults."""

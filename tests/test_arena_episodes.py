@@ -71,7 +71,7 @@ from socialnav.data import DATA_DIR
 from socialnav.evaluation import arena_report
 from socialnav.jaxsim.scenes.spec import load_scene
 spec = load_scene(DATA_DIR / 'scenes' / 'casn_head_on.json')
-methods = ['navfn', 'orca', 'snape_social_eband']
+methods = ['navfn', 'snl_small', 'orca', 'snl_large', 'snape_social_eband']
 one, _ = arena_report.run_scene(spec, methods, 9, n_devices=1)
 two, _ = arena_report.run_scene(spec, methods, 9, n_devices=2)
 print(jax.local_device_count(), one.equals(two), one.method.tolist() == two.method.tolist(), len(two))
@@ -80,8 +80,9 @@ print(jax.local_device_count(), one.equals(two), one.method.tolist() == two.meth
 
 @pytest.mark.slow
 def test_methods_spread_over_two_host_devices_give_the_same_table_as_one_after_the_other():
-    """``arena.run_spread``: with two XLA host devices the counterfactual and each method run on
-    devices 0, 1, 0, 1 at once; the episodes are the same bits as one after the other on one."""
+    """``arena.run_spread``: with two XLA host devices the programs are dealt to devices 0, 1, 0, ...
+    (the two SNL variants share one, on one device) and run at once; the episodes are the same
+    bits as one after the other on one."""
     import os
     import subprocess
     import sys
@@ -90,7 +91,7 @@ def test_methods_spread_over_two_host_devices_give_the_same_table_as_one_after_t
     root = DATA_DIR.parent
     out = subprocess.run([sys.executable, "-c", _SPREAD], cwd=root, env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.split() == ["2", "True", "True", "27"]
+    assert out.stdout.split() == ["2", "True", "True", "45"]
 
 
 def test_run_spread_yields_in_order_and_raises_a_methods_error():
@@ -104,6 +105,38 @@ def test_run_spread_yields_in_order_and_raises_a_methods_error():
 
     with pytest.raises(ValueError, match="method broke"):
         list(arena.run_spread([lambda v: v, broken], variants))
+
+
+def test_the_snl_variants_share_one_program_with_their_own_covariances():
+    """The three SNL methods differ only in traced covariances, so they run one compiled program
+    (``planners.stack.program_config``), each with its own parameters; the other methods keep
+    their own programs."""
+    setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"))
+    runs = {m: arena.episode_function(setup, METHODS[m]) for m in ("snl_small", "snl_large", "snl_matched", "navfn")}
+    assert runs["snl_small"].func is runs["snl_large"].func is runs["snl_matched"].func
+    assert runs["navfn"].func is not runs["snl_small"].func
+    sigmas = [jax.tree_util.tree_leaves(runs[m].args[1].layers.snl) for m in ("snl_small", "snl_large", "snl_matched")]
+    assert not np.allclose(sigmas[0], sigmas[1]) and not np.allclose(sigmas[1], sigmas[2])
+
+
+@pytest.mark.slow
+def test_a_shared_snl_program_gives_the_episodes_of_the_methods_own():
+    """snl_large run by the shared program gives the same bits as by a program built for it."""
+    from socialnav.planners import actors
+
+    spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
+    setup = arena.setup_scene(spec)
+    variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 0, 8, n_slots=setup.n_slots))
+    shared = arena.episode_function(setup, METHODS["snl_large"])
+    config = arena.ArenaConfig()
+    radius = float(robot_lib.RobotParams().radius_m)
+    own_actor = actors.stack_actor(
+        METHODS["snl_large"], setup.grid, radius, config.replan_every_steps, config.max_path_cells
+    )
+    own = arena.actor_function(setup, own_actor, shared.args[1], shared.args[0])
+    assert own.func is not shared.func
+    for a, b in zip(jax.tree_util.tree_leaves(shared(variants)), jax.tree_util.tree_leaves(own(variants)), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
 def test_padded_slots_is_a_power_of_two_of_at_least_two():
