@@ -132,7 +132,7 @@ def compiled(config: TrainConfig, objective=None):
     """``(graphdef, tx, train_step, predict)`` of a configuration (and training objective, see
     :func:`make_train_step`), built once per process so that resuming, restoring and evaluating in
     one process do not compile again."""
-    graphdef = nnx.graphdef(nnx.eval_shape(lambda: make_model(config)))  # the structure only: no weights drawn
+    graphdef = nnx.graphdef(_abstract_model(config))
     tx = optax.adam(learning_rate_schedule(config))
     return (
         graphdef,
@@ -142,11 +142,17 @@ def compiled(config: TrainConfig, objective=None):
     )
 
 
+def _abstract_model(config: TrainConfig):
+    """``config``'s model with ``jax.ShapeDtypeStruct`` leaves: its structure without drawing
+    weights (drawing the random initial weights eagerly took 3.8 s, a compiled operation per
+    layer's shape; tracing them abstractly takes a fraction)."""
+    return nnx.eval_shape(lambda: make_model(config))
+
+
 def weight_shapes(config: TrainConfig):
-    """``(params, batch_stats)`` of ``config``'s model as shapes only (``jax.ShapeDtypeStruct``
-    leaves), a template to load weights into: drawing the random initial weights eagerly took
-    3.8 s (a compiled operation per layer's shape), tracing them abstractly takes a fraction."""
-    _, params, batch_stats = nnx.split(nnx.eval_shape(lambda: make_model(config)), nnx.Param, nnx.BatchStat)
+    """``(params, batch_stats)`` of ``config``'s model as shapes only, a template to load weights
+    into."""
+    _, params, batch_stats = nnx.split(_abstract_model(config), nnx.Param, nnx.BatchStat)
     return params, batch_stats
 
 
