@@ -367,7 +367,11 @@ def method_actor(
 
 def actor_function(setup: SceneSetup, actor: Actor, params, env: env_lib.Env | None = None):
     """``variants (batched Variant, padded to ``setup.n_slots``) -> Trajectory (batched)`` for
-    any actor with its ``params``."""
+    any actor with its ``params``. In a scene with ``stop_and_go_m`` (the queue) the actor runs
+    with the stop-and-go (:func:`planners.actors.with_stop_and_go`), whatever it is, so every
+    method of the scene has it."""
+    if setup.spec.stop_and_go_m is not None:
+        actor = actors.with_stop_and_go(actor, float(setup.spec.stop_and_go_m))
     program = _episode_program(actor)
     return functools.partial(program, setup.env if env is None else env, params)
 
@@ -397,7 +401,14 @@ def episode_function(
         raise ValueError("method 'gscl' needs a trained GSCL model")
     actor = method_actor(stack.program_config(method), setup.grid, float(robot_params.radius_m), config, apply)
     params = actors.stack_params(
-        env, setup.map, config.safety_margin_m, config.person_radius_m, gscl_weights, layers, method
+        env,
+        setup.map,
+        config.safety_margin_m,
+        config.person_radius_m,
+        gscl_weights,
+        layers,
+        method,
+        people_are_obstacles=setup.spec.people_in_global_plan,
     )
     return actor_function(setup, actor, params, env)
 
@@ -430,7 +441,9 @@ def baseline_function(
     if crowd is not None:
         env = env.replace(crowd=crowd)
     actor = baseline_actor(name, setup.grid, float(robot_params.radius_m), config)
-    params = baselines.baseline_params(name, env, setup.map, rule_params, config.safety_margin_m)
+    params = baselines.baseline_params(
+        name, env, setup.map, rule_params, config.safety_margin_m, setup.spec.people_in_global_plan
+    )
     return actor_function(setup, actor, params, env)
 
 

@@ -75,6 +75,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from socialnav.evaluation.metrics import collision_encounters
+from socialnav.jaxsim.scenes import rule_monitor
 from socialnav.planners.scene import wrap_angle
 
 VERSION = "nav-metrics 2"
@@ -300,7 +301,7 @@ def people_effect(people_xy, present, people_xy_without, present_without, dt_s: 
 
 
 # A rule's fields that are numbers (traced in a compiled check) and those that shape the program.
-RULE_NUMBERS = ("distance_m", "centre", "radius_m", "box", "min_share")
+RULE_NUMBERS = ("distance_m", "centre", "radius_m", "box", "min_share", "head", "half_width_m", "length_m", "ahead_m")
 RULE_STRUCTURE = ("type", "group", "person")
 
 
@@ -385,4 +386,6 @@ def rule_satisfied(rule: dict, robot_xy, reached, people_xy, people_start_xy, pe
         # Along the walker's direction, the walker is ahead of the crossing point.
         ahead = jnp.sum((people_xy[1:, i] - robot_xy[1:]) * direction, axis=-1) > 0
         return jnp.all(jnp.where(crosses, ahead, True))
+    if kind == "queue":
+        return ~jnp.any(active & rule_monitor.queue_cut_in(rule, robot_xy, people_xy, present))
     raise ValueError(f"unknown rule {kind!r}")

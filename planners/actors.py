@@ -9,11 +9,13 @@ actor's ``params``, traced: another scene of the same shapes, another speed limi
 GSCL checkpoint reuses the compiled program.
 
 :func:`go_to_goal` drives straight at the goal (a throughput baseline and the shape of a user's
-own actor).
+own actor). :func:`with_stop_and_go` wraps any actor with seed 002's queueing stop-and-go.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -49,8 +51,10 @@ class StackMap:
 class StackParams:
     """A stack's dynamic inputs: the map, the robot's speed limit (m/s) and body radius used by
     the safety stop (m), the safety margin (m), a person's radius (m), the layers' and local
-    planners' parameters (:class:`planners.stack.LayerParams`) and the GSCL weights (``None``
-    without the gscl layer)."""
+    planners' parameters (:class:`planners.stack.LayerParams`), the GSCL weights (``None``
+    without the gscl layer) and ``people_are_obstacles`` () bool: whether the global planner
+    sees the people as obstacles (a scene's ``people_in_global_plan``, :mod:`jaxsim.scenes.spec`;
+    false: only the social layer shapes the path round them)."""
 
     map: StackMap
     max_speed_mps: jax.Array
@@ -59,6 +63,7 @@ class StackParams:
     person_radius_m: jax.Array
     layers: stack.LayerParams
     gscl_weights: Any = None
+    people_are_obstacles: jax.Array = True
 
 
 @struct.dataclass
@@ -102,6 +107,7 @@ def stack_params(
     gscl_weights=None,
     layers: stack.LayerParams | None = None,
     method: stack.StackConfig | None = None,
+    people_are_obstacles: bool = True,
 ) -> StackParams:
     """A stack's params for ``env`` (its robot's limits) on ``map_``; ``layers`` default to
     ``method``'s (:func:`planners.stack.layer_params`)."""
@@ -116,6 +122,7 @@ def stack_params(
         safety_margin_m=jnp.float32(safety_margin_m),
         person_radius_m=jnp.float32(person),
         gscl_weights=gscl_weights,
+        people_are_obstacles=jnp.asarray(people_are_obstacles),
     )
 
 
@@ -183,10 +190,12 @@ def stack_actor(
             predict = lambda maps: gscl_apply(params.gscl_weights, maps)
             gscl_fn = lambda s: gscl_layer.gscl_layer(predict, occupancy, grid, s)
         social, casn_state = stack.social_layer(method, scene, x_m, y_m, st.casn, gscl_fn, params.layers)
-        # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the walls.
+        # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the
+        # walls, unless the scene leaves them to the social layer (people_are_obstacles false).
         pxy = obs.people_xy_m
         d = jnp.hypot(x_m[None] - pxy[:, 0, None, None], y_m[None] - pxy[:, 1, None, None])
-        bodies = jnp.any((d <= params.person_radius_m) & obs.people_visible[:, None, None], axis=0)
+        seen = obs.people_visible & params.people_are_obstacles
+        bodies = jnp.any((d <= params.person_radius_m) & seen[:, None, None], axis=0)
         obstacles = costmap.obstacle_layer(jnp.maximum(occupancy, bodies), grid, float(robot_radius_m))
         costs = costmap.combine_max(obstacles, social)
         path, length, found = stack.global_plan(method, costs, obs.robot_xy_m, obs.goal_xy_m, grid, max_path_cells)
@@ -244,6 +253,39 @@ def safety_stop(params: StackParams, obs: Observation) -> jax.Array:
     in_front = jnp.cos(bearing) > 0.5
     near = dist < params.robot_radius_m + params.person_radius_m + params.safety_margin_m
     return jnp.any(obs.people_visible & in_front & near)
+
+
+STOP_AND_GO_CONE_DEG = (
+    60.0  # "the next person in line": ahead within this angle of the heading (the safety stop's cone)
+)
+
+
+def person_ahead(obs: Observation, gap_m, cone_deg: float = STOP_AND_GO_CONE_DEG) -> jax.Array:
+    """() bool: a visible person within ``cone_deg`` of the robot's heading and closer than
+    ``gap_m``, centre to centre."""
+    offset = obs.people_xy_m - obs.robot_xy_m
+    dist = jnp.linalg.norm(offset, axis=-1)
+    bearing = jnp.arctan2(offset[:, 1], offset[:, 0]) - obs.robot_yaw_rad
+    in_front = jnp.cos(bearing) > np.cos(np.radians(cone_deg))
+    return jnp.any(obs.people_visible & in_front & (dist < gap_m))
+
+
+@functools.lru_cache(maxsize=64)
+def with_stop_and_go(actor: Actor, gap_m: float, cone_deg: float = STOP_AND_GO_CONE_DEG) -> Actor:
+    """``actor`` with seed 002's queueing stop-and-go (Sec. 4.3: "a simple stop-and-go mechanism
+    based on the distance to the next person in line"): its forward speed is held at 0 while a
+    seen person is ahead (:func:`person_ahead`) closer than ``gap_m``, and it goes on, as the
+    actor commands, once the gap opens. Turning and backing off are left to the actor. Any actor
+    (a stack, a reactive baseline, a policy, a user's own) keeps its params, state and plan; the
+    wrapper is cached, so the same actor and gap give the same (compiled) actor. Scenes ask for
+    it with ``stop_and_go_m`` (:mod:`jaxsim.scenes.spec`), and the arena wraps every method."""
+
+    def act(params, st, obs: Observation, key):
+        action, st = actor.act(params, st, obs, key)
+        v = jnp.where(person_ahead(obs, gap_m, cone_deg), jnp.minimum(action[0], 0.0), action[0])
+        return action.at[0].set(v), st
+
+    return dataclasses.replace(actor, act=act, name=actor.name)
 
 
 def go_to_goal(gain_turn: float = 2.0, name: str = "go_to_goal") -> Actor:

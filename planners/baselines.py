@@ -57,9 +57,15 @@ def baseline_actor(
 
 
 def baseline_params(
-    name: str, env: Env, map_: actors.StackMap, rule_params=None, safety_margin_m: float = 0.1
+    name: str,
+    env: Env,
+    map_: actors.StackMap,
+    rule_params=None,
+    safety_margin_m: float = 0.1,
+    people_are_obstacles: bool = True,
 ) -> reactive.ReactiveParams:
-    """A baseline's params in ``env`` on ``map_`` (``rule_params`` default: the baseline's)."""
+    """A baseline's params in ``env`` on ``map_`` (``rule_params`` default: the baseline's);
+    ``people_are_obstacles``: whether its guiding path plans round the seen people."""
     rule_params = BASELINES[name].default_params(env) if rule_params is None else rule_params
-    guide = actors.stack_params(env, map_, safety_margin_m)
+    guide = actors.stack_params(env, map_, safety_margin_m, people_are_obstacles=people_are_obstacles)
     return reactive.ReactiveParams(guide=guide, robot=env.robot, rule=rule_params)

@@ -137,3 +137,54 @@ def test_pass_behind_streamed():
         args = (robot, jnp.zeros(T, bool), walker, present, *legs)
         assert bool(_streamed({"type": "pass_behind", "person": 0}, *args)) == want
         assert bool(_batch({"type": "pass_behind", "person": 0}, *args)) == want
+
+
+QUEUE_RULE = {
+    "type": "queue",
+    "head": [3.0, 0.0],
+    "direction_deg": 0,
+    "half_width_m": 0.6,
+    "length_m": 4.5,
+    "ahead_m": 1.2,
+}
+
+
+def _queue_episode(robot_points, served_every=None):
+    """Three people in line facing +x at x = 3.0, 2.2, 1.4 (y = 0); the head leaves (absent from
+    then on) every ``served_every`` steps and the others step up 0.8 m; the robot walks through
+    ``robot_points`` at even steps."""
+    t = np.arange(T)
+    served = np.zeros(T, int) if served_every is None else t // served_every
+    place = np.arange(3)[None] - served[:, None]  # (T, 3) place in line, < 0 once served
+    people = np.stack([3.0 - 0.8 * np.maximum(place, 0), np.zeros((T, 3))], -1)
+    present = place >= 0
+    pts = np.asarray(robot_points, float)
+    s = np.linspace(0, len(pts) - 1, T)
+    robot = np.stack([np.interp(s, np.arange(len(pts)), pts[:, k]) for k in range(2)], -1)
+    return robot, people, present
+
+
+@pytest.mark.parametrize(
+    "robot_points, served_every, want",
+    [
+        ([(0.0, -2.0), (0.0, 0.0), (0.4, 0.0)], None, True),  # joins behind the tail and waits
+        ([(3.5, -2.0), (3.8, 0.0)], None, False),  # straight to the goal in front of the head
+        ([(2.6, -2.0), (2.6, 0.0)], None, False),  # steps into the line between two people
+        ([(2.0, -2.0), (2.0, -0.8), (3.8, -0.8)], None, True),  # walks past beside the line, never in it
+        # joins at the tail and reaches the goal only after all three were served
+        ([(0.0, -2.0), (0.6, 0.0), (0.6, 0.0), (3.8, 0.0)], 20, True),
+        # the same walk, but the last person is still in line when the robot reaches the goal
+        ([(0.0, -2.0), (0.6, 0.0), (0.6, 0.0), (3.8, 0.0)], 30, False),
+    ],
+)
+def test_queue_rule_on_hand_made_walks(robot_points, served_every, want):
+    robot, people, present = _queue_episode(robot_points, served_every)
+    legs = (jnp.zeros((3, 2)), jnp.ones((3, 2)), jnp.full((3,), -1, jnp.int32))
+    args = (jnp.asarray(robot, jnp.float32), jnp.zeros(T, bool), jnp.asarray(people, jnp.float32), jnp.asarray(present))
+    rule = {**QUEUE_RULE, "head": np.asarray(QUEUE_RULE["head"])}
+    assert bool(_streamed(rule, *args, *legs)) == want
+    assert bool(_batch(rule, *args, *legs)) == want
+    # The same walk in a queue facing the other way, with the rule turned with it.
+    flipped = dict(rule, head=np.array([-3.0, 0.0]), direction_deg=180)
+    turned = [a * jnp.array([-1.0, 1.0]) if a.ndim and a.shape[-1] == 2 else a for a in args]
+    assert bool(_batch(flipped, *turned, *legs)) == want

@@ -61,6 +61,16 @@ def _mutated(tmp_path, mutate):
         (lambda o: o.update(rule={"type": "avoid_group", "group": 3}), "rule.group"),
         (lambda o: o.update(rule={"type": "teleport"}), "rule.type"),
         (lambda o: o.update(held_out_rule={"type": "all", "rules": []}), "held_out_rule.rules"),
+        (lambda o: o.update(rule={"type": "queue", "head": [1], "direction_deg": 0, "length_m": 3}), "rule.head"),
+        (lambda o: o.update(rule={"type": "queue", "head": [1, 0], "direction_deg": 0}), "rule.length_m"),
+        (
+            lambda o: o.update(
+                rule={"type": "queue", "head": [1, 0], "direction_deg": 0, "length_m": 3, "half_width_m": 0}
+            ),
+            "rule.half_width_m",
+        ),
+        (lambda o: o.update(stop_and_go_m=0), "stop_and_go_m"),
+        (lambda o: o.update(people_in_global_plan="no"), "people_in_global_plan"),
         (lambda o: o.update(objects=[{"polygon": [[0, 0], [1, 1], [1, 0]], "cost": 10}]), "objects[0].polygon"),
         (lambda o: o.update(bounds_m=[0, 100, 0, 100]), "bounds_m"),
         (

@@ -52,6 +52,32 @@ class MonitorState:
     leaves: tuple
 
 
+def queue_cut_in(rule: dict, robot_xy, people_xy, present):
+    """bool (...): the robot cuts into the queue of a ``queue`` rule (:mod:`jaxsim.scenes.spec`):
+    its centre is in the line's lane and ahead, along the lane, of a present person still in it.
+    ``robot_xy`` (..., 2), ``people_xy`` (..., P, 2), ``present`` (..., P): one step or a
+    trajectory's steps. The lane's frame comes from the rule's ``head`` and ``right`` (the right of
+    the way the queue faces, :func:`evaluation.nav_metrics.right_of`) or ``direction_deg``."""
+    if "right" in rule:
+        right = jnp.asarray(rule["right"], jnp.float32)
+    else:
+        angle = np.radians(rule["direction_deg"])
+        right = jnp.array([np.sin(angle), -np.cos(angle)], jnp.float32)
+    forward = jnp.stack([-right[1], right[0]])
+    head = jnp.asarray(rule["head"], jnp.float32)
+
+    def lane(xy):
+        d = xy - head
+        along, side = jnp.sum(d * forward, axis=-1), jnp.sum(d * right, axis=-1)
+        inside = (along >= -rule["length_m"]) & (along <= rule["ahead_m"]) & (jnp.abs(side) <= rule["half_width_m"])
+        return along, inside
+
+    robot_along, robot_in = lane(robot_xy)
+    people_along, people_in = lane(people_xy)
+    ahead_of_someone = jnp.any(present & people_in & (robot_along[..., None] > people_along), axis=-1)
+    return robot_in & ahead_of_someone
+
+
 def _leaves(rule: dict) -> list[dict]:
     if rule["type"] == "all":
         return [leaf for sub in rule["rules"] for leaf in _leaves(sub)]
@@ -118,6 +144,16 @@ def _leaf(rule: dict):
             crosses = s[2] & (jnp.sign(side) != jnp.sign(s[1])) & active
             ahead = jnp.sum((step.people_xy[i] - step.robot_xy) * direction) > 0
             return (s[0] & (~crosses | ahead), side, jnp.array(True))
+
+        return init, update, lambda s: s[0]
+
+    if kind == "queue":
+
+        def init():
+            return (jnp.array(True),)
+
+        def update(s, step: Step, ep: Episode, active):
+            return (s[0] & ~(active & queue_cut_in(rule, step.robot_xy, step.people_xy, step.present)),)
 
         return init, update, lambda s: s[0]
 

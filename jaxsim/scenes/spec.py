@@ -25,7 +25,9 @@ Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[
        {"behaviour": "stream", "from": P, "to": P, "count": 2, "start_s": N, "interval_s": N, "speed_mps": N}
      ],
      "rule": {"type": "min_distance", "distance_m": 1.2},
-     "held_out_rule": {...}}                                    # optional, see below
+     "held_out_rule": {...},                                    # optional, see below
+     "stop_and_go_m": 0.9,                                      # optional, see below
+     "people_in_global_plan": true}                             # optional, see below
 
 Behaviours: a **standing** person stays put; a **walker** goes from ``from`` to ``to`` at
 ``speed_mps`` from ``start_s`` on (back and forth if asked), by the social force; a **group** is
@@ -44,7 +46,17 @@ centre to centre), ``avoid_group`` (never inside group ``group``'s circle), ``av
 within ``radius_m`` of ``centre``: a corner taken wide), ``keep_right``
 (inside ``box``, travelling along ``direction_deg``, at least ``min_share`` of the time on the right
 half of the box), ``visit`` (pass through ``box`` before the goal), ``pass_behind`` (cross walker
-``person``'s line behind them), ``all`` (every rule in ``rules``).
+``person``'s line behind them), ``queue`` (join a line at its tail and never cut in: see below),
+``all`` (every rule in ``rules``).
+
+``queue``: ``{"type": "queue", "head": [x, y], "direction_deg": N, "half_width_m": 0.6,
+"length_m": 5, "ahead_m": 1.2}``. The line's lane runs from ``length_m`` behind ``head`` to
+``ahead_m`` in front of it (the way the queue faces is ``direction_deg``), ``half_width_m`` either
+side of its axis. The robot cuts in when its centre is in the lane ahead, along the axis, of a
+person still in the lane: entering the lane from the side ahead of someone in line, or reaching a
+goal in front of the head while people still wait. Joining behind the last person and advancing
+with the line obeys it (seed 002 Sec. 5.3.5: "enter the queue from the beginning and wait for its
+turn").
 
 ``held_out_rule`` (optional; default ``rule``): the rule of the held-out layout (:func:`mirror`),
 written in this file's frame and mirrored with the layout, for a scene where mirroring changes
@@ -52,6 +64,19 @@ what a person would do. The L-hallway's left turn becomes a right turn there: ke
 puts the blind inner corner on the robot's own side, so "take the corner wide" would mean leaving
 its lane, and the two rules together are ones no walker satisfies; its held-out rule keeps right
 in both legs and keeps the distance to people, without the wide corner.
+
+``stop_and_go_m`` (optional; default none): every method's robot in the scene stops while a seen
+person is ahead of it (within 60 deg of its heading) closer than this, centre to centre, and goes
+on when the gap opens: seed 002 Sec. 4.3's "simple stop-and-go mechanism based on the distance to
+the next person in line", which its robot used in the queue scene only. It wraps every method's
+actor (:func:`planners.actors.with_stop_and_go`), so the methods stay comparable.
+
+``people_in_global_plan`` (optional; default true): whether the stacks' global planner sees the
+people as obstacles (Nav2's obstacle layer in the global costmap, this arena's default). false:
+the global costmap is the walls, their inflation and the social layer, as seed 002 Sec. 4.4 lists
+it ("the static and the inflation layer"); the people then shape the global path only through
+the social layer, and the local planner, the safety stop and the stop-and-go keep the robot off
+them. A queue needs it: the way to the head is through the line, behind the people in it.
 """
 
 from __future__ import annotations
@@ -69,7 +94,7 @@ from socialnav.jaxsim.scenario.errors import ScenarioError
 
 BEHAVIOURS = ("standing", "walk", "group", "queue", "stream")
 KIND = {"standing": 0, "walk": 1, "queue": 2, "stream": 3}  # a group's members are standing
-RULES = ("min_distance", "avoid_group", "avoid_circle", "keep_right", "visit", "pass_behind", "all")
+RULES = ("min_distance", "avoid_group", "avoid_circle", "keep_right", "visit", "pass_behind", "queue", "all")
 MAX_GROUP = 6
 MAX_OBJECT_VERTICES = 8
 
@@ -90,6 +115,8 @@ class SceneSpec:
     rule: dict
     n_people_slots: int
     held_out_rule: dict | None = None  # the mirrored layout's rule, in this frame (None: ``rule``)
+    stop_and_go_m: float | None = None  # every robot stops for a person ahead closer than this
+    people_in_global_plan: bool = True  # the seen people are obstacles for the global planner
 
 
 # ------------------------------------------------------------------ typed reads
@@ -142,7 +169,7 @@ class _Reader:
     def flag(self, obj: dict, where: str, key: str, default: bool) -> bool:
         value = self.get(obj, where, key, default)
         if not isinstance(value, bool):
-            self.fail(f"{where}.{key}", f"expected true or false, got {value!r}")
+            self.fail(f"{where}.{key}" if where else key, f"expected true or false, got {value!r}")
         return value
 
 
@@ -272,6 +299,18 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
         if people[i]["behaviour"] != "walk":
             r.fail(f"{where}.person", f"person {i} is a {people[i]['behaviour']!r}, not a walker")
         return {"type": kind, "person": i}
+    if kind == "queue":
+        head = r.get(rule, where, "head")
+        if not isinstance(head, list) or len(head) != 2:
+            r.fail(f"{where}.head", f"expected [x, y], got {head!r}")
+        return {
+            "type": kind,
+            "head": np.array([r.number(c, f"{where}.head[{i}]")[0] for i, c in enumerate(head)]),
+            "direction_deg": r.number(r.get(rule, where, "direction_deg"), f"{where}.direction_deg")[0],
+            "half_width_m": r.number(r.get(rule, where, "half_width_m", 0.6), f"{where}.half_width_m", 0.05, 5.0)[0],
+            "length_m": r.number(r.get(rule, where, "length_m"), f"{where}.length_m", 0.0, 100.0)[0],
+            "ahead_m": r.number(r.get(rule, where, "ahead_m", 1.2), f"{where}.ahead_m", 0.0, 20.0)[0],
+        }
     rules = r.get(rule, where, "rules")
     if not isinstance(rules, list) or not rules:
         r.fail(f"{where}.rules", "expected a non-empty list of rules")
@@ -413,6 +452,10 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     rule = _rule(r, r.get(obj, "", "rule"), "rule", people)
     held_out = r.get(obj, "", "held_out_rule", None)
     held_out_rule = None if held_out is None else _rule(r, held_out, "held_out_rule", people)
+    stop_and_go = r.get(obj, "", "stop_and_go_m", None)
+    if stop_and_go is not None:
+        stop_and_go = r.number(stop_and_go, "stop_and_go_m", 0.3, 5.0)[0]
+    people_in_global_plan = r.flag(obj, "", "people_in_global_plan", True)
     _check_placements(r, robot, people)
     return SceneSpec(
         file=file,
@@ -427,6 +470,8 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         rule=rule,
         n_people_slots=max(slots, 1),
         held_out_rule=held_out_rule,
+        stop_and_go_m=stop_and_go,
+        people_in_global_plan=people_in_global_plan,
     )
 
 
@@ -470,8 +515,9 @@ def mirror(spec: SceneSpec) -> SceneSpec:
         if "box" in r:
             b = np.asarray(r["box"], float)
             r["box"] = np.array([b[0], b[1], c - b[3], c - b[2]])
-        if "centre" in r:
-            r["centre"] = np.array([r["centre"][0], c - r["centre"][1]])
+        for key in ("centre", "head"):
+            if key in r:
+                r[key] = np.array([r[key][0], c - r[key][1]])
         if "direction_deg" in r:
             r["direction_deg"] = -r["direction_deg"]
         if "rules" in r:
