@@ -1,9 +1,10 @@
 """People of a scene: where each behaviour wants them, and one step of the crowd model.
 
-Walkers, stream members and queue members move by the warehouse crowd's own step
+Walkers, stream members and served queue members move by the warehouse crowd's own step
 (:func:`jaxsim.crowd.step_crowd`: pedsim's desired, Moussaid and wall forces, the random force,
 walls as a hard constraint; the warehouse's constants), with the robot as an agent they avoid
-unless ``ignore_robot``.
+unless ``ignore_robot``. People waiting in a queue step straight up to their place in line, one
+place after another (:func:`queue_place`).
 Standing people (and group members) stay where they stand, as the seeds' subjects did; a group
 member turns to face the group's centre at its ``turn_at_s``.
 """
@@ -23,6 +24,7 @@ from socialnav.jaxsim.scenes.world import SceneWorld
 ARRIVED_M = 0.3  # a walker within this distance of its target has arrived
 STOP_RAMP_M = 0.5  # a queue member slows down over the last half metre to its place
 AT_PLACE_M = 0.05  # a queue member this close to its place stands there
+QUEUE_STEP_UP_DELAY_S = 0.5  # each place in line steps up this long after the one ahead of it
 MOVING_MPS = 0.1  # slower than this a person keeps their heading (a standing body does not turn to its drift)
 HUMAN_MODELS = ("social_force", "orca")
 
@@ -54,6 +56,20 @@ def init_people(v: Variant) -> PeopleState:
     )
 
 
+def queue_place(v: Variant, time_s):
+    """(P,) int32 each queue member's place in line at ``time_s`` (0: the head, < 0: served).
+
+    The head is served every ``queue_interval_s``; the line then steps up from the front, each
+    place :data:`QUEUE_STEP_UP_DELAY_S` after the one ahead of it, as people in a line do. The
+    ``k``-th service (at ``k interval``) moves the member first at place ``q`` on from place
+    ``q - k + 1`` at ``k interval + (q - k + 1) delay`` (the head leaves at ``k interval``), so by
+    ``t`` it has moved ``floor((t - (q + 1) delay) / (interval - delay))`` times (intervals are
+    at least 1 s, the delay 0.5 s)."""
+    delay = QUEUE_STEP_UP_DELAY_S
+    steps = jnp.floor((time_s - (v.queue_place + 1) * delay) / (v.queue_interval_s - delay)).astype(jnp.int32)
+    return v.queue_place - jnp.maximum(steps, 0)
+
+
 def targets(v: Variant, s: PeopleState, time_s):
     """Where each person is going now: (target (P, 2), desired speed (P,), mobile (P,) bool)."""
     walk = v.kind == KIND["walk"]
@@ -63,8 +79,7 @@ def targets(v: Variant, s: PeopleState, time_s):
     # Walkers and stream members: towards the end of their leg (or back, on a return leg).
     leg_target = jnp.where((s.leg == 1)[:, None], v.start_xy, v.end_xy)
     # Queue members: their place, moved up once per interval; past the head, the exit.
-    served = jnp.floor(time_s / v.queue_interval_s).astype(jnp.int32)
-    place = v.queue_place - served
+    place = queue_place(v, time_s)
     queue_target = jnp.where(
         (place >= 0)[:, None], v.queue_head + jnp.maximum(place, 0)[:, None] * v.queue_step, v.exit_xy
     )
@@ -119,6 +134,16 @@ def step_people(
         )  # fmt: skip
     xy = jnp.stack([x, y], axis=-1)
     new_v = jnp.stack([vx, vy], axis=-1)
+    # People waiting in line step straight up to their place (the human model's repulsion between
+    # people a body apart would spread the line sideways by up to half a metre, and a robot
+    # coming up behind would push them out of line); once served they walk to the exit by the
+    # human model like anyone else.
+    in_line = (v.kind == KIND["queue"]) & (queue_place(v, time_s) >= 0) & mobile
+    to_place = target - s.xy
+    gap = jnp.linalg.norm(to_place, axis=-1, keepdims=True)
+    line_v = to_place / jnp.maximum(gap, 1e-9) * jnp.minimum(speed[:, None], gap / dt)
+    xy = jnp.where(in_line[:, None], s.xy + line_v * dt, xy)
+    new_v = jnp.where(in_line[:, None], line_v, new_v)
 
     moving = jnp.linalg.norm(new_v, axis=-1) > MOVING_MPS
     turned = jnp.where(time_s >= v.turn_at_s, v.heading_turned, v.heading0)
@@ -128,7 +153,7 @@ def step_people(
     walk = v.kind == KIND["walk"]
     stream = v.kind == KIND["stream"]
     queue = v.kind == KIND["queue"]
-    place = v.queue_place - jnp.floor(time_s / v.queue_interval_s).astype(jnp.int32)
+    place = queue_place(v, time_s)
     flip = mobile & walk & arrived & v.back_and_forth
     leg = jnp.where(flip, 1 - s.leg, s.leg)
     done = s.done | (mobile & arrived & ((walk & ~v.back_and_forth) | stream | (queue & (place < 0))))
