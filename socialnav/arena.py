@@ -178,10 +178,10 @@ RESULTS = (
     "shards",
 )
 # Rough cost of one episode for the estimate printed before a run (this project's 2-core
-# machine, the default table with --held-out, 100 variants, 11 methods: 30,800 episodes in 9.0
-# min with the methods on both cores, every program compiled in the run, at f55e7d3;
-# docs/arena-results.md).
-EPISODES_PER_S = 57.0
+# machine, the default table with --held-out, 100 variants, 11 methods: 30,800 episodes in 9.3
+# min with the methods on both cores, every program compiled in the run, after the queue was
+# rebuilt (90 s episodes); docs/arena-results.md).
+EPISODES_PER_S = 55.0
 # Bytes a finished episode's row costs in the joined tables: 146 measured in memory
 # (``memory_usage(deep=True)``, 26 columns, 80 episodes of casn_head_on and casn_crossing), times
 # about four for the copies the joins, the summary and the statistics make.
