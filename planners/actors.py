@@ -247,12 +247,7 @@ def stack_actor(
 def safety_stop(params: StackParams, obs: Observation) -> jax.Array:
     """() bool: a visible person in front (within 60 deg of the heading) closer, centre to
     centre, than the bodies plus the safety margin: the base stops."""
-    offset = obs.people_xy_m - obs.robot_xy_m
-    dist = jnp.linalg.norm(offset, axis=-1)
-    bearing = jnp.arctan2(offset[:, 1], offset[:, 0]) - obs.robot_yaw_rad
-    in_front = jnp.cos(bearing) > 0.5
-    near = dist < params.robot_radius_m + params.person_radius_m + params.safety_margin_m
-    return jnp.any(obs.people_visible & in_front & near)
+    return person_ahead(obs, params.robot_radius_m + params.person_radius_m + params.safety_margin_m, 60.0)
 
 
 STOP_AND_GO_CONE_DEG = (

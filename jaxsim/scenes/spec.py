@@ -158,6 +158,12 @@ class _Reader:
             self.fail(where, f"expected a point [x, y], got {value!r}")
         return tuple(self.number(v, f"{where}[{i}]") for i, v in enumerate(value))
 
+    def exact_point(self, value: Any, where: str) -> np.ndarray:
+        """A rule's point ``[x, y]`` (numbers, no ranges): (2,) float array."""
+        if not isinstance(value, list) or len(value) != 2:
+            self.fail(where, f"expected [x, y], got {value!r}")
+        return np.array([self.number(c, f"{where}[{i}]")[0] for i, c in enumerate(value)])
+
     def box(self, value: Any, where: str) -> np.ndarray:
         if not isinstance(value, list) or len(value) != 4:
             self.fail(where, f"expected [xmin, xmax, ymin, ymax], got {value!r}")
@@ -275,12 +281,9 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
             r.fail(f"{where}.group", f"expected the index of one of the scene's {len(groups)} group(s), got {g!r}")
         return {"type": kind, "group": g}
     if kind == "avoid_circle":
-        centre = r.get(rule, where, "centre")
-        if not isinstance(centre, list) or len(centre) != 2:
-            r.fail(f"{where}.centre", f"expected [x, y], got {centre!r}")
         return {
             "type": kind,
-            "centre": np.array([r.number(c, f"{where}.centre[{i}]")[0] for i, c in enumerate(centre)]),
+            "centre": r.exact_point(r.get(rule, where, "centre"), f"{where}.centre"),
             "radius_m": r.number(r.get(rule, where, "radius_m"), f"{where}.radius_m", 0.0)[0],
         }
     if kind == "keep_right":
@@ -300,12 +303,9 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
             r.fail(f"{where}.person", f"person {i} is a {people[i]['behaviour']!r}, not a walker")
         return {"type": kind, "person": i}
     if kind == "queue":
-        head = r.get(rule, where, "head")
-        if not isinstance(head, list) or len(head) != 2:
-            r.fail(f"{where}.head", f"expected [x, y], got {head!r}")
         return {
             "type": kind,
-            "head": np.array([r.number(c, f"{where}.head[{i}]")[0] for i, c in enumerate(head)]),
+            "head": r.exact_point(r.get(rule, where, "head"), f"{where}.head"),
             "direction_deg": r.number(r.get(rule, where, "direction_deg"), f"{where}.direction_deg")[0],
             "half_width_m": r.number(r.get(rule, where, "half_width_m", 0.6), f"{where}.half_width_m", 0.05, 5.0)[0],
             "length_m": r.number(r.get(rule, where, "length_m"), f"{where}.length_m", 0.0, 100.0)[0],
