@@ -16,7 +16,6 @@ import optax
 from flax import nnx
 
 from socialnav.models.config import TrainConfig, learning_rate_schedule, make_model
-from socialnav.models.social_costs import GRADED_TOP
 
 
 def batch_sharding(batch_size: int):
@@ -45,7 +44,6 @@ def make_train_step(
     cost_weight: float = 0.0,
     pair_weight: float = 0.0,
     objective=None,
-    forbidden_weight: float = 0.0,
 ):
     """``step(state, inputs, targets, family, contrast=None, key=None) -> (state, loss)``; ``state``
     is a dict with ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and
@@ -54,9 +52,7 @@ def make_train_step(
 
     With ``objective`` None (the "maps" objective) the loss is the mean over pixels of ``(1 +
     cost_weight * target + pair_weight * contrast) * error**2`` (the plain MSE with both at 0 or no
-    contrast given), and ``loss`` is the plain MSE. With ``forbidden_weight`` > 0, a pixel whose
-    target, or whose twin's target, is forbidden (above :data:`models.social_costs.GRADED_TOP`: the
-    queue's U) weighs ``forbidden_weight`` instead. With an ``objective`` (the "paths" one,
+    contrast given), and ``loss`` is the plain MSE. With an ``objective`` (the "paths" one,
     ``planners.irl.PathObjective``: ``prepare(key, inputs, targets)`` and ``loss(costs, inputs,
     prepared) -> (B,)``), ``key`` draws the batch's demonstrations and the loss and ``loss`` are
     the mean of ``objective.loss``. The per-family accumulators are the plain MSE either way."""
@@ -72,15 +68,7 @@ def make_train_step(
         weight = 1.0 + cost_weight * targets
         if pair_weight and contrast is not None:
             weight = weight + pair_weight * contrast
-        if forbidden_weight:
-            # A twin's U shows as a contrast above any graded cost's.
-            forbidden = targets > GRADED_TOP + 1e-3
-            if contrast is not None:
-                forbidden = forbidden | (contrast > GRADED_TOP + 1e-3)
-            weight = jnp.where(forbidden, forbidden_weight, weight)
-        weighted = (
-            jnp.mean(weight * squared) if (cost_weight or pair_weight or forbidden_weight) else jnp.mean(per_sample)
-        )
+        weighted = jnp.mean(weight * squared) if (cost_weight or pair_weight) else jnp.mean(per_sample)
         return weighted, (per_sample, nnx.state(model, nnx.BatchStat))
 
     @jax.jit
@@ -149,9 +137,7 @@ def compiled(config: TrainConfig, objective=None):
     return (
         graphdef,
         tx,
-        make_train_step(
-            graphdef, tx, len(config.counts), config.cost_weight, config.pair_weight, objective, config.forbidden_weight
-        ),
+        make_train_step(graphdef, tx, len(config.counts), config.cost_weight, config.pair_weight, objective),
         make_predict(graphdef),
     )
 

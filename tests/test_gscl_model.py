@@ -381,37 +381,6 @@ def test_the_pair_weighted_loss_weighs_only_the_contrast():
     assert TrainConfig.paper().pair_weight == 0.0
 
 
-def test_the_forbidden_weight_replaces_the_other_terms_on_the_queues_u_only():
-    """``forbidden_weight`` is the weight of a pixel whose target is the queue's U: on maps with no
-    U the step is the same with it or without; on queues with their U it differs; at 1 with the
-    other terms at 0 it is the plain step. Bad weights are refused; runs saved before it read as 0."""
-    base = {**TINY, "schedule": "constant", "cost_weight": 10.0, "pair_weight": 0.0}
-
-    def step(data, **settings):
-        config = TrainConfig(**{**base, **settings})
-        state = steps.initial_state(config)
-        new, _ = steps.compiled(config)[2](state, data["inputs"], data["targets"], np.zeros(16, np.int32))
-        return jax.tree.leaves(new["params"])
-
-    def same(a, b):
-        return all(np.allclose(x, y, rtol=1e-6, atol=1e-7) for x, y in zip(a, b, strict=True))
-
-    groups, queues = dataset.generate(3, {"group": 16}), dataset.generate(3, {"queue": 16})
-    assert (queues["targets"] > 0.9).any() and not (groups["targets"] > 0.9).any()
-    assert same(step(groups, forbidden_weight=0.0), step(groups, forbidden_weight=3.0))
-    assert not same(step(queues, forbidden_weight=0.0), step(queues, forbidden_weight=3.0))
-    assert same(
-        step(queues, cost_weight=0.0, forbidden_weight=0.0), step(queues, cost_weight=0.0, forbidden_weight=1.0)
-    )
-    for bad in (-1.0, float("nan")):
-        with pytest.raises(ValueError, match="forbidden_weight"):
-            TrainConfig(forbidden_weight=bad)
-    old = TrainConfig().to_json()
-    del old["forbidden_weight"]
-    assert TrainConfig.from_json(old).forbidden_weight == 0.0
-    assert TrainConfig.paper().forbidden_weight == 0.0
-
-
 def test_an_epoch_carries_its_contrast_through_the_shuffle():
     """``epoch_data`` computes the twins' contrast before it shuffles, and shuffles it with its
     samples: the same rows as :func:`dataset.pair_contrast` of the unshuffled epoch; runs without a
@@ -463,29 +432,6 @@ def test_an_exported_model_predicts_what_the_run_predicts_and_bad_folders_are_na
     (tmp_path / "m" / inference.WEIGHTS_FILE).write_bytes(b"not msgpack")
     with pytest.raises(ValueError, match="weights.msgpack"):
         inference.SocialCostModel.load(tmp_path / "m")
-
-
-def test_a_model_of_graded_targets_is_read_in_the_graded_range_and_cannot_be_trained_on(tmp_path):
-    """A run saved before the targets had a forbidden level (its config.json has no 'targets')
-    and a "paths" run learnt graded costs only: loaded, their costs are scaled by GRADED_TOP, so
-    that the GSCL layer reads their peak as the top of the graded range, never as forbidden."""
-    from socialnav.models import social_costs as sc
-
-    now = TrainConfig(**TINY)
-    old = TrainConfig.from_json({k: v for k, v in now.to_json().items() if k != "targets"})
-    assert (now.targets, old.targets) == ("graded_forbidden", "graded")
-    assert now.reads_forbidden and not old.reads_forbidden
-    assert not TrainConfig(**TINY, objective="paths").reads_forbidden
-    state = steps.initial_state(now)
-    graphdef = steps.compiled(now)[0]
-    maps = dataset.generate(0, {"queue": 2})["inputs"]
-    raw = np.asarray(inference.SocialCostModel(graphdef, state["params"], state["batch_stats"], now)(maps))
-    model = inference.SocialCostModel(graphdef, state["params"], state["batch_stats"], old)
-    np.testing.assert_allclose(np.asarray(model(maps)), sc.GRADED_TOP * raw, rtol=1e-6)
-    np.testing.assert_allclose(np.asarray(model.apply(model.weights, maps)), sc.GRADED_TOP * raw, rtol=1e-6)
-    with pytest.raises(ValueError, match="targets: 'graded'"):
-        train.train(old, tmp_path / "old", progress=False)
-    assert not (tmp_path / "old").exists()  # refused before any file
 
 
 @pytest.mark.slow
