@@ -41,6 +41,7 @@ def _cell(row: pd.Series, metric: str) -> str:
 
 def table(run: pathlib.Path) -> str:
     """The Markdown table of ``run`` (an arena run's folder)."""
+    from socialnav.evaluation.arena_report import HELD_OUT
     from socialnav.evaluation.papers import PAPER_ROWS
 
     summary_path = run / "summary.csv"
@@ -57,9 +58,8 @@ def table(run: pathlib.Path) -> str:
             if (scene, method) not in summary.index:
                 raise SystemExit(f"{summary_path}: no row for scene {scene}, method {method}")
             row = summary.loc[(scene, method)]
-            held = (
-                summary.loc[(f"{scene}@held_out", method)] if (f"{scene}@held_out", method) in summary.index else None
-            )
+            held_key = (scene + HELD_OUT, method)
+            held = summary.loc[held_key] if held_key in summary.index else None
             theirs = f"{_pct(paper.get((scene, method, 'goal_success_pct')))} / "
             theirs += _pct(paper.get((scene, method, "social_success_pct")))
             lines.append(
