@@ -38,9 +38,8 @@ map without the rule's own cost (a group's people facing in put some cost into t
 middle by their proxemics alone; a model must add the interaction zone to pass). The expected
 map is built with the same cost shapes as the training targets (:mod:`models.social_costs`):
 people at the cell they are drawn in, facing the drawn (8-direction) heading, because the input
-shows no more; the queue's U along the line from its tail's cell to its head's
-(:func:`models.social_costs.drawn_line`), as the generator draws it, and the group's zone over
-its own circle, which the people's cells show at any angle. Every case's rule adds at least
+shows no more; the queue's U along the queue's own line and the group's zone over its own
+circle, which the people's cells show at any angle. Every case's rule adds at least
 :data:`MIN_EXPECTED_CONTRAST` (tested), so a model that draws nothing, or only people, fails.
 
 :func:`build_suite` makes the cases (numpy arrays, deterministic by seed); :func:`evaluate`
@@ -235,10 +234,7 @@ def _draw_queue(scene: _Scene, q: _Queue, goal: str, rng):
     if goal == "head":
         d = rng.uniform(0.5, 1.1)
         scene.goal = _world(q.hx, q.hy, q.phi, d, 0.0)
-        # The U along the line the people's cells show, as the generator draws it.
-        x, y, heading = (jnp.asarray(v, jnp.float32) for v in zip(*scene.people[-q.n :], strict=True))
-        line = sc.drawn_line(x, y, heading, jnp.ones(q.n, bool))
-        scene.costs.append(("queue_u", sc.queue_u_cost(*line)))
+        scene.costs.append(("queue_u", sc.queue_u_cost(q.hx, q.hy, q.phi, q.tail)))
     else:
         scene.goal = q.elsewhere_goal
 

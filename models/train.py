@@ -31,7 +31,7 @@ from socialnav.common import progress as progress_lib
 from socialnav.common.atomic import write_text_atomic
 from socialnav.models import dataset, rules
 from socialnav.models.checkpoints import check_run_folder, checkpoint_manager, host, restore_state, write_metrics
-from socialnav.models.config import TARGETS, TrainConfig, learning_rate_schedule
+from socialnav.models.config import TrainConfig, learning_rate_schedule
 from socialnav.models.quality import by_family, meets_quality, trivial_baselines
 from socialnav.models.steps import batch_sharding, compiled, initial_state, per_sample_mse
 from socialnav.models.streams import demonstration_key, epoch_data, test_data
@@ -62,16 +62,10 @@ def train(
         None for the "maps" objective.
 
     Raises:
-      ValueError: ``objective`` does not match ``config.objective``, or ``config.targets`` is
-        not the targets the generator draws (an older run's "graded").
+      ValueError: ``objective`` does not match ``config.objective``.
     """
     import orbax.checkpoint as ocp
 
-    if config.targets != TARGETS[0]:
-        raise ValueError(
-            f"targets: {config.targets!r} runs learnt the generator's earlier targets, which it no longer "
-            f"draws; such a run can be read, not trained (start a new run, targets {TARGETS[0]!r})"
-        )
     if (objective is None) != (config.objective == "maps"):
         raise ValueError(
             f"objective: a {config.objective!r} run needs "

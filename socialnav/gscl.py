@@ -68,7 +68,6 @@ _TRAIN_OPTIONS = (
     "group_scale",
     "cost_weight",
     "pair_weight",
-    "forbidden_weight",
     "objective",
     "temperature",
     "paths_per_map",
@@ -163,13 +162,6 @@ def add_parser(top) -> None:
         default=None,
         help="training loss: add this x |target - twin's target| to the weight of a group and the same circle "
         "facing out, a queue and the same queue with the goal elsewhere (default 20; --paper: 0)",
-    )
-    tr.add_argument(
-        "--forbidden-weight",
-        type=non_negative_float,
-        default=None,
-        help="training loss: the weight of the forbidden head's cross-entropy (the queue's U, learnt as a "
-        "classification) beside the graded costs' MSE (default 1; > 0 for a 'maps' run)",
     )
     tr.add_argument(
         "--objective",

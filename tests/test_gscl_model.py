@@ -381,55 +381,6 @@ def test_the_pair_weighted_loss_weighs_only_the_contrast():
     assert TrainConfig.paper().pair_weight == 0.0
 
 
-def test_the_forbidden_head_learns_the_queues_u_as_a_classification_beside_the_graded_costs():
-    """Today's targets split exactly into the graded channel's targets and the forbidden head's
-    (the U on queues with the goal at the head, nothing on groups); the combined output is
-    FORBIDDEN where the head's logit is >= 0 and GRADED_TOP x graded elsewhere; the head exists
-    only for "maps" runs on today's targets; its loss weight moves the step only where it acts."""
-    from socialnav.models import social_costs as sc
-
-    queues, groups = dataset.generate(3, {"queue": 16}), dataset.generate(3, {"group": 16})
-    t = jnp.asarray(queues["targets"])
-    graded, forbidden, _ = steps.split_targets(t)
-    assert float(forbidden.max()) > 0.95 and float(graded.max()) <= 1.0 and float(graded.min()) >= 0.0
-    rebuilt = jnp.where(
-        forbidden > 0, sc.GRADED_TOP + forbidden * (sc.FORBIDDEN - sc.GRADED_TOP), sc.GRADED_TOP * graded
-    )
-    np.testing.assert_allclose(np.asarray(rebuilt), queues["targets"], atol=1e-6)
-    assert float(steps.split_targets(jnp.asarray(groups["targets"]))[1].max()) == 0.0
-    assert steps.split_targets(t, None)[2] is None
-
-    combined = unet.combine_heads(jnp.array([0.5, 0.5, 1.0]), jnp.array([-0.1, 0.0, 2.0]))
-    np.testing.assert_allclose(np.asarray(combined), [0.5 * sc.GRADED_TOP, sc.FORBIDDEN, sc.FORBIDDEN])
-
-    def head_outputs(config):
-        return steps.weight_shapes(config)[0]["head"]["kernel"].shape[-1]
-
-    base = {**TINY, "schedule": "constant"}
-    assert head_outputs(TrainConfig(**base)) == 2
-    assert head_outputs(TrainConfig(**base, objective="paths")) == 1
-    old = TrainConfig().to_json()
-    del old["forbidden_weight"], old["targets"]
-    assert (TrainConfig.from_json(old).forbidden_weight, head_outputs(TrainConfig.from_json(old))) == (0.0, 1)
-    for bad in (0.0, -1.0, float("nan")):
-        with pytest.raises(ValueError, match="forbidden_weight"):
-            TrainConfig(forbidden_weight=bad)
-    assert TrainConfig(forbidden_weight=0.0, objective="paths").forbidden_weight == 0.0
-    assert TrainConfig.paper().forbidden_weight == TrainConfig().forbidden_weight
-
-    def step(data, **settings):
-        config = TrainConfig(**{**base, **settings})
-        state = steps.initial_state(config)
-        new, loss = steps.compiled(config)[2](state, data["inputs"], data["targets"], np.zeros(16, np.int32))
-        return new["params"], float(loss)
-
-    (one, loss_one), (three, loss_three) = step(queues, forbidden_weight=1.0), step(queues, forbidden_weight=3.0)
-    assert loss_one == loss_three  # the reported loss is the plain MSE of the output before the step
-    # Adam's first step is the gradient's sign on a parameter one loss alone moves (the head's own
-    # kernel); the shared layers, moved by both, change with the weight.
-    assert not all(np.allclose(a, b) for a, b in zip(jax.tree.leaves(one), jax.tree.leaves(three), strict=True))
-
-
 def test_an_epoch_carries_its_contrast_through_the_shuffle():
     """``epoch_data`` computes the twins' contrast before it shuffles, and shuffles it with its
     samples: the same rows as :func:`dataset.pair_contrast` of the unshuffled epoch; runs without a
@@ -481,31 +432,6 @@ def test_an_exported_model_predicts_what_the_run_predicts_and_bad_folders_are_na
     (tmp_path / "m" / inference.WEIGHTS_FILE).write_bytes(b"not msgpack")
     with pytest.raises(ValueError, match="weights.msgpack"):
         inference.SocialCostModel.load(tmp_path / "m")
-
-
-def test_a_model_of_graded_targets_is_read_in_the_graded_range_and_cannot_be_trained_on(tmp_path):
-    """A run saved before the targets had a forbidden level (its config.json has no 'targets')
-    and a "paths" run learnt graded costs only: they have one output, and loaded, their costs are
-    scaled by GRADED_TOP, so that the GSCL layer reads their peak as the top of the graded range,
-    never as forbidden. A model with the forbidden head is read as it outputs."""
-    from socialnav.models import social_costs as sc
-
-    now = TrainConfig(**TINY)
-    old = TrainConfig.from_json({k: v for k, v in now.to_json().items() if k != "targets"})
-    assert (now.targets, old.targets) == ("graded_forbidden", "graded")
-    assert now.reads_forbidden and not old.reads_forbidden
-    assert not TrainConfig(**TINY, objective="paths").reads_forbidden
-    maps = dataset.generate(0, {"queue": 2})["inputs"]
-    for config, scale in ((old, sc.GRADED_TOP), (now, 1.0)):
-        state = steps.initial_state(config)
-        graphdef = steps.compiled(config)[0]
-        raw = np.asarray(inference.SocialCostModel(graphdef, state["params"], state["batch_stats"])(maps))
-        model = inference.SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
-        np.testing.assert_allclose(np.asarray(model(maps)), scale * raw, rtol=1e-6)
-        np.testing.assert_allclose(np.asarray(model.apply(model.weights, maps)), scale * raw, rtol=1e-6)
-    with pytest.raises(ValueError, match="targets: 'graded'"):
-        train.train(old, tmp_path / "old", progress=False)
-    assert not (tmp_path / "old").exists()  # refused before any file
 
 
 @pytest.mark.slow
