@@ -27,8 +27,6 @@ rule               contrast (A minus B)
 ``corner_wide``    an L hallway's inner (blind) corner minus its outer corner: within 1 m of each,
                    inside the corridor
 ``blind_corner``   the free side within 1 m of a blind corner minus the free side 3-4.5 m from it
-                   (beside a queue: both regions 2 m clear of its people, and a cell clear of
-                   its U, which the ``queue_u`` check scores)
 ``pass_left``      beside a person on their right (0.6-1.4 m, 0-1.6 m ahead) minus the same on their
                    left (the passing layer: the robot passes on their left)
 =================  ===================================================================================
@@ -40,9 +38,8 @@ map without the rule's own cost (a group's people facing in put some cost into t
 middle by their proxemics alone; a model must add the interaction zone to pass). The expected
 map is built with the same cost shapes as the training targets (:mod:`models.social_costs`):
 people at the cell they are drawn in, facing the drawn (8-direction) heading, because the input
-shows no more; the queue's U along the line from its tail's cell to its head's
-(:func:`models.social_costs.drawn_line`), as the generator draws it, and the group's zone over
-its own circle, which the people's cells show at any angle. Every case's rule adds at least
+shows no more; the queue's U along the queue's own line and the group's zone over its own
+circle, which the people's cells show at any angle. Every case's rule adds at least
 :data:`MIN_EXPECTED_CONTRAST` (tested), so a model that draws nothing, or only people, fails.
 
 :func:`build_suite` makes the cases (numpy arrays, deterministic by seed); :func:`evaluate`
@@ -237,10 +234,7 @@ def _draw_queue(scene: _Scene, q: _Queue, goal: str, rng):
     if goal == "head":
         d = rng.uniform(0.5, 1.1)
         scene.goal = _world(q.hx, q.hy, q.phi, d, 0.0)
-        # The U along the line the people's cells show, as the generator draws it.
-        x, y, heading = (jnp.asarray(v, jnp.float32) for v in zip(*scene.people[-q.n :], strict=True))
-        line = sc.drawn_line(x, y, heading, jnp.ones(q.n, bool))
-        scene.costs.append(("queue_u", sc.queue_u_cost(*line)))
+        scene.costs.append(("queue_u", sc.queue_u_cost(q.hx, q.hy, q.phi, q.tail)))
     else:
         scene.goal = q.elsewhere_goal
 
@@ -496,12 +490,6 @@ def _corner_walls(rng, distance=(1.0, 6.5), wedge_deg=CORNER_WEDGE_DEG):
     return walls, (cx, cy), rel > beta, {"corner_m": d, "wedge_deg": float(np.rad2deg(beta))}
 
 
-def _grown(mask):
-    """(40, 40) bool: ``mask`` and its cells' 8 neighbours."""
-    padded = np.pad(mask, 1)
-    return np.any([padded[1 + dr : 41 + dr, 1 + dc : 41 + dc] for dr in (-1, 0, 1) for dc in (-1, 0, 1)], axis=0)
-
-
 def _blind_corner_regions(corner, free_side, image, keep_out):
     d = np.hypot(grid.CELL_X_M - corner[0], grid.CELL_Y_M - corner[1])
     free = free_side & _free(image) & ~keep_out
@@ -588,12 +576,7 @@ def _scene_queue_corner(rng):
     if out is None:
         return None
     q, images, expected, region = out
-    # The corner's regions leave out the queue: its people and, with the goal at its head, its U
-    # and a cell round it (the U is forbidden, above every graded cost: in a region it would
-    # decide the corner's contrast; the queue_u check scores it).
-    head = _first(expected)
-    u_cells = _grown(head[""] > head["queue_u"] + 1e-3)
-    a, b = _blind_corner_regions(corner, free_side, images[0], _near(q.people + [q.elsewhere_goal], 2.0) | u_cells)
+    a, b = _blind_corner_regions(corner, free_side, images[0], _near(q.people + [q.elsewhere_goal], 2.0))
     return [
         _case("queue+corner", "queue_u", images, expected, region, region),
         _case("queue+corner", "blind_corner", images[0], _first(expected), a, b, **geometry),
