@@ -24,8 +24,17 @@ ADDED_LATER = {
     "objective": "maps",
     "temperature": 2.0,
     "paths_per_map": 4,
+    "targets": "graded",
+    "forbidden_weight": 0.0,
+    "init_from": "",
+    "forbidden_features": [],
+    "freeze_graded": False,
 }
 OBJECTIVES = ("maps", "paths")
+# The generator's targets: "graded_forbidden" (today's: graded shapes up to
+# models.social_costs.GRADED_TOP, the queue's U at FORBIDDEN) or "graded" (runs saved before:
+# every shape graded, peak 1; kept only to read those runs, the generator no longer draws them).
+TARGETS = ("graded_forbidden", "graded")
 # The soft planner's temperature of the "paths" objective, in NavFn cost units on the network's
 # 0.4 m grid (the cheapest move, 0.4 m of free space, costs 20; the soft-min converges for
 # tau < 20 / ln 8 = 9.6). Exact plans are noise-free demonstrations and a low temperature fits
@@ -74,6 +83,14 @@ class TrainConfig:
         facing-out one). 20 by default: on 400 fresh scenes of each kind every held-out check
         passed (the zone beside a hallway 92.8 -> 96.0 %, beside a queue 94.8 -> 97.2 %); 0: no
         pair term (runs saved before it, ``--paper``).
+      forbidden_weight: the weight of the forbidden head's loss (the mean over pixels of the
+        binary cross-entropy of its logits against the forbidden share of the target,
+        :func:`models.steps.split_targets`) beside the graded channel's weighted MSE; > 0 for a
+        model with the head. ``--paper`` keeps the head and this weight: reading the U as lethal
+        is this project's choice, not a change of the paper's network. 1 by default: on short
+        runs (2 epochs of a quarter of the data, the queue's U rule check / the corner family's
+        test error as a share of the trivial predictor's) 0.01 gave 0 % / 0.44, 0.3 3 % / 0.37,
+        1 63 % / 0.41 and 3 69 % / 0.59.
       objective: ``"maps"`` (seed 002: regression on the generator's target maps, the loss
         above) or ``"paths"`` (maximum-entropy IRL through the soft planner,
         :mod:`planners.irl`: the targets are used only to plan ``paths_per_map`` exact
@@ -84,6 +101,24 @@ class TrainConfig:
       temperature: the soft planner's temperature of the "paths" objective
         (:data:`PATH_TEMPERATURE`, below :data:`MAX_PATH_TEMPERATURE`).
       paths_per_map: demonstrations planned on each map by the "paths" objective.
+      targets: which targets the run learnt (:data:`TARGETS`); see :attr:`reads_forbidden`.
+      init_from: a model folder (an exported model, e.g. the shipped one, or a training run's
+        folder) whose weights start this run (:mod:`models.warm_start`: fine-tuning; a source
+        with one output starts a model with the forbidden head, whose new channel starts fresh);
+        ``""`` (the default): fresh weights drawn from ``seed``. A relative path is read from
+        the working directory; a resumed run starts from its checkpoint and never reads it.
+      forbidden_features: ``()`` (the default): the forbidden head is a second output channel of
+        the U-Net's last layer, sharing its features with the graded costs; four widths: the
+        forbidden logit comes from a separate, smaller U-Net of those widths
+        (:class:`models.unet.UNet`'s ``forbidden_features``), so that the graded network can be
+        kept as it is (``freeze_graded``).
+      freeze_graded: train the forbidden branch only: the graded network's weights and batch
+        statistics stay as ``init_from`` gave them (Adam's updates set to zero, batch norm in
+        inference mode, no gradient computed through it), and the loss is the forbidden head's
+        cross-entropy alone. Needs ``init_from`` and ``forbidden_features``. Why: a fine-tune of
+        the shared network learnt the U but drew the blind corner beside a queue weaker than the
+        shipped model (93.5 % against 95.8 % of the rule suite's scenes, commit 826782f); a
+        frozen graded network keeps every graded cost the source drew.
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).
       keep_checkpoints: how many checkpoints orbax keeps.
@@ -104,9 +139,14 @@ class TrainConfig:
     group_scale: int = 2
     cost_weight: float = 10.0
     pair_weight: float = 20.0
+    forbidden_weight: float = 1.0
     objective: str = "maps"
     temperature: float = PATH_TEMPERATURE
     paths_per_map: int = 4
+    targets: str = "graded_forbidden"
+    init_from: str = ""
+    forbidden_features: tuple[int, ...] = ()
+    freeze_graded: bool = False
     seed: int = 0
     checkpoint_every_steps: int = 500
     keep_checkpoints: int = 2
@@ -116,6 +156,12 @@ class TrainConfig:
         if len(features) != 4 or not all(isinstance(f, int) and not isinstance(f, bool) and f >= 1 for f in features):
             raise ValueError(f"features must be 4 whole numbers >= 1, got {list(features)}")
         object.__setattr__(self, "features", tuple(int(f) for f in features))
+        branch = tuple(self.forbidden_features)
+        if branch and (
+            len(branch) != 4 or not all(isinstance(f, int) and not isinstance(f, bool) and f >= 1 for f in branch)
+        ):
+            raise ValueError(f"forbidden_features must be empty or 4 whole numbers >= 1, got {list(branch)}")
+        object.__setattr__(self, "forbidden_features", branch)
         for name in ("learning_rate", "final_lr_fraction", "train_fraction", "test_fraction"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
@@ -123,9 +169,17 @@ class TrainConfig:
             raise ValueError("warmup_steps must be >= 0 and final_lr_fraction in [0, 1]")
         if self.schedule not in ("constant", "cosine"):
             raise ValueError(f"schedule must be 'constant' or 'cosine', got {self.schedule!r}")
-        for name in ("cost_weight", "pair_weight"):
+        for name in ("cost_weight", "pair_weight", "forbidden_weight"):
             if not (math.isfinite(getattr(self, name)) and getattr(self, name) >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {getattr(self, name)}")
+        if self.targets not in TARGETS:
+            raise ValueError(f"targets must be one of {TARGETS}, got {self.targets!r}")
+        if self.reads_forbidden and not self.forbidden_weight > 0:
+            raise ValueError("forbidden_weight must be > 0 with the forbidden head (a 'maps' run on today's targets)")
+        if self.forbidden_features and not self.reads_forbidden:
+            raise ValueError("forbidden_features needs the forbidden head (a 'maps' run on today's targets)")
+        if self.freeze_graded and not (self.init_from and self.forbidden_features):
+            raise ValueError("freeze_graded needs init_from (the graded network to keep) and forbidden_features")
         if self.objective not in OBJECTIVES:
             raise ValueError(f"objective must be one of {OBJECTIVES}, got {self.objective!r}")
         if not 0 < self.temperature < MAX_PATH_TEMPERATURE:
@@ -163,6 +217,15 @@ class TrainConfig:
         return cls(**{**base, **overrides})
 
     @property
+    def reads_forbidden(self) -> bool:
+        """Whether the model has the forbidden head (:mod:`models.unet`) and its costs are read
+        with a forbidden level (the "maps" objective on today's targets: from
+        :data:`models.social_costs.FORBIDDEN_FROM` up lethal). A model that learnt graded costs
+        only (older runs; the "paths" objective, whose soft planner reads every cost as graded)
+        has one output and is scaled into the graded range when loaded."""
+        return self.targets == "graded_forbidden" and self.objective == "maps"
+
+    @property
     def counts(self) -> dict[str, int]:
         """Samples per family of the whole (train + test) set: the paper's (groups and non-groups
         times :attr:`group_scale`), plus the composites."""
@@ -188,6 +251,7 @@ class TrainConfig:
     def to_json(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
         d["features"] = list(self.features)
+        d["forbidden_features"] = list(self.forbidden_features)
         return d
 
     @classmethod
@@ -204,7 +268,16 @@ class TrainConfig:
         missing = sorted(set(fields) - set(d))
         if missing:
             raise ValueError(f"{source}: field '{missing[0]}': missing")
-        kinds = {"features": list, "coords": bool, "fresh_samples": bool, "schedule": str, "objective": str}
+        kinds = {
+            "features": list,
+            "coords": bool,
+            "fresh_samples": bool,
+            "schedule": str,
+            "objective": str,
+            "targets": str,
+            "init_from": str,
+            "forbidden_features": list,
+        }
         for name, value in d.items():
             want = kinds.get(name, type(getattr(cls, name)))
             ok = isinstance(value, want) and not (want is not bool and isinstance(value, bool))
@@ -213,7 +286,7 @@ class TrainConfig:
             if not ok:
                 raise ValueError(f"{source}: field '{name}': expected {want.__name__}, got {value!r}")
         try:
-            return cls(**{**d, "features": tuple(d["features"])})
+            return cls(**{**d, "features": tuple(d["features"]), "forbidden_features": tuple(d["forbidden_features"])})
         except ValueError as e:
             raise ValueError(f"{source}: {e}") from None
 
@@ -234,4 +307,10 @@ def learning_rate_schedule(config: TrainConfig) -> optax.Schedule:
 
 def make_model(config: TrainConfig) -> unet.UNet:
     """A freshly initialised U-Net of ``config``'s widths (seeded by ``config.seed``)."""
-    return unet.UNet(config.features, config.coords, rngs=nnx.Rngs(config.seed))
+    return unet.UNet(
+        config.features,
+        config.coords,
+        config.reads_forbidden,
+        forbidden_features=config.forbidden_features or None,
+        rngs=nnx.Rngs(config.seed),
+    )

@@ -262,11 +262,16 @@ QUEUE_LENGTH_M = (2.0, 12.0)
 QUEUE_GAP_M = (0.2, 0.55, 1.0)  # triangular: low, mode, high
 QUEUE_WALL_CLEARANCE_M = 1.0
 QUEUE_BODY_M = 0.4  # the triangular 0.3-0.8 m "distance between individuals" is read as the gap
+# The share of queues of one person (the last one at the desk; the paper's are 3-10 m long). A
+# robot waiting behind the head sees a line of one, and without these the network never learns
+# a U round it: the generator's own map let the robot round the head to the desk in a quarter of
+# the arena's queue episodes (scripts/gscl_queue_oracle.py).
+QUEUE_ALONE_SHARE = 0.15
 
 
 def queue_layout(key):
     """A queue facing +phi: head position, people behind it, (P,) valid mask, and the goal at the head."""
-    k_h, k_o, k_len, k_gap, k_j = jax.random.split(key, 5)
+    k_h, k_o, k_len, k_gap, k_j, k_alone = jax.random.split(key, 6)
     hx, hy = jax.random.uniform(k_h, (2,), minval=-3.0, maxval=3.0)
     phi = jax.random.uniform(k_o, (), minval=-jnp.pi, maxval=jnp.pi)
     length = jax.random.uniform(k_len, (), minval=QUEUE_LENGTH_M[0], maxval=QUEUE_LENGTH_M[1])
@@ -276,7 +281,8 @@ def queue_layout(key):
     jitter = jax.random.uniform(k_j, (2, MAX_QUEUE), minval=-1.0, maxval=1.0)
     along = -(i * spacing + 0.15 * spacing * jitter[0] * (i > 0))
     lateral = 0.05 * jitter[1]
-    valid = i * spacing <= length
+    alone = jax.random.uniform(k_alone) < QUEUE_ALONE_SHARE
+    valid = (i * spacing <= length) & ((i == 0) | ~alone)
     px, py = _rotate(along, lateral, phi)
     return hx + px, hy + py, phi, valid, hx, hy, spacing
 
@@ -285,7 +291,7 @@ def _sample_queue(key, at_head: bool):
     k_l, k_g, k_w = jax.random.split(key, 3)
     x, y, phi, valid, hx, hy, spacing = queue_layout(k_l)
     x, y, heading = _as_drawn(x, y, jnp.full(MAX_QUEUE, phi))
-    tail = jnp.max(jnp.where(valid, jnp.arange(MAX_QUEUE), 0)) * spacing
+    tail = jnp.max(jnp.where(valid, jnp.arange(MAX_QUEUE), 0)) * spacing  # the sampled line's
     if at_head:
         ahead = jax.random.uniform(k_g, (), minval=0.6, maxval=1.0)
         gx, gy = hx + ahead * jnp.cos(phi), hy + ahead * jnp.sin(phi)
@@ -304,8 +310,8 @@ def _sample_queue(key, at_head: bool):
     image = grid.draw_people(image, x, y, heading, valid)
     image = grid.draw_goal(image, gx, gy)
     cost = sc.people_cost(x, y, heading, valid)
-    if at_head:
-        cost = jnp.maximum(cost, sc.queue_u_cost(hx, hy, phi, tail))
+    if at_head:  # the U round the line as the map shows it (sc.drawn_line)
+        cost = jnp.maximum(cost, sc.queue_u_cost(*sc.drawn_line(x, y, heading, valid)))
     cost = jnp.where(image == grid.WALL, 0.0, cost)
     return image, cost
 
@@ -369,7 +375,9 @@ def _shift(image, drow, dcol, fill):
     return jax.lax.dynamic_slice(padded, (g - drow, g - dcol), (g, g))
 
 
-def _dilate(mask, cells: int):
+def dilate(mask, cells: int):
+    """(..., H, W) bool: ``mask`` grown by ``cells`` cells in each of the 8 directions (a square
+    window), as a jnp array."""
     window = (2 * cells + 1, 2 * cells + 1)
     return jax.lax.reduce_window(mask, False, jax.lax.bitwise_or, window, (1, 1), "SAME")
 
@@ -413,7 +421,7 @@ def _composite(key):
         twin = jnp.array([names.index(TWINS[n]) if TWINS.get(n) in names else i for i, n in enumerate(names)])
         return jnp.abs(costs[index] - costs[twin[index]])
 
-    blocked = _dilate(a_image != grid.FREE, COMPOSITE_CLEARANCE_CELLS)
+    blocked = dilate(a_image != grid.FREE, COMPOSITE_CLEARANCE_CELLS)
     things = (b_image == grid.PERSON) | (b_image == grid.GOAL)
     shifts = jax.random.randint(k_shift, (COMPOSITE_TRIES, 2), -COMPOSITE_SHIFT_CELLS, COMPOSITE_SHIFT_CELLS + 1)
 

@@ -25,6 +25,7 @@ from flax import nnx
 
 from socialnav.data import DATA_DIR
 from socialnav.models import grid
+from socialnav.models.social_costs import GRADED_TOP
 
 OCCUPIED_ABOVE = 0.6  # the paper's threshold on occupancy values
 
@@ -163,12 +164,22 @@ def rotation_averaged(predict, rotations: int = 4):
 
 
 @functools.lru_cache(maxsize=8)
-def _apply_for(graphdef):
-    """``(weights, maps) -> costs`` over :func:`models.steps.make_predict`, one per structure."""
+def _apply_for(graphdef, scale: float = 1.0):
+    """``(weights, maps) -> scale x costs`` over :func:`models.steps.make_predict`, one per
+    structure and scale."""
     from socialnav.models.steps import make_predict
 
     predict = make_predict(graphdef)
-    return lambda weights, maps: predict(*weights, maps)
+    if scale == 1.0:
+        return lambda weights, maps: predict(*weights, maps)
+    return lambda weights, maps: scale * predict(*weights, maps)
+
+
+def output_scale(config) -> float:
+    """1, or :data:`models.social_costs.GRADED_TOP` for a model that learnt graded costs only
+    (:attr:`models.config.TrainConfig.reads_forbidden` false), so that its peak is read as the
+    top of the graded range and never as forbidden."""
+    return 1.0 if config is None or config.reads_forbidden else GRADED_TOP
 
 
 WEIGHTS_FILE = "weights.msgpack"
@@ -218,6 +229,7 @@ class SocialCostModel:
         from socialnav.models.steps import make_predict
 
         self._predict = make_predict(graphdef)  # jitted, batch norm in eval mode
+        self._scale = output_scale(config)
         self._graphdef = graphdef
         self._params, self._batch_stats = params, batch_stats
         self.config = config
@@ -284,8 +296,9 @@ class SocialCostModel:
 
     def function(self, maps):
         """The prediction as a function of the maps alone (closes over the weights): use it inside
-        your own jit."""
-        return self._predict(self._params, self._batch_stats, maps)
+        your own jit. Scaled by :func:`output_scale`."""
+        costs = self._predict(self._params, self._batch_stats, maps)
+        return costs if self._scale == 1.0 else self._scale * costs
 
     @property
     def weights(self):
@@ -298,7 +311,7 @@ class SocialCostModel:
         argument, so that under a caller's ``jit`` they are traced and another checkpoint of the
         same network reuses the compiled program. One function per network structure (equal
         structures give the same function, so callers that cache on it hit)."""
-        return _apply_for(self._graphdef)
+        return _apply_for(self._graphdef, self._scale)
 
     def __call__(self, maps) -> jax.Array:
         """Costs (B, 40, 40) in [0, 1] of input maps (B, 40, 40) or (40, 40), checked first

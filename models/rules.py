@@ -27,6 +27,8 @@ rule               contrast (A minus B)
 ``corner_wide``    an L hallway's inner (blind) corner minus its outer corner: within 1 m of each,
                    inside the corridor
 ``blind_corner``   the free side within 1 m of a blind corner minus the free side 3-4.5 m from it
+                   (beside a queue: both regions 2 m clear of its people, and a cell clear of
+                   its U, which the ``queue_u`` check scores)
 ``pass_left``      beside a person on their right (0.6-1.4 m, 0-1.6 m ahead) minus the same on their
                    left (the passing layer: the robot passes on their left)
 =================  ===================================================================================
@@ -38,8 +40,9 @@ map without the rule's own cost (a group's people facing in put some cost into t
 middle by their proxemics alone; a model must add the interaction zone to pass). The expected
 map is built with the same cost shapes as the training targets (:mod:`models.social_costs`):
 people at the cell they are drawn in, facing the drawn (8-direction) heading, because the input
-shows no more; the queue's U along the queue's own line and the group's zone over its own
-circle, which the people's cells show at any angle. Every case's rule adds at least
+shows no more; the queue's U along the line from its tail's cell to its head's
+(:func:`models.social_costs.drawn_line`), as the generator draws it, and the group's zone over
+its own circle, which the people's cells show at any angle. Every case's rule adds at least
 :data:`MIN_EXPECTED_CONTRAST` (tested), so a model that draws nothing, or only people, fails.
 
 :func:`build_suite` makes the cases (numpy arrays, deterministic by seed); :func:`evaluate`
@@ -59,7 +62,7 @@ import numpy as np
 from socialnav.common.intervals import wilson
 from socialnav.models import grid
 from socialnav.models import social_costs as sc
-from socialnav.models.families import QUEUE_BODY_M
+from socialnav.models.families import QUEUE_BODY_M, dilate
 
 PASS_FRACTION = 0.5  # a case passes when the model's contrast is >= this share of the expected one
 MIN_EXPECTED_CONTRAST = 0.1  # every case's expected contrast is at least this (checked when built)
@@ -234,7 +237,10 @@ def _draw_queue(scene: _Scene, q: _Queue, goal: str, rng):
     if goal == "head":
         d = rng.uniform(0.5, 1.1)
         scene.goal = _world(q.hx, q.hy, q.phi, d, 0.0)
-        scene.costs.append(("queue_u", sc.queue_u_cost(q.hx, q.hy, q.phi, q.tail)))
+        # The U along the line the people's cells show, as the generator draws it.
+        x, y, heading = (jnp.asarray(v, jnp.float32) for v in zip(*scene.people[-q.n :], strict=True))
+        line = sc.drawn_line(x, y, heading, jnp.ones(q.n, bool))
+        scene.costs.append(("queue_u", sc.queue_u_cost(*line)))
     else:
         scene.goal = q.elsewhere_goal
 
@@ -576,7 +582,12 @@ def _scene_queue_corner(rng):
     if out is None:
         return None
     q, images, expected, region = out
-    a, b = _blind_corner_regions(corner, free_side, images[0], _near(q.people + [q.elsewhere_goal], 2.0))
+    # The corner's regions leave out the queue: its people and, with the goal at its head, its U
+    # and a cell round it (the U is forbidden, above every graded cost: in a region it would
+    # decide the corner's contrast; the queue_u check scores it).
+    head = _first(expected)
+    u_cells = np.asarray(dilate(jnp.asarray(head[""] > head["queue_u"] + 1e-3), 1))
+    a, b = _blind_corner_regions(corner, free_side, images[0], _near(q.people + [q.elsewhere_goal], 2.0) | u_cells)
     return [
         _case("queue+corner", "queue_u", images, expected, region, region),
         _case("queue+corner", "blind_corner", images[0], _first(expected), a, b, **geometry),

@@ -13,7 +13,19 @@ project's rules:
   test error stalled at 0.37-0.48 of the trivial predictor's while every other family improved);
 * **interaction zone** of a group: a plateau over the disc the group faces, soft-edged;
 * **blind corner**: a Gaussian around the corner point on the free side, sigma 1 m (the paper's
-  "at least one metre from the corner").
+  "at least one metre from the corner");
+* **queue**: with the goal at the line's head, a U round the line (its sides and a bar across its
+  front, open at the tail) at :data:`FORBIDDEN`, so that the robot joins at the tail.
+
+Two ranges (this project's choice; the paper draws the U as one more graded cost): every graded
+shape peaks at :data:`GRADED_TOP` (0.7), and the U is drawn at :data:`FORBIDDEN` (1). The GSCL
+layer (:mod:`planners.gscl_layer`) reads network costs from :data:`FORBIDDEN_FROM` (0.85, halfway)
+up as lethal and scales the graded ones back to Nav2's full graded range, so the planner sees the
+graded shapes as it did when they peaked at 1. Why: in closed loop a graded U, even at the top of
+the graded range, is crossed by every plan, since the way round a line is metres longer than the
+way through it (``scripts/gscl_queue_oracle.py``: 0 % social success with the generator's own
+graded map, about 90 % with the U read as lethal). Nav2 has the same split: a keepout zone is
+lethal, a social cost is graded.
 
 Costs combine by cell-wise max, as Nav2 layers do.
 """
@@ -25,10 +37,14 @@ import jax.numpy as jnp
 
 from socialnav.models.grid import CELL_X_M, CELL_Y_M
 
+GRADED_TOP = 0.7  # the peak of every graded shape (a person's own cell)
+FORBIDDEN = 1.0  # the queue's U: read as lethal by the GSCL layer
+FORBIDDEN_FROM = 0.5 * (GRADED_TOP + FORBIDDEN)  # network costs from here up are lethal
+
 PROXEMIC_SIGMA_M = 0.5
 FRONT_STRETCH_PER_MPS = 2.0
 PASSING_AMPLITUDE = 0.6
-INTERACTION_COST = 0.8
+INTERACTION_COST = 0.8 * GRADED_TOP
 CORNER_SIGMA_M = 1.0
 
 
@@ -37,7 +53,7 @@ def _wrap(a):
 
 
 def proxemic_cost(x_m, y_m, heading_rad, speed_mps, sigma_m: float = PROXEMIC_SIGMA_M):
-    """(GRID, GRID) proxemic + passing cost of one person, peak 1 at the person."""
+    """(GRID, GRID) proxemic + passing cost of one person, peak :data:`GRADED_TOP` at the person."""
     dx, dy = CELL_X_M - x_m, CELL_Y_M - y_m
     c, s = jnp.cos(heading_rad), jnp.sin(heading_rad)
     along, left = dx * c + dy * s, -dx * s + dy * c
@@ -53,7 +69,7 @@ def proxemic_cost(x_m, y_m, heading_rad, speed_mps, sigma_m: float = PROXEMIC_SI
         )
     )
     passing = jnp.where((right > 0) & (speed_mps > 0), passing, 0.0)
-    return jnp.maximum(body, passing)
+    return GRADED_TOP * jnp.maximum(body, passing)
 
 
 PERSON_SPEED_MPS = 0.5  # every person's cost is drawn for this speed (front stretch 2, passing layer on)
@@ -72,13 +88,18 @@ def disc_plateau(cx_m, cy_m, radius_m, level: float = INTERACTION_COST, edge_m: 
 
 
 def corner_cost(cx_m, cy_m, free_side, sigma_m: float = CORNER_SIGMA_M):
-    """Gaussian around a corner point, on the cells where ``free_side`` (GRID, GRID) is True."""
+    """Gaussian around a corner point, peak :data:`GRADED_TOP`, on the cells where ``free_side``
+    (GRID, GRID) is True."""
     d2 = (CELL_X_M - cx_m) ** 2 + (CELL_Y_M - cy_m) ** 2
-    return jnp.where(free_side, jnp.exp(-d2 / (2 * sigma_m**2)), 0.0)
+    return jnp.where(free_side, GRADED_TOP * jnp.exp(-d2 / (2 * sigma_m**2)), 0.0)
 
 
-HALLWAY_LEFT_COST = 0.6
-QUEUE_U_COST = 0.7
+HALLWAY_LEFT_COST = 0.6 * GRADED_TOP
+QUEUE_U_INNER_M = 0.6  # the U's sides: this far from the line's axis ...
+QUEUE_U_OUTER_M = 1.4  # ... to this far
+QUEUE_U_BEHIND_TAIL_M = 0.6  # the sides start this far behind the tail
+QUEUE_U_FRONT_M = (1.4, 2.2)  # the bar across the front: this far ahead of the head
+QUEUE_U_EDGE_M = 0.06  # the U's edges: steep, but continuous in the line's position
 
 
 def smoothstep(t):
@@ -95,9 +116,12 @@ def soft_band(distance_m, inner_m, outer_m, level: float, edge_m: float = 0.15):
 
 
 def queue_u_cost(head_x_m, head_y_m, heading_rad, tail_m):
-    """(GRID, GRID) the U around a queue whose goal is at its head: :data:`QUEUE_U_COST` along
-    both sides (0.6-1.4 m from the queue's line, from the tail to 1.6 m ahead of the head) and
-    across the front (1.4-2.2 m ahead), open at the tail.
+    """(GRID, GRID) the U round a queue whose goal is at its head, at :data:`FORBIDDEN`: both sides
+    (:data:`QUEUE_U_INNER_M`-:data:`QUEUE_U_OUTER_M` from the line's axis, from
+    :data:`QUEUE_U_BEHIND_TAIL_M` behind the tail to the front bar's far edge) and a bar across
+    the front (:data:`QUEUE_U_FRONT_M` ahead of the head), open at the tail. Its edges are
+    sigmoids :data:`QUEUE_U_EDGE_M` wide: at the 0.4 m cells' centres the U is 0 or 1 but for a
+    cell whose centre lies within about 0.1 m of an edge.
 
     Args:
       head_x_m, head_y_m: the head's position; heading_rad: the way the queue faces (its line
@@ -105,11 +129,27 @@ def queue_u_cost(head_x_m, head_y_m, heading_rad, tail_m):
     """
     c, s = jnp.cos(heading_rad), jnp.sin(heading_rad)
     dx, dy = CELL_X_M - head_x_m, CELL_Y_M - head_y_m
-    lx, ly = dx * c + dy * s, -dx * s + dy * c  # +x ahead of the head, the queue along -x
-    along = soft_band(lx, -tail_m, 1.6, 1.0, edge_m=0.3)  # from the tail to the front bar
-    sides = along * soft_band(jnp.abs(ly), 0.6, 1.4, QUEUE_U_COST)
-    front = soft_band(jnp.abs(ly), -1.0, 1.4, 1.0) * soft_band(lx, 1.4, 2.2, QUEUE_U_COST)
+    lx, ly = dx * c + dy * s, jnp.abs(-dx * s + dy * c)  # +x ahead of the head, the queue along -x
+    near, far = QUEUE_U_FRONT_M
+    e = QUEUE_U_EDGE_M
+    along = soft_band(lx, -tail_m - QUEUE_U_BEHIND_TAIL_M, far, 1.0, edge_m=e)
+    sides = along * soft_band(ly, QUEUE_U_INNER_M, QUEUE_U_OUTER_M, FORBIDDEN, edge_m=e)
+    front = soft_band(ly, -1.0, QUEUE_U_OUTER_M, 1.0, edge_m=e) * soft_band(lx, near, far, FORBIDDEN, edge_m=e)
     return jnp.maximum(sides, front)
+
+
+def drawn_line(x_m, y_m, heading_rad, valid):
+    """``(head x, head y, heading, tail)`` of a queue as its input map shows it: ``x_m``, ``y_m``
+    (P,) its people at their cells' centres, head first, ``heading_rad`` (P,) their drawn
+    (8-direction) headings, ``valid`` (P,) (at least one). The line runs from the last valid
+    person to the head; a line of one faces the head's drawn heading. Drawing the U from these and
+    not from the sampled line makes the target a function of the input (the sampled line differs
+    by up to a cell's half-diagonal at each end)."""
+    last = jnp.max(jnp.where(valid, jnp.arange(x_m.shape[0]), 0))
+    tx, ty = x_m[last], y_m[last]
+    hx, hy = x_m[0], y_m[0]
+    along = jnp.arctan2(hy - ty, hx - tx)
+    return hx, hy, jnp.where(last > 0, along, heading_rad[0]), jnp.hypot(hx - tx, hy - ty)
 
 
 def left_of_path(lx_m, ly_m, turn_at_m: float | jax.Array, turns_left):

@@ -16,6 +16,8 @@ import optax
 from flax import nnx
 
 from socialnav.models.config import TrainConfig, learning_rate_schedule, make_model
+from socialnav.models.social_costs import FORBIDDEN, GRADED_TOP
+from socialnav.models.unet import combine_heads
 
 
 def batch_sharding(batch_size: int):
@@ -37,6 +39,42 @@ def batch_sharding(batch_size: int):
     )
 
 
+def split_targets(targets, contrast=None):
+    """``(graded, forbidden, contrast)`` of today's targets (:mod:`models.social_costs`: graded
+    shapes up to ``GRADED_TOP``, the queue's U above it up to ``FORBIDDEN``), each (B, 40, 40):
+    the graded channel's targets ``min(t, GRADED_TOP) / GRADED_TOP`` in [0, 1], the forbidden
+    head's ``(t - GRADED_TOP) / (FORBIDDEN - GRADED_TOP)`` clipped to [0, 1] (the U's soft edges
+    give fractions), and the pair contrast on the graded channel's scale (clipped to 1; None
+    stays None). Nothing graded reaches above ``GRADED_TOP``, so the split is exact."""
+    graded = jnp.minimum(targets, GRADED_TOP) / GRADED_TOP
+    forbidden = jnp.clip((targets - GRADED_TOP) / (FORBIDDEN - GRADED_TOP), 0.0, 1.0)
+    if contrast is not None:
+        contrast = jnp.minimum(contrast / GRADED_TOP, 1.0)
+    return graded, forbidden, contrast
+
+
+def two_channel_loss(
+    graded, forbidden_logit, targets, contrast=None, cost_weight=0.0, pair_weight=0.0, forbidden_weight=1.0
+):
+    """The "maps" loss of a model with the forbidden head: graded (B, 40, 40) in [0, 1] and the
+    forbidden logits (B, 40, 40) against today's targets (B, 40, 40), split by
+    :func:`split_targets`. The graded channel's squared error is weighed per pixel by ``1 +
+    cost_weight * graded target + pair_weight * contrast``, except on the U's own cells (weight
+    0: the head decides the output there, so the graded channel is not asked to draw the U as
+    well) and on the cells of the twin's U (weight 1: a contrast above any graded cost's is the
+    twin's U, not this map's costs); plus ``forbidden_weight`` x the mean binary cross-entropy of
+    the logits against the U's share."""
+    graded_target, forbidden_target, graded_contrast = split_targets(targets, contrast)
+    weight = 1.0 + cost_weight * graded_target
+    if pair_weight and contrast is not None:
+        weight = weight + pair_weight * graded_contrast
+    if contrast is not None:
+        weight = jnp.where(contrast > GRADED_TOP + 1e-3, 1.0, weight)
+    weight = jnp.where(forbidden_target > 0, 0.0, weight)
+    bce = optax.sigmoid_binary_cross_entropy(forbidden_logit, forbidden_target)
+    return jnp.mean(weight * (graded - graded_target) ** 2) + forbidden_weight * jnp.mean(bce)
+
+
 def make_train_step(
     graphdef,
     tx: optax.GradientTransformation,
@@ -44,32 +82,60 @@ def make_train_step(
     cost_weight: float = 0.0,
     pair_weight: float = 0.0,
     objective=None,
+    forbidden_weight: float = 0.0,
+    freeze_graded: bool = False,
 ):
     """``step(state, inputs, targets, family, contrast=None, key=None) -> (state, loss)``; ``state``
     is a dict with ``params``, ``batch_stats``, ``opt_state``, ``family_sse`` (F,) and
     ``family_count`` (F,); ``contrast`` (B, 40, 40) is :func:`models.dataset.pair_contrast` of the
     batch.
 
-    With ``objective`` None (the "maps" objective) the loss is the mean over pixels of ``(1 +
-    cost_weight * target + pair_weight * contrast) * error**2`` (the plain MSE with both at 0 or no
-    contrast given), and ``loss`` is the plain MSE. With an ``objective`` (the "paths" one,
+    With ``objective`` None (the "maps" objective) and a model with one output, the loss is the
+    mean over pixels of ``(1 + cost_weight * target + pair_weight * contrast) * error**2`` (the
+    plain MSE with both at 0 or no contrast given). With the forbidden head
+    (:mod:`models.unet`), :func:`two_channel_loss`. With an ``objective`` (the "paths" one,
     ``planners.irl.PathObjective``: ``prepare(key, inputs, targets)`` and ``loss(costs, inputs,
     prepared) -> (B,)``), ``key`` draws the batch's demonstrations and the loss and ``loss`` are
-    the mean of ``objective.loss``. The per-family accumulators are the plain MSE either way."""
+    the mean of ``objective.loss``. The returned ``loss`` and the per-family accumulators are
+    always the plain MSE of the model's output (the combined map) against the targets.
+
+    With ``freeze_graded`` (a model with a separate forbidden branch,
+    :attr:`models.config.TrainConfig.freeze_graded`) the graded layers run with batch norm in
+    inference mode and no gradient, their statistics stay as they are, and the loss is
+    ``forbidden_weight`` x the forbidden logits' mean cross-entropy alone (``tx`` must leave the
+    graded weights unchanged: :func:`frozen_graded_tx`)."""
+
+    def pixel_weight_and_error(costs, targets, contrast):
+        squared = (costs - targets) ** 2
+        weight = 1.0 + cost_weight * targets
+        if pair_weight and contrast is not None:
+            weight = weight + pair_weight * contrast
+        return weight, squared
 
     def loss_fn(params, batch_stats, inputs, targets, contrast, prepared):
         model = nnx.merge(graphdef, params, batch_stats, copy=True)
         model.train()
-        costs = model(inputs)
-        squared = (costs - targets) ** 2
-        per_sample = jnp.mean(squared, axis=(1, 2))
+        if freeze_graded:
+            for module in model.graded_modules():
+                module.eval()
+        graded, forbidden_logit = model.heads(inputs)
+        if freeze_graded:
+            graded = jax.lax.stop_gradient(graded)
+        costs = graded if forbidden_logit is None else combine_heads(graded, forbidden_logit)
+        per_sample = jnp.mean((costs - targets) ** 2, axis=(1, 2))
+        aux = (per_sample, nnx.state(model, nnx.BatchStat))
+        if freeze_graded:
+            _, forbidden_target, _ = split_targets(targets)
+            bce = optax.sigmoid_binary_cross_entropy(forbidden_logit, forbidden_target)
+            return forbidden_weight * jnp.mean(bce), aux
         if objective is not None:
-            return jnp.mean(objective.loss(costs, inputs, prepared)), (per_sample, nnx.state(model, nnx.BatchStat))
-        weight = 1.0 + cost_weight * targets
-        if pair_weight and contrast is not None:
-            weight = weight + pair_weight * contrast
-        weighted = jnp.mean(weight * squared) if (cost_weight or pair_weight) else jnp.mean(per_sample)
-        return weighted, (per_sample, nnx.state(model, nnx.BatchStat))
+            return jnp.mean(objective.loss(costs, inputs, prepared)), aux
+        if forbidden_logit is None:
+            weight, squared = pixel_weight_and_error(costs, targets, contrast)
+            return jnp.mean(weight * squared), aux
+        return two_channel_loss(
+            graded, forbidden_logit, targets, contrast, cost_weight, pair_weight, forbidden_weight
+        ), aux
 
     @jax.jit
     def step(state, inputs, targets, family, contrast=None, key=None):
@@ -87,7 +153,7 @@ def make_train_step(
             "opt_state": opt_state,
             "family_sse": state["family_sse"] + onehot.T @ per_sample,
             "family_count": state["family_count"] + onehot.sum(0),
-        }, (value if objective is not None else jnp.mean(per_sample))
+        }, jnp.mean(per_sample) if objective is None else value
 
     return step
 
@@ -134,12 +200,38 @@ def compiled(config: TrainConfig, objective=None):
     one process do not compile again."""
     graphdef = nnx.graphdef(_abstract_model(config))
     tx = optax.adam(learning_rate_schedule(config))
+    if config.freeze_graded:
+        tx = frozen_graded_tx(tx)
     return (
         graphdef,
         tx,
-        make_train_step(graphdef, tx, len(config.counts), config.cost_weight, config.pair_weight, objective),
+        make_train_step(
+            graphdef,
+            tx,
+            len(config.counts),
+            config.cost_weight,
+            config.pair_weight,
+            objective,
+            config.forbidden_weight,
+            config.freeze_graded,
+        ),
         make_predict(graphdef),
     )
+
+
+BRANCH = "forbidden_branch"  # models.unet.UNet's attribute holding the separate forbidden branch
+
+
+def frozen_graded_tx(tx: optax.GradientTransformation) -> optax.GradientTransformation:
+    """``tx`` on the forbidden branch's weights (paths through :data:`BRANCH`), zero updates on
+    every other weight (the graded network, kept as its source drew it)."""
+
+    def labels(params):
+        return jax.tree_util.tree_map_with_path(
+            lambda path, _: "train" if BRANCH in jax.tree_util.keystr(path) else "frozen", params
+        )
+
+    return optax.multi_transform({"train": tx, "frozen": optax.set_to_zero()}, labels)
 
 
 def _abstract_model(config: TrainConfig):

@@ -13,7 +13,8 @@ Files in ``out``:
 * ``metrics.jsonl`` - one line per epoch: train and test MSE, overall and per family, samples
   seen and wall time; rewritten atomically from the checkpoint, so it never disagrees with it;
 * ``baselines.json`` - the test MSE of two trivial predictors (all zeros; the mean training
-  map), overall and per family.
+  map), overall and per family;
+* ``init_from.json`` - a warm-started run's source model (:func:`models.warm_start.source_record`).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from socialnav.common import progress as progress_lib
 from socialnav.common.atomic import write_text_atomic
 from socialnav.models import dataset, rules
 from socialnav.models.checkpoints import check_run_folder, checkpoint_manager, host, restore_state, write_metrics
-from socialnav.models.config import TrainConfig, learning_rate_schedule
+from socialnav.models.config import TARGETS, TrainConfig, learning_rate_schedule
 from socialnav.models.quality import by_family, meets_quality, trivial_baselines
 from socialnav.models.steps import batch_sharding, compiled, initial_state, per_sample_mse
 from socialnav.models.streams import demonstration_key, epoch_data, test_data
@@ -62,10 +63,16 @@ def train(
         None for the "maps" objective.
 
     Raises:
-      ValueError: ``objective`` does not match ``config.objective``.
+      ValueError: ``objective`` does not match ``config.objective``, or ``config.targets`` is
+        not the targets the generator draws (an older run's "graded").
     """
     import orbax.checkpoint as ocp
 
+    if config.targets != TARGETS[0]:
+        raise ValueError(
+            f"targets: {config.targets!r} runs learnt the generator's earlier targets, which it no longer "
+            f"draws; such a run can be read, not trained (start a new run, targets {TARGETS[0]!r})"
+        )
     if (objective is None) != (config.objective == "maps"):
         raise ValueError(
             f"objective: a {config.objective!r} run needs "
@@ -73,6 +80,16 @@ def train(
         )
     data_sharding, replicated = batch_sharding(config.batch_size)  # a bad batch size fails before any file
     out = pathlib.Path(out)
+    state, source = initial_state(config), None
+    resuming = (out / "checkpoints").is_dir() and checkpoint_manager(out, config, True).latest_step() is not None
+    if config.init_from and not resuming:  # a source that cannot start this run fails before any file
+        from socialnav.models.inference import model_problem
+        from socialnav.models.warm_start import source_record, warm_started
+
+        problem = model_problem(config.init_from)
+        if problem:
+            raise ValueError(f"init_from: {problem}")
+        state, source = warm_started(state, config.init_from), source_record(config.init_from)
     out.mkdir(parents=True, exist_ok=True)
     config_path = out / "config.json"
     check_run_folder(out, config)
@@ -84,7 +101,6 @@ def train(
     # (as dataset.generate numbers them).
     names = [f for f in dataset.FAMILIES if config.train_counts.get(f, 0) > 0]
     _, _, train_step, predict = compiled(config, objective)
-    state = initial_state(config)
     test = test_data(config)
     meta = {"step": 0, "wall_s": 0.0, "history": [], "baselines": None}
 
@@ -93,6 +109,11 @@ def train(
         latest, state, meta = restore_state(manager, state, out, config, log=log)
         log(f"resuming {out} at step {latest} (epoch {latest // config.steps_per_epoch})")
         write_metrics(out, meta)  # a kill between a checkpoint and its metrics line loses nothing
+    elif source is not None:
+        from socialnav.models.warm_start import SOURCE_FILE
+
+        write_text_atomic(out / SOURCE_FILE, json.dumps(source, indent=1))
+        log(f"starting from the weights of {config.init_from}")
     if meta["baselines"] is None:
         meta["baselines"] = trivial_baselines(epoch_data(config, 0), test)
         write_text_atomic(out / "baselines.json", json.dumps(meta["baselines"], indent=1))

@@ -15,6 +15,20 @@ This project's choices (the paper does not give them):
   goal" are about where things are relative to it.
 * **Output.** A sigmoid, so costs stay in [0, 1] like the normalised targets; its bias starts
   at -3 (a cost of 0.05), near the average target.
+* **A forbidden head** (``forbidden_head``, on for the runs trained on today's targets): a second
+  output channel, the logit of "this cell is forbidden" (the queue's U,
+  :data:`models.social_costs.FORBIDDEN`), trained as a classification beside the graded costs'
+  regression, as Nav2 keeps a keepout mask apart from its graded layers. The call returns one
+  map: :data:`models.social_costs.FORBIDDEN` where the probability is at least 1/2, else the
+  graded channel scaled to ``[0, GRADED_TOP]``, so that a cost reader needs no second output.
+  Why not one regressed channel with a forbidden level above the graded ones (tried, commit
+  0d92bc9): the least-squares answer where the network is unsure is the mean, and along the
+  line's tail it stayed below the lethal threshold, so plans crossed the line's side.
+  With ``forbidden_features`` the head is a **separate branch**: a second, smaller U-Net of its
+  own widths whose one output is the forbidden logit, the main network keeping its one graded
+  output. Training can then keep the main network as a source model drew it
+  (:attr:`models.config.TrainConfig.freeze_graded`): a shared trunk fine-tuned to learn the U
+  drew other costs weaker (the blind corner beside a queue).
 * **Width.** ``features = (f1, f2, f3, bottleneck)``. :data:`PAPER_FEATURES` (32, 64, 128, 256)
   has about 1.9 M parameters, near the paper's ~1.6 M; the default for CPU training is
   :data:`CPU_FEATURES` (see the README's measurements for what it costs and buys).
@@ -32,6 +46,7 @@ import numpy as np
 from flax import nnx
 
 from socialnav.models import grid
+from socialnav.models.social_costs import FORBIDDEN, GRADED_TOP
 
 PAPER_FEATURES = (32, 64, 128, 256)
 CPU_FEATURES = (16, 32, 64, 128)
@@ -75,13 +90,29 @@ class UNet(nnx.Module):
     Args:
       features: channels of the three encoder blocks and the bottleneck.
       coords: add the two coordinate channels to the input (see the module docstring).
+      forbidden_head: add the forbidden channel (see the module docstring); the call then returns
+        graded costs in ``[0, GRADED_TOP]`` and ``FORBIDDEN`` where the head says forbidden.
+      forbidden_features: None (the default): the forbidden channel is a second output of the
+        last layer; four widths: it is the one output of a separate U-Net of these widths (the
+        attribute ``forbidden_branch``). Needs ``forbidden_head``.
     """
 
-    def __init__(self, features=CPU_FEATURES, coords: bool = True, *, rngs: nnx.Rngs):
+    def __init__(
+        self,
+        features=CPU_FEATURES,
+        coords: bool = True,
+        forbidden_head: bool = False,
+        forbidden_features=None,
+        *,
+        rngs: nnx.Rngs,
+    ):
         if len(features) != 4 or any(int(f) < 1 for f in features):
             raise ValueError(f"features must be 4 positive widths (3 encoder blocks, bottleneck), got {features}")
         self.features = tuple(int(f) for f in features)
         self.coords = coords
+        self.forbidden_head = bool(forbidden_head)
+        if forbidden_features is not None and not self.forbidden_head:
+            raise ValueError("forbidden_features needs forbidden_head")
         f1, f2, f3, fb = self.features
         in_ch = len(INPUT_CHANNEL_CODES) + (2 if coords else 0)
         self.enc = nnx.List([ConvBlock(i, o, rngs=rngs) for i, o in ((in_ch, f1), (f1, f2), (f2, f3))])
@@ -92,9 +123,26 @@ class UNet(nnx.Module):
         self.dec = nnx.List([ConvBlock(2 * o, o, rngs=rngs) for o in (f3, f2, f1)])
         # Output bias at the logit of a typical cost (sigmoid(-3) = 0.05): most pixels cost nothing,
         # and starting from 0.5 everywhere spends the first hundreds of steps unlearning that.
-        self.head = nnx.Conv(f1, 1, (1, 1), bias_init=nnx.initializers.constant(HEAD_BIAS), rngs=rngs)
+        outputs = 2 if self.forbidden_head and forbidden_features is None else 1
+        self.head = nnx.Conv(f1, outputs, (1, 1), bias_init=nnx.initializers.constant(HEAD_BIAS), rngs=rngs)
+        self.forbidden_branch = (
+            None if forbidden_features is None else UNet(forbidden_features, coords, False, rngs=rngs)
+        )
 
-    def __call__(self, maps):
+    def heads(self, maps):
+        """``(graded, forbidden_logit)``: (B, 40, 40) graded costs in [0, 1] (the sigmoid of the
+        first channel) and the forbidden channel's logits, or None without the forbidden head."""
+        out = self.logits(maps)
+        if self.forbidden_branch is not None:
+            return nnx.sigmoid(out[..., 0]), self.forbidden_branch.logits(maps)[..., 0]
+        return nnx.sigmoid(out[..., 0]), (out[..., 1] if self.forbidden_head else None)
+
+    def graded_modules(self):
+        """The layers that draw the graded costs (every one but ``forbidden_branch``)."""
+        return (self.enc, self.bottleneck, self.up, self.dec, self.head)
+
+    def logits(self, maps):
+        """(B, 40, 40, outputs) raw outputs of the main network's last layer."""
         x = encode_input(maps, self.coords)
         skips = []
         for block in self.enc:
@@ -104,7 +152,19 @@ class UNet(nnx.Module):
         x = self.bottleneck(x)
         for up, block, skip in zip(self.up, self.dec, reversed(skips)):
             x = block(jnp.concatenate([up(x), skip], axis=-1))
-        return nnx.sigmoid(self.head(x)[..., 0])
+        return self.head(x)
+
+    def __call__(self, maps):
+        graded, forbidden_logit = self.heads(maps)
+        if forbidden_logit is None:
+            return graded
+        return combine_heads(graded, forbidden_logit)
+
+
+def combine_heads(graded, forbidden_logit):
+    """One cost map from the two channels: ``FORBIDDEN`` where the forbidden probability is at
+    least 1/2 (logit >= 0), else ``GRADED_TOP x graded``."""
+    return jnp.where(forbidden_logit >= 0.0, FORBIDDEN, GRADED_TOP * graded)
 
 
 def parameter_count(model: nnx.Module) -> int:

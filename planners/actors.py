@@ -196,7 +196,12 @@ def stack_actor(
         d = jnp.hypot(x_m[None] - pxy[:, 0, None, None], y_m[None] - pxy[:, 1, None, None])
         seen = obs.people_visible & params.people_are_obstacles
         bodies = jnp.any((d <= params.person_radius_m) & seen[:, None, None], axis=0)
-        obstacles = costmap.obstacle_layer(jnp.maximum(occupancy, bodies), grid, float(robot_radius_m))
+        # A social layer's lethal cells (the GSCL queue's U) are inflated with the walls, as Nav2's
+        # inflation layer grows every lethal cell a layer before it wrote: uninflated, the robot's
+        # centre fits between a person in line and the U's side.
+        forbidden = social >= costmap.LETHAL
+        occupied = jnp.maximum(jnp.maximum(occupancy, bodies), forbidden)
+        obstacles = costmap.obstacle_layer(occupied, grid, float(robot_radius_m))
         costs = costmap.combine_max(obstacles, social)
         path, length, found = stack.global_plan(method, costs, obs.robot_xy_m, obs.goal_xy_m, grid, max_path_cells)
         # No path now (a person on the goal, say): keep the previous one; before any, a straight line.

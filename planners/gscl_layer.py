@@ -4,10 +4,15 @@ Per scene: the 40 x 40 input map around the robot (:func:`models.inference.input
 the occupancy grid, people with their heading pixel, the goal), the network's cost map, and that
 map placed into the planner's grid at the planner's resolution: each planner cell takes the value
 of the 0.4 m network cell holding its centre (nearest neighbour, the paper's "rescaled"), zero
-outside the 16 m window. The network's ``[0, 1]`` becomes ``252 x`` on Nav2's scale, inside the
-graded range, so that combined by max with the obstacle layer (:func:`planners.costmap.combine_max`)
-an obstacle always dominates, as the paper's Eq. 3 (``distance x max(obstacle cost, social
-cost)``) and Nav2's ``updateWithMax`` have it.
+outside the 16 m window. The network's graded range ``[0, GRADED_TOP]``
+(:data:`models.social_costs.GRADED_TOP`) becomes ``[0, 252]`` on Nav2's scale, so that combined by
+max with the obstacle layer (:func:`planners.costmap.combine_max`) an obstacle always dominates,
+as the paper's Eq. 3 (``distance x max(obstacle cost, social cost)``) and Nav2's ``updateWithMax``
+have it; costs from :data:`models.social_costs.FORBIDDEN_FROM` up (the queue's U) are lethal
+(254), and the actor inflates them with the walls (:func:`planners.actors.stack_actor`). A model
+trained on graded targets only (runs saved before the U was forbidden, and "paths" runs) is
+scaled into the graded range when loaded (:meth:`models.inference.SocialCostModel.load`), so it is
+read as before.
 
 The window keeps the world's axes (``robot_frame=False``, default; the dataset's maps have no
 preferred robot heading: the goal pixel gives the direction of travel); ``robot_frame=True`` turns
@@ -26,7 +31,8 @@ import jax.numpy as jnp
 
 from socialnav.models import grid
 from socialnav.models.inference import input_map
-from socialnav.planners.costmap import MAX_GRADED, GridSpec
+from socialnav.models.social_costs import FORBIDDEN_FROM, GRADED_TOP
+from socialnav.planners.costmap import LETHAL, MAX_GRADED, GridSpec
 from socialnav.planners.scene import Scene
 
 
@@ -45,17 +51,25 @@ def window_input(occupancy, spec: GridSpec, scene: Scene, robot_frame: bool = Fa
     )
 
 
+def read_cost(value):
+    """Nav2 costs of network costs (any shape): ``252 x value / GRADED_TOP`` (clipped to [0, 252])
+    below ``FORBIDDEN_FROM``, lethal (254) from there up."""
+    graded = MAX_GRADED * jnp.clip(value / GRADED_TOP, 0.0, 1.0)
+    return jnp.where(value >= FORBIDDEN_FROM, LETHAL, graded).astype(jnp.float32)
+
+
 def read_window(window_costs, dx_m, dy_m):
-    """float32 costs, 252 x the (40, 40) network costs in [0, 1] at offsets ``dx_m``, ``dy_m`` (any
-    shape) from the window's centre in its own axes (nearest 0.4 m cell; 0 outside the window)."""
+    """float32 Nav2 costs (:func:`read_cost`) of the (40, 40) network costs at offsets ``dx_m``,
+    ``dy_m`` (any shape) from the window's centre in its own axes (nearest 0.4 m cell; 0 outside
+    the window)."""
     row, col = grid.cell_of(dx_m, dy_m)
     on = grid.inside(row, col)
     value = window_costs[jnp.clip(row, 0, grid.GRID - 1), jnp.clip(col, 0, grid.GRID - 1)]
-    return jnp.where(on, MAX_GRADED * jnp.clip(value, 0.0, 1.0), 0.0).astype(jnp.float32)
+    return jnp.where(on, read_cost(value), 0.0).astype(jnp.float32)
 
 
 def place_window(window_costs, spec: GridSpec, scene: Scene, robot_frame: bool = False):
-    """(H, W) float32: the (40, 40) network costs in [0, 1] placed into the planner's grid, 252 x."""
+    """(H, W) float32: the (40, 40) network costs placed into the planner's grid (:func:`read_cost`)."""
     x_m, y_m = spec.cell_centres()
     dx, dy = x_m - scene.robot_xy_m[0], y_m - scene.robot_xy_m[1]
     yaw = scene.robot_yaw_rad if robot_frame else 0.0

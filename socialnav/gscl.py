@@ -68,9 +68,13 @@ _TRAIN_OPTIONS = (
     "group_scale",
     "cost_weight",
     "pair_weight",
+    "forbidden_weight",
     "objective",
     "temperature",
     "paths_per_map",
+    "init_from",
+    "forbidden_features",
+    "freeze_graded",
 )
 
 
@@ -164,6 +168,13 @@ def add_parser(top) -> None:
         "facing out, a queue and the same queue with the goal elsewhere (default 20; --paper: 0)",
     )
     tr.add_argument(
+        "--forbidden-weight",
+        type=non_negative_float,
+        default=None,
+        help="training loss: the weight of the forbidden head's cross-entropy (the queue's U, learnt as a "
+        "classification) beside the graded costs' MSE (default 1; > 0 for a 'maps' run)",
+    )
+    tr.add_argument(
         "--objective",
         choices=("maps", "paths"),
         default=None,
@@ -181,6 +192,27 @@ def add_parser(top) -> None:
         type=positive_int,
         default=None,
         help="--objective paths: demonstrations planned on each map (default 4)",
+    )
+    tr.add_argument(
+        "--init-from",
+        default=None,
+        metavar="MODEL",
+        help="start from this model's weights (an exported model such as data/gscl/default, or a run's folder): "
+        "fine-tuning; a model with one output starts the forbidden head's graded channel, the head starts fresh",
+    )
+    tr.add_argument(
+        "--forbidden-features",
+        type=_features,
+        default=None,
+        help="the forbidden head as a separate U-Net of these widths, e.g. 8,16,32,64 (default: a second "
+        "output channel of the main network)",
+    )
+    tr.add_argument(
+        "--freeze-graded",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="train the separate forbidden branch only, the graded network kept as --init-from drew it "
+        "(needs --init-from and --forbidden-features)",
     )
     tr.add_argument(
         "--stop-when-good",
@@ -457,7 +489,17 @@ def _train(args) -> int:
         check_run_folder(args.out, config)
     except (ValueError, RunFolderError) as err:
         raise SystemExit(f"socialnav gscl train: {err}") from None
-    runfolder.record(args.out, TRAIN_JOB, ["config.json", "baselines.json", "metrics.jsonl", "checkpoints/"])
+    runfolder.record(
+        args.out,
+        TRAIN_JOB,
+        [
+            "config.json",
+            "baselines.json",
+            "metrics.jsonl",
+            "checkpoints/",
+            *(["init_from.json"] if config.init_from else []),
+        ],
+    )
     import jax
 
     print(
@@ -493,7 +535,7 @@ def _train(args) -> int:
 
 
 TRAIN_JOB = "socialnav gscl train"
-TRAIN_RESULTS = ("config.json", "baselines.json", "metrics.jsonl", "checkpoints")
+TRAIN_RESULTS = ("config.json", "baselines.json", "metrics.jsonl", "checkpoints", "init_from.json")
 EVALUATION_JOB = "socialnav gscl evaluation"  # evaluate and rules share RUN/evaluation
 
 
@@ -652,6 +694,20 @@ def _fit_tracks(args) -> int:
     return 0
 
 
+def _source(run) -> dict:
+    """``{"init_from": ...}``, the model a warm-started run started from (its ``init_from.json``,
+    :func:`models.warm_start.source_record`), or nothing."""
+    from socialnav.models.warm_start import SOURCE_FILE
+
+    path = pathlib.Path(run) / SOURCE_FILE
+    if not path.is_file():
+        return {}
+    try:
+        return {"init_from": json.loads(path.read_text(encoding="utf-8"))}
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise SystemExit(f"socialnav gscl export: {path}: not valid JSON ({e})") from None
+
+
 def _export(args) -> int:
     """The run's model alone, with a card of how it was made and what it reaches."""
     import datetime
@@ -675,13 +731,16 @@ def _export(args) -> int:
     print(f"checking step {int(meta['step'])} against the quality bar and the rule suite ...", flush=True)
     checks = evaluation.check_model(model, meta["baselines"], scenes_per_kind=args.scenes, seed=args.seed)
     card = {
-        "made_by": "socialnav gscl train --out RUN (the recipe in config.json), then socialnav gscl export --run RUN",
+        "made_by": "socialnav gscl train --out RUN (the recipe in config.json"
+        + (", started from the model in init_from" if config.init_from else "")
+        + "), then socialnav gscl export --run RUN",
         "run": args.run.name,
         "step": int(meta["step"]),
         "epoch": int(meta["step"]) // config.steps_per_epoch,
         "parameters": _parameters(config),
         "baselines": meta["baselines"],
         **checks,
+        **_source(args.run),
         "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "socialnav_version": __version__,
         "jax_version": jax.__version__,

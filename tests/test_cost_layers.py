@@ -9,6 +9,7 @@ import pytest
 from flax import nnx
 from scipy import ndimage
 
+from socialnav.models import social_costs as sc
 from socialnav.models import unet
 from socialnav.planners import casn, costmap, gscl_layer, snape, snl
 from socialnav.planners.scene import make_scene
@@ -259,7 +260,14 @@ def test_gscl_layer_reproduces_the_model_where_window_and_grid_align():
     layer = np.asarray(gscl_layer.gscl_layer(predict, occupancy, spec, scene))
     window = np.asarray(predict(gscl_layer.window_input(occupancy, spec, scene)[None]))[0]
     # The window's row 0 is the top (y up); the planner grid's row 0 is the bottom.
-    np.testing.assert_allclose(layer, 252.0 * np.flipud(window), rtol=1e-6)
+    np.testing.assert_allclose(layer, gscl_layer.read_cost(np.flipud(window)), rtol=1e-6)
+
+
+def test_gscl_costs_read_graded_up_to_the_graded_top_and_lethal_from_the_forbidden_level():
+    top, forbidden_from = sc.GRADED_TOP, sc.FORBIDDEN_FROM
+    values = np.array([0.0, 0.5 * top, top, 0.5 * (top + forbidden_from), forbidden_from, 1.0, -0.1], np.float32)
+    want = [0.0, 126.0, costmap.MAX_GRADED, costmap.MAX_GRADED, costmap.LETHAL, costmap.LETHAL, 0.0]
+    np.testing.assert_allclose(np.asarray(gscl_layer.read_cost(values)), want, rtol=1e-6)
 
 
 @pytest.mark.slow

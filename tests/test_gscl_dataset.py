@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from socialnav.models import dataset, families, grid
+from socialnav.models import social_costs as sc
 
 N = 64
 
@@ -48,7 +49,7 @@ def test_every_person_carries_proxemic_cost_and_a_heading_pixel(data):
         person = inputs == grid.PERSON
         assert person.any(axis=(1, 2)).all(), name
         # High cost on every person (the cell centre is up to 0.28 m from them: >= exp(-0.28^2 / 0.5)).
-        assert (targets[person] > 0.85).all(), name
+        assert (targets[person] > 0.85 * sc.GRADED_TOP).all(), name
         # Each person has its heading pixel among its 8 neighbours.
         for img in inputs[:16]:
             for r, c in zip(*np.nonzero(img == grid.PERSON)):
@@ -68,8 +69,8 @@ def test_the_interaction_zone_exists_only_when_people_face_inward():
     row, col = (np.asarray(v) for v in grid.cell_of(cx, cy))
     centre_in = inward[np.arange(32), row, col]
     centre_out = outward[np.arange(32), row, col]
-    assert (centre_in > 0.7).all()
-    assert (centre_in - centre_out > 0.3).mean() > 0.9  # out: only the people's tails reach it
+    assert (centre_in > 0.7 * sc.GRADED_TOP).all()
+    assert (centre_in - centre_out > 0.3 * sc.GRADED_TOP).mean() > 0.9  # out: only the people's tails reach it
 
 
 @pytest.mark.slow
@@ -113,29 +114,41 @@ def test_hallway_cost_is_higher_on_the_left_half(data):
         assert (left > right).mean() > 0.95, name
     inputs, targets = _family(data, "hallway_l")
     assert ((inputs == grid.WALL).sum(axis=(1, 2)) > 40).all()
-    assert (targets.max(axis=(1, 2)) > 0.75).all()  # the blind inner corner, above the 0.6 of the left half
+    # The blind inner corner, above the left half's cost.
+    assert (targets.max(axis=(1, 2)) > 1.25 * sc.HALLWAY_LEFT_COST).all()
 
 
 @pytest.mark.slow
 def test_the_queue_u_shape_is_there_only_when_the_goal_is_at_the_head(data):
-    """Cost beside the queue, away from the people, is the U: present with the goal at the head."""
+    """Beside the queue as its map shows it, the U at the forbidden level with the goal at the
+    head, and graded costs only with the goal elsewhere."""
     import jax
+    import jax.numpy as jnp
 
     keys = dataset.family_keys(0, "queue", 32)
-    at_head = np.asarray(dataset.batched_sampler("queue")(keys)[1])
+    images, at_head = (np.asarray(a) for a in dataset.batched_sampler("queue")(keys))
     elsewhere = np.asarray(dataset.batched_sampler("non_queue")(keys)[1])
     layout_keys = jax.vmap(lambda k: jax.random.split(k, 3)[0])(keys)  # as _sample_queue splits
-    x, y, phi, valid, hx, hy, spacing = (np.asarray(v) for v in jax.vmap(families.queue_layout)(layout_keys))
+    x, y, phi, valid, *_ = jax.vmap(families.queue_layout)(layout_keys)
+    drawn = grid.quantise_heading(jnp.broadcast_to(phi[:, None], x.shape))
+    hx, hy, phi, tail = (np.asarray(v) for v in jax.vmap(sc.drawn_line)(*grid.snap_to_cell(x, y), drawn, valid))
+    checked = 0
     for b in range(32):
-        # A point 1 m to the side of the second person: in the U's arm, beyond their proxemics.
-        px, py = x[b, 1] - 1.1 * np.sin(phi[b]), y[b, 1] + 1.1 * np.cos(phi[b])
-        r, c = (int(v) for v in grid.cell_of(px, py))
-        if 0 <= r < 40 and 0 <= c < 40:
-            assert at_head[b, r, c] > 0.4 and at_head[b, r, c] - elsewhere[b, r, c] > 0.2
+        dx, dy = grid.CELL_X_M - hx[b], grid.CELL_Y_M - hy[b]
+        lx = dx * np.cos(phi[b]) + dy * np.sin(phi[b])
+        ly = np.abs(-dx * np.sin(phi[b]) + dy * np.cos(phi[b]))
+        beside = (lx > -tail[b]) & (lx < 0) & (ly > 0.75) & (ly < 1.25) & (images[b] != grid.WALL)
+        assert (at_head[b][beside] >= sc.FORBIDDEN_FROM).all(), b
+        assert (elsewhere[b][beside] <= sc.GRADED_TOP + 1e-6).all(), b
+        assert (at_head[b][images[b] == grid.PERSON] < sc.FORBIDDEN_FROM).all(), b  # the line itself is open
+        checked += beside.sum()
+    assert checked > 32 * 5
     inputs, _ = _family(data, "non_queue")
     assert ((inputs == grid.GOAL).sum(axis=(1, 2)) <= 1).all()
     people = (_family(data, "queue")[0] == grid.PERSON).sum(axis=(1, 2))
-    assert people.min() >= 2 and people.max() <= families.MAX_QUEUE  # 2-12 m at 0.6-1.4 m spacing
+    assert people.min() >= 1 and people.max() <= families.MAX_QUEUE  # 2-12 m at 0.6-1.4 m spacing, or one
+    alone = (people == 1).mean()  # the lines of one (QUEUE_ALONE_SHARE)
+    assert 0.5 * families.QUEUE_ALONE_SHARE < alone < 2 * families.QUEUE_ALONE_SHARE
 
 
 @pytest.mark.slow

@@ -7,6 +7,7 @@ import json
 import jax
 import jax.numpy as jnp
 import numpy as np
+import optax
 import pytest
 from flax import nnx, serialization
 
@@ -381,6 +382,68 @@ def test_the_pair_weighted_loss_weighs_only_the_contrast():
     assert TrainConfig.paper().pair_weight == 0.0
 
 
+def test_the_forbidden_head_learns_the_queues_u_as_a_classification_beside_the_graded_costs():
+    """Today's targets split exactly into the graded channel's targets and the forbidden head's
+    (the U on queues with the goal at the head, nothing on groups); the combined output is
+    FORBIDDEN where the head's logit is >= 0 and GRADED_TOP x graded elsewhere; the head exists
+    only for "maps" runs on today's targets; its loss weight moves the step only where it acts."""
+    from socialnav.models import social_costs as sc
+
+    queues, groups = dataset.generate(3, {"queue": 16}), dataset.generate(3, {"group": 16})
+    t = jnp.asarray(queues["targets"])
+    graded, forbidden, _ = steps.split_targets(t)
+    assert float(forbidden.max()) > 0.95 and float(graded.max()) <= 1.0 and float(graded.min()) >= 0.0
+    rebuilt = jnp.where(
+        forbidden > 0, sc.GRADED_TOP + forbidden * (sc.FORBIDDEN - sc.GRADED_TOP), sc.GRADED_TOP * graded
+    )
+    np.testing.assert_allclose(np.asarray(rebuilt), queues["targets"], atol=1e-6)
+    assert float(steps.split_targets(jnp.asarray(groups["targets"]))[1].max()) == 0.0
+    assert steps.split_targets(t, None)[2] is None
+
+    # The graded channel's loss ignores the U's own cells (the head decides there) and counts
+    # every other cell.
+    logit = jnp.zeros_like(t)
+    base_loss = steps.two_channel_loss(graded, logit, t, cost_weight=10.0)
+    bce = float(jnp.mean(optax.sigmoid_binary_cross_entropy(logit, forbidden)))
+    three = float(steps.two_channel_loss(graded, logit, t, cost_weight=10.0, forbidden_weight=3.0))
+    assert three - float(base_loss) == pytest.approx(2 * bce, rel=1e-5)
+    in_u, off_u = forbidden > 0, (forbidden == 0) & (graded > 0.1)
+    assert float(steps.two_channel_loss(jnp.where(in_u, 0.0, graded), logit, t, cost_weight=10.0)) == pytest.approx(
+        float(base_loss)
+    )
+    assert float(steps.two_channel_loss(jnp.where(off_u, 0.0, graded), logit, t, cost_weight=10.0)) > float(base_loss)
+
+    combined = unet.combine_heads(jnp.array([0.5, 0.5, 1.0]), jnp.array([-0.1, 0.0, 2.0]))
+    np.testing.assert_allclose(np.asarray(combined), [0.5 * sc.GRADED_TOP, sc.FORBIDDEN, sc.FORBIDDEN])
+
+    def head_outputs(config):
+        return steps.weight_shapes(config)[0]["head"]["kernel"].shape[-1]
+
+    base = {**TINY, "schedule": "constant"}
+    assert head_outputs(TrainConfig(**base)) == 2
+    assert head_outputs(TrainConfig(**base, objective="paths")) == 1
+    old = TrainConfig().to_json()
+    del old["forbidden_weight"], old["targets"]
+    assert (TrainConfig.from_json(old).forbidden_weight, head_outputs(TrainConfig.from_json(old))) == (0.0, 1)
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="forbidden_weight"):
+            TrainConfig(forbidden_weight=bad)
+    assert TrainConfig(forbidden_weight=0.0, objective="paths").forbidden_weight == 0.0
+    assert TrainConfig.paper().forbidden_weight == TrainConfig().forbidden_weight
+
+    def step(data, **settings):
+        config = TrainConfig(**{**base, **settings})
+        state = steps.initial_state(config)
+        new, loss = steps.compiled(config)[2](state, data["inputs"], data["targets"], np.zeros(16, np.int32))
+        return new["params"], float(loss)
+
+    (one, loss_one), (three, loss_three) = step(queues, forbidden_weight=1.0), step(queues, forbidden_weight=3.0)
+    assert loss_one == loss_three  # the reported loss is the plain MSE of the output before the step
+    # Adam's first step is the gradient's sign on a parameter one loss alone moves (the head's own
+    # kernel); the shared layers, moved by both, change with the weight.
+    assert not all(np.allclose(a, b) for a, b in zip(jax.tree.leaves(one), jax.tree.leaves(three), strict=True))
+
+
 def test_an_epoch_carries_its_contrast_through_the_shuffle():
     """``epoch_data`` computes the twins' contrast before it shuffles, and shuffles it with its
     samples: the same rows as :func:`dataset.pair_contrast` of the unshuffled epoch; runs without a
@@ -434,6 +497,31 @@ def test_an_exported_model_predicts_what_the_run_predicts_and_bad_folders_are_na
         inference.SocialCostModel.load(tmp_path / "m")
 
 
+def test_a_model_of_graded_targets_is_read_in_the_graded_range_and_cannot_be_trained_on(tmp_path):
+    """A run saved before the targets had a forbidden level (its config.json has no 'targets')
+    and a "paths" run learnt graded costs only: they have one output, and loaded, their costs are
+    scaled by GRADED_TOP, so that the GSCL layer reads their peak as the top of the graded range,
+    never as forbidden. A model with the forbidden head is read as it outputs."""
+    from socialnav.models import social_costs as sc
+
+    now = TrainConfig(**TINY)
+    old = TrainConfig.from_json({k: v for k, v in now.to_json().items() if k != "targets"})
+    assert (now.targets, old.targets) == ("graded_forbidden", "graded")
+    assert now.reads_forbidden and not old.reads_forbidden
+    assert not TrainConfig(**TINY, objective="paths").reads_forbidden
+    maps = dataset.generate(0, {"queue": 2})["inputs"]
+    for config, scale in ((old, sc.GRADED_TOP), (now, 1.0)):
+        state = steps.initial_state(config)
+        graphdef = steps.compiled(config)[0]
+        raw = np.asarray(inference.SocialCostModel(graphdef, state["params"], state["batch_stats"])(maps))
+        model = inference.SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
+        np.testing.assert_allclose(np.asarray(model(maps)), scale * raw, rtol=1e-6)
+        np.testing.assert_allclose(np.asarray(model.apply(model.weights, maps)), scale * raw, rtol=1e-6)
+    with pytest.raises(ValueError, match="targets: 'graded'"):
+        train.train(old, tmp_path / "old", progress=False)
+    assert not (tmp_path / "old").exists()  # refused before any file
+
+
 @pytest.mark.slow
 def test_the_shipped_model_meets_the_quality_bar_and_the_rule_suite_as_its_card_says():
     """The model the package ships (data/gscl/default, what 'gscl' runs without --gscl-run):
@@ -445,3 +533,148 @@ def test_the_shipped_model_meets_the_quality_bar_and_the_rule_suite_as_its_card_
     assert checks["meets_rules"], min(checks["rules_pass_by_check"].values())
     assert checks["test_mse"] == pytest.approx(card["test_mse"], rel=1e-3)
     assert model.config == checkpoints.load_config(inference.DEFAULT_MODEL)
+
+
+@pytest.mark.slow
+def test_a_warm_start_copies_the_source_and_grows_a_head_and_bad_sources_are_named(tmp_path):
+    """--init-from: a one-output model (an older run's, like the package's model before the
+    forbidden head) starts a head model: every weight copied, the head's graded channel equal to
+    the source's output, the forbidden channel fresh; so the first graded prediction is the
+    source's. A source of other widths, or no model, fails in one line before any file; a resumed
+    run never reads its source again."""
+    from socialnav.models import warm_start
+
+    now = TrainConfig(**TINY)
+    old = TrainConfig.from_json({k: v for k, v in now.to_json().items() if k != "targets"})
+    state = steps.initial_state(old)
+    params = jax.tree.map(lambda a: a + 0.01 * jnp.arange(a.size, dtype=a.dtype).reshape(a.shape), state["params"])
+    source = inference.SocialCostModel(steps.compiled(old)[0], params, state["batch_stats"], old)
+    source.export(tmp_path / "src")
+
+    fresh = steps.initial_state(now)
+    started = warm_start.warm_started(fresh, tmp_path / "src")
+    mine, theirs, new = (nnx.to_pure_dict(s) for s in (started["params"], params, fresh["params"]))
+    assert mine["head"]["kernel"].shape[-1] == 2 and theirs["head"]["kernel"].shape[-1] == 1
+    np.testing.assert_array_equal(mine["head"]["kernel"][..., :1], theirs["head"]["kernel"])
+    np.testing.assert_array_equal(mine["head"]["kernel"][..., 1], new["head"]["kernel"][..., 1])
+    np.testing.assert_array_equal(mine["enc"][0]["conv1"]["kernel"], theirs["enc"][0]["conv1"]["kernel"])
+    assert not np.array_equal(
+        nnx.to_pure_dict(fresh["params"])["enc"][0]["conv1"]["kernel"], mine["enc"][0]["conv1"]["kernel"]
+    )
+    maps = dataset.generate(0, {"corner": 2, "queue": 2})["inputs"]
+    model = nnx.merge(steps.compiled(now)[0], started["params"], started["batch_stats"])
+    model.eval()
+    graded, _ = model.heads(jnp.asarray(maps))
+    raw = inference.SocialCostModel(steps.compiled(old)[0], params, state["batch_stats"])(maps)
+    np.testing.assert_allclose(np.asarray(graded), np.asarray(raw), atol=1e-6)
+
+    # Trained from it: the run starts there, and a resume reads the checkpoint, not the source.
+    run = tmp_path / "run"
+    config = TrainConfig(**{**TINY, "init_from": str(tmp_path / "src")})
+    logs = []
+    train.train(config, run, progress=False, max_steps=4, log=logs.append)
+    assert any("starting from the weights of" in line for line in logs)
+    source_id = inference.model_identity(tmp_path / "src")
+    assert json.loads((run / warm_start.SOURCE_FILE).read_text())["identity"] == source_id
+    (tmp_path / "src" / inference.WEIGHTS_FILE).unlink()
+    train.train(config, run, progress=False, max_steps=6, log=logs.append)
+    assert any("resuming" in line for line in logs)
+    # The exported model's card names the source, which its folder no longer holds.
+    assert cli.main(["gscl", "export", "--run", str(run), "--out", str(tmp_path / "exp"), "--scenes", "1"]) == 0
+    card = json.loads((tmp_path / "exp" / inference.CARD_FILE).read_text())
+    assert card["init_from"]["identity"] == source_id and "started from the model in init_from" in card["made_by"]
+
+    other = TrainConfig(**{**TINY, "features": (4, 4, 8, 16)})
+    with pytest.raises(ValueError, match=r"init_from: .*src2's .*shaped"):
+        source.export(tmp_path / "src2")
+        warm_start.warm_started(steps.initial_state(other), tmp_path / "src2")
+    with pytest.raises(ValueError, match="init_from: .*neither a GSCL training run"):
+        train.train(TrainConfig(**{**TINY, "init_from": str(tmp_path / "nothing")}), tmp_path / "bad", progress=False)
+    assert not (tmp_path / "bad").exists()
+    with pytest.raises(ValueError, match="field 'init_from'"):
+        TrainConfig.from_json({**now.to_json(), "init_from": 3})
+
+
+def test_a_frozen_graded_network_keeps_the_sources_costs_while_the_forbidden_branch_learns(tmp_path):
+    """--forbidden-features with --freeze-graded: the forbidden logit comes from a separate U-Net;
+    started from a one-output source, every graded weight and batch statistic stays the source's
+    through training steps (so the graded prediction stays the source's), the branch's weights
+    and statistics move, and the loss is the branch's cross-entropy alone. The settings are
+    checked on construction, and a config.json written before them reads as the shared head."""
+    from socialnav.models import warm_start
+
+    old = TrainConfig.from_json({k: v for k, v in TrainConfig(**TINY).to_json().items() if k != "targets"})
+    state = steps.initial_state(old)
+    params = jax.tree.map(lambda a: a + 0.01 * jnp.arange(a.size, dtype=a.dtype).reshape(a.shape), state["params"])
+    source = inference.SocialCostModel(steps.compiled(old)[0], params, state["batch_stats"], old)
+    source.export(tmp_path / "src")
+
+    config = TrainConfig(
+        **{**TINY, "init_from": str(tmp_path / "src"), "forbidden_features": (4, 4, 4, 8), "freeze_graded": True}
+    )
+    started = warm_start.warm_started(steps.initial_state(config), config.init_from)
+    fresh_branch = nnx.to_pure_dict(steps.initial_state(config)["params"])["forbidden_branch"]
+    for a, b in zip(
+        jax.tree.leaves(nnx.to_pure_dict(started["params"])["forbidden_branch"]), jax.tree.leaves(fresh_branch)
+    ):
+        np.testing.assert_array_equal(a, b)  # other widths than the source's: the branch starts fresh
+    # A branch of the source's widths starts as a copy of the source's layers, its output layer fresh.
+    same = TrainConfig(**{**TINY, "init_from": str(tmp_path / "src"), "forbidden_features": TINY["features"]})
+    copied = nnx.to_pure_dict(warm_start.warm_started(steps.initial_state(same), same.init_from)["params"])
+    theirs = nnx.to_pure_dict(params)
+    np.testing.assert_array_equal(
+        copied["forbidden_branch"]["dec"][1]["conv2"]["kernel"], theirs["dec"][1]["conv2"]["kernel"]
+    )
+    np.testing.assert_array_equal(copied["forbidden_branch"]["head"]["bias"], [unet.HEAD_BIAS])
+    assert not np.array_equal(copied["forbidden_branch"]["head"]["kernel"], theirs["head"]["kernel"])
+    data = dataset.generate(5, {"queue": 8, "corner": 8})
+    step = steps.compiled(config)[2]
+    new = started
+    for _ in range(3):
+        new, _ = step(new, data["inputs"], data["targets"], np.zeros(16, np.int32))
+    before, after = (nnx.to_pure_dict(s["params"]) for s in (started, new))
+    stats_before, stats_after = (nnx.to_pure_dict(s["batch_stats"]) for s in (started, new))
+    for name in ("enc", "bottleneck", "up", "dec", "head"):
+        for a, b in zip(jax.tree.leaves(before[name]), jax.tree.leaves(after[name]), strict=True):
+            np.testing.assert_array_equal(a, b)
+    for name in ("enc", "bottleneck"):
+        for a, b in zip(jax.tree.leaves(stats_before[name]), jax.tree.leaves(stats_after[name]), strict=True):
+            np.testing.assert_array_equal(a, b)
+    moved = [
+        not np.array_equal(a, b)
+        for a, b in zip(jax.tree.leaves(before["forbidden_branch"]), jax.tree.leaves(after["forbidden_branch"]))
+    ]
+    assert all(moved)
+    assert not np.array_equal(
+        stats_before["forbidden_branch"]["enc"][0]["norm1"]["mean"],
+        stats_after["forbidden_branch"]["enc"][0]["norm1"]["mean"],
+    )
+    model = nnx.merge(steps.compiled(config)[0], new["params"], new["batch_stats"])
+    model.eval()
+    graded, forbidden_logit = model.heads(jnp.asarray(data["inputs"]))
+    np.testing.assert_allclose(np.asarray(graded), np.asarray(source(data["inputs"])) / source._scale, atol=1e-6)
+    assert forbidden_logit.shape == graded.shape
+
+    # The loss is the branch's cross-entropy alone: targets with every graded cost removed (the
+    # U kept) move the branch exactly as the full targets do.
+    _, forbidden_target, _ = steps.split_targets(jnp.asarray(data["targets"]))
+    u_only = np.where(np.asarray(forbidden_target) > 0, data["targets"], 0.0).astype(np.float32)
+    assert not np.array_equal(u_only, data["targets"])
+    family = np.zeros(16, np.int32)
+    full, _ = step(started, data["inputs"], data["targets"], family)
+    bare, _ = step(started, data["inputs"], u_only, family)
+    for a, b in zip(jax.tree.leaves(full["params"]), jax.tree.leaves(bare["params"]), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), atol=1e-7)
+
+    for bad, match in (
+        ({"freeze_graded": True, "forbidden_features": (4, 4, 4, 8)}, "freeze_graded needs init_from"),
+        ({"freeze_graded": True, "init_from": "x"}, "freeze_graded needs"),
+        ({"forbidden_features": (4, 4, 4)}, "forbidden_features must be"),
+        ({"forbidden_features": (4, 4, 4, 8), "objective": "paths"}, "forbidden_features needs"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            TrainConfig(**{**TINY, **bad})
+    before_fields = {k: v for k, v in config.to_json().items() if k not in ("forbidden_features", "freeze_graded")}
+    read = TrainConfig.from_json(before_fields)
+    assert (read.forbidden_features, read.freeze_graded) == ((), False)
+    assert TrainConfig.from_json(config.to_json()) == config

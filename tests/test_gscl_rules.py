@@ -52,14 +52,37 @@ def test_queue_u_cost_known_answers():
         r, c = (int(v) for v in grid.cell_of(np.float32(x), np.float32(y)))
         return u[r, c]
 
-    # Mid-band (0.4 m inside both soft edges of width 0.15 m): the level times two logistic factors.
-    mid_band = sc.QUEUE_U_COST / (1 + np.exp(-0.4 / 0.15)) ** 2
+    # Mid-band (0.4 m inside both edges): the forbidden level times two logistic factors.
+    mid_band = sc.FORBIDDEN / (1 + np.exp(-0.4 / sc.QUEUE_U_EDGE_M)) ** 2
+    assert mid_band > sc.FORBIDDEN_FROM
     assert at(-2.0, 1.0) == pytest.approx(mid_band, abs=0.01)  # beside, left (1 m from the line)
     assert at(-2.0, -1.0) == pytest.approx(mid_band, abs=0.01)  # beside, right
     assert at(1.8, 0.2) == pytest.approx(mid_band, abs=0.01)  # across the front (1.8 m ahead)
+    assert at(-2.0, 0.6) == pytest.approx(0.5 * sc.FORBIDDEN, abs=0.01)  # a cell centred on the inner edge
+    assert at(-4.2, 1.0) > sc.FORBIDDEN_FROM  # beside the tail: the sides reach 0.6 m behind it
     assert at(-2.0, 0.2) < 0.05  # on the queue's own line
     assert at(-5.8, 1.0) < 0.05  # behind the tail: the U is open there
     assert at(-2.0, 2.6) < 0.01  # well outside
+
+
+def test_graded_shapes_peak_at_the_graded_top_below_the_forbidden_level():
+    person = np.asarray(sc.proxemic_cost(0.2, 0.2, 0.0, sc.PERSON_SPEED_MPS))
+    assert person.max() == pytest.approx(sc.GRADED_TOP, abs=1e-6)
+    corner = np.asarray(sc.corner_cost(0.2, 0.2, np.ones((grid.GRID, grid.GRID), bool)))
+    assert corner.max() == pytest.approx(sc.GRADED_TOP, abs=1e-6)
+    assert max(sc.INTERACTION_COST, sc.HALLWAY_LEFT_COST) <= sc.GRADED_TOP < sc.FORBIDDEN_FROM < sc.FORBIDDEN
+
+
+def test_drawn_line_reads_the_line_from_the_peoples_cells():
+    # Three people 0.8 m apart facing -y (head at the bottom), one padding slot.
+    x = np.array([0.2, 0.2, 0.2, 9.0], np.float32)
+    y = np.array([-1.0, -0.2, 0.6, 9.0], np.float32)
+    drawn = np.full(4, np.pi / 4, np.float32)  # the heading pixels: read only for a line of one
+    hx, hy, heading, tail = sc.drawn_line(x, y, drawn, np.array([True, True, True, False]))
+    assert (float(hx), float(hy), float(tail)) == pytest.approx((0.2, -1.0, 1.6))
+    assert float(heading) == pytest.approx(-np.pi / 2)
+    hx, hy, heading, tail = sc.drawn_line(x, y, drawn, np.array([True, False, False, False]))
+    assert (float(hx), float(hy), float(heading), float(tail)) == pytest.approx((0.2, -1.0, np.pi / 4, 0.0))
 
 
 def test_the_suites_expected_maps_pass_and_rule_blind_maps_fail(cases):
@@ -85,6 +108,34 @@ def test_the_suites_expected_maps_pass_and_rule_blind_maps_fail(cases):
         lo, hi = v["pass_share_ci95"]
         assert lo <= v["pass_share"] <= hi and hi - lo < 1.0
     assert "95 % interval" in rules.table(nothing)
+
+
+def test_the_blind_corner_beside_a_queue_is_scored_apart_from_the_queues_u():
+    """The U is forbidden, above every graded cost: a region holding some of it would score the U
+    and not the corner. The corner's regions keep a cell clear of it (and of the people), and a
+    'model' that draws the expected map with the U shifted by one cell still passes the corner."""
+    cases = rules.build_suite(30, kinds=("queue+corner",))
+    corner = [c for c in cases if c.rule == "blind_corner"]
+    assert corner
+    shifted = []
+    for c in corner:
+        u = c.expected[0] > sc.GRADED_TOP + 1e-3
+        assert u.any()  # the goal is at the head: the U is drawn
+        near_u = np.zeros_like(u)
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                near_u |= np.roll(np.roll(u, dr, 0), dc, 1)
+        assert not (near_u & (c.region_a | c.region_b)).any()
+        moved = np.where(np.roll(u, 1, 1), sc.FORBIDDEN, np.where(u, c.blind[0], c.expected[0]))
+        shifted.append(np.stack([moved, c.expected[1]]))
+    table = {c.images[0].tobytes(): m[0] for c, m in zip(corner, shifted)}
+    blank = np.zeros((grid.GRID, grid.GRID), np.float32)  # evaluate pads its last batch
+
+    def predict(maps):
+        return np.stack([table.get(np.asarray(x).tobytes(), blank) for x in maps])
+
+    report = rules.evaluate(predict, corner, batch=16)
+    assert report["passed"].all()
 
 
 def test_the_suite_goes_beyond_the_generators_layouts():
@@ -116,7 +167,7 @@ def test_composite_samples_hold_both_scenes_and_their_max():
     assert np.all(targets[inputs == grid.WALL] == 0) and targets.min() >= 0 and targets.max() <= 1
     people = inputs == grid.PERSON
     # Everybody's cost peaks on their own cell (people are drawn at cell centres).
-    assert np.all(targets[people] > 0.99)
+    assert np.all(targets[people] > sc.GRADED_TOP - 0.01)
     # Most composites hold two scenes: more people than any single family's sample would have...
     per_sample = people.sum((1, 2))
     assert np.median(per_sample) >= 4

@@ -20,6 +20,8 @@ from socialnav.jaxsim.scenes.actor import Actor
 from socialnav.jaxsim.scenes.env import Observation
 from socialnav.jaxsim.scenes.spec import load_scene, mirror
 from socialnav.jaxsim.scenes.variant import sample_variants
+from socialnav.models import grid
+from socialnav.models import social_costs as sc
 from socialnav.planners import actors
 from socialnav.planners.stack import METHODS
 
@@ -81,6 +83,36 @@ def test_the_global_planner_leaves_the_people_to_the_social_layer_when_the_scene
         offsets[seen] = np.abs(path[:, 1]).max()
     assert offsets[True] > 0.4  # at least a body and the robot's radius off the person's centre
     assert offsets[False] < 0.15  # the straight line, to a cell
+
+
+def _band_costs(level):
+    """``gscl_apply`` stand-in: a band of ``level`` across the way 1.6-2.4 m ahead of the robot
+    (|y| < 2 m), with one 0.4 m cell open at y 0-0.4 m, in the network's 40 x 40 window."""
+    x, y = np.asarray(grid.CELL_X_M), np.asarray(grid.CELL_Y_M)
+    band = (x > 1.7) & (x < 2.3) & (np.abs(y) < 2.0) & ~np.isclose(y, 0.2)
+    costs = jnp.asarray(np.where(band, level, 0.0), jnp.float32)
+    return lambda weights, maps: jnp.broadcast_to(costs, maps.shape)
+
+
+def test_a_forbidden_social_cost_is_inflated_with_the_walls_and_a_graded_one_is_not():
+    """The gscl stack from (0, 0) to (3.8, 0) with a social band across the way and a 0.4 m gap in
+    it: forbidden (lethal, then inflated by the robot's radius) the gap is closed and the plan goes
+    round the band's end; at the top of the graded range the plan goes straight on."""
+    setup = arena.setup_scene(load_scene(SCENES_DIR / "gscl_queue.json"))
+    obs = _observation([(-5.0, 3.0)], goal=(3.8, 0.0))
+    params = actors.stack_params(setup.env, setup.map, people_are_obstacles=False)
+    widest = {}
+    for level in (sc.FORBIDDEN, sc.GRADED_TOP):
+        actor = actors.stack_actor(METHODS["gscl"], setup.grid, 0.275, gscl_apply=_band_costs(level))
+        st = actor.plan(params, actor.init(jax.random.PRNGKey(0), obs), obs, jax.random.PRNGKey(0))
+        path = np.asarray(st.path[: int(st.path_len)])
+        assert np.linalg.norm(path[-1] - [3.8, 0.0]) < 0.1, level
+        widest[level] = np.abs(path[:, 1]).max()
+        if level == sc.FORBIDDEN:  # never within the robot's radius of a forbidden cell
+            in_x = (path[:, 0] > 1.6 - 0.275) & (path[:, 0] < 2.4 + 0.275)
+            assert np.all(np.abs(path[in_x, 1]) > 2.0 + 0.275 - 0.06)
+    assert widest[sc.FORBIDDEN] > 2.2
+    assert widest[sc.GRADED_TOP] < 1.0
 
 
 def _queue_then_goal(behind_xy):
