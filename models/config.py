@@ -109,7 +109,7 @@ class TrainConfig:
         the working directory; a resumed run starts from its checkpoint and never reads it.
       forbidden_features: ``()`` (the default): the forbidden head is a second output channel of
         the U-Net's last layer, sharing its features with the graded costs; four widths: the
-        forbidden logit comes from a separate, smaller U-Net of those widths
+        forbidden logit comes from a separate U-Net of those widths
         (:class:`models.unet.UNet`'s ``forbidden_features``), so that the graded network can be
         kept as it is (``freeze_graded``).
       freeze_graded: train the forbidden branch only: the graded network's weights and batch

@@ -17,7 +17,7 @@ from flax import nnx
 
 from socialnav.models.config import TrainConfig, learning_rate_schedule, make_model
 from socialnav.models.social_costs import FORBIDDEN, GRADED_TOP
-from socialnav.models.unet import combine_heads
+from socialnav.models.unet import BRANCH, combine_heads
 
 
 def batch_sharding(batch_size: int):
@@ -217,9 +217,6 @@ def compiled(config: TrainConfig, objective=None):
         ),
         make_predict(graphdef),
     )
-
-
-BRANCH = "forbidden_branch"  # models.unet.UNet's attribute holding the separate forbidden branch
 
 
 def frozen_graded_tx(tx: optax.GradientTransformation) -> optax.GradientTransformation:

@@ -24,8 +24,8 @@ This project's choices (the paper does not give them):
   Why not one regressed channel with a forbidden level above the graded ones (tried, commit
   0d92bc9): the least-squares answer where the network is unsure is the mean, and along the
   line's tail it stayed below the lethal threshold, so plans crossed the line's side.
-  With ``forbidden_features`` the head is a **separate branch**: a second, smaller U-Net of its
-  own widths whose one output is the forbidden logit, the main network keeping its one graded
+  With ``forbidden_features`` the head is a **separate branch** (:data:`BRANCH`): a second U-Net
+  of its own widths whose one output is the forbidden logit, the main network keeping its one graded
   output. Training can then keep the main network as a source model drew it
   (:attr:`models.config.TrainConfig.freeze_graded`): a shared trunk fine-tuned to learn the U
   drew other costs weaker (the blind corner beside a queue).
@@ -52,6 +52,7 @@ PAPER_FEATURES = (32, 64, 128, 256)
 CPU_FEATURES = (16, 32, 64, 128)
 INPUT_CHANNEL_CODES = (grid.WALL, grid.PERSON, grid.HEADING, grid.GOAL)
 HEAD_BIAS = -3.0
+BRANCH = "forbidden_branch"  # the attribute holding the separate forbidden branch
 
 
 def encode_input(maps, coords: bool = True):

@@ -28,12 +28,11 @@ import jax
 import numpy as np
 from flax import nnx
 
+from socialnav.models.unet import BRANCH
+
 
 def _flat(tree) -> dict[str, np.ndarray]:
     return {jax.tree_util.keystr(k): np.asarray(v) for k, v in jax.tree_util.tree_flatten_with_path(tree)[0]}
-
-
-BRANCH = "forbidden_branch"  # models.unet.UNet's separate forbidden branch
 
 
 def merged_weights(fresh: dict, source: dict, source_name: str) -> dict:
