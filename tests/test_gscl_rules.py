@@ -215,8 +215,14 @@ def test_composites_are_a_training_setting():
 )
 def test_a_tiny_model_trained_here_learns_a_rule(family, kind, check, untrained_at_most, trained_at_least):
     """A rule pinned on held-out scenes: an untrained U-Net fails it on (nearly) every one; 150
-    steps of the plain MSE on one family of the generator pass it on most."""
-    config = TrainConfig(features=(8, 8, 16, 16), batch_size=32, warmup_steps=10, epochs=1, cost_weight=0.0)
+    steps of the plain MSE on one family of the generator pass it on most. The model has one graded
+    output (``targets="graded"``): these families hold no U, and the plain MSE is what is pinned
+    here. (With the forbidden head and its two-channel loss, this tiny model passed 2.5 % of the
+    passing rule after the same 150 steps, 0 % with the head's weight at 1e-3; not yet explained:
+    the full-size runs learn every graded rule with the head, ``docs/arena-results.md``.)"""
+    config = TrainConfig(
+        features=(8, 8, 16, 16), batch_size=32, warmup_steps=10, epochs=1, cost_weight=0.0, targets="graded"
+    )
     state = steps.initial_state(config)
     _, _, train_step, predict = steps.compiled(config)
     data = dataset.generate(7, {family: 32 * 150})
