@@ -19,6 +19,7 @@ from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
+from socialnav.models.social_costs import GRADED_TOP
 from socialnav.planners import costmap, policy_run, policy_social, policy_training
 from socialnav.planners import policy as policy_lib
 
@@ -137,11 +138,13 @@ def test_the_gscl_channel_reads_the_networks_window_where_it_was_computed():
     state = policy_social.gscl_refresh(predict, jnp.zeros((40, 40)), spec, obs, state)
     window, _ = policy_social.window("gscl", obs, policy_lib.window_points(config, obs), state)
     channel = np.asarray(window).reshape(9, 9)
-    assert channel[6, 4] == pytest.approx(0.5 * 252 / 254) and np.count_nonzero(channel) == 1  # (1.0, 0.0)
+    # The layer reads a network's graded range [0, GRADED_TOP] as Nav2's [0, 252] (gscl_layer.read_cost).
+    want = 0.5 / GRADED_TOP * 252 / 254
+    assert channel[6, 4] == pytest.approx(want) and np.count_nonzero(channel) == 1  # (1.0, 0.0)
     # The robot moves 0.5 m forward: the same world cell is now 0.5 m ahead of it.
     moved = obs.replace(robot_xy_m=jnp.array([0.5, 0.0]))
     channel = np.asarray(policy_social.window("gscl", moved, policy_lib.window_points(config, moved), state)[0])
-    assert channel.reshape(9, 9)[5, 4] == pytest.approx(0.5 * 252 / 254)
+    assert channel.reshape(9, 9)[5, 4] == pytest.approx(want)
 
 
 def test_guidance_field_is_zero_at_the_goal_and_no_shorter_than_the_straight_line():
