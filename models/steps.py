@@ -114,10 +114,11 @@ def make_train_step(
 
     def loss_fn(params, batch_stats, inputs, targets, contrast, prepared):
         model = nnx.merge(graphdef, params, batch_stats, copy=True)
-        model.train()
-        if freeze_graded:
-            for module in model.graded_modules():
-                module.eval()
+        if freeze_graded:  # every layer in inference mode but the branch's
+            model.eval()
+            model.forbidden_branch.train()
+        else:
+            model.train()
         graded, forbidden_logit = model.heads(inputs)
         if freeze_graded:
             graded = jax.lax.stop_gradient(graded)

@@ -138,10 +138,6 @@ class UNet(nnx.Module):
             return nnx.sigmoid(out[..., 0]), self.forbidden_branch.logits(maps)[..., 0]
         return nnx.sigmoid(out[..., 0]), (out[..., 1] if self.forbidden_head else None)
 
-    def graded_modules(self):
-        """The layers that draw the graded costs (every one but ``forbidden_branch``)."""
-        return (self.enc, self.bottleneck, self.up, self.dec, self.head)
-
     def logits(self, maps):
         """(B, 40, 40, outputs) raw outputs of the main network's last layer."""
         x = encode_input(maps, self.coords)
