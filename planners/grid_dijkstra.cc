@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <queue>
@@ -49,77 +50,140 @@ struct Move {
 
 constexpr int64_t kMaxBuckets = 1 << 16;
 
+typedef float V4f __attribute__((vector_size(16)));
+typedef int32_t V4i __attribute__((vector_size(16)));
+
+struct Bucket;
+
 // One grid, padded by a ring of cells that are impassable and already settled, so that no move
 // needs a bounds check: index p = (i + 1) * stride + (j + 1), stride = w + 2.
 struct Padded {
   int64_t stride;
   std::vector<float> t;       // traversal, inf on the ring
   std::vector<uint8_t> wall;  // t is inf (the corner rule's test)
-  std::vector<uint8_t> done;  // settled (the ring from the start)
-  std::vector<float> phi;
-  std::vector<int64_t> offset;  // of each move
+  std::vector<float> phi;     // the potential; -phi once settled
+  std::vector<int64_t> offset;  // of each move (the path's descent)
+  V4f length[3];                // metres of the move a -> b, a in b's row above, own, below (lanes: columns j-1..j+2)
+  V4i open_lanes[16][3];        // by the walls N, S, W, E of b: which of those moves are allowed (-1) or not (0)
+  std::vector<Bucket> ring;      // the bucket queue, kept allocated between grids
 };
 
-// Relax phi[a] through b (settled at d) for every move a -> b. Branch-free over the moves (which
-// of them improve a cell is data and unpredictable): the improved cells are gathered, then pushed.
-// K: the number of moves (8 or 4, the first K of the padded grid's move table), a constant so
-// that the loop unrolls.
-template <int K, typename Push>
-inline void relax_into(Padded& g, const Move* moves, int64_t b, float d, Push push) {
-  const float tb = g.t[b];
-  int64_t cell[K];
-  float value[K];
-  int n = 0;
-  for (int k = 0; k < K; ++k) {
-    const Move& m = moves[k];
-    const int64_t a = b - g.offset[k];
-    const bool corner = m.di && m.dj && (g.wall[a + m.di * g.stride] | g.wall[a + m.dj]);
-    const float candidate = m.length * tb + d;  // -ffp-contract=off: two roundings, as in JAX
-    const bool better = !g.done[a] & !corner & (candidate < g.phi[a]);
-    g.phi[a] = better ? candidate : g.phi[a];
-    cell[n] = a, value[n] = candidate;
-    n += better;
-  }
-  for (int k = 0; k < n; ++k) push(cell[k], value[k]);
+
+inline V4f load4(const float* p) {
+  V4f v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
 }
 
-template <int K>
-void by_heap(Padded& g, const Move* moves, int64_t goal) {
+inline void store4(float* p, V4f v) { std::memcpy(p, &v, sizeof v); }
+
+inline uint32_t lane_bits(V4i m) {
+#if defined(__SSE__)
+  return static_cast<uint32_t>(__builtin_ia32_movmskps(reinterpret_cast<V4f>(m)));
+#else
+  return (m[0] & 1u) | (m[1] & 2u) | (m[2] & 4u) | (m[3] & 8u);
+#endif
+}
+
+// Relaxes phi[a] through b (settled at d) for every move a -> b, the neighbours a of b taken as
+// three rows of four cells (b's row above, its own, below; from the column left of b), one
+// vector each: the candidates len(a -> b) * t[b] + d (the same two float32 roundings per move as
+// in JAX: -ffp-contract=off) replace phi[a] where they are lower and the move is open (lanes
+// off: b itself, the fourth column, a move the corner rule or the connectivity forbids; a
+// settled cell holds -phi, so no candidate beats it). Branch-free (which neighbours improve is
+// data, unpredictable). Returns the improved cells as a 12-bit mask: lane x of row r at bit
+// 4 r + x, the cell b + (r - 1) * stride + x - 1.
+inline uint32_t relax(Padded& g, int64_t b, float d) {
+  const float tb = g.t[b];
+  const int mask = g.wall[b - g.stride] | g.wall[b + g.stride] << 1 | g.wall[b - 1] << 2 | g.wall[b + 1] << 3;
+  const V4f base = {d, d, d, d};
+  const V4f tv = {tb, tb, tb, tb};
+  uint32_t bits = 0;
+  for (int r = 0; r < 3; ++r) {
+    float* row = g.phi.data() + b + (r - 1) * g.stride - 1;
+    const V4f old = load4(row);
+    const V4f candidate = g.length[r] * tv + base;
+    const V4i better = (candidate < old) & g.open_lanes[mask][r];
+    store4(row, better ? candidate : old);
+    bits |= lane_bits(better) << (4 * r);
+  }
+  return bits;
+}
+
+// The cell of bit `bit` of relax's mask.
+inline int64_t lane_cell(const Padded& g, int64_t b, int bit) { return b + (bit / 4 - 1) * g.stride + bit % 4 - 1; }
+
+void by_heap(Padded& g, int64_t goal) {
   using Entry = std::pair<float, int64_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   heap.emplace(0.0f, goal);
   while (!heap.empty()) {
     const auto [d, b] = heap.top();
     heap.pop();
-    if (g.done[b]) continue;
-    g.done[b] = 1;
-    relax_into<K>(g, moves, b, d, [&](int64_t a, float c) { heap.emplace(c, a); });
+    if (std::signbit(g.phi[b])) continue;
+    g.phi[b] = -d;
+    for (uint32_t bits = relax(g, b, d); bits; bits &= bits - 1) {
+      const int64_t a = lane_cell(g, b, __builtin_ctz(bits));
+      heap.emplace(g.phi[a], a);
+    }
   }
 }
 
-template <int K>
-void by_buckets(Padded& g, const Move* moves, int64_t goal, float delta, int64_t n_buckets) {
+// A bucket of the ring: its cells, first n of `cells` (kept allocated between grids).
+struct Bucket {
+  std::vector<int32_t> cells;
+  size_t n = 0;
+  int32_t* room(size_t k) {  // space for k more cells
+    if (n + k > cells.size()) cells.resize(2 * cells.size() + 64);
+    return cells.data() + n;
+  }
+};
+
+// Appends to `bucket` the cells of `bits` (relax's mask) among the four at `position` (the cells
+// b + offset), without a branch per cell: each is written, and counted if its bit is set.
+inline void push4(Bucket& bucket, uint32_t bits, const int (&position)[4], const int64_t (&offset)[4], int64_t b) {
+  int32_t* out = bucket.room(4);
+  size_t n = 0;
+  for (int k = 0; k < 4; ++k) {
+    out[n] = static_cast<int32_t>(b + offset[k]);
+    n += (bits >> position[k]) & 1u;
+  }
+  bucket.n += n;
+}
+
+// The straight moves' candidates are all one value, fl(fl(straight_m t[b]) + d), and the
+// diagonals' another: the improved cells go to two buckets, four cells each at most.
+void by_buckets(Padded& g, int64_t goal, float delta, int64_t n_buckets) {
   int64_t size = 1;  // a power of two, so that the ring's index is a mask, not a division
   while (size < n_buckets) size *= 2;
   const int64_t mask = size - 1;
-  std::vector<std::vector<int32_t>> ring(size);
+  std::vector<Bucket>& ring = g.ring;
+  if (static_cast<int64_t>(ring.size()) < size) ring.resize(size);
+  for (auto& r : ring) r.n = 0;
   const float inv = 1.0f / delta;
+  const int64_t s = g.stride;
+  static constexpr int kStraight[4] = {1, 4, 6, 9}, kDiagonal[4] = {0, 2, 8, 10};
+  const int64_t straight_offset[4] = {-s, -1, 1, s}, diagonal_offset[4] = {-s - 1, -s + 1, s - 1, s + 1};
+  const float straight_m = g.length[0][1], diagonal_m = g.length[0][0];  // 0 when 4-connected (lanes off)
   int64_t pending = 1;
-  ring[0].push_back(static_cast<int32_t>(goal));
+  *ring[0].room(1) = static_cast<int32_t>(goal);
+  ring[0].n = 1;
   for (int64_t current = 0; pending > 0; ++current) {
-    std::vector<int32_t>& bucket = ring[current & mask];
-    // Relaxations land two buckets on or more (at most n_buckets - 1 on): never in this vector.
-    for (size_t k = 0; k < bucket.size(); ++k) {
-      const int64_t b = bucket[k];
+    Bucket& bucket = ring[current & mask];
+    // Relaxations land one bucket on or more (at most n_buckets - 1 on): never in this one.
+    for (size_t k = 0; k < bucket.n; ++k) {
+      const int64_t b = bucket.cells[k];
       --pending;
-      if (g.done[b]) continue;
-      g.done[b] = 1;
-      relax_into<K>(g, moves, b, g.phi[b], [&](int64_t a, float c) {
-        ring[static_cast<int64_t>(c * inv) & mask].push_back(static_cast<int32_t>(a));
-        ++pending;
-      });
+      const float d = g.phi[b];
+      if (std::signbit(d)) continue;
+      g.phi[b] = -d;
+      const uint32_t bits = relax(g, b, d);
+      pending += __builtin_popcount(bits);
+      const float tb = g.t[b];
+      push4(ring[static_cast<int64_t>((straight_m * tb + d) * inv) & mask], bits, kStraight, straight_offset, b);
+      push4(ring[static_cast<int64_t>((diagonal_m * tb + d) * inv) & mask], bits, kDiagonal, diagonal_offset, b);
     }
-    bucket.clear();
+    bucket.n = 0;
   }
 }
 
@@ -132,8 +196,8 @@ void one_grid(const float* t, const int32_t* goal, int64_t h, int64_t w, const s
   g.stride = stride;
   g.t.assign(size, kInf);
   g.wall.assign(size, 1);
-  g.done.assign(size, 1);
-  g.phi.assign(size, kInf);
+  g.phi.assign(size + 2, -kInf);  // settled cells hold -phi (the ring: settled, unreachable); + 2: the
+                                  // last row's vectors read two cells past the ring
   float t_min = kInf, t_max = 0.0f;
   for (int64_t i = 0; i < h; ++i)
     for (int64_t j = 0; j < w; ++j) {
@@ -141,7 +205,7 @@ void one_grid(const float* t, const int32_t* goal, int64_t h, int64_t w, const s
       const int64_t p = (i + 1) * stride + j + 1;
       g.t[p] = v;
       g.wall[p] = std::isinf(v);
-      g.done[p] = 0;
+      g.phi[p] = kInf;
       if (!std::isinf(v)) t_min = std::min(t_min, v), t_max = std::max(t_max, v);
     }
   g.offset.clear();
@@ -150,15 +214,28 @@ void one_grid(const float* t, const int32_t* goal, int64_t h, int64_t w, const s
     g.offset.push_back(m.di * stride + m.dj);
     shortest = std::min(shortest, m.length), longest = std::max(longest, m.length);
   }
+  for (int r = 0; r < 3; ++r)  // relax's lanes: length and whether open, by the walls around b
+    for (int x = 0; x < 4; ++x) {
+      g.length[r][x] = 0.0f;
+      for (int mask = 0; mask < 16; ++mask) g.open_lanes[mask][r][x] = 0;
+      for (const Move& m : moves)  // a = b + (r - 1, x - 1): the move a -> b is (1 - r, 1 - x)
+        if (m.di == 1 - r && m.dj == 1 - x) {
+          g.length[r][x] = m.length;
+          for (int mask = 0; mask < 16; ++mask) {
+            const bool blocked = m.di && m.dj && ((mask & (m.di == 1 ? 1 : 2)) || (mask & (m.dj == 1 ? 4 : 8)));
+            g.open_lanes[mask][r][x] = blocked ? 0 : -1;
+          }
+        }
+    }
   const int64_t start = (gi + 1) * stride + gj + 1;
   g.phi[start] = 0.0f;
   const float delta = 0.5f * shortest * t_min;
   const double spread = static_cast<double>(longest) * t_max / delta;
   if (size < (int64_t{1} << 31) && delta > 0.0f && std::isfinite(delta) && spread < kMaxBuckets)
-    moves.size() == 8 ? by_buckets<8>(g, moves.data(), start, delta, static_cast<int64_t>(spread) + 3)
-                      : by_buckets<4>(g, moves.data(), start, delta, static_cast<int64_t>(spread) + 3);
+    by_buckets(g, start, delta, static_cast<int64_t>(spread) + 3);
   else
-    moves.size() == 8 ? by_heap<8>(g, moves.data(), start) : by_heap<4>(g, moves.data(), start);
+    by_heap(g, start);
+  for (float& v : g.phi) v = std::fabs(v);  // settled: -phi -> phi; the ring: -inf -> inf
   for (int64_t i = 0; i < h; ++i)
     std::copy_n(g.phi.begin() + (i + 1) * stride + 1, w, phi + i * w);
 }
