@@ -116,6 +116,17 @@ def test_the_target_processor_is_a_setting_and_part_of_the_build_key(monkeypatch
     assert native.flags()[-1] == "-march=x86-64-v3" and "-fno-trapping-math" in native.flags()
 
 
+def test_the_scheduling_flags_go_to_gcc_only():
+    """clang has no -fsched-pressure: a clang build must not get it (it would fail and fall back)."""
+    gcc = "c++ (Debian 12.2.0-14+deb12u1) 12.2.0\nCopyright (C) 2022 Free Software Foundation, Inc.\n"
+    clang = "Debian clang version 14.0.6\nTarget: x86_64-pc-linux-gnu\n"
+    assert set(native.GCC_FLAGS) <= set(native.flags(gcc))
+    assert not set(native.GCC_FLAGS) & set(native.flags(clang))
+    assert native.flags(clang)[-1] == native.flags(gcc)[-1]
+    other = native.SOURCE.with_name("other.cc")  # the planners' Dijkstra, say: not for it
+    assert not set(native.GCC_FLAGS) & set(native.flags(gcc, other))
+
+
 def _has_avx2() -> bool:
     try:
         with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:

@@ -50,6 +50,16 @@ FLAGS = (
     "-fno-trapping-math",
     "-ffp-contract=off",
 )
+# GCC only (clang has no -fsched-pressure): instruction scheduling before register allocation,
+# pressure-aware. The social force's pair loop runs one chain of dependent operations per vector
+# of worlds (2 square roots, 3 divisions, 2 exponentials in a row), too long for the processor's
+# out-of-order window to overlap two of them; social_force.cc writes the block's vectors as
+# independent chains in one loop body, and this pass interleaves them. On one core (2026-11-27,
+# AMD EPYC, 1024 worlds of 51 agents, ns per pair): AVX2 build 6.0 -> 3.1, AVX-512 build
+# 3.5 -> 2.3; the chains without the pass, or the pass without the chains, gained nothing. The
+# float operations are the same, so the results are the same bits. Only for the social force:
+# the planners' Dijkstra (no such chains) measured 0-15 % slower with it.
+GCC_FLAGS = ("-fschedule-insns", "-fsched-pressure")
 
 
 def march() -> str:
@@ -62,9 +72,12 @@ def march() -> str:
     return os.environ.get("SOCIALNAV_NATIVE_MARCH", "").strip() or "native"
 
 
-def flags() -> tuple[str, ...]:
-    """The compiler's flags: :data:`FLAGS` and ``-march`` (:func:`march`)."""
-    return (*FLAGS, f"-march={march()}")
+def flags(compiler_version: str = "", source: pathlib.Path = SOURCE) -> tuple[str, ...]:
+    """The compiler's flags for ``source``: :data:`FLAGS`, :data:`GCC_FLAGS` for the social force
+    where ``compiler_version`` (the compiler's ``--version`` text) is GCC's, and ``-march``
+    (:func:`march`)."""
+    gcc = "Free Software Foundation" in compiler_version and source == SOURCE
+    return (*FLAGS, *(GCC_FLAGS if gcc else ()), f"-march={march()}")
 
 
 def cpu_isa() -> str:
@@ -125,7 +138,7 @@ def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
     key = hashlib.sha256(
         b"\0".join(
             s.encode() if isinstance(s, str) else s
-            for s in (source.read_bytes(), " ".join(flags()), version, header.read_bytes(), _cpu_flags())
+            for s in (source.read_bytes(), " ".join(flags(version, source)), version, header.read_bytes(), _cpu_flags())
         )
     ).hexdigest()[:16]
     folder = _cache_dir()
@@ -137,7 +150,7 @@ def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
     os.close(fd)
     try:
         done = subprocess.run(
-            [*compiler, *flags(), f"-I{include}", str(source), "-o", tmp], capture_output=True, text=True
+            [*compiler, *flags(version, source), f"-I{include}", str(source), "-o", tmp], capture_output=True, text=True
         )
         if done.returncode:
             first = next((line for line in done.stderr.splitlines() if "error" in line), done.stderr.strip()[:200])

@@ -113,7 +113,14 @@ inline void moussaid(float dx, float dy, float dvx, float dvy, float lambda, flo
   fy = f_vel * iy + f_ang * ix;
 }
 
-// Force on agent i from agent j (and its reaction) for every lane of the block.
+// Force on agent i from agent j (and its reaction) for every lane of the block. The block's
+// vectors (kChains of kNarrowLanes worlds) are computed in one loop body as independent chains:
+// one pair's arithmetic is a long chain of dependent operations (2 square roots, 3 divisions, 2
+// exponentials), one vector's chain at a time left the processor waiting on their latency, and
+// GCC's pressure-aware scheduling before register allocation (-fschedule-insns -fsched-pressure,
+// native/__init__.py) interleaves the chains. Every lane runs the same operations as before, in
+// the same order, so the bits are the same (6.0 -> 3.1 ns per pair with AVX2, 3.5 -> 2.3 with
+// AVX-512, one core).
 template <int kLanes>
 inline void pair(const Params<kLanes>& p, Block<kLanes>& b, int64_t i, int64_t j) {
   const float* __restrict xi = &b.x[i * kLanes];
@@ -130,15 +137,24 @@ inline void pair(const Params<kLanes>& p, Block<kLanes>& b, int64_t i, int64_t j
   float* __restrict ayi = &b.ay[i * kLanes];
   float* __restrict axj = &b.ax[j * kLanes];
   float* __restrict ayj = &b.ay[j * kLanes];
+  constexpr int kChains = kLanes / kNarrowLanes, kStep = kNarrowLanes;
 #pragma omp simd
-  for (int t = 0; t < kLanes; ++t) {
-    float fx, fy;
-    moussaid(xj[t] - xi[t], yj[t] - yi[t], vxi[t] - vxj[t], vyi[t] - vyj[t], p.lambda[t], p.gamma[t],
-             p.inv_gamma[t], p.n_prime[t], p.n[t], fx, fy);
-    axi[t] += wj[t] * fx;
-    ayi[t] += wj[t] * fy;
-    axj[t] -= wi[t] * fx;
-    ayj[t] -= wi[t] * fy;
+  for (int t = 0; t < kStep; ++t) {
+    float fx[kChains], fy[kChains];
+#pragma GCC unroll 8
+    for (int c = 0; c < kChains; ++c) {
+      const int u = t + c * kStep;
+      moussaid(xj[u] - xi[u], yj[u] - yi[u], vxi[u] - vxj[u], vyi[u] - vyj[u], p.lambda[u], p.gamma[u],
+               p.inv_gamma[u], p.n_prime[u], p.n[u], fx[c], fy[c]);
+    }
+#pragma GCC unroll 8
+    for (int c = 0; c < kChains; ++c) {
+      const int u = t + c * kStep;
+      axi[u] += wj[u] * fx[c];
+      ayi[u] += wj[u] * fy[c];
+      axj[u] -= wi[u] * fx[c];
+      ayj[u] -= wi[u] * fy[c];
+    }
   }
 }
 
