@@ -65,9 +65,8 @@ struct Padded {
   std::vector<int64_t> offset;  // of each move (the path's descent)
   V4f length[3];                // metres of the move a -> b, a in b's row above, own, below (lanes: columns j-1..j+2)
   V4i open_lanes[16][3];        // by the walls N, S, W, E of b: which of those moves are allowed (-1) or not (0)
-  std::vector<Bucket> ring;      // the bucket queue, kept allocated between grids
+  std::vector<Bucket> ring;     // the bucket queue, kept allocated between grids
 };
-
 
 inline V4f load4(const float* p) {
   V4f v;

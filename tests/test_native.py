@@ -117,7 +117,8 @@ def test_the_target_processor_is_a_setting_and_part_of_the_build_key(monkeypatch
 
 
 def test_the_scheduling_flags_go_to_gcc_only():
-    """clang has no -fsched-pressure: a clang build must not get it (it would fail and fall back)."""
+    """GCC's scheduling flags go to GCC alone (another compiler may reject them, and a failed build
+    falls back to the JAX force), and to the social force alone (the Dijkstra is slower with them)."""
     gcc = "c++ (Debian 12.2.0-14+deb12u1) 12.2.0\nCopyright (C) 2022 Free Software Foundation, Inc.\n"
     clang = "Debian clang version 14.0.6\nTarget: x86_64-pc-linux-gnu\n"
     assert set(native.GCC_FLAGS) <= set(native.flags(gcc))

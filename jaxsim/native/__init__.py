@@ -50,7 +50,8 @@ FLAGS = (
     "-fno-trapping-math",
     "-ffp-contract=off",
 )
-# GCC only (clang has no -fsched-pressure): instruction scheduling before register allocation,
+# GCC's own flags, given to GCC only (another compiler may reject them, and a failed build falls
+# back to the JAX force): instruction scheduling before register allocation,
 # pressure-aware. The social force's pair loop runs one chain of dependent operations per vector
 # of worlds (2 square roots, 3 divisions, 2 exponentials in a row), too long for the processor's
 # out-of-order window to overlap two of them; social_force.cc writes the block's vectors as
