@@ -73,8 +73,19 @@ def bench_generation():
     )
 
 
+def _step_flops(step, *args) -> float | None:
+    """XLA's count of floating-point operations in one compiled training step (None if the
+    backend gives none)."""
+    try:
+        analysis = step.lower(*args).compile().cost_analysis()
+    except Exception:  # a figure for the record, never a reason to stop
+        return None
+    analysis = analysis[0] if isinstance(analysis, list) else analysis
+    return (float(analysis.get("flops", 0.0)) or None) if analysis else None
+
+
 def bench_throughput(widths, batch_sizes, steps: int = 15):
-    print("training throughput (samples/s, compile excluded):")
+    print("training throughput (samples/s, compile excluded; XLA's flop count of a step and the rate it ran at):")
     data = dataset.generate(0, dataset.scaled_counts(0.05))
     for features in widths:
         for bs in batch_sizes:
@@ -100,9 +111,17 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
             loss.block_until_ready()
             rate = steps * bs / (time.perf_counter() - t0)
             params = unet.parameter_count(make_model(config))
+            flops = _step_flops(step, state, *batch(0))
+            if flops is not None and data_sharding is not None:
+                flops *= jax.device_count()  # XLA counts one device's share of a sharded step
+            rate_flops = (
+                ""
+                if flops is None
+                else f", {flops / bs / 1e6:.0f} MFLOP per sample, {flops / bs * rate / 1e9:.1f} GFLOP/s"
+            )
             print(
                 f"  features {features!s:<22} {params:>10,} params  batch {bs:>4}: {rate:7.1f} samples/s "
-                f"(compile {compile_s:.1f} s)"
+                f"(compile {compile_s:.1f} s{rate_flops})"
             )
 
 
