@@ -678,3 +678,30 @@ def test_a_frozen_graded_network_keeps_the_sources_costs_while_the_forbidden_bra
     read = TrainConfig.from_json(before_fields)
     assert (read.forbidden_features, read.freeze_graded) == ((), False)
     assert TrainConfig.from_json(config.to_json()) == config
+
+
+def test_the_decoders_upsampling_is_flaxs_transposed_convolution_with_the_same_parameters():
+    """UpConv computes nnx.ConvTranspose(in, out, (2, 2), strides=(2, 2)) as one product: the same
+    parameters (names, shapes, initial values: checkpoints load unchanged), the same outputs and
+    gradients to float rounding, a bias-free layer included."""
+    x = jax.random.normal(jax.random.PRNGKey(1), (3, 5, 7, 12))
+    for use_bias in (True, False):
+        ours = unet.UpConv(12, 8, use_bias=use_bias, rngs=nnx.Rngs(0))
+        flax_ = nnx.ConvTranspose(12, 8, (2, 2), strides=(2, 2), use_bias=use_bias, rngs=nnx.Rngs(0))
+        ours_state, flax_state = nnx.state(ours), nnx.state(flax_)
+        assert jax.tree.structure(ours_state) == jax.tree.structure(flax_state)
+        assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(ours_state), jax.tree.leaves(flax_state)))
+        y = ours(x)
+        assert y.shape == (3, 10, 14, 8)
+        np.testing.assert_allclose(y, flax_(x), atol=2e-6)
+
+        def loss(model, x):
+            return jnp.sum(jnp.sin(model(x)))
+
+        grads_ours = nnx.grad(loss, argnums=(0, 1))(ours, x)
+        grads_flax = nnx.grad(loss, argnums=(0, 1))(flax_, x)
+        for a, b in zip(jax.tree.leaves(grads_ours), jax.tree.leaves(grads_flax)):
+            np.testing.assert_allclose(a, b, atol=2e-5)
+    # The U-Net's decoder uses it.
+    model = unet.UNet((4, 4, 8, 8), rngs=nnx.Rngs(0))
+    assert all(isinstance(layer, unet.UpConv) for layer in model.up)
