@@ -16,13 +16,9 @@ from __future__ import annotations
 
 import argparse
 import collections
-import gzip
-import json
 import os
 import pathlib
-import re
 import sys
-import tempfile
 import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
@@ -36,6 +32,7 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.xla_trace import kernel_times  # noqa: E402
 from socialnav.models import dataset, steps  # noqa: E402
 from socialnav.models.config import TrainConfig  # noqa: E402
 
@@ -80,26 +77,15 @@ def main() -> None:
         state, loss = train_step(state, *batch(i))
     jax.block_until_ready(loss)
     untraced_ms = (time.perf_counter() - t0) / args.steps * 1e3
-    with tempfile.TemporaryDirectory() as folder:
-        jax.profiler.start_trace(folder, create_perfetto_trace=True)
+
+    def run():
+        nonlocal state
         for i in range(5, 5 + args.steps):
             state, loss = train_step(state, *batch(i))
         jax.block_until_ready(loss)
-        jax.profiler.stop_trace()
-        path = next(os.path.join(d, f) for d, _, fs in os.walk(folder) for f in fs if f.endswith(".trace.json.gz"))
-        with gzip.open(path) as f:
-            events = json.load(f)
-    events = events["traceEvents"] if isinstance(events, dict) else events
-    total, calls = collections.Counter(), collections.Counter()
-    for e in events:
-        name = e.get("name", "")
-        if e.get("ph") != "X" or name.startswith(("ThunkExecutor", "$", "end:")) or "Execute" in name:
-            continue
-        if "Pjit" in name or "while" in name.lower() or name.startswith("jit_"):
-            continue
-        key = re.sub(r"\.\d+$", "", name)
-        total[key] += e.get("dur", 0) / args.steps / 1e3  # ms per step
-        calls[key] += 1
+
+    seconds, calls = kernel_times(run, per=args.steps)
+    total = collections.Counter({name: s * 1e3 for name, s in seconds.items()})  # ms per step
     step_ms = sum(total.values())
     print(
         f"default model, batch {args.batch}: {untraced_ms:.1f} ms per step untraced; "
@@ -112,7 +98,7 @@ def main() -> None:
         print(f"  {kind:<30} {ms:7.1f} ms  {ms / step_ms:5.1%}")
     print(f"the {args.top} costliest kernels (ms per step, share, calls per step):")
     for name, ms in total.most_common(args.top):
-        print(f"{ms:8.2f} ms  {ms / step_ms:5.1%}  x{calls[name] / args.steps:4.1f}  {name}")
+        print(f"{ms:8.2f} ms  {ms / step_ms:5.1%}  x{calls[name]:4.1f}  {name}")
 
 
 if __name__ == "__main__":

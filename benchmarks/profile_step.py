@@ -17,12 +17,8 @@ from __future__ import annotations
 
 import argparse
 import collections
-import gzip
-import json
 import os
-import re
 import sys
-import tempfile
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
@@ -36,6 +32,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.xla_trace import kernel_times  # noqa: E402
 from socialnav.jaxsim import robot as robot_lib  # noqa: E402
 from socialnav.jaxsim import rollout, social_force  # noqa: E402
 from socialnav.jaxsim import workers as workers_lib  # noqa: E402
@@ -124,30 +121,19 @@ def kernels(scenario, top: int) -> None:
     for _ in range(20):
         states, _ = fn(p, world, controller, states, keys)
     jax.block_until_ready(states)
-    with tempfile.TemporaryDirectory() as folder:
-        jax.profiler.start_trace(folder, create_perfetto_trace=True)
+
+    def run():
+        nonlocal states
         for _ in range(10):
             states, _ = fn(p, world, controller, states, keys)
         jax.block_until_ready(states)
-        jax.profiler.stop_trace()
-        path = next(os.path.join(d, f) for d, _, fs in os.walk(folder) for f in fs if f.endswith(".trace.json.gz"))
-        with gzip.open(path) as f:
-            events = json.load(f)
-    events = events["traceEvents"] if isinstance(events, dict) else events
-    total, calls = collections.Counter(), collections.Counter()
-    for e in events:
-        name = e.get("name", "")
-        if e.get("ph") != "X" or name.startswith(("ThunkExecutor", "$", "end:")) or "Execute" in name:
-            continue
-        if "Pjit" in name or "while" in name.lower():
-            continue
-        key = re.sub(r"\.\d+$", "", name)
-        total[key] += e.get("dur", 0) / 100  # per step (100 steps traced)
-        calls[key] += 1
+
+    seconds, calls = kernel_times(run, per=100)  # per step (10 calls of 10 steps)
+    total = collections.Counter({name: s * 1e6 for name, s in seconds.items()})  # us
     step_us = sum(total.values())
     print(f"\nkernels of one step, 64 worlds on one device (sum {step_us:.0f} us per step)")
     for name, us in total.most_common(top):
-        print(f"{us:8.1f} us  {us / step_us:5.1%}  x{calls[name] / 100:5.1f}  {name}")
+        print(f"{us:8.1f} us  {us / step_us:5.1%}  x{calls[name]:5.1f}  {name}")
 
 
 def main() -> int:

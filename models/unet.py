@@ -78,8 +78,9 @@ class UpConv(nnx.ConvTranspose):
     (2, 2), strides=(2, 2))``, so every checkpoint loads as before, and its outputs to float
     rounding (tested). Why: XLA's CPU backend ran the transposed convolution as a convolution of
     the zero-dilated input, 18 % of a training step (``benchmarks/profile_gscl_step.py``); as a
-    product the default model's step is 16-33 % faster (139-153 -> 178-185 samples/s at batch 32
-    on 2 cores, 2026-11-27)."""
+    product the default model's step is faster on both instruction sets (batch 32, 2 cores,
+    2026-11-27, interleaved rounds: AVX-512 134-142 -> 176-185 samples/s; AVX2 emulated 153-154 ->
+    175-176)."""
 
     def __init__(self, in_features: int, out_features: int, *, use_bias: bool = True, rngs: nnx.Rngs):
         super().__init__(in_features, out_features, (2, 2), strides=(2, 2), use_bias=use_bias, rngs=rngs)
