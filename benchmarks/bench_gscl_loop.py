@@ -25,7 +25,6 @@ request_host_devices()
 request_wide_vectors()
 
 import jax  # noqa: E402
-import numpy as np  # noqa: E402
 from flax import nnx  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
@@ -56,9 +55,7 @@ def main(argv=None):
     data = train.epoch_data(config, 0)
 
     def batch(b):
-        sl = slice(b * bs, (b + 1) * bs)
-        out = (data["inputs"][sl], data["targets"][sl], data["family"][sl].astype(np.int32), data["contrast"][sl])
-        return out if data_sharding is None else jax.device_put(out, data_sharding)
+        return train.epoch_batch(data, b, bs, data_sharding)
 
     state, loss = train_step(state, *batch(0), None)
     jax.block_until_ready(loss)

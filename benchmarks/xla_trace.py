@@ -32,9 +32,8 @@ def kernel_times(run: Callable[[], object], per: int) -> tuple[collections.Count
     seconds, calls = collections.Counter(), collections.Counter()
     for e in events:
         name = e.get("name", "")
-        if e.get("ph") != "X" or name.startswith(_SKIP_PREFIXES) or "Execute" in name:
-            continue
-        if "Pjit" in name or "while" in name.lower():
+        skipped = name.startswith(_SKIP_PREFIXES) or "Execute" in name or "Pjit" in name or "while" in name.lower()
+        if e.get("ph") != "X" or skipped:
             continue
         key = re.sub(r"\.\d+$", "", name)
         seconds[key] += e.get("dur", 0) * 1e-6 / per

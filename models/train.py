@@ -141,11 +141,7 @@ def train(
             t_start = time.perf_counter()  # wall_s counts data generation and training, not evaluation
             data = epoch_data(config, epoch)
             for b in range(step % spe, spe):
-                sl = slice(b * config.batch_size, (b + 1) * config.batch_size)
-                batch = (data["inputs"][sl], data["targets"][sl], data["family"][sl].astype(np.int32))
-                batch = (*batch, data["contrast"][sl] if "contrast" in data else None)
-                if data_sharding is not None:
-                    batch = jax.device_put(batch, data_sharding)
+                batch = epoch_batch(data, b, config.batch_size, data_sharding)
                 key = demonstration_key(config, step) if objective is not None else None
                 state, loss = train_step(state, *batch, key)
                 step += 1
@@ -185,6 +181,15 @@ def train(
         bar.close()
         manager.close()
     return line
+
+
+def epoch_batch(data: dict, index: int, batch_size: int, data_sharding=None) -> tuple:
+    """Batch ``index`` of an epoch's data (:func:`epoch_data`) as the training step takes it:
+    ``(inputs, targets, family int32, contrast or None)``, put on ``data_sharding`` when given."""
+    sl = slice(index * batch_size, (index + 1) * batch_size)
+    batch = (data["inputs"][sl], data["targets"][sl], data["family"][sl].astype(np.int32))
+    batch = (*batch, data["contrast"][sl] if "contrast" in data else None)
+    return batch if data_sharding is None else jax.device_put(batch, data_sharding)
 
 
 class TrainingDiverged(ValueError):

@@ -78,9 +78,10 @@ class UpConv(nnx.ConvTranspose):
     (2, 2), strides=(2, 2))``, so every checkpoint loads as before, and its outputs to float
     rounding (tested). Why: XLA's CPU backend ran the transposed convolution as a convolution of
     the zero-dilated input, 18 % of a training step (``benchmarks/profile_gscl_step.py``); as a
-    product the default model's step is faster on both instruction sets (batch 32, 2 cores,
-    2026-11-27, interleaved rounds: AVX-512 134-142 -> 176-185 samples/s; AVX2 emulated 153-154 ->
-    175-176)."""
+    product the default model's training loop is faster on both instruction sets
+    (``benchmarks/bench_gscl_loop.py`` against ``--transposed-conv``, batch 32, 2 cores,
+    2026-11-27, interleaved processes: AVX-512 166-175 -> 230-253 samples/s; AVX2 emulated 173-197
+    -> 224-259)."""
 
     def __init__(self, in_features: int, out_features: int, *, use_bias: bool = True, rngs: nnx.Rngs):
         super().__init__(in_features, out_features, (2, 2), strides=(2, 2), use_bias=use_bias, rngs=rngs)
