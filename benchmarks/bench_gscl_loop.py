@@ -4,6 +4,7 @@ over rounds of steps, compilation excluded.
 
     python benchmarks/bench_gscl_loop.py                       # the default model
     python benchmarks/bench_gscl_loop.py --transposed-conv     # the decoder's upsampling as nnx.ConvTranspose
+    python benchmarks/bench_gscl_loop.py --features 12,24,48,96 --batch-size 16   # another width or batch
 
 Run the variants as separate processes, interleaved, and compare them only within one session:
 this machine's speed moves by 10 % or more within an hour. ``bench_gscl.py``'s throughput table
@@ -39,11 +40,21 @@ def main(argv=None):
     parser.add_argument(
         "--transposed-conv", action="store_true", help="the decoder's upsampling as nnx.ConvTranspose (before UpConv)"
     )
+    parser.add_argument(
+        "--features",
+        type=lambda s: tuple(int(f) for f in s.split(",")),
+        default=None,
+        help="U-Net widths, e.g. 12,24,48,96",
+    )
+    parser.add_argument("--batch-size", type=int, default=None, help="samples per step (default: the recipe's)")
     args = parser.parse_args(argv)
     if args.transposed_conv:
         unet.UpConv.__call__ = nnx.ConvTranspose.__call__
     print(machine())
-    config = TrainConfig()
+    config = TrainConfig(
+        **({} if args.features is None else {"features": args.features}),
+        **({} if args.batch_size is None else {"batch_size": args.batch_size}),
+    )
     bs = config.batch_size
     if (args.rounds * args.steps + 1) * bs > sum(config.train_counts.values()):
         parser.error("rounds x steps is more than one epoch's batches")
@@ -69,7 +80,7 @@ def main(argv=None):
         rates.append(args.steps * bs / (time.perf_counter() - t0))
     upsampling = "nnx.ConvTranspose" if args.transposed_conv else "UpConv"
     print(
-        f"default model {config.features}, batch {bs}, {jax.device_count()} device(s), upsampling {upsampling}: "
+        f"model {config.features}, batch {bs}, {jax.device_count()} device(s), upsampling {upsampling}: "
         f"samples/s per round of {args.steps} steps: {', '.join(f'{r:.0f}' for r in rates)} (loss {float(loss):.6f})"
     )
 
