@@ -20,6 +20,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
+from socialnav.argtypes import positive_int, unet_widths
 from socialnav.runtime import request_host_devices, request_wide_vectors
 
 request_host_devices()
@@ -40,13 +41,10 @@ def main(argv=None):
     parser.add_argument(
         "--transposed-conv", action="store_true", help="the decoder's upsampling as nnx.ConvTranspose (before UpConv)"
     )
+    parser.add_argument("--features", type=unet_widths, default=None, help="U-Net widths, e.g. 12,24,48,96")
     parser.add_argument(
-        "--features",
-        type=lambda s: tuple(int(f) for f in s.split(",")),
-        default=None,
-        help="U-Net widths, e.g. 12,24,48,96",
+        "--batch-size", type=positive_int, default=None, help="samples per step (default: the recipe's)"
     )
-    parser.add_argument("--batch-size", type=int, default=None, help="samples per step (default: the recipe's)")
     args = parser.parse_args(argv)
     if args.transposed_conv:
         unet.UpConv.__call__ = nnx.ConvTranspose.__call__

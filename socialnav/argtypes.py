@@ -57,6 +57,17 @@ def comma_ints(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
 
 
+def unet_widths(text: str) -> tuple[int, ...]:
+    """A U-Net's four widths (3 encoder blocks, bottleneck), e.g. ``16,32,64,128``."""
+    try:
+        values = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 4 comma-separated widths, got {text!r}") from None
+    if len(values) != 4 or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"expected 4 positive comma-separated widths, got {text!r}")
+    return values
+
+
 def comma_names(text: str) -> list[str]:
     """Comma-separated names, e.g. ``S1,S6,S11``."""
     names = [v.strip() for v in text.split(",")]

@@ -24,6 +24,7 @@ from socialnav.argtypes import (
     positive_float,
     positive_int,
     seed_int,
+    unet_widths,
 )
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.common import runfolder
@@ -31,16 +32,6 @@ from socialnav.common.atomic import write_text_atomic
 from socialnav.common.memory import available_bytes
 from socialnav.common.runfolder import RunFolderError
 from socialnav.locking import locks_folder
-
-
-def _features(text: str) -> tuple[int, ...]:
-    try:
-        values = tuple(int(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 4 comma-separated widths, got {text!r}") from None
-    if len(values) != 4 or min(values) < 1:
-        raise argparse.ArgumentTypeError(f"expected 4 positive comma-separated widths, got {text!r}")
-    return values
 
 
 def _count(text: str) -> tuple[str, int]:
@@ -127,7 +118,7 @@ def add_parser(top) -> None:
         action="store_true",
         help="the paper's recipe: 32/64/128/256, batch 32, Adam 1e-3 constant, 20 epochs on one fixed split",
     )
-    tr.add_argument("--features", type=_features, default=None, help="U-Net widths, e.g. 16,32,64,128")
+    tr.add_argument("--features", type=unet_widths, default=None, help="U-Net widths, e.g. 16,32,64,128")
     tr.add_argument("--epochs", type=positive_int, default=None)
     tr.add_argument("--batch-size", type=positive_int, default=None)
     tr.add_argument("--learning-rate", type=positive_float, default=None, help="Adam's peak learning rate")
@@ -202,7 +193,7 @@ def add_parser(top) -> None:
     )
     tr.add_argument(
         "--forbidden-features",
-        type=_features,
+        type=unet_widths,
         default=None,
         help="the forbidden head as a separate U-Net of these widths, e.g. 8,16,32,64 (default: a second "
         "output channel of the main network)",
