@@ -36,8 +36,8 @@ from socialnav.models.config import TrainConfig  # noqa: E402
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--steps", type=int, default=100, help="steps per round")
+    parser.add_argument("--rounds", type=positive_int, default=3)
+    parser.add_argument("--steps", type=positive_int, default=100, help="steps per round")
     parser.add_argument(
         "--transposed-conv", action="store_true", help="the decoder's upsampling as nnx.ConvTranspose (before UpConv)"
     )
