@@ -24,6 +24,7 @@ ADDED_LATER = {
     "objective": "maps",
     "temperature": 2.0,
     "paths_per_map": 4,
+    "demonstrations": "paths",
     "targets": "graded",
     "forbidden_weight": 0.0,
     "init_from": "",
@@ -31,6 +32,12 @@ ADDED_LATER = {
     "freeze_graded": False,
 }
 OBJECTIVES = ("maps", "paths")
+# What the "paths" objective demonstrates on each map: "paths", ``paths_per_map`` exact plans to
+# the goal; "cells", the exact planner's move out of every free cell, each once
+# (planners.irl.policy_demonstration). scripts/irl_rule_oracle.py shows why the second exists: a
+# free grid fitted to 4 exact plans on each rule-suite map keeps almost none of the rules, one
+# fitted to every cell's move most of them.
+DEMONSTRATIONS = ("paths", "cells")
 # The generator's targets: "graded_forbidden" (today's: graded shapes up to
 # models.social_costs.GRADED_TOP, the queue's U at FORBIDDEN) or "graded" (runs saved before:
 # every shape graded, peak 1; kept only to read those runs, the generator no longer draws them).
@@ -101,6 +108,9 @@ class TrainConfig:
       temperature: the soft planner's temperature of the "paths" objective
         (:data:`PATH_TEMPERATURE`, below :data:`MAX_PATH_TEMPERATURE`).
       paths_per_map: demonstrations planned on each map by the "paths" objective.
+      demonstrations: what the "paths" objective demonstrates (:data:`DEMONSTRATIONS`): "paths"
+        (the default), ``paths_per_map`` exact plans per map; "cells", the exact planner's move out
+        of every free cell (``paths_per_map`` is then unused).
       targets: which targets the run learnt (:data:`TARGETS`); see :attr:`reads_forbidden`.
       init_from: a model folder (an exported model, e.g. the shipped one, or a training run's
         folder) whose weights start this run (:mod:`models.warm_start`: fine-tuning; a source
@@ -143,6 +153,7 @@ class TrainConfig:
     objective: str = "maps"
     temperature: float = PATH_TEMPERATURE
     paths_per_map: int = 4
+    demonstrations: str = "paths"
     targets: str = "graded_forbidden"
     init_from: str = ""
     forbidden_features: tuple[int, ...] = ()
@@ -184,6 +195,8 @@ class TrainConfig:
             raise ValueError(f"objective must be one of {OBJECTIVES}, got {self.objective!r}")
         if not 0 < self.temperature < MAX_PATH_TEMPERATURE:
             raise ValueError(f"temperature must be in (0, {MAX_PATH_TEMPERATURE:.2f}), got {self.temperature}")
+        if self.demonstrations not in DEMONSTRATIONS:
+            raise ValueError(f"demonstrations must be one of {DEMONSTRATIONS}, got {self.demonstrations!r}")
         if self.paths_per_map < 1:
             raise ValueError(f"paths_per_map must be >= 1, got {self.paths_per_map}")
         if self.composites < 0:

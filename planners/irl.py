@@ -147,6 +147,40 @@ def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4) -> De
     return Demonstrations(moves, start_counts, goal, jnp.sum(ok).astype(jnp.float32))
 
 
+def policy_demonstration(key, maps, target_costs) -> Demonstrations:
+    """The exact planner's move out of **every** free cell that reaches the goal, each counted once:
+    the demonstrations of :func:`planned_demonstration` from every start, each step once.
+
+    The goal is chosen as there (the map's goal pixel, or a random free cell). The negative
+    log-likelihood of one step ``s -> s'`` is ``(w(s, s') + phi(s') - phi(s)) / tau``, so the
+    steps go into :class:`Demonstrations` as move counts and as ``starts`` of +1 at ``s`` and -1 at
+    ``s'`` (the sum telescopes as a path's does); ``n_paths`` counts the steps, so
+    :func:`path_nll` is the mean NLL per step. A path constrains the costs only along itself and
+    where the soft policy might leave it; every cell's move constrains them where no plan goes,
+    e.g. how a robot on the wrong side of a hallway gets back to the right one. Jit and vmap it.
+    """
+    maps = jnp.asarray(maps)
+    free = (maps != grid.WALL) & (maps != grid.PERSON) & (maps != grid.HEADING)
+    goal_pixel, has_goal = _goal_cell(maps)
+    goal = jnp.where(has_goal, goal_pixel, _random_cell(key, free))
+    exact = traversal_per_m(maps, target_costs, jnp.inf)
+    phi = grid_planner.potential(exact, goal, grid.CELL_M, CONNECTIVITY)
+    offsets = grid_planner.moves(CONNECTIVITY)
+    weights = grid_planner.move_costs(exact, grid.CELL_M, CONNECTIVITY)
+    padded = jnp.pad(phi, 1, constant_values=jnp.inf)
+    n = grid.GRID
+    value = jnp.stack([weights[m] + padded[1 + m[0] : 1 + m[0] + n, 1 + m[1] : 1 + m[1] + n] for m in offsets])
+    k = jnp.argmin(value, axis=0)  # (H, W) the exact planner's move (its first on a tie, as descend takes)
+    rows, cols = jnp.arange(n)[:, None], jnp.arange(n)[None, :]
+    ok = free & jnp.isfinite(phi) & jnp.isfinite(jnp.min(value, axis=0)) & ~((rows == goal[0]) & (cols == goal[1]))
+    moves = (jax.nn.one_hot(k, K, axis=0) * ok).astype(jnp.float32)
+    step = jnp.asarray(offsets, jnp.int32)[k]  # (H, W, 2)
+    ni, nj = jnp.clip(rows + step[..., 0], 0, n - 1), jnp.clip(cols + step[..., 1], 0, n - 1)
+    okf = ok.astype(jnp.float32)
+    starts = okf - jnp.zeros((n, n), jnp.float32).at[ni, nj].add(okf)
+    return Demonstrations(moves, starts, goal, jnp.sum(okf))
+
+
 def planned_demonstrations(key, maps, target_costs, paths_per_map: int = 4) -> Demonstrations:
     """:func:`planned_demonstration` of a batch: maps and targets (B, H, W), one key per map."""
     keys = jax.random.split(key, len(maps))
@@ -179,14 +213,18 @@ class PathObjective:
     temperature: float = TEMPERATURE
     paths_per_map: int = 4
     iterations: int = ITERATIONS
+    demonstrations: str = "paths"  # or "cells" (models.config.DEMONSTRATIONS)
 
     @classmethod
     def of(cls, config) -> PathObjective:
         """The objective of a :class:`models.config.TrainConfig`."""
-        return cls(float(config.temperature), int(config.paths_per_map))
+        return cls(float(config.temperature), int(config.paths_per_map), ITERATIONS, config.demonstrations)
 
     def prepare(self, key, maps, target_costs) -> Demonstrations:
-        """(B,) demonstrations planned on a batch's target maps (B, H, W)."""
+        """(B,) demonstrations planned on a batch's target maps (B, H, W): :func:`planned_demonstrations`,
+        or with ``demonstrations == "cells"`` :func:`policy_demonstration` of each map."""
+        if self.demonstrations == "cells":
+            return jax.vmap(policy_demonstration)(jax.random.split(key, len(maps)), maps, target_costs)
         return planned_demonstrations(key, maps, target_costs, self.paths_per_map)
 
     def loss(self, costs, maps, demos: Demonstrations):

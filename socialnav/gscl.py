@@ -63,6 +63,7 @@ _TRAIN_OPTIONS = (
     "objective",
     "temperature",
     "paths_per_map",
+    "demonstrations",
     "init_from",
     "forbidden_features",
     "freeze_graded",
@@ -183,6 +184,13 @@ def add_parser(top) -> None:
         type=positive_int,
         default=None,
         help="--objective paths: demonstrations planned on each map (default 4)",
+    )
+    tr.add_argument(
+        "--demonstrations",
+        choices=("paths", "cells"),
+        default=None,
+        help="--objective paths: paths (the default), --paths-per-map exact plans to each map's goal; cells, the "
+        "exact planner's move out of every free cell, each once (docs/irl.md)",
     )
     tr.add_argument(
         "--init-from",

@@ -163,6 +163,52 @@ def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
     np.testing.assert_allclose(balance, 0, atol=1e-6)
 
 
+def test_every_cell_demonstration_is_the_exact_plans_each_step_once():
+    rng = np.random.default_rng(6)
+    maps = np.zeros((grid.GRID, grid.GRID), np.uint8)
+    maps[10, 5:30] = grid.WALL
+    maps[30, 8] = grid.GOAL
+    costs = rng.uniform(0, 1, maps.shape).astype(np.float32)
+    demo = irl.policy_demonstration(jax.random.key(0), jnp.asarray(maps), jnp.asarray(costs))
+    moves, starts = np.asarray(demo.moves), np.asarray(demo.starts)
+    free = maps == grid.FREE
+    # One move out of every free cell but the goal, none out of a wall, and as many steps.
+    np.testing.assert_array_equal(moves.sum(0), free.astype(np.float32))
+    assert float(demo.n_paths) == free.sum() and tuple(np.asarray(demo.goal_ij)) == (30, 8)
+    # Each step is +1 where it leaves and -1 where it lands: the starts sum to 0 and the moves'
+    # cost equals the potential they descend (each step is the exact plan's step).
+    assert float(starts.sum()) == pytest.approx(0.0, abs=1e-6)
+    t = np.asarray(irl.traversal_per_m(maps, costs))
+    t = np.where(t >= smooth_planner.BLOCKED, np.inf, t)
+    phi = np.asarray(grid_planner.potential(t, (30, 8), grid.CELL_M))
+    weights = np.stack(list(grid_planner.move_costs(t, grid.CELL_M).values()))
+    total = float(np.sum(moves * np.where(moves > 0, weights, 0.0)))
+    assert total == pytest.approx(float(np.sum(starts * np.where(np.isfinite(phi), phi, 0.0))), rel=1e-5)
+    # The paths planned to the same goal take the same move at every cell they cross.
+    paths = irl.planned_demonstration(jax.random.key(1), jnp.asarray(maps), jnp.asarray(costs), paths_per_map=4)
+    crossed = np.asarray(paths.moves) > 0
+    assert crossed.sum() > 20 and np.all(moves[crossed] == 1)
+    # Its likelihood is the mean of the steps' one-step likelihoods under the soft policy.
+    tau = 2.0
+    soft_w = smooth_planner.soft_weights(irl.traversal_per_m(maps, costs), grid.CELL_M)
+    soft = np.asarray(smooth_planner.soft_potential_implicit(soft_w, demo.goal_ij, tau, irl.ITERATIONS, irl.CEILING))
+    padded = np.pad(soft, 1, constant_values=np.inf)
+    steps = [
+        (float(soft_w[k, i, j]) + padded[1 + i + di, 1 + j + dj] - soft[i, j]) / tau
+        for k, (di, dj) in enumerate(grid_planner.moves(8))
+        for i, j in zip(*np.nonzero(moves[k]), strict=True)
+    ]
+    nll = float(irl.path_nll(jnp.asarray(costs), jnp.asarray(maps), demo, tau))
+    assert nll == pytest.approx(np.mean(steps), rel=2e-3) and nll > 0  # float32 sums of potentials
+    # The "cells" objective prepares the same demonstrations for each map of a batch.
+    objective = irl.PathObjective(tau, demonstrations="cells")
+    batch = objective.prepare(jax.random.key(2), jnp.stack([maps, maps]), jnp.stack([costs, costs]))
+    np.testing.assert_array_equal(np.asarray(batch.moves[1]), moves)
+    np.testing.assert_allclose(
+        np.asarray(objective.loss(jnp.stack([costs, costs]), jnp.stack([maps, maps]), batch)), nll, rtol=1e-5
+    )
+
+
 @pytest.mark.slow
 def test_a_known_cost_map_is_recovered_from_its_exact_plans():
     """Known answer: learn a free cost grid from exact plans on a known one; held-out start and
@@ -273,8 +319,13 @@ def test_the_command_line_refuses_bad_path_settings_in_one_line(tmp_path):
         (["--temperature", "12"], "temperature must be in"),
         (["--objective", "demos"], "invalid choice"),
         (["--paths-per-map", "0"], "positive"),
+        (["--demonstrations", "everywhere"], "invalid choice"),
     ):
         with pytest.raises(SystemExit) as err:
             cli.main(["gscl", "train", "--out", str(tmp_path / "r"), "--objective", "paths", *extra])
         assert message in str(err.value) or err.value.code == 2
     assert not (tmp_path / "r" / "checkpoints").exists()
+    from socialnav.models.config import TrainConfig
+
+    with pytest.raises(ValueError, match="demonstrations must be one of"):
+        TrainConfig(objective="paths", demonstrations="everywhere")
