@@ -719,7 +719,15 @@ def evaluate(predict, cases, batch: int = 256) -> dict:
     pad = -len(flat) % batch  # every call the same shape: one compilation
     flat = np.concatenate([flat, np.zeros((pad, grid.GRID, grid.GRID), np.uint8)])
     out = np.concatenate([np.asarray(predict(jnp.asarray(flat[i : i + batch]))) for i in range(0, len(flat), batch)])
-    costs = out[: len(flat) - pad].reshape(images.shape).astype(np.float64)
+    return score(out[: len(flat) - pad].reshape(images.shape), cases)
+
+
+def score(costs, cases) -> dict:
+    """:func:`evaluate`'s report of given cost maps: ``costs`` (N, 2, 40, 40), the two maps of each
+    of the N cases (e.g. maps fitted to each case by another route than a network)."""
+    costs = np.asarray(costs, np.float64)
+    if costs.shape != (len(cases), 2, grid.GRID, grid.GRID):
+        raise ValueError(f"costs: expected shape {(len(cases), 2, grid.GRID, grid.GRID)}, got {costs.shape}")
     expected = np.stack([c.expected for c in cases]).astype(np.float64)
     region_a, region_b = np.stack([c.region_a for c in cases]), np.stack([c.region_b for c in cases])
     model, want = contrasts(costs, region_a, region_b), contrasts(expected, region_a, region_b)

@@ -108,6 +108,12 @@ def test_the_suites_expected_maps_pass_and_rule_blind_maps_fail(cases):
         lo, hi = v["pass_share_ci95"]
         assert lo <= v["pass_share"] <= hi and hi - lo < 1.0
     assert "95 % interval" in rules.table(nothing)
+    # score() is evaluate() on given maps: the expected maps themselves pass every case, and a
+    # stack of the wrong shape is refused.
+    direct = rules.score(np.stack([c.expected for c in cases]), cases)
+    assert direct["passed"].all() and direct["mse"] == pytest.approx(0.0, abs=1e-10)
+    with pytest.raises(ValueError, match="expected shape"):
+        rules.score(np.zeros((len(cases), 40, 40), np.float32), cases)
 
 
 def test_the_blind_corner_beside_a_queue_is_scored_apart_from_the_queues_u():

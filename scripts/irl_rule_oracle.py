@@ -1,0 +1,153 @@
+"""What maximum-entropy IRL can learn of GSCL's rules at best: a free cost grid fitted to each rule-suite map.
+
+    python scripts/irl_rule_oracle.py                                  # tau 2 4 8 x 4 paths / every cell
+    python scripts/irl_rule_oracle.py --temperature 8 --demos cells --scenes 20
+    python scripts/irl_rule_oracle.py --crossing --scenes 20          # do the exact plans cross the queue's U?
+
+Issue 36 trains the U-Net from exact plans on the generator's maps and finds the held-out rule
+suite (``socialnav gscl rules``) far below the maps-trained model. Is that the network, the
+training, or the likelihood itself? This script takes the network out: for each map of the suite's
+cases (``--scenes`` scenes of each kind from the suite's own seed), demonstrations are planned
+exactly on the case's **expected** map (the rule's own costs: the best a generator could draw), and
+a free cost grid (the sigmoid of one parameter per cell, starting at the U-Net's initial 0.05) is
+fitted to them alone by Adam through the soft planner (planners.irl), as the paths objective
+does. The fitted maps are then scored by the suite's own test (models.rules.score): a case passes
+when the fitted map keeps half of what the rule adds.
+
+Demonstrations (``--demos``):
+
+* ``paths``: ``--paths-per-map`` exact plans to the map's goal (the first from the robot's cell),
+  what ``socialnav gscl train --objective paths`` plans on each map;
+* ``cells``: the exact planner's move out of every free cell (planners.irl.policy_demonstration).
+
+The printed table is the pass share per (scene, rule) for each setting: an upper bound of what
+the likelihood identifies on one scene with unlimited capacity (a network shares its capacity
+across scenes, which can help where a rule is seen in other scenes and hurt everywhere else).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from socialnav.argtypes import positive_int
+from socialnav.models import rules
+from socialnav.models.config import MAX_PATH_TEMPERATURE
+from socialnav.planners import grid_planner, irl
+
+INITIAL_LOGIT = -3.0  # the U-Net's output bias at the start (models.unet: sigmoid(-3) = 0.05)
+
+
+def fit(maps, demos, temperature: float, steps: int, learning_rate: float = 0.1):
+    """Free cost grids (M, 40, 40) fitted to demonstrations on maps (M, 40, 40) by Adam: the grids
+    and the final mean NLL."""
+
+    def loss(theta):
+        return jnp.mean(irl.batch_nll(jax.nn.sigmoid(theta), maps, demos, temperature))
+
+    opt = optax.adam(learning_rate)
+
+    @jax.jit
+    def run(theta):
+        def step(carry, _):
+            theta, state = carry
+            value, grad = jax.value_and_grad(loss)(theta)
+            updates, state = opt.update(grad, state)
+            return (optax.apply_updates(theta, updates), state), value
+
+        (theta, _), values = jax.lax.scan(step, (theta, opt.init(theta)), None, length=steps)
+        return jax.nn.sigmoid(theta), values[-1]
+
+    return run(jnp.full(maps.shape, INITIAL_LOGIT, jnp.float32))
+
+
+def demonstrations(kind: str, key, maps, expected, paths_per_map: int):
+    keys = jax.random.split(key, len(maps))
+    if kind == "cells":
+        return jax.jit(jax.vmap(irl.policy_demonstration))(keys, maps, expected)
+    one = lambda k, m, c: irl.planned_demonstration(k, m, c, paths_per_map)
+    return jax.jit(jax.vmap(one))(keys, maps, expected)
+
+
+def crossed_share(cases, demos) -> np.ndarray:
+    """(N,) the share of each case's region A (map 0) that some demonstrated move enters, with
+    ``demos`` planned on the cases' maps 0."""
+    moves = np.asarray(demos.moves)  # (N, K, H, W): out of each cell
+    entered = np.zeros((len(cases), 40, 40))
+    for k, (di, dj) in enumerate(grid_planner.moves(irl.CONNECTIVITY)):
+        entered += np.roll(moves[:, k], (di, dj), axis=(1, 2))  # into the cell it lands in
+    return np.array([(entered[i][c.region_a] > 0).mean() for i, c in enumerate(cases)])
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--temperature", type=float, nargs="+", default=[2.0, 4.0, 8.0])
+    ap.add_argument("--demos", choices=("paths", "cells"), nargs="+", default=["paths", "cells"])
+    ap.add_argument("--paths-per-map", type=positive_int, default=4)
+    ap.add_argument("--scenes", type=positive_int, default=10, help="scenes of each kind from the suite's seed")
+    ap.add_argument("--steps", type=positive_int, default=300, help="Adam steps of the fit")
+    ap.add_argument(
+        "--crossing",
+        action="store_true",
+        help="only print how much of the queue's U (the queue_u cases' region beside the queue, goal at its "
+        "head) the exact planner's moves out of every cell enter, and stop",
+    )
+    args = ap.parse_args(argv)
+    for t in args.temperature:
+        if not 0 < t < MAX_PATH_TEMPERATURE:
+            ap.error(f"--temperature: {t} is not in (0, {MAX_PATH_TEMPERATURE:.2f}) (the soft-min diverges)")
+
+    cases = rules.build_suite(args.scenes)
+    if args.crossing:
+        queue = [c for c in cases if c.rule == "queue_u"]
+        maps0 = jnp.asarray(np.stack([c.images[0] for c in queue]))
+        demos = demonstrations(
+            "cells", jax.random.key(0), maps0, jnp.asarray(np.stack([c.expected[0] for c in queue])), 1
+        )
+        share = crossed_share(queue, demos)
+        level = np.mean([c.expected[0][c.region_a].mean() for c in queue])
+        print(
+            f"{len(queue)} queue_u cases, the U costing {level:.2f} there: exact moves enter {share.mean():.2f} of "
+            f"its cells on average; none in {int((share == 0).sum())} cases"
+        )
+        return
+    images = np.stack([c.images for c in cases]).reshape(-1, 40, 40)
+    expected = np.stack([c.expected for c in cases]).reshape(-1, 40, 40)
+    maps, targets = jnp.asarray(images), jnp.asarray(expected)
+    print(f"{len(cases)} cases ({len(maps)} maps), {args.steps} Adam steps per fit, {jax.devices()[0].platform}")
+
+    results = {"initial": rules.score(np.full((len(cases), 2, 40, 40), 0.05, np.float32), cases)}
+    for kind in args.demos:
+        demos = demonstrations(kind, jax.random.key(0), maps, targets, args.paths_per_map)
+        for t in args.temperature:
+            t0 = time.perf_counter()
+            fitted, nll = fit(maps, demos, t, args.steps)
+            fitted = np.asarray(fitted).reshape(len(cases), 2, 40, 40)
+            name = f"{kind} tau {t:g}"
+            results[name] = rules.score(fitted, cases)
+            print(
+                f"{name}: NLL {float(nll):.3f} per {'step' if kind == 'cells' else 'path'}, "
+                f"{time.perf_counter() - t0:.0f} s, MSE against the expected maps {results[name]['mse']:.4f}"
+            )
+
+    names = list(results)
+    print("\n| check | " + " | ".join(names) + " |")
+    print("|---|" + "---|" * len(names))
+    for check in results["initial"]["by_check"]:
+        row = [f"{100 * results[n]['by_check'][check]['pass_share']:.0f}" for n in names]
+        print(f"| {check} | " + " | ".join(row) + " |")
+    passing = [sum(v["pass_share"] >= rules.RULES_BAR for v in results[n]["by_check"].values()) for n in names]
+    print("| checks at the bar | " + " | ".join(str(p) for p in passing) + " |")
+
+
+if __name__ == "__main__":
+    main()
