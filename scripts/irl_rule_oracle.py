@@ -40,8 +40,9 @@ import numpy as np
 import optax
 
 from socialnav.argtypes import positive_int
-from socialnav.models import rules
+from socialnav.models import grid, rules
 from socialnav.models.config import MAX_PATH_TEMPERATURE
+from socialnav.models.social_costs import FORBIDDEN_FROM
 from socialnav.planners import grid_planner, irl
 
 INITIAL_LOGIT = -3.0  # the U-Net's output bias at the start (models.unet: sigmoid(-3) = 0.05)
@@ -98,8 +99,9 @@ def main(argv=None) -> None:
     ap.add_argument(
         "--crossing",
         action="store_true",
-        help="only print how much of the queue's U (the queue_u cases' region beside the queue, goal at its "
-        "head) the exact planner's moves out of every cell enter, and stop",
+        help="only the queue's U (the queue_u cases' region beside the queue, goal at its head): how much of it "
+        "the exact planner's moves out of every cell enter, and the fit of those moves with the U priced and "
+        "with it planned as a wall (at the first --temperature), and stop",
     )
     args = ap.parse_args(argv)
     for t in args.temperature:
@@ -119,6 +121,20 @@ def main(argv=None) -> None:
             f"{len(queue)} queue_u cases, the U costing {level:.2f} there: exact moves enter {share.mean():.2f} of "
             f"its cells on average; none in {int((share == 0).sum())} cases"
         )
+        # Would demonstrations that never cross it teach the U? Plan them with the U as a wall (as
+        # the GSCL layer reads a forbidden cost), fit on the maps as the network sees them.
+        images = np.stack([c.images for c in queue]).reshape(-1, 40, 40)
+        expected = np.stack([c.expected for c in queue]).reshape(-1, 40, 40)
+        lethal = np.where(expected >= FORBIDDEN_FROM, grid.WALL, images).astype(np.uint8)
+        for name, planned_on in (("priced as the soft planner prices it", images), ("a wall", lethal)):
+            demos = demonstrations("cells", jax.random.key(0), jnp.asarray(planned_on), jnp.asarray(expected), 1)
+            fitted, _ = fit(jnp.asarray(images), demos, args.temperature[0], args.steps)
+            report = rules.score(np.asarray(fitted).reshape(len(queue), 2, 40, 40), queue)
+            checks = ", ".join(
+                f"{k} {100 * v['pass_share']:.0f} % (contrast {v['contrast']:.2f} of {v['expected_contrast']:.2f})"
+                for k, v in report["by_check"].items()
+            )
+            print(f"every cell's move, the U {name}, tau {args.temperature[0]:g}: {checks}")
         return
     images = np.stack([c.images for c in cases]).reshape(-1, 40, 40)
     expected = np.stack([c.expected for c in cases]).reshape(-1, 40, 40)
