@@ -124,19 +124,28 @@ def _random_cell(key, allowed):
     return jnp.stack([index // allowed.shape[1], index % allowed.shape[1]]).astype(jnp.int32)
 
 
-def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4) -> Demonstrations:
-    """Exact plans on one known cost map: ``paths_per_map`` paths to the map's goal pixel (the
-    first from the robot's cell, the others from random free cells that reach the goal), or, on
-    a map without a goal pixel, to a random free cell. Jit and vmap it."""
+def _exact_potential(goal_key, maps, target_costs):
+    """What both demonstrations plan on one map: ``(reach, goal, has_goal, exact, phi)``, the cells
+    a demonstration may start in (H, W: free, reaching the goal, not the goal), the goal (the
+    map's goal pixel, else a free cell drawn with ``goal_key``) and whether the map has one, the
+    exact traversal costs and their potential."""
     maps = jnp.asarray(maps)
     free = (maps != grid.WALL) & (maps != grid.PERSON) & (maps != grid.HEADING)
-    k_goal, k_starts = jax.random.split(key)
     goal_pixel, has_goal = _goal_cell(maps)
-    goal = jnp.where(has_goal, goal_pixel, _random_cell(k_goal, free))
+    goal = jnp.where(has_goal, goal_pixel, _random_cell(goal_key, free))
     exact = traversal_per_m(maps, target_costs, jnp.inf)
     phi = grid_planner.potential(exact, goal, grid.CELL_M, CONNECTIVITY)
     rows, cols = jnp.arange(grid.GRID)[:, None], jnp.arange(grid.GRID)[None, :]
     reach = jnp.isfinite(phi) & free & ~((rows == goal[0]) & (cols == goal[1]))
+    return reach, goal, has_goal, exact, phi
+
+
+def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4) -> Demonstrations:
+    """Exact plans on one known cost map: ``paths_per_map`` paths to the map's goal pixel (the
+    first from the robot's cell, the others from random free cells that reach the goal), or, on
+    a map without a goal pixel, to a random free cell. Jit and vmap it."""
+    k_goal, k_starts = jax.random.split(key)
+    reach, goal, has_goal, exact, phi = _exact_potential(k_goal, maps, target_costs)
     robot = jnp.stack(grid.cell_of(0.0, 0.0)).astype(jnp.int32)
     others = jax.vmap(lambda k: _random_cell(k, reach))(jax.random.split(k_starts, paths_per_map))
     starts = others.at[0].set(jnp.where(has_goal & reach[robot[0], robot[1]], robot, others[0]))
@@ -159,20 +168,14 @@ def policy_demonstration(key, maps, target_costs) -> Demonstrations:
     where the soft policy might leave it; every cell's move constrains them where no plan goes,
     e.g. how a robot on the wrong side of a hallway gets back to the right one. Jit and vmap it.
     """
-    maps = jnp.asarray(maps)
-    free = (maps != grid.WALL) & (maps != grid.PERSON) & (maps != grid.HEADING)
-    goal_pixel, has_goal = _goal_cell(maps)
-    goal = jnp.where(has_goal, goal_pixel, _random_cell(key, free))
-    exact = traversal_per_m(maps, target_costs, jnp.inf)
-    phi = grid_planner.potential(exact, goal, grid.CELL_M, CONNECTIVITY)
+    reach, goal, _, exact, phi = _exact_potential(key, maps, target_costs)
     offsets = grid_planner.moves(CONNECTIVITY)
     weights = grid_planner.move_costs(exact, grid.CELL_M, CONNECTIVITY)
-    padded = jnp.pad(phi, 1, constant_values=jnp.inf)
+    value = jnp.stack([weights[m] + grid_planner._shift(phi, *m, jnp.inf) for m in offsets])  # (K, H, W)
     n = grid.GRID
-    value = jnp.stack([weights[m] + padded[1 + m[0] : 1 + m[0] + n, 1 + m[1] : 1 + m[1] + n] for m in offsets])
     k = jnp.argmin(value, axis=0)  # (H, W) the exact planner's move (its first on a tie, as descend takes)
     rows, cols = jnp.arange(n)[:, None], jnp.arange(n)[None, :]
-    ok = free & jnp.isfinite(phi) & jnp.isfinite(jnp.min(value, axis=0)) & ~((rows == goal[0]) & (cols == goal[1]))
+    ok = reach & jnp.isfinite(jnp.min(value, axis=0))
     moves = (jax.nn.one_hot(k, K, axis=0) * ok).astype(jnp.float32)
     step = jnp.asarray(offsets, jnp.int32)[k]  # (H, W, 2)
     ni, nj = jnp.clip(rows + step[..., 0], 0, n - 1), jnp.clip(cols + step[..., 1], 0, n - 1)

@@ -133,22 +133,28 @@ def test_a_demonstrated_corridor_becomes_the_cheaper_one():
     assert top < 0.5 < bottom
 
 
-def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
-    rng = np.random.default_rng(5)
+def _walled_map_with_goal(seed):
+    """A 40 x 40 map with one wall and a goal pixel at (30, 8), random costs in [0, 1], and the
+    exact potential to the goal with the move weights it descends: (maps, costs, phi, weights)."""
     maps = np.zeros((grid.GRID, grid.GRID), np.uint8)
     maps[10, 5:30] = grid.WALL
     maps[30, 8] = grid.GOAL
-    costs = rng.uniform(0, 1, maps.shape).astype(np.float32)
+    costs = np.random.default_rng(seed).uniform(0, 1, maps.shape).astype(np.float32)
+    t = np.asarray(irl.traversal_per_m(maps, costs))
+    t = np.where(t >= smooth_planner.BLOCKED, np.inf, t)
+    phi = np.asarray(grid_planner.potential(t, (30, 8), grid.CELL_M))
+    weights = np.stack(list(grid_planner.move_costs(t, grid.CELL_M).values()))
+    return maps, costs, phi, weights
+
+
+def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
+    maps, costs, phi, weights = _walled_map_with_goal(5)
     demo = irl.planned_demonstration(jax.random.key(0), jnp.asarray(maps), jnp.asarray(costs), paths_per_map=3)
     assert float(demo.n_paths) == 3 and tuple(np.asarray(demo.goal_ij)) == (30, 8)
     robot = tuple(int(v) for v in grid.cell_of(0.0, 0.0))
     assert demo.starts[robot] >= 1  # the first path leaves from the robot's cell
     # Every path costs its exact optimum: the demonstrations' total cost equals the sum of the
     # exact potentials at their starts.
-    t = np.asarray(irl.traversal_per_m(maps, costs))
-    t = np.where(t >= smooth_planner.BLOCKED, np.inf, t)
-    phi = np.asarray(grid_planner.potential(t, (30, 8), grid.CELL_M))
-    weights = np.stack(list(grid_planner.move_costs(t, grid.CELL_M).values()))
     moves = np.asarray(demo.moves)
     total = float(np.sum(moves * np.where(moves > 0, weights, 0.0)))
     assert total == pytest.approx(float(np.sum(np.asarray(demo.starts) * phi)), rel=1e-5)
@@ -164,11 +170,7 @@ def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
 
 
 def test_every_cell_demonstration_is_the_exact_plans_each_step_once():
-    rng = np.random.default_rng(6)
-    maps = np.zeros((grid.GRID, grid.GRID), np.uint8)
-    maps[10, 5:30] = grid.WALL
-    maps[30, 8] = grid.GOAL
-    costs = rng.uniform(0, 1, maps.shape).astype(np.float32)
+    maps, costs, phi, weights = _walled_map_with_goal(6)
     demo = irl.policy_demonstration(jax.random.key(0), jnp.asarray(maps), jnp.asarray(costs))
     moves, starts = np.asarray(demo.moves), np.asarray(demo.starts)
     free = maps == grid.FREE
@@ -178,10 +180,6 @@ def test_every_cell_demonstration_is_the_exact_plans_each_step_once():
     # Each step is +1 where it leaves and -1 where it lands: the starts sum to 0 and the moves'
     # cost equals the potential they descend (each step is the exact plan's step).
     assert float(starts.sum()) == pytest.approx(0.0, abs=1e-6)
-    t = np.asarray(irl.traversal_per_m(maps, costs))
-    t = np.where(t >= smooth_planner.BLOCKED, np.inf, t)
-    phi = np.asarray(grid_planner.potential(t, (30, 8), grid.CELL_M))
-    weights = np.stack(list(grid_planner.move_costs(t, grid.CELL_M).values()))
     total = float(np.sum(moves * np.where(moves > 0, weights, 0.0)))
     assert total == pytest.approx(float(np.sum(starts * np.where(np.isfinite(phi), phi, 0.0))), rel=1e-5)
     # The paths planned to the same goal take the same move at every cell they cross.
