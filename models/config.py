@@ -25,6 +25,7 @@ ADDED_LATER = {
     "temperature": 2.0,
     "paths_per_map": 4,
     "demonstrations": "paths",
+    "reading": "graded",
     "targets": "graded",
     "forbidden_weight": 0.0,
     "init_from": "",
@@ -38,6 +39,12 @@ OBJECTIVES = ("maps", "paths")
 # free grid fitted to 4 exact plans on each rule-suite map keeps almost none of the rules, one
 # fitted to every cell's move most of them.
 DEMONSTRATIONS = ("paths", "cells")
+# How the "paths" objective prices costs (planners.irl.traversal_per_m), the demonstrator's
+# targets and the network's output alike: "graded", every cost on NavFn's graded scale (the
+# queue's U at 1 is then 5 times a free cell, and exact plans cross it); "layer", as the GSCL
+# layer reads a network's costs (graded up to models.social_costs.GRADED_TOP, lethal from
+# FORBIDDEN_FROM), so that no demonstration enters the U and the network can learn a lethal level.
+READINGS = ("graded", "layer")
 # The generator's targets: "graded_forbidden" (today's: graded shapes up to
 # models.social_costs.GRADED_TOP, the queue's U at FORBIDDEN) or "graded" (runs saved before:
 # every shape graded, peak 1; kept only to read those runs, the generator no longer draws them).
@@ -111,6 +118,8 @@ class TrainConfig:
       demonstrations: what the "paths" objective demonstrates (:data:`DEMONSTRATIONS`): "paths"
         (the default), ``paths_per_map`` exact plans per map; "cells", the exact planner's move out
         of every free cell (``paths_per_map`` is then unused).
+      reading: how the "paths" objective prices costs (:data:`READINGS`): "graded" (the default)
+        or "layer" (see :attr:`reads_lethal`).
       targets: which targets the run learnt (:data:`TARGETS`); see :attr:`reads_forbidden`.
       init_from: a model folder (an exported model, e.g. the shipped one, or a training run's
         folder) whose weights start this run (:mod:`models.warm_start`: fine-tuning; a source
@@ -154,6 +163,7 @@ class TrainConfig:
     temperature: float = PATH_TEMPERATURE
     paths_per_map: int = 4
     demonstrations: str = "paths"
+    reading: str = "graded"
     targets: str = "graded_forbidden"
     init_from: str = ""
     forbidden_features: tuple[int, ...] = ()
@@ -197,6 +207,10 @@ class TrainConfig:
             raise ValueError(f"temperature must be in (0, {MAX_PATH_TEMPERATURE:.2f}), got {self.temperature}")
         if self.demonstrations not in DEMONSTRATIONS:
             raise ValueError(f"demonstrations must be one of {DEMONSTRATIONS}, got {self.demonstrations!r}")
+        if self.reading not in READINGS:
+            raise ValueError(f"reading must be one of {READINGS}, got {self.reading!r}")
+        if self.reading != "graded" and self.objective != "paths":
+            raise ValueError("reading 'layer' needs the 'paths' objective (a 'maps' run learns the forbidden head)")
         if self.paths_per_map < 1:
             raise ValueError(f"paths_per_map must be >= 1, got {self.paths_per_map}")
         if self.composites < 0:
@@ -237,6 +251,15 @@ class TrainConfig:
         only (older runs; the "paths" objective, whose soft planner reads every cost as graded)
         has one output and is scaled into the graded range when loaded."""
         return self.targets == "graded_forbidden" and self.objective == "maps"
+
+    @property
+    def reads_lethal(self) -> bool:
+        """Whether the model's costs are read as they are, lethal from
+        :data:`models.social_costs.FORBIDDEN_FROM` up: a model with the forbidden head, or a
+        "paths" model learnt with ``reading == "layer"``, whose soft planner priced its one output
+        exactly so. Any other model is scaled into the graded range when loaded
+        (:func:`models.inference.output_scale`)."""
+        return self.reads_forbidden or (self.objective == "paths" and self.reading == "layer")
 
     @property
     def counts(self) -> dict[str, int]:
@@ -288,6 +311,7 @@ class TrainConfig:
             "schedule": str,
             "objective": str,
             "targets": str,
+            "reading": str,
             "init_from": str,
             "forbidden_features": list,
         }

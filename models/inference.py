@@ -177,9 +177,9 @@ def _apply_for(graphdef, scale: float = 1.0):
 
 def output_scale(config) -> float:
     """1, or :data:`models.social_costs.GRADED_TOP` for a model that learnt graded costs only
-    (:attr:`models.config.TrainConfig.reads_forbidden` false), so that its peak is read as the
+    (:attr:`models.config.TrainConfig.reads_lethal` false), so that its peak is read as the
     top of the graded range and never as forbidden."""
-    return 1.0 if config is None or config.reads_forbidden else GRADED_TOP
+    return 1.0 if config is None or config.reads_lethal else GRADED_TOP
 
 
 WEIGHTS_FILE = "weights.msgpack"

@@ -44,9 +44,11 @@ import numpy as np
 from flax import struct
 
 from socialnav.models import grid
-from socialnav.models.config import PATH_TEMPERATURE
+from socialnav.models.config import PATH_TEMPERATURE, READINGS
+from socialnav.models.social_costs import FORBIDDEN_FROM, GRADED_TOP
 from socialnav.planners import grid_planner, smooth_planner
-from socialnav.planners.costmap import MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
+from socialnav.planners.costmap import LETHAL, MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
+from socialnav.planners.gscl_layer import read_cost
 
 CONNECTIVITY = 8
 K = CONNECTIVITY
@@ -56,6 +58,12 @@ CEILING = smooth_planner.BLOCKED * grid.CELL_M * 2 * grid.GRID  # the potential 
 _MOVE_INDEX = {m: k for k, m in enumerate(grid_planner.moves(CONNECTIVITY))}
 # (di + 1) * 3 + (dj + 1) -> move index (-1: no move)
 _MOVE_LOOKUP = np.array([_MOVE_INDEX.get((di, dj), -1) for di in (-1, 0, 1) for dj in (-1, 0, 1)], np.int32)
+# The soft planner's price per metre of a cell the "layer" reading makes lethal, on top of the
+# graded top: one 0.4 m cell costs 2,000 more, the price of 40 m of free space, so that wherever
+# crossing it saves less than 20 m of free space the soft policy's odds of crossing are below
+# e^-500 at the default temperature; finite, so that the ramp in traversal_per_m has a gradient.
+LETHAL_PER_M = 5000.0
+LETHAL_RAMP = 0.05  # network cost units above FORBIDDEN_FROM over which the soft price reaches it
 
 
 @struct.dataclass
@@ -76,12 +84,36 @@ class Demonstrations:
     n_paths: jnp.ndarray
 
 
-def traversal_per_m(maps, costs, impassable: float = smooth_planner.BLOCKED):
-    """(..., H, W) cost per metre of entering a cell: NavFn's ``50 + 0.8 * 252 c`` for a cost ``c``
-    in [0, 1] (the GSCL layer's scale in the planner), ``impassable`` on the input map's walls
-    (:data:`planners.smooth_planner.BLOCKED` for the soft planner, ``inf`` for the exact one)."""
-    costs = jnp.asarray(costs)
-    return jnp.where(jnp.asarray(maps) == grid.WALL, impassable, NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * costs)
+def traversal_per_m(maps, costs, impassable: float = smooth_planner.BLOCKED, reading: str = "graded"):
+    """(..., H, W) cost per metre of entering a cell, ``impassable`` on the input map's walls
+    (:data:`planners.smooth_planner.BLOCKED` for the soft planner, ``inf`` for the exact one).
+
+    ``reading`` (:data:`READINGS`) says how a cost ``c`` in [0, 1] is priced: ``"graded"``,
+    NavFn's ``50 + 0.8 * 252 c``; ``"layer"``, ``50 + 0.8 x`` with ``x`` the GSCL layer's Nav2
+    cost (:func:`planners.gscl_layer.read_cost`: ``252 c / GRADED_TOP`` clipped, lethal from
+    ``FORBIDDEN_FROM``). Lethal is ``impassable`` for the exact planner (``impassable`` inf).
+
+    The soft planner needs a gradient all the way up, so for it the graded slope goes on past
+    ``GRADED_TOP`` to ``FORBIDDEN_FROM`` (at most 17 % above the graded top, where the layer reads
+    the top), and :data:`LETHAL_PER_M` is added by a linear ramp over the :data:`LETHAL_RAMP`
+    above ``FORBIDDEN_FROM``. A cost the likelihood pushes past the graded top climbs at the
+    graded slope, and is priced prohibitively only once the layer reads it lethal: a ramp below
+    the threshold would stop it where the soft planner already avoids it but the layer reads
+    the graded top (``scripts/irl_rule_oracle.py --reading layer``: with a ramp from
+    ``GRADED_TOP`` to ``FORBIDDEN_FROM`` no queue case passed).
+    """
+    costs, walls = jnp.asarray(costs), jnp.asarray(maps) == grid.WALL
+    if reading == "graded":
+        return jnp.where(walls, impassable, NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * costs)
+    if reading != "layer":
+        raise ValueError(f"reading must be one of {READINGS}, got {reading!r}")
+    nav2 = read_cost(costs)
+    graded = NAVFN_NEUTRAL + NAVFN_FACTOR * jnp.minimum(nav2, MAX_GRADED)
+    if np.isinf(impassable):
+        return jnp.where(walls | (nav2 >= LETHAL), impassable, graded)
+    rising = NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * jnp.clip(costs, 0.0, FORBIDDEN_FROM) / GRADED_TOP
+    lethal = LETHAL_PER_M * jnp.clip((costs - FORBIDDEN_FROM) / LETHAL_RAMP, 0.0, 1.0)
+    return jnp.where(walls, impassable, rising + lethal)
 
 
 def path_moves(path_ij, shape=(grid.GRID, grid.GRID)):
@@ -95,19 +127,34 @@ def path_moves(path_ij, shape=(grid.GRID, grid.GRID)):
     return counts.at[jnp.maximum(k, 0), path_ij[:-1, 0], path_ij[:-1, 1]].add(moved.astype(jnp.float32))
 
 
-def path_nll(costs, maps, demo: Demonstrations, temperature: float = TEMPERATURE, iterations: int = ITERATIONS):
+def path_nll(
+    costs,
+    maps,
+    demo: Demonstrations,
+    temperature: float = TEMPERATURE,
+    iterations: int = ITERATIONS,
+    reading: str = "graded",
+):
     """Mean negative log-likelihood per path of one map's demonstrations under the soft policy of
-    ``costs`` (H, W) in [0, 1] on input map ``maps`` (H, W): ``(sum of the paths' costs - sum of
-    phi at their starts) / (tau n_paths)``; 0 when ``n_paths`` is 0."""
-    weights = smooth_planner.soft_weights(traversal_per_m(maps, costs), grid.CELL_M, CONNECTIVITY)
+    ``costs`` (H, W) in [0, 1] on input map ``maps`` (H, W), priced by ``reading``
+    (:func:`traversal_per_m`): ``(sum of the paths' costs - sum of phi at their starts) / (tau
+    n_paths)``; 0 when ``n_paths`` is 0."""
+    weights = smooth_planner.soft_weights(traversal_per_m(maps, costs, reading=reading), grid.CELL_M, CONNECTIVITY)
     phi = smooth_planner.soft_potential_implicit(weights, demo.goal_ij, temperature, iterations, CEILING, CONNECTIVITY)
     nll = (jnp.sum(demo.moves * weights) - jnp.sum(demo.starts * phi)) / temperature
     return jnp.where(demo.n_paths > 0, nll / jnp.maximum(demo.n_paths, 1.0), 0.0)
 
 
-def batch_nll(costs, maps, demos: Demonstrations, temperature: float = TEMPERATURE, iterations: int = ITERATIONS):
+def batch_nll(
+    costs,
+    maps,
+    demos: Demonstrations,
+    temperature: float = TEMPERATURE,
+    iterations: int = ITERATIONS,
+    reading: str = "graded",
+):
     """(B,) :func:`path_nll` of a batch: costs and maps (B, H, W), demonstrations with axis B."""
-    return jax.vmap(lambda c, m, d: path_nll(c, m, d, temperature, iterations))(costs, maps, demos)
+    return jax.vmap(lambda c, m, d: path_nll(c, m, d, temperature, iterations, reading))(costs, maps, demos)
 
 
 def _goal_cell(maps):
@@ -124,28 +171,29 @@ def _random_cell(key, allowed):
     return jnp.stack([index // allowed.shape[1], index % allowed.shape[1]]).astype(jnp.int32)
 
 
-def _exact_potential(goal_key, maps, target_costs):
+def _exact_potential(goal_key, maps, target_costs, reading: str = "graded"):
     """What both demonstrations plan on one map: ``(reach, goal, has_goal, exact, phi)``, the cells
     a demonstration may start in (H, W: free, reaching the goal, not the goal), the goal (the
     map's goal pixel, else a free cell drawn with ``goal_key``) and whether the map has one, the
-    exact traversal costs and their potential."""
+    exact traversal costs (the targets priced by ``reading``) and their potential."""
     maps = jnp.asarray(maps)
     free = (maps != grid.WALL) & (maps != grid.PERSON) & (maps != grid.HEADING)
     goal_pixel, has_goal = _goal_cell(maps)
     goal = jnp.where(has_goal, goal_pixel, _random_cell(goal_key, free))
-    exact = traversal_per_m(maps, target_costs, jnp.inf)
+    exact = traversal_per_m(maps, target_costs, jnp.inf, reading)
     phi = grid_planner.potential(exact, goal, grid.CELL_M, CONNECTIVITY)
     rows, cols = jnp.arange(grid.GRID)[:, None], jnp.arange(grid.GRID)[None, :]
     reach = jnp.isfinite(phi) & free & ~((rows == goal[0]) & (cols == goal[1]))
     return reach, goal, has_goal, exact, phi
 
 
-def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4) -> Demonstrations:
-    """Exact plans on one known cost map: ``paths_per_map`` paths to the map's goal pixel (the
-    first from the robot's cell, the others from random free cells that reach the goal), or, on
-    a map without a goal pixel, to a random free cell. Jit and vmap it."""
+def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4, reading: str = "graded") -> Demonstrations:
+    """Exact plans on one known cost map priced by ``reading`` (:func:`traversal_per_m`):
+    ``paths_per_map`` paths to the map's goal pixel (the first from the robot's cell, the others
+    from random free cells that reach the goal), or, on a map without a goal pixel, to a random
+    free cell. Jit and vmap it."""
     k_goal, k_starts = jax.random.split(key)
-    reach, goal, has_goal, exact, phi = _exact_potential(k_goal, maps, target_costs)
+    reach, goal, has_goal, exact, phi = _exact_potential(k_goal, maps, target_costs, reading)
     robot = jnp.stack(grid.cell_of(0.0, 0.0)).astype(jnp.int32)
     others = jax.vmap(lambda k: _random_cell(k, reach))(jax.random.split(k_starts, paths_per_map))
     starts = others.at[0].set(jnp.where(has_goal & reach[robot[0], robot[1]], robot, others[0]))
@@ -156,7 +204,7 @@ def planned_demonstration(key, maps, target_costs, paths_per_map: int = 4) -> De
     return Demonstrations(moves, start_counts, goal, jnp.sum(ok).astype(jnp.float32))
 
 
-def policy_demonstration(key, maps, target_costs) -> Demonstrations:
+def policy_demonstration(key, maps, target_costs, reading: str = "graded") -> Demonstrations:
     """The exact planner's move out of **every** free cell that reaches the goal, each counted once:
     the demonstrations of :func:`planned_demonstration` from every start, each step once.
 
@@ -166,9 +214,11 @@ def policy_demonstration(key, maps, target_costs) -> Demonstrations:
     ``s'`` (the sum telescopes as a path's does); ``n_paths`` counts the steps, so
     :func:`path_nll` is the mean NLL per step. A path constrains the costs only along itself and
     where the soft policy might leave it; every cell's move constrains them where no plan goes,
-    e.g. how a robot on the wrong side of a hallway gets back to the right one. Jit and vmap it.
+    e.g. how a robot on the wrong side of a hallway gets back to the right one. The targets are
+    priced by ``reading`` (:func:`traversal_per_m`; with ``"layer"`` no move enters the queue's U,
+    as the GSCL layer's planner never does). Jit and vmap it.
     """
-    reach, goal, _, exact, phi = _exact_potential(key, maps, target_costs)
+    reach, goal, _, exact, phi = _exact_potential(key, maps, target_costs, reading)
     offsets = grid_planner.moves(CONNECTIVITY)
     weights = grid_planner.move_costs(exact, grid.CELL_M, CONNECTIVITY)
     value = jnp.stack([weights[m] + grid_planner._shift(phi, *m, jnp.inf) for m in offsets])  # (K, H, W)
@@ -184,10 +234,11 @@ def policy_demonstration(key, maps, target_costs) -> Demonstrations:
     return Demonstrations(moves, starts, goal, jnp.sum(okf))
 
 
-def planned_demonstrations(key, maps, target_costs, paths_per_map: int = 4) -> Demonstrations:
+def planned_demonstrations(key, maps, target_costs, paths_per_map: int = 4, reading: str = "graded") -> Demonstrations:
     """:func:`planned_demonstration` of a batch: maps and targets (B, H, W), one key per map."""
     keys = jax.random.split(key, len(maps))
-    return jax.vmap(lambda k, m, c: planned_demonstration(k, m, c, paths_per_map))(keys, maps, target_costs)
+    one = lambda k, m, c: planned_demonstration(k, m, c, paths_per_map, reading)
+    return jax.vmap(one)(keys, maps, target_costs)
 
 
 def exact_path_cost(true_costs, maps, plan_costs, start_ij, goal_ij):
@@ -217,19 +268,23 @@ class PathObjective:
     paths_per_map: int = 4
     iterations: int = ITERATIONS
     demonstrations: str = "paths"  # or "cells" (models.config.DEMONSTRATIONS)
+    reading: str = "graded"  # or "layer" (models.config.READINGS; traversal_per_m)
 
     @classmethod
     def of(cls, config) -> PathObjective:
         """The objective of a :class:`models.config.TrainConfig`."""
-        return cls(float(config.temperature), int(config.paths_per_map), ITERATIONS, config.demonstrations)
+        return cls(
+            float(config.temperature), int(config.paths_per_map), ITERATIONS, config.demonstrations, config.reading
+        )
 
     def prepare(self, key, maps, target_costs) -> Demonstrations:
         """(B,) demonstrations planned on a batch's target maps (B, H, W): :func:`planned_demonstrations`,
         or with ``demonstrations == "cells"`` :func:`policy_demonstration` of each map."""
         if self.demonstrations == "cells":
-            return jax.vmap(policy_demonstration)(jax.random.split(key, len(maps)), maps, target_costs)
-        return planned_demonstrations(key, maps, target_costs, self.paths_per_map)
+            one = lambda k, m, c: policy_demonstration(k, m, c, self.reading)
+            return jax.vmap(one)(jax.random.split(key, len(maps)), maps, target_costs)
+        return planned_demonstrations(key, maps, target_costs, self.paths_per_map, self.reading)
 
     def loss(self, costs, maps, demos: Demonstrations):
         """(B,) mean negative log-likelihood per path of each map's demonstrations."""
-        return batch_nll(costs, maps, demos, self.temperature, self.iterations)
+        return batch_nll(costs, maps, demos, self.temperature, self.iterations, self.reading)

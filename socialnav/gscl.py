@@ -64,6 +64,7 @@ _TRAIN_OPTIONS = (
     "temperature",
     "paths_per_map",
     "demonstrations",
+    "reading",
     "init_from",
     "forbidden_features",
     "freeze_graded",
@@ -191,6 +192,13 @@ def add_parser(top) -> None:
         default=None,
         help="--objective paths: paths (the default), --paths-per-map exact plans to each map's goal; cells, the "
         "exact planner's move out of every free cell, each once (docs/irl.md)",
+    )
+    tr.add_argument(
+        "--reading",
+        choices=("graded", "layer"),
+        default=None,
+        help="--objective paths: how costs are priced, the targets' and the network's: graded (the default), every "
+        "cost graded; layer, as the GSCL layer reads them, the queue's U lethal (docs/irl.md)",
     )
     tr.add_argument(
         "--init-from",

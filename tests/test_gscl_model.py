@@ -509,6 +509,11 @@ def test_a_model_of_graded_targets_is_read_in_the_graded_range_and_cannot_be_tra
     assert (now.targets, old.targets) == ("graded_forbidden", "graded")
     assert now.reads_forbidden and not old.reads_forbidden
     assert not TrainConfig(**TINY, objective="paths").reads_forbidden
+    assert old.reading == "graded" and not TrainConfig(**TINY, objective="paths").reads_lethal
+    # A "paths" model learnt as the layer reads costs has one output, read as it is.
+    layer = TrainConfig(**TINY, objective="paths", reading="layer")
+    assert layer.reads_lethal and not layer.reads_forbidden
+    assert inference.output_scale(layer) == 1.0
     maps = dataset.generate(0, {"queue": 2})["inputs"]
     for config, scale in ((old, sc.GRADED_TOP), (now, 1.0)):
         state = steps.initial_state(config)

@@ -310,6 +310,59 @@ def test_a_paths_run_lowers_the_demonstrations_likelihood_and_loads_as_a_gscl_mo
     assert model(data["inputs"][:2]).shape == (2, grid.GRID, grid.GRID)
 
 
+def test_the_layer_reading_prices_costs_as_the_gscl_layer_and_never_enters_a_forbidden_cell():
+    from socialnav.models.social_costs import FORBIDDEN, FORBIDDEN_FROM, GRADED_TOP
+    from socialnav.planners import gscl_layer
+    from socialnav.planners.costmap import NAVFN_FACTOR, NAVFN_NEUTRAL
+
+    # Below FORBIDDEN_FROM the exact planner prices a cost as NavFn prices the layer's Nav2 cost
+    # (the graded top from GRADED_TOP up), and from there up it cannot enter. The soft one prices
+    # the graded costs alike, goes on at the graded slope up to FORBIDDEN_FROM, and adds
+    # LETHAL_PER_M over LETHAL_RAMP above it.
+    costs = jnp.asarray([[0.0, 0.35, GRADED_TOP, 0.8, FORBIDDEN_FROM, FORBIDDEN]], jnp.float32)
+    maps = jnp.zeros(costs.shape, jnp.uint8).at[0, 0].set(grid.WALL)
+    exact = np.asarray(irl.traversal_per_m(maps, costs, jnp.inf, "layer"))
+    soft = np.asarray(irl.traversal_per_m(maps, costs, smooth_planner.BLOCKED, "layer"))
+    nav2 = np.asarray(gscl_layer.read_cost(costs))
+    np.testing.assert_allclose(exact[0, 1:4], NAVFN_NEUTRAL + NAVFN_FACTOR * nav2[0, 1:4], rtol=1e-6)
+    top = NAVFN_NEUTRAL + NAVFN_FACTOR * 252.0
+    assert exact[0, 2] == pytest.approx(top) and exact[0, 3] == pytest.approx(top)
+    assert np.isinf(exact[0, [0, 4, 5]]).all() and soft[0, 0] == smooth_planner.BLOCKED
+    np.testing.assert_allclose(soft[0, 1:3], exact[0, 1:3], rtol=1e-6)
+    slope = NAVFN_FACTOR * 252.0 / GRADED_TOP  # per unit of network cost
+    rising = NAVFN_NEUTRAL + slope * np.array([0.8, FORBIDDEN_FROM, FORBIDDEN_FROM])
+    np.testing.assert_allclose(soft[0, 3:], rising + irl.LETHAL_PER_M * np.array([0, 0, 1]), rtol=1e-5)
+    assert soft[0, 3] < 1.2 * top  # below the threshold the soft price stays near the layer's
+    price = jax.grad(lambda c: irl.traversal_per_m(jnp.zeros(()), c, reading="layer"))
+    assert float(price(jnp.float32(0.8))) == pytest.approx(slope, rel=1e-4)  # no flat stretch to stall in
+    step = float(price(jnp.float32(FORBIDDEN_FROM + irl.LETHAL_RAMP / 2)))
+    assert step == pytest.approx(irl.LETHAL_PER_M / irl.LETHAL_RAMP, rel=1e-3)
+    with pytest.raises(ValueError, match="reading must be one of"):
+        irl.traversal_per_m(maps, costs, reading="lethal")
+
+    # A forbidden band (the queue's U at FORBIDDEN) between the left half and the goal, open only
+    # at the bottom: graded, it is 5 times a free cell and the exact moves cross it; read as the
+    # layer reads it, no move enters it (a move still leaves each of its cells, as a robot inside
+    # the U would get out).
+    band = np.zeros((grid.GRID, grid.GRID), np.float32)
+    band[:34, 20] = FORBIDDEN
+    maps = np.zeros(band.shape, np.uint8)
+    maps[5, 30] = grid.GOAL
+    entered = {}
+    for reading in ("graded", "layer"):
+        demo = irl.policy_demonstration(jax.random.key(0), jnp.asarray(maps), jnp.asarray(band), reading)
+        moves = np.asarray(demo.moves)
+        landed = sum(np.roll(moves[k], (di, dj), axis=(0, 1)) for k, (di, dj) in enumerate(grid_planner.moves(8)))
+        entered[reading] = int((landed[band == FORBIDDEN] > 0).sum())
+        assert float(demo.n_paths) == (maps == grid.FREE).sum()
+    assert entered["graded"] > 10 and entered["layer"] == 0
+    # The objective read as the layer: its loss is finite, and lower with the band lethal than free.
+    objective = irl.PathObjective(2.0, demonstrations="cells", reading="layer")
+    demos = objective.prepare(jax.random.key(0), jnp.asarray(maps)[None], jnp.asarray(band)[None])
+    lethal, free = (objective.loss(jnp.asarray(c)[None], jnp.asarray(maps)[None], demos) for c in (band, 0 * band))
+    assert np.isfinite(float(lethal[0])) and float(lethal[0]) < float(free[0])
+
+
 def test_the_command_line_refuses_bad_path_settings_in_one_line(tmp_path):
     from socialnav import cli
 
@@ -318,6 +371,7 @@ def test_the_command_line_refuses_bad_path_settings_in_one_line(tmp_path):
         (["--objective", "demos"], "invalid choice"),
         (["--paths-per-map", "0"], "positive"),
         (["--demonstrations", "everywhere"], "invalid choice"),
+        (["--reading", "lethal"], "invalid choice"),
     ):
         with pytest.raises(SystemExit) as err:
             cli.main(["gscl", "train", "--out", str(tmp_path / "r"), "--objective", "paths", *extra])
@@ -327,3 +381,7 @@ def test_the_command_line_refuses_bad_path_settings_in_one_line(tmp_path):
 
     with pytest.raises(ValueError, match="demonstrations must be one of"):
         TrainConfig(objective="paths", demonstrations="everywhere")
+    with pytest.raises(ValueError, match="reading must be one of"):
+        TrainConfig(objective="paths", reading="lethal")
+    with pytest.raises(ValueError, match="needs the 'paths' objective"):
+        TrainConfig(objective="maps", reading="layer")
