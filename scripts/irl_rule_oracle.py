@@ -3,6 +3,7 @@
     python scripts/irl_rule_oracle.py                                  # tau 2 4 8 x 4 paths / every cell
     python scripts/irl_rule_oracle.py --temperature 8 --demos cells --scenes 20
     python scripts/irl_rule_oracle.py --crossing --scenes 20          # do the exact plans cross the queue's U?
+    python scripts/irl_rule_oracle.py --demos cells --temperature 2 --reading graded layer   # the U read as lethal
 
 Issue 36 trains the U-Net from exact plans on the generator's maps and finds the held-out rule
 suite (``socialnav gscl rules``) far below the maps-trained model. Is that the network, the
@@ -19,6 +20,12 @@ Demonstrations (``--demos``):
 * ``paths``: ``--paths-per-map`` exact plans to the map's goal (the first from the robot's cell),
   what ``socialnav gscl train --objective paths`` plans on each map;
 * ``cells``: the exact planner's move out of every free cell (planners.irl.policy_demonstration).
+
+Readings (``--reading``, planners.irl.traversal_per_m), how both the expected maps (for the exact
+demonstrations) and the fitted grids (in the soft planner) are priced: ``graded``, every cost on
+NavFn's graded scale, the queue's U at 1 five times a free cell; ``layer``, as the GSCL layer
+reads a network's costs, the U lethal (no demonstration enters it) and the fitted grid able to
+learn a lethal level, scored as the layer reads it (:func:`as_read`).
 
 The printed table is the pass share per (scene, rule) for each setting: an upper bound of what
 the likelihood identifies on one scene with unlimited capacity (a network shares its capacity
@@ -41,19 +48,19 @@ import optax
 
 from socialnav.argtypes import positive_int
 from socialnav.models import grid, rules
-from socialnav.models.config import MAX_PATH_TEMPERATURE
-from socialnav.models.social_costs import FORBIDDEN_FROM
+from socialnav.models.config import MAX_PATH_TEMPERATURE, READINGS
+from socialnav.models.social_costs import FORBIDDEN, FORBIDDEN_FROM, GRADED_TOP
 from socialnav.planners import grid_planner, irl
 
 INITIAL_LOGIT = -3.0  # the U-Net's output bias at the start (models.unet: sigmoid(-3) = 0.05)
 
 
-def fit(maps, demos, temperature: float, steps: int, learning_rate: float = 0.1):
-    """Free cost grids (M, 40, 40) fitted to demonstrations on maps (M, 40, 40) by Adam: the grids
-    and the final mean NLL."""
+def fit(maps, demos, temperature: float, steps: int, learning_rate: float = 0.1, reading: str = "graded"):
+    """Free cost grids (M, 40, 40) fitted to demonstrations on maps (M, 40, 40) by Adam, priced by
+    ``reading`` (planners.irl.traversal_per_m): the grids and the final mean NLL."""
 
     def loss(theta):
-        return jnp.mean(irl.batch_nll(jax.nn.sigmoid(theta), maps, demos, temperature))
+        return jnp.mean(irl.batch_nll(jax.nn.sigmoid(theta), maps, demos, temperature, reading=reading))
 
     opt = optax.adam(learning_rate)
 
@@ -71,12 +78,21 @@ def fit(maps, demos, temperature: float, steps: int, learning_rate: float = 0.1)
     return run(jnp.full(maps.shape, INITIAL_LOGIT, jnp.float32))
 
 
-def demonstrations(kind: str, key, maps, expected, paths_per_map: int):
+def demonstrations(kind: str, key, maps, expected, paths_per_map: int, reading: str = "graded"):
     keys = jax.random.split(key, len(maps))
     if kind == "cells":
-        return jax.jit(jax.vmap(irl.policy_demonstration))(keys, maps, expected)
-    one = lambda k, m, c: irl.planned_demonstration(k, m, c, paths_per_map)
+        return jax.jit(jax.vmap(lambda k, m, c: irl.policy_demonstration(k, m, c, reading)))(keys, maps, expected)
+    one = lambda k, m, c: irl.planned_demonstration(k, m, c, paths_per_map, reading)
     return jax.jit(jax.vmap(one))(keys, maps, expected)
+
+
+def as_read(fitted, reading: str):
+    """Fitted grids as the suite should score them: as they are for the ``graded`` reading (priced
+    like the targets), and for ``layer`` as the GSCL layer reads them (graded up to GRADED_TOP,
+    FORBIDDEN from FORBIDDEN_FROM), so that a lethal U scores as the targets' U does."""
+    if reading == "graded":
+        return fitted
+    return np.where(fitted >= FORBIDDEN_FROM, FORBIDDEN, np.minimum(fitted, GRADED_TOP))
 
 
 def crossed_share(cases, demos) -> np.ndarray:
@@ -93,6 +109,7 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--temperature", type=float, nargs="+", default=[2.0, 4.0, 8.0])
     ap.add_argument("--demos", choices=("paths", "cells"), nargs="+", default=["paths", "cells"])
+    ap.add_argument("--reading", choices=READINGS, nargs="+", default=["graded"])
     ap.add_argument("--paths-per-map", type=positive_int, default=4)
     ap.add_argument("--scenes", type=positive_int, default=10, help="scenes of each kind from the suite's seed")
     ap.add_argument("--steps", type=positive_int, default=300, help="Adam steps of the fit")
@@ -122,11 +139,18 @@ def main(argv=None) -> None:
         )
         # Would demonstrations that never cross it teach the U? Plan them with the U as a wall (as
         # the GSCL layer reads a forbidden cost), fit on the maps as the network sees them.
+        # Or read as the layer reads it, lethal in the demonstrations and learnable as lethal.
         lethal = np.where(expected >= FORBIDDEN_FROM, grid.WALL, images).astype(np.uint8)
         walled = demonstrations("cells", jax.random.key(0), jnp.asarray(lethal), jnp.asarray(expected), 1)
-        for name, demos in (("priced as the soft planner prices it", priced), ("a wall", walled)):
-            fitted, _ = fit(jnp.asarray(images), demos, args.temperature[0], args.steps)
-            report = rules.score(np.asarray(fitted).reshape(len(queue), 2, 40, 40), queue)
+        layer = demonstrations("cells", jax.random.key(0), jnp.asarray(images), jnp.asarray(expected), 1, "layer")
+        for name, demos, reading in (
+            ("priced as the soft planner prices it", priced, "graded"),
+            ("a wall", walled, "graded"),
+            ("lethal as the layer reads it, and learnt so", layer, "layer"),
+        ):
+            fitted, _ = fit(jnp.asarray(images), demos, args.temperature[0], args.steps, reading=reading)
+            fitted = as_read(np.asarray(fitted), reading)
+            report = rules.score(fitted.reshape(len(queue), 2, 40, 40), queue)
             checks = ", ".join(
                 f"{k} {100 * v['pass_share']:.0f} % (contrast {v['contrast']:.2f} of {v['expected_contrast']:.2f})"
                 for k, v in report["by_check"].items()
@@ -140,17 +164,18 @@ def main(argv=None) -> None:
 
     results = {"initial": rules.score(np.full((len(cases), 2, 40, 40), 0.05, np.float32), cases)}
     for kind in args.demos:
-        demos = demonstrations(kind, jax.random.key(0), maps, targets, args.paths_per_map)
-        for t in args.temperature:
-            t0 = time.perf_counter()
-            fitted, nll = fit(maps, demos, t, args.steps)
-            fitted = np.asarray(fitted).reshape(len(cases), 2, 40, 40)
-            name = f"{kind} tau {t:g}"
-            results[name] = rules.score(fitted, cases)
-            print(
-                f"{name}: NLL {float(nll):.3f} per {'step' if kind == 'cells' else 'path'}, "
-                f"{time.perf_counter() - t0:.0f} s, MSE against the expected maps {results[name]['mse']:.4f}"
-            )
+        for reading in args.reading:
+            demos = demonstrations(kind, jax.random.key(0), maps, targets, args.paths_per_map, reading)
+            for t in args.temperature:
+                t0 = time.perf_counter()
+                fitted, nll = fit(maps, demos, t, args.steps, reading=reading)
+                fitted = as_read(np.asarray(fitted), reading).reshape(len(cases), 2, 40, 40)
+                name = f"{kind} tau {t:g}" + (f" {reading}" if len(args.reading) > 1 else "")
+                results[name] = rules.score(fitted, cases)
+                print(
+                    f"{name}: NLL {float(nll):.3f} per {'step' if kind == 'cells' else 'path'}, "
+                    f"{time.perf_counter() - t0:.0f} s, MSE against the expected maps {results[name]['mse']:.4f}"
+                )
 
     names = list(results)
     print("\n| check | " + " | ".join(names) + " |")
