@@ -2,7 +2,8 @@
 
 A cost map ``c`` (H, W) in [0, 1] (a GSCL network's output, or a free grid) prices a move on the
 network's 0.4 m grid at NavFn's cell cost, as the GSCL layer's planner does
-(:func:`traversal_per_m`: ``50 + 0.8 * 252 c`` per metre, walls impassable). The soft-min
+(:func:`traversal_per_m`: ``50 + 0.8 * 252 c`` per metre, walls impassable; with the "layer"
+reading, as the GSCL layer reads a network's costs, the queue's U lethal). The soft-min
 planner (:func:`planners.smooth_planner.soft_potential_implicit`) at temperature ``tau`` defines a
 stochastic policy ``pi(a | s) = exp(-(w(s, a) + phi(s')) / tau) / exp(-phi(s) / tau)``: maximum
 entropy IRL's soft value iteration (Ziebart et al., AAAI 2008). The log-likelihood of a path
