@@ -108,10 +108,9 @@ def traversal_per_m(maps, costs, impassable: float = smooth_planner.BLOCKED, rea
         return jnp.where(walls, impassable, NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * costs)
     if reading != "layer":
         raise ValueError(f"reading must be one of {READINGS}, got {reading!r}")
-    nav2 = read_cost(costs)
-    graded = NAVFN_NEUTRAL + NAVFN_FACTOR * jnp.minimum(nav2, MAX_GRADED)
     if np.isinf(impassable):
-        return jnp.where(walls | (nav2 >= LETHAL), impassable, graded)
+        nav2 = read_cost(costs)
+        return jnp.where(walls | (nav2 >= LETHAL), impassable, NAVFN_NEUTRAL + NAVFN_FACTOR * nav2)
     rising = NAVFN_NEUTRAL + NAVFN_FACTOR * MAX_GRADED * jnp.clip(costs, 0.0, FORBIDDEN_FROM) / GRADED_TOP
     lethal = LETHAL_PER_M * jnp.clip((costs - FORBIDDEN_FROM) / LETHAL_RAMP, 0.0, 1.0)
     return jnp.where(walls, impassable, rising + lethal)
