@@ -117,11 +117,15 @@ def read_manifest(folder: str | pathlib.Path) -> Manifest | None:
         files = raw["files"] if ok else None
         ok = ok and isinstance(raw.get("job"), str) and isinstance(files, list)
         ok = ok and all(isinstance(f, str) and _safe_relative(f.rstrip("/")) for f in files)
+        journal = raw.get("journal") if ok else None
+        if isinstance(journal, dict):  # a commit's journal names files too: the same rule
+            lists = [journal.get("old", []), journal.get("new", [])]
+            ok = all(isinstance(entries, list) for entries in lists)
+            ok = ok and all(isinstance(f, str) and _safe_relative(f.rstrip("/")) for f in lists[0] + lists[1])
     except (OSError, UnicodeDecodeError, json.JSONDecodeError):
         ok = False
     if not ok:
         raise NotOurs(f"{path}: not a socialnav run manifest (damaged or foreign); remove the folder yourself")
-    journal = raw.get("journal")
     return Manifest(raw["job"], raw.get("marker"), tuple(files), journal if isinstance(journal, dict) else None)
 
 
@@ -135,6 +139,24 @@ def write_manifest(folder: pathlib.Path, manifest: Manifest) -> None:
 def _safe_relative(rel: str) -> bool:
     parts = pathlib.PurePosixPath(rel).parts
     return bool(parts) and not rel.startswith("/") and all(p not in ("..", ".", "") for p in parts)
+
+
+def _listed_path(folder: pathlib.Path, rel: str, base: pathlib.Path | None = None) -> pathlib.Path:
+    """``base / rel`` (``base`` defaults to ``folder``) for a file a manifest lists, if the
+    folder holding it lies inside ``folder`` with every symbolic link followed; else
+    :class:`NotOurs` naming the entry. The entry itself may be a link: it is moved or removed
+    as a link, never followed, so only the folders above it are resolved. A hand-edited
+    manifest listing ``link/precious.txt`` beside ``link -> ../victim`` is refused before
+    anything is moved."""
+    path = (base if base is not None else folder) / rel.rstrip("/")
+    root = folder.resolve()
+    holder = path.parent.resolve()
+    if holder != root and not holder.is_relative_to(root):
+        raise NotOurs(
+            f"{folder / MANIFEST}: entry '{rel}' lies in {holder}, outside the run folder {root} (a symbolic link "
+            "on its way); refused, nothing moved or removed: fix or remove the manifest yourself"
+        )
+    return path
 
 
 # ------------------------------------------------------------------ names and paths
@@ -207,7 +229,7 @@ def owned_files(folder: pathlib.Path, manifest: Manifest | None = None, with_run
     found: list[str] = []
     if manifest is not None:
         for rel in manifest.files:
-            path = folder / rel.rstrip("/")
+            path = _listed_path(folder, rel)
             if rel.endswith("/"):
                 if path.is_dir() and not path.is_symlink():
                     found += [p.relative_to(folder).as_posix() for p in sorted(path.rglob("*")) if not p.is_dir()]
@@ -475,7 +497,12 @@ def _finish(folder: pathlib.Path, stage: pathlib.Path, aside: pathlib.Path, old:
 def recover(folder: pathlib.Path) -> str | None:
     """Settle a commit that a kill interrupted (its manifest still holds the journal): finish it
     when the new marker is in place, else put the previous run back. Returns ``"finished"``,
-    ``"rolled back"`` or None (nothing to settle)."""
+    ``"rolled back"`` or None (nothing to settle).
+
+    Raises:
+      NotOurs: the journal names a file whose folder lies outside ``folder`` (symbolic links
+        followed); nothing is moved.
+    """
     try:
         manifest = read_manifest(folder)
     except NotOurs:
@@ -487,6 +514,11 @@ def recover(folder: pathlib.Path) -> str | None:
     stage, aside = folder / str(journal.get("stage", "")), folder / str(journal.get("aside", ""))
     if not (_LEFTOVER.match(stage.name) and _LEFTOVER.match(aside.name)):
         return None
+    if stage.is_symlink() or aside.is_symlink():
+        raise NotOurs(f"{folder / MANIFEST}: the journal's {stage.name} or {aside.name} is a symbolic link; refused")
+    for rel in old + new:  # every file the settling would move, checked before the first move
+        for base in (folder, stage, aside):
+            _listed_path(folder, rel, base)
     marker = manifest.marker
     new_marker_in = marker in new and _exists(folder / marker) and not _exists(stage / marker)
     if new_marker_in:

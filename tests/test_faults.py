@@ -308,3 +308,63 @@ def test_every_command_leaves_a_users_files_alone(job, learned_run, tmp_path):
         assert written - {runfolder.MANIFEST} <= set(runfolder.owned_files(out)), written
     else:  # gscl generate writes a file and its record, not a folder
         assert written == {"d.npz", "d.json"}
+
+
+def _victim_beside(folder: pathlib.Path) -> pathlib.Path:
+    """A user's folder ``victim`` beside ``folder`` and a symbolic link ``folder/link`` to it."""
+    victim = folder.parent / "victim"
+    victim.mkdir()
+    (victim / "precious.txt").write_text("the user's thesis")
+    (folder / "link").symlink_to(victim, target_is_directory=True)
+    return victim
+
+
+def test_a_manifest_naming_a_file_through_a_symbolic_link_is_refused(tmp_path, capsys):
+    """A hand-edited manifest listing ``link/precious.txt`` beside ``link -> ../victim``:
+    ``--overwrite`` refuses it in one line naming the entry, before moving anything; the user's
+    file and the previous run stay whole."""
+    from socialnav import cli
+
+    out = tmp_path / "out"
+    short = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
+    assert cli.main(["simulate", "--out", str(out), *short]) == 0
+    logs = (out / "logs.parquet").read_bytes()
+    victim = _victim_beside(out)
+    manifest = json.loads((out / runfolder.MANIFEST).read_text())
+    manifest["files"].append("link/precious.txt")
+    (out / runfolder.MANIFEST).write_text(json.dumps(manifest))
+    capsys.readouterr()
+
+    assert cli.main(["simulate", "--out", str(out), "--overwrite", "--seed", "5", *short]) == 2
+    err = capsys.readouterr().err
+    assert "link/precious.txt" in err and "outside" in err and err.count("\n") == 1, err
+    assert (victim / "precious.txt").read_text() == "the user's thesis"
+    assert (out / "logs.parquet").read_bytes() == logs and (out / "run.json").is_file()
+
+
+def test_a_journal_naming_a_file_through_a_symbolic_link_is_not_settled(tmp_path):
+    """The same entry in an interrupted commit's journal: settling it refuses before a move."""
+    folder = tmp_path / "run"
+    folder.mkdir()
+    _write_old(folder)
+    victim = _victim_beside(folder)
+    manifest = runfolder.read_manifest(folder)
+    journal = {"old": ["link/precious.txt"], "new": [], "stage": ".staging-1", "aside": ".old-1"}
+    runfolder.write_manifest(
+        folder, runfolder.Manifest("test", "run.json", (*manifest.files, "link/precious.txt"), journal)
+    )
+    with pytest.raises(runfolder.NotOurs, match="link/precious.txt"):
+        runfolder.clear_leftovers(folder)
+    assert (victim / "precious.txt").read_text() == "the user's thesis"
+    assert _state(folder) == "old"
+
+
+@pytest.mark.parametrize("entry", ["../victim/precious.txt", "/etc/passwd", "a/../../b"])
+def test_a_manifest_naming_a_path_outside_is_not_a_manifest(tmp_path, entry):
+    folder = tmp_path / "run"
+    folder.mkdir()
+    (folder / runfolder.MANIFEST).write_text(
+        json.dumps({"format": runfolder.MANIFEST_FORMAT, "job": "test", "marker": None, "files": [entry]})
+    )
+    with pytest.raises(runfolder.NotOurs, match="not a socialnav run manifest"):
+        runfolder.read_manifest(folder)
