@@ -85,7 +85,9 @@ class Trajectory:
       robot_xy (T, 2), robot_yaw (T,), robot_speed (T,); people_xy (T, P, 2), people_heading (T, P),
       people_present (T, P), people_visible (T, P); reached (T,) bool (the goal has been reached by
       then); speed_gain (T,) the local planner's speed factor (1 without one); predicted_distance_m
-      (T,) nearest person's predicted distance to the robot 2 s ahead; wall_contacts () int32.
+      (T,) nearest person's predicted distance to the robot 2 s ahead; wall_contacts () int32;
+      invalid_actions () int32 the steps whose action had a NaN or infinite entry (the base was
+      stopped instead: :meth:`jaxsim.scenes.env.Env.step`).
     """
 
     robot_xy: jnp.ndarray
@@ -99,6 +101,7 @@ class Trajectory:
     speed_gain: jnp.ndarray
     predicted_distance_m: jnp.ndarray
     wall_contacts: jnp.ndarray
+    invalid_actions: jnp.ndarray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -248,6 +251,7 @@ def _record(seen: env_lib.Observation, action, actor_state, timestep: env_lib.Ti
         info.reached,
         jnp.asarray(gain, jnp.float32),
         pred_d,
+        info.invalid_action,
     )
 
 
@@ -261,7 +265,7 @@ def run_episode(env: env_lib.Env, actor: Actor, params, variant: Variant) -> Tra
     """One episode of ``variant`` in ``env`` driven by ``actor`` (``actor`` static; vmap it over
     variants): :func:`jaxsim.scenes.actor.rollout` with the arena's record."""
     (state, _), records = rollout(env, actor, params, variant, episode_key(variant), record=_record)
-    robot_xy, yaw, speed, pxy, pheading, present, seen, reached, gain, pred_d = records
+    robot_xy, yaw, speed, pxy, pheading, present, seen, reached, gain, pred_d, invalid = records
     return Trajectory(
         robot_xy=robot_xy,
         robot_yaw=yaw,
@@ -274,6 +278,7 @@ def run_episode(env: env_lib.Env, actor: Actor, params, variant: Variant) -> Tra
         speed_gain=gain,
         predicted_distance_m=pred_d,
         wall_contacts=state.robot.wall_contacts,
+        invalid_actions=jnp.sum(invalid, dtype=jnp.int32),
     )
 
 

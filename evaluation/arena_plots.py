@@ -179,7 +179,9 @@ def methods_figure(summary: pd.DataFrame, path) -> pathlib.Path:
     x = np.arange(len(methods))
     for k, (key, title, higher) in enumerate(panels):
         ax = fig.add_subplot(rows, cols, k + 1)
-        per_scene = summary.pivot_table(index="scene", columns="method", values=key, sort=False)[methods]
+        # reindexed: a method whose values are all NaN (a broken actor's) keeps its row, empty
+        per_scene = summary.pivot_table(index="scene", columns="method", values=key, sort=False, dropna=False)
+        per_scene = per_scene.reindex(columns=methods)
         means = per_scene.mean(axis=0).to_numpy()
         ax.barh(x, means, color="tab:blue" if higher else "tab:orange", alpha=0.7)
         for j, m in enumerate(methods):

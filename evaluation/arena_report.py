@@ -20,7 +20,7 @@ from scipy import stats
 from socialnav.common.intervals import wilson
 from socialnav.evaluation import arena, nav_metrics
 from socialnav.evaluation.arena_params import ArenaParams
-from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.actor import Actor, check_actor
 from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
 from socialnav.jaxsim.scenes.variant import Variant, sample_variants
 from socialnav.planners.baselines import BASELINES
@@ -120,8 +120,12 @@ def _metrics_program(rule_structure, n_periods: int, config: arena.ArenaConfig, 
     return jax.jit(jax.vmap(one, in_axes=(0, 0, 0, None)))
 
 
-def episode_frame(scene: str, method: str, first: int, metrics: dict, wall_contacts) -> pd.DataFrame:
-    """One row per episode: scalar metrics, zone shares, the first people's minimum distances."""
+def episode_frame(
+    scene: str, method: str, first: int, metrics: dict, wall_contacts, invalid_actions=None
+) -> pd.DataFrame:
+    """One row per episode: scalar metrics, zone shares, the first people's minimum distances,
+    the wall contacts and ``invalid_action_steps`` (the steps whose action had a NaN or infinite
+    entry, the base stopped instead; 0 for a sound actor)."""
     m = {k: np.asarray(v) for k, v in metrics.items()}
     n = len(m["goal_success"])
     rows = {"scene": [scene] * n, "method": [method] * n, "variant": np.arange(first, first + n)}
@@ -135,6 +139,7 @@ def episode_frame(scene: str, method: str, first: int, metrics: dict, wall_conta
         else:
             rows[key] = value
     rows["wall_contacts"] = np.asarray(wall_contacts)
+    rows["invalid_action_steps"] = np.zeros(n, np.int32) if invalid_actions is None else np.asarray(invalid_actions)
     frame = pd.DataFrame(rows)
     frame["metrics_version"] = nav_metrics.VERSION
     return frame
@@ -217,7 +222,7 @@ def run_scene(
     for method in methods:
         if method in user_actors:
             env = setup.env.replace(crowd=crowd, robot=robot)
-            actor, actor_params = user_actor(user_actors[method], env)
+            actor, actor_params = user_actor(user_actors[method], env, setup.n_slots)
             runs.append(arena.actor_function(setup, actor, actor_params, env))
         elif method in BASELINES:
             runs.append(arena.baseline_function(setup, method, crowd, robot, config))
@@ -237,7 +242,8 @@ def run_scene(
     results = arena.run_spread(runs, variants, n_devices)
     without = next(results)
     for method, tr in zip(methods, results):
-        episodes.append(episode_frame(name, method, first, measure(tr, variants, without), tr.wall_contacts))
+        metrics = measure(tr, variants, without)
+        episodes.append(episode_frame(name, method, first, metrics, tr.wall_contacts, tr.invalid_actions))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)
         if kept is not None:
             trajectories.append(kept)
@@ -248,17 +254,22 @@ def run_scene(
     )
 
 
-def user_actor(factory: Callable, env) -> tuple[Actor, object]:
+def user_actor(factory: Callable, env, n_people: int | None = None) -> tuple[Actor, object]:
     """``(actor, params)`` from a user's factory called with the scene's env: it returns an
     :class:`~jaxsim.scenes.actor.Actor` (its params are then the env's robot limits,
-    :class:`~jaxsim.scenes.robot.RobotParams`) or ``(actor, params)``."""
+    :class:`~jaxsim.scenes.robot.RobotParams`) or ``(actor, params)``. With ``n_people`` (the
+    scene's padded people slots) the actor is traced once on such an observation and an action
+    that is not of shape (2,) is refused (:func:`jaxsim.scenes.actor.check_actor`), before any
+    episode runs."""
     made = factory(env)
-    if isinstance(made, Actor):
-        return made, env.robot
-    if isinstance(made, tuple) and len(made) == 2 and isinstance(made[0], Actor):
-        return made
     name = getattr(factory, "__name__", repr(factory))
-    raise TypeError(f"{name}(env) must return an Actor or (Actor, params), got {type(made).__name__}")
+    if isinstance(made, Actor):
+        made = made, env.robot
+    if not (isinstance(made, tuple) and len(made) == 2 and isinstance(made[0], Actor)):
+        raise TypeError(f"{name}(env) must return an Actor or (Actor, params), got {type(made).__name__}")
+    if n_people is not None:
+        check_actor(env, made[0], made[1], n_people)
+    return made
 
 
 # The means that get a 95 % interval in the summary (``<key>_lo``, ``<key>_hi``).
@@ -281,7 +292,9 @@ def mean_interval(values) -> tuple[float, float]:
 
 def summary(episodes: pd.DataFrame) -> pd.DataFrame:
     """One row per (scene, method): n, goal and social success (%) with Wilson 95 % intervals
-    (``_ci`` as text, ``_lo``/``_hi`` in %), means, and t intervals of :data:`INTERVAL_MEANS`."""
+    (``_ci`` as text, ``_lo``/``_hi`` in %), means, t intervals of :data:`INTERVAL_MEANS`, and
+    ``invalid_action_pct``, the share of episodes in which the actor gave a NaN or infinite
+    action at least once (its rows measure a robot stopped on those steps, not the method)."""
     rows = []
     for (scene, method), g in episodes.groupby(["scene", "method"], sort=False):
         n = len(g)
@@ -295,6 +308,8 @@ def summary(episodes: pd.DataFrame) -> pd.DataFrame:
         for key in SUMMARY_SHARES:
             if key in g:
                 row[key + "_pct"] = 100.0 * float(g[key].mean())
+        if "invalid_action_steps" in g:
+            row["invalid_action_pct"] = 100.0 * float((g["invalid_action_steps"] > 0).mean())
         for key in SUMMARY_MEANS:
             if key in g:
                 values = g[key].replace([np.inf, -np.inf], np.nan)

@@ -299,3 +299,132 @@ def test_scene_from_file_draws_the_arenas_variant_and_names_a_bad_file(setup, tm
     plain, hall = scene_from_file(DATA_DIR / "scenes" / "gscl_l_hallway.json")
     middle = hall.spec.bounds_m[2] + hall.spec.bounds_m[3]
     assert float(mirrored.goal_xy_m[1]) == pytest.approx(middle - float(plain.goal_xy_m[1]), abs=1.0)
+
+
+# ---------------------------------------------------------------- actions at the boundary
+
+
+@pytest.mark.parametrize("bad", [jnp.array([jnp.nan, 0.3]), jnp.array([0.5, jnp.inf]), jnp.array([-jnp.inf, 0.0])])
+def test_a_non_finite_action_stops_the_robot_and_is_marked(bad):
+    """On a scene whose people walk around the robot: a NaN or infinite action is never applied
+    (the base stops), the step says so, and nothing turns NaN: not the robot, the people who
+    avoid it, nor the reward."""
+    setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "snape_walking.json"))
+    env = setup.env
+    state, ts = env.reset(jax.random.key(0), _one(_variants(setup, 1), 0))
+    step = jax.jit(env.step)
+    for _ in range(5):
+        state, ts = step(state, jnp.array([0.5, 0.0]))
+    assert not bool(ts.info.invalid_action)
+    moving_xy = np.asarray(state.robot.xy)
+    for _ in range(20):
+        state, ts = step(state, bad)
+        assert bool(ts.info.invalid_action)
+    assert float(ts.observation.robot_speed_mps) == pytest.approx(0.0, abs=1e-6)
+    assert np.linalg.norm(np.asarray(state.robot.xy) - moving_xy) < 0.5  # braked, not driven
+    for leaf in jax.tree_util.tree_leaves((ts.observation, ts.reward, state.people.xy, state.robot)):
+        if jnp.issubdtype(leaf.dtype, jnp.floating):
+            assert np.all(np.isfinite(np.asarray(leaf))), leaf
+    state, ts = step(state, jnp.array([0.5, 0.0]))
+    assert not bool(ts.info.invalid_action) and float(ts.observation.robot_speed_mps) > 0.0
+
+
+@pytest.mark.parametrize("bad", [jnp.array([0.5]), jnp.array([0.5, 0.1, 9.0]), jnp.float32(0.5), jnp.zeros((1, 2))])
+def test_an_action_of_another_shape_is_refused_when_traced(setup, bad):
+    env = setup.env
+    state, _ = env.reset(jax.random.key(0), _one(_variants(setup, 1), 0))
+    with pytest.raises(ValueError, match=r"shape \(2,\)"):
+        jax.jit(env.step)(state, bad)
+    with pytest.raises(ValueError, match=r"shape \(2,\)"):
+        env.step(state, bad)
+    variants = _variants(setup, 2)
+    states, _ = jax.vmap(env.reset)(jax.random.split(jax.random.key(0), 2), variants)
+    with pytest.raises(ValueError, match=r"shape \(2,\)"):  # a batch of scalars: one lane's shape is ()
+        jax.vmap(env.step)(states, jnp.zeros(2))
+
+
+def _actor_returning(action):
+    return Actor(init=lambda key, obs: (), act=lambda p, s, o, k: (action, s), name="odd")
+
+
+@pytest.mark.parametrize("action", [jnp.zeros(1), jnp.zeros(3), jnp.float32(0.0), jnp.zeros((2, 2))])
+def test_check_actor_refuses_an_action_of_another_shape(setup, action):
+    from socialnav.jaxsim.scenes.actor import check_actor
+
+    with pytest.raises(ValueError, match=r"actor 'odd'.*shape \(2,\)"):
+        check_actor(setup.env, _actor_returning(action), (), setup.n_slots)
+    check_actor(setup.env, _actor_returning(jnp.zeros(2)), (), setup.n_slots)  # the right one passes
+    check_actor(setup.env, _actor_returning((0.1, 0.0)), (), setup.n_slots)  # a pair reads as (2,)
+
+
+def test_the_gymnasium_adapters_stop_on_a_nan_action_and_refuse_a_wrong_shape():
+    gym_env = pytest.importorskip("socialnav.jaxsim.scenes.gym_env")
+    spec = load_scene(DATA_DIR / "scenes" / "snape_walking.json")
+    env = gym_env.SocialNavEnv(spec, pool=4)
+    env.reset(seed=0)
+    for _ in range(5):
+        obs, reward, *_, info = env.step(np.array([np.nan, np.nan], np.float32))
+        assert info["invalid_action"] and np.isfinite(reward)
+        assert env.observation_space.contains(obs)
+    obs, *_, info = env.step(env.action_space.high)
+    assert not info["invalid_action"] and env.observation_space.contains(obs)
+    for bad in (np.zeros(1), np.zeros(3), 0.5, np.zeros((1, 2)), "fast"):
+        with pytest.raises(ValueError, match=r"SocialNavEnv.step: actions must"):
+            env.step(bad)
+    venv = gym_env.SocialNavVectorEnv(spec, num_envs=2, pool=4)
+    venv.reset(seed=0)
+    obs, *_, info = venv.step(np.array([[np.inf, 0.0], [0.3, 0.0]], np.float32))
+    assert list(info["invalid_action"]) == [True, False] and venv.observation_space.contains(obs)
+    with pytest.raises(ValueError, match=r"shape \(2, 2\).*got shape \(2,\)"):
+        venv.step(np.zeros(2))
+
+
+NAN_ACTORS = """
+import jax.numpy as jnp
+from socialnav.jaxsim.scenes import Actor
+
+
+def nan_after_a_second(env):
+    def act(robot, state, obs, key):
+        return jnp.where(obs.time_s > 1.0, jnp.nan, 1.0) * jnp.array([robot.max_speed_mps, 0.0]), state
+
+    return Actor(init=lambda key, obs: (), act=act, name="nan_after_a_second")
+
+
+def one_number(env):
+    return Actor(init=lambda key, obs: (), act=lambda p, s, o, k: (jnp.array([0.5]), s), name="one_number")
+
+
+def a_scalar(env):
+    return Actor(init=lambda key, obs: (), act=lambda p, s, o, k: (jnp.float32(0.5), s), name="a_scalar")
+"""
+
+
+def test_the_arena_marks_an_actor_whose_actions_go_non_finite(tmp_path, capsys):
+    module = tmp_path / "nan_actors.py"
+    module.write_text(NAN_ACTORS)
+    out = tmp_path / "run"
+    argv = ["arena", "--scenes", "snape_walking", "--methods", "navfn", "--variants", "2", "--no-progress"]
+    assert cli.main([*argv, "--actor", f"{module}:nan_after_a_second", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "nan_after_a_second gave a NaN or infinite action in 100 %" in err and "Traceback" not in err
+    summary = pd.read_csv(out / "summary.csv").set_index("method")
+    assert summary.loc["nan_after_a_second", "invalid_action_pct"] == 100.0
+    assert summary.loc["navfn", "invalid_action_pct"] == 0.0
+    episodes = pd.read_parquet(out / "episodes" / "snape_walking.parquet")
+    broken = episodes[episodes.method == "nan_after_a_second"]
+    assert (broken["invalid_action_steps"] > 0).all() and np.isfinite(broken["d_min_m"]).all()
+    trajectories = pd.read_parquet(out / "trajectories" / "snape_walking.parquet")
+    assert np.isfinite(trajectories.filter(regex="^(robot|p\\d+)_[xy]$").to_numpy()).all()
+    assert (out / "pictures" / "methods.png").is_file()
+
+
+@pytest.mark.parametrize("function", ["one_number", "a_scalar"])
+def test_the_arena_refuses_an_actor_whose_action_has_another_shape(tmp_path, capsys, function):
+    module = tmp_path / "nan_actors.py"
+    module.write_text(NAN_ACTORS)
+    argv = ["arena", "--scenes", "snape_walking", "--methods", "navfn", "--variants", "2", "--no-progress"]
+    assert cli.main([*argv, "--actor", f"{module}:{function}", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"actor '{function}'" in err and "shape (2,)" in err, err
+    assert not (tmp_path / "o" / "run.json").exists()

@@ -24,12 +24,37 @@ from collections.abc import Callable
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.actor import Actor, ActorState, Params
-from socialnav.jaxsim.scenes.env import Env, EnvState, Observation, TimeStep
+from socialnav.jaxsim.scenes.env import Env, EnvState, Observation, TimeStep, action_problem
 
-__all__ = ["Actor", "ActorState", "Params", "StepRecord", "default_record", "rollout"]
+__all__ = ["Actor", "ActorState", "Params", "StepRecord", "check_actor", "default_record", "rollout"]
+
+
+def check_actor(env: Env, actor: Actor, params: Params, n_people: int) -> None:
+    """Trace ``actor``'s ``init``, ``plan`` and ``act`` once on an observation of ``env`` with
+    ``n_people`` slots (shapes only: ``jax.eval_shape``, nothing runs) and check its action.
+
+    Raises:
+      ValueError: the action is not of shape (2,) = (v m/s, omega rad/s), named with the actor.
+      Exception: whatever the actor's own code raises when traced.
+    """
+    spec = env.observation_spec(n_people)
+    observation = Observation(**{k: jax.ShapeDtypeStruct(shape, dtype) for k, (shape, dtype) in spec.items()})
+    key = jax.random.key(0)
+    state = jax.eval_shape(actor.init, key, observation)
+    if actor.plan is not None:
+        state = jax.eval_shape(actor.plan, params, state, observation, key)
+    action, _ = jax.eval_shape(actor.act, params, state, observation, key)
+    try:  # as Env.step reads it: a tuple (v, omega) is an array of shape (2,)
+        action = jax.eval_shape(jnp.asarray, action) if not hasattr(action, "shape") else action
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"actor {actor.name!r}: its action is not an array of shape (2,) = (v, omega): {e}") from None
+    problem = action_problem(action.shape, action.dtype)
+    if problem is not None:
+        raise ValueError(f"actor {actor.name!r}: {problem}")
 
 
 @struct.dataclass

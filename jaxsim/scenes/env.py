@@ -9,7 +9,12 @@ One step (``dt_s``, 0.1 s by default):
 
 1. the action ``(v, omega)`` (m/s, rad/s) is applied to the base, whose limits
    (:class:`~jaxsim.scenes.robot.RobotParams`) clip it; once the goal is reached the base is
-   commanded to stop (the episode's people go on);
+   commanded to stop (the episode's people go on). An action of another shape is refused when
+   the step is traced (``ValueError``, before any work). An action with a NaN or infinite entry
+   is never applied: the base is commanded to stop for that step and ``info.invalid_action`` is
+   set, so a broken actor's episode stays finite and is marked (the arena counts such steps per
+   episode, ``invalid_action_steps``) instead of spreading NaN into the robot, the people who
+   avoid it and every metric;
 2. the people move by the social force (:mod:`jaxsim.scenes.people`), the robot's previous
    position and velocity an agent they avoid; the base moves and slides along walls;
 3. the robot perceives (:mod:`jaxsim.scenes.perception`): people in range and in line of sight,
@@ -135,7 +140,8 @@ class StepInfo:
     """True quantities for metrics (not for the robot): people_xy_m (P, 2),
     people_heading_rad (P,), people_present (P,) bool, reached () bool (by now),
     person_contact () bool, wall_contact () bool (this step), nearest_person_m () the smallest
-    body-to-body distance (inf with nobody present)."""
+    body-to-body distance (inf with nobody present), invalid_action () bool (this step's action
+    had a NaN or infinite entry and the base was stopped instead)."""
 
     people_xy_m: jax.Array
     people_heading_rad: jax.Array
@@ -144,6 +150,7 @@ class StepInfo:
     person_contact: jax.Array
     wall_contact: jax.Array
     nearest_person_m: jax.Array
+    invalid_action: jax.Array
 
 
 @struct.dataclass
@@ -216,16 +223,23 @@ class Env:
             key=key,
         )
         state, observation = self._perceive(state)
-        info = self._info(state, jnp.array(False))
+        info = self._info(state, jnp.array(False), jnp.array(False))
         zero = jnp.float32(0.0)
         return state, TimeStep(observation, zero, jnp.array(False), jnp.array(False), info)
 
     def step(self, state: EnvState, action: jax.Array) -> tuple[EnvState, TimeStep]:
-        """Apply ``action`` (2,) = (v m/s, omega rad/s) for one step."""
+        """Apply ``action`` (2,) = (v m/s, omega rad/s) for one step.
+
+        Raises:
+          ValueError: ``action`` is not of shape (2,) (checked when the step is traced; under
+            ``vmap`` the shape of one lane).
+        """
         cfg = self.config
-        action = jnp.asarray(action, jnp.float32)
-        v = jnp.where(state.reached, 0.0, action[0])
-        w = jnp.where(state.reached, 0.0, action[1])
+        action = check_action(action)
+        invalid = ~jnp.all(jnp.isfinite(action))
+        stop = state.reached | invalid
+        v = jnp.where(stop, 0.0, action[0])
+        w = jnp.where(stop, 0.0, action[1])
         crowd = self.crowd.replace(dt_s=cfg.dt_s)
         people = people_lib.step_people(
             crowd,
@@ -245,7 +259,7 @@ class Env:
         new = state.replace(people=people, robot=robot, step=state.step + 1, reached=state.reached | reached_now)
         new, observation = self._perceive(new)
         wall_contact = robot.wall_contacts > state.robot.wall_contacts
-        info = self._info(new, wall_contact)
+        info = self._info(new, wall_contact, invalid)
         progress_m = jnp.linalg.norm(state.robot.xy - goal) - jnp.linalg.norm(robot.xy - goal)
         reward = self._reward(info, ~state.reached & new.reached, progress_m, state.reached)
         terminated = new.reached
@@ -322,7 +336,7 @@ class Env:
         value = grid.values[jnp.clip(row, 0, h - 1).astype(jnp.int32), jnp.clip(col, 0, w - 1).astype(jnp.int32)]
         return jnp.where(inside, value, 1.0)
 
-    def _info(self, state: EnvState, wall_contact) -> StepInfo:
+    def _info(self, state: EnvState, wall_contact, invalid_action) -> StepInfo:
         people, robot = state.people, state.robot
         gap = jnp.linalg.norm(people.xy - robot.xy, axis=-1) - self.robot.radius_m - self.config.person_radius_m
         nearest = jnp.min(jnp.where(people.present, gap, jnp.inf))
@@ -334,6 +348,7 @@ class Env:
             person_contact=nearest < 0.0,
             wall_contact=wall_contact,
             nearest_person_m=nearest,
+            invalid_action=invalid_action,
         )
 
     def _reward(self, info: StepInfo, arrived, progress_m, was_reached):
@@ -352,6 +367,35 @@ class Env:
             + r.time_penalty
         )
         return jnp.where(was_reached, 0.0, reward).astype(jnp.float32)
+
+
+def action_problem(shape, dtype) -> str | None:
+    """What is wrong with an action of ``shape`` and ``dtype`` (None: a (2,) array of real
+    numbers, ``(v m/s, omega rad/s)``)."""
+    if tuple(shape) != (2,):
+        return (
+            f"an action must have shape (2,) = (v m/s, omega rad/s), got shape {tuple(shape)} "
+            "(under vmap: the shape of one episode's action)"
+        )
+    if not (jnp.issubdtype(dtype, jnp.floating) or jnp.issubdtype(dtype, jnp.integer)):
+        return f"an action must hold real numbers (v m/s, omega rad/s), got dtype {dtype}"
+    return None
+
+
+def check_action(action) -> jax.Array:
+    """``action`` as a (2,) float32 array ``(v m/s, omega rad/s)``; ``ValueError`` naming the
+    shape otherwise (:func:`action_problem`). A shape is static under ``jit``, so a wrong one is
+    refused when the step is traced, before any episode runs (a (1,) action would otherwise be
+    read as speed = turn rate, a (3,) one lose its third entry, a scalar fail deep inside JAX)."""
+    if not (hasattr(action, "shape") and hasattr(action, "dtype")):
+        try:
+            action = jnp.asarray(action)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"an action must be an array of shape (2,) = (v m/s, omega rad/s): {e}") from None
+    problem = action_problem(action.shape, action.dtype)
+    if problem is not None:
+        raise ValueError(problem)
+    return jnp.asarray(action, jnp.float32)
 
 
 def _round_up(n: int, multiple: int) -> int:

@@ -7,7 +7,10 @@ CleanRL-style code (``pip install socialnav-jax[gym]``).
   returns the new episode's first observation with reward 0).
 
 Observations are a ``Dict`` of float32 boxes, one per :class:`~jaxsim.scenes.env.Observation`
-field (``people_visible`` as 0/1); the action is ``Box([0, -w_max], [v_max, w_max])``. Each
+field (``people_visible`` as 0/1); the action is ``Box([0, -w_max], [v_max, w_max])``. An action
+of another shape is refused with a ``ValueError`` naming it; one with a NaN or infinite entry
+stops the robot for that step, as the JAX environment does, and ``info["invalid_action"]`` says
+so (the observation stays finite and inside its space). Each
 reset draws a variant of the scene from a pool drawn once (``pool`` variants under ``seed``,
 the scene's training draws, never the held-out ones); ``reset(seed=s)`` reseeds the choice.
 """
@@ -132,7 +135,7 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
     def step(self, actions):
         if self._state is None:
             raise RuntimeError("SocialNavVectorEnv.step before reset")
-        actions = jnp.asarray(np.asarray(actions, np.float32).reshape(self.num_envs, 2))
+        actions = _as_actions(actions, (self.num_envs, 2), "SocialNavVectorEnv.step")
         keys, variants = self._draw(self.num_envs)
         mask = jnp.asarray(self._needs_reset)
         self._state, ts = self._step(self._state, actions, mask, keys, variants)
@@ -140,7 +143,8 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
         truncated = np.asarray(ts.truncated) & ~self._needs_reset
         reward = np.where(self._needs_reset, 0.0, np.asarray(ts.reward)).astype(np.float32)
         self._needs_reset = terminated | truncated
-        return _numpy(ts.observation), reward, terminated, truncated, {}
+        invalid = np.asarray(ts.info.invalid_action)
+        return _numpy(ts.observation), reward, terminated, truncated, {"invalid_action": invalid}
 
 
 class SocialNavEnv(gym.Env):
@@ -159,11 +163,24 @@ class SocialNavEnv(gym.Env):
         return {k: np.asarray(v[0]) for k, v in obs.items()}, info
 
     def step(self, action):
-        obs, reward, terminated, truncated, info = self._vector.step(np.asarray(action, np.float32)[None])
+        action = _as_actions(action, (2,), "SocialNavEnv.step")
+        obs, reward, terminated, truncated, info = self._vector.step(action[None])
         return (
             {k: np.asarray(v[0]) for k, v in obs.items()},
             float(reward[0]),
             bool(terminated[0]),
             bool(truncated[0]),
-            info,
+            {"invalid_action": bool(info["invalid_action"][0])},
         )
+
+
+def _as_actions(actions, shape: tuple[int, ...], where: str) -> np.ndarray:
+    """``actions`` as float32 of ``shape``; ``ValueError`` naming the shape found otherwise
+    (a reshape would read a (1,) action as speed = turn rate or fail with numpy's message)."""
+    try:
+        array = np.asarray(actions, np.float32)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{where}: actions must be numbers of shape {shape} (v m/s, omega rad/s): {e}") from None
+    if array.shape != shape:
+        raise ValueError(f"{where}: actions must have shape {shape} (v m/s, omega rad/s), got shape {array.shape}")
+    return array
