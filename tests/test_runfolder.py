@@ -131,9 +131,13 @@ def test_learn_and_evaluate_refuse_to_replace_their_results(learned_run, tmp_pat
 
 def test_names_that_reach_paths_are_checked(tmp_path):
     assert runfolder.check_name("casn_head_on@held_out", "scene") == "casn_head_on@held_out"
-    for bad in ("../../victim", "", ".hidden", "-x", "a/b", "a..b", "x" * 101, "ü", None):
+    for bad in ("../../victim", "", ".hidden", "-x", "a/b", "a..b", "x" * 101, "ü" * 101, "é\u0301", None):
         with pytest.raises(ValueError, match="cannot name a file"):
             runfolder.check_name(bad, "scene")
+    for unicode in ("Küche", "出口-2", "ü" * 100):  # letters of any script (they named waypoints before)
+        assert runfolder.check_name(unicode, "waypoint") == unicode
+    with pytest.raises(ValueError, match=r"the character\(s\) ' ', '/' are not allowed"):
+        runfolder.check_name("my room/2", "waypoint")
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "link").symlink_to(tmp_path)
     assert runfolder.inside(tmp_path / "out", tmp_path / "out" / "a" / "b.parquet")

@@ -86,6 +86,62 @@ def test_a_bad_scene_file_gives_one_error_naming_file_and_field(tmp_path, mutate
     assert e.value.field == field and str(path) in str(e.value)
 
 
+def _queue_person(obj):
+    (queue,) = [p for p in obj["people"] if p["behaviour"] == "queue"]
+    return queue
+
+
+@pytest.mark.parametrize(
+    "mutate, field, words",
+    [  # the queue's line, placed from its head back against towards_deg: every place checked
+        (lambda o: _queue_person(o).update(length=20, spacing_m=3.0), "people[0].length", "the line's place 3"),
+        (lambda o: _queue_person(o).update(towards_deg=180), "people[0].length", "walls["),
+        (lambda o: _queue_person(o).update(towards_deg=[-10, 100]), "people[0].length", "towards_deg"),
+        # the rules' geometry: a queue rule's head outside the scene or inside a wall is never broken
+        (lambda o: o["rule"]["rules"][0].update(head=[300, 0]), "rule.rules[0].head", "outside bounds_m"),
+        (lambda o: o["rule"]["rules"][0].update(head=[5.0, 0.0]), "rule.rules[0].head", "inside walls[4]"),
+        (lambda o: o.update(rule={"type": "visit", "box": [50, 60, 0, 1]}), "rule.box", "wholly outside"),
+        (lambda o: o.update(rule={"type": "avoid_circle", "centre": [0, 40], "radius_m": 1}), "rule.centre", "outside"),
+        (
+            lambda o: o.update(
+                rule={"type": "all", "rules": [{"type": "keep_right", "box": [7, 9, 0, 1], "direction_deg": 0}]}
+            ),
+            "rule.rules[0].box",
+            "wholly outside",
+        ),
+    ],
+)
+def test_a_queue_line_or_rule_outside_the_scene_is_refused(tmp_path, mutate, field, words):
+    obj = json.loads((DATA_DIR / "scenes" / "gscl_queue.json").read_text())
+    mutate(obj)
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(obj))
+    with pytest.raises(ScenarioError) as e:
+        load_scene(path)
+    assert e.value.field == field and words in str(e.value), str(e.value)
+
+
+def test_a_group_whose_circle_reaches_a_wall_or_out_of_the_scene_is_refused(tmp_path):
+    path = _mutated(tmp_path, lambda o: o["people"][0].update(radius_m=5.0))
+    with pytest.raises(ScenarioError, match="a member at .* lies (inside walls|outside bounds_m)") as e:
+        load_scene(path)
+    assert e.value.field == "people[0].radius_m"
+
+
+def test_every_generated_queue_place_lies_inside_the_scene_and_clear_of_walls():
+    """The check's promise, measured on the generator: every queue place of 200 variants of the
+    shipped queue, evaluation and held-out draws alike, lies inside the bounds and no wall."""
+    spec = load_scene(DATA_DIR / "scenes" / "gscl_queue.json")
+    xmin, xmax, ymin, ymax = spec.bounds_m
+    for held_out in (False, True):
+        v = sample_variants(spec, 0, 200, 0, held_out)
+        xy = v.xy0[v.valid & (v.kind == 2)]
+        assert len(xy) > 200
+        assert np.all((xy[:, 0] >= xmin) & (xy[:, 0] <= xmax) & (xy[:, 1] >= ymin) & (xy[:, 1] <= ymax))
+        for wx0, wx1, wy0, wy1 in spec.walls_m:
+            assert not np.any((xy[:, 0] > wx0) & (xy[:, 0] < wx1) & (xy[:, 1] > wy0) & (xy[:, 1] < wy1))
+
+
 def test_not_json_and_missing_file(tmp_path):
     (tmp_path / "bad.json").write_text("{oops")
     with pytest.raises(ScenarioError, match="invalid JSON"):

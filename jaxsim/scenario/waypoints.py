@@ -7,7 +7,7 @@ import pathlib
 
 import numpy as np
 
-from socialnav.common.names import SAFE_NAME_RULE, is_safe_name
+from socialnav.common.names import SAFE_NAME_RULE, is_safe_name, name_problem
 from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenario.jsonio import field, list_field, number, read_json
 
@@ -37,7 +37,9 @@ def load_waypoints(folder: pathlib.Path) -> Waypoints:
         where = f"waypoints[{i}]"
         name = field(wp, file, where, "id", str)
         if not is_safe_name(name):  # it names a log column, density_<id>, and the pictures' labels
-            raise ScenarioError(file, f"{where}.id", f"{name!r} cannot name a log column: use {SAFE_NAME_RULE}")
+            raise ScenarioError(
+                file, f"{where}.id", f"{name!r} cannot name a log column ({name_problem(name)}): use {SAFE_NAME_RULE}"
+            )
         if name in ids:
             raise ScenarioError(file, f"{where}.id", f"duplicate waypoint id {name!r}")
         ids.append(name)

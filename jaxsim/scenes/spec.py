@@ -89,7 +89,7 @@ from typing import Any
 
 import numpy as np
 
-from socialnav.common.names import SAFE_NAME_RULE, is_safe_name
+from socialnav.common.names import SAFE_NAME_RULE, is_safe_name, name_problem
 from socialnav.jaxsim.scenario.errors import ScenarioError
 
 BEHAVIOURS = ("standing", "walk", "group", "queue", "stream")
@@ -183,7 +183,7 @@ def _inside_bounds(r: _Reader, bounds, point, where):
     xmin, xmax, ymin, ymax = bounds
     (x0, x1), (y0, y1) = point
     if x0 < xmin or x1 > xmax or y0 < ymin or y1 > ymax:
-        r.fail(where, f"lies outside bounds_m {list(bounds)}")
+        r.fail(where, f"lies outside bounds_m {[float(b) for b in bounds]}")
 
 
 def _clear_of_walls(r: _Reader, walls_m: np.ndarray, point, where):
@@ -195,6 +195,91 @@ def _clear_of_walls(r: _Reader, walls_m: np.ndarray, point, where):
                 where,
                 f"range x {[x0, x1]}, y {[y0, y1]} reaches into walls[{k}] {[float(v) for v in (wx0, wx1, wy0, wy1)]}",
             )
+
+
+def _extremes(value, legal=(-math.inf, math.inf)) -> list[float]:
+    """The values a range ``(lo, hi)`` can be drawn at, in the evaluation's draws and the held-out
+    ones (up to half its width beyond either end, clipped to ``legal``:
+    :class:`jaxsim.scenes.variant._Drawer`), at its ends and middle."""
+    lo, hi = value
+    half = (hi - lo) / 2
+    lo, hi = max(lo - half, legal[0]), min(hi + half, legal[1])
+    return sorted({lo, (lo + hi) / 2, hi})
+
+
+def _check_queue_line(r: _Reader, queue: dict, where: str, bounds, walls_m: np.ndarray) -> None:
+    """Every place of a queue's line (``head`` moved back ``m * spacing_m`` against
+    ``towards_deg``, for m up to ``length - 1``) inside ``bounds_m`` and outside every wall, for
+    the head's corners and the ends and middle of the direction's and spacing's ranges (held-out
+    draws included; between the directions checked, every 45 degrees as well). The exit and the
+    head are checked as points already."""
+    (hx0, hx1), (hy0, hy1) = queue["head"]
+    lo, hi = _extremes(queue["towards_deg"])[0], _extremes(queue["towards_deg"])[-1]
+    angles = sorted({lo, hi, (lo + hi) / 2, *(45.0 * k for k in range(math.ceil(lo / 45), math.floor(hi / 45) + 1))})
+    spacings = _extremes(queue["spacing_m"], (0.3, 3.0))
+    last = int(queue["length"][1]) - 1
+    xmin, xmax, ymin, ymax = bounds
+    for angle in angles:
+        for spacing in spacings:
+            back = -spacing * np.array([math.cos(math.radians(angle)), math.sin(math.radians(angle))])
+            for m in range(1, last + 1):
+                for hx, hy in ((hx0, hy0), (hx0, hy1), (hx1, hy0), (hx1, hy1)):
+                    x, y = hx + m * back[0], hy + m * back[1]
+                    place = (
+                        f"the line's place {m} at ({x:.2f}, {y:.2f}) m (towards_deg {angle:g}, spacing_m {spacing:g})"
+                    )
+                    if not (xmin <= x <= xmax and ymin <= y <= ymax):
+                        r.fail(f"{where}.length", f"{place} lies outside bounds_m {[float(b) for b in bounds]}")
+                    for k, (wx0, wx1, wy0, wy1) in enumerate(walls_m):
+                        if wx0 <= x <= wx1 and wy0 <= y <= wy1:
+                            r.fail(f"{where}.length", f"{place} lies inside walls[{k}]")
+
+
+def _check_group_circle(r: _Reader, group: dict, where: str, bounds, walls_m: np.ndarray) -> None:
+    """Every member of a group (on its circle of ``radius_m`` about ``centre``, ``size`` of them
+    spaced evenly from ``rotation_deg``) inside ``bounds_m`` and outside every wall, for the
+    centre's corners, the radius's and rotation's ends and middle (held-out draws included; a
+    rotation range every 10 degrees) and every size drawn."""
+    (cx0, cx1), (cy0, cy1) = group["centre"]
+    radii = _extremes(group["radius_m"], (0.3, 5.0))
+    lo, hi = _extremes(group["rotation_deg"])[0], _extremes(group["rotation_deg"])[-1]
+    rotations = np.linspace(lo, hi, max(2, math.ceil((hi - lo) / 10.0) + 1)) if hi > lo else [lo]
+    sizes = range(2, int(group["size"][1]) + 1)
+    xmin, xmax, ymin, ymax = bounds
+    for size in sizes:
+        for rotation in rotations:
+            for m in range(size):
+                angle = math.radians(rotation) + 2 * math.pi * m / size
+                for radius in radii:
+                    for cx, cy in ((cx0, cy0), (cx0, cy1), (cx1, cy0), (cx1, cy1)):
+                        x, y = cx + radius * math.cos(angle), cy + radius * math.sin(angle)
+                        member = f"a member at ({x:.2f}, {y:.2f}) m (size {size}, radius_m {radius:g})"
+                        if not (xmin <= x <= xmax and ymin <= y <= ymax):
+                            r.fail(f"{where}.radius_m", f"{member} lies outside bounds_m {[float(b) for b in bounds]}")
+                        for k, (wx0, wx1, wy0, wy1) in enumerate(walls_m):
+                            if wx0 <= x <= wx1 and wy0 <= y <= wy1:
+                                r.fail(f"{where}.radius_m", f"{member} lies inside walls[{k}]")
+
+
+def _rule_point(r: _Reader, point: np.ndarray, where: str, bounds, walls_m: np.ndarray) -> np.ndarray:
+    """A rule's point inside ``bounds_m`` and outside every wall (a rule anchored where no robot
+    can go can never be broken: it would score every method as following it)."""
+    x, y = float(point[0]), float(point[1])
+    xmin, xmax, ymin, ymax = bounds
+    if not (xmin <= x <= xmax and ymin <= y <= ymax):
+        r.fail(where, f"({x:g}, {y:g}) lies outside bounds_m {[float(b) for b in bounds]}")
+    for k, (wx0, wx1, wy0, wy1) in enumerate(walls_m):
+        if wx0 < x < wx1 and wy0 < y < wy1:
+            r.fail(where, f"({x:g}, {y:g}) lies inside walls[{k}]")
+    return point
+
+
+def _rule_box(r: _Reader, box: np.ndarray, where: str, bounds) -> np.ndarray:
+    """A rule's box overlapping ``bounds_m`` (a box wholly outside the scene can never be entered)."""
+    xmin, xmax, ymin, ymax = bounds
+    if box[1] <= xmin or box[0] >= xmax or box[3] <= ymin or box[2] >= ymax:
+        r.fail(where, f"{[float(v) for v in box]} lies wholly outside bounds_m {[float(b) for b in bounds]}")
+    return box
 
 
 def _person(r: _Reader, p: dict, where: str, bounds, walls_m: np.ndarray) -> tuple[dict, int]:
@@ -240,6 +325,7 @@ def _person(r: _Reader, p: dict, where: str, bounds, walls_m: np.ndarray) -> tup
             rotation_deg=num("rotation_deg", default=0.0),
             turn_inward_at_s=None if turn is None else r.number(turn, f"{where}.turn_inward_at_s", 0.0),
         )
+        _check_group_circle(r, out, where, bounds, walls_m)
         return out, int(size[1])
     if behaviour == "queue":
         length = num("length", 1, 20, integer=True)
@@ -251,6 +337,7 @@ def _person(r: _Reader, p: dict, where: str, bounds, walls_m: np.ndarray) -> tup
             advance_every_s=num("advance_every_s", 1.0),
             exit=pt("exit"),
         )
+        _check_queue_line(r, out, where, bounds, walls_m)
         return out, int(length[1])
     # stream
     count = r.get(p, where, "count")
@@ -268,7 +355,7 @@ def _person(r: _Reader, p: dict, where: str, bounds, walls_m: np.ndarray) -> tup
     return out, count
 
 
-def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
+def _rule(r: _Reader, rule: Any, where: str, people: list[dict], bounds, walls_m: np.ndarray) -> dict:
     kind = r.get(rule, where, "type")
     if kind not in RULES:
         r.fail(f"{where}.type", f"expected one of {', '.join(RULES)}, got {kind!r}")
@@ -283,18 +370,27 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
     if kind == "avoid_circle":
         return {
             "type": kind,
-            "centre": r.exact_point(r.get(rule, where, "centre"), f"{where}.centre"),
+            "centre": _rule_point(
+                r,
+                r.exact_point(r.get(rule, where, "centre"), f"{where}.centre"),
+                f"{where}.centre",
+                bounds,
+                np.zeros((0, 4)),
+            ),
             "radius_m": r.number(r.get(rule, where, "radius_m"), f"{where}.radius_m", 0.0)[0],
         }
     if kind == "keep_right":
         return {
             "type": kind,
-            "box": r.box(r.get(rule, where, "box"), f"{where}.box"),
+            "box": _rule_box(r, r.box(r.get(rule, where, "box"), f"{where}.box"), f"{where}.box", bounds),
             "direction_deg": r.number(r.get(rule, where, "direction_deg"), f"{where}.direction_deg")[0],
             "min_share": r.number(r.get(rule, where, "min_share", 0.5), f"{where}.min_share", 0.0, 1.0)[0],
         }
     if kind == "visit":
-        return {"type": kind, "box": r.box(r.get(rule, where, "box"), f"{where}.box")}
+        return {
+            "type": kind,
+            "box": _rule_box(r, r.box(r.get(rule, where, "box"), f"{where}.box"), f"{where}.box", bounds),
+        }
     if kind == "pass_behind":
         i = r.get(rule, where, "person")
         if isinstance(i, bool) or not isinstance(i, int) or not 0 <= i < len(people):
@@ -305,7 +401,9 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
     if kind == "queue":
         return {
             "type": kind,
-            "head": r.exact_point(r.get(rule, where, "head"), f"{where}.head"),
+            "head": _rule_point(
+                r, r.exact_point(r.get(rule, where, "head"), f"{where}.head"), f"{where}.head", bounds, walls_m
+            ),
             "direction_deg": r.number(r.get(rule, where, "direction_deg"), f"{where}.direction_deg")[0],
             "half_width_m": r.number(r.get(rule, where, "half_width_m", 0.6), f"{where}.half_width_m", 0.05, 5.0)[0],
             "length_m": r.number(r.get(rule, where, "length_m"), f"{where}.length_m", 0.0, 100.0)[0],
@@ -314,7 +412,10 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict]) -> dict:
     rules = r.get(rule, where, "rules")
     if not isinstance(rules, list) or not rules:
         r.fail(f"{where}.rules", "expected a non-empty list of rules")
-    return {"type": kind, "rules": [_rule(r, sub, f"{where}.rules[{i}]", people) for i, sub in enumerate(rules)]}
+    return {
+        "type": kind,
+        "rules": [_rule(r, sub, f"{where}.rules[{i}]", people, bounds, walls_m) for i, sub in enumerate(rules)],
+    }
 
 
 # Bodies for the placement checks of :func:`load_scene`: a person's radius is the crowd model's
@@ -400,7 +501,7 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         r.fail("<file>", "top level must be a JSON object")
     name = r.get(obj, "", "name")
     if not is_safe_name(name):  # the name files its results: episodes/<name>.parquet
-        r.fail("name", f"{name!r} cannot name the scene's result files: use {SAFE_NAME_RULE}")
+        r.fail("name", f"{name!r} cannot name the scene's result files ({name_problem(name)}): use {SAFE_NAME_RULE}")
     bounds = tuple(r.box(r.get(obj, "", "bounds_m"), "bounds_m"))
     if (bounds[1] - bounds[0]) * (bounds[3] - bounds[2]) > 2500:
         r.fail(
@@ -449,9 +550,9 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         slots += n
     if slots > 64:
         r.fail("people", f"{slots} people at most: 64 allowed")
-    rule = _rule(r, r.get(obj, "", "rule"), "rule", people)
+    rule = _rule(r, r.get(obj, "", "rule"), "rule", people, bounds, walls_m)
     held_out = r.get(obj, "", "held_out_rule", None)
-    held_out_rule = None if held_out is None else _rule(r, held_out, "held_out_rule", people)
+    held_out_rule = None if held_out is None else _rule(r, held_out, "held_out_rule", people, bounds, walls_m)
     stop_and_go = r.get(obj, "", "stop_and_go_m", None)
     if stop_and_go is not None:
         stop_and_go = r.number(stop_and_go, "stop_and_go_m", 0.3, 5.0)[0]
