@@ -142,6 +142,46 @@ def read_ros_map(path) -> tuple[np.ndarray, float, tuple[float, float]]:
     return np.ascontiguousarray(occupancy), float(resolution), (float(origin[0]), float(origin[1]))
 
 
+# The least share of a file's positions that must lie on its map (inside the image's extent) for
+# the two to be taken as one frame. Positions of another frame (the map's origin forgotten, the
+# tracks in centimetres or pixels, x and y swapped) put next to none of them on the map, and a
+# window with no walls teaches nothing of walls; a recording whose people sometimes walk past the
+# mapped area still passes. A choice, not a measurement: ``--min-on-map`` sets another.
+MIN_ON_MAP_SHARE = 0.8
+
+
+def check_on_map(
+    tracks: dict,
+    occupancy,
+    resolution_m: float,
+    origin_xy_m,
+    tracks_file="tracks",
+    map_file="map",
+    min_share: float = MIN_ON_MAP_SHARE,
+) -> float:
+    """The share of the tracks' positions that lie on the map (inside the image's extent).
+
+    Raises:
+      TrackFileError: below ``min_share``, naming both files, the share and where the positions
+        and the map lie (so a frame mismatch can be seen at once).
+    """
+    h, w = np.shape(occupancy)
+    x0, y0 = float(origin_xy_m[0]), float(origin_xy_m[1])
+    x1, y1 = x0 + w * resolution_m, y0 + h * resolution_m
+    xy = np.concatenate([t[:, 1:] for t in tracks.values()])
+    on = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+    share = float(on.mean())
+    if share < min_share:
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        raise TrackFileError(
+            f"{tracks_file}: columns 'x', 'y': {100 * share:.0f} % of the positions lie on the map {map_file} "
+            f"(at least {100 * min_share:.0f} % needed): the positions span x {lo[0]:.4g}..{hi[0]:.4g}, "
+            f"y {lo[1]:.4g}..{hi[1]:.4g} m, the map x {x0:.4g}..{x1:.4g}, y {y0:.4g}..{y1:.4g} m; "
+            "are both in metres, in the same frame?"
+        )
+    return share
+
+
 def _cells(points_local_m: np.ndarray) -> np.ndarray:
     """(N, 2) int cells crossed by the polyline of local points (M, 2), consecutive repeats dropped."""
     dense = [points_local_m[:1]]

@@ -23,6 +23,7 @@ from socialnav.argtypes import (
     output_folder,
     positive_float,
     positive_int,
+    probability,
     seed_int,
     unet_widths,
 )
@@ -273,6 +274,9 @@ def add_parser(top) -> None:
     )
     ex.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
     ex.add_argument("--out", type=output_folder, required=True, help="the model's folder")
+    ex.add_argument(
+        "--overwrite", action="store_true", help="replace the model in --out whole (only once the new one is complete)"
+    )
     ex.add_argument("--scenes", type=positive_int, default=400, help="rule-suite scenes of each kind (default 400)")
     ex.add_argument(
         "--seed",
@@ -306,6 +310,9 @@ def add_parser(top) -> None:
         "--variants", type=positive_int, default=50, help="--scene: variants of each scene walked (default 50)"
     )
     ft.add_argument("--out", type=output_folder, required=True, help="the model's folder")
+    ft.add_argument(
+        "--overwrite", action="store_true", help="replace the model in --out whole (only once the new one is complete)"
+    )
     ft.add_argument("--steps", type=positive_int, default=2000, help="gradient steps (default 2000)")
     ft.add_argument("--batch-size", type=positive_int, default=32, help="tracks per step (default 32)")
     ft.add_argument(
@@ -314,6 +321,13 @@ def add_parser(top) -> None:
         default=4.0,
         help="the soft planner's temperature in NavFn cost units (default 4: people are noisier than exact "
         "plans; below 9.6)",
+    )
+    ft.add_argument(
+        "--min-on-map",
+        type=probability,
+        default=0.8,
+        help="--tracks: the least share of the positions that must lie on the --map's extent (default 0.8; "
+        "fewer means the two are in different frames or units)",
     )
     ft.add_argument("--seed", type=seed_int, default=0)
     ft.add_argument("--no-progress", action="store_true", help="hide the progress bar")
@@ -661,7 +675,8 @@ def _fit_tracks(args) -> int:
             specs = _scene_specs(args.scene)
         else:
             sources = [(tracks.read_tracks(args.tracks), *tracks.read_ros_map(args.map))]
-        runfolder.claim(args.out, FIT_TRACKS_JOB, FIT_TRACKS_FILES)
+            tracks.check_on_map(*sources[0], args.tracks, args.map, args.min_on_map)
+        runfolder.prepare(args.out, FIT_TRACKS_FILES, args.overwrite, marker="model.json", job=FIT_TRACKS_JOB)
         runfolder.check_writable(args.out)
     except runfolder.RunFolderError as err:
         raise SystemExit(f"socialnav gscl fit-tracks: --out {err}") from None
@@ -691,9 +706,12 @@ def _fit_tracks(args) -> int:
         "nll_per_path_first_last": [history[0], history[-1]],
         "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
-    model.export(args.out, card)
-    demonstrations_figure(model, maps, demos, args.out / "demonstrations.png")
-    runfolder.record(args.out, FIT_TRACKS_JOB, FIT_TRACKS_FILES)
+    try:
+        with runfolder.staged(args.out, "model.json", args.overwrite, job=FIT_TRACKS_JOB) as stage:
+            model.export(stage, card)
+            demonstrations_figure(model, maps, demos, stage / "demonstrations.png")
+    except runfolder.RunFolderError as err:
+        raise SystemExit(f"socialnav gscl fit-tracks: --out {err}") from None
     print(
         f"negative log-likelihood per path {history[0]:.2f} -> {history[-1]:.2f} nats; wrote "
         f"{args.out}/{{{', '.join(FIT_TRACKS_FILES)}}}"
@@ -727,7 +745,7 @@ def _export(args) -> int:
     from socialnav.models.inference import SocialCostModel
 
     try:
-        runfolder.claim(args.out, EXPORT_JOB, EXPORT_FILES)
+        runfolder.prepare(args.out, EXPORT_FILES, args.overwrite, marker="model.json", job=EXPORT_JOB)
         runfolder.check_writable(args.out)
         config, graphdef, state, meta = restore(args.run, args.step)
     except runfolder.RunFolderError as err:
@@ -752,8 +770,11 @@ def _export(args) -> int:
         "socialnav_version": __version__,
         "jax_version": jax.__version__,
     }
-    model.export(args.out, card)
-    runfolder.record(args.out, EXPORT_JOB, EXPORT_FILES)
+    try:
+        with runfolder.staged(args.out, "model.json", args.overwrite, job=EXPORT_JOB) as stage:
+            model.export(stage, card)
+    except runfolder.RunFolderError as err:
+        raise SystemExit(f"socialnav gscl export: --out {err}") from None
     worst = min(checks["rules_pass_by_check"].items(), key=lambda kv: kv[1])
     print(
         f"test MSE {checks['test_mse']:.5f}: {'meets' if checks['meets_quality'] else 'does not meet'} the quality "

@@ -133,6 +133,42 @@ def test_bad_map_files_are_named_with_their_field(tmp_path):
         tracks.read_tracks(tmp_path / "t.txt")
 
 
+def _walks(x_of_frame) -> list[tuple]:
+    """Six people walking along x at y = 10-15 m, 20 frames each."""
+    return [(f, person, x_of_frame(f), 10.0 + person) for person in range(6) for f in range(20)]
+
+
+@pytest.mark.parametrize(
+    ("where", "x_of_frame", "refused"),
+    [
+        ("on the map", lambda f: 1.0 + 0.5 * f, False),
+        ("the last frame past its edge (95 % on it)", lambda f: 20.0 + 0.55 * f, False),
+        ("100 m away", lambda f: 101.0 + 0.5 * f, True),
+        ("in centimetres", lambda f: 100.0 * (1.0 + 0.5 * f), True),
+        ("at 1e12 m", lambda f: 1e12 + f, True),
+    ],
+)
+def test_tracks_off_the_map_are_refused_before_any_work(tmp_path, where, x_of_frame, refused):
+    """Tracks another frame or unit than their map's are refused in one line naming both files
+    and where each lies, before any work; a recording a little wider than its map passes."""
+    from socialnav import cli
+
+    yaml_path = _write_map(tmp_path, [])  # 30 m x 30 m from the origin
+    pd.DataFrame(_walks(x_of_frame), columns=["frame", "id", "x", "y"]).to_csv(tmp_path / "t.csv", index=False)
+    occupancy, resolution, origin = tracks.read_ros_map(yaml_path)
+    read = tracks.read_tracks(tmp_path / "t.csv")
+    if not refused:
+        assert tracks.check_on_map(read, occupancy, resolution, origin) >= tracks.MIN_ON_MAP_SHARE
+        return
+    with pytest.raises(tracks.TrackFileError, match="lie on the map") as err:
+        tracks.check_on_map(read, occupancy, resolution, origin, tmp_path / "t.csv", yaml_path)
+    assert "\n" not in str(err.value) and "map.yaml" in str(err.value) and "t.csv" in str(err.value)
+    argv = ["gscl", "fit-tracks", "--tracks", str(tmp_path / "t.csv"), "--map", str(yaml_path)]
+    with pytest.raises(SystemExit, match="columns 'x', 'y'"):
+        cli.main([*argv, "--out", str(tmp_path / "m"), "--steps", "2", "--no-progress"])
+    assert not (tmp_path / "m").exists()
+
+
 @pytest.mark.slow
 def test_fit_tracks_command_fits_exports_a_loadable_model_and_names_bad_files(tmp_path, capsys):
     from socialnav import cli
