@@ -62,6 +62,38 @@ def check_run_folder(out, config: TrainConfig) -> None:
         )
 
 
+def newest_restorable(steps, restore_one) -> tuple[int | None, object, list[str]]:
+    """``(step, restored, failures)``: the newest of ``steps`` that ``restore_one(step)``
+    restores (it returns the restored tree, or raises, or returns a string saying why the tree
+    does not fit), with one line per newer step it fell back past; ``(None, None, failures)``
+    when none restores. Orbax and tensorstore raise many types for a damaged or foreign file, so
+    any exception counts as a failure."""
+    failures = []
+    for candidate in sorted(steps, reverse=True):
+        try:
+            restored = restore_one(candidate)
+        except Exception as e:
+            first = str(e).strip().splitlines()[0][:200] if str(e).strip() else type(e).__name__
+            failures.append(f"step {candidate}: {first}")
+            continue
+        if isinstance(restored, str):
+            failures.append(f"step {candidate}: {restored}")
+            continue
+        return candidate, restored, failures
+    return None, None, failures
+
+
+def drop_unreadable(manager, restored_step: int, log=print, where="") -> list[int]:
+    """Delete the checkpoints newer than ``restored_step``, which :func:`newest_restorable` fell
+    back past: a resumed run trains those steps again and saving them needs their places (left,
+    orbax stopped every resume with "Checkpoint for step N already exists"). Returns the steps."""
+    dropped = sorted(s for s in manager.all_steps() if s > restored_step)
+    for step in dropped:
+        manager.delete(step)
+        log(f"warning: {where}: removed the unreadable checkpoint of step {step}; its steps are trained again")
+    return dropped
+
+
 class CheckpointError(ValueError):
     """No checkpoint of a run folder can be restored with its ``config.json``; the message says why."""
 
@@ -83,21 +115,17 @@ def restore_state(manager, template, out, config: TrainConfig, step: int | None 
         steps = [step]
     if not steps:
         raise FileNotFoundError(f"{out} has no checkpoint yet")
-    failures = []
-    for candidate in steps:
-        try:
-            restored = manager.restore(
-                candidate,
-                args=ocp.args.Composite(state=ocp.args.StandardRestore(host(template)), meta=ocp.args.JsonRestore()),
-            )
-        except Exception as e:  # orbax and tensorstore raise many types for a damaged or foreign file
-            first = str(e).strip().splitlines()[0][:200] if str(e).strip() else type(e).__name__
-            failures.append(f"step {candidate}: {first}")
-            continue
-        mismatch = _shape_mismatch(template, restored["state"])
-        if mismatch:  # orbax restores the saved shapes whatever the template's
-            failures.append(f"step {candidate}: {mismatch}")
-            continue
+
+    def restore_one(candidate):
+        restored = manager.restore(
+            candidate,
+            args=ocp.args.Composite(state=ocp.args.StandardRestore(host(template)), meta=ocp.args.JsonRestore()),
+        )
+        # orbax restores the saved shapes whatever the template's
+        return _shape_mismatch(template, restored["state"]) or restored
+
+    candidate, restored, failures = newest_restorable(steps, restore_one)
+    if candidate is not None:
         if failures:
             log(f"warning: {out}: skipped unreadable checkpoint(s) ({'; '.join(failures)}); using step {candidate}")
         return candidate, restored["state"], restored["meta"]

@@ -31,7 +31,14 @@ import numpy as np
 from socialnav.common import progress as progress_lib
 from socialnav.common.atomic import write_text_atomic
 from socialnav.models import dataset, rules
-from socialnav.models.checkpoints import check_run_folder, checkpoint_manager, host, restore_state, write_metrics
+from socialnav.models.checkpoints import (
+    check_run_folder,
+    checkpoint_manager,
+    drop_unreadable,
+    host,
+    restore_state,
+    write_metrics,
+)
 from socialnav.models.config import TARGETS, TrainConfig, learning_rate_schedule
 from socialnav.models.quality import by_family, meets_quality, trivial_baselines
 from socialnav.models.steps import batch_sharding, compiled, initial_state, per_sample_mse
@@ -107,6 +114,7 @@ def train(
     manager = checkpoint_manager(out, config)
     if manager.latest_step() is not None:
         latest, state, meta = restore_state(manager, state, out, config, log=log)
+        drop_unreadable(manager, latest, log, out)
         log(f"resuming {out} at step {latest} (epoch {latest // config.steps_per_epoch})")
         write_metrics(out, meta)  # a kill between a checkpoint and its metrics line loses nothing
     elif source is not None:

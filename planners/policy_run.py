@@ -78,16 +78,25 @@ def save(mgr, state: TrainState, history: list[dict]) -> None:
     )
 
 
-def restore(mgr, template: TrainState) -> tuple[TrainState, list[dict]] | None:
-    """The newest checkpoint in ``template``'s shapes with its history, or None without one."""
+def restore(mgr, template: TrainState, log=print) -> tuple[TrainState, list[dict]] | None:
+    """The newest checkpoint that restores in ``template``'s shapes, with its history, or None
+    without one. A damaged newer checkpoint is skipped with a warning (``log``) and removed, so
+    the resumed run saves those updates again (:func:`models.checkpoints.drop_unreadable`).
+
+    Raises:
+      PolicyRunError: no checkpoint restores, naming each step and why, and the fix.
+    """
     import orbax.checkpoint as ocp
 
-    step = mgr.latest_step()
-    if step is None:
+    from socialnav.models.checkpoints import drop_unreadable, newest_restorable
+
+    steps = mgr.all_steps()
+    if not steps:
         return None
     rest_template = (template.opt_state, template.runners, template.update)
-    try:
-        got = mgr.restore(
+
+    def restore_one(step):
+        return mgr.restore(
             step,
             args=ocp.args.Composite(
                 weights=ocp.args.StandardRestore(_host(template.weights)),
@@ -95,13 +104,17 @@ def restore(mgr, template: TrainState) -> tuple[TrainState, list[dict]] | None:
                 meta=ocp.args.JsonRestore(),
             ),
         )
-    except Exception as e:  # orbax raises ValueError on another tree, others on a damaged file
-        first = (str(e).strip().splitlines() or [type(e).__name__])[0][:160]
+
+    step, got, failures = newest_restorable(steps, restore_one)
+    if step is None:
         raise PolicyRunError(
-            f"{mgr.directory}/{step}: cannot resume training from it ({first}); a run written by an "
-            "earlier version of the trainer still serves socialnav arena --policy-run but cannot train "
-            "on: start a new run in another --out"
-        ) from None
+            f"{mgr.directory}: no checkpoint restores ({'; '.join(failures)}): damaged files, or a run of an earlier "
+            "version of the trainer (which still serves socialnav arena --policy-run); remove the damaged step "
+            "folder(s) to resume from an older one, or start a new run in another --out"
+        )
+    if failures:
+        log(f"warning: {mgr.directory}: skipped unreadable checkpoint(s) ({'; '.join(failures)}); using step {step}")
+        drop_unreadable(mgr, step, log, mgr.directory)
     opt_state, runners, update = jax.tree.map(jax.numpy.asarray, got["rest"])
     weights = jax.tree.map(jax.numpy.asarray, got["weights"])
     return TrainState(weights, opt_state, runners, update), got["meta"]["history"]
@@ -111,11 +124,17 @@ def write_metrics(out: pathlib.Path, history: list[dict]) -> None:
     write_text_atomic(pathlib.Path(out) / METRICS, "".join(json.dumps(h) + "\n" for h in history))
 
 
-def load_weights(out) -> tuple[PPOConfig, object, object, int]:
-    """``(config, graphdef, weights, update)`` of a run's newest checkpoint (the network only)."""
+def load_weights(out, log=None) -> tuple[PPOConfig, object, object, int]:
+    """``(config, graphdef, weights, update)`` of a run's newest checkpoint whose weights restore
+    (the network only; a damaged newer one is skipped with a warning on stderr, or ``log``)."""
+    import sys
+
     import orbax.checkpoint as ocp
 
     from socialnav.models import policy_net
+    from socialnav.models.checkpoints import newest_restorable
+
+    log = log or (lambda message: print(message, file=sys.stderr))
 
     out = pathlib.Path(out)
     config, n_features = read_config(out)
@@ -123,14 +142,17 @@ def load_weights(out) -> tuple[PPOConfig, object, object, int]:
     if not (out / CHECKPOINTS).is_dir():
         raise PolicyRunError(f"{out / CHECKPOINTS}: no such folder (the run has no checkpoint yet)")
     with manager(out, read_only=True) as mgr:
-        step = mgr.latest_step()
-        if step is None:
+        if not mgr.all_steps():
             raise PolicyRunError(f"{out / CHECKPOINTS}: no checkpoint yet")
-        try:
-            got = mgr.restore(step, args=ocp.args.Composite(weights=ocp.args.StandardRestore(_host(template))))
-        except Exception as e:  # orbax and tensorstore raise many types for a damaged file
-            first = (str(e).strip().splitlines() or [type(e).__name__])[0][:200]
-            raise PolicyRunError(f"{out / CHECKPOINTS}/{step}: cannot restore the weights ({first})") from None
+        restore_one = lambda step: mgr.restore(
+            step, args=ocp.args.Composite(weights=ocp.args.StandardRestore(_host(template)))
+        )
+        step, got, failures = newest_restorable(mgr.all_steps(), restore_one)
+    if step is None:
+        raise PolicyRunError(f"{out / CHECKPOINTS}: no checkpoint's weights restore ({'; '.join(failures)})")
+    if failures:
+        skipped = "; ".join(failures)
+        log(f"warning: {out / CHECKPOINTS}: skipped unreadable checkpoint(s) ({skipped}); using step {step}")
     weights = jax.tree.map(jax.numpy.asarray, got["weights"])
     for path, a in jax.tree_util.tree_flatten_with_path(weights)[0]:
         if not np.all(np.isfinite(np.asarray(a))):
@@ -235,15 +257,21 @@ def train(
     if stored is not None and (
         dataclasses.replace(stored[0], updates=config.updates) != config or stored[1] != trainer.n_features
     ):
+        differ = [
+            f.name
+            for f in dataclasses.fields(config)
+            if f.name != "updates" and getattr(stored[0], f.name) != getattr(config, f.name)
+        ]
         raise PolicyRunError(
-            f"{out / CONFIG} holds a run with other settings: resume it with the same ones or choose another --out"
+            f"{out / CONFIG} holds a run with other settings ({', '.join(differ) or 'the feature length'}): resume it "
+            "with the same ones (only --updates may change) or choose another --out"
         )
     if stored is None or stored[0].updates != config.updates:  # a new run, or one trained on for longer
         write_config(out, config, trainer.n_features)
     state = trainer.initial_state()
     history: list[dict] = []
     with manager(out) as mgr:
-        restored = restore(mgr, state)
+        restored = restore(mgr, state, log)
         if restored is not None:
             state, history = restored
             log(f"resuming {out} at update {int(state.update)} of {config.updates}")

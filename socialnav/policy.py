@@ -94,12 +94,24 @@ def _config(args, scene_names: tuple[str, ...]):
         gscl_run = "" if args.gscl_run is None else str(args.gscl_run.resolve())
         given["policy"] = PolicyConfig(social_layer=args.social_layer, gscl_run=gscl_run)
     if (args.out / "config.json").exists():
+        # A resume keeps the recorded settings; an option given replaces its recorded value
+        # (the trainer accepts a new --updates and refuses any other change, naming it).
         stored, _ = read_config(args.out)
-        if args.scenes is None and not given:
-            return stored  # resume with the stored settings
-        if args.updates is not None and not (set(given) - {"updates"}) and args.scenes is None:
-            return dataclasses.replace(stored, updates=args.updates)  # train on for longer
+        if args.scenes is not None:
+            given["scenes"] = scene_names
+        config = dataclasses.replace(stored, **given)
+        for key in given:
+            if getattr(config, key) != getattr(stored, key):
+                print(
+                    f"socialnav policy train: {args.out}: {key} {_shown(getattr(config, key))} given, "
+                    f"the run recorded {_shown(getattr(stored, key))}"
+                )
+        return config
     return PPOConfig(scenes=scene_names, **given)
+
+
+def _shown(value) -> str:
+    return ",".join(value) if isinstance(value, tuple) and all(isinstance(v, str) for v in value) else str(value)
 
 
 @locks_folder(lambda args: args.out, "policy train")

@@ -12,6 +12,7 @@ import pytest
 from flax import nnx, serialization
 
 from socialnav import cli
+from socialnav.common import runfolder
 from socialnav.models import checkpoints, dataset, evaluation, grid, inference, quality, steps, streams, train, unet
 from socialnav.models.config import TrainConfig
 
@@ -240,9 +241,15 @@ def test_a_damaged_checkpoint_falls_back_and_a_foreign_config_is_named(tmp_path)
     warnings = []
     _, _, state, meta = checkpoints.restore(run, log=warnings.append)
     assert meta["step"] == 4 and "skipped unreadable checkpoint" in warnings[0] and "step 6" in warnings[0]
-    # Resuming trains on from the good checkpoint instead of failing.
-    train.train(config, run, progress=False, max_steps=8, log=warnings.append)
+    # Resuming trains on from the good checkpoint instead of failing, the unreadable one removed
+    # (it stopped every resume that saved step 6 again, "Checkpoint for step 6 already exists");
+    # run to step 6 exactly, then on: each resume continues.
+    train.train(config, run, progress=False, max_steps=6, log=warnings.append)
     assert any("resuming" in w and "step 4" in w for w in warnings)
+    assert any("removed the unreadable checkpoint of step 6" in w for w in warnings)
+    assert checkpoints.restore(run, log=warnings.append)[3]["step"] == 6
+    train.train(config, run, progress=False, max_steps=8, log=warnings.append)
+    assert sorted(int(p.name) for p in (run / "checkpoints").iterdir() if p.name.isdigit()) == [6, 8]
 
     foreign = tmp_path / "foreign"
     train.train(config, foreign, progress=False, max_steps=4, log=lambda *_: None)
@@ -274,6 +281,23 @@ def test_model_inputs_outside_the_pixel_encoding_are_refused():
             inference.check_maps(maps)
     with pytest.raises(ValueError, match="people_xy_m holds NaN"):
         inference.input_map(np.zeros((50, 50)), 0.1, (0.0, 0.0), (2.5, 2.5), [[np.nan, 1.0]], [0.0], (4.0, 2.5))
+    # Resolutions and shapes: each refused naming the argument (they divided by zero, erased the
+    # walls, broadcast one heading over two people, failed deep in a broadcast).
+    good = dict(occupancy=np.zeros((50, 50)), resolution_m=0.1, origin_xy_m=(0.0, 0.0), robot_xy_m=(2.5, 2.5))
+    good |= dict(people_xy_m=[[1.0, 1.0], [2.0, 2.0]], people_heading_rad=[0.0, 1.0], goal_xy_m=(4.0, 2.5))
+    assert inference.input_map(**good).shape == (40, 40)
+    for change, words in (
+        ({"resolution_m": 0}, "resolution_m must be a positive"),
+        ({"resolution_m": -0.05}, "resolution_m must be a positive"),
+        ({"resolution_m": float("nan")}, "resolution_m must be a positive"),
+        ({"people_heading_rad": [0.0]}, r"people_heading_rad must be \(2,\)"),
+        ({"people_valid": [True, False, True]}, r"people_valid must be \(2,\)"),
+        ({"occupancy": np.zeros((2, 50, 50))}, "occupancy must be a 2-D"),
+        ({"people_xy_m": [1.0, 2.0, 3.0]}, r"people_xy_m must be \(P, 2\)"),
+        ({"goal_xy_m": (1.0, 2.0, 3.0)}, "goal_xy_m must be"),
+    ):
+        with pytest.raises(ValueError, match=words):
+            inference.input_map(**(good | change))
 
 
 def test_the_cost_weighted_loss_changes_only_what_it_weighs():
@@ -588,6 +612,15 @@ def test_a_warm_start_copies_the_source_and_grows_a_head_and_bad_sources_are_nam
     assert cli.main(["gscl", "export", "--run", str(run), "--out", str(tmp_path / "exp"), "--scenes", "1"]) == 0
     card = json.loads((tmp_path / "exp" / inference.CARD_FILE).read_text())
     assert card["init_from"]["identity"] == source_id and "started from the model in init_from" in card["made_by"]
+    # A second export into the same folder: refused without --overwrite (it replaced the first
+    # without a word), replaced whole with it; the manifest lists exactly the model's files.
+    again = ["gscl", "export", "--run", str(run), "--out", str(tmp_path / "exp"), "--scenes", "1", "--step", "4"]
+    with pytest.raises(SystemExit, match="holds a previous run.*--overwrite"):
+        cli.main(again)
+    assert json.loads((tmp_path / "exp" / inference.CARD_FILE).read_text()) == card
+    assert cli.main([*again, "--overwrite"]) == 0
+    assert json.loads((tmp_path / "exp" / inference.CARD_FILE).read_text())["step"] == 4
+    assert sorted(runfolder.read_manifest(tmp_path / "exp").files) == ["config.json", "model.json", "weights.msgpack"]
 
     other = TrainConfig(**{**TINY, "features": (4, 4, 8, 16)})
     with pytest.raises(ValueError, match=r"init_from: .*src2's .*shaped"):

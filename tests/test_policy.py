@@ -4,6 +4,7 @@ improves the return, a resumed run equal to an uninterrupted one, the arena's --
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -273,6 +274,59 @@ def test_policy_train_and_arena_policy_run_from_the_command_line(tmp_path, capsy
     summary = pd.read_csv(out / "summary.csv")
     assert set(summary.method) == {"navfn", "ppo"}
     assert json.loads((out / "run.json").read_text())["policy_model"]
+
+
+@pytest.mark.slow
+def test_a_resume_keeps_the_recorded_settings_and_says_when_one_changes(tmp_path, capsys):
+    """Started with --updates 3 and resumed with the same options but no --updates: still a
+    3-update run (it became a 300-update one, its config.json rewritten); a new --updates is
+    taken and said; another change is refused naming the field."""
+    run = tmp_path / "ppo"
+    argv = ["policy", "train", "--out", str(run), "--scenes", EASY, "--envs-per-scene", "4", "--rollout-steps", "8"]
+    assert main([*argv, "--updates", "3", "--no-progress"]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "3 updates" in out and "given" not in out and policy_run.read_config(run)[0].updates == 3
+    assert main([*argv, "--updates", "4", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "updates 4 given, the run recorded 3" in out and policy_run.read_config(run)[0].updates == 4
+    assert len((run / "metrics.jsonl").read_text().splitlines()) == 4
+    assert main([*argv[:-2], "--rollout-steps", "16", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "other settings (rollout_steps)" in err and len(err.strip().splitlines()) == 1
+
+
+def _truncate_step(folder):
+    for f in folder.rglob("*"):
+        if f.is_file() and f.stat().st_size > 100:
+            f.write_bytes(f.read_bytes()[: f.stat().st_size // 3])
+
+
+@pytest.mark.slow
+def test_a_damaged_policy_checkpoint_falls_back_to_the_intact_one(tmp_path):
+    """The newest checkpoint damaged: training resumes from the older one with a warning (it
+    blamed "an earlier version" and advised starting over), saves the lost updates again, and
+    resumes again; the benchmark reads the intact weights. Every checkpoint damaged: one line
+    naming each step and the fix."""
+    spec = load_scene(SCENES_DIR / f"{EASY}.json")
+    config = dataclasses.replace(_tiny(4), envs_per_scene=4, rollout_steps=8, checkpoint_every=2)
+    run = tmp_path / "run"
+    policy_run.train([spec], config, run, progress=False)
+    _truncate_step(run / "checkpoints" / "4")
+    said = []
+    assert policy_run.load_weights(run, log=said.append)[3] == 2 and "using step 2" in said[-1]
+    history = policy_run.train([spec], config, run, progress=False, log=said.append)
+    assert [h["update"] for h in history] == [1, 2, 3, 4]
+    assert any("skipped unreadable checkpoint" in w and "step 4" in w for w in said)
+    assert any("removed the unreadable checkpoint of step 4" in w for w in said)
+    assert policy_run.load_weights(run)[3] == 4
+    assert policy_run.train([spec], config, run, progress=False, log=said.append)[-1]["update"] == 4
+    for step in ("2", "4"):
+        _truncate_step(run / "checkpoints" / step)
+    with pytest.raises(policy_run.PolicyRunError, match="no checkpoint restores") as err:
+        policy_run.train([spec], config, run, progress=False, log=said.append)
+    assert "step 4" in str(err.value) and "step 2" in str(err.value) and "remove the damaged" in str(err.value)
 
 
 def test_bad_input_to_policy_train_and_arena_policy_run_is_one_line(tmp_path, capsys):
