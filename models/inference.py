@@ -41,6 +41,38 @@ def _check_finite(**arrays) -> None:
             raise ValueError(f"{name} holds NaN or inf at {np.argwhere(~np.isfinite(array))[0].tolist()}")
 
 
+def _check_input_shapes(
+    occupancy, resolution_m, origin_xy_m, robot_xy_m, people_xy_m, people_heading_rad, goal_xy_m, people_valid
+) -> None:
+    """ValueError naming the argument of :func:`input_map` whose shape (static, so checked under
+    ``jit`` too) or resolution is wrong: a resolution of 0 divided by zero, a negative one erased
+    the walls, a heading count other than the people count was broadcast, a 3-D occupancy failed
+    in a broadcast."""
+    if not isinstance(resolution_m, jax.core.Tracer):
+        try:
+            value = float(resolution_m)
+        except (TypeError, ValueError):
+            raise ValueError(f"resolution_m must be a number of metres, got {resolution_m!r}") from None
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"resolution_m must be a positive number of metres, got {resolution_m!r}")
+    shape = lambda a: tuple(np.shape(a))
+    if len(shape(occupancy)) != 2:
+        raise ValueError(f"occupancy must be a 2-D (H, W) grid, got shape {shape(occupancy)}")
+    for name, value in (("origin_xy_m", origin_xy_m), ("robot_xy_m", robot_xy_m), ("goal_xy_m", goal_xy_m)):
+        if shape(value) != (2,):
+            raise ValueError(f"{name} must be (x, y), got shape {shape(value)}")
+    people = shape(people_xy_m)
+    if not ((len(people) == 2 and people[1] == 2) or people == (0,)):
+        raise ValueError(f"people_xy_m must be (P, 2), got shape {people}")
+    n = people[0] if len(people) == 2 else 0
+    if shape(people_heading_rad) != (n,):
+        raise ValueError(
+            f"people_heading_rad must be ({n},), one per person in people_xy_m, got shape {shape(people_heading_rad)}"
+        )
+    if people_valid is not None and shape(people_valid) != (n,):
+        raise ValueError(f"people_valid must be ({n},), one per person in people_xy_m, got shape {shape(people_valid)}")
+
+
 def input_map(
     occupancy,
     resolution_m: float,
@@ -75,6 +107,9 @@ def input_map(
         occupancy cell apart so that a wall one cell thick is not missed. ``resolution_m`` and
         ``supersample`` are static (Python numbers) under ``jit``.
     """
+    _check_input_shapes(
+        occupancy, resolution_m, origin_xy_m, robot_xy_m, people_xy_m, people_heading_rad, goal_xy_m, people_valid
+    )
     if supersample is None:
         supersample = max(1, math.ceil(grid.CELL_M / resolution_m - 1e-9))
     _check_finite(

@@ -177,11 +177,35 @@ RESULTS = (
     "pictures",
     "shards",
 )
-# Rough cost of one episode for the estimate printed before a run (this project's 2-core
-# machine, the default table with --held-out, 100 variants, 11 methods: 30,800 episodes in 9.3
-# min with the methods on both cores, every program compiled in the run, after the queue was
-# rebuilt (90 s episodes); docs/arena-results.md).
-EPISODES_PER_S = 55.0
+# The time printed before a run, as a range on this project's 2-core machine: start-up, then a
+# compilation per program (one per scene file and method, and two per scene for the people
+# without the robot and the metrics; a held-out mirror shares its scene's), then the simulated
+# seconds of every episode. Measured here on 2026-11-28 with no compilation cache
+# (SOCIALNAV_JAX_CACHE=off): seed 001's four scenes x 11 methods in 75 s at 2 variants and 89 s
+# at 50 (1.2 s a program; the 48 variants more, 84,000 simulated seconds, at 6,000 a second);
+# the default table with --held-out x 100 variants took 9.3 min (docs/arena-results.md). The
+# ends below widen those figures (a loaded machine, slower scenes); the estimate they replace,
+# episodes / 55 per second, said 40 s for a run of minutes. An earlier run's programs in the
+# compilation cache can beat the low end.
+STARTUP_S = 10.0
+COMPILE_S_PER_PROGRAM = (0.7, 2.0)
+SIMULATED_S_PER_S = (6000.0, 2000.0)  # the fast end first: it gives the low estimate
+
+
+def estimate_s(specs, n_methods: int, variants: int, held_out: bool) -> tuple[float, float]:
+    """``(low, high)`` seconds a run of ``specs`` x ``n_methods`` x ``variants`` takes here
+    (see the constants above)."""
+    programs = len(specs) * (n_methods + 2)
+    simulated = sum(spec.timeout_s for spec in specs) * (2 if held_out else 1) * variants * n_methods
+    return tuple(
+        STARTUP_S + programs * c + simulated / rate for c, rate in zip(COMPILE_S_PER_PROGRAM, SIMULATED_S_PER_S)
+    )
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds / 60:.1f} min" if seconds >= 90 else f"{seconds:.0f} s"
+
+
 # Bytes a finished episode's row costs in the joined tables: 146 measured in memory
 # (``memory_usage(deep=True)``, 26 columns, 80 episodes of casn_head_on and casn_crossing), times
 # about four for the copies the joins, the summary and the statistics make.
@@ -199,7 +223,7 @@ def run(args) -> int:
                 code = _run_into(args, stage, shown_as=args.out)
                 if code:
                     raise _Failed(code)
-            print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, directions.csv, episodes/ and trajectories/")
+            print(_wrote(args.out))
             return 0
         runfolder.claim(args.out, JOB, RESULTS)  # a previous arena run is resumed, not refused
         code = _run_into(args, args.out, shown_as=args.out)
@@ -210,8 +234,16 @@ def run(args) -> int:
         print(f"socialnav arena: cannot write{where}: {getattr(e, 'strerror', None) or e}", file=sys.stderr)
         return 2
     if code == 0:
-        print(f"wrote {args.out}/summary.csv, stats.csv, papers.csv, directions.csv, episodes/ and trajectories/")
+        print(_wrote(args.out))
     return code
+
+
+def _wrote(out: pathlib.Path) -> str:
+    """The line naming what a finished run holds (``papers.csv`` and ``directions.csv`` only
+    where the run has scenes of the papers)."""
+    names = ["summary.csv", "stats.csv", "papers.csv", "directions.csv", "episodes/", "trajectories/", "pictures/"]
+    there = [n for n in names if (pathlib.Path(out) / n.rstrip("/")).exists()]
+    return f"wrote {out}/" + ", ".join(there)
 
 
 class _Failed(Exception):
@@ -332,10 +364,10 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         from socialnav.evaluation import arena as arena_lib
         from socialnav.evaluation import arena_report as report_lib
 
-        env = arena_lib.setup_scene(specs[0]).env
+        first = arena_lib.setup_scene(specs[0])
         for spec in actor_specs:
             try:
-                report_lib.user_actor(actor_spec.load(spec), env)
+                report_lib.user_actor(actor_spec.load(spec), first.env, first.n_slots)
             except Exception as e:  # the user's code: any error, named in one line
                 print(f"socialnav arena: --actor {spec}: {type(e).__name__}: {e}", file=sys.stderr)
                 return 2
@@ -428,12 +460,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
                 file=sys.stderr,
             )
             return 2
-    seconds = n_episodes / EPISODES_PER_S
-    took = f"{seconds / 60:.0f} min" if seconds >= 60 else f"{seconds:.0f} s"
+    low, high = estimate_s(specs, len(methods), args.variants, args.held_out)
     print(
         f"arena: {len(runs)} scene run(s) x {len(methods)} method(s) x {args.variants} variant(s) = {n_episodes:,} "
-        f"episodes; about {took} at {EPISODES_PER_S:.0f} episodes/s (2 cores, compilation included), at most "
-        f"{needed / 1e9:.2f} GB at once",
+        f"episodes; about {_duration(low)} to {_duration(high)} (on 2 cores, compilation included; less with programs "
+        f"an earlier run left in the cache), at most {needed / 1e9:.2f} GB at once",
         flush=True,
     )
     out.mkdir(parents=True, exist_ok=True)
@@ -494,6 +525,13 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     ]
     with pd.option_context("display.width", 200, "display.max_rows", 500):
         print(summary[shown].round(2).to_string(index=False))
+    for row in summary[summary.get("invalid_action_pct", pd.Series(0.0, summary.index)) > 0].itertuples():
+        print(
+            f"socialnav arena: warning: {row.method} gave a NaN or infinite action in {row.invalid_action_pct:.0f} % "
+            f"of {row.scene}'s episodes; the robot was stopped on those steps (invalid_action_steps in "
+            "episodes/), so those rows measure a stopped robot, not the method",
+            file=sys.stderr,
+        )
     statistics = arena_stats.scene_statistics(pd.concat(frames, ignore_index=True))
     write_atomic(out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
     written = ["summary.csv", "stats.csv"]

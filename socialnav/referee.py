@@ -39,7 +39,7 @@ import pathlib
 import sys
 import time
 
-from socialnav.argtypes import comma_ints, output_folder, positive_float, positive_int
+from socialnav.argtypes import comma_ints, non_negative_int, output_folder, positive_float, positive_int
 from socialnav.locking import locks_folder
 
 JOB = "socialnav referee"
@@ -67,7 +67,7 @@ def add_parser(sub) -> None:
         help="the robot's battery at 08:00 (default from params.json; a short day needs a low one to charge at all)",
     )
     p.add_argument(
-        "--do-worlds", type=positive_int, default=8, help="simulated worlds per forced speed (default 8; 0: skip)"
+        "--do-worlds", type=non_negative_int, default=8, help="simulated worlds per forced speed (default 8; 0: skip)"
     )
     p.add_argument("--no-progress", action="store_true", help="print one line per run only")
     p.set_defaults(handler=run)

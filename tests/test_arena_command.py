@@ -34,3 +34,36 @@ def test_arena_command_writes_tables_resumes_and_refuses_other_settings(tmp_path
     assert (out / "episodes" / "casn_static_person.parquet").stat().st_mtime_ns == stamp
     assert cli.main([*args[:-1], "3", "--no-progress"]) == 2
     assert "other settings" in capsys.readouterr().err
+
+
+def test_the_time_estimate_is_a_range_that_grows_with_the_work():
+    """``estimate_s``: a low and a high end; more variants, methods or the held-out rows cost
+    more; compilation alone is paid once per program, whatever the variants."""
+    from socialnav.arena import COMPILE_S_PER_PROGRAM, STARTUP_S, estimate_s
+    from socialnav.data import SCENES_DIR
+    from socialnav.jaxsim.scenes.spec import load_scene
+
+    specs = [load_scene(SCENES_DIR / f"{n}.json") for n in ("casn_head_on", "gscl_group")]
+    low, high = estimate_s(specs, 3, 6, False)
+    assert STARTUP_S < low < high
+    assert estimate_s(specs, 3, 60, False)[0] > low and estimate_s(specs, 4, 6, False)[1] > high
+    more_low, more_high = estimate_s(specs, 3, 6, True)
+    assert more_low > low and more_high > high
+    programs = len(specs) * (3 + 2)
+    assert low - STARTUP_S == pytest.approx(programs * COMPILE_S_PER_PROGRAM[0] + (40 + 60) * 6 * 3 / 6000.0)
+
+
+def test_the_arena_names_only_the_files_it_wrote(tmp_path, capsys):
+    """A user's own scene has no paper's numbers: the closing line names no papers.csv."""
+    import json
+
+    from socialnav import cli
+    from socialnav.data import SCENES_DIR
+
+    obj = json.loads((SCENES_DIR / "casn_static_person.json").read_text())
+    (tmp_path / "mine.json").write_text(json.dumps({**obj, "name": "mine"}))
+    out = tmp_path / "run"
+    argv = ["arena", "--out", str(out), "--scenes", str(tmp_path / "mine.json"), "--methods", "navfn"]
+    assert cli.main([*argv, "--variants", "2", "--no-progress"]) == 0
+    said = [line for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")][-1]
+    assert "summary.csv" in said and "papers.csv" not in said and not (out / "papers.csv").exists()

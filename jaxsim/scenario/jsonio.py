@@ -28,9 +28,19 @@ def read_json(file: pathlib.Path) -> dict:
     return obj
 
 
+def _object(obj: Any, file: pathlib.Path, where: str, key: str) -> None:
+    """An entry that should be an object holding ``key`` (a string where an object belongs read
+    as "missing field" before)."""
+    if not isinstance(obj, dict):
+        raise ScenarioError(
+            file, where or "<file>", f"expected an object with field '{key}', got {type(obj).__name__} {obj!r:.40}"
+        )
+
+
 def field(obj: Any, file: pathlib.Path, where: str, key: str, kind: type) -> Any:
     """``obj[key]``, which must be of type ``kind`` (a bool is not a number)."""
-    if not isinstance(obj, dict) or key not in obj:
+    _object(obj, file, where, key)
+    if key not in obj:
         raise ScenarioError(file, f"{where}.{key}" if where else key, "missing field")
     value = obj[key]
     if not isinstance(value, kind) or (kind is not bool and isinstance(value, bool)):
@@ -42,7 +52,8 @@ def field(obj: Any, file: pathlib.Path, where: str, key: str, kind: type) -> Any
 
 def number(obj: Any, file: pathlib.Path, where: str, key: str) -> float:
     """``obj[key]`` as a finite float."""
-    if not isinstance(obj, dict) or key not in obj:
+    _object(obj, file, where, key)
+    if key not in obj:
         raise ScenarioError(file, f"{where}.{key}", "missing field")
     value = obj[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):

@@ -29,6 +29,8 @@ def load_tasks(
     file = folder / FILE
     tasks = read_json(file)
     task_slots = list_field(tasks, file, "slots")
+    for s, t in enumerate(task_slots):
+        field(t, file, f"slots[{s}]", "name", str)
     if [t.get("name") if isinstance(t, dict) else None for t in task_slots] != list(slot_names):
         raise ScenarioError(file, "slots", f"slot names must match schedule.json: {list(slot_names)}")
     goals = []
