@@ -8,6 +8,7 @@
     socialnav gscl generate|train|evaluate ...                      # GSCL (seed 002)
     socialnav layers --out docs/img                                 # the social cost layers, pictured
     socialnav arena --out runs/arena                                # methods x scenes x variants, closed loop
+    socialnav humans validate --out runs/humans                     # the human models against real pedestrians
 
 Runtime set-up (one XLA host device per core, JAX's persistent compilation cache) happens here,
 before JAX is imported; the subcommands' modules are imported after it.
@@ -23,7 +24,7 @@ from socialnav import runtime
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
-    from socialnav import arena, evaluate, gscl, layers, learn, pipelines, policy, referee, simulate
+    from socialnav import arena, evaluate, gscl, humans, layers, learn, pipelines, policy, referee, simulate
     from socialnav.common import __version__
 
     parser = argparse.ArgumentParser(
@@ -41,6 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     arena.add_parser(sub)
     policy.add_parser(sub)
     referee.add_parser(sub)
+    humans.add_parser(sub)
     return parser
 
 

@@ -96,6 +96,9 @@ def quiet_third_party_logs() -> None:
         return
     for name in ("absl", "asyncio", "orbax"):
         logging.getLogger(name).setLevel(logging.CRITICAL)
+    # JAX's note on backends it did not find ("Unable to initialize backend 'tpu'") is INFO, shown
+    # once PedPy has given the root logger a handler at that level.
+    logging.getLogger("jax").setLevel(logging.WARNING)
     previous = sys.unraisablehook
 
     def hook(unraisable):

@@ -1,0 +1,174 @@
+"""Measures of pedestrian motion, applied alike to recorded and simulated trajectories.
+
+Trajectories are frames of ``run, person, frame, x_m, y_m`` rows (:mod:`socialnav.data.recorded`'s
+form; a simulation writes the same) at a known frame rate.
+
+* :func:`voronoi_density_speed`: density (persons/m²) and speed (m/s, along the walking
+  direction) in a measurement area, per frame, by PedPy's Voronoi method (Steffen & Seyfried 2010;
+  PedPy is the maintained library of the group that ran the Jülich experiments, so the data and
+  the models are measured by the same code as the published diagrams).
+* :func:`binned`: mean and standard deviation of speed per density bin.
+* :func:`weidmann_speed`: Weidmann's (1993) fundamental diagram.
+* :func:`lane_order`: the lane order parameter of counterflow (Rex & Löwen 2007's form).
+* :func:`overlaps`: how often and how deep two bodies overlap.
+* :func:`ade_fde`: displacement errors of predictions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+# Weidmann (1993): v(rho) = v_free (1 - exp(-gamma (1/rho - 1/rho_max))), v_free 1.34 m/s,
+# gamma 1.913 /m², rho_max 5.4 /m².
+WEIDMANN_FREE_MPS = 1.34
+WEIDMANN_GAMMA = 1.913
+WEIDMANN_JAM_PER_M2 = 5.4
+# The density bins of the fundamental diagram's comparison: 0.5-wide, centred at 0.5 ... 3.5 /m².
+DENSITY_BINS = tuple(0.5 * k for k in range(1, 8))
+
+
+def weidmann_speed(density_per_m2) -> np.ndarray:
+    """Weidmann's speed (m/s) at ``density_per_m2`` (0 from the jam density on)."""
+    rho = np.maximum(np.asarray(density_per_m2, float), 1e-9)
+    v = WEIDMANN_FREE_MPS * (1.0 - np.exp(-WEIDMANN_GAMMA * (1.0 / rho - 1.0 / WEIDMANN_JAM_PER_M2)))
+    return np.maximum(v, 0.0)
+
+
+def voronoi_density_speed(
+    rows: pd.DataFrame,
+    frames_per_s: float,
+    walkable_polygon_m: Sequence[Sequence[float]],
+    measurement_area_m: Sequence[Sequence[float]],
+    walking_direction: Sequence[float] | None = None,
+    obstacles_m: Sequence[Sequence[Sequence[float]]] = (),
+    frames: tuple[int, int] | None = None,
+    speed_frame_step: int | None = None,
+) -> pd.DataFrame:
+    """``frame, density, speed`` in the measurement area by PedPy's Voronoi method.
+
+    Args:
+      rows: one run's ``person, frame, x_m, y_m``.
+      walkable_polygon_m, obstacles_m: the walkable area (the Voronoi cells are cut to it).
+      measurement_area_m: the polygon measured in.
+      walking_direction: (2,) unit vector; speeds are along it (None: the speed's magnitude).
+      frames: ``(first, last)`` frames kept (a steady state), inclusive; None: every frame.
+      speed_frame_step: frames either side of a position for its speed (default: 0.3 s).
+    """
+    import pedpy
+
+    data = pd.DataFrame(
+        {
+            "id": rows["person"].to_numpy(np.int64),
+            "frame": rows["frame"].to_numpy(np.int64),
+            "x": rows["x_m"].to_numpy(float),
+            "y": rows["y_m"].to_numpy(float),
+        }
+    )
+    traj = pedpy.TrajectoryData(data=data, frame_rate=float(frames_per_s))
+    walkable = pedpy.WalkableArea(
+        [tuple(p) for p in walkable_polygon_m], obstacles=[[tuple(p) for p in o] for o in obstacles_m] or None
+    )
+    area = pedpy.MeasurementArea(measurement_area_m)
+    cells = pedpy.compute_individual_voronoi_polygons(
+        traj_data=traj, walkable_area=walkable, cut_off=pedpy.Cutoff(radius=1.2, quad_segments=3)
+    )
+    density, intersection = pedpy.compute_voronoi_density(individual_voronoi_data=cells, measurement_area=area)
+    step = speed_frame_step if speed_frame_step is not None else max(1, round(0.3 * frames_per_s))
+    individual = pedpy.compute_individual_speed(
+        traj_data=traj,
+        frame_step=step,
+        movement_direction=None if walking_direction is None else np.asarray(walking_direction, float),
+        speed_calculation=pedpy.SpeedCalculation.BORDER_SINGLE_SIDED,
+    )
+    speed = pedpy.compute_voronoi_speed(
+        traj_data=traj, individual_speed=individual, individual_voronoi_intersection=intersection, measurement_area=area
+    )
+    out = density.merge(speed, on="frame")[["frame", "density", "speed"]]
+    if frames is not None:
+        out = out[(out["frame"] >= frames[0]) & (out["frame"] <= frames[1])]
+    return out[out["density"] > 0].reset_index(drop=True)
+
+
+def binned(points: pd.DataFrame, bins: Sequence[float] = DENSITY_BINS, half_width: float = 0.25) -> pd.DataFrame:
+    """``density_bin, n, speed_mean, speed_sd`` of ``density, speed`` points, a bin holding the
+    points within ``half_width`` of its centre (bins with no point are left out)."""
+    rows = []
+    for centre in bins:
+        inside = points[(points["density"] >= centre - half_width) & (points["density"] < centre + half_width)]
+        if len(inside):
+            rows.append(
+                {
+                    "density_bin": centre,
+                    "n": len(inside),
+                    "speed_mean": float(inside["speed"].mean()),
+                    "speed_sd": float(inside["speed"].std(ddof=1)) if len(inside) > 1 else 0.0,
+                }
+            )
+    return pd.DataFrame(rows, columns=["density_bin", "n", "speed_mean", "speed_sd"])
+
+
+def lane_order(
+    rows: pd.DataFrame,
+    direction_of: dict,
+    box_m: tuple[float, float, float, float],
+    band_half_m: float = 0.25,
+    reach_m: float = 2.0,
+) -> float:
+    """The lane order parameter of a counterflow (Rex & Löwen 2007's form): for each person in
+    ``box_m = (xmin, xmax, ymin, ymax)`` at a frame, ``phi = ((n_same - n_opp) / (n_same +
+    n_opp))^2`` over the others within ``band_half_m`` sideways and ``reach_m`` along the
+    corridor (x); averaged over the people with anyone in their band. 1: everyone walks in a
+    lane of their own direction; about 1/(the neighbours in a band) for a random mixture.
+
+    Args:
+      rows: ``person, frame, x_m, y_m`` (the corridor along x).
+      direction_of: person -> +1 or -1, the way they walk.
+    """
+    xmin, xmax, ymin, ymax = box_m
+    phis = []
+    for _, g in rows.groupby("frame", sort=False):
+        x, y = g["x_m"].to_numpy(), g["y_m"].to_numpy()
+        d = g["person"].map(direction_of).to_numpy(float)
+        inside = (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)
+        near = (np.abs(y[:, None] - y[None, :]) < band_half_m) & (np.abs(x[:, None] - x[None, :]) < reach_m)
+        np.fill_diagonal(near, False)
+        same = (near & (d[:, None] == d[None, :])).sum(axis=1)
+        opposite = (near & (d[:, None] != d[None, :])).sum(axis=1)
+        counted = inside & (same + opposite > 0)
+        if counted.any():
+            phis.append((((same - opposite) / np.maximum(same + opposite, 1)) ** 2)[counted])
+    return float(np.concatenate(phis).mean()) if phis else float("nan")
+
+
+def overlaps(rows: pd.DataFrame, radius_m: float) -> dict:
+    """How bodies of ``radius_m`` overlap: ``pair_frames`` (pairs closer than two radii, over all
+    pairs and frames), ``share_people`` (share of person-frames overlapping anyone), ``max_depth_m``
+    and ``share_deeper_0_1_m`` (person-frames overlapping someone by more than 0.1 m)."""
+    pairs, overlapping, deep, people, depth = 0, 0, 0, 0, 0.0
+    for _, g in rows.groupby("frame", sort=False):
+        xy = g[["x_m", "y_m"]].to_numpy()
+        d = np.linalg.norm(xy[:, None] - xy[None, :], axis=-1)
+        np.fill_diagonal(d, np.inf)
+        gap = 2 * radius_m - d  # > 0: overlapping by that much
+        worst = gap.max(axis=1) if len(xy) > 1 else np.full(len(xy), -np.inf)
+        pairs += int((gap > 0).sum() // 2)
+        overlapping += int((worst > 0).sum())
+        deep += int((worst > 0.1).sum())
+        people += len(xy)
+        depth = max(depth, float(worst.max()) if len(xy) > 1 else 0.0)
+    return {
+        "pair_frames": pairs,
+        "share_people": overlapping / max(people, 1),
+        "max_depth_m": max(depth, 0.0),
+        "share_deeper_0_1_m": deep / max(people, 1),
+    }
+
+
+def ade_fde(predicted_xy, true_xy) -> tuple[np.ndarray, np.ndarray]:
+    """Per trajectory: the mean displacement over the predicted frames and the final one (m).
+    ``predicted_xy``, ``true_xy``: (N, T, 2)."""
+    err = np.linalg.norm(np.asarray(predicted_xy) - np.asarray(true_xy), axis=-1)
+    return err.mean(axis=1), err[:, -1]

@@ -1,0 +1,245 @@
+"""The collision-free speed model (Tordeux, Chraibi & Seyfried 2016, "Collision-free speed model
+for pedestrian dynamics", Traffic and Granular Flow '15, 225-232; arXiv:1512.05597): a human
+model with bodies, the one JuPedSim ships as its default.
+
+First order: a person moves along a direction ``e_i`` at a speed set by the room ahead,
+
+  e_i = normalise(e0_i - sum_j a exp((l_ij - d_ij) / D) n_ij  + a_w exp((r_i - d_iw) / D_w) n_iw)
+  v_i = min(v0_i, max(0, s_i / T))      s_i = min over j ahead of i in its lane of (d_ij - l_ij)
+
+with ``e0_i`` towards the target, ``n_ij`` the unit vector from i to j, ``l_ij = r_i + r_j``,
+``n_iw`` the nearest wall's outward normal, ``T`` the time gap, and "ahead in its lane" the
+neighbours with ``e_i . (x_j - x_i) >= 0`` and ``|e_i^perp . (x_j - x_i)| <= l_ij``. A person
+never steps into the space another occupies ahead: bodies do not interpenetrate, and in a dense
+crowd speed falls with the headway, which is what the fundamental diagram measures.
+JuPedSim's implementation (``libsimulator/.../CollisionFreeSpeedModel.cpp``) is the reference
+for the details: neighbours within 3 m, the defaults below. Here the walls are the crowd's
+distance field (the nearest wall, as the social force reads it) and the hard wall constraint
+of :func:`jaxsim.crowd.wall_constraint` is kept; the robot is one more body (its radius), felt
+unless a person ``ignores_robot``.
+
+Everything is a smooth function of positions almost everywhere (the ``min``/``max`` and the lane
+test are piecewise), so a loss over a rollout differentiates through it
+(:mod:`evaluation.human_calibration`).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from flax import struct
+
+from socialnav.jaxsim.crowd import wall_constraint
+from socialnav.jaxsim.world import Grid
+
+_EPS = 1e-6
+
+
+@struct.dataclass
+class SpeedModelParams:
+    """The collision-free speed model's constants (dynamic floats: traced, fittable).
+
+    JuPedSim's defaults: ``time_gap_s`` 1 s, ``radius_m`` 0.2 m, neighbour repulsion strength 8
+    and range 0.1 m, geometry repulsion strength 5 and range 0.02 m, neighbours within 3 m.
+    """
+
+    time_gap_s: float = 1.0
+    radius_m: float = 0.2
+    neighbor_strength: float = 8.0
+    neighbor_range_m: float = 0.1
+    wall_strength: float = 5.0
+    wall_range_m: float = 0.02
+    cutoff_m: float = 3.0
+
+
+def step_speed_model(
+    params: SpeedModelParams,
+    wall_field: Grid,
+    dt: float,
+    x: jax.Array,
+    y: jax.Array,
+    vx: jax.Array,
+    vy: jax.Array,
+    aim_dx: jax.Array,
+    aim_dy: jax.Array,
+    desired_speed_mps: jax.Array,
+    present: jax.Array,
+    moving: jax.Array,
+    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
+    robot_radius_m: float,
+    ignores_robot: jax.Array | None = None,
+):
+    """One step of N people (the arguments of :func:`jaxsim.orca.step_orca`). Returns
+    ``(x, y, vx, vy)``; ``vx, vy`` is the velocity taken this step (0 for who does not move)."""
+    n = x.shape[0]
+    rx, ry, _, _ = robot_xyv
+    feels_robot = jnp.ones(n, bool) if ignores_robot is None else ~ignores_robot
+    # Everyone and the robot as one set of bodies: (N + 1,)
+    xs = jnp.concatenate([x, rx[None]])
+    ys = jnp.concatenate([y, ry[None]])
+    radius = jnp.concatenate([jnp.full(n, params.radius_m), jnp.full(1, robot_radius_m)])
+    source = jnp.concatenate([present, jnp.ones(1, bool)])
+    dx = xs[None, :] - x[:, None]  # (N, N + 1): from i to j
+    dy = ys[None, :] - y[:, None]
+    dist = jnp.sqrt(dx * dx + dy * dy + _EPS * _EPS)
+    reach = radius[None, :] + params.radius_m  # l_ij
+    others = (jnp.arange(n + 1)[None, :] != jnp.arange(n)[:, None]) & source[None, :] & (dist < params.cutoff_m)
+    others = others.at[:, n].set(others[:, n] & feels_robot)
+    push = jnp.where(others, params.neighbor_strength * jnp.exp((reach - dist) / params.neighbor_range_m), 0.0)
+    rep_x = -jnp.sum(push * dx / dist, axis=1)
+    rep_y = -jnp.sum(push * dy / dist, axis=1)
+
+    field = wall_field.lookup(x, y)
+    wall, nx, ny = field[..., 0], field[..., 1], field[..., 2]
+    wall_push = params.wall_strength * jnp.exp((params.radius_m - wall) / params.wall_range_m)
+    aim = jnp.sqrt(aim_dx * aim_dx + aim_dy * aim_dy)
+    ex = aim_dx / jnp.maximum(aim, _EPS) + rep_x + wall_push * nx
+    ey = aim_dy / jnp.maximum(aim, _EPS) + rep_y + wall_push * ny
+    norm = jnp.sqrt(ex * ex + ey * ey)
+    ex, ey = ex / jnp.maximum(norm, _EPS), ey / jnp.maximum(norm, _EPS)
+
+    ahead = ex[:, None] * dx + ey[:, None] * dy >= 0.0
+    lane = jnp.abs(-ey[:, None] * dx + ex[:, None] * dy) <= reach
+    spacing = jnp.min(jnp.where(others & ahead & lane, dist - reach, jnp.inf), axis=1)
+    speed = jnp.minimum(jnp.maximum(spacing / params.time_gap_s, 0.0), desired_speed_mps)
+    speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
+    new_vx, new_vy = speed * ex, speed * ey
+    new_x, new_y = x + dt * new_vx, y + dt * new_vy
+    new_x, new_y, new_vx, new_vy = wall_constraint(wall, nx, ny, new_x, new_y, new_vx, new_vy, dt)
+    zero = jnp.zeros_like(new_vx)
+    return (
+        jnp.where(moving, new_x, x),
+        jnp.where(moving, new_y, y),
+        jnp.where(moving, new_vx, zero),
+        jnp.where(moving, new_vy, zero),
+    )
+
+
+@struct.dataclass
+class AnticipationParams:
+    """The anticipation velocity model's constants (dynamic floats: traced, fittable): JuPedSim's
+    ``AnticipationVelocityModelAgentParameters`` defaults (time gap 1.06 s, radius 0.2 m,
+    neighbour strength 8 and range 0.1 m, wall buffer 0.1 m, anticipation time 1 s, reaction
+    time 0.3 s), its model's wall push-out 0.3, neighbours within 3 m."""
+
+    time_gap_s: float = 1.06
+    radius_m: float = 0.2
+    neighbor_strength: float = 8.0
+    neighbor_range_m: float = 0.1
+    wall_buffer_m: float = 0.1
+    anticipation_time_s: float = 1.0
+    reaction_time_s: float = 0.3
+    pushout_strength: float = 0.3
+    cutoff_m: float = 3.0
+
+
+CREEP_MPS = 0.01  # below this a blocked person creeps forward or stands (JuPedSim's also steps back)
+SPACING_BUFFER_M = 0.02  # the anticipation model's spacing keeps this much more than two radii
+
+
+def _unit(x, y):
+    norm = jnp.sqrt(x * x + y * y)
+    return x / jnp.maximum(norm, _EPS), y / jnp.maximum(norm, _EPS), norm
+
+
+def step_anticipation(
+    params: AnticipationParams,
+    wall_field: Grid,
+    dt: float,
+    x: jax.Array,
+    y: jax.Array,
+    vx: jax.Array,
+    vy: jax.Array,
+    aim_dx: jax.Array,
+    aim_dy: jax.Array,
+    desired_speed_mps: jax.Array,
+    present: jax.Array,
+    moving: jax.Array,
+    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
+    robot_radius_m: float,
+    u1: jax.Array,
+    u2: jax.Array,
+    ignores_robot: jax.Array | None = None,
+):
+    """One step of the anticipation velocity model (Xu, Chraibi & Seyfried 2021, "Anticipation
+    in a velocity-based model for pedestrian dynamics", Transportation Research C 133, 103464;
+    JuPedSim's ``AnticipationVelocityModel``): the collision-free speed model's headway speed,
+    with a direction that anticipates. Each neighbour j in view (ahead of i's desired direction
+    or its heading) pushes i *sideways*, away from the side where j will be after the
+    anticipation time, with strength ``a (1 + (1 - d_i . e_j) / 2) exp(-max(gap - (v_i - v_j) .
+    e_ij t_a, 0) / D)`` (the gap the two will have closed counts as closed; someone coming
+    towards i counts up to 1.5 times); the heading turns towards the result over the reaction
+    time; a heading into a wall within the buffer loses that component. So people overtake a
+    slower walker ahead and step aside early for someone coming the other way, which the
+    isotropic repulsion of :func:`step_speed_model` does not do.
+
+    The heading is the velocity's direction (the desired one when standing still), so a blocked
+    person creeps forward or stands (``u2``), never back as JuPedSim's may (its heading is a state
+    of its own); ``u1`` breaks a tie between the two sides (JuPedSim draws both from its random
+    generator). Arguments and returns as :func:`step_speed_model`."""
+    n = x.shape[0]
+    rx, ry, rvx, rvy = robot_xyv
+    feels_robot = jnp.ones(n, bool) if ignores_robot is None else ~ignores_robot
+    dxi, dyi, aim = _unit(aim_dx, aim_dy)  # d_i, the desired direction
+    hx, hy, speed_now = _unit(vx, vy)
+    hx, hy = jnp.where(speed_now > _EPS, hx, dxi), jnp.where(speed_now > _EPS, hy, dyi)  # e_i, the heading
+    xs, ys = jnp.concatenate([x, rx[None]]), jnp.concatenate([y, ry[None]])
+    vxs, vys = jnp.concatenate([vx, rvx[None]]), jnp.concatenate([vy, rvy[None]])
+    ejx, ejy, _ = _unit(vxs, vys)
+    radius = jnp.concatenate([jnp.full(n, params.radius_m), jnp.full(1, robot_radius_m)])
+    source = jnp.concatenate([present, jnp.ones(1, bool)])
+    dx, dy = xs[None, :] - x[:, None], ys[None, :] - y[:, None]  # (N, N + 1): from i to j
+    ex, ey, dist = _unit(dx, dy)
+    reach = radius[None, :] + params.radius_m
+    others = (jnp.arange(n + 1)[None, :] != jnp.arange(n)[:, None]) & source[None, :] & (dist < params.cutoff_m)
+    others = others.at[:, n].set(others[:, n] & feels_robot)
+
+    in_view = (dxi[:, None] * ex + dyi[:, None] * ey >= 0.0) | (hx[:, None] * ex + hy[:, None] * ey >= 0.0)
+    closing = ((vx[:, None] - vxs[None, :]) * ex + (vy[:, None] - vys[None, :]) * ey) * params.anticipation_time_s
+    gap = jnp.maximum(dist - reach - closing, 0.0)
+    facing = 1.0 + 0.5 * (1.0 - (dxi[:, None] * ejx[None, :] + dyi[:, None] * ejy[None, :]))
+    strength = jnp.where(
+        others & in_view, params.neighbor_strength * facing * jnp.exp(-gap / params.neighbor_range_m), 0.0
+    )
+    ox, oy = -dyi, dxi  # left of the desired direction
+    ahead_x = dx + vxs[None, :] * params.anticipation_time_s  # where j will be, from i
+    ahead_y = dy + vys[None, :] * params.anticipation_time_s
+    side = ox[:, None] * ahead_x + oy[:, None] * ahead_y
+    tie = jnp.where(u1 < 0.5, -1.0, 1.0)[:, None]
+    away = jnp.where(jnp.abs(side) < 1e-9, tie, -jnp.sign(side))  # +1: to the left
+    calc_x, calc_y, _ = _unit(dxi + jnp.sum(strength * away, axis=1) * ox, dyi + jnp.sum(strength * away, axis=1) * oy)
+
+    flip = (dxi * calc_x + dyi * calc_y) * (dxi * hx + dyi * hy) < 0.0
+    turn = dt / params.reaction_time_s
+    new_hx, new_hy, _ = _unit(hx + (calc_x - hx) * turn, hy + (calc_y - hy) * turn)
+    new_hx, new_hy = jnp.where(flip, calc_x, new_hx), jnp.where(flip, calc_y, new_hy)
+
+    lane_reach = reach + SPACING_BUFFER_M
+    ahead = new_hx[:, None] * dx + new_hy[:, None] * dy >= 0.0
+    lane = jnp.abs(-new_hy[:, None] * dx + new_hx[:, None] * dy) <= lane_reach
+    spacing = jnp.min(jnp.where(others & ahead & lane, dist - lane_reach, jnp.inf), axis=1)
+    speed = spacing / params.time_gap_s
+    creep = jnp.where(u2 < 0.5, CREEP_MPS, 0.0)
+    speed = jnp.where(speed < CREEP_MPS, creep, speed)
+    speed = jnp.minimum(speed, desired_speed_mps)
+    speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
+
+    field = wall_field.lookup(x, y)
+    wall, nx, ny = field[..., 0], field[..., 1], field[..., 2]
+    into = new_hx * nx + new_hy * ny
+    near_wall = (wall <= params.wall_buffer_m + params.radius_m) & (into < 0.0)
+    wx = new_hx - nx * into + nx * params.pushout_strength
+    wy = new_hy - ny * into + ny * params.pushout_strength
+    wx, wy, _ = _unit(wx, wy)
+    new_hx, new_hy = jnp.where(near_wall, wx, new_hx), jnp.where(near_wall, wy, new_hy)
+
+    new_vx, new_vy = speed * new_hx, speed * new_hy
+    new_x, new_y = x + dt * new_vx, y + dt * new_vy
+    new_x, new_y, new_vx, new_vy = wall_constraint(wall, nx, ny, new_x, new_y, new_vx, new_vy, dt)
+    zero = jnp.zeros_like(new_vx)
+    return (
+        jnp.where(moving, new_x, x),
+        jnp.where(moving, new_y, y),
+        jnp.where(moving, new_vx, zero),
+        jnp.where(moving, new_vy, zero),
+    )

@@ -1,0 +1,127 @@
+"""``socialnav humans validate``: the human models against real pedestrians.
+
+    socialnav humans validate --out runs/humans                       # the social force
+    socialnav humans validate --models social_force,orca --quick --out runs/humans-quick
+
+Writes ``summary.json`` (each model's checks against the bar of issue 61), the tables
+(``fundamental_diagram.csv``, ``prediction.csv``, ``counterflow.csv``, ``bodies.csv``) and three
+pictures, all at once when the run is complete (:mod:`evaluation.human_validation`).
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+import time
+
+from socialnav.argtypes import comma_names, output_folder, seed_int
+from socialnav.common import runfolder
+
+JOB = "socialnav humans validate"
+RESULTS = ("summary.json", "fundamental_diagram.csv", "prediction.csv", "counterflow.csv", "bodies.csv", "pictures")
+
+
+def add_parser(top) -> None:
+    humans = top.add_parser("humans", help="the human models against real pedestrian data")
+    sub = humans.add_subparsers(dest="humans_command", required=True, metavar="COMMAND")
+    v = sub.add_parser(
+        "validate",
+        help="each human model against the Jülich corridors and ETH/UCY",
+        description="Runs each human model where the shipped data was recorded and measures both alike: the "
+        "fundamental diagram in a 1.8 m corridor against the Jülich uo runs (PedPy's Voronoi densities), "
+        "counterflow against bi_corr_400_b_03 (speed, lane order), ETH/UCY prediction against constant velocity "
+        "(test splits: 8 frames observed, 12 predicted), and body overlaps. Writes a run folder and prints the "
+        "checks against the bar of issue 61.",
+    )
+    v.add_argument("--models", type=comma_names, default=["social_force"], help="human models (default social_force)")
+    v.add_argument(
+        "--out", type=output_folder, default=pathlib.Path("runs/humans"), help="folder (default runs/humans)"
+    )
+    v.add_argument("--quick", action="store_true", help="10 m corridors, 30 s: a first look in about a minute a model")
+    v.add_argument("--seed", type=seed_int, default=0)
+    v.add_argument("--overwrite", action="store_true", help="replace the run in --out whole once the new one is done")
+    v.add_argument("--no-progress", action="store_true", help="print the headline only")
+    v.set_defaults(handler=validate)
+
+
+def validate(args) -> int:
+    from socialnav.evaluation import human_validation as hv
+
+    unknown = [m for m in args.models if m not in hv.HUMAN_MODELS]
+    if unknown:
+        print(f"socialnav humans validate: --models: unknown {', '.join(unknown)} (known: "
+              f"{', '.join(hv.HUMAN_MODELS)})", file=sys.stderr)  # fmt: skip
+        return 2
+    try:
+        runfolder.prepare(args.out, RESULTS, args.overwrite, marker="summary.json", job=JOB)
+        runfolder.check_writable(args.out)
+    except runfolder.RunFolderError as e:
+        print(f"socialnav humans validate: --out {e}", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+    say = (
+        (lambda what: None)
+        if args.no_progress
+        else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
+    )
+    data = hv.reference(say)
+    results = {name: hv.validate(hv.HumanModel(name), data, args.quick, args.seed, say) for name in args.models}
+    try:
+        with runfolder.staged(args.out, "summary.json", args.overwrite, job=JOB) as stage:
+            _write(stage, data, results, args)
+    except runfolder.RunFolderError as e:
+        print(f"socialnav humans validate: --out {e}", file=sys.stderr)
+        return 2
+    _headline(data, results)
+    print(f"wrote {args.out}/{{{', '.join(RESULTS)}}} in {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def _write(stage: pathlib.Path, data: dict, results: dict, args) -> None:
+    import pandas as pd
+
+    from socialnav.evaluation import human_plots
+
+    fd = [data["fd_bins"].assign(source="data: Jülich uo runs")]
+    fd += [r["fd_bins"].assign(source=name) for name, r in results.items()]
+    pd.concat(fd, ignore_index=True).to_csv(stage / "fundamental_diagram.csv", index=False)
+    prediction = [data["constant_velocity"].assign(model="constant velocity", aim="velocity")]
+    prediction += [r["prediction"].assign(model=name) for name, r in results.items()]
+    pd.concat(prediction, ignore_index=True).to_csv(stage / "prediction.csv", index=False)
+    counter = [{"source": "data: bi_corr_400_b_03", **data["counterflow"]}]
+    counter += [{"source": name, **r["counterflow"]} for name, r in results.items()]
+    pd.DataFrame(counter).to_csv(stage / "counterflow.csv", index=False)
+    bodies = pd.concat([r["bodies"].assign(model=name) for name, r in results.items()], ignore_index=True)
+    bodies.to_csv(stage / "bodies.csv", index=False)
+    (stage / "pictures").mkdir()
+    human_plots.fundamental_diagram(data, results, stage / "pictures" / "fundamental_diagram.png")
+    human_plots.prediction(data, results, stage / "pictures" / "prediction.png")
+    human_plots.counterflow_and_bodies(data, results, stage / "pictures" / "counterflow_bodies.png")
+    summary = {
+        "models": {name: r["checks"] for name, r in results.items()},
+        "quick": bool(args.quick),
+        "seed": args.seed,
+        "data": {"counterflow": data["counterflow"]},
+    }
+    (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+
+
+def _headline(data: dict, results: dict) -> None:
+    cv = data["constant_velocity"]
+    c = data["counterflow"]
+    print(f"data: counterflow {c['speed_mps']:.2f} m/s, lane order {c['lane_order']:.2f} at {c['density']:.2f} /m²; "
+          f"constant velocity ADE/FDE {cv['ade_m'].mean():.2f} / {cv['fde_m'].mean():.2f} m")  # fmt: skip
+    for name, r in results.items():
+        k = r["checks"]
+        verdict = lambda ok: "pass" if ok else "FAIL"
+        ade, fde = k["eth_ucy_ade_fde"]
+        print(
+            f"{name}: speed inside the data's ±1 s.d. in {k['fd_bins_inside_1sd']} density bins "
+            f"({verdict(k['fd_pass'])}); "
+            f"deepest overlap {k['overlap_max_m']:.2f} m ({verdict(k['overlap_pass'])}); ETH/UCY ADE/FDE {ade:.2f} / "
+            f"{fde:.2f} m, ahead in {k['eth_ucy_scenes_ahead']} of 5 scenes ({verdict(k['eth_ucy_pass'])}); with the "
+            f"destination ADE {k['destination_ade_m']:.2f} m ({verdict(k['destination_pass'])}); counterflow speed "
+            f"x{k['counterflow_speed_ratio']:.2f}, lane order {k['counterflow_lane_order']:.2f} "
+            f"({verdict(k['counterflow_pass'])})"
+        )
