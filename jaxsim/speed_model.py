@@ -33,6 +33,7 @@ from socialnav.jaxsim.crowd import wall_constraint
 from socialnav.jaxsim.world import Grid
 
 _EPS = 1e-6
+FREE_SPACING_M = 1000.0  # the spacing of someone with nobody ahead
 
 
 @struct.dataclass
@@ -100,7 +101,9 @@ def step_speed_model(
 
     ahead = ex[:, None] * dx + ey[:, None] * dy >= 0.0
     lane = jnp.abs(-ey[:, None] * dx + ex[:, None] * dy) <= reach
-    spacing = jnp.min(jnp.where(others & ahead & lane, dist - reach, jnp.inf), axis=1)
+    # Nobody ahead: a spacing of 1 km (an infinite one would give the speed's gradient with
+    # respect to the time gap as 0 x inf = NaN where the desired speed binds).
+    spacing = jnp.min(jnp.where(others & ahead & lane, dist - reach, FREE_SPACING_M), axis=1)
     speed = jnp.minimum(jnp.maximum(spacing / params.time_gap_s, 0.0), desired_speed_mps)
     speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
     new_vx, new_vy = speed * ex, speed * ey
@@ -138,8 +141,10 @@ SPACING_BUFFER_M = 0.02  # the anticipation model's spacing keeps this much more
 
 
 def _unit(x, y):
-    norm = jnp.sqrt(x * x + y * y)
-    return x / jnp.maximum(norm, _EPS), y / jnp.maximum(norm, _EPS), norm
+    """``(x, y) / |(x, y)|`` and the norm, with a gradient at the origin (the norm's own is
+    infinite there: a person standing still would give NaN gradients)."""
+    norm = jnp.sqrt(x * x + y * y + _EPS * _EPS)
+    return x / norm, y / norm, norm
 
 
 def step_anticipation(
@@ -217,7 +222,7 @@ def step_anticipation(
     lane_reach = reach + SPACING_BUFFER_M
     ahead = new_hx[:, None] * dx + new_hy[:, None] * dy >= 0.0
     lane = jnp.abs(-new_hy[:, None] * dx + new_hx[:, None] * dy) <= lane_reach
-    spacing = jnp.min(jnp.where(others & ahead & lane, dist - lane_reach, jnp.inf), axis=1)
+    spacing = jnp.min(jnp.where(others & ahead & lane, dist - lane_reach, FREE_SPACING_M), axis=1)
     speed = spacing / params.time_gap_s
     creep = jnp.where(u2 < 0.5, CREEP_MPS, 0.0)
     speed = jnp.where(speed < CREEP_MPS, creep, speed)
@@ -243,3 +248,36 @@ def step_anticipation(
         jnp.where(moving, new_vx, zero),
         jnp.where(moving, new_vy, zero),
     )
+
+
+# Fitted parameters shipped as named human models (``--human-model <name>``): the gradient's fits
+# of ``socialnav humans calibrate --model <kind>`` on the Jülich training runs (seed 0; the
+# values its fit.json holds), scored on held-out data in docs/humans.md.
+CALIBRATED: dict[str, SpeedModelParams | AnticipationParams] = {
+    "collision_free_speed_calibrated": SpeedModelParams(
+        time_gap_s=0.7536, neighbor_strength=10.1751, neighbor_range_m=0.1124, radius_m=0.1598
+    ),
+    "anticipation_calibrated": AnticipationParams(
+        time_gap_s=0.7026,
+        neighbor_strength=6.4946,
+        neighbor_range_m=0.0732,
+        radius_m=0.1645,
+        anticipation_time_s=0.8633,
+    ),
+}
+VELOCITY_MODELS = ("collision_free_speed", "anticipation")
+
+
+def kind_of(name: str) -> str:
+    """The model a human model's name runs (a calibrated one's base model; others their own)."""
+    for kind in VELOCITY_MODELS:
+        if name == f"{kind}_calibrated":
+            return kind
+    return name
+
+
+def params_of(name: str):
+    """The parameters a velocity model's name starts from: its calibrated preset, or the defaults."""
+    if name in CALIBRATED:
+        return CALIBRATED[name]
+    return {"collision_free_speed": SpeedModelParams, "anticipation": AnticipationParams}[kind_of(name)]()

@@ -1,7 +1,8 @@
-"""``socialnav humans validate``: the human models against real pedestrians.
+"""``socialnav humans validate|calibrate``: the human models against real pedestrians.
 
     socialnav humans validate --out runs/humans                       # the social force
     socialnav humans validate --models social_force,orca --quick --out runs/humans-quick
+    socialnav humans calibrate --model collision_free_speed --out runs/calibration
 
 Writes ``summary.json`` (each model's checks against the bar of issue 61), the tables
 (``fundamental_diagram.csv``, ``prediction.csv``, ``counterflow.csv``, ``bodies.csv``) and three
@@ -15,8 +16,9 @@ import pathlib
 import sys
 import time
 
-from socialnav.argtypes import comma_names, output_folder, seed_int
+from socialnav.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
 from socialnav.common import runfolder
+from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 
 JOB = "socialnav humans validate"
 RESULTS = ("summary.json", "fundamental_diagram.csv", "prediction.csv", "counterflow.csv", "bodies.csv", "pictures")
@@ -44,14 +46,94 @@ def add_parser(top) -> None:
     v.add_argument("--no-progress", action="store_true", help="print the headline only")
     v.set_defaults(handler=validate)
 
+    c = sub.add_parser(
+        "calibrate",
+        help="fit a human model's parameters to the Jülich training runs, by gradient and by Nelder-Mead",
+        description="Fits a velocity model's parameters (time gap, repulsion strength and range, body radius; the "
+        "anticipation time too) to the fundamental diagram of the Jülich training runs (the test runs are never "
+        "read) by Adam through the crowd step, and by Nelder-Mead on the same loss as the check. Writes fit.json "
+        "and curve.png and prints the fitted values; socialnav humans validate --models <model>_calibrated scores "
+        "the shipped fit on held-out data.",
+    )
+    c.add_argument("--model", choices=("collision_free_speed", "anticipation"), default="collision_free_speed")
+    c.add_argument("--out", type=output_folder, default=pathlib.Path("runs/calibration"), help="folder")
+    c.add_argument("--steps", type=positive_int, default=80, help="gradient steps (default 80)")
+    c.add_argument("--learning-rate", type=positive_float, default=0.02, help="Adam's, on log-parameters (0.02)")
+    c.add_argument("--evaluations", type=positive_int, default=250, help="Nelder-Mead's loss evaluations (250)")
+    c.add_argument("--seed", type=seed_int, default=0)
+    c.add_argument("--overwrite", action="store_true", help="replace the run in --out whole once the new one is done")
+    c.set_defaults(handler=calibrate)
 
-def validate(args) -> int:
+
+CALIBRATE_JOB = "socialnav humans calibrate"
+CALIBRATE_RESULTS = ("fit.json", "curve.png")
+
+
+def calibrate(args) -> int:
+    import jax
+
+    from socialnav.common import figures
+    from socialnav.evaluation import human_calibration as hc
     from socialnav.evaluation import human_validation as hv
 
-    unknown = [m for m in args.models if m not in hv.HUMAN_MODELS]
+    try:
+        runfolder.prepare(args.out, CALIBRATE_RESULTS, args.overwrite, marker="fit.json", job=CALIBRATE_JOB)
+        runfolder.check_writable(args.out)
+    except runfolder.RunFolderError as e:
+        print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+    model = hv.HumanModel(args.model)
+    corridors = hc.training_corridors(model, args.seed)
+    print(f"{args.model}: fitting {', '.join(hc.FITTED[args.model])} to the runs {', '.join(hc.TRAIN_RUNS)} "
+          f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m²)", flush=True)  # fmt: skip
+    start = float(hc.fd_loss(model, corridors, hc.theta_of(model), jax.random.key(args.seed)))
+    by_gradient, gradient_history = hc.fit_gradient(model, corridors, args.steps, args.learning_rate, args.seed)
+    by_search, search_history = hc.fit_nelder_mead(model, corridors, args.evaluations, args.seed)
+    fit = {
+        "model": args.model,
+        "train_runs": list(hc.TRAIN_RUNS),
+        "test_runs": list(hc.TEST_RUNS),
+        "densities": list(corridors.densities),
+        "start": {"values": hc.fitted_values(model), "loss": start},
+        "gradient": {"values": hc.fitted_values(by_gradient), "loss": min(h[1] for h in gradient_history),
+                     "steps": args.steps, "seconds": gradient_history[-1][2]},
+        "nelder_mead": {"values": hc.fitted_values(by_search), "loss": min(h[1] for h in search_history),
+                        "evaluations": len(search_history), "seconds": search_history[-1][2]},
+        "seed": args.seed,
+    }  # fmt: skip
+    try:
+        with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
+            fig = figures.figure(figsize=(6.0, 3.6), layout="constrained")
+            ax = fig.add_subplot()
+            for label, history in (("gradient (Adam)", gradient_history), ("Nelder-Mead", search_history)):
+                seconds = [h[2] for h in history]
+                ax.plot(seconds, [min(h[1] for h in history[: k + 1]) for k in range(len(history))], label=label)
+            ax.set_xlabel("seconds")
+            ax.set_ylabel("loss (best so far)")
+            ax.set_yscale("log")
+            ax.legend()
+            ax.set_title(f"{args.model} on the Jülich training runs", fontsize=10)
+            figures.save(fig, stage / "curve.png")
+            (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
+    except runfolder.RunFolderError as e:
+        print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
+        return 2
+    for label in ("gradient", "nelder_mead"):
+        print(f"{label}: loss {start:.2f} -> {fit[label]['loss']:.2f}, {fit[label]['values']}")
+    print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def validate(args) -> int:
+    from socialnav.evaluation import human_calibration as hc
+    from socialnav.evaluation import human_validation as hv
+
+    known = list(HUMAN_MODELS)
+    unknown = [m for m in args.models if m not in known]
     if unknown:
-        print(f"socialnav humans validate: --models: unknown {', '.join(unknown)} (known: "
-              f"{', '.join(hv.HUMAN_MODELS)})", file=sys.stderr)  # fmt: skip
+        print(f"socialnav humans validate: --models: unknown {', '.join(unknown)} (known: {', '.join(known)})",
+              file=sys.stderr)  # fmt: skip
         return 2
     try:
         runfolder.prepare(args.out, RESULTS, args.overwrite, marker="summary.json", job=JOB)
@@ -66,7 +148,7 @@ def validate(args) -> int:
         else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
     )
     data = hv.reference(say)
-    results = {name: hv.validate(hv.HumanModel(name), data, args.quick, args.seed, say) for name in args.models}
+    results = {name: hv.validate(hc.named_model(name), data, args.quick, args.seed, say, name) for name in args.models}
     try:
         with runfolder.staged(args.out, "summary.json", args.overwrite, job=JOB) as stage:
             _write(stage, data, results, args)

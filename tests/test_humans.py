@@ -4,6 +4,9 @@ figures (constant velocity on ETH/UCY, the Jülich diagram)."""
 
 from __future__ import annotations
 
+import dataclasses
+
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pandas as pd
@@ -194,3 +197,57 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
     assert pd.read_csv(out / "prediction.csv")["model"].nunique() == 2
     assert cli.main(["humans", "validate", "--quick", "--out", str(out), "--no-progress"]) == 2  # no --overwrite
     assert cli.main(["humans", "validate", "--models", "crowd_of_ghosts", "--out", str(tmp_path / "x")]) == 2
+
+
+# ---------------------------------------------------------------- calibration
+
+
+def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search():
+    """Known answer: the fundamental diagram of the speed model with a time gap of 0.6 s, fitted
+    from 1.0 s by gradient through the crowd step and by Nelder-Mead, gives back 0.6 s."""
+    from socialnav.evaluation import human_calibration as hc
+
+    truth = hv.HumanModel("collision_free_speed", speed=speed_model.SpeedModelParams(time_gap_s=0.6))
+    size = dict(length_m=6.0, warmup_steps=60, measured_steps=20)
+    fields = ("time_gap_s",)
+    corridors = hc.corridors_at(truth, (1.5, 2.5, 3.5), np.zeros(3), np.full(3, 0.05), **size)
+    key = jax.random.key(0)
+    measured = np.asarray(hc.mean_speeds(truth, corridors, hc.theta_of(truth, fields), key, fields=fields))
+    assert np.all(np.diff(measured) < 0)  # speed falls with density
+    corridors = dataclasses.replace(corridors, speed_data=measured)
+    start = hv.HumanModel("collision_free_speed")
+    quiet = lambda *_: None
+    by_gradient, history = hc.fit_gradient(start, corridors, 60, 0.05, log=quiet, fields=fields)
+    assert history[-1][1] < 0.05 * history[0][1]
+    assert float(by_gradient.speed.time_gap_s) == pytest.approx(0.6, rel=0.05)
+    by_search, _ = hc.fit_nelder_mead(start, corridors, 40, log=quiet, fields=fields)
+    assert float(by_search.speed.time_gap_s) == pytest.approx(0.6, rel=0.05)
+
+
+@pytest.mark.parametrize("name", ["collision_free_speed", "anticipation", "collision_free_speed_calibrated"])
+def test_a_velocity_model_moves_the_arenas_people_around_a_standing_robot(name):
+    """``--human-model``: the arena's env steps its people by the velocity model; the walker
+    passes the robot without entering its body (a disc of the robot's radius to them)."""
+    from socialnav.data import SCENES_DIR
+    from socialnav.evaluation import arena
+    from socialnav.jaxsim.scenes import env as env_lib
+    from socialnav.jaxsim.scenes.spec import load_scene
+    from socialnav.jaxsim.scenes.variant import sample_variant
+
+    spec = load_scene(SCENES_DIR / "snape_walking.json")
+    setup = arena.setup_scene(spec)
+    env = env_lib.make_env(spec, env_lib.EnvConfig(human_model=name, max_steps=300))
+    assert env.velocity is not None
+    variant = jax.tree.map(jnp.asarray, sample_variant(spec, 0, 0, n_slots=setup.n_slots))
+    state, _ = env.reset(jax.random.key(0), variant)
+    step = jax.jit(env.step)
+    start = np.asarray(state.people.xy)
+    nearest = np.inf
+    for _ in range(200):
+        state, ts = step(state, jnp.zeros(2))
+        nearest = min(nearest, float(ts.info.nearest_person_m))
+    moved = np.linalg.norm(np.asarray(state.people.xy) - start, axis=-1)[np.asarray(variant.valid)]
+    assert moved.max() > 2.0 and np.isfinite(np.asarray(state.people.xy)).all()
+    radius = float(env.velocity.radius_m)
+    # nearest_person_m is measured with the arena's 0.25 m bodies; the model's own are smaller
+    assert nearest > -(0.25 - radius) - 1e-3, nearest

@@ -1,0 +1,206 @@
+"""Human-model parameters fitted to real pedestrians by gradient through the crowd step, with a
+derivative-free search on the same loss as the check that the gradient finds what a search finds.
+
+The loss (:func:`fd_loss`) is the fundamental diagram of the Jülich corridor runs of the
+*training* split (:data:`TRAIN_RUNS`; the others, :data:`TEST_RUNS`, are never read here):
+for each density bin the training runs cover, the model walks a periodic 1.8 m corridor at that
+density and its mean speed along the corridor is compared with the data's, in units of the
+data's standard deviation in the bin::
+
+    loss(theta) = mean over bins of ((v_model(rho; theta) - v_data(rho)) / sd_data(rho))^2
+
+The model's speed is measured over the last ``measured_steps`` of a run whose first
+``warmup_steps`` are taken with the gradient stopped (the crowd arranges itself; a gradient
+through hundreds of steps of a crowd is long, costly and chaotic): the gradient is that of the
+speed the arranged crowd walks at, which for a first-order velocity model is most of it. The
+parameters are fitted as logarithms (they must stay positive) with Adam (optax); Nelder-Mead
+(scipy) minimises the same loss, with the warm-up included, from the same start.
+
+The corridors are the validation's (:mod:`evaluation.human_validation`: 1.8 m x 20 m, periodic,
+the speed taken after 30 s): in a shorter one (10 m, 20 s) the velocity models, which do not
+overtake a walker ahead, had not yet closed up behind the slowest, and a fit there walked 0.3 m/s
+too slow at low density in the validation's. The density of a simulated corridor is its global
+density (people over area); PedPy's Voronoi density of the validation is what scores the
+result, on the held-out runs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from socialnav.evaluation import human_validation as hv
+from socialnav.evaluation import pedestrian_measures as measures
+from socialnav.jaxsim import speed_model
+
+TRAIN_RUNS, TEST_RUNS = hv.FD_TRAIN_RUNS, hv.FD_TEST_RUNS
+# The fitted fields of each model's parameters (fitted as logarithms).
+FITTED = {
+    "collision_free_speed": ("time_gap_s", "neighbor_strength", "neighbor_range_m", "radius_m"),
+    "anticipation": ("time_gap_s", "neighbor_strength", "neighbor_range_m", "radius_m", "anticipation_time_s"),
+}
+_FIELD = {"collision_free_speed": "speed", "anticipation": "anticipation"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Corridors:
+    """What the loss simulates: one periodic corridor per density bin (people, desired speeds,
+    their starts, fixed across evaluations: common random numbers) and the data's bins."""
+
+    densities: tuple[float, ...]
+    speed_data: np.ndarray
+    sd_data: np.ndarray
+    starts: tuple
+    width_m: float = 1.8
+    length_m: float = 20.0
+    warmup_steps: int = 300
+    measured_steps: int = 50
+
+
+def corridors_at(model: hv.HumanModel, densities, speed_data, sd_data, seed: int = 0, **size) -> Corridors:
+    """Corridors at ``densities`` (persons/m²) against ``speed_data`` +- ``sd_data``, people
+    drawn once under ``seed`` (``size``: ``width_m``, ``length_m``, ``warmup_steps``,
+    ``measured_steps``)."""
+    width, length = size.get("width_m", 1.8), size.get("length_m", 20.0)
+    rng = np.random.default_rng(seed)
+    starts = []
+    for rho in densities:
+        n = max(2, int(round(rho * width * length)))
+        xy0 = hv._starts(n, width, length, model.radius_m, rng)
+        speed = hv.desired_speeds(model.crowd, n, rng)
+        starts.append((jnp.asarray(xy0, jnp.float32), jnp.ones(n, jnp.float32), jnp.asarray(speed, jnp.float32)))
+    steps = {k: v for k, v in size.items() if k in ("warmup_steps", "measured_steps")}
+    return Corridors(tuple(float(r) for r in densities), np.asarray(speed_data, float),
+                     np.maximum(np.asarray(sd_data, float), 0.02), tuple(starts), width, length, **steps)  # fmt: skip
+
+
+def training_corridors(model: hv.HumanModel, seed: int = 0, runs=TRAIN_RUNS, **size) -> Corridors:
+    """The corridors of :func:`fd_loss` for the bins the training ``runs`` cover (with at least
+    100 frames), against the runs' mean speed and standard deviation there."""
+    bins = measures.binned(hv.data_fundamental_diagram(runs))
+    bins = bins[bins["n"] >= 100]
+    return corridors_at(model, bins["density_bin"], bins["speed_mean"], bins["speed_sd"], seed, **size)
+
+
+def with_theta(model: hv.HumanModel, theta, fields=None) -> hv.HumanModel:
+    """``model`` with its fitted ``fields`` (default :data:`FITTED`'s) set to ``exp(theta)``."""
+    field = _FIELD[model.name]
+    fields = FITTED[model.name] if fields is None else fields
+    params = getattr(model, field).replace(**dict(zip(fields, jnp.exp(theta), strict=True)))
+    return dataclasses.replace(model, **{field: params})
+
+
+def theta_of(model: hv.HumanModel, fields=None) -> jnp.ndarray:
+    """The logarithms of ``model``'s fitted ``fields`` (default :data:`FITTED`'s)."""
+    params = getattr(model, _FIELD[model.name])
+    fields = FITTED[model.name] if fields is None else fields
+    return jnp.log(jnp.asarray([float(getattr(params, f)) for f in fields], jnp.float32))
+
+
+def mean_speeds(model: hv.HumanModel, corridors: Corridors, theta, key, stop_warmup: bool = True, fields=None):
+    """(bins,) the model's mean speed along each corridor over its measured steps."""
+    field = hv.corridor_field(corridors.width_m, corridors.length_m)
+    m = with_theta(model, theta, fields)
+    speeds = []
+    for k, (xy0, direction, speed) in enumerate(corridors.starts):
+        step = hv.periodic_step(m.name, m.params, field, direction, speed, corridors.length_m)
+        keys = jax.random.split(jax.random.fold_in(key, k), corridors.warmup_steps + corridors.measured_steps)
+        carry, _ = jax.lax.scan(lambda c, q, step=step: (step(c, q), None), hv.periodic_start(direction, speed, xy0),
+                                keys[: corridors.warmup_steps])  # fmt: skip
+        if stop_warmup:
+            carry = jax.lax.stop_gradient(carry)
+
+        def measured(c, q, step=step):
+            new = step(c, q)
+            return new, new[1][:, 0]
+
+        _, vx = jax.lax.scan(measured, carry, keys[corridors.warmup_steps :])
+        speeds.append(jnp.mean(vx))
+    return jnp.stack(speeds)
+
+
+def fd_loss(model: hv.HumanModel, corridors: Corridors, theta, key, stop_warmup: bool = True, fields=None):
+    """The loss of the module's docstring (``theta``: the logarithms of ``fields``)."""
+    v = mean_speeds(model, corridors, theta, key, stop_warmup, fields)
+    return jnp.mean(((v - corridors.speed_data) / corridors.sd_data) ** 2)
+
+
+def fit_gradient(
+    model: hv.HumanModel,
+    corridors: Corridors,
+    steps: int = 80,
+    learning_rate: float = 0.02,
+    seed: int = 0,
+    log=print,
+    fields=None,
+):
+    """Adam on :func:`fd_loss` from ``model``'s parameters (``fields``, default :data:`FITTED`'s):
+    ``(fitted model, history)``, the model at the lowest loss seen, ``history`` a list of
+    ``(step, loss, seconds)``."""
+    loss_and_grad = jax.jit(jax.value_and_grad(lambda th, key: fd_loss(model, corridors, th, key, fields=fields)))
+    optimizer = optax.adam(learning_rate)
+    theta = theta_of(model, fields)
+    state = optimizer.init(theta)
+    key = jax.random.key(seed)
+    history, t0 = [], time.perf_counter()
+    best = (np.inf, theta)
+    for k in range(steps):
+        loss, grad = loss_and_grad(theta, key)
+        loss = float(loss)
+        if loss < best[0]:
+            best = (loss, theta)
+        history.append((k, loss, time.perf_counter() - t0))
+        if k % 10 == 0 or k == steps - 1:
+            log(f"  gradient step {k}: loss {loss:.3f} ({time.perf_counter() - t0:.0f} s)")
+        updates, state = optimizer.update(grad, state)
+        theta = optax.apply_updates(theta, updates)
+    return with_theta(model, best[1], fields), history
+
+
+def fit_nelder_mead(
+    model: hv.HumanModel, corridors: Corridors, max_evaluations: int = 250, seed: int = 0, log=print, fields=None
+):
+    """Nelder-Mead (scipy) on :func:`fd_loss` with the warm-up's gradient not stopped (no
+    gradient is taken): ``(fitted model, history)`` as :func:`fit_gradient`."""
+    from scipy.optimize import minimize
+
+    loss = jax.jit(lambda th, key: fd_loss(model, corridors, th, key, stop_warmup=False, fields=fields))
+    key = jax.random.key(seed)
+    history, t0 = [], time.perf_counter()
+
+    def f(theta):
+        value = float(loss(jnp.asarray(theta, jnp.float32), key))
+        history.append((len(history), value, time.perf_counter() - t0))
+        if len(history) % 20 == 0:
+            log(f"  Nelder-Mead evaluation {len(history)}: loss {min(h[1] for h in history):.3f}")
+        return value
+
+    x0 = np.asarray(theta_of(model, fields), float)
+    # The first simplex 30 % away in each parameter (scipy's default step is 5 % of a value, and
+    # 0.00025 of a zero: a log-parameter of 1 would start on a point).
+    simplex = np.vstack([x0, x0 + 0.3 * np.eye(len(x0))])
+    options = {"maxfev": max_evaluations, "xatol": 1e-3, "fatol": 1e-3, "initial_simplex": simplex}
+    result = minimize(f, x0, method="Nelder-Mead", options=options)
+    return with_theta(model, jnp.asarray(result.x, jnp.float32), fields), history
+
+
+def fitted_values(model: hv.HumanModel) -> dict:
+    params = getattr(model, _FIELD[model.name])
+    return {f: round(float(getattr(params, f)), 4) for f in FITTED[model.name]}
+
+
+def named_model(name: str) -> hv.HumanModel:
+    """A human model by name, the calibrated ones (:data:`jaxsim.speed_model.CALIBRATED`) included."""
+    kind = speed_model.kind_of(name)
+    if kind in _FIELD:
+        return hv.HumanModel(kind, **{_FIELD[kind]: speed_model.params_of(name)})
+    return hv.HumanModel(name)
+
+
+__all__ = ["FITTED", "TEST_RUNS", "TRAIN_RUNS", "fd_loss", "fit_gradient", "fit_nelder_mead",
+           "named_model", "speed_model", "training_corridors"]  # fmt: skip
