@@ -34,6 +34,7 @@ import sys
 from socialnav import actor_spec
 from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.backend import add_backend_options
+from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.locking import locks_folder
 
 DEFAULT_METHODS = (
@@ -86,10 +87,11 @@ def add_parser(sub) -> None:
     )
     p.add_argument(
         "--human-model",
-        choices=("social_force", "orca"),
+        choices=HUMAN_MODELS,
         default="social_force",
-        help="how the people move: the warehouse's social force (default) or ORCA (a method checked against "
-        "another human model)",
+        help="how the people move: the warehouse's social force (default), ORCA, or a velocity model with bodies "
+        "(collision_free_speed, anticipation, and their _calibrated fits: docs/humans.md measures each against real "
+        "pedestrians)",
     )
     p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")
     p.add_argument(

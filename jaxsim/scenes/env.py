@@ -39,6 +39,7 @@ import numpy as np
 from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR
+from socialnav.jaxsim import speed_model
 from socialnav.jaxsim.orca import ORCAParams
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
@@ -67,7 +68,8 @@ class EnvConfig:
         turned with it (row 0 behind, column 0 to the right; 0: no window).
       window_resolution_m: its cell size.
       human_model: how the people move (:data:`jaxsim.scenes.people.HUMAN_MODELS`): the
-        warehouse's social force (default) or ORCA (:mod:`jaxsim.orca`).
+        warehouse's social force (default), ORCA (:mod:`jaxsim.orca`) or a velocity model with
+        bodies (:mod:`jaxsim.speed_model`; ``docs/humans.md`` measures each against real people).
     """
 
     dt_s: float = 0.1
@@ -194,6 +196,8 @@ class Env:
       robot: the base's limits.
       reward: the reward's weights.
       orca: ORCA's constants (used with ``config.human_model = "orca"``).
+      velocity: a velocity model's constants (:mod:`jaxsim.speed_model`; used with
+        ``config.human_model`` one of them; None otherwise).
       config: static settings.
     """
 
@@ -203,7 +207,8 @@ class Env:
     robot: robot_lib.RobotParams
     reward: RewardParams
     orca: ORCAParams
-    config: EnvConfig = struct.field(pytree_node=False)
+    velocity: Any = None
+    config: EnvConfig = struct.field(pytree_node=False, default=EnvConfig())
 
     # ------------------------------------------------------------------ API
 
@@ -252,6 +257,7 @@ class Env:
             cfg.human_model,
             self.orca,
             self.robot.radius_m,
+            self.velocity,
         )
         robot = robot_lib.step_robot(self.robot, self.world, state.robot, v, w, cfg.dt_s)
         goal = state.variant.goal_xy
@@ -432,7 +438,19 @@ def make_env(
     occ, (x0, y0) = world_lib.occupancy(spec, occupancy_resolution_m)
     half = occupancy_resolution_m / 2
     grid = Grid(jnp.asarray(occ), origin_x_m=x0 + half, origin_y_m=y0 + half, resolution_m=occupancy_resolution_m)
-    return Env(world=world, occupancy=grid, crowd=crowd, robot=robot, reward=reward, orca=orca, config=config)
+    velocity = None
+    if speed_model.kind_of(config.human_model) in speed_model.VELOCITY_MODELS:
+        velocity = speed_model.params_of(config.human_model)
+    return Env(
+        world=world,
+        occupancy=grid,
+        crowd=crowd,
+        robot=robot,
+        reward=reward,
+        orca=orca,
+        velocity=velocity,
+        config=config,
+    )
 
 
 def episode_steps(timeout_s: float, dt_s: float, period_steps: int = 1) -> int:

@@ -15,7 +15,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim import crowd, orca, rng
+from socialnav.jaxsim import crowd, orca, rng, speed_model
 from socialnav.jaxsim.params import TIAGO_RADIUS_M, SimParams
 from socialnav.jaxsim.scenes.spec import KIND
 from socialnav.jaxsim.scenes.variant import Variant
@@ -26,7 +26,8 @@ STOP_RAMP_M = 0.5  # a queue member slows down over the last half metre to its p
 AT_PLACE_M = 0.05  # a queue member this close to its place stands there
 QUEUE_STEP_UP_DELAY_S = 0.5  # each place in line steps up this long after the one ahead of it
 MOVING_MPS = 0.1  # slower than this a person keeps their heading (a standing body does not turn to its drift)
-HUMAN_MODELS = ("social_force", "orca")
+HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation", "collision_free_speed_calibrated",
+                "anticipation_calibrated")  # fmt: skip
 
 
 @struct.dataclass
@@ -102,6 +103,7 @@ def step_people(
     model: str = "social_force",
     orca_params: orca.ORCAParams | None = None,
     robot_radius_m: float = TIAGO_RADIUS_M,
+    velocity_params=None,
 ) -> PeopleState:
     """One step of ``params.dt_s``: behaviours, then the human model on the mobile people.
 
@@ -109,8 +111,10 @@ def step_people(
       robot_xy, robot_velocity: (2,) the robot's previous position and velocity.
       step: () int32 step counter (time and the random force's stream).
       model: :data:`HUMAN_MODELS`: ``social_force`` (:func:`jaxsim.crowd.step_crowd`, the
-        warehouse's) or ``orca`` (:func:`jaxsim.orca.step_orca` with ``orca_params``; the robot a
-        disc of ``robot_radius_m``).
+        warehouse's), ``orca`` (:func:`jaxsim.orca.step_orca` with ``orca_params``), or a velocity
+        model with bodies (:mod:`jaxsim.speed_model`: ``collision_free_speed``, ``anticipation``
+        and their ``_calibrated`` fits, with ``velocity_params``, default the name's own); the
+        robot a disc of ``robot_radius_m`` for all but the social force.
     """
     if model not in HUMAN_MODELS:
         raise ValueError(f"human model must be one of {', '.join(HUMAN_MODELS)}, got {model!r}")
@@ -121,7 +125,20 @@ def step_people(
     robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
     x, y, vx, vy = s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1]
     aim_dx, aim_dy = target[:, 0] - x, target[:, 1] - y
-    if model == "orca":
+    kind = speed_model.kind_of(model)
+    if kind in speed_model.VELOCITY_MODELS:
+        velocity_params = speed_model.params_of(model) if velocity_params is None else velocity_params
+        if kind == "anticipation":
+            x, y, vx, vy = speed_model.step_anticipation(
+                velocity_params, world.wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, s.present, mobile, robot,
+                robot_radius_m, u[0], u[1], ignores_robot=v.ignore_robot,
+            )  # fmt: skip
+        else:
+            x, y, vx, vy = speed_model.step_speed_model(
+                velocity_params, world.wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, s.present, mobile, robot,
+                robot_radius_m, ignores_robot=v.ignore_robot,
+            )  # fmt: skip
+    elif model == "orca":
         orca_params = orca.ORCAParams() if orca_params is None else orca_params
         x, y, vx, vy = orca.step_orca(
             orca_params, world.wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, s.present, mobile, robot,
