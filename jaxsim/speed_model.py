@@ -53,6 +53,19 @@ class SpeedModelParams:
     cutoff_m: float = 3.0
 
 
+def _move(x, y, vx, vy, wall, nx, ny, moving, dt: float):
+    """Move by ``(vx, vy)`` for ``dt``, walls kept by the crowd's hard constraint
+    (:func:`jaxsim.crowd.wall_constraint`); who is not ``moving`` stays, with velocity 0."""
+    new_x, new_y, new_vx, new_vy = wall_constraint(wall, nx, ny, x + dt * vx, y + dt * vy, vx, vy, dt)
+    zero = jnp.zeros_like(new_vx)
+    return (
+        jnp.where(moving, new_x, x),
+        jnp.where(moving, new_y, y),
+        jnp.where(moving, new_vx, zero),
+        jnp.where(moving, new_vy, zero),
+    )
+
+
 def step_speed_model(
     params: SpeedModelParams,
     wall_field: Grid,
@@ -107,15 +120,7 @@ def step_speed_model(
     speed = jnp.minimum(jnp.maximum(spacing / params.time_gap_s, 0.0), desired_speed_mps)
     speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
     new_vx, new_vy = speed * ex, speed * ey
-    new_x, new_y = x + dt * new_vx, y + dt * new_vy
-    new_x, new_y, new_vx, new_vy = wall_constraint(wall, nx, ny, new_x, new_y, new_vx, new_vy, dt)
-    zero = jnp.zeros_like(new_vx)
-    return (
-        jnp.where(moving, new_x, x),
-        jnp.where(moving, new_y, y),
-        jnp.where(moving, new_vx, zero),
-        jnp.where(moving, new_vy, zero),
-    )
+    return _move(x, y, new_vx, new_vy, wall, nx, ny, moving, dt)
 
 
 @struct.dataclass
@@ -239,15 +244,7 @@ def step_anticipation(
     new_hx, new_hy = jnp.where(near_wall, wx, new_hx), jnp.where(near_wall, wy, new_hy)
 
     new_vx, new_vy = speed * new_hx, speed * new_hy
-    new_x, new_y = x + dt * new_vx, y + dt * new_vy
-    new_x, new_y, new_vx, new_vy = wall_constraint(wall, nx, ny, new_x, new_y, new_vx, new_vy, dt)
-    zero = jnp.zeros_like(new_vx)
-    return (
-        jnp.where(moving, new_x, x),
-        jnp.where(moving, new_y, y),
-        jnp.where(moving, new_vx, zero),
-        jnp.where(moving, new_vy, zero),
-    )
+    return _move(x, y, new_vx, new_vy, wall, nx, ny, moving, dt)
 
 
 # Fitted parameters shipped as named human models (``--human-model <name>``): the gradient's fits
