@@ -1,0 +1,88 @@
+"""What each human model costs: one crowd step of N people, every model on the same crowd.
+
+    python benchmarks/bench_human_models.py                  # N = 16, 64, 256 in a batch of 64 worlds
+    XLA_FLAGS=--xla_cpu_max_isa=AVX2 python benchmarks/bench_human_models.py   # AVX2 only
+
+The crowd is a periodic corridor's (:mod:`evaluation.human_validation`: 1.8 m wide, 2 persons/m²,
+ghosts either side, so 3N bodies are felt), ``vmap``-ed over worlds as the arena and the
+validation batch them. Prints people-steps per second (worlds x N x steps over the wall time,
+compilation apart and printed, best of ``--repeats``) for each model, the ratio to the social
+force, and the machine. ORCA is left out above 64 people (issue 66: its step grows as N^3-4).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+
+from benchmarks.bench_simulator import machine  # noqa: E402
+from socialnav.evaluation import human_calibration as hc  # noqa: E402
+from socialnav.evaluation import human_validation as hv  # noqa: E402
+
+MODELS = ("social_force", "collision_free_speed_calibrated", "anticipation_calibrated", "orca")
+
+
+def program(model: hv.HumanModel, n: int, worlds: int, steps: int, seed: int = 0):
+    """``(run, args)``: ``run(*args)`` steps ``worlds`` corridors of ``n`` people ``steps`` times."""
+    width, length = 1.8, n / (2.0 * 1.8)
+    rng = np.random.default_rng(seed)
+    xy0 = np.stack([hv._starts(n, width, length, model.radius_m, rng) for _ in range(worlds)])
+    speed = np.stack([hv.desired_speeds(model.crowd, n, rng) for _ in range(worlds)])
+    field = hv.corridor_field(width, length)
+
+    def one(params, xy, s, key):
+        direction = jnp.ones(n, jnp.float32)
+        step = hv.periodic_step(model.name, params, field, direction, s, length)
+        carry, _ = jax.lax.scan(lambda c, k: (step(c, k), None), hv.periodic_start(direction, s, xy),
+                                jax.random.split(key, steps))  # fmt: skip
+        return carry[0]
+
+    run = jax.jit(jax.vmap(one, in_axes=(None, 0, 0, 0)))
+    args = (model.params, jnp.asarray(xy0, jnp.float32), jnp.asarray(speed, jnp.float32),
+            jax.random.split(jax.random.key(seed), worlds))  # fmt: skip
+    return run, args
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--people", default="16,64,256", help="crowd sizes (default 16,64,256)")
+    ap.add_argument("--worlds", type=int, default=64)
+    ap.add_argument("--steps", type=int, default=100)
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args()
+    print(machine())
+    for n in (int(v) for v in args.people.split(",")):
+        base = None
+        for name in MODELS:
+            if name == "orca" and n > 64:
+                print(f"N={n:4d} {name:32s} left out (O(N^3-4), issue 66)")
+                continue
+            run, run_args = program(hc.named_model(name), n, args.worlds, args.steps)
+            t0 = time.perf_counter()
+            jax.block_until_ready(run(*run_args))
+            compile_s = time.perf_counter() - t0
+            best = min(_timed(run, run_args) for _ in range(args.repeats))
+            rate = args.worlds * n * args.steps / best
+            base = rate if name == "social_force" else base
+            print(f"N={n:4d} {name:32s} {rate / 1e6:8.2f} M people-steps/s  (x{rate / base:.2f} of the social "
+                  f"force; compile and first run {compile_s:.1f} s)", flush=True)  # fmt: skip
+    return 0
+
+
+def _timed(run, args) -> float:
+    t0 = time.perf_counter()
+    jax.block_until_ready(run(*args))
+    return time.perf_counter() - t0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
