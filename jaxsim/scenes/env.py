@@ -15,8 +15,8 @@ One step (``dt_s``, 0.1 s by default):
    set, so a broken actor's episode stays finite and is marked (the arena counts such steps per
    episode, ``invalid_action_steps``) instead of spreading NaN into the robot, the people who
    avoid it and every metric;
-2. the people move by the social force (:mod:`jaxsim.scenes.people`), the robot's previous
-   position and velocity an agent they avoid; the base moves and slides along walls;
+2. the people move by the human model (:mod:`jaxsim.scenes.people`; the social force by
+   default), the robot's previous position and velocity an agent they avoid; the base moves and slides along walls;
 3. the robot perceives (:mod:`jaxsim.scenes.perception`): people in range and in line of sight,
    their velocities estimated from a window of observed positions (never read from the
    simulator), and the occupancy around it.
