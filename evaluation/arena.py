@@ -34,7 +34,7 @@ import numpy as np
 from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR
-from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes import robot as robot_lib
@@ -57,7 +57,7 @@ class ArenaConfig:
       goal_tolerance_m: reached when the robot's centre is this close to the goal.
       safety_margin_m: the base stops when a visible person in front (within 60 deg) is closer
         than robot radius + person radius + this margin.
-      person_radius_m: a person's body radius (the warehouse's workers').
+      person_radius_m: a person's body radius (:data:`jaxsim.params.PERSON_RADIUS_M`).
       max_path_cells: the global path's length bound in cells.
       human_model: how the people move: ``social_force`` (the warehouse's crowd) or ``orca``.
     """
@@ -67,7 +67,7 @@ class ArenaConfig:
     grid_resolution_m: float = 0.2
     goal_tolerance_m: float = 0.3
     safety_margin_m: float = 0.1
-    person_radius_m: float = 0.25
+    person_radius_m: float = PERSON_RADIUS_M
     max_path_cells: int = 256
     human_model: str = "social_force"
 

@@ -9,12 +9,17 @@ wall point (a static obstacle: the whole ``u``), and the disc of its maximum spe
 programs are RVO2's (``linearProgram1/2/3`` of ``Agent.cpp``), written with fixed shapes: the
 incremental program runs over all lines with masks, and where the constraints cannot all hold
 (a dense crowd) the third program finds the velocity that violates the agents' lines least,
-the wall's kept hard. RVO2 keeps only the ``max_neighbors`` nearest within ``neighbor_dist``;
-here every person within ``neighbor_dist`` counts (a scene has at most 16 slots).
+the wall's kept hard. As RVO2, a person feels only its ``max_neighbors`` nearest within
+``neighbor_dist`` (:func:`nearest_neighbors`), so its cost does not grow with the crowd; the
+third program runs only for the people whose second failed (:func:`_fallback`), so a step of N
+people costs O(N^2) (the distances), not the O(N^3-N^4) of solving everything for everyone.
 
-Defaults (:class:`ORCAParams`) are CrowdNav's and social-jym's JORCA's: radius 0.3 m, time
-horizons 5 s, neighbour distance 10 m, safety space 0.01 m. Walls are also kept by the crowd's
-hard constraint (:func:`jaxsim.crowd.wall_constraint`), the same as for the social force.
+Defaults (:class:`ORCAParams`) are CrowdNav's and social-jym's JORCA's (time horizons 5 s,
+neighbour distance 10 m, safety space 0.01 m) and RVO2's (10 neighbours), except the radius:
+the toolkit's person (:data:`jaxsim.params.PERSON_RADIUS_M`, 0.25 m; CrowdNav's 0.3 m made ORCA
+push apart people who walk side by side 0.5-0.6 m apart, as real ones do). Walls are also kept by
+the crowd's hard constraint (:func:`jaxsim.crowd.wall_constraint`), the same as for the social
+force.
 """
 
 from __future__ import annotations
@@ -24,21 +29,26 @@ import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
+from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.world import Grid
 
 _EPS = 1e-5
+MAX_NEIGHBORS = 10  # RVO2's default maxNeighbors
+FALLBACK_CHUNK = 4  # people whose third program is solved together (:func:`_fallback`)
 
 
 @struct.dataclass
 class ORCAParams:
-    """ORCA's constants (dynamic floats): radius_m 0.3, time_horizon_s 5, time_horizon_obst_s
-    5, neighbor_dist_m 10, safety_space_m 0.01 (CrowdNav's ORCA policy; social-jym's JORCA)."""
+    """ORCA's constants: dynamic floats (traced, fittable) radius_m (the toolkit's person, 0.25),
+    time_horizon_s 5, time_horizon_obst_s 5, neighbor_dist_m 10, safety_space_m 0.01 (CrowdNav's
+    ORCA policy; social-jym's JORCA); static ``max_neighbors`` 10 (RVO2's; a change recompiles)."""
 
-    radius_m: float = 0.3
+    radius_m: float = PERSON_RADIUS_M
     time_horizon_s: float = 5.0
     time_horizon_obst_s: float = 5.0
     neighbor_dist_m: float = 10.0
     safety_space_m: float = 0.01
+    max_neighbors: int = struct.field(pytree_node=False, default=MAX_NEIGHBORS)
 
 
 def _det(a, b):
@@ -162,41 +172,59 @@ def _lp3(points, dirs, valid, hard, begin, radius, result):
     return jax.lax.fori_loop(0, n, body, (jnp.float32(0.0), result))[1]
 
 
-def orca_velocity(
-    params: ORCAParams, xy, velocity, pref_velocity, max_speed, others_xy, others_velocity, others_radius, others_valid,
-    others_share, wall_point, wall_valid, dt,
-):  # fmt: skip
-    """One agent's ORCA velocity (2,).
-
-    Args:
-      xy, velocity, pref_velocity: (2,) this agent; max_speed: ().
-      others_*: (M,) neighbours (people and the robot): positions, velocities, radii, valid,
-        their share of the avoidance (0.5 reciprocal, 1 static).
-      wall_point: (2,) the nearest wall point; wall_valid: () bool (within reach).
-    """
-    radius = params.radius_m + params.safety_space_m
-    rel_pos = others_xy - xy
-    near = others_valid & (jnp.linalg.norm(rel_pos, axis=-1) < params.neighbor_dist_m)
-    u, d = jax.vmap(orca_line, in_axes=(0, 0, 0, None, None, 0))(
-        rel_pos, velocity - others_velocity, radius + others_radius, 1.0 / params.time_horizon_s, dt, others_share
-    )
-    # The wall: a static point obstacle, its line first and hard.
-    wu, wd = orca_line(wall_point - xy, velocity, radius, 1.0 / params.time_horizon_obst_s, dt, 1.0)
-    points = jnp.concatenate([(velocity + wu)[None], velocity + u])
-    dirs = jnp.concatenate([wd[None], d])
-    valid = jnp.concatenate([wall_valid[None], near])
-    hard = jnp.zeros_like(valid).at[0].set(True)
-    return solve(points, dirs, valid, hard, max_speed, pref_velocity)
-
-
 def solve(points, dirs, valid, hard, max_speed, pref_velocity):
     """The velocity (2,) closest to ``pref_velocity`` inside the half-planes (L lines: ``points``
     (L, 2) and ``dirs`` (L, 2), the allowed side left of each, ``valid`` (L,) bool) and the disc
     of ``max_speed``; where they cannot all hold, the one that violates the soft lines least,
-    the ``hard`` ones (L,) bool kept (RVO2's linearProgram2, then linearProgram3)."""
+    the ``hard`` ones (L,) bool kept (RVO2's linearProgram2, then linearProgram3).
+
+    One agent (the robot's ORCA); under ``vmap`` the ``cond`` runs both programs for everyone,
+    which is why the crowd's step (:func:`step_orca`) runs the third only for those who need it."""
     failed, result = _lp2(points, dirs, valid, max_speed, pref_velocity, False)
     n = points.shape[0]
     return jax.lax.cond(failed < n, lambda: _lp3(points, dirs, valid, hard, failed, max_speed, result), lambda: result)
+
+
+def nearest_neighbors(xy, candidate, k: int):
+    """The ``k`` nearest candidates of each person: ``(index (N, k) int32, valid (N, k) bool)``.
+
+    ``xy`` (N, 2); ``candidate`` (N, N) bool, whether j may be i's neighbour (present, not i,
+    within the neighbour distance). RVO2 keeps the ``maxNeighbors`` nearest; here they are then
+    listed by index (the order the lines are added in, as before the cap: the program's answer
+    does not depend on it where the lines can all hold). Costs O(N^2) per world (the distances)."""
+    n = xy.shape[0]
+    d2 = jnp.sum((xy[:, None, :] - xy[None, :, :]) ** 2, axis=-1)
+    d2 = jnp.where(candidate, d2, jnp.inf)
+    _, index = jax.lax.top_k(-d2, k)
+    valid = jnp.take_along_axis(candidate, index, axis=1)
+    key = jnp.sort(jnp.where(valid, index, index + n), axis=1)  # by index, the invalid last
+    return (key % n).astype(jnp.int32), key < n
+
+
+def _fallback(points, dirs, valid, hard, failed, max_speed, result, chunk: int):
+    """RVO2's linearProgram3 for the people whose second program failed (``failed`` (N,) < L),
+    ``chunk`` of them at a time; everyone else keeps ``result`` (N, 2).
+
+    Under ``vmap`` a ``cond`` runs both branches for everyone, and the third program costs L
+    times the second: run for all it made a crowd's step grow as N^3-N^4. Here the failing
+    people are gathered to the front and solved ``chunk`` by ``chunk`` in a ``while_loop`` that
+    stops after the last of them (batched over worlds, it runs as long as the world with most)."""
+    n, lines = failed.shape[0], points.shape[1]
+    needs = failed < lines
+    count = jnp.sum(needs)
+    order = jnp.argsort(~needs, stable=True).astype(jnp.int32)  # those who need it first
+    lp3 = jax.vmap(_lp3, in_axes=(0, 0, 0, 0, 0, 0, 0))
+
+    def body(carry):
+        start, out = carry
+        first = jnp.minimum(start, n - chunk)  # the last chunk overlaps the one before: same answers
+        who = jax.lax.dynamic_slice(order, (first,), (chunk,))
+        # From the second program's answers (``result``), never from an earlier chunk's.
+        solved = lp3(points[who], dirs[who], valid[who], hard[who], failed[who], max_speed[who], result[who])
+        out = out.at[who].set(jnp.where(needs[who][:, None], solved, out[who]))
+        return start + chunk, out
+
+    return jax.lax.while_loop(lambda c: c[0] < count, body, (jnp.int32(0), result))[1]
 
 
 def step_orca(
@@ -217,8 +245,16 @@ def step_orca(
     ignores_robot: jax.Array | None = None,
 ):
     """One ORCA step of N people (the arguments of :func:`jaxsim.crowd.step_crowd`; standing
-    people are static obstacles to the others). Returns (x, y, vx, vy)."""
+    people are static obstacles to the others). Returns (x, y, vx, vy), each (N,).
+
+    Each person's lines, in order: the nearest wall point (hard), its ``params.max_neighbors``
+    nearest people within ``params.neighbor_dist_m`` (by index), the robot (always, within the
+    neighbour distance, unless the person ``ignores_robot``: a person in a crowd does not lose
+    sight of a robot). The second program runs for everyone, the third only for those whose
+    second failed (:func:`_fallback`). Cost per world: O(N^2) for the neighbours plus O(N K^2)
+    and O(F K^3) for the programs (K neighbours, F failing people)."""
     n = x.shape[0]
+    k = min(params.max_neighbors, n)
     xy = jnp.stack([x, y], -1)
     v = jnp.stack([vx, vy], -1)
     dist = jnp.sqrt(aim_dx * aim_dx + aim_dy * aim_dy)
@@ -230,22 +266,31 @@ def step_orca(
     wall_d, nx, ny = field[..., 0], field[..., 1], field[..., 2]
     wall_point = xy - wall_d[:, None] * jnp.stack([nx, ny], -1)
     wall_valid = wall_d < params.neighbor_dist_m
+    radius = params.radius_m + params.safety_space_m
 
-    # Everyone's neighbours: the people, then the robot (the same for every agent).
-    others_xy = jnp.concatenate([xy, jnp.stack([rx, ry])[None]])
-    others_v = jnp.concatenate([v, jnp.stack([rvx, rvy])[None]])
-    radius = jnp.concatenate([jnp.full(n, params.radius_m), jnp.full(1, robot_radius_m)])
-    share = jnp.concatenate([jnp.where(moving, 0.5, 1.0), jnp.full(1, 0.5)])
+    # People: the k nearest present others within reach; standing ones are static (share 1).
+    within = jnp.sum((xy[:, None] - xy[None]) ** 2, -1) < params.neighbor_dist_m**2
+    candidate = present[None, :] & ~jnp.eye(n, dtype=bool) & within
+    index, near = nearest_neighbors(xy, candidate, k)
+    share = jnp.where(moving, 0.5, 1.0)[index]
+    rel_pos = xy[index] - xy[:, None]  # (N, k, 2)
+    rel_vel = v[:, None] - v[index]
+    lines = jax.vmap(jax.vmap(orca_line, in_axes=(0, 0, None, None, None, 0)), in_axes=(0, 0, None, None, None, 0))
+    u, d = lines(rel_pos, rel_vel, radius + params.radius_m, 1.0 / params.time_horizon_s, dt, share)
+    # The robot, a reciprocating neighbour, and the wall, a static point obstacle.
+    robot_xy, robot_v = jnp.stack([rx, ry]), jnp.stack([rvx, rvy])
+    one_line = jax.vmap(orca_line, in_axes=(0, 0, None, None, None, None))
+    ru, rd = one_line(robot_xy - xy, v - robot_v, radius + robot_radius_m, 1.0 / params.time_horizon_s, dt, 0.5)
+    robot_near = ~ignores & (jnp.linalg.norm(robot_xy - xy, axis=-1) < params.neighbor_dist_m)
+    wu, wd = one_line(wall_point - xy, v, radius, 1.0 / params.time_horizon_obst_s, dt, 1.0)
+    points = jnp.concatenate([(v + wu)[:, None], v[:, None] + u, (v + ru)[:, None]], axis=1)  # (N, k + 2, 2)
+    dirs = jnp.concatenate([wd[:, None], d, rd[:, None]], axis=1)
+    valid = jnp.concatenate([wall_valid[:, None], near, robot_near[:, None]], axis=1)
+    hard = jnp.zeros_like(valid).at[:, 0].set(True)
 
-    def one(i):
-        me = jnp.arange(n + 1) == i
-        valid = jnp.concatenate([present, ~ignores[i][None]]) & ~me
-        return orca_velocity(
-            params, xy[i], v[i], pref[i], desired_speed_mps[i], others_xy, others_v, radius, valid, share,
-            wall_point[i], wall_valid[i], dt,
-        )  # fmt: skip
-
-    new_v = jax.vmap(one)(jnp.arange(n))
+    failed, result = jax.vmap(_lp2, in_axes=(0, 0, 0, 0, 0, None))(points, dirs, valid, desired_speed_mps, pref, False)
+    chunk = min(FALLBACK_CHUNK, n)
+    new_v = _fallback(points, dirs, valid, hard, failed, desired_speed_mps, result, chunk)
     new_xy = xy + dt * new_v
     nx_, ny_, nvx, nvy = wall_constraint(wall_d, nx, ny, new_xy[:, 0], new_xy[:, 1], new_v[:, 0], new_v[:, 1], dt)
     zero = jnp.zeros_like(nvx)

@@ -80,6 +80,11 @@ _NON_NEGATIVE = (
 # body of the scenes, the warehouse protocol's collision radius and the figures' robot.
 TIAGO_RADIUS_M = 0.275
 
+# A person's body in the arena: the env's contacts and reward, the planners' inflation around a
+# person, and the body ORCA's people avoid each other with (Helbing, Farkas and Vicsek 2000 draw
+# 0.25-0.35 m). The warehouse's social force keeps its own ``worker_radius_m`` (0.2 m, params.json).
+PERSON_RADIUS_M = 0.25
+
 # Physical ranges of the bodies' radii, checked by :meth:`SimParams.validate`.
 BODY_RADIUS_M = {"worker_radius_m": (0.1, 0.5), "robot_radius_m": (0.05, 1.5)}
 BODY_RADIUS_SOURCE = {

@@ -39,6 +39,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
+from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.planners.snape import SNAPEParams, person_gaussian
 
 
@@ -55,7 +56,7 @@ class BandParams:
     max_step_m: float = 0.1
     delta_m: float = 0.05
     predict_s: float = 2.0
-    person_radius_m: float = 0.25
+    person_radius_m: float = PERSON_RADIUS_M
     speed_gain_lambda_per_mm: float = 0.001
     min_clearance_m: float = 0.3
 

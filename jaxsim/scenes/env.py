@@ -41,7 +41,7 @@ from flax import struct
 from socialnav.data import WAREHOUSE_DIR
 from socialnav.jaxsim import speed_model
 from socialnav.jaxsim.orca import ORCAParams
-from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.scenes import people as people_lib
 from socialnav.jaxsim.scenes import perception
@@ -60,8 +60,8 @@ class EnvConfig:
       dt_s: simulation and control step (0.1 s: 10 Hz, the seeds' local planners).
       max_steps: the time limit in steps (``truncated`` from then on).
       goal_tolerance_m: the goal is reached when the robot's centre is this close.
-      person_radius_m: a person's body radius for contacts and the reward (the warehouse's
-        workers' 0.25 m).
+      person_radius_m: a person's body radius for contacts, the reward and ORCA's people
+        (:data:`jaxsim.params.PERSON_RADIUS_M`, 0.25 m).
       sensor_range_m: people farther than this are not seen (8 m: GSCL's window; the seeds'
         RGB-D sensors reach about as far).
       window_cells: the observed occupancy window's side in cells, centred on the robot and
@@ -75,7 +75,7 @@ class EnvConfig:
     dt_s: float = 0.1
     max_steps: int = 600
     goal_tolerance_m: float = 0.3
-    person_radius_m: float = 0.25
+    person_radius_m: float = PERSON_RADIUS_M
     sensor_range_m: float = perception.RANGE_M
     window_cells: int = 16
     window_resolution_m: float = 0.25
@@ -424,13 +424,17 @@ def make_env(
     crowd: SimParams | None = None,
     reward: RewardParams = RewardParams(),
     occupancy_resolution_m: float = 0.2,
-    orca: ORCAParams = ORCAParams(),
+    orca: ORCAParams | None = None,
 ) -> Env:
     """The environment of a :class:`~jaxsim.scenes.spec.SceneSpec` (host side, once per scene).
 
     ``crowd`` defaults to the warehouse's social force constants (the arena's people are the
-    same walkers). ``config.max_steps`` is kept as given (see :func:`episode_steps`).
+    same walkers); ``orca`` to ORCA's defaults with ``config.person_radius_m`` as its people's
+    radius (the body the env counts contacts with). ``config.max_steps`` is kept as given (see
+    :func:`episode_steps`).
     """
+    if orca is None:
+        orca = ORCAParams(radius_m=config.person_radius_m)
     if crowd is None:
         crowd = load_scenario(WAREHOUSE_DIR).params
     world = world_lib.build_scene_world(spec)
