@@ -7,7 +7,8 @@ The crowd is a periodic corridor's (:mod:`evaluation.human_validation`: 1.8 m wi
 ghosts either side, so 3N bodies are felt), ``vmap``-ed over worlds as the arena and the
 validation batch them. Prints people-steps per second (worlds x N x steps over the wall time,
 compilation apart and printed, best of ``--repeats``) for each model, the ratio to the social
-force, and the machine. ORCA is left out above 64 people (issue 66: its step grows as N^3-4).
+force, and the machine. ``benchmarks/bench_crowd_scaling.py`` takes each model from 8 to 512
+people and from 1 to 1,024 worlds.
 """
 
 from __future__ import annotations
@@ -63,9 +64,6 @@ def main() -> int:
     for n in (int(v) for v in args.people.split(",")):
         base = None
         for name in MODELS:
-            if name == "orca" and n > 64:
-                print(f"N={n:4d} {name:32s} left out (O(N^3-4), issue 66)")
-                continue
             run, run_args = program(hc.named_model(name), n, args.worlds, args.steps)
             t0 = time.perf_counter()
             jax.block_until_ready(run(*run_args))

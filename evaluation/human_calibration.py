@@ -43,8 +43,13 @@ TRAIN_RUNS, TEST_RUNS = hv.FD_TRAIN_RUNS, hv.FD_TEST_RUNS
 FITTED = {
     "collision_free_speed": ("time_gap_s", "neighbor_strength", "neighbor_range_m", "radius_m"),
     "anticipation": ("time_gap_s", "neighbor_strength", "neighbor_range_m", "radius_m", "anticipation_time_s"),
+    "orca": ("time_horizon_s", "radius_m"),
 }
-_FIELD = {"collision_free_speed": "speed", "anticipation": "anticipation"}
+_FIELD = {"collision_free_speed": "speed", "anticipation": "anticipation", "orca": "orca"}
+# Models whose step holds a loop of unknown length (ORCA's fallback, :func:`jaxsim.orca._fallback`,
+# a ``while_loop``): reverse mode cannot run through it, so their gradient is taken forward
+# (one tangent per fitted parameter: as cheap for the few parameters fitted here).
+FORWARD_MODE = ("orca",)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -142,7 +147,15 @@ def fit_gradient(
     """Adam on :func:`fd_loss` from ``model``'s parameters (``fields``, default :data:`FITTED`'s):
     ``(fitted model, history)``, the model at the lowest loss seen, ``history`` a list of
     ``(step, loss, seconds)``."""
-    loss_and_grad = jax.jit(jax.value_and_grad(lambda th, key: fd_loss(model, corridors, th, key, fields=fields)))
+
+    def loss(th, key):
+        return fd_loss(model, corridors, th, key, fields=fields)
+
+    if model.name in FORWARD_MODE:
+        forward = jax.jacfwd(lambda th, key: (loss(th, key), loss(th, key)), has_aux=True)
+        loss_and_grad = jax.jit(lambda th, key: forward(th, key)[::-1])
+    else:
+        loss_and_grad = jax.jit(jax.value_and_grad(loss))
     optimizer = optax.adam(learning_rate)
     theta = theta_of(model, fields)
     state = optimizer.init(theta)
@@ -197,7 +210,7 @@ def fitted_values(model: hv.HumanModel) -> dict:
 def named_model(name: str) -> hv.HumanModel:
     """A human model by name, the calibrated ones (:data:`jaxsim.speed_model.CALIBRATED`) included."""
     kind = speed_model.kind_of(name)
-    if kind in _FIELD:
+    if kind in speed_model.VELOCITY_MODELS:
         return hv.HumanModel(kind, **{_FIELD[kind]: speed_model.params_of(name)})
     return hv.HumanModel(name)
 

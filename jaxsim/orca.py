@@ -16,8 +16,9 @@ people costs O(N^2) (the distances), not the O(N^3-N^4) of solving everything fo
 
 Defaults (:class:`ORCAParams`) are CrowdNav's and social-jym's JORCA's (time horizons 5 s,
 neighbour distance 10 m, safety space 0.01 m) and RVO2's (10 neighbours), except the radius:
-the toolkit's person (:data:`jaxsim.params.PERSON_RADIUS_M`, 0.25 m; CrowdNav's 0.3 m made ORCA
-push apart people who walk side by side 0.5-0.6 m apart, as real ones do). Walls are also kept by
+the toolkit's person (:data:`jaxsim.params.PERSON_RADIUS_M`, 0.25 m, as every other person of
+the arena; CrowdNav's 0.3 m made two ORCA people keep 0.62 m between centres, wider than many
+pairs walking side by side in ETH/UCY). Walls are also kept by
 the crowd's hard constraint (:func:`jaxsim.crowd.wall_constraint`), the same as for the social
 force.
 """
@@ -185,15 +186,17 @@ def solve(points, dirs, valid, hard, max_speed, pref_velocity):
     return jax.lax.cond(failed < n, lambda: _lp3(points, dirs, valid, hard, failed, max_speed, result), lambda: result)
 
 
-def nearest_neighbors(xy, candidate, k: int):
-    """The ``k`` nearest candidates of each person: ``(index (N, k) int32, valid (N, k) bool)``.
+def nearest_neighbors(xy, eligible, k: int, max_dist_m):
+    """Each person's ``k`` nearest eligible others closer than ``max_dist_m``: ``(index (N, k)
+    int32, valid (N, k) bool)``.
 
-    ``xy`` (N, 2); ``candidate`` (N, N) bool, whether j may be i's neighbour (present, not i,
-    within the neighbour distance). RVO2 keeps the ``maxNeighbors`` nearest; here they are then
-    listed by index (the order the lines are added in, as before the cap: the program's answer
-    does not depend on it where the lines can all hold). Costs O(N^2) per world (the distances)."""
+    ``xy`` (N, 2); ``eligible`` (N, N) bool, whether j may be i's neighbour (present, not i).
+    RVO2 keeps the ``maxNeighbors`` nearest within ``neighborDist``; here they are then listed by
+    index (the order the lines are added in, as before the cap: the program's answer does not
+    depend on it where the lines can all hold). Costs O(N^2) per world (the distances)."""
     n = xy.shape[0]
     d2 = jnp.sum((xy[:, None, :] - xy[None, :, :]) ** 2, axis=-1)
+    candidate = eligible & (d2 < max_dist_m * max_dist_m)
     d2 = jnp.where(candidate, d2, jnp.inf)
     _, index = jax.lax.top_k(-d2, k)
     valid = jnp.take_along_axis(candidate, index, axis=1)
@@ -269,9 +272,8 @@ def step_orca(
     radius = params.radius_m + params.safety_space_m
 
     # People: the k nearest present others within reach; standing ones are static (share 1).
-    within = jnp.sum((xy[:, None] - xy[None]) ** 2, -1) < params.neighbor_dist_m**2
-    candidate = present[None, :] & ~jnp.eye(n, dtype=bool) & within
-    index, near = nearest_neighbors(xy, candidate, k)
+    eligible = present[None, :] & ~jnp.eye(n, dtype=bool)
+    index, near = nearest_neighbors(xy, eligible, k, params.neighbor_dist_m)
     share = jnp.where(moving, 0.5, 1.0)[index]
     rel_pos = xy[index] - xy[:, None]  # (N, k, 2)
     rel_vel = v[:, None] - v[index]

@@ -50,12 +50,12 @@ def add_parser(top) -> None:
         "calibrate",
         help="fit a human model's parameters to the Jülich training runs, by gradient and by Nelder-Mead",
         description="Fits a velocity model's parameters (time gap, repulsion strength and range, body radius; the "
-        "anticipation time too) to the fundamental diagram of the Jülich training runs (the test runs are never "
-        "read) by Adam through the crowd step, and by Nelder-Mead on the same loss as the check. Writes fit.json "
-        "and curve.png and prints the fitted values; socialnav humans validate --models <model>_calibrated scores "
-        "the shipped fit on held-out data.",
+        "anticipation time too) or ORCA's (time horizon, body radius) to the fundamental diagram of the Jülich "
+        "training runs (the test runs are never read) by Adam through the crowd step, and by Nelder-Mead on the "
+        "same loss as the check. Writes fit.json and curve.png and prints the fitted values; socialnav humans "
+        "validate --models <model>_calibrated scores the shipped fit on held-out data.",
     )
-    c.add_argument("--model", choices=("collision_free_speed", "anticipation"), default="collision_free_speed")
+    c.add_argument("--model", choices=("collision_free_speed", "anticipation", "orca"), default="collision_free_speed")
     c.add_argument("--out", type=output_folder, default=pathlib.Path("runs/calibration"), help="folder")
     c.add_argument("--steps", type=positive_int, default=80, help="gradient steps (default 80)")
     c.add_argument("--learning-rate", type=positive_float, default=0.02, help="Adam's, on log-parameters (0.02)")

@@ -111,14 +111,17 @@ def test_a_person_feels_only_its_nearest_neighbors():
 
 def test_nearest_neighbors_by_index_the_far_and_absent_left_out():
     xy = jnp.array([[0.0, 0.0], [5.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.5, 0.0]])
-    candidate = jnp.array([[j != i and j != 3 for j in range(5)] for i in range(5)])  # person 3 absent
-    index, valid = orca.nearest_neighbors(xy, candidate, 2)
+    eligible = jnp.array([[j != i and j != 3 for j in range(5)] for i in range(5)])  # person 3 absent
+    index, valid = orca.nearest_neighbors(xy, eligible, 2, 10.0)
     assert index[0].tolist() == [2, 4] and valid[0].all()  # the two nearest of 0, listed by index
     assert index[1].tolist() == [2, 4]  # 3 is nearer to 1 than 4 is, but absent
-    lone = orca.nearest_neighbors(xy[:1], jnp.zeros((1, 1), bool), 1)
+    index, valid = orca.nearest_neighbors(xy, eligible, 3, 4.2)
+    assert index[1].tolist()[0] == 2 and valid[1].tolist() == [True, False, False]  # only 2 within 4.2 m of 1
+    lone = orca.nearest_neighbors(xy[:1], jnp.zeros((1, 1), bool), 1, 10.0)
     assert not bool(lone[1].any())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scene", ["casn_crossing", "gscl_crowded_entrance", "snape_two_walking", "gscl_queue"])
 def test_equal_to_the_old_step_on_the_arena_scenes(scene):
     spec = load_scene(DATA_DIR / "scenes" / f"{scene}.json")
