@@ -37,7 +37,7 @@ import pandas as pd
 
 from socialnav.data import WAREHOUSE_DIR, recorded
 from socialnav.evaluation import pedestrian_measures as measures
-from socialnav.jaxsim import crowd, geometry, orca, speed_model
+from socialnav.jaxsim import geometry, humans, orca, speed_model
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.world import Grid
@@ -91,30 +91,18 @@ class HumanModel:
         return float(self.crowd.worker_radius_m)
 
     @property
-    def params(self):
-        """The traced part: ``(crowd, orca, speed, anticipation)`` (pass it through ``jit`` as an
-        argument)."""
-        return (self.crowd, self.orca, self.speed, self.anticipation)
+    def params(self) -> humans.HumanParams:
+        """The traced part (pass it through ``jit`` as an argument)."""
+        return humans.HumanParams(self.crowd, self.orca, self.speed, self.anticipation)
 
 
 def model_step(name: str, params, field: Grid, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, u1, u2):
-    """One step of N people by human model ``name`` with ``params = (crowd, orca, speed, anticipation)``
-    (:func:`jaxsim.crowd.step_crowd`'s arrays; no robot; pedsim's cap is the desired speed)."""
-    crowd_params, orca_params, speed_params, anticipation_params = params
+    """One step of N people by human model ``name`` (:func:`jaxsim.humans.step_humans`, the one
+    crowd function) with ``params`` (:class:`~jaxsim.humans.HumanParams`): no robot; the social
+    force's cap is the desired speed."""
     robot = (jnp.float32(FAR_M), jnp.float32(FAR_M), jnp.float32(0.0), jnp.float32(0.0))
-    dt = float(crowd_params.dt_s)
-    if name == "orca":
-        return orca.step_orca(orca_params, field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, robot, 0.0)
-    if name == "collision_free_speed":
-        return speed_model.step_speed_model(
-            speed_params, field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, robot, 0.0
-        )
-    if name == "anticipation":
-        return speed_model.step_anticipation(
-            anticipation_params, field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, robot, 0.0, u1, u2
-        )
-    return crowd.step_crowd(crowd_params, field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, present, moving,
-                            robot, u1, u2)  # fmt: skip
+    return humans.step_humans(name, params, field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, present, moving, robot,
+                              0.0, u1, u2)  # fmt: skip
 
 
 def desired_speeds(params: SimParams, n: int, rng: np.random.Generator) -> np.ndarray:

@@ -218,6 +218,7 @@ def simulate_to_parquet(
     progress: bool = True,
     chunk_budget_bytes: int = CHUNK_BUDGET_BYTES,
     first_world: int = 0,
+    human_model: str = "social_force",
 ) -> RunSummary:
     """Simulate ``n_worlds`` worlds for ``duration_s`` and write ``logs.parquet`` + ``run.json``.
 
@@ -236,6 +237,8 @@ def simulate_to_parquet(
       snapshot_time_s: keep the first world's positions at this time for a picture.
       first_world: the first world's index (a shard of a larger run: worlds ``first_world ..
         first_world + n_worlds - 1``, the same worlds as in one run of them all).
+      human_model: how the workers move (:data:`jaxsim.humans.HUMAN_MODELS`; recorded in
+        ``run.json``).
 
     Raises:
       ValueError: on inconsistent sizes, before anything is written.
@@ -261,7 +264,7 @@ def simulate_to_parquet(
     out.mkdir(parents=True, exist_ok=True)
 
     start = time.perf_counter()
-    world = world_lib.build_world(scenario)
+    world = world_lib.build_world(scenario, human_model)
     keys = rollout.world_keys(seed, n_worlds, first_world)
     states = rollout.init_batch(p, world, driver, keys)
     per_sample = 4 * (scenario.n_waypoints + p.n_workers * (4 if log_positions else 2) + 32)
@@ -326,6 +329,7 @@ def simulate_to_parquet(
         seed=seed,
         n_worlds=n_worlds,
         first_world=first_world,
+        human_model=human_model,
         duration_s=duration_s,
         sample_interval_s=sample_interval_s,
         rows=rows,

@@ -24,7 +24,7 @@ import jax
 import jax.numpy as jnp
 import jax.scipy.special as jss
 
-from socialnav.jaxsim import crowd
+from socialnav.jaxsim import humans, orca
 from socialnav.jaxsim import social_force as sf
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING, WorkerState
@@ -167,8 +167,9 @@ def move(
     u1: jax.Array,
     u2: jax.Array,
 ) -> WorkerState:
-    """One social-force step of every present worker (:func:`jaxsim.crowd.step_crowd`, the
-    crowd model the arena's people share), towards the current waypoint or, at the destination,
+    """One step of every present worker by the world's human model (``world.human_model``,
+    :func:`jaxsim.humans.step_humans`, the crowd function the arena's people share; by default
+    the social force, :func:`jaxsim.crowd.step_crowd`), towards the current waypoint or, at the destination,
     the worker's spot there (slowing down within ``SETTLE_DISTANCE_M``; the speed cap stays the
     worker's desired speed). The robot is an agent the workers avoid; it is not moved here.
     ``u1, u2``: (N,) uniforms for the random force."""
@@ -180,9 +181,12 @@ def move(
     settle = jnp.minimum(1.0, jnp.sqrt(dx * dx + dy * dy) / SETTLE_DISTANCE_M)
     speed = jnp.where(w.status == ACTIVITY, w.desired_speed_mps * settle, w.desired_speed_mps)
     robot = (robot_x, robot_y, robot_vx, robot_vy)
-    x, y, vx, vy = crowd.step_crowd(
-        params, world.wall_field, w.x_m, w.y_m, w.vx_mps, w.vy_mps, dx, dy, speed, w.desired_speed_mps,
-        present, present, robot, u1, u2,
+    model = world.human_model
+    # ORCA's people are the warehouse's workers' bodies; a velocity model keeps its own (fitted) radius.
+    bundle = humans.human_params(model, params, orca.ORCAParams(radius_m=params.worker_radius_m))
+    x, y, vx, vy = humans.step_humans(
+        model, bundle, world.wall_field, w.x_m, w.y_m, w.vx_mps, w.vy_mps, dx, dy, speed, w.desired_speed_mps,
+        present, present, robot, params.robot_radius_m, u1, u2,
     )  # fmt: skip
     return w.replace(x_m=x, y_m=y, vx_mps=vx, vy_mps=vy)
 

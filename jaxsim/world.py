@@ -63,6 +63,8 @@ class World:
       robot_goal_count: (S,) int32 real goals per slot.
       parking_x_m, parking_y_m: worker spawn centre.
       parking: parking waypoint index; charging_station: charger index; robot_start: start index.
+      human_model: how the workers move (static: a change recompiles;
+        :data:`jaxsim.humans.HUMAN_MODELS`, default the social force).
     """
 
     waypoint_x_m: jax.Array
@@ -83,6 +85,7 @@ class World:
     parking: int = struct.field(pytree_node=False)
     charging_station: int = struct.field(pytree_node=False)
     robot_start: int = struct.field(pytree_node=False)
+    human_model: str = struct.field(pytree_node=False, default="social_force")
 
     @property
     def n_waypoints(self) -> int:
@@ -139,8 +142,12 @@ def _geometry(
     return field, hgrid, rgrid
 
 
-def build_world(scenario: Scenario) -> World:
-    """Precompute the static arrays of ``scenario`` (distance field, routes, schedule)."""
+def build_world(scenario: Scenario, human_model: str = "social_force") -> World:
+    """Precompute the static arrays of ``scenario`` (distance field, routes, schedule); its
+    workers move by ``human_model`` (:data:`jaxsim.humans.HUMAN_MODELS`)."""
+    from socialnav.jaxsim.humans import check_model  # humans -> orca -> world: imported here
+
+    check_model(human_model)
     p = scenario.params
     bounds = world_bounds(scenario)
     field, hgrid, rgrid = _geometry(
@@ -180,4 +187,5 @@ def build_world(scenario: Scenario) -> World:
         parking=scenario.parking,
         charging_station=scenario.charging_station,
         robot_start=scenario.robot_start,
+        human_model=human_model,
     )

@@ -12,6 +12,7 @@ from socialnav.common import runfolder
 from socialnav.common.logschema import LOG_FILE, META_FILE
 from socialnav.common.memory import available_bytes
 from socialnav.jaxsim import logs, viz
+from socialnav.jaxsim.humans import HUMAN_MODELS
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
 from socialnav.jaxsim.world import build_world
@@ -76,6 +77,13 @@ def add_parser(sub) -> None:
         help="time of the snapshot picture (default: the middle of the lunch slot S6, or of the run)",
     )
     sim.add_argument("--log-positions", action="store_true", help="also log every worker's position and status")
+    sim.add_argument(
+        "--human-model",
+        choices=HUMAN_MODELS,
+        default="social_force",
+        help="how the workers move (default social_force, the warehouse's; docs/humans.md measures each against "
+        "real pedestrians)",
+    )
     sim.add_argument(
         "--shard-worlds",
         type=positive_int,
@@ -151,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
                     log_positions=args.log_positions,
                     snapshot_time_s=snap_t,
                     progress=not args.no_progress,
+                    human_model=args.human_model,
                 )
             pictures = []
             if run.snapshot is not None:
@@ -173,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
     mean = lambda k: sum(f[k]) / n
     print(
         f"\nsimulated {args.worlds} world(s) x {duration_s:.0f} s ({duration_s / p.slot_length_s:.2f} slots of "
-        f"{p.slot_length_s:.0f} s), {p.n_workers} workers + robot, seed {args.seed}"
+        f"{p.slot_length_s:.0f} s), {p.n_workers} workers ({args.human_model}) + robot, seed {args.seed}"
     )
     print(
         f"wall time {run.wall_s:.1f} s (until the first chunk, compile included: {run.compile_s:.1f} s), "

@@ -27,7 +27,10 @@ from socialnav.common.logschema import LOG_FILE, META_FILE
 STAGING = ".shards"
 
 
-def compute_shard(scenario_dir, overrides, first, n, duration_s, seed, sample_interval_s, log_positions, snap_t):
+def compute_shard(
+    scenario_dir, overrides, first, n, duration_s, seed, sample_interval_s, log_positions, snap_t,
+    human_model="social_force",
+):  # fmt: skip
     """Simulate one shard of worlds (here or in a Ray worker): ``(Parquet bytes, summary dict)``."""
     from socialnav.jaxsim import logs
     from socialnav.jaxsim.route_follower import route_follower
@@ -42,6 +45,7 @@ def compute_shard(scenario_dir, overrides, first, n, duration_s, seed, sample_in
             tmp,
             route_follower(shortest_path_plan(scenario), build_world(scenario)),
             n_worlds=n,
+            human_model=human_model,
             duration_s=duration_s,
             seed=seed,
             sample_interval_s=sample_interval_s,
@@ -93,6 +97,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
         "sample_interval_s": args.sample_interval_s,
         "log_positions": args.log_positions,
         "snapshot_time_s": snap_t,
+        "human_model": args.human_model,
     }
     backend_lib.staging_folder(staging, settings)  # another run's parts are not ours to reuse
     scenario_dir = None if args.scenario is None else str(pathlib.Path(args.scenario).resolve())
@@ -110,6 +115,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
                 args.sample_interval_s,
                 args.log_positions,
                 snap_t if first == 0 else None,
+                args.human_model,
             ),
             work=min(size, args.worlds - first),
         )
@@ -143,6 +149,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
         wall_s=wall,
         compile_s=max(s["compile_s"] for s in summaries),
         agent_steps_per_s=agent_steps / wall,
+        human_model=args.human_model,
         shards=[{"first_world": s["first_world"], "n_worlds": s["n_worlds"]} for s in summaries],
         **backend_lib.describe(args),
         final=final,

@@ -49,6 +49,41 @@ def test_the_warehouse_and_the_arena_move_people_with_one_function(monkeypatch, 
     assert calls == [False, True]  # the warehouse's workers all feel the robot; the arena's may not
 
 
+@pytest.mark.parametrize("model", ["collision_free_speed_calibrated", "orca"])
+def test_the_warehouse_and_the_arena_move_people_by_the_chosen_human_model(monkeypatch, short_day, params, model):
+    from socialnav.jaxsim import humans
+    from socialnav.jaxsim import step as step_lib
+    from socialnav.jaxsim.state import WALKING
+    from socialnav.jaxsim.world import build_world
+
+    calls = []
+    original = humans.step_humans
+    monkeypatch.setattr(humans, "step_humans", lambda m, *a, **k: calls.append(m) or original(m, *a, **k))
+    scenario, sf_world, controller = short_day
+    world = build_world(scenario, model)
+    state = step_lib.init_state(scenario.params, world, controller, jax.random.key(0))
+    u = jnp.full((6, state.workers.x_m.shape[0]), 0.5)
+    # Two workers walking, 0.3 m apart: the chosen model moves them, not the social force.
+    w = state.workers.replace(
+        x_m=state.workers.x_m.at[:2].set(jnp.array([10.0, 10.3])),
+        y_m=state.workers.y_m.at[:2].set(10.0),
+        status=state.workers.status.at[:2].set(WALKING),
+    )
+    args = (jnp.float32(0.0), jnp.int32(0), u)
+    chosen = step_lib.crowd_step(scenario.params, world, w, state.robot, *args)
+    social = step_lib.crowd_step(scenario.params, sf_world, w, state.robot, *args)
+    assert not np.allclose(np.asarray(chosen.x_m[:2]), np.asarray(social.x_m[:2]), atol=1e-4)
+    setup = arena.setup_scene(
+        load_scene(DATA_DIR / "scenes" / "casn_head_on.json"), arena.ArenaConfig(human_model=model)
+    )
+    variant = jax.tree_util.tree_map(jnp.asarray, sample_variant(setup.spec, 0, 0))
+    people_lib.step_people(params, setup.env.world, variant, people_lib.init_people(variant), jnp.zeros(2),
+                           jnp.zeros(2), jnp.int32(0), model, setup.env.orca)  # fmt: skip
+    assert calls == [model, "social_force", model]
+    with pytest.raises(ValueError, match="human model must be one of"):
+        build_world(scenario, "helbing")
+
+
 def test_a_person_walking_into_a_wall_stops_at_the_clearance_without_velocity_into_it(params):
     # A wall whose surface is the line x = 0, the free side x > 0: distance x, normal +x.
     xs = np.arange(-1.0, 3.01, 0.05, dtype=np.float32)

@@ -1,9 +1,9 @@
 """People of a scene: where each behaviour wants them, and one step of the crowd model.
 
-Walkers, stream members and served queue members move by the warehouse crowd's own step
-(:func:`jaxsim.crowd.step_crowd`: pedsim's desired, Moussaid and wall forces, the random force,
-walls as a hard constraint; the warehouse's constants), with the robot as an agent they avoid
-unless ``ignore_robot``. People waiting in a queue step straight up to their place in line, one
+Walkers, stream members and served queue members move by the run's human model through the one
+crowd function the warehouse uses too (:func:`jaxsim.humans.step_humans`; by default the
+warehouse's social force, :func:`jaxsim.crowd.step_crowd`), with the robot as an agent they
+avoid unless ``ignore_robot``. People waiting in a queue step straight up to their place in line, one
 place after another (:func:`queue_place`).
 Standing people (and group members) stay where they stand, as the seeds' subjects did; a group
 member turns to face the group's centre at its ``turn_at_s``.
@@ -15,7 +15,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim import crowd, orca, rng, speed_model
+from socialnav.jaxsim import humans, orca, rng
 from socialnav.jaxsim.params import TIAGO_RADIUS_M, SimParams
 from socialnav.jaxsim.scenes.spec import KIND
 from socialnav.jaxsim.scenes.variant import Variant
@@ -26,8 +26,7 @@ STOP_RAMP_M = 0.5  # a queue member slows down over the last half metre to its p
 AT_PLACE_M = 0.05  # a queue member this close to its place stands there
 QUEUE_STEP_UP_DELAY_S = 0.5  # each place in line steps up this long after the one ahead of it
 MOVING_MPS = 0.1  # slower than this a person keeps their heading (a standing body does not turn to its drift)
-HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation", "collision_free_speed_calibrated",
-                "anticipation_calibrated")  # fmt: skip
+HUMAN_MODELS = humans.HUMAN_MODELS
 
 
 @struct.dataclass
@@ -116,8 +115,7 @@ def step_people(
         and their ``_calibrated`` fits, with ``velocity_params``, default the name's own); the
         robot a disc of ``robot_radius_m`` for all but the social force.
     """
-    if model not in HUMAN_MODELS:
-        raise ValueError(f"human model must be one of {', '.join(HUMAN_MODELS)}, got {model!r}")
+    humans.check_model(model)
     dt = params.dt_s
     time_s = step.astype(jnp.float32) * dt
     target, speed, mobile = targets(v, s, time_s)
@@ -125,30 +123,12 @@ def step_people(
     robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
     x, y, vx, vy = s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1]
     aim_dx, aim_dy = target[:, 0] - x, target[:, 1] - y
-    kind = speed_model.kind_of(model)
-    if kind in speed_model.VELOCITY_MODELS:
-        velocity_params = speed_model.params_of(model) if velocity_params is None else velocity_params
-        if kind == "anticipation":
-            x, y, vx, vy = speed_model.step_anticipation(
-                velocity_params, world.wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, s.present, mobile, robot,
-                robot_radius_m, u[0], u[1], ignores_robot=v.ignore_robot,
-            )  # fmt: skip
-        else:
-            x, y, vx, vy = speed_model.step_speed_model(
-                velocity_params, world.wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, s.present, mobile, robot,
-                robot_radius_m, ignores_robot=v.ignore_robot,
-            )  # fmt: skip
-    elif model == "orca":
-        orca_params = orca.ORCAParams() if orca_params is None else orca_params
-        x, y, vx, vy = orca.step_orca(
-            orca_params, world.wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, s.present, mobile, robot,
-            robot_radius_m, ignores_robot=v.ignore_robot,
-        )  # fmt: skip
-    else:  # pedsim's cap is the desired speed (a queue member's slows down to its place)
-        x, y, vx, vy = crowd.step_crowd(
-            params, world.wall_field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, s.present, mobile, robot,
-            u[0], u[1], ignores_robot=v.ignore_robot,
-        )  # fmt: skip
+    bundle = humans.human_params(model, params, orca_params, velocity_params)
+    # pedsim's cap is the desired speed (a queue member's slows down to its place)
+    x, y, vx, vy = humans.step_humans(
+        model, bundle, world.wall_field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, s.present, mobile, robot,
+        robot_radius_m, u[0], u[1], ignores_robot=v.ignore_robot,
+    )  # fmt: skip
     xy = jnp.stack([x, y], axis=-1)
     new_v = jnp.stack([vx, vy], axis=-1)
     # People waiting in line step straight up to their place (the human model's repulsion between
