@@ -144,7 +144,7 @@ def _lp3(points, dirs, valid, hard, begin, radius, result):
         distance = jnp.where(worse, _det(dirs[i], points[i] - result), distance)
         return distance, result
 
-    return jax.lax.fori_loop(0, n, body, (jnp.float32(0.0), result))[1]
+    return jax.lax.fori_loop(0, n, body, (jnp.zeros((), result.dtype), result))[1]
 
 
 def orca_velocity(
