@@ -1,6 +1,7 @@
-"""Optimal reciprocal collision avoidance (ORCA, van den Berg et al. 2011) for the arena's people:
-the other human model a run can choose (``EnvConfig.human_model = "orca"``), as CrowdNav and
-social-jym offer beside the social force.
+"""Optimal reciprocal collision avoidance (ORCA, van den Berg et al. 2011) as a human model: one a
+run can choose for the arena's people (``EnvConfig.human_model = "orca"``) and the warehouse's
+workers (``build_world(scenario, "orca")``), as CrowdNav and social-jym offer beside the social
+force (:func:`jaxsim.humans.step_humans`).
 
 Each person takes the velocity closest to its preferred one (towards its target at its desired
 speed) inside the intersection of half-planes: one per other person and one for the robot
@@ -18,9 +19,8 @@ Defaults (:class:`ORCAParams`) are CrowdNav's and social-jym's JORCA's (time hor
 neighbour distance 10 m, safety space 0.01 m) and RVO2's (10 neighbours), except the radius:
 the toolkit's person (:data:`jaxsim.params.PERSON_RADIUS_M`, 0.25 m, as every other person of
 the arena; CrowdNav's 0.3 m made two ORCA people keep 0.62 m between centres, wider than many
-pairs walking side by side in ETH/UCY). Walls are also kept by
-the crowd's hard constraint (:func:`jaxsim.crowd.wall_constraint`), the same as for the social
-force.
+pairs walking side by side in ETH/UCY). Walls are also kept by the crowd's hard constraint
+(:func:`jaxsim.crowd.wall_constraint`), the same as for the social force.
 """
 
 from __future__ import annotations
