@@ -49,7 +49,7 @@ def test_the_warehouse_and_the_arena_move_people_with_one_function(monkeypatch, 
     assert calls == [False, True]  # the warehouse's workers all feel the robot; the arena's may not
 
 
-@pytest.mark.parametrize("model", ["collision_free_speed_calibrated", "orca"])
+@pytest.mark.parametrize("model", ["collision_free_speed_calibrated", pytest.param("orca", marks=pytest.mark.slow)])
 def test_the_warehouse_and_the_arena_move_people_by_the_chosen_human_model(monkeypatch, short_day, params, model):
     from socialnav.jaxsim import humans
     from socialnav.jaxsim import step as step_lib

@@ -63,7 +63,9 @@ def _second_program_fails(p, crowd) -> int:
     return int(jnp.sum(jax.vmap(one)(jnp.arange(n)) & moving))
 
 
-@pytest.mark.parametrize("n", [2, 7, 16, 40])
+@pytest.mark.parametrize(
+    "n", [pytest.param(2, marks=pytest.mark.slow), 7, 16, pytest.param(40, marks=pytest.mark.slow)]
+)
 def test_equal_to_the_step_that_solved_everything_for_everyone(n):
     """In float64 the same answers to 1e-9 (the same programs, in another layout and order of
     work). In float32, as the step runs, a third program that is ill-conditioned (its answer at
