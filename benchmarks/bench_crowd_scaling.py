@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import pathlib
 import sys
-import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -28,6 +27,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
+from benchmarks.bench_human_models import _timed  # noqa: E402
 from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.evaluation import human_calibration as hc  # noqa: E402
 from socialnav.evaluation import human_validation as hv  # noqa: E402
@@ -71,12 +71,6 @@ def program(model: hv.HumanModel, n: int, worlds: int, steps: int):
     run = jax.jit(jax.vmap(one, in_axes=(None, 0, 0, 0, 0)))
     xy0, goal, speed = crowd(n, worlds)
     return run, (model.params, xy0, goal, speed, jax.random.split(jax.random.key(0), worlds))
-
-
-def _timed(run, args) -> float:
-    t0 = time.perf_counter()
-    jax.block_until_ready(run(*args))
-    return time.perf_counter() - t0
 
 
 def main() -> int:

@@ -152,7 +152,12 @@ def fit_gradient(
         return fd_loss(model, corridors, th, key, fields=fields)
 
     if model.name in FORWARD_MODE:
-        forward = jax.jacfwd(lambda th, key: (loss(th, key), loss(th, key)), has_aux=True)
+
+        def loss_twice(th, key):  # the value as jacfwd's aux: one rollout gives both
+            value = loss(th, key)
+            return value, value
+
+        forward = jax.jacfwd(loss_twice, has_aux=True)
         loss_and_grad = jax.jit(lambda th, key: forward(th, key)[::-1])
     else:
         loss_and_grad = jax.jit(jax.value_and_grad(loss))

@@ -1,6 +1,8 @@
 """ORCA's crowd step as it was before issue 66 (every person against every other, both linear
 programs run for everyone): the oracle the scaled step (:func:`jaxsim.orca.step_orca`) is tested
-equal to, with the neighbour cap above the crowd's size. Kept verbatim, not used by the package."""
+equal to, with the neighbour cap above the crowd's size. Kept verbatim, not used by the package;
+the half-plane of one neighbour (``orca_line``), which the rewrite left as it was, is the
+package's own."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
+from socialnav.jaxsim.orca import _det, orca_line
 from socialnav.jaxsim.world import Grid
 
 _EPS = 1e-5
@@ -24,49 +27,6 @@ class ORCAParams:
     time_horizon_obst_s: float = 5.0
     neighbor_dist_m: float = 10.0
     safety_space_m: float = 0.01
-
-
-def _det(a, b):
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def orca_line(rel_pos, rel_vel, combined_radius, inv_horizon, dt, share):
-    """RVO2's half-plane for one neighbour: ``(point (2,), direction (2,))``; the allowed side is
-    to the left of ``direction`` through ``point`` (relative to this agent's velocity ``v``:
-    the caller adds ``v``). ``share``: 0.5 for a reciprocating neighbour, 1 for a static one."""
-    dist_sq = jnp.dot(rel_pos, rel_pos)
-    r_sq = combined_radius * combined_radius
-    # No collision: the velocity obstacle's cut-off circle or one of its legs.
-    w = rel_vel - inv_horizon * rel_pos
-    w_len_sq = jnp.dot(w, w)
-    dot1 = jnp.dot(w, rel_pos)
-    on_circle = (dot1 < 0.0) & (dot1 * dot1 > r_sq * w_len_sq)
-    w_len = jnp.sqrt(jnp.maximum(w_len_sq, 1e-12))
-    unit_w = w / w_len
-    circle_dir = jnp.stack([unit_w[1], -unit_w[0]])
-    circle_u = (combined_radius * inv_horizon - w_len) * unit_w
-    leg = jnp.sqrt(jnp.maximum(dist_sq - r_sq, 0.0))
-    x, y = rel_pos[0], rel_pos[1]
-    left = _det(rel_pos, w) > 0.0
-    left_dir = jnp.stack([x * leg - y * combined_radius, x * combined_radius + y * leg]) / jnp.maximum(dist_sq, 1e-12)
-    right_dir = -jnp.stack([x * leg + y * combined_radius, -x * combined_radius + y * leg]) / jnp.maximum(
-        dist_sq, 1e-12
-    )
-    leg_dir = jnp.where(left, left_dir, right_dir)
-    leg_u = jnp.dot(rel_vel, leg_dir) * leg_dir - rel_vel
-    free_dir = jnp.where(on_circle, circle_dir, leg_dir)
-    free_u = jnp.where(on_circle, circle_u, leg_u)
-    # Already overlapping: the cut-off circle of one step.
-    inv_dt = 1.0 / dt
-    wc = rel_vel - inv_dt * rel_pos
-    wc_len = jnp.sqrt(jnp.maximum(jnp.dot(wc, wc), 1e-12))
-    unit_wc = wc / wc_len
-    hit_dir = jnp.stack([unit_wc[1], -unit_wc[0]])
-    hit_u = (combined_radius * inv_dt - wc_len) * unit_wc
-    colliding = dist_sq <= r_sq
-    direction = jnp.where(colliding, hit_dir, free_dir)
-    u = jnp.where(colliding, hit_u, free_u)
-    return share * u, direction
 
 
 def _lp1(points, dirs, valid, k, radius, opt, direction_opt):

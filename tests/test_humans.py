@@ -202,19 +202,27 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
 # ---------------------------------------------------------------- calibration
 
 
+def _walked_by(truth: hv.HumanModel, fields):
+    """Short corridors at 1.5, 2.5 and 3.5 /m² whose "data" is the speed ``truth`` walks there
+    (s.d. 0.05 m/s): a calibration's known answer."""
+    from socialnav.evaluation import human_calibration as hc
+
+    size = dict(length_m=6.0, warmup_steps=60, measured_steps=20)
+    corridors = hc.corridors_at(truth, (1.5, 2.5, 3.5), np.zeros(3), np.full(3, 0.05), **size)
+    key = jax.random.key(0)
+    measured = np.asarray(hc.mean_speeds(truth, corridors, hc.theta_of(truth, fields), key, fields=fields))
+    return dataclasses.replace(corridors, speed_data=measured)
+
+
 def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search():
     """Known answer: the fundamental diagram of the speed model with a time gap of 0.6 s, fitted
     from 1.0 s by gradient through the crowd step and by Nelder-Mead, gives back 0.6 s."""
     from socialnav.evaluation import human_calibration as hc
 
     truth = hv.HumanModel("collision_free_speed", speed=speed_model.SpeedModelParams(time_gap_s=0.6))
-    size = dict(length_m=6.0, warmup_steps=60, measured_steps=20)
     fields = ("time_gap_s",)
-    corridors = hc.corridors_at(truth, (1.5, 2.5, 3.5), np.zeros(3), np.full(3, 0.05), **size)
-    key = jax.random.key(0)
-    measured = np.asarray(hc.mean_speeds(truth, corridors, hc.theta_of(truth, fields), key, fields=fields))
-    assert np.all(np.diff(measured) < 0)  # speed falls with density
-    corridors = dataclasses.replace(corridors, speed_data=measured)
+    corridors = _walked_by(truth, fields)
+    assert np.all(np.diff(corridors.speed_data) < 0)  # speed falls with density
     start = hv.HumanModel("collision_free_speed")
     quiet = lambda *_: None
     by_gradient, history = hc.fit_gradient(start, corridors, 60, 0.05, log=quiet, fields=fields)
@@ -232,13 +240,8 @@ def test_orcas_parameters_are_fitted_by_a_forward_gradient_through_its_fallback_
     from socialnav.evaluation import human_calibration as hc
     from socialnav.jaxsim import orca
 
-    truth = hv.HumanModel("orca", orca=orca.ORCAParams(radius_m=0.2))
-    size = dict(length_m=6.0, warmup_steps=60, measured_steps=20)
     fields = ("radius_m",)
-    corridors = hc.corridors_at(truth, (1.5, 2.5, 3.5), np.zeros(3), np.full(3, 0.05), **size)
-    key = jax.random.key(0)
-    measured = np.asarray(hc.mean_speeds(truth, corridors, hc.theta_of(truth, fields), key, fields=fields))
-    corridors = dataclasses.replace(corridors, speed_data=measured)
+    corridors = _walked_by(hv.HumanModel("orca", orca=orca.ORCAParams(radius_m=0.2)), fields)
     start = hv.HumanModel("orca", orca=orca.ORCAParams(radius_m=0.3))
     fitted, history = hc.fit_gradient(start, corridors, 12, 0.05, log=lambda *_: None, fields=fields)
     assert np.isfinite(history[0][1]) and min(h[1] for h in history) < 0.1 * history[0][1]
