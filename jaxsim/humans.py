@@ -11,7 +11,9 @@ The models (``docs/humans.md`` measures each against the Jülich corridors and E
   (:mod:`jaxsim.speed_model`), and their ``_calibrated`` fits to the Jülich training runs.
 
 Every model takes the same arrays and returns ``(x, y, vx, vy)``; ``model`` is static (a
-change recompiles), the constants in :class:`HumanParams` are traced.
+change recompiles), the constants in :class:`HumanParams` are traced. People who walk together
+(``group_id``) get Moussaïd et al. 2010's group terms on top of any model
+(:mod:`jaxsim.groups`).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from __future__ import annotations
 import jax
 from flax import struct
 
-from socialnav.jaxsim import crowd, orca, speed_model
+from socialnav.jaxsim import crowd, groups, orca, speed_model
 from socialnav.jaxsim.params import SimParams
 
 HUMAN_MODELS = (
@@ -43,25 +45,29 @@ def check_model(model: str) -> str:
 class HumanParams:
     """The traced constants of the human models: ``crowd`` (the social force's
     :class:`~jaxsim.params.SimParams`, whose static ``dt_s`` is every model's step), ``orca``
-    (:class:`~jaxsim.orca.ORCAParams`), ``speed`` and ``anticipation`` (the velocity models')."""
+    (:class:`~jaxsim.orca.ORCAParams`), ``speed`` and ``anticipation`` (the velocity models'),
+    ``group`` (the walking groups' terms, :class:`~jaxsim.groups.GroupParams`)."""
 
     crowd: SimParams
     orca: orca.ORCAParams
     speed: speed_model.SpeedModelParams
     anticipation: speed_model.AnticipationParams
+    group: groups.GroupParams = groups.GroupParams()
 
 
 def human_params(model: str, crowd_params: SimParams, orca_params: orca.ORCAParams | None = None,
-                 velocity=None) -> HumanParams:  # fmt: skip
+                 velocity=None, group: groups.GroupParams | None = None) -> HumanParams:  # fmt: skip
     """The constants ``model`` runs with: ORCA's defaults unless ``orca_params``; a velocity
     model's ``velocity`` parameters, else its name's own (:func:`jaxsim.speed_model.params_of`:
-    a ``_calibrated`` name its fit)."""
+    a ``_calibrated`` name its fit); the walking groups' ``group`` terms, Moussaïd's unless
+    given."""
     kind = speed_model.kind_of(check_model(model))
     speed, anticipation = speed_model.SpeedModelParams(), speed_model.AnticipationParams()
     if kind in speed_model.VELOCITY_MODELS:
         chosen = speed_model.params_of(model) if velocity is None else velocity
         speed, anticipation = (chosen, anticipation) if kind == "collision_free_speed" else (speed, chosen)
-    return HumanParams(crowd_params, orca.ORCAParams() if orca_params is None else orca_params, speed, anticipation)
+    chosen_orca = orca.ORCAParams() if orca_params is None else orca_params
+    return HumanParams(crowd_params, chosen_orca, speed, anticipation, groups.GroupParams() if group is None else group)
 
 
 def step_humans(
@@ -83,6 +89,7 @@ def step_humans(
     u1: jax.Array,
     u2: jax.Array,
     ignores_robot: jax.Array | None = None,
+    group_id: jax.Array | None = None,
 ):
     """One step of ``params.crowd.dt_s`` of N people by human ``model``: ``(x, y, vx, vy)``, (N,) each.
 
@@ -96,9 +103,16 @@ def step_humans(
         (N,) bool; ``robot_radius_m`` its body (the social force's pair force has no radius).
       u1, u2: (N,) uniforms in (0, 1]: the social force's random force, the anticipation
         model's reaction noise.
+      group_id: (N,) int32, people walking together share a non-negative id (-1 alone): their
+        aims and speeds get the group terms (:func:`jaxsim.groups.group_aim`). ``None``: no
+        groups, and nothing computed for them.
     """
     kind = speed_model.kind_of(check_model(model))
     dt = params.crowd.dt_s
+    if group_id is not None:
+        aim_dx, aim_dy, speed_mps = groups.group_aim(
+            params.group, x, y, aim_dx, aim_dy, speed_mps, max_speed_mps, group_id, present
+        )
     if kind == "collision_free_speed":
         return speed_model.step_speed_model(
             params.speed, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, present, moving, robot_xyv,

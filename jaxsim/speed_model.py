@@ -106,10 +106,10 @@ def step_speed_model(
     field = wall_field.lookup(x, y)
     wall, nx, ny = field[..., 0], field[..., 1], field[..., 2]
     wall_push = params.wall_strength * jnp.exp((params.radius_m - wall) / params.wall_range_m)
-    aim = jnp.sqrt(aim_dx * aim_dx + aim_dy * aim_dy)
+    aim = jnp.sqrt(aim_dx * aim_dx + aim_dy * aim_dy + _EPS * _EPS)  # the epsilon: a gradient at a standstill
     ex = aim_dx / jnp.maximum(aim, _EPS) + rep_x + wall_push * nx
     ey = aim_dy / jnp.maximum(aim, _EPS) + rep_y + wall_push * ny
-    norm = jnp.sqrt(ex * ex + ey * ey)
+    norm = jnp.sqrt(ex * ex + ey * ey + _EPS * _EPS)
     ex, ey = ex / jnp.maximum(norm, _EPS), ey / jnp.maximum(norm, _EPS)
 
     ahead = ex[:, None] * dx + ey[:, None] * dy >= 0.0
