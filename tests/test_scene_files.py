@@ -69,6 +69,9 @@ def _mutated(tmp_path, mutate):
             ),
             "rule.half_width_m",
         ),
+        (lambda o: o["people"][1].update(walks_with=1), "people[1].walks_with"),  # itself
+        (lambda o: o["people"][1].update(walks_with=0), "people[1].walks_with"),  # a standing group
+        (lambda o: o["people"][1].update(walks_with="the others"), "people[1].walks_with"),
         (lambda o: o.update(stop_and_go_m=0), "stop_and_go_m"),
         (lambda o: o.update(people_in_global_plan="no"), "people_in_global_plan"),
         (lambda o: o.update(objects=[{"polygon": [[0, 0], [1, 1], [1, 0]], "cost": 10}]), "objects[0].polygon"),

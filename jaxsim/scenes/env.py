@@ -199,6 +199,8 @@ class Env:
       velocity: a velocity model's constants (:mod:`jaxsim.speed_model`; used with
         ``config.human_model`` one of them; None otherwise).
       config: static settings.
+      walking_groups: static, the scene has walkers who walk together (``walks_with``): the
+        crowd step computes the group terms (:mod:`jaxsim.groups`) only then.
     """
 
     world: SceneWorld
@@ -209,6 +211,7 @@ class Env:
     orca: ORCAParams
     velocity: Any = None
     config: EnvConfig = struct.field(pytree_node=False, default=EnvConfig())
+    walking_groups: bool = struct.field(pytree_node=False, default=False)
 
     # ------------------------------------------------------------------ API
 
@@ -258,6 +261,7 @@ class Env:
             self.orca,
             self.robot.radius_m,
             self.velocity,
+            state.variant.walking_group if self.walking_groups else None,
         )
         robot = robot_lib.step_robot(self.robot, self.world, state.robot, v, w, cfg.dt_s)
         goal = state.variant.goal_xy
@@ -454,6 +458,7 @@ def make_env(
         orca=orca,
         velocity=velocity,
         config=config,
+        walking_groups=any(p.get("walks_with") is not None for p in spec.people),
     )
 
 

@@ -103,6 +103,7 @@ def step_people(
     orca_params: orca.ORCAParams | None = None,
     robot_radius_m: float = TIAGO_RADIUS_M,
     velocity_params=None,
+    group_id=None,
 ) -> PeopleState:
     """One step of ``params.dt_s``: behaviours, then the human model on the mobile people.
 
@@ -114,6 +115,8 @@ def step_people(
         model with bodies (:mod:`jaxsim.speed_model`: ``collision_free_speed``, ``anticipation``
         and their ``_calibrated`` fits, with ``velocity_params``, default the name's own); the
         robot a disc of ``robot_radius_m`` for all but the social force.
+      group_id: (P,) int32 the walking groups (``Variant.walking_group``; None: nobody walks
+        with anyone, and the group terms are not computed).
     """
     humans.check_model(model)
     dt = params.dt_s
@@ -127,7 +130,7 @@ def step_people(
     # pedsim's cap is the desired speed (a queue member's slows down to its place)
     x, y, vx, vy = humans.step_humans(
         model, bundle, world.wall_field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, s.present, mobile, robot,
-        robot_radius_m, u[0], u[1], ignores_robot=v.ignore_robot,
+        robot_radius_m, u[0], u[1], ignores_robot=v.ignore_robot, group_id=group_id,
     )  # fmt: skip
     xy = jnp.stack([x, y], axis=-1)
     new_v = jnp.stack([vx, vy], axis=-1)

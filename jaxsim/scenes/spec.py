@@ -17,7 +17,7 @@ Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[
      "people": [
        {"behaviour": "standing", "position": P, "heading_deg": N},
        {"behaviour": "walk", "from": P, "to": P, "speed_mps": N, "start_s": N,
-        "back_and_forth": false, "ignore_robot": true},
+        "back_and_forth": false, "ignore_robot": true, "walks_with": 2},
        {"behaviour": "group", "centre": P, "size": N, "radius_m": N, "facing": "in" | "out",
         "rotation_deg": N, "turn_inward_at_s": N},
        {"behaviour": "queue", "head": P, "towards_deg": N, "length": N, "spacing_m": N,
@@ -37,7 +37,9 @@ behind ``head`` facing ``towards_deg``, spaced ``spacing_m``: every ``advance_ev
 person leaves for ``exit`` and the rest step up; a **stream** is ``count`` walkers entering at
 ``from`` every ``interval_s`` from ``start_s``, leaving the scene at ``to``. ``ignore_robot``
 (walkers, streams): the person does not avoid the robot, as the seeds' test subjects walked their
-course.
+course. ``walks_with`` (walkers): the index in ``people`` of another walker this one walks
+with, a walking group (Moussaïd et al. 2010's group terms, :mod:`jaxsim.groups`, on top of the
+run's human model); pairs chain into larger groups.
 
 Rules (what "socially successful" means in the scene, checked on the trajectory by
 :func:`evaluation.nav_metrics.rule_satisfied`, and step by step by
@@ -309,6 +311,7 @@ def _person(r: _Reader, p: dict, where: str, bounds, walls_m: np.ndarray) -> tup
             start_s=num("start_s", 0.0, default=0.0),
             back_and_forth=r.flag(p, where, "back_and_forth", False),
             ignore_robot=r.flag(p, where, "ignore_robot", False),
+            walks_with=r.get(p, where, "walks_with", None),
         )
         return out, 1
     if behaviour == "group":
@@ -550,6 +553,13 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         slots += n
     if slots > 64:
         r.fail("people", f"{slots} people at most: 64 allowed")
+    for i, person in enumerate(people):
+        mate = person.get("walks_with")
+        if mate is None:
+            continue
+        walkers = [k for k, q in enumerate(people) if q["behaviour"] == "walk" and k != i]
+        if isinstance(mate, bool) or not isinstance(mate, int) or mate not in walkers:
+            r.fail(f"people[{i}].walks_with", f"expected the index of another walker (one of {walkers}), got {mate!r}")
     rule = _rule(r, r.get(obj, "", "rule"), "rule", people, bounds, walls_m)
     held_out = r.get(obj, "", "held_out_rule", None)
     held_out_rule = None if held_out is None else _rule(r, held_out, "held_out_rule", people, bounds, walls_m)

@@ -32,7 +32,9 @@ class Variant:
       turn_at_s: (P,) when a group member turns inward (``inf``: never); heading_turned: (P,) after.
       queue_place: (P,) int32 place in the queue (0 at the head); queue_head: (P, 2); queue_step:
         (P, 2) from one place to the next one back; queue_interval_s: (P,); exit_xy: (P, 2).
-      group: (P,) int32 group index (-1: none).
+      group: (P,) int32 standing group index (-1: none).
+      walking_group: (P,) int32 walkers who walk together share one (-1: alone;
+        :mod:`jaxsim.groups`).
       robot_xy: (2,) start; robot_yaw: (); goal_xy: (2,).
       seed_u32: () uint32 seed of the people's random force.
     """
@@ -55,6 +57,7 @@ class Variant:
     queue_interval_s: np.ndarray
     exit_xy: np.ndarray
     group: np.ndarray
+    walking_group: np.ndarray
     robot_xy: np.ndarray
     robot_yaw: np.ndarray
     goal_xy: np.ndarray
@@ -105,6 +108,19 @@ def padded_slots(n_slots: int) -> int:
     return max(2, 1 << (max(int(n_slots), 1) - 1).bit_length())
 
 
+def walking_groups(spec: SceneSpec, slot_of: list[int], n_slots: int) -> np.ndarray:
+    """(n_slots,) int32: the walkers linked by ``walks_with`` (chains joined) share the lowest
+    slot among them as their id; everyone else -1."""
+    label = np.arange(n_slots)
+    mates = [(i, p.get("walks_with")) for i, p in enumerate(spec.people)]
+    links = [(slot_of[i], slot_of[k]) for i, k in mates if k is not None]
+    for _ in range(len(links)):
+        for a, b in links:
+            label[a] = label[b] = min(label[a], label[b])
+    linked = {s for pair in links for s in pair}
+    return np.array([label[k] if k in linked else -1 for k in range(n_slots)], np.int32)
+
+
 def sample_variant(
     spec: SceneSpec, seed: int, k: int, held_out: bool = False, n_slots: int = 0, training: bool = False
 ) -> Variant:
@@ -143,9 +159,12 @@ def sample_variant(
         queue_interval_s=np.ones(n, np.float32),
         exit_xy=f32((n, 2)),
         group=np.full(n, -1, np.int32),
+        walking_group=np.full(n, -1, np.int32),
     )
     slot, group_index = 0, 0
+    slot_of = []
     for person in spec.people:
+        slot_of.append(slot)
         b = person["behaviour"]
         if b == "standing":
             xy = draw.point(person["position"])
@@ -217,6 +236,7 @@ def sample_variant(
                 a["ignore_robot"][slot + m] = person["ignore_robot"]
                 a["valid"][slot + m] = True
             slot += person["count"]
+    a["walking_group"] = walking_groups(spec, slot_of, n)
     robot = spec.robot
     return Variant(
         **a,
