@@ -1,4 +1,4 @@
-"""Pictures of ``socialnav humans validate``: each test's data beside the models."""
+"""Pictures of ``socialnav humans validate`` (each test's data beside the models) and of ``calibrate``."""
 
 from __future__ import annotations
 
@@ -39,14 +39,17 @@ def fundamental_diagram(data: dict, results: dict, path: pathlib.Path) -> pathli
 
 def prediction(data: dict, results: dict, path: pathlib.Path) -> pathlib.Path:
     """ADE and FDE per ETH/UCY scene: constant velocity and each model (aimed along its velocity;
-    hatched: given the true destination)."""
+    dotted: its people walking on in the groups they walked in; hatched: given the true
+    destination)."""
     scenes = list(data["constant_velocity"]["scene"])
-    fig = figures.figure(figsize=(8.0, 3.6), layout="constrained")
     series = [("constant velocity", data["constant_velocity"], "0.5", "")]
     for colour, (name, r) in zip(COLOURS, results.items(), strict=False):
         p = r["prediction"]
         series.append((name, p[p["aim"] == "velocity"], colour, ""))
+        if (p["aim"] == "velocity_groups").any():
+            series.append((f"{name}, in walking groups", p[p["aim"] == "velocity_groups"], colour, ".."))
         series.append((f"{name}, true destination", p[p["aim"] == "destination"], colour, "//"))
+    fig = figures.figure(figsize=(9.0, 3.6 + 0.18 * (len(series) // 4 + 1)), layout="constrained")
     width = 0.8 / len(series)
     for k, metric in enumerate(("ade_m", "fde_m")):
         ax = fig.add_subplot(1, 2, k + 1)
@@ -58,8 +61,8 @@ def prediction(data: dict, results: dict, path: pathlib.Path) -> pathlib.Path:
                    edgecolor="k", lw=0.3)  # fmt: skip
         ax.set_xticks(x, [*scenes, "mean"], fontsize=8)
         ax.set_ylabel(metric.split("_")[0].upper() + " (m)")
-        if k == 0:
-            ax.legend(fontsize=7)
+    handles, labels = fig.axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(4, len(series)), fontsize=7)
     fig.suptitle("ETH/UCY test splits: 8 frames observed, 12 predicted", fontsize=10)
     return figures.save(fig, path)
 
@@ -86,4 +89,23 @@ def counterflow_and_bodies(data: dict, results: dict, path: pathlib.Path) -> pat
     ax.set_ylabel("deepest overlap (m)")
     ax.legend(fontsize=7)
     fig.suptitle(f"counterflow at {data['counterflow']['density']:.2f} /m² (bi_corr_400_b_03); bodies", fontsize=10)
+    return figures.save(fig, path)
+
+
+def trajectory_fit(rows: list[dict], title: str, path: pathlib.Path) -> pathlib.Path:
+    """The ETH/UCY fits' loss on their training sample, best so far, against loss evaluations
+    (:func:`evaluation.trajectory_calibration.leave_one_scene_out`'s rows): the gradient solid,
+    Nelder-Mead dotted, a colour a held-out scene."""
+    fig = figures.figure(figsize=(6.4, 3.8), layout="constrained")
+    ax = fig.add_subplot()
+    for colour, row in zip(COLOURS, rows, strict=False):
+        for key, style, label in (("gradient_history", "-", "gradient"), ("nelder_mead_history", ":", "Nelder-Mead")):
+            history = row.get(key)
+            if history:
+                best = np.minimum.accumulate([h[1] for h in history])
+                ax.plot(np.arange(1, len(best) + 1), best, style, color=colour, label=f"{row['scene']}: {label}")
+    ax.set_xlabel("loss evaluations (a gradient step is one)")
+    ax.set_ylabel("ADE on the training sample, best so far (m)")
+    ax.legend(fontsize=6, ncol=2)
+    ax.set_title(title, fontsize=10)
     return figures.save(fig, path)

@@ -14,7 +14,10 @@ Each protocol runs a human model (the crowd step the arena and the warehouse use
   frames, 3.2 s; predict 12, 4.8 s; people present in all 20; each scene's test split), the
   model stepped from the last observed frame with every person present aimed along their last
   observed velocity at its speed (``aim="velocity"``) or at their true final position
-  (``aim="destination"``, "social force with a destination"), beside constant velocity.
+  (``aim="destination"``, "social force with a destination"), beside constant velocity; and
+  aimed along the velocity with the people who walked together over the observed frames walking
+  on as groups (``"velocity_groups"``, :mod:`jaxsim.groups`; reported beside, the bar's check
+  is the plain ``"velocity"``, as issue 61 defined it).
 * **Bodies** (:func:`evaluation.pedestrian_measures.overlaps`): how often and how deep two
   bodies overlap in the model's corridors.
 
@@ -34,10 +37,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pandas as pd
+from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR, recorded
 from socialnav.evaluation import pedestrian_measures as measures
-from socialnav.jaxsim import geometry, humans, orca, speed_model
+from socialnav.jaxsim import geometry, groups, humans, orca, speed_model
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.world import Grid
@@ -60,13 +64,15 @@ FD_TEST_RUNS = ("uo-060-180-180", "uo-070-180-180", "uo-145-180-180", "uo-180-18
 class HumanModel:
     """A human model and its parameters: ``name`` (:data:`HUMAN_MODELS`), the social force's
     :class:`~jaxsim.params.SimParams` (the warehouse's by default; its ``dt_s`` is the step)
-    and ORCA's :class:`~jaxsim.orca.ORCAParams`."""
+    and ORCA's :class:`~jaxsim.orca.ORCAParams`, the velocity models', and the walking groups'
+    :class:`~jaxsim.groups.GroupParams` (felt where a protocol has groups: ETH/UCY's)."""
 
     name: str = "social_force"
     crowd: SimParams | None = None
     orca: orca.ORCAParams = orca.ORCAParams()
     speed: speed_model.SpeedModelParams = speed_model.SpeedModelParams()
     anticipation: speed_model.AnticipationParams = speed_model.AnticipationParams()
+    group: groups.GroupParams = groups.GroupParams()
 
     def __post_init__(self):
         if self.name not in HUMAN_MODELS:
@@ -93,16 +99,17 @@ class HumanModel:
     @property
     def params(self) -> humans.HumanParams:
         """The traced part (pass it through ``jit`` as an argument)."""
-        return humans.HumanParams(self.crowd, self.orca, self.speed, self.anticipation)
+        return humans.HumanParams(self.crowd, self.orca, self.speed, self.anticipation, self.group)
 
 
-def model_step(name: str, params, field: Grid, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, u1, u2):
+def model_step(name: str, params, field: Grid, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, u1, u2,
+               group_id=None):  # fmt: skip
     """One step of N people by human model ``name`` (:func:`jaxsim.humans.step_humans`, the one
     crowd function) with ``params`` (:class:`~jaxsim.humans.HumanParams`): no robot; the social
-    force's cap is the desired speed."""
+    force's cap is the desired speed; ``group_id`` (N,) the walking groups (None: none)."""
     robot = (jnp.float32(FAR_M), jnp.float32(FAR_M), jnp.float32(0.0), jnp.float32(0.0))
     return humans.step_humans(name, params, field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, present, moving, robot,
-                              0.0, u1, u2)  # fmt: skip
+                              0.0, u1, u2, group_id=group_id)  # fmt: skip
 
 
 def desired_speeds(params: SimParams, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -152,13 +159,15 @@ def _starts(n: int, width_m: float, length_m: float, radius_m: float, rng: np.ra
     return xy + rng.uniform(-1, 1, xy.shape) * room
 
 
-def periodic_step(name: str, params, field, direction, speed, length_m: float):
+def periodic_step(name: str, params, field, direction, speed, length_m: float, group_id=None):
     """``step((xy, v, laps), key) -> (xy, v, laps)``: one step of N people (``xy``, ``v`` (N, 2))
-    in a periodic corridor along x, their ghosts a length either side; ``laps`` (N,) counts wraps."""
+    in a periodic corridor along x, their ghosts a length either side; ``laps`` (N,) counts wraps;
+    ``group_id`` (N,) who walks together (their ghosts walk alone), None: nobody."""
     n = direction.shape[0]
     moving = jnp.arange(3 * n) < n
     present = jnp.ones(3 * n, bool)
     shift = jnp.array([length_m, 0.0], jnp.float32)
+    groups_all = None if group_id is None else jnp.concatenate([group_id, jnp.full(2 * n, groups.ALONE, jnp.int32)])
 
     def step(carry, key):
         xy, v, laps = carry
@@ -167,7 +176,8 @@ def periodic_step(name: str, params, field, direction, speed, length_m: float):
         aim = jnp.tile(direction, 3) * 10.0
         u = jax.random.uniform(key, (2, 3 * n), minval=1e-6, maxval=1.0)
         x, y, vx, vy = model_step(name, params, field, all_xy[:, 0], all_xy[:, 1], all_v[:, 0], all_v[:, 1], aim,
-                                  jnp.zeros(3 * n), jnp.tile(speed, 3), present, moving, u[0], u[1])  # fmt: skip
+                                  jnp.zeros(3 * n), jnp.tile(speed, 3), present, moving, u[0], u[1],
+                                  groups_all)  # fmt: skip
         x, y, vx, vy = x[:n], y[:n], vx[:n], vy[:n]
         wrap = jnp.floor(x / length_m)
         laps = laps + jnp.abs(wrap).astype(jnp.int32)
@@ -381,16 +391,16 @@ def eth_ucy_windows(rows: pd.DataFrame):
     return pad(observed, np.nan), pad(future, np.nan), pad(complete, False), pad(present, False)
 
 
-def _predict(name: str, params, field, xy, v, aim, speed, present, key, steps_per_frame: int):
+def _predict(name: str, params, field, xy, v, aim, speed, present, key, steps_per_frame: int, group_id=None):
     """(P, 12, 2) positions of one window's people stepped by the model from ``xy``, ``v``
-    (``aim(xy) -> (P, 2)``: where each is heading)."""
+    (``aim(xy) -> (P, 2)``: where each is heading; ``group_id`` (P,) who walks together)."""
 
     def step(carry, k):
         xy, v = carry
         u = jax.random.uniform(k, (2, xy.shape[0]), minval=1e-6, maxval=1.0)
         to = aim(xy)
         x, y, vx, vy = model_step(name, params, field, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
-                                  speed, present, present & (speed > 0.0), u[0], u[1])  # fmt: skip
+                                  speed, present, present & (speed > 0.0), u[0], u[1], group_id)  # fmt: skip
         return (jnp.stack([x, y], -1), jnp.stack([vx, vy], -1)), jnp.stack([x, y], -1)
 
     keys = jax.random.split(key, PREDICT_FRAMES * steps_per_frame)
@@ -406,38 +416,98 @@ def _open_field() -> Grid:
     return Grid(jnp.asarray(values), -FAR_M, -FAR_M, 2 * FAR_M)
 
 
-def eth_ucy_prediction(model: HumanModel | None, scene: str, aim: str = "velocity", seed: int = 0) -> dict:
-    """ADE and FDE (m) of one scene's test split: ``model`` None is constant velocity (the last
-    observed displacement carried on); else the model from the last observed frame, every
-    person aimed along their last observed velocity (``aim="velocity"``) or at their true
-    final position (``aim="destination"``), at their last observed speed. Returns ``ade_m``,
-    ``fde_m``, ``samples``."""
-    observed, future, complete, present = eth_ucy_windows(recorded.eth_ucy_split(scene, "test"))
+@struct.dataclass
+class PredictionWindows:
+    """The samples of one ETH/UCY split, ready to step (:func:`prediction_windows`); (W, P, ...)
+    arrays, P padded: ``start`` the last observed position (absent people far away),
+    ``velocity`` the last observed one (m/s), ``speed`` its norm, ``present``, ``goal`` the true
+    final position of a scored person (else the constant-velocity one), ``group_id`` who walked
+    together over the observed frames, ``future`` (W, P, 12, 2) the truth (0 where a person is
+    absent: only the ``complete`` count), ``complete`` who is scored, ``constant_velocity``
+    (W, P, 12, 2) the baseline's prediction."""
+
+    start: np.ndarray
+    velocity: np.ndarray
+    speed: np.ndarray
+    present: np.ndarray
+    goal: np.ndarray
+    group_id: np.ndarray
+    future: np.ndarray
+    complete: np.ndarray
+    constant_velocity: np.ndarray
+
+    def take(self, index, bucket: int = 16) -> PredictionWindows:
+        """The windows at ``index`` (an index array or slice), their people cut to the most any
+        of them has, rounded up to a multiple of ``bucket`` (the people are padded at the end;
+        the rounding bounds the shapes a jit compiles for)."""
+        people = int(np.asarray(self.present)[index].sum(axis=1).max(initial=1))
+        keep = min(self.start.shape[1], -(-people // bucket) * bucket)
+        return PredictionWindows(*(getattr(self, f.name)[index][:, :keep] for f in dataclasses.fields(self)))
+
+
+def prediction_windows(scene: str, split: str = "test", reach_m: float = 1.0) -> PredictionWindows:
+    """:class:`PredictionWindows` of ``scene``'s ``split`` (:func:`eth_ucy_windows`); walking
+    groups detected within ``reach_m`` (:func:`evaluation.pedestrian_measures.walking_groups`)."""
+    observed, future, complete, present = eth_ucy_windows(recorded.eth_ucy_split(scene, split))
     last, before = observed[:, :, -1], observed[:, :, -2]
     velocity = np.nan_to_num((last - before) / ETH_UCY_FRAME_S)
     horizon = ETH_UCY_FRAME_S * np.arange(1, PREDICT_FRAMES + 1)
+    cv = last[:, :, None, :] + velocity[:, :, None, :] * horizon[None, None, :, None]
+    start = np.nan_to_num(last, nan=FAR_M)
+    goal = np.where(complete[..., None], np.nan_to_num(future[:, :, -1]), start + velocity * horizon[-1])
+    return PredictionWindows(start.astype(np.float32), velocity.astype(np.float32),
+                             np.linalg.norm(velocity, axis=-1).astype(np.float32), present, goal.astype(np.float32),
+                             measures.walking_groups(observed, reach_m), np.nan_to_num(future), complete,
+                             cv)  # fmt: skip
+
+
+def window_predictor(name: str, dt_s: float, aim: str = "velocity", groups: bool = False):
+    """``predict(params, windows, key) -> (W, P, 12, 2)``: human model ``name`` stepped
+    from each window's last observed frame (``aim``: along the last velocity, or at the true
+    ``"destination"``), walking groups felt if ``groups``; pure and jit-able, so a loss over it
+    differentiates with respect to ``params`` (:class:`~jaxsim.humans.HumanParams`)."""
+    steps = int(round(ETH_UCY_FRAME_S / dt_s))
+    field = _open_field()
+
+    def one(params, xy, v, s, here, g, gid, key):
+        along = lambda p: v * 10.0 / jnp.maximum(jnp.linalg.norm(v, axis=-1, keepdims=True), 1e-6)
+        towards = lambda p: g - p
+        return _predict(name, params, field, xy, v, along if aim == "velocity" else towards, s, here, key, steps,
+                        gid if groups else None)  # fmt: skip
+
+    @jax.jit
+    def batched(params, start, velocity, speed, present, goal, group_id, key):
+        keys = jax.random.split(key, start.shape[0])
+        return jax.vmap(one, in_axes=(None, 0, 0, 0, 0, 0, 0, 0))(params, start, velocity, speed, present, goal,
+                                                                   group_id, keys)  # fmt: skip
+
+    def predict(params, w: PredictionWindows, key):
+        return batched(params, w.start, w.velocity, w.speed, w.present, w.goal, w.group_id, key)
+
+    return predict
+
+
+def eth_ucy_prediction(
+    model: HumanModel | None, scene: str, aim: str = "velocity", seed: int = 0, groups: bool = False,
+    reach_m: float = 1.0, split: str = "test",
+) -> dict:  # fmt: skip
+    """ADE and FDE (m) of one scene's ``split`` (the test split unless asked): ``model`` None is
+    constant velocity (the last observed displacement carried on); else the model from the last
+    observed frame, every person aimed along their last observed velocity (``aim="velocity"``) or
+    at their true final position (``aim="destination"``), at their last observed speed; with
+    ``groups``, the people who walked together over the observed frames
+    (:func:`evaluation.pedestrian_measures.walking_groups` within ``reach_m``) walk on as groups
+    (:mod:`jaxsim.groups`). Returns ``ade_m``, ``fde_m``, ``samples``, ``grouped`` (the share of
+    scored people in a group)."""
+    w = prediction_windows(scene, split, reach_m)
     if model is None:
-        predicted = last[:, :, None, :] + velocity[:, :, None, :] * horizon[None, None, :, None]
+        predicted = w.constant_velocity
     else:
-        speed = np.linalg.norm(velocity, axis=-1)
-        start = np.nan_to_num(last, nan=FAR_M)
-        goal = np.where(complete[..., None], np.nan_to_num(future[:, :, -1]), start + velocity * horizon[-1])
-        steps = int(round(ETH_UCY_FRAME_S / model.dt_s))
-        field = _open_field()
-
-        def one(params, xy, v, s, here, g, key):
-            along = lambda p: v * 10.0 / jnp.maximum(jnp.linalg.norm(v, axis=-1, keepdims=True), 1e-6)
-            towards = lambda p: g - p
-            return _predict(model.name, params, field, xy, v, along if aim == "velocity" else towards, s, here, key,
-                            steps)  # fmt: skip
-
-        keys = jax.random.split(jax.random.key(seed), len(start))
-        run = jax.jit(jax.vmap(one, in_axes=(None, 0, 0, 0, 0, 0, 0)))
-        f32 = lambda a: jnp.asarray(a, jnp.float32)
-        args = (f32(start), f32(velocity), f32(speed), jnp.asarray(present), f32(goal), keys)
-        predicted = np.asarray(run(model.params, *args))
-    ade, fde = measures.ade_fde(predicted[complete], future[complete])
-    return {"ade_m": float(ade.mean()), "fde_m": float(fde.mean()), "samples": int(complete.sum())}
+        predict = window_predictor(model.name, model.dt_s, aim, groups)
+        predicted = np.asarray(predict(model.params, w, jax.random.key(seed)))
+    ade, fde = measures.ade_fde(predicted[w.complete], w.future[w.complete])
+    return {"ade_m": float(ade.mean()), "fde_m": float(fde.mean()), "samples": int(w.complete.sum()),
+            "grouped": float((w.group_id[w.complete] >= 0).mean())}  # fmt: skip
 
 
 # ------------------------------------------------------------------ the report
@@ -473,7 +543,8 @@ def validate(
     """One model against ``data`` (:func:`reference`): its tables and the headline checks.
 
     ``quick``: shorter corridors (10 m, 30 s after 10 s) for a first look; the report says so.
-    Returns ``fd_points``, ``fd_bins``, ``bodies``, ``prediction`` (scene, aim, ade_m, fde_m),
+    Returns ``fd_points``, ``fd_bins``, ``bodies``, ``prediction`` (scene, aim, ade_m, fde_m; aim
+    ``velocity``, ``velocity_groups`` or ``destination``),
     ``counterflow`` and ``checks`` (a dict of the bar's numbers and whether each passes)."""
     size = dict(length_m=10.0, seconds=30.0, warmup_s=10.0) if quick else {}
     label = label or model.name
@@ -483,9 +554,10 @@ def validate(
     counter = model_counterflow(model, data["counterflow"]["density"], seed=seed, **size)
     progress(f"{label}: ETH/UCY prediction")
     rows = []
-    for aim in ("velocity", "destination"):
+    for aim, grouped in (("velocity", False), ("velocity", True), ("destination", False)):
         for scene in recorded.ETH_UCY_SCENES:
-            rows.append({"scene": scene, "aim": aim, **eth_ucy_prediction(model, scene, aim, seed)})
+            label = f"{aim}_groups" if grouped else aim
+            rows.append({"scene": scene, "aim": label, **eth_ucy_prediction(model, scene, aim, seed, grouped)})
     prediction = pd.DataFrame(rows)
     fd = measures.binned(points)
     return {
@@ -506,6 +578,7 @@ def checks(fd: pd.DataFrame, bodies: pd.DataFrame, prediction: pd.DataFrame, cou
     cv = data["constant_velocity"].set_index("scene")
     along = prediction[prediction["aim"] == "velocity"].set_index("scene")
     towards = prediction[prediction["aim"] == "destination"].set_index("scene")
+    grouped = prediction[prediction["aim"] == "velocity_groups"]
     ahead = (along["ade_m"] < cv["ade_m"]) & (along["fde_m"] < cv["fde_m"])
     speed_ratio = counter["speed_mps"] / data["counterflow"]["speed_mps"]
     return {
@@ -519,6 +592,7 @@ def checks(fd: pd.DataFrame, bodies: pd.DataFrame, prediction: pd.DataFrame, cou
         "overlap_pass": bool(bodies["max_depth_m"].max() <= MAX_OVERLAP_M),
         "eth_ucy_ade_fde": [float(along["ade_m"].mean()), float(along["fde_m"].mean())],
         "constant_velocity_ade_fde": [float(cv["ade_m"].mean()), float(cv["fde_m"].mean())],
+        "eth_ucy_groups_ade_fde": [float(grouped["ade_m"].mean()), float(grouped["fde_m"].mean())],
         "eth_ucy_scenes_ahead": int(ahead.sum()),
         "eth_ucy_pass": bool(
             along["ade_m"].mean() < cv["ade_m"].mean()

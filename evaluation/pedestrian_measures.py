@@ -12,6 +12,7 @@ form; a simulation writes the same) at a known frame rate.
 * :func:`lane_order`: the lane order parameter of counterflow (Rex & Löwen 2007's form).
 * :func:`overlaps`: how often and how deep two bodies overlap.
 * :func:`ade_fde`: displacement errors of predictions.
+* :func:`walking_groups`: who walks together in an observed window.
 """
 
 from __future__ import annotations
@@ -172,3 +173,36 @@ def ade_fde(predicted_xy, true_xy) -> tuple[np.ndarray, np.ndarray]:
     ``predicted_xy``, ``true_xy``: (N, T, 2)."""
     err = np.linalg.norm(np.asarray(predicted_xy) - np.asarray(true_xy), axis=-1)
     return err.mean(axis=1), err[:, -1]
+
+
+def walking_groups(observed_xy, reach_m: float = 1.0, moving_m: float = 0.5) -> np.ndarray:
+    """(W, P) int32 group ids of the people in observed windows (-1: walking alone).
+
+    Two people walk together when both are present in every observed frame, each of them moved
+    at least ``moving_m`` over the window, and they were never farther apart than ``reach_m``
+    (default 1 m: the distance Moussaïd et al. 2010's pair holds, where their attraction starts,
+    :mod:`jaxsim.groups`); a group is a connected set of such pairs, its id its lowest member's
+    index. ETH/UCY ships no group labels, so this is the detection; ``scripts`` or a user may
+    sweep ``reach_m`` (``docs/humans.md`` reports 0.8-1.5 m).
+
+    Args:
+      observed_xy: (W, P, T, 2) positions, NaN where a person is absent.
+    """
+    xy = np.asarray(observed_xy, float)
+    w, p = xy.shape[:2]
+    seen = ~np.isnan(xy[..., 0]).any(axis=-1)  # (W, P) present throughout
+    moved = np.linalg.norm(np.nan_to_num(xy[:, :, -1] - xy[:, :, 0]), axis=-1) >= moving_m
+    gap = np.linalg.norm(xy[:, :, None] - xy[:, None, :], axis=-1)  # (W, P, P, T)
+    near = np.nan_to_num(gap, nan=np.inf).max(axis=-1) <= reach_m
+    ok = seen & moved
+    linked = near & ok[:, :, None] & ok[:, None, :]
+    # connected components by repeated min-label propagation (P is at most a few dozen)
+    label = np.broadcast_to(np.arange(p), (w, p)).copy()
+    for _ in range(p):
+        spread = np.where(linked, label[:, None, :], p).min(axis=-1)
+        new = np.minimum(label, spread)
+        if np.array_equal(new, label):
+            break
+        label = new
+    alone = ~(linked & ~np.eye(p, dtype=bool)).any(axis=-1)
+    return np.where(alone, -1, label).astype(np.int32)

@@ -16,11 +16,13 @@ import pathlib
 import sys
 import time
 
-from socialnav.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
+from socialnav.argtypes import comma_names, non_negative_int, output_folder, positive_float, positive_int, seed_int
 from socialnav.common import runfolder
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 
 JOB = "socialnav humans validate"
+CALIBRATABLE = ("collision_free_speed", "anticipation", "orca", "collision_free_speed_calibrated",
+                "anticipation_calibrated")  # fmt: skip
 RESULTS = ("summary.json", "fundamental_diagram.csv", "prediction.csv", "counterflow.csv", "bodies.csv", "pictures")
 
 
@@ -55,11 +57,20 @@ def add_parser(top) -> None:
         "same loss as the check. Writes fit.json and curve.png and prints the fitted values; socialnav humans "
         "validate --models <model>_calibrated scores the shipped fit on held-out data.",
     )
-    c.add_argument("--model", choices=("collision_free_speed", "anticipation", "orca"), default="collision_free_speed")
+    c.add_argument("--model", choices=CALIBRATABLE, default="collision_free_speed",
+                   help="the model to fit, from its parameters (a _calibrated one: from the Jülich fit)")  # fmt: skip
+    c.add_argument("--data", choices=("juelich", "eth_ucy"), default="juelich",
+                   help="juelich: the fundamental diagram of the training runs (default); eth_ucy: the prediction "
+                        "ADE, one fit a scene on its training split, scored on its test split")  # fmt: skip
+    c.add_argument("--scenes", type=comma_names, default=None, help="with --data eth_ucy: the held-out scenes (all)")
     c.add_argument("--out", type=output_folder, default=pathlib.Path("runs/calibration"), help="folder")
-    c.add_argument("--steps", type=positive_int, default=80, help="gradient steps (default 80)")
-    c.add_argument("--learning-rate", type=positive_float, default=0.02, help="Adam's, on log-parameters (0.02)")
-    c.add_argument("--evaluations", type=positive_int, default=250, help="Nelder-Mead's loss evaluations (250)")
+    c.add_argument("--steps", type=positive_int, default=None, help="gradient steps (80; eth_ucy 60 a scene)")
+    c.add_argument("--learning-rate", type=positive_float, default=None,
+                   help="Adam's, on log-parameters (0.02; eth_ucy 0.2)")  # fmt: skip
+    c.add_argument("--evaluations", type=non_negative_int, default=None,
+                   help="Nelder-Mead's loss evaluations (250; eth_ucy 60, 0: none)")  # fmt: skip
+    c.add_argument("--sample", type=positive_int, default=256,
+                   help="eth_ucy: training windows the loss is taken over, drawn once (256)")  # fmt: skip
     c.add_argument("--seed", type=seed_int, default=0)
     c.add_argument("--overwrite", action="store_true", help="replace the run in --out whole once the new one is done")
     c.set_defaults(handler=calibrate)
@@ -81,6 +92,20 @@ def calibrate(args) -> int:
         runfolder.check_writable(args.out)
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
+        return 2
+    if args.data == "eth_ucy":
+        return _calibrate_trajectories(args)
+    if args.model.endswith("_calibrated") or args.scenes is not None:
+        what = "--model " + args.model if args.model.endswith("_calibrated") else "--scenes"
+        print(f"socialnav humans calibrate: {what} goes with --data eth_ucy (the Jülich fit starts from a model's "
+              "own defaults)", file=sys.stderr)  # fmt: skip
+        return 2
+    args.steps = args.steps or 80
+    args.learning_rate = args.learning_rate or 0.02
+    args.evaluations = 250 if args.evaluations is None else args.evaluations
+    if args.evaluations == 0:
+        print("socialnav humans calibrate: --evaluations must be >= 1 with --data juelich (its search is the check "
+              "of the gradient's fit)", file=sys.stderr)  # fmt: skip
         return 2
     t0 = time.perf_counter()
     model = hv.HumanModel(args.model)
@@ -121,6 +146,48 @@ def calibrate(args) -> int:
         return 2
     for label in ("gradient", "nelder_mead"):
         print(f"{label}: loss {start:.2f} -> {fit[label]['loss']:.2f}, {fit[label]['values']}")
+    print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def _calibrate_trajectories(args) -> int:
+    """``--data eth_ucy``: :func:`evaluation.trajectory_calibration.leave_one_scene_out`."""
+    from socialnav.data import recorded
+    from socialnav.evaluation import human_calibration as hc
+    from socialnav.evaluation import human_plots
+    from socialnav.evaluation import trajectory_calibration as tc
+
+    scenes = args.scenes or list(recorded.ETH_UCY_SCENES)
+    unknown = [s for s in scenes if s not in recorded.ETH_UCY_SCENES]
+    if unknown:
+        print(f"socialnav humans calibrate: --scenes: unknown {', '.join(unknown)} "
+              f"(known: {', '.join(recorded.ETH_UCY_SCENES)})", file=sys.stderr)  # fmt: skip
+        return 2
+    t0 = time.perf_counter()
+    model = hc.named_model(args.model)
+    fields = tc.FITTED[model.name]
+    print(f"{args.model}: fitting {', '.join(fields)} to ETH/UCY, one fit a held-out scene "
+          f"({', '.join(scenes)}), on its training split", flush=True)  # fmt: skip
+    rows = tc.leave_one_scene_out(
+        model, fields, scenes, args.steps or 60, args.learning_rate or 0.2,
+        60 if args.evaluations is None else args.evaluations, args.sample, seed=args.seed,
+    )  # fmt: skip
+    fit = {"model": args.model, "data": "eth_ucy", "fields": list(fields), "start": tc.values_of(model, fields),
+           "scenes": rows, "seed": args.seed, "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
+    try:
+        with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
+            human_plots.trajectory_fit(rows, f"{args.model} on ETH/UCY, leave one scene out", stage / "curve.png")
+            (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
+    except runfolder.RunFolderError as e:
+        print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
+        return 2
+    mean = lambda key, k: sum(r[key][k] for r in rows) / len(rows)
+    for key, label in (("constant_velocity", "constant velocity"), ("start", "as given"), ("gradient", "fitted"),
+                       ("nelder_mead", "Nelder-Mead")):  # fmt: skip
+        if key in rows[0]:
+            ahead = sum(r[key][0] < r["constant_velocity"][0] and r[key][1] < r["constant_velocity"][1] for r in rows)
+            print(f"{label}: test ADE/FDE {mean(key, 0):.3f} / {mean(key, 1):.3f} m over {len(rows)} held-out scenes"
+                  + ("" if key == "constant_velocity" else f", ahead of constant velocity in {ahead}"))  # fmt: skip
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
@@ -198,11 +265,13 @@ def _headline(data: dict, results: dict) -> None:
         k = r["checks"]
         verdict = lambda ok: "pass" if ok else "FAIL"
         ade, fde = k["eth_ucy_ade_fde"]
+        grouped = r["prediction"][r["prediction"]["aim"] == "velocity_groups"]
         print(
             f"{name}: speed inside the data's ±1 s.d. in {k['fd_bins_inside_1sd']} density bins "
             f"({verdict(k['fd_pass'])}); "
             f"deepest overlap {k['overlap_max_m']:.2f} m ({verdict(k['overlap_pass'])}); ETH/UCY ADE/FDE {ade:.2f} / "
-            f"{fde:.2f} m, ahead in {k['eth_ucy_scenes_ahead']} of 5 scenes ({verdict(k['eth_ucy_pass'])}); with the "
+            f"{fde:.2f} m, ahead in {k['eth_ucy_scenes_ahead']} of 5 scenes ({verdict(k['eth_ucy_pass'])}; in walking "
+            f"groups {grouped['ade_m'].mean():.2f} / {grouped['fde_m'].mean():.2f} m); with the "
             f"destination ADE {k['destination_ade_m']:.2f} m ({verdict(k['destination_pass'])}); counterflow speed "
             f"x{k['counterflow_speed_ratio']:.2f}, lane order {k['counterflow_lane_order']:.2f} "
             f"({verdict(k['counterflow_pass'])})"

@@ -1,0 +1,182 @@
+"""Human-model parameters fitted to ETH/UCY trajectories, leave one scene out, by gradient through
+the crowd step and by Nelder-Mead as the check.
+
+For each of the five scenes, the fit reads only that scene's *training* split (the other four
+scenes' recordings, :func:`socialnav.data.recorded.eth_ucy_split`) and is scored on the scene's
+test split, which it never reads. The loss is the prediction protocol's
+(:func:`evaluation.human_validation.eth_ucy_prediction`: 8 frames observed, 12 predicted, every
+person aimed along their last observed velocity, walking groups detected over the observed
+frames and walking on as groups)::
+
+    loss(theta) = mean over scored people of the ADE (m) of the model's 12 predicted positions
+
+``theta`` are the logarithms of the fitted fields (:data:`FITTED`: the velocity model's
+interaction, its time gap, and Moussaïd's group terms' strengths; the body radius is left to the
+Jülich fit). The loss is taken over one fixed sample of training windows (256 by default, drawn
+once), minimised by Adam (optax, the gradient clipped to a global norm of 1) and by Nelder-Mead
+(scipy) from the same start: one function for both, so their curves compare. The fields are
+named ``"<part>.<field>"`` of :class:`evaluation.human_validation.HumanModel` (``speed``,
+``anticipation``, ``orca``, ``group``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from socialnav.data import recorded
+from socialnav.evaluation import human_validation as hv
+from socialnav.evaluation import pedestrian_measures as measures
+
+_GROUP = ("group.gaze_per_rad", "group.attraction_mps2")
+FITTED = {
+    "collision_free_speed": ("speed.time_gap_s", "speed.neighbor_strength", "speed.neighbor_range_m", *_GROUP),
+    "anticipation": (
+        "anticipation.time_gap_s", "anticipation.neighbor_strength", "anticipation.neighbor_range_m",
+        "anticipation.anticipation_time_s", *_GROUP,
+    ),
+    "orca": ("orca.time_horizon_s", *_GROUP),
+}  # fmt: skip
+# ORCA's fallback is a while_loop: no reverse-mode gradient (evaluation.human_calibration).
+FORWARD_MODE = ("orca",)
+
+
+def with_values(model: hv.HumanModel, fields, values) -> hv.HumanModel:
+    """``model`` with each ``"<part>.<field>"`` of ``fields`` set to the matching value."""
+    parts: dict = {}
+    for path, value in zip(fields, values, strict=True):
+        part, field = path.split(".")
+        parts.setdefault(part, {})[field] = value
+    return dataclasses.replace(model, **{p: getattr(model, p).replace(**f) for p, f in parts.items()})
+
+
+def values_of(model: hv.HumanModel, fields) -> dict:
+    """``{"<part>.<field>": value}`` of ``model``'s ``fields``."""
+    return {path: round(float(getattr(getattr(model, path.split(".")[0]), path.split(".")[1])), 4) for path in fields}
+
+
+def ade_loss(model: hv.HumanModel, fields, theta, w: hv.PredictionWindows, key, groups: bool = True):
+    """Mean ADE (m) over the scored people of windows ``w``, ``model`` with ``fields`` at
+    ``exp(theta)``."""
+    m = with_values(model, fields, jnp.exp(theta))
+    predicted = hv.window_predictor(m.name, m.dt_s, "velocity", groups)(m.params, w, key)
+    truth = jnp.asarray(w.future, jnp.float32)
+    # (W, P); the epsilon keeps the gradient finite where a prediction is exact (a person standing)
+    error = jnp.sqrt(jnp.sum((predicted - truth) ** 2, axis=-1) + 1e-12).mean(axis=-1)
+    scored = jnp.asarray(w.complete, jnp.float32)
+    return jnp.sum(error * scored) / jnp.maximum(jnp.sum(scored), 1.0)
+
+
+def _loss_and_grad(model, fields, groups):
+    loss = lambda th, w, key: ade_loss(model, fields, th, w, key, groups)
+    if model.name in FORWARD_MODE:
+        forward = jax.jacfwd(lambda th, w, key: (loss(th, w, key),) * 2, has_aux=True)
+        return jax.jit(lambda th, w, key: forward(th, w, key)[::-1])
+    return jax.jit(jax.value_and_grad(loss))
+
+
+def fit_gradient(model, fields, sample: hv.PredictionWindows, steps: int = 60, learning_rate: float = 0.2,
+                 groups: bool = True, log=print):  # fmt: skip
+    """Adam on :func:`ade_loss` over the fixed training windows ``sample`` (the loss Nelder-Mead
+    minimises, so the two are compared on one function): ``(fitted model, history)``, the model at
+    the lowest loss seen, ``history`` a list of ``(step, loss, seconds)``."""
+    loss_and_grad = _loss_and_grad(model, fields, groups)
+    # the rollout's gradient spikes where a neighbour enters or leaves a lane (the speed model's
+    # min and lane test are piecewise): clipped to a global norm of 1 before Adam
+    optimizer = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(learning_rate))
+    theta = jnp.log(jnp.asarray(list(values_of(model, fields).values()), jnp.float32))
+    state = optimizer.init(theta)
+    history, t0 = [], time.perf_counter()
+    best = (np.inf, theta)
+    for k in range(steps):
+        value, grad = loss_and_grad(theta, sample, jax.random.key(0))
+        value = float(value)
+        if value < best[0]:
+            best = (value, theta)
+        history.append((k, value, time.perf_counter() - t0))
+        if k % 10 == 0 or k == steps - 1:
+            log(f"  gradient step {k}: ADE {value:.3f} m ({time.perf_counter() - t0:.0f} s)")
+        updates, state = optimizer.update(grad, state)
+        theta = optax.apply_updates(theta, updates)
+    return with_values(model, fields, jnp.exp(best[1])), history
+
+
+def fit_nelder_mead(model, fields, sample: hv.PredictionWindows, max_evaluations: int = 60, groups: bool = True,
+                    log=print):  # fmt: skip
+    """Nelder-Mead (scipy) on :func:`ade_loss` over the fixed windows ``sample``: ``(fitted
+    model, history)`` as :func:`fit_gradient`."""
+    from scipy.optimize import minimize
+
+    loss = jax.jit(lambda th, w: ade_loss(model, fields, th, w, jax.random.key(0), groups))
+    x0 = np.log(np.asarray(list(values_of(model, fields).values()), float))
+    history, t0 = [], time.perf_counter()
+
+    def f(theta):
+        value = float(loss(jnp.asarray(theta, jnp.float32), sample))
+        history.append((len(history), value, time.perf_counter() - t0))
+        if len(history) % 20 == 0:
+            log(f"  Nelder-Mead evaluation {len(history)}: ADE {min(h[1] for h in history):.3f} m")
+        return value
+
+    simplex = np.vstack([x0, x0 + 0.3 * np.eye(len(x0))])
+    options = {"maxfev": max_evaluations, "xatol": 1e-3, "fatol": 1e-4, "initial_simplex": simplex}
+    result = minimize(f, x0, method="Nelder-Mead", options=options)
+    return with_values(model, fields, np.exp(result.x)), history
+
+
+def scored(model: hv.HumanModel | None, w: hv.PredictionWindows, groups: bool = True, seed: int = 0) -> tuple:
+    """``(ADE, FDE)`` (m) of ``model`` (None: constant velocity) on windows ``w``."""
+    if model is None:
+        predicted = w.constant_velocity
+    else:
+        predict = hv.window_predictor(model.name, model.dt_s, "velocity", groups)
+        predicted = np.asarray(predict(model.params, w, jax.random.key(seed)))
+    ade, fde = measures.ade_fde(predicted[w.complete], w.future[w.complete])
+    return float(ade.mean()), float(fde.mean())
+
+
+def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_UCY_SCENES, steps: int = 60,
+                        learning_rate: float = 0.2, evaluations: int = 60, sample: int = 256, seed: int = 0,
+                        log=print) -> list[dict]:  # fmt: skip
+    """One fit a scene on ``sample`` windows drawn from its training split (by gradient; by
+    Nelder-Mead too when ``evaluations`` > 0), scored on its test split: a row a scene with the
+    test ADE/FDE of constant velocity, of ``model`` as given and as fitted, the fitted values,
+    the loss curves on the training sample."""
+    fields = FITTED[model.name] if fields is None else fields
+    rows = []
+    for scene in scenes:
+        log(f"{scene}: fitting on {sample} windows of the other scenes (its training split)")
+        train = hv.prediction_windows(scene, "train")
+        test = hv.prediction_windows(scene, "test")
+        pick = np.random.default_rng(seed).choice(len(train.start), size=min(sample, len(train.start)), replace=False)
+        fixed = train.take(np.sort(pick))
+        fitted, history = fit_gradient(model, fields, fixed, steps, learning_rate, log=log)
+        row = {
+            "scene": scene,
+            "train_windows": len(train.start),
+            "sample_windows": len(fixed.start),
+            "constant_velocity": scored(None, test),
+            "start": scored(model, test),
+            "gradient": scored(fitted, test),
+            "gradient_values": values_of(fitted, fields),
+            "gradient_history": history,
+            "sample_loss": {"start": history[0][1], "gradient": min(h[1] for h in history)},
+        }
+        if evaluations:
+            by_search, search_history = fit_nelder_mead(model, fields, fixed, evaluations, log=log)
+            row.update(nelder_mead=scored(by_search, test), nelder_mead_values=values_of(by_search, fields),
+                       nelder_mead_history=search_history)  # fmt: skip
+            row["sample_loss"]["nelder_mead"] = min(h[1] for h in search_history)
+        log(
+            f"  {scene} test ADE/FDE: constant velocity {row['constant_velocity'][0]:.3f}/"
+            f"{row['constant_velocity'][1]:.3f}, as given {row['start'][0]:.3f}/{row['start'][1]:.3f}, "
+            f"by gradient {row['gradient'][0]:.3f}/{row['gradient'][1]:.3f}"
+            + (f", by Nelder-Mead {row['nelder_mead'][0]:.3f}/{row['nelder_mead'][1]:.3f}" if evaluations else "")
+        )
+        rows.append(row)
+    return rows
