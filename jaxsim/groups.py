@@ -83,32 +83,30 @@ def group_terms(
       aim_dx, aim_dy: (N,) towards each person's target (their walking direction).
       group_id: (N,) int32, -1 alone; present: (N,) bool.
     """
-    mate = same_group(group_id, present)
-    w = mate.astype(x.dtype)
+    w = same_group(group_id, present).astype(x.dtype)
+    # one pass over the pairs: relative positions serve the centres of mass and the repulsion
+    dx = x[None, :] - x[:, None]  # (N, N) from i to j
+    dy = y[None, :] - y[:, None]
+    d = jnp.sqrt(dx * dx + dy * dy + _EPS * _EPS)
+    close = w * (d < params.repulsion_distance_m) / d
     others = jnp.sum(w, axis=1)
+    to_x, to_y = jnp.sum(w * dx, axis=1), jnp.sum(w * dy, axis=1)  # sums of (x_j - x_i) over mates
+    push_x, push_y = jnp.sum(close * dx, axis=1), jnp.sum(close * dy, axis=1)
     in_group = others > 0
     size = others + 1.0
     # gaze: the angle to the other members' centre of mass beyond the vision field
-    ox = jnp.sum(w * x[None, :], axis=1) / jnp.maximum(others, 1.0) - x
-    oy = jnp.sum(w * y[None, :], axis=1) / jnp.maximum(others, 1.0) - y
+    ox, oy = to_x / jnp.maximum(others, 1.0), to_y / jnp.maximum(others, 1.0)
     cross, dot = aim_dx * oy - aim_dy * ox, aim_dx * ox + aim_dy * oy
     # the angle in [0, pi]; arctan2's gradient is NaN at (0, 0) (someone alone, no aim): kept off it
     alone_here = (cross == 0.0) & (dot == 0.0)
     angle = jnp.arctan2(jnp.abs(cross), jnp.where(alone_here, 1.0, dot))
     turn_rad = jnp.maximum(angle - params.vision_half_angle_rad, 0.0)
-    # attraction: towards the whole group's centre of mass, beyond (N - 1) / 2 m of it
-    cx = (jnp.sum(w * x[None, :], axis=1) + x) / size - x
-    cy = (jnp.sum(w * y[None, :], axis=1) + y) / size - y
+    # attraction: towards the whole group's centre of mass (i included), beyond (N - 1) / 2 m of it
+    cx, cy = to_x / size, to_y / size
     c_norm = jnp.sqrt(cx * cx + cy * cy + _EPS * _EPS)
     far = (c_norm > (size - 1.0) / 2.0).astype(x.dtype)
-    ax, ay = far * params.attraction_mps2 * cx / c_norm, far * params.attraction_mps2 * cy / c_norm
-    # repulsion: away from each member closer than repulsion_distance_m
-    dx = x[None, :] - x[:, None]
-    dy = y[None, :] - y[:, None]
-    d = jnp.sqrt(dx * dx + dy * dy + _EPS * _EPS)
-    close = w * (d < params.repulsion_distance_m)
-    ax = ax - params.repulsion_mps2 * jnp.sum(close * dx / d, axis=1)
-    ay = ay - params.repulsion_mps2 * jnp.sum(close * dy / d, axis=1)
+    ax = far * params.attraction_mps2 * cx / c_norm - params.repulsion_mps2 * push_x
+    ay = far * params.attraction_mps2 * cy / c_norm - params.repulsion_mps2 * push_y
     keep = in_group.astype(x.dtype)
     return keep * turn_rad, keep * ax, keep * ay, in_group
 
