@@ -1,13 +1,15 @@
 """What each human model costs: one crowd step of N people, every model on the same crowd.
 
     python benchmarks/bench_human_models.py                  # N = 16, 64, 256 in a batch of 64 worlds
+    python benchmarks/bench_human_models.py --pairs          # and each model with everyone in pairs
     XLA_FLAGS=--xla_cpu_max_isa=AVX2 python benchmarks/bench_human_models.py   # AVX2 only
 
 The crowd is a periodic corridor's (:mod:`evaluation.human_validation`: 1.8 m wide, 2 persons/m²,
 ghosts either side, so 3N bodies are felt), ``vmap``-ed over worlds as the arena and the
 validation batch them. Prints people-steps per second (worlds x N x steps over the wall time,
 compilation apart and printed, best of ``--repeats``) for each model, the ratio to the social
-force, and the machine. ``benchmarks/bench_crowd_scaling.py`` takes each model from 8 to 512
+force, and the machine; with ``--pairs``, each model again with everyone walking in pairs
+(:mod:`jaxsim.groups`: what the group terms cost). ``benchmarks/bench_crowd_scaling.py`` takes each model from 8 to 512
 people and from 1 to 1,024 worlds.
 """
 
@@ -32,8 +34,9 @@ from socialnav.evaluation import human_validation as hv  # noqa: E402
 MODELS = ("social_force", "collision_free_speed_calibrated", "anticipation_calibrated", "orca")
 
 
-def program(model: hv.HumanModel, n: int, worlds: int, steps: int, seed: int = 0):
-    """``(run, args)``: ``run(*args)`` steps ``worlds`` corridors of ``n`` people ``steps`` times."""
+def program(model: hv.HumanModel, n: int, worlds: int, steps: int, seed: int = 0, pairs: bool = False):
+    """``(run, args)``: ``run(*args)`` steps ``worlds`` corridors of ``n`` people ``steps`` times
+    (``pairs``: person 2k walks with 2k + 1)."""
     width, length = 1.8, n / (2.0 * 1.8)
     rng = np.random.default_rng(seed)
     xy0 = np.stack([hv._starts(n, width, length, model.radius_m, rng) for _ in range(worlds)])
@@ -42,7 +45,8 @@ def program(model: hv.HumanModel, n: int, worlds: int, steps: int, seed: int = 0
 
     def one(params, xy, s, key):
         direction = jnp.ones(n, jnp.float32)
-        step = hv.periodic_step(model.name, params, field, direction, s, length)
+        group_id = jnp.arange(n, dtype=jnp.int32) // 2 if pairs else None
+        step = hv.periodic_step(model.name, params, field, direction, s, length, group_id)
         carry, _ = jax.lax.scan(lambda c, k: (step(c, k), None), hv.periodic_start(direction, s, xy),
                                 jax.random.split(key, steps))  # fmt: skip
         return carry[0]
@@ -59,19 +63,21 @@ def main() -> int:
     ap.add_argument("--worlds", type=int, default=64)
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--pairs", action="store_true", help="each model again with everyone walking in pairs")
     args = ap.parse_args()
     print(machine())
     for n in (int(v) for v in args.people.split(",")):
         base = None
-        for name in MODELS:
-            run, run_args = program(hc.named_model(name), n, args.worlds, args.steps)
+        for name, pairs in [(m, p) for m in MODELS for p in ((False, True) if args.pairs else (False,))]:
+            run, run_args = program(hc.named_model(name), n, args.worlds, args.steps, pairs=pairs)
             t0 = time.perf_counter()
             jax.block_until_ready(run(*run_args))
             compile_s = time.perf_counter() - t0
             best = min(_timed(run, run_args) for _ in range(args.repeats))
             rate = args.worlds * n * args.steps / best
-            base = rate if name == "social_force" else base
-            print(f"N={n:4d} {name:32s} {rate / 1e6:8.2f} M people-steps/s  (x{rate / base:.2f} of the social "
+            base = rate if name == "social_force" and not pairs else base
+            label = f"{name}{' in pairs' if pairs else ''}"
+            print(f"N={n:4d} {label:41s} {rate / 1e6:8.2f} M people-steps/s  (x{rate / base:.2f} of the social "
                   f"force; compile and first run {compile_s:.1f} s)", flush=True)  # fmt: skip
     return 0
 
