@@ -194,7 +194,7 @@ def test_the_eth_ucy_calibration_command_fits_on_training_windows_and_scores_the
     fit = json.loads((out / "fit.json").read_text())
     (row,) = fit["scenes"]
     assert row["scene"] == "hotel" and row["sample_windows"] == 8 and len(row["gradient_history"]) == 2
-    assert row["sample_loss"]["nelder_mead"] <= row["sample_loss"]["start"] + 1e-6
+    assert row["sample_loss"]["nelder_mead"] <= row["sample_loss"]["start"] + 1e-4  # its first point is the start
     assert 0.2 < row["constant_velocity"][0] < 0.5 and all(np.isfinite(row["nelder_mead"]))  # hotel: 0.32 m
     assert (out / "curve.png").is_file() and "Nelder-Mead: test ADE/FDE" in capsys.readouterr().out
     assert cli.main(argv) == 2  # the run is there: no --overwrite
