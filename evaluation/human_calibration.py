@@ -27,7 +27,6 @@ result, on the held-out runs.
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import jax
 import jax.numpy as jnp
@@ -35,6 +34,7 @@ import numpy as np
 import optax
 
 from socialnav.evaluation import human_validation as hv
+from socialnav.evaluation import minimise
 from socialnav.evaluation import pedestrian_measures as measures
 from socialnav.jaxsim import speed_model
 
@@ -147,37 +147,12 @@ def fit_gradient(
     """Adam on :func:`fd_loss` from ``model``'s parameters (``fields``, default :data:`FITTED`'s):
     ``(fitted model, history)``, the model at the lowest loss seen, ``history`` a list of
     ``(step, loss, seconds)``."""
-
-    def loss(th, key):
-        return fd_loss(model, corridors, th, key, fields=fields)
-
-    if model.name in FORWARD_MODE:
-
-        def loss_twice(th, key):  # the value as jacfwd's aux: one rollout gives both
-            value = loss(th, key)
-            return value, value
-
-        forward = jax.jacfwd(loss_twice, has_aux=True)
-        loss_and_grad = jax.jit(lambda th, key: forward(th, key)[::-1])
-    else:
-        loss_and_grad = jax.jit(jax.value_and_grad(loss))
-    optimizer = optax.adam(learning_rate)
-    theta = theta_of(model, fields)
-    state = optimizer.init(theta)
-    key = jax.random.key(seed)
-    history, t0 = [], time.perf_counter()
-    best = (np.inf, theta)
-    for k in range(steps):
-        loss, grad = loss_and_grad(theta, key)
-        loss = float(loss)
-        if loss < best[0]:
-            best = (loss, theta)
-        history.append((k, loss, time.perf_counter() - t0))
-        if k % 10 == 0 or k == steps - 1:
-            log(f"  gradient step {k}: loss {loss:.3f} ({time.perf_counter() - t0:.0f} s)")
-        updates, state = optimizer.update(grad, state)
-        theta = optax.apply_updates(theta, updates)
-    return with_theta(model, best[1], fields), history
+    loss_and_grad = minimise.value_and_grad(
+        lambda th, key: fd_loss(model, corridors, th, key, fields=fields), forward=model.name in FORWARD_MODE
+    )
+    best, history = minimise.adam(loss_and_grad, theta_of(model, fields), steps, optax.adam(learning_rate),
+                                  (jax.random.key(seed),), log)  # fmt: skip
+    return with_theta(model, best, fields), history
 
 
 def fit_nelder_mead(
@@ -185,26 +160,10 @@ def fit_nelder_mead(
 ):
     """Nelder-Mead (scipy) on :func:`fd_loss` with the warm-up's gradient not stopped (no
     gradient is taken): ``(fitted model, history)`` as :func:`fit_gradient`."""
-    from scipy.optimize import minimize
-
     loss = jax.jit(lambda th, key: fd_loss(model, corridors, th, key, stop_warmup=False, fields=fields))
-    key = jax.random.key(seed)
-    history, t0 = [], time.perf_counter()
-
-    def f(theta):
-        value = float(loss(jnp.asarray(theta, jnp.float32), key))
-        history.append((len(history), value, time.perf_counter() - t0))
-        if len(history) % 20 == 0:
-            log(f"  Nelder-Mead evaluation {len(history)}: loss {min(h[1] for h in history):.3f}")
-        return value
-
-    x0 = np.asarray(theta_of(model, fields), float)
-    # The first simplex 30 % away in each parameter (scipy's default step is 5 % of a value, and
-    # 0.00025 of a zero: a log-parameter of 1 would start on a point).
-    simplex = np.vstack([x0, x0 + 0.3 * np.eye(len(x0))])
-    options = {"maxfev": max_evaluations, "xatol": 1e-3, "fatol": 1e-3, "initial_simplex": simplex}
-    result = minimize(f, x0, method="Nelder-Mead", options=options)
-    return with_theta(model, jnp.asarray(result.x, jnp.float32), fields), history
+    x, history = minimise.nelder_mead(loss, theta_of(model, fields), max_evaluations, 1e-3,
+                                      (jax.random.key(seed),), log)  # fmt: skip
+    return with_theta(model, jnp.asarray(x, jnp.float32), fields), history
 
 
 def fitted_values(model: hv.HumanModel) -> dict:

@@ -445,9 +445,11 @@ class PredictionWindows:
         return PredictionWindows(*(getattr(self, f.name)[index][:, :keep] for f in dataclasses.fields(self)))
 
 
+@functools.lru_cache(maxsize=16)
 def prediction_windows(scene: str, split: str = "test", reach_m: float = 1.0) -> PredictionWindows:
     """:class:`PredictionWindows` of ``scene``'s ``split`` (:func:`eth_ucy_windows`); walking
-    groups detected within ``reach_m`` (:func:`evaluation.pedestrian_measures.walking_groups`)."""
+    groups detected within ``reach_m`` (:func:`evaluation.pedestrian_measures.walking_groups`).
+    Cached: a validation scores every model three ways on each test split (read-only arrays)."""
     observed, future, complete, present = eth_ucy_windows(recorded.eth_ucy_split(scene, split))
     last, before = observed[:, :, -1], observed[:, :, -2]
     velocity = np.nan_to_num((last - before) / ETH_UCY_FRAME_S)
@@ -455,10 +457,13 @@ def prediction_windows(scene: str, split: str = "test", reach_m: float = 1.0) ->
     cv = last[:, :, None, :] + velocity[:, :, None, :] * horizon[None, None, :, None]
     start = np.nan_to_num(last, nan=FAR_M)
     goal = np.where(complete[..., None], np.nan_to_num(future[:, :, -1]), start + velocity * horizon[-1])
-    return PredictionWindows(start.astype(np.float32), velocity.astype(np.float32),
-                             np.linalg.norm(velocity, axis=-1).astype(np.float32), present, goal.astype(np.float32),
-                             measures.walking_groups(observed, reach_m), np.nan_to_num(future), complete,
-                             cv)  # fmt: skip
+    windows = PredictionWindows(start.astype(np.float32), velocity.astype(np.float32),
+                                np.linalg.norm(velocity, axis=-1).astype(np.float32), present,
+                                goal.astype(np.float32), measures.walking_groups(observed, reach_m),
+                                np.nan_to_num(future), complete, cv)  # fmt: skip
+    for f in dataclasses.fields(windows):
+        getattr(windows, f.name).setflags(write=False)  # shared by the cache
+    return windows
 
 
 def window_predictor(name: str, dt_s: float, aim: str = "velocity", groups: bool = False):

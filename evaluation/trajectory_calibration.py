@@ -22,7 +22,6 @@ named ``"<part>.<field>"`` of :class:`evaluation.human_validation.HumanModel` (`
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import jax
 import jax.numpy as jnp
@@ -31,6 +30,7 @@ import optax
 
 from socialnav.data import recorded
 from socialnav.evaluation import human_validation as hv
+from socialnav.evaluation import minimise
 from socialnav.evaluation import pedestrian_measures as measures
 
 _GROUP = ("group.gaze_per_rad", "group.attraction_mps2")
@@ -42,7 +42,7 @@ FITTED = {
     ),
     "orca": ("orca.time_horizon_s", *_GROUP),
 }  # fmt: skip
-# ORCA's fallback is a while_loop: no reverse-mode gradient (evaluation.human_calibration).
+# ORCA's fallback is a while_loop: its gradient is taken forward (evaluation.minimise.value_and_grad).
 FORWARD_MODE = ("orca",)
 
 
@@ -72,12 +72,10 @@ def ade_loss(model: hv.HumanModel, fields, theta, w: hv.PredictionWindows, key, 
     return jnp.sum(error * scored) / jnp.maximum(jnp.sum(scored), 1.0)
 
 
-def _loss_and_grad(model, fields, groups):
-    loss = lambda th, w, key: ade_loss(model, fields, th, w, key, groups)
-    if model.name in FORWARD_MODE:
-        forward = jax.jacfwd(lambda th, w, key: (loss(th, w, key),) * 2, has_aux=True)
-        return jax.jit(lambda th, w, key: forward(th, w, key)[::-1])
-    return jax.jit(jax.value_and_grad(loss))
+def theta_of(model: hv.HumanModel, fields) -> jnp.ndarray:
+    """The logarithms of ``model``'s ``fields``."""
+    return jnp.log(jnp.asarray([getattr(getattr(model, p.split(".")[0]), p.split(".")[1]) for p in fields],
+                               jnp.float32))  # fmt: skip
 
 
 def fit_gradient(model, fields, sample: hv.PredictionWindows, steps: int = 60, learning_rate: float = 0.2,
@@ -85,48 +83,25 @@ def fit_gradient(model, fields, sample: hv.PredictionWindows, steps: int = 60, l
     """Adam on :func:`ade_loss` over the fixed training windows ``sample`` (the loss Nelder-Mead
     minimises, so the two are compared on one function): ``(fitted model, history)``, the model at
     the lowest loss seen, ``history`` a list of ``(step, loss, seconds)``."""
-    loss_and_grad = _loss_and_grad(model, fields, groups)
+    loss_and_grad = minimise.value_and_grad(
+        lambda th, w: ade_loss(model, fields, th, w, jax.random.key(0), groups), forward=model.name in FORWARD_MODE
+    )
     # the rollout's gradient spikes where a neighbour enters or leaves a lane (the speed model's
     # min and lane test are piecewise): clipped to a global norm of 1 before Adam
     optimizer = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(learning_rate))
-    theta = jnp.log(jnp.asarray(list(values_of(model, fields).values()), jnp.float32))
-    state = optimizer.init(theta)
-    history, t0 = [], time.perf_counter()
-    best = (np.inf, theta)
-    for k in range(steps):
-        value, grad = loss_and_grad(theta, sample, jax.random.key(0))
-        value = float(value)
-        if value < best[0]:
-            best = (value, theta)
-        history.append((k, value, time.perf_counter() - t0))
-        if k % 10 == 0 or k == steps - 1:
-            log(f"  gradient step {k}: ADE {value:.3f} m ({time.perf_counter() - t0:.0f} s)")
-        updates, state = optimizer.update(grad, state)
-        theta = optax.apply_updates(theta, updates)
-    return with_values(model, fields, jnp.exp(best[1])), history
+    best, history = minimise.adam(loss_and_grad, theta_of(model, fields), steps, optimizer, (sample,), log,
+                                  "ADE {:.3f} m")  # fmt: skip
+    return with_values(model, fields, jnp.exp(best)), history
 
 
 def fit_nelder_mead(model, fields, sample: hv.PredictionWindows, max_evaluations: int = 60, groups: bool = True,
                     log=print):  # fmt: skip
     """Nelder-Mead (scipy) on :func:`ade_loss` over the fixed windows ``sample``: ``(fitted
     model, history)`` as :func:`fit_gradient`."""
-    from scipy.optimize import minimize
-
     loss = jax.jit(lambda th, w: ade_loss(model, fields, th, w, jax.random.key(0), groups))
-    x0 = np.log(np.asarray(list(values_of(model, fields).values()), float))
-    history, t0 = [], time.perf_counter()
-
-    def f(theta):
-        value = float(loss(jnp.asarray(theta, jnp.float32), sample))
-        history.append((len(history), value, time.perf_counter() - t0))
-        if len(history) % 20 == 0:
-            log(f"  Nelder-Mead evaluation {len(history)}: ADE {min(h[1] for h in history):.3f} m")
-        return value
-
-    simplex = np.vstack([x0, x0 + 0.3 * np.eye(len(x0))])
-    options = {"maxfev": max_evaluations, "xatol": 1e-3, "fatol": 1e-4, "initial_simplex": simplex}
-    result = minimize(f, x0, method="Nelder-Mead", options=options)
-    return with_values(model, fields, np.exp(result.x)), history
+    x, history = minimise.nelder_mead(loss, theta_of(model, fields), max_evaluations, 1e-4, (sample,), log,
+                                      "ADE {:.3f} m")  # fmt: skip
+    return with_values(model, fields, np.exp(x)), history
 
 
 def scored(model: hv.HumanModel | None, w: hv.PredictionWindows, groups: bool = True, seed: int = 0) -> tuple:

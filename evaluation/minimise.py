@@ -1,0 +1,69 @@
+"""The two minimisers the human-model calibrations share (:mod:`evaluation.human_calibration`,
+:mod:`evaluation.trajectory_calibration`): Adam (optax) through a loss's gradient, and
+Nelder-Mead (scipy) on its value as the check that the gradient finds what a search finds.
+
+Both take a loss of the log-parameters ``theta`` and return the best ``theta`` seen with a
+history of ``(step, loss, seconds)``, so the two curves compare.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+
+def value_and_grad(loss: Callable, forward: bool = False) -> Callable:
+    """``jit``-ed ``(theta, *args) -> (loss, d loss / d theta)``. ``forward``: by forward mode
+    (one tangent a parameter), for a loss whose rollout holds a loop of unknown length that
+    reverse mode cannot run through (ORCA's fallback); one rollout gives the value and tangents."""
+    if not forward:
+        return jax.jit(jax.value_and_grad(loss))
+    tangents = jax.jacfwd(lambda theta, *args: (loss(theta, *args),) * 2, has_aux=True)
+    return jax.jit(lambda theta, *args: tangents(theta, *args)[::-1])
+
+
+def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTransformation, args=(),
+         log=print, what: str = "loss {:.3f}"):  # fmt: skip
+    """``steps`` updates of ``optimizer`` from ``theta`` on ``loss_and_grad(theta, *args)``:
+    ``(best theta, history)``; ``what`` formats the loss in the progress lines."""
+    state = optimizer.init(theta)
+    history, t0 = [], time.perf_counter()
+    best = (np.inf, theta)
+    for k in range(steps):
+        value, grad = loss_and_grad(theta, *args)
+        value = float(value)
+        if value < best[0]:
+            best = (value, theta)
+        history.append((k, value, time.perf_counter() - t0))
+        if k % 10 == 0 or k == steps - 1:
+            log(f"  gradient step {k}: {what.format(value)} ({time.perf_counter() - t0:.0f} s)")
+        updates, state = optimizer.update(grad, state)
+        theta = optax.apply_updates(theta, updates)
+    return best[1], history
+
+
+def nelder_mead(loss: Callable, theta, max_evaluations: int, fatol: float, args=(), log=print,
+                what: str = "loss {:.3f}"):  # fmt: skip
+    """Nelder-Mead on ``loss(theta, *args)`` from ``theta``: ``(theta found, history)``. The first
+    simplex lies 30 % away in each log-parameter (scipy's default step is 5 % of a value, and
+    0.00025 of a zero: a log-parameter of 1 would start on a point)."""
+    from scipy.optimize import minimize
+
+    history, t0 = [], time.perf_counter()
+
+    def f(x):
+        value = float(loss(jnp.asarray(x, jnp.float32), *args))
+        history.append((len(history), value, time.perf_counter() - t0))
+        if len(history) % 20 == 0:
+            log(f"  Nelder-Mead evaluation {len(history)}: {what.format(min(h[1] for h in history))}")
+        return value
+
+    x0 = np.asarray(theta, float)
+    simplex = np.vstack([x0, x0 + 0.3 * np.eye(len(x0))])
+    options = {"maxfev": max_evaluations, "xatol": 1e-3, "fatol": fatol, "initial_simplex": simplex}
+    return minimize(f, x0, method="Nelder-Mead", options=options).x, history
