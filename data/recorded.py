@@ -81,10 +81,16 @@ def _table():
     return table
 
 
+def _frame_numbers_per_s(info: dict) -> float:
+    """How far a run's frame number advances in a second (its sample rate times its frame step)."""
+    return float(info["frames_per_s"]) * float(info.get("frame_step", 1))
+
+
 def trajectories(runs: Sequence[str] | str | None = None, dataset: str | None = None):
     """``run, person, frame, t_s, x_m, y_m`` rows of ``runs`` (one name or several; default:
     every run of ``dataset``, or all), sorted by run, person and frame. ``t_s`` is the frame over
-    the run's frame rate; a person is identified by ``(run, person)``."""
+    the run's frame numbers per second (the sample rate times ``frame_step``: ETH/UCY's frames
+    are those of its 25 fps videos, 10 apart); a person is identified by ``(run, person)``."""
     import pandas as pd
 
     names = [runs] if isinstance(runs, str) else list(runs) if runs is not None else run_names(dataset)
@@ -92,7 +98,9 @@ def trajectories(runs: Sequence[str] | str | None = None, dataset: str | None = 
         run_info(name)  # a KeyError naming an unknown run
     table = _table()
     rows = table[table["run"].isin(names)]
-    fps = rows["run"].map({name: float(run_info(name)["frames_per_s"]) for name in names})
+    # A frame number counts the source's own frames: ETH/UCY's are the 25 fps video's, of which
+    # every 10th is annotated (2.5 Hz, ``frame_step`` 10); the Jülich runs number every sample.
+    fps = rows["run"].map({name: _frame_numbers_per_s(run_info(name)) for name in names})
     return pd.DataFrame(
         {
             "run": rows["run"].to_numpy(),

@@ -35,6 +35,14 @@ def test_the_shipped_runs_read_back_in_metres_with_their_records():
     assert np.all(np.diff(first["frame"].to_numpy()) > 0)
     with pytest.raises(KeyError, match="no recorded run 'nowhere'"):
         recorded.trajectories("nowhere")
+    # ETH/UCY numbers the frames of its 25 fps videos, every 10th annotated: 0.4 s apart, and
+    # its people walk at walking speed in those seconds.
+    hotel = recorded.trajectories("biwi_hotel")
+    steps = hotel.groupby("person")["t_s"].diff().dropna()
+    assert np.allclose(steps.median(), 0.4)
+    d = hotel.groupby("person")[["x_m", "y_m", "t_s"]].diff().dropna()
+    speed = np.hypot(d["x_m"], d["y_m"]) / d["t_s"]
+    assert 0.8 < float(np.median(speed[speed > 0.2])) < 1.6
 
 
 def test_eth_ucy_splits_leave_the_test_scene_out_and_cut_the_rest_at_the_validation_frame():
