@@ -61,7 +61,11 @@ def add_parser(sub) -> None:
         "N seeded variants each, in closed loop; per-episode metrics, trajectories and a summary.",
     )
     p.add_argument(
-        "--scenes", type=comma_names, default=None, help="scene names or .json files (default: all built-in)"
+        "--scenes",
+        type=comma_names,
+        default=None,
+        help="scene names or .json files (default: the 14 seed scenes); 'recorded' names the recorded-crowd scenes "
+        "(data/scenes/recorded: ETH/UCY and Jülich crowds, replayed and reactive)",
     )
     p.add_argument(
         "--methods",
@@ -156,13 +160,26 @@ def _scene_method(text: str) -> tuple[str, str]:
     return scene, method
 
 
-def _scene_files(names, scenes_dir: pathlib.Path) -> list[pathlib.Path]:
+RECORDED = "recorded"  # --scenes recorded: every recorded-crowd scene
+
+
+def _scene_files(names, scenes_dir: pathlib.Path, recorded_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
+    """The files of ``names`` (None: every seed scene): a ``.json`` path as given, a name in
+    ``recorded_dir`` if it is there and in ``scenes_dir`` otherwise (a missing one is reported
+    there), :data:`RECORDED` every file of ``recorded_dir``."""
     if names is None:
         return sorted(scenes_dir.glob("*.json"))
     files = []
     for name in names:
         path = pathlib.Path(name)
-        files.append(path if path.suffix == ".json" else scenes_dir / f"{name}.json")
+        if path.suffix == ".json":
+            files.append(path)
+        elif recorded_dir is not None and name == RECORDED:
+            files.extend(sorted(recorded_dir.glob("*.json")))
+        elif recorded_dir is not None and (recorded_dir / f"{name}.json").is_file():
+            files.append(recorded_dir / f"{name}.json")
+        else:
+            files.append(scenes_dir / f"{name}.json")
     return files
 
 
@@ -286,7 +303,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     from socialnav.common import runfolder
     from socialnav.common.atomic import write_atomic, write_text_atomic
     from socialnav.common.memory import available_bytes
-    from socialnav.data import SCENES_DIR
+    from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.jaxsim.scenario.errors import ScenarioError
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners.baselines import BASELINES
@@ -352,7 +369,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     except arena_params.ParamsFileError as e:
         print(f"socialnav arena: --params {e}", file=sys.stderr)
         return 2
-    files = _scene_files(args.scenes, SCENES_DIR)
+    files = _scene_files(args.scenes, SCENES_DIR, RECORDED_SCENES_DIR)
     try:
         runfolder.check_inputs(shown_as, [*files, args.gscl_run, args.params, args.policy_run])
         specs = [load_scene(f) for f in files]
@@ -525,8 +542,17 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         "d_min_m",
         "time_s",
     ]
-    with pd.option_context("display.width", 200, "display.max_rows", 500):
+    recorded_specs = [spec for spec in specs if spec.recording is not None]
+    if recorded_specs:  # among recorded crowds: who caused the collisions, the near misses, the effect on people
+        shown[5:6] = ["collisions", "collisions_robot", "collisions_person", "near_misses", "people_deviation_m"]
+    with pd.option_context("display.width", 250, "display.max_rows", 500):
         print(summary[shown].round(2).to_string(index=False))
+    if any(spec.recording["playback"] == "replayed" for spec in recorded_specs):
+        print(
+            "replayed scenes: the people move as recorded and ignore the robot, so every collision there is the "
+            "robot's to avoid (collisions_person counts a recorded person walking into it) and the effect on people "
+            "is 0 by construction"
+        )
     for row in summary[summary.get("invalid_action_pct", pd.Series(0.0, summary.index)) > 0].itertuples():
         print(
             f"socialnav arena: warning: {row.method} gave a NaN or infinite action in {row.invalid_action_pct:.0f} % "

@@ -201,6 +201,8 @@ class Env:
       config: static settings.
       walking_groups: static, the scene has walkers who walk together (``walks_with``): the
         crowd step computes the group terms (:mod:`jaxsim.groups`) only then.
+      playback: static, how a recorded crowd is played (``replayed``, ``reactive``:
+        :mod:`jaxsim.scenes.people`); None for a scene without a recording.
     """
 
     world: SceneWorld
@@ -212,6 +214,7 @@ class Env:
     velocity: Any = None
     config: EnvConfig = struct.field(pytree_node=False, default=EnvConfig())
     walking_groups: bool = struct.field(pytree_node=False, default=False)
+    playback: str | None = struct.field(pytree_node=False, default=None)
 
     # ------------------------------------------------------------------ API
 
@@ -262,6 +265,7 @@ class Env:
             self.robot.radius_m,
             self.velocity,
             state.variant.walking_group if self.walking_groups else None,
+            self.playback,
         )
         robot = robot_lib.step_robot(self.robot, self.world, state.robot, v, w, cfg.dt_s)
         goal = state.variant.goal_xy
@@ -459,6 +463,7 @@ def make_env(
         velocity=velocity,
         config=config,
         walking_groups=any(p.get("walks_with") is not None for p in spec.people),
+        playback=None if spec.recording is None else spec.recording["playback"],
     )
 
 

@@ -7,6 +7,14 @@ avoid unless ``ignore_robot``. People waiting in a queue step straight up to the
 place after another (:func:`queue_place`).
 Standing people (and group members) stay where they stand, as the seeds' subjects did; a group
 member turns to face the group's centre at its ``turn_at_s``.
+
+A recorded crowd (a scene with a ``recording``, :mod:`jaxsim.scenes.recording`) is played back
+one of two ways (``playback``): ``replayed``, every person is where the recording has them at
+every step, robot or not (:func:`recorded_at`); ``reactive``, every person walks by the human
+model towards where they are recorded :data:`~jaxsim.scenes.recording.LOOKAHEAD_SAMPLES` samples
+(1 s) ahead, at the speed that gets them there in that time (at most
+:data:`REACTIVE_MAX_SPEED_MPS`), so they avoid the robot and each other as the model does and
+return to their path after; a person appears where and when the recording has them appear.
 """
 
 from __future__ import annotations
@@ -17,6 +25,7 @@ from flax import struct
 
 from socialnav.jaxsim import humans, orca, rng
 from socialnav.jaxsim.params import TIAGO_RADIUS_M, SimParams
+from socialnav.jaxsim.scenes.recording import LOOKAHEAD_SAMPLES, RECORD_DT_S
 from socialnav.jaxsim.scenes.spec import KIND
 from socialnav.jaxsim.scenes.variant import Variant
 from socialnav.jaxsim.scenes.world import SceneWorld
@@ -27,6 +36,10 @@ AT_PLACE_M = 0.05  # a queue member this close to its place stands there
 QUEUE_STEP_UP_DELAY_S = 0.5  # each place in line steps up this long after the one ahead of it
 MOVING_MPS = 0.1  # slower than this a person keeps their heading (a standing body does not turn to its drift)
 HUMAN_MODELS = humans.HUMAN_MODELS
+PLAYBACKS = (None, "replayed", "reactive")
+# A reactive person pushed off their recorded path hurries back at most this fast (a brisk walk;
+# Weidmann's free speed is 1.34 m/s).
+REACTIVE_MAX_SPEED_MPS = 2.0
 
 
 @struct.dataclass
@@ -45,10 +58,12 @@ class PeopleState:
 
 def init_people(v: Variant) -> PeopleState:
     present = v.valid & ((v.kind != KIND["stream"]) | (v.start_s <= 0.0))
+    present = present & ((v.kind != KIND["recorded"]) | v.track_present[:, 0])
     n = v.valid.shape[-1]
+    recorded_velocity = recorded_at(v, jnp.float32(0.0))[1]  # a recorded crowd is already walking
     return PeopleState(
         xy=jnp.asarray(v.xy0),
-        velocity=jnp.zeros((n, 2), jnp.float32),
+        velocity=jnp.where((v.kind == KIND["recorded"])[:, None], recorded_velocity, jnp.zeros((n, 2), jnp.float32)),
         heading=jnp.asarray(v.heading0),
         present=present,
         leg=jnp.zeros(n, jnp.int32),
@@ -91,6 +106,53 @@ def targets(v: Variant, s: PeopleState, time_s):
     return target, speed, mobile
 
 
+def _sample(time_s):
+    """The recording's sample index at ``time_s`` (a float step times ``dt_s`` lands a hair below
+    a whole sample: rounded up from 1e-4 below)."""
+    return jnp.floor(time_s / RECORD_DT_S + 1e-4).astype(jnp.int32)
+
+
+def recorded_at(v: Variant, time_s):
+    """A recorded crowd at ``time_s``: ``(xy (P, 2), velocity (P, 2), present (P,) bool)``,
+    positions interpolated linearly between samples, the velocity the sample's forward difference
+    (the backward one at a person's last sample; 0 for a person seen once)."""
+    f = v.track_xy.shape[-2]
+    k = jnp.clip(_sample(time_s), 0, f - 1)
+    ahead, behind = jnp.minimum(k + 1, f - 1), jnp.maximum(k - 1, 0)
+    here_xy, ahead_xy, behind_xy = v.track_xy[:, k], v.track_xy[:, ahead], v.track_xy[:, behind]
+    fraction = jnp.clip(time_s / RECORD_DT_S - k, 0.0, 1.0)
+    fraction = jnp.where(fraction < 1e-3, 0.0, fraction)  # on a sample (the step's rounding): exactly it
+    present = v.track_present[:, k] & v.valid
+    forward = present & v.track_present[:, ahead] & (ahead > k)
+    backward = present & v.track_present[:, behind] & (behind < k)
+    velocity = jnp.where(
+        forward[:, None],
+        (ahead_xy - here_xy) / RECORD_DT_S,
+        jnp.where(backward[:, None], (here_xy - behind_xy) / RECORD_DT_S, 0.0),
+    )
+    xy = here_xy + jnp.where(forward, fraction, 0.0)[:, None] * (ahead_xy - here_xy)
+    return xy, velocity, present
+
+
+def recorded_ahead(v: Variant, time_s, samples: int = LOOKAHEAD_SAMPLES):
+    """(P, 2) where each recorded person is ``samples`` samples after ``time_s``, or at their last
+    sample if it comes sooner (the slot's next person is at least that many empty samples later:
+    :data:`~jaxsim.scenes.recording.SLOT_GAP_SAMPLES`)."""
+    f = v.track_xy.shape[-2]
+    k = jnp.clip(_sample(time_s), 0, f - 1)
+    index = jnp.minimum(k + jnp.arange(samples + 1), f - 1)  # (S + 1,)
+    present = v.track_present[:, index]  # (P, S + 1)
+    last = jnp.max(jnp.where(present, jnp.arange(samples + 1), 0), axis=1)
+    return v.track_xy[jnp.arange(v.track_xy.shape[0]), index[last]]
+
+
+def _replayed(v: Variant, s: PeopleState, time_s) -> PeopleState:
+    xy, velocity, present = recorded_at(v, time_s)
+    moving = jnp.linalg.norm(velocity, axis=-1) > MOVING_MPS
+    heading = jnp.where(moving, jnp.arctan2(velocity[:, 1], velocity[:, 0]), s.heading)
+    return s.replace(xy=xy, velocity=velocity, heading=heading, present=present)
+
+
 def step_people(
     params: SimParams,
     world: SceneWorld,
@@ -104,6 +166,7 @@ def step_people(
     robot_radius_m: float = TIAGO_RADIUS_M,
     velocity_params=None,
     group_id=None,
+    playback: str | None = None,
 ) -> PeopleState:
     """One step of ``params.dt_s``: behaviours, then the human model on the mobile people.
 
@@ -117,10 +180,19 @@ def step_people(
         robot a disc of ``robot_radius_m`` for all but the social force.
       group_id: (P,) int32 the walking groups (``Variant.walking_group``; None: nobody walks
         with anyone, and the group terms are not computed).
+      playback: static, a recorded crowd's (:data:`PLAYBACKS`; None: the scene has no
+        recording). Replayed, nobody is stepped by the model.
     """
     humans.check_model(model)
+    if playback not in PLAYBACKS:
+        raise ValueError(f"playback must be one of {PLAYBACKS}, got {playback!r}")
     dt = params.dt_s
     time_s = step.astype(jnp.float32) * dt
+    if playback == "replayed":
+        return _replayed(v, s, time_s + dt)
+    if playback == "reactive":
+        return _reactive(params, world, v, s, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
+                         velocity_params, group_id)  # fmt: skip
     target, speed, mobile = targets(v, s, time_s)
     u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
     robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
@@ -161,6 +233,33 @@ def step_people(
     enters = v.valid & stream & (time_s + dt >= v.start_s) & ~done
     present = jnp.where(stream, enters, s.present & ~leaves)
     return PeopleState(xy=xy, velocity=new_v, heading=heading, present=present, leg=leg, done=done)
+
+
+def _reactive(
+    params, world, v: Variant, s: PeopleState, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
+    velocity_params, group_id,
+) -> PeopleState:  # fmt: skip
+    """One step of a reactive recorded crowd (see the module's docstring)."""
+    dt = params.dt_s
+    time_s = step.astype(jnp.float32) * dt
+    lookahead_s = LOOKAHEAD_SAMPLES * RECORD_DT_S
+    aim = recorded_ahead(v, time_s) - s.xy
+    speed = jnp.minimum(jnp.linalg.norm(aim, axis=-1) / lookahead_s, REACTIVE_MAX_SPEED_MPS)
+    u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
+    robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
+    bundle = humans.human_params(model, params, orca_params, velocity_params)
+    x, y, vx, vy = humans.step_humans(
+        model, bundle, world.wall_field, s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1], aim[:, 0],
+        aim[:, 1], speed, speed, s.present, s.present, robot, robot_radius_m, u[0], u[1],
+        ignores_robot=v.ignore_robot, group_id=group_id,
+    )  # fmt: skip
+    entry_xy, entry_velocity, present = recorded_at(v, time_s + dt)
+    entering = present & ~s.present  # appears where the recording has them appear
+    xy = jnp.where(entering[:, None], entry_xy, jnp.stack([x, y], axis=-1))
+    velocity = jnp.where(entering[:, None], entry_velocity, jnp.stack([vx, vy], axis=-1))
+    moving = jnp.linalg.norm(velocity, axis=-1) > MOVING_MPS
+    heading = jnp.where(moving, jnp.arctan2(velocity[:, 1], velocity[:, 0]), s.heading)
+    return s.replace(xy=xy, velocity=velocity, heading=heading, present=present)
 
 
 def stack_people(states: list[PeopleState]) -> PeopleState:

@@ -27,7 +27,9 @@ Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[
      "rule": {"type": "min_distance", "distance_m": 1.2},
      "held_out_rule": {...},                                    # optional, see below
      "stop_and_go_m": 0.9,                                      # optional, see below
-     "people_in_global_plan": true}                             # optional, see below
+     "people_in_global_plan": true,                             # optional, see below
+     "recording": {"run": "biwi_hotel", "playback": "replayed" | "reactive",
+                   "window_within_s": [0, 480]}}                # optional, see below
 
 Behaviours: a **standing** person stays put; a **walker** goes from ``from`` to ``to`` at
 ``speed_mps`` from ``start_s`` on (back and forth if asked), by the social force; a **group** is
@@ -79,6 +81,17 @@ the global costmap is the walls, their inflation and the social layer, as seed 0
 it ("the static and the inflation layer"); the people then shape the global path only through
 the social layer, and the local planner, the safety stop and the stop-and-go keep the robot off
 them. A queue needs it: the way to the head is through the line, behind the people in it.
+
+``recording`` (optional): the scene's people are a recorded crowd, a window of ``timeout_s``
+seconds of the shipped run ``run`` (:func:`socialnav.data.recorded.run_names`: the ETH/UCY
+scenes, the Jülich corridors; positions in the run's own frame) per variant, drawn from the
+run's ``window_within_s``; a held-out variant's window lies wholly outside it, in the rest of the
+run (:mod:`jaxsim.scenes.recording`). Such a scene has no scripted ``people`` (``[]``). Two
+``playback`` modes: ``replayed``, everyone moves exactly as recorded and ignores the robot (as
+SocNavBench replays ETH/UCY: a collision is then the robot's by construction); ``reactive``, each
+person heads for where they are recorded 1 s ahead, by the run's human model, so they yield to
+the robot and go back to their recorded path after. The robot's start is redrawn (with the
+window) until nobody recorded stands within 0.775 m of it when the episode begins.
 """
 
 from __future__ import annotations
@@ -95,7 +108,8 @@ from socialnav.common.names import SAFE_NAME_RULE, is_safe_name, name_problem
 from socialnav.jaxsim.scenario.errors import ScenarioError
 
 BEHAVIOURS = ("standing", "walk", "group", "queue", "stream")
-KIND = {"standing": 0, "walk": 1, "queue": 2, "stream": 3}  # a group's members are standing
+KIND = {"standing": 0, "walk": 1, "queue": 2, "stream": 3, "recorded": 4}  # a group's members are standing
+PLAYBACKS = ("replayed", "reactive")
 RULES = ("min_distance", "avoid_group", "avoid_circle", "keep_right", "visit", "pass_behind", "queue", "all")
 MAX_GROUP = 6
 MAX_OBJECT_VERTICES = 8
@@ -119,6 +133,7 @@ class SceneSpec:
     held_out_rule: dict | None = None  # the mirrored layout's rule, in this frame (None: ``rule``)
     stop_and_go_m: float | None = None  # every robot stops for a person ahead closer than this
     people_in_global_plan: bool = True  # the seen people are obstacles for the global planner
+    recording: dict | None = None  # the recorded people (:func:`_recording`); None: scripted people only
 
 
 # ------------------------------------------------------------------ typed reads
@@ -490,6 +505,44 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
                 )
 
 
+MAX_PEOPLE_SLOTS = 64
+
+
+def _recording(r: _Reader, rec: Any, timeout_s: float, people: list) -> dict:
+    """The ``recording`` block: the run (known, readable), the playback mode, the windows' range
+    (room for an evaluated window inside it and a held-out one outside), the slots it needs."""
+    from socialnav.data.recorded import RecordedDataError
+    from socialnav.jaxsim.scenes import recording as recording_lib
+
+    run = r.get(rec, "recording", "run")
+    if not isinstance(run, str):
+        r.fail("recording.run", f"expected a run's name, got {run!r}")
+    try:
+        data = recording_lib.load_recording(run)
+    except KeyError as e:
+        r.fail("recording.run", e.args[0])
+    except RecordedDataError as e:
+        r.fail("recording.run", str(e))
+    slots = recording_lib.slots_needed(data)
+    if slots > MAX_PEOPLE_SLOTS:
+        r.fail("recording.run", f"{run} has up to {slots} people at once: {MAX_PEOPLE_SLOTS} allowed")
+    playback = r.get(rec, "recording", "playback")
+    if playback not in PLAYBACKS:
+        r.fail("recording.playback", f"expected one of {', '.join(PLAYBACKS)}, got {playback!r}")
+    within = r.number(r.get(rec, "recording", "window_within_s"), "recording.window_within_s", 0.0, data.duration_s)
+    if not recording_lib.window_starts_s(within, timeout_s, data.duration_s, held_out=False):
+        r.fail("recording.window_within_s", f"{list(within)} is shorter than one window (timeout_s {timeout_s:g} s)")
+    if not recording_lib.window_starts_s(within, timeout_s, data.duration_s, held_out=True):
+        r.fail(
+            "recording.window_within_s",
+            f"{list(within)} leaves no held-out window of timeout_s {timeout_s:g} s outside it "
+            f"(the run lasts {data.duration_s:.1f} s)",
+        )
+    if people:
+        r.fail("people", "a scene with a recording has no scripted people (expected [])")
+    return {"run": run, "playback": playback, "within_s": within, "slots": slots, "mirror_y_m": None}
+
+
 def load_scene(file: str | pathlib.Path) -> SceneSpec:
     """Read and validate a scene file (one :class:`ScenarioError` naming file and field on error)."""
     file = pathlib.Path(file)
@@ -551,8 +604,8 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         person, n = _person(r, p, f"people[{i}]", bounds, walls_m)
         people.append(person)
         slots += n
-    if slots > 64:
-        r.fail("people", f"{slots} people at most: 64 allowed")
+    if slots > MAX_PEOPLE_SLOTS:
+        r.fail("people", f"{slots} people at most: {MAX_PEOPLE_SLOTS} allowed")
     for i, person in enumerate(people):
         mate = person.get("walks_with")
         if mate is None:
@@ -568,6 +621,8 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         stop_and_go = r.number(stop_and_go, "stop_and_go_m", 0.3, 5.0)[0]
     people_in_global_plan = r.flag(obj, "", "people_in_global_plan", True)
     _check_placements(r, robot, people)
+    recording_obj = r.get(obj, "", "recording", None)
+    recording = None if recording_obj is None else _recording(r, recording_obj, timeout, people)
     return SceneSpec(
         file=file,
         name=name,
@@ -579,10 +634,11 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         timeout_s=timeout,
         people=tuple(people),
         rule=rule,
-        n_people_slots=max(slots, 1),
+        n_people_slots=max(slots, 1) if recording is None else recording["slots"],
         held_out_rule=held_out_rule,
         stop_and_go_m=stop_and_go,
         people_in_global_plan=people_in_global_plan,
+        recording=recording,
     )
 
 
@@ -640,6 +696,9 @@ def mirror(spec: SceneSpec) -> SceneSpec:
         "goal": point(spec.robot["goal"]),
         "yaw_deg": angle(spec.robot["yaw_deg"]),
     }
+    recording = spec.recording
+    if recording is not None:  # the recorded people mirrored too (twice: as recorded)
+        recording = {**recording, "mirror_y_m": c if recording["mirror_y_m"] is None else None}
     return dataclasses.replace(
         spec,
         name=spec.name,
@@ -649,4 +708,5 @@ def mirror(spec: SceneSpec) -> SceneSpec:
         people=tuple(people),
         rule=rule(spec.rule if spec.held_out_rule is None else spec.held_out_rule),
         held_out_rule=None if spec.held_out_rule is None else rule(spec.rule),
+        recording=recording,
     )

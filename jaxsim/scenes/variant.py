@@ -15,7 +15,14 @@ import zlib
 import numpy as np
 from flax import struct
 
+from socialnav.jaxsim.params import PERSON_RADIUS_M, TIAGO_RADIUS_M
+from socialnav.jaxsim.scenes import recording as recording_lib
 from socialnav.jaxsim.scenes.spec import KIND, SceneSpec
+
+# A recorded scene's robot starts at least this far from everyone recorded there at time 0
+# (centre to centre: the robot's and a person's radii and a quarter metre): its first step is
+# not a contact it could not avoid.
+RECORDED_START_CLEAR_M = TIAGO_RADIUS_M + PERSON_RADIUS_M + 0.25
 
 
 @struct.dataclass
@@ -35,6 +42,10 @@ class Variant:
       group: (P,) int32 standing group index (-1: none).
       walking_group: (P,) int32 walkers who walk together share one (-1: alone;
         :mod:`jaxsim.groups`).
+      track_xy: (P, F, 2) a recorded scene's people sampled every
+        :data:`jaxsim.scenes.recording.RECORD_DT_S` from the episode's start; track_present:
+        (P, F) bool (a scene without a recording: F = 1, nobody); window_start_s: () where the
+        window begins in its run (0 without one).
       robot_xy: (2,) start; robot_yaw: (); goal_xy: (2,).
       seed_u32: () uint32 seed of the people's random force.
     """
@@ -58,6 +69,9 @@ class Variant:
     exit_xy: np.ndarray
     group: np.ndarray
     walking_group: np.ndarray
+    track_xy: np.ndarray
+    track_present: np.ndarray
+    window_start_s: np.ndarray
     robot_xy: np.ndarray
     robot_yaw: np.ndarray
     goal_xy: np.ndarray
@@ -133,9 +147,10 @@ def sample_variant(
     variant the benchmark evaluates on, whatever the seeds."""
     if held_out and training:
         raise ValueError("a variant is drawn held out or for training, not both")
-    entropy = (
-        (int(seed), int(k), zlib.crc32(spec.name.encode())) + ((1,) if held_out else ()) + ((2,) if training else ())
-    )
+    # A recorded scene draws by its run's name: its replayed and reactive scenes play the same
+    # windows from the same starts (a paired comparison of the two playbacks).
+    stream = spec.name if spec.recording is None else f"recording:{spec.recording['run']}"
+    entropy = (int(seed), int(k), zlib.crc32(stream.encode())) + ((1,) if held_out else ()) + ((2,) if training else ())
     rng = np.random.default_rng(entropy)
     draw = _Drawer(rng, held_out)
     n = max(spec.n_people_slots, int(n_slots))
@@ -238,12 +253,48 @@ def sample_variant(
             slot += person["count"]
     a["walking_group"] = walking_groups(spec, slot_of, n)
     robot = spec.robot
+    if spec.recording is None:
+        track_xy, track_present = recording_lib.empty_tracks(n)
+        start_s, robot_xy = 0.0, draw.point(robot["start"])
+    else:
+        track_xy, track_present, start_s, robot_xy = _recorded_window(spec, rng, draw, n, held_out)
+        a["kind"][:] = KIND["recorded"]
+        a["valid"][:] = track_present.any(axis=1)
+        a["xy0"][:] = track_xy[:, 0]
+        step = track_xy[:, 1] - track_xy[:, 0]
+        a["heading0"][:] = np.arctan2(step[:, 1], step[:, 0])
     return Variant(
         **a,
-        robot_xy=draw.point(robot["start"]),
+        track_xy=track_xy,
+        track_present=track_present,
+        window_start_s=np.float32(start_s),
+        robot_xy=robot_xy,
         robot_yaw=np.float32(math.radians(draw.number(robot["yaw_deg"]))),
         goal_xy=draw.point(robot["goal"]),
         seed_u32=np.uint32(rng.integers(0, 2**32, dtype=np.uint64)),
+    )
+
+
+def _recorded_window(spec: SceneSpec, rng: np.random.Generator, draw: _Drawer, n: int, held_out: bool):
+    """A recorded scene's window and robot start: ``(track_xy, track_present, start_s, robot_xy)``.
+
+    The window is drawn from the file's ``window_within_s`` (held out: outside it), the start from
+    ``robot.start``; both are drawn again until nobody recorded is within
+    :data:`RECORDED_START_CLEAR_M` of the start at time 0 (``ValueError`` after 200 tries)."""
+    rec = spec.recording
+    data = recording_lib.load_recording(rec["run"])
+    intervals = recording_lib.window_starts_s(rec["within_s"], spec.timeout_s, data.duration_s, held_out)
+    n_samples = recording_lib.samples_per_episode(spec.timeout_s)
+    for _ in range(200):
+        first = recording_lib.draw_window_start(rng, intervals)
+        xy, present = recording_lib.window(data, first, n_samples, n, rec["mirror_y_m"])
+        robot_xy = draw.point(spec.robot["start"])
+        gap = np.linalg.norm(xy[present[:, 0], 0] - robot_xy, axis=-1)
+        if np.all(gap >= RECORDED_START_CLEAR_M):
+            return xy, present, first * recording_lib.RECORD_DT_S, robot_xy
+    raise ValueError(
+        f"{spec.file}: robot.start: no start clear of the recorded people ({RECORDED_START_CLEAR_M:.3f} m) "
+        "in 200 draws of a window and a start"
     )
 
 
