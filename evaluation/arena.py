@@ -423,6 +423,56 @@ def _closed(predict: Callable) -> Callable:
     return lambda weights, maps: predict(maps)
 
 
+# Each compiled episode program holds 400-950 of the process's memory maps (XLA's CPU backend
+# maps its code sections one by one; measured on hotel_replayed: NavFn 535, SNAPE's social band
+# 937), and Linux gives a process at most vm.max_map_count of them (65,530 by default): past it
+# LLVM aborts the process ("Unable to allocate section memory"). The 14 recorded-crowd scenes,
+# of 10 different shapes, compiled about 130 programs and hit it. Before a scene the arena drops
+# every compiled program once the process holds more than this share of its limit
+# (:func:`release_programs_if_crowded`); a dropped program compiles again to the same code.
+MAP_SHARE_BEFORE_RELEASE = 0.5
+
+
+def memory_maps() -> tuple[int, int] | None:
+    """``(maps held, the limit)`` of this process on Linux; None elsewhere."""
+    try:
+        with open("/proc/self/maps", "rb") as maps:
+            held = sum(1 for _ in maps)
+        with open("/proc/sys/vm/max_map_count") as limit:
+            return held, int(limit.read())
+    except (OSError, ValueError):
+        return None
+
+
+def program_key(setup: SceneSetup) -> tuple:
+    """What picks a scene's compiled programs: its grid, its env's structure and array shapes,
+    its people slots and episode length (a scene and its held-out mirror, or a recording's replayed
+    and reactive scenes, share one)."""
+    leaves, structure = jax.tree_util.tree_flatten(setup.env)
+    return (setup.grid, setup.n_slots, setup.n_periods, structure, tuple(np.shape(leaf) for leaf in leaves))
+
+
+_previous_key: list = [None]  # the program key of the scene run last (release_programs_if_crowded)
+
+
+def release_programs_if_crowded(share: float = MAP_SHARE_BEFORE_RELEASE, caches=(), key=None) -> bool:
+    """Drop every compiled program (JAX's caches, the arena's actor and program caches and the
+    ``functools.lru_cache`` caches in ``caches``) when the process holds more than ``share`` of its
+    memory-map limit (:func:`memory_maps`); True if it did. A ``key`` (:func:`program_key`) equal
+    to the previous call's keeps them: the next scene runs the same programs. The programs compile
+    again when next called, to the same code (tested bit for bit)."""
+    previous, _previous_key[0] = _previous_key[0], key
+    if key is not None and key == previous:
+        return False
+    maps = memory_maps()
+    if maps is None or maps[0] <= share * maps[1]:
+        return False
+    jax.clear_caches()
+    for cache in (_episode_program, method_actor, baseline_actor, _closed, actors.with_stop_and_go, *caches):
+        cache.cache_clear()
+    return True
+
+
 @functools.lru_cache(maxsize=64)
 def baseline_actor(name: str, grid: costmap.GridSpec, robot_radius_m: float, config: ArenaConfig = ArenaConfig()):
     """A reactive baseline (:data:`planners.baselines.BASELINES`) as an actor (cached as

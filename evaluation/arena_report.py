@@ -209,6 +209,7 @@ def run_scene(
     if held_out:
         spec = mirror(spec)
     setup = arena.setup_scene(spec, config)
+    arena.release_programs_if_crowded(caches=(_metrics_program,), key=arena.program_key(setup))
     crowd = arena.crowd_params()
     variants = jax.tree_util.tree_map(
         jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out, setup.n_slots)

@@ -492,7 +492,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     runfolder.record(out, JOB, ["run.json", "shards/"])
 
     shards = []
-    for (spec, held_out), name in zip(runs, names, strict=True):
+    # A scene and its held-out mirror one after the other: they share their compiled programs,
+    # which the arena may drop between scenes (evaluation.arena.release_programs_if_crowded).
+    position = {id(spec): k for k, spec in enumerate(specs)}
+    order = sorted(range(len(runs)), key=lambda i: (position[id(runs[i][0])], runs[i][1]))
+    for (spec, held_out), name in ((runs[i], names[i]) for i in order):
         if _finished(out, name, digests[name]):
             continue  # the whole scene is done, with these settings
         for first in range(0, args.variants, args.shard_variants):

@@ -181,3 +181,25 @@ def test_a_bad_recording_gives_one_error_naming_file_and_field(tmp_path, mutate,
     with pytest.raises(ScenarioError, match=words) as e:
         load_scene(path)
     assert e.value.field == field and str(path) in str(e.value)
+
+
+def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
+    import pandas as pd
+
+    from socialnav.evaluation import arena_report
+
+    if arena.memory_maps() is None:
+        pytest.skip("no /proc/self/maps here: the arena never drops its programs")
+    spec = load_scene(HOTEL_REACTIVE)
+    config = arena.ArenaConfig(human_model="orca")
+    before, _ = arena_report.run_scene(spec, ["navfn", "orca"], 3, config=config)
+    held = arena.memory_maps()[0]
+    assert arena.release_programs_if_crowded(share=0.0)
+    assert arena.memory_maps()[0] < held  # the programs' code is unmapped
+    assert not arena.release_programs_if_crowded()  # far below half the limit now
+    key = arena.program_key(arena.setup_scene(spec, config))
+    assert key == arena.program_key(arena.setup_scene(load_scene(HOTEL), config))  # both playbacks: one program
+    assert arena.release_programs_if_crowded(share=0.0, key=key)
+    assert not arena.release_programs_if_crowded(share=0.0, key=key)  # the same scene's programs are kept
+    after, _ = arena_report.run_scene(spec, ["navfn", "orca"], 3, config=config)
+    pd.testing.assert_frame_equal(before, after)

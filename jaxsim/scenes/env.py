@@ -201,8 +201,9 @@ class Env:
       config: static settings.
       walking_groups: static, the scene has walkers who walk together (``walks_with``): the
         crowd step computes the group terms (:mod:`jaxsim.groups`) only then.
-      playback: static, how a recorded crowd is played (``replayed``, ``reactive``:
-        :mod:`jaxsim.scenes.people`); None for a scene without a recording.
+      recorded: static, the scene's people are a recorded crowd (:mod:`jaxsim.scenes.people`;
+        replayed or reactive as each variant says, so both playbacks of a recording share one
+        compiled program).
     """
 
     world: SceneWorld
@@ -214,7 +215,7 @@ class Env:
     velocity: Any = None
     config: EnvConfig = struct.field(pytree_node=False, default=EnvConfig())
     walking_groups: bool = struct.field(pytree_node=False, default=False)
-    playback: str | None = struct.field(pytree_node=False, default=None)
+    recorded: bool = struct.field(pytree_node=False, default=False)
 
     # ------------------------------------------------------------------ API
 
@@ -265,7 +266,7 @@ class Env:
             self.robot.radius_m,
             self.velocity,
             state.variant.walking_group if self.walking_groups else None,
-            self.playback,
+            self.recorded,
         )
         robot = robot_lib.step_robot(self.robot, self.world, state.robot, v, w, cfg.dt_s)
         goal = state.variant.goal_xy
@@ -463,7 +464,7 @@ def make_env(
         velocity=velocity,
         config=config,
         walking_groups=any(p.get("walks_with") is not None for p in spec.people),
-        playback=None if spec.recording is None else spec.recording["playback"],
+        recorded=spec.recording is not None,
     )
 
 

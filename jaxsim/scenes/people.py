@@ -9,7 +9,7 @@ Standing people (and group members) stay where they stand, as the seeds' subject
 member turns to face the group's centre at its ``turn_at_s``.
 
 A recorded crowd (a scene with a ``recording``, :mod:`jaxsim.scenes.recording`) is played back
-one of two ways (``playback``): ``replayed``, every person is where the recording has them at
+one of two ways (the variant's ``reactive``): ``replayed``, every person is where the recording has them at
 every step, robot or not (:func:`recorded_at`); ``reactive``, every person walks by the human
 model towards where they are recorded :data:`~jaxsim.scenes.recording.LOOKAHEAD_SAMPLES` samples
 (1 s) ahead, at the speed that gets them there in that time (at most
@@ -36,7 +36,6 @@ AT_PLACE_M = 0.05  # a queue member this close to its place stands there
 QUEUE_STEP_UP_DELAY_S = 0.5  # each place in line steps up this long after the one ahead of it
 MOVING_MPS = 0.1  # slower than this a person keeps their heading (a standing body does not turn to its drift)
 HUMAN_MODELS = humans.HUMAN_MODELS
-PLAYBACKS = (None, "replayed", "reactive")
 # A reactive person pushed off their recorded path hurries back at most this fast (a brisk walk;
 # Weidmann's free speed is 1.34 m/s).
 REACTIVE_MAX_SPEED_MPS = 2.0
@@ -166,7 +165,7 @@ def step_people(
     robot_radius_m: float = TIAGO_RADIUS_M,
     velocity_params=None,
     group_id=None,
-    playback: str | None = None,
+    recorded: bool = False,
 ) -> PeopleState:
     """One step of ``params.dt_s``: behaviours, then the human model on the mobile people.
 
@@ -180,19 +179,18 @@ def step_people(
         robot a disc of ``robot_radius_m`` for all but the social force.
       group_id: (P,) int32 the walking groups (``Variant.walking_group``; None: nobody walks
         with anyone, and the group terms are not computed).
-      playback: static, a recorded crowd's (:data:`PLAYBACKS`; None: the scene has no
-        recording). Replayed, nobody is stepped by the model.
+      recorded: static, the people are a recorded crowd (every one of them), played back as
+        ``v.reactive`` says: both ways are computed and one kept, so a recording's replayed and
+        reactive scenes share one compiled program.
     """
     humans.check_model(model)
-    if playback not in PLAYBACKS:
-        raise ValueError(f"playback must be one of {PLAYBACKS}, got {playback!r}")
     dt = params.dt_s
     time_s = step.astype(jnp.float32) * dt
-    if playback == "replayed":
-        return _replayed(v, s, time_s + dt)
-    if playback == "reactive":
-        return _reactive(params, world, v, s, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
-                         velocity_params, group_id)  # fmt: skip
+    if recorded:
+        replayed = _replayed(v, s, time_s + dt)
+        reactive = _reactive(params, world, v, s, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
+                             velocity_params, group_id)  # fmt: skip
+        return jax.tree_util.tree_map(lambda a, b: jnp.where(v.reactive, a, b), reactive, replayed)
     target, speed, mobile = targets(v, s, time_s)
     u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
     robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])

@@ -45,7 +45,8 @@ class Variant:
       track_xy: (P, F, 2) a recorded scene's people sampled every
         :data:`jaxsim.scenes.recording.RECORD_DT_S` from the episode's start; track_present:
         (P, F) bool (a scene without a recording: F = 1, nobody); window_start_s: () where the
-        window begins in its run (0 without one).
+        window begins in its run (0 without one); reactive: () bool, the recorded crowd is played
+        reactively (False: replayed, or no recording).
       robot_xy: (2,) start; robot_yaw: (); goal_xy: (2,).
       seed_u32: () uint32 seed of the people's random force.
     """
@@ -72,6 +73,7 @@ class Variant:
     track_xy: np.ndarray
     track_present: np.ndarray
     window_start_s: np.ndarray
+    reactive: np.ndarray
     robot_xy: np.ndarray
     robot_yaw: np.ndarray
     goal_xy: np.ndarray
@@ -268,6 +270,7 @@ def sample_variant(
         track_xy=track_xy,
         track_present=track_present,
         window_start_s=np.float32(start_s),
+        reactive=np.bool_(spec.recording is not None and spec.recording["playback"] == "reactive"),
         robot_xy=robot_xy,
         robot_yaw=np.float32(math.radians(draw.number(robot["yaw_deg"]))),
         goal_xy=draw.point(robot["goal"]),
