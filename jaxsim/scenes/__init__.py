@@ -2,7 +2,8 @@
 
 The file format and its validation (:mod:`~socialnav.jaxsim.scenes.spec`), variants
 (:mod:`~socialnav.jaxsim.scenes.variant`), the walls (:mod:`~socialnav.jaxsim.scenes.world`),
-people (:mod:`~socialnav.jaxsim.scenes.people`), perception
+people (:mod:`~socialnav.jaxsim.scenes.people`; recorded crowds,
+:mod:`~socialnav.jaxsim.scenes.recording`), perception
 (:mod:`~socialnav.jaxsim.scenes.perception`), the robot base (:mod:`~socialnav.jaxsim.scenes.robot`),
 the environment (:mod:`~socialnav.jaxsim.scenes.env`) and the rollout of an actor in it
 (:mod:`~socialnav.jaxsim.scenes.actor`). The Gymnasium adapters
