@@ -426,8 +426,8 @@ def _closed(predict: Callable) -> Callable:
 # Each compiled episode program holds 400-950 of the process's memory maps (XLA's CPU backend
 # maps its code sections one by one; measured on hotel_replayed: NavFn 535, SNAPE's social band
 # 937), and Linux gives a process at most vm.max_map_count of them (65,530 by default): past it
-# LLVM aborts the process ("Unable to allocate section memory"). The 14 recorded-crowd scenes,
-# of 10 different shapes, compiled about 130 programs and hit it. Before a scene the arena drops
+# LLVM aborts the process ("Unable to allocate section memory"). The recorded-crowd table (14
+# scenes of 13 programs each, as it then was) hit it after 10 minutes. Before a scene the arena drops
 # every compiled program once the process holds more than this share of its limit
 # (:func:`release_programs_if_crowded`); a dropped program compiles again to the same code.
 MAP_SHARE_BEFORE_RELEASE = 0.5

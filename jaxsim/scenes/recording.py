@@ -4,9 +4,9 @@ its people dealt to a fixed number of slots.
 A scene with a ``recording`` (:mod:`jaxsim.scenes.spec`) replays a run of
 :mod:`socialnav.data.recorded` (the ETH/UCY scenes, the Jülich corridors). The run is resampled
 once at :data:`RECORD_DT_S` by linear interpolation between its own samples (ETH/UCY's 2.5 Hz,
-the Jülich runs' 16 and 25 fps); a variant is a window of ``timeout_s`` seconds of it, drawn from
-``window_within_s`` (held out: from the rest of the run, so a held-out window shares no recorded
-second with an evaluated one, :func:`draw_window_start`).
+``biwi_eth``'s 1.5 Hz, the Jülich runs' 16 and 25 fps); a variant is a window of ``timeout_s``
+seconds of it, drawn from ``window_within_s`` (held out: from the rest of the run, so a held-out
+window shares no recorded second with an evaluated one, :func:`draw_window_start`).
 
 People come and go; the arrays an episode runs on have a fixed number of slots. A slot holds one
 person after another, each from their first to their last sample, with at least
