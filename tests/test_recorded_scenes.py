@@ -183,6 +183,7 @@ def test_a_bad_recording_gives_one_error_naming_file_and_field(tmp_path, mutate,
     assert e.value.field == field and str(path) in str(e.value)
 
 
+@pytest.mark.slow  # two arena runs of two methods, compiled twice: 35 s
 def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     import pandas as pd
 
