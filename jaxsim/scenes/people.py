@@ -145,8 +145,9 @@ def recorded_ahead(v: Variant, time_s, samples: int = LOOKAHEAD_SAMPLES):
     return v.track_xy[jnp.arange(v.track_xy.shape[0]), index[last]]
 
 
-def _replayed(v: Variant, s: PeopleState, time_s) -> PeopleState:
-    xy, velocity, present = recorded_at(v, time_s)
+def _moved(s: PeopleState, xy, velocity, present) -> PeopleState:
+    """``s`` at new positions and velocities: a moving person faces where they go, a standing one
+    keeps their heading."""
     moving = jnp.linalg.norm(velocity, axis=-1) > MOVING_MPS
     heading = jnp.where(moving, jnp.arctan2(velocity[:, 1], velocity[:, 0]), s.heading)
     return s.replace(xy=xy, velocity=velocity, heading=heading, present=present)
@@ -187,9 +188,10 @@ def step_people(
     dt = params.dt_s
     time_s = step.astype(jnp.float32) * dt
     if recorded:
-        replayed = _replayed(v, s, time_s + dt)
+        after = recorded_at(v, time_s + dt)  # where the recording has everyone at the step's end
+        replayed = _moved(s, *after)
         reactive = _reactive(params, world, v, s, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
-                             velocity_params, group_id)  # fmt: skip
+                             velocity_params, group_id, after)  # fmt: skip
         return jax.tree_util.tree_map(lambda a, b: jnp.where(v.reactive, a, b), reactive, replayed)
     target, speed, mobile = targets(v, s, time_s)
     u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
@@ -235,11 +237,11 @@ def step_people(
 
 def _reactive(
     params, world, v: Variant, s: PeopleState, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
-    velocity_params, group_id,
+    velocity_params, group_id, after,
 ) -> PeopleState:  # fmt: skip
-    """One step of a reactive recorded crowd (see the module's docstring)."""
-    dt = params.dt_s
-    time_s = step.astype(jnp.float32) * dt
+    """One step of a reactive recorded crowd (see the module's docstring); ``after``: the
+    recording at the step's end (:func:`recorded_at`)."""
+    time_s = step.astype(jnp.float32) * params.dt_s
     lookahead_s = LOOKAHEAD_SAMPLES * RECORD_DT_S
     aim = recorded_ahead(v, time_s) - s.xy
     speed = jnp.minimum(jnp.linalg.norm(aim, axis=-1) / lookahead_s, REACTIVE_MAX_SPEED_MPS)
@@ -251,13 +253,11 @@ def _reactive(
         aim[:, 1], speed, speed, s.present, s.present, robot, robot_radius_m, u[0], u[1],
         ignores_robot=v.ignore_robot, group_id=group_id,
     )  # fmt: skip
-    entry_xy, entry_velocity, present = recorded_at(v, time_s + dt)
+    entry_xy, entry_velocity, present = after
     entering = present & ~s.present  # appears where the recording has them appear
     xy = jnp.where(entering[:, None], entry_xy, jnp.stack([x, y], axis=-1))
     velocity = jnp.where(entering[:, None], entry_velocity, jnp.stack([vx, vy], axis=-1))
-    moving = jnp.linalg.norm(velocity, axis=-1) > MOVING_MPS
-    heading = jnp.where(moving, jnp.arctan2(velocity[:, 1], velocity[:, 0]), s.heading)
-    return s.replace(xy=xy, velocity=velocity, heading=heading, present=present)
+    return _moved(s, xy, velocity, present)
 
 
 def stack_people(states: list[PeopleState]) -> PeopleState:
