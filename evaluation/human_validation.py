@@ -48,11 +48,11 @@ from socialnav.jaxsim.world import Grid
 
 HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation")
 FAR_M = 1.0e4  # where the robot is: no robot in these protocols
-PREDICT_OBSERVED, PREDICT_FRAMES = 8, 12  # the ETH/UCY protocol: 3.2 s observed, 4.8 s predicted
-# The protocol's sample interval. biwi_eth's samples are 0.67 s apart (data/pedestrians/README.md)
-# but its test windows are stepped at 0.4 s too, as the literature's benchmark counts samples:
-# the models there meet people moving 1.67 times faster than they did (not corrected yet).
-ETH_UCY_FRAME_S = 0.4
+# The ETH/UCY protocol counts samples: 8 observed, 12 predicted (3.2 s and 4.8 s at 2.5 Hz). A
+# window's sample interval is its run's (PredictionWindows.frame_s): biwi_eth's samples are 0.67 s
+# apart (data/pedestrians/README.md), so its windows span 5.3 s and 8 s, and a model is stepped
+# for that long; constant velocity, which carries the last displacement on, is the same either way.
+PREDICT_OBSERVED, PREDICT_FRAMES = 8, 12
 COUNTERFLOW_RUN = "bi_corr_400_b_03"
 UO_RUNS = tuple(f"uo-{a}" for a in ("050-180-180", "060-180-180", "070-180-180", "100-180-180", "145-180-180",
                                       "180-180-070", "180-180-095", "180-180-120", "180-180-180"))  # fmt: skip
@@ -369,10 +369,12 @@ def eth_ucy_windows(rows: pd.DataFrame):
     present for 20 consecutive frames, ``(observed (W, P, 8, 2), future (W, P, 12, 2),
     complete (W, P) bool, present (W, P) bool)``: the P people present at the last observed frame
     and the one before it (the others in the crowd), of whom ``complete`` are present in all 20
-    frames (the ones scored). Positions of frames a person is absent are NaN."""
-    observed, future, complete, present = [], [], [], []
+    frames (the ones scored), and ``frame_s`` (W,) the seconds between two samples (the run's).
+    Positions of frames a person is absent are NaN."""
+    observed, future, complete, present, frame_s = [], [], [], [], []
     for _, g in rows.groupby("run", sort=False):
         step = int(np.median(np.diff(np.unique(g["frame"].to_numpy()))))
+        seconds = float(np.median(np.diff(np.unique(g["t_s"].to_numpy()))))
         index = ((g["frame"] - g["frame"].min()) // step).to_numpy()
         people = {p: k for k, p in enumerate(np.unique(g["person"]))}
         grid = np.full((index.max() + 1, len(people), 2), np.nan)
@@ -389,14 +391,27 @@ def eth_ucy_windows(rows: pd.DataFrame):
             future.append(window[PREDICT_OBSERVED:, here].transpose(1, 0, 2))
             complete.append(scored[here])
             present.append(np.ones(here.sum(), bool))
+            frame_s.append(seconds)
     p = max(len(c) for c in complete)
     pad = lambda a, fill: np.stack([np.concatenate([x, np.full((p - len(x), *x.shape[1:]), fill)]) for x in a])
-    return pad(observed, np.nan), pad(future, np.nan), pad(complete, False), pad(present, False)
+    return pad(observed, np.nan), pad(future, np.nan), pad(complete, False), pad(present, False), np.array(frame_s)
 
 
-def _predict(name: str, params, field, xy, v, aim, speed, present, key, steps_per_frame: int, group_id=None):
+def _sample_steps(frame_s: float, dt_s: float) -> tuple[int, np.ndarray, np.ndarray]:
+    """How to read 12 samples ``frame_s`` apart off a path stepped every ``dt_s``: ``(steps, lo,
+    frac)``, the sample ``k`` at ``path[lo[k]] * (1 - frac[k]) + path[lo[k] + 1] * frac[k]``
+    (``path[i]`` is at ``(i + 1) * dt_s``). Where ``frame_s`` is a multiple of ``dt_s`` every
+    ``frac`` is 0 and the samples are steps of the path."""
+    at = np.arange(1, PREDICT_FRAMES + 1) * frame_s / dt_s - 1.0
+    lo = np.floor(at + 1e-6).astype(int)
+    frac = np.where(at - lo < 1e-6, 0.0, at - lo)
+    return int(lo[-1] + (frac[-1] > 0) + 1), lo, frac.astype(np.float32)
+
+
+def _predict(name: str, params, field, xy, v, aim, speed, present, key, frame_s: float, dt_s: float, group_id=None):
     """(P, 12, 2) positions of one window's people stepped by the model from ``xy``, ``v``
-    (``aim(xy) -> (P, 2)``: where each is heading; ``group_id`` (P,) who walks together)."""
+    (``aim(xy) -> (P, 2)``: where each is heading; ``group_id`` (P,) who walks together), read
+    every ``frame_s`` seconds off the path stepped every ``dt_s`` (:func:`_sample_steps`)."""
 
     def step(carry, k):
         xy, v = carry
@@ -406,9 +421,12 @@ def _predict(name: str, params, field, xy, v, aim, speed, present, key, steps_pe
                                   speed, present, present & (speed > 0.0), u[0], u[1], group_id)  # fmt: skip
         return (jnp.stack([x, y], -1), jnp.stack([vx, vy], -1)), jnp.stack([x, y], -1)
 
-    keys = jax.random.split(key, PREDICT_FRAMES * steps_per_frame)
-    _, path = jax.lax.scan(step, (xy, v), keys)
-    return path[steps_per_frame - 1 :: steps_per_frame].transpose(1, 0, 2)
+    steps, lo, frac = _sample_steps(frame_s, dt_s)
+    _, path = jax.lax.scan(step, (xy, v), jax.random.split(key, steps))
+    if not frac.any():
+        return path[lo].transpose(1, 0, 2)
+    w = frac[:, None, None]
+    return (path[lo] * (1.0 - w) + path[np.minimum(lo + 1, steps - 1)] * w).transpose(1, 0, 2)
 
 
 def _open_field() -> Grid:
@@ -427,7 +445,8 @@ class PredictionWindows:
     final position of a scored person (else the constant-velocity one), ``group_id`` who walked
     together over the observed frames, ``future`` (W, P, 12, 2) the truth (0 where a person is
     absent: only the ``complete`` count), ``complete`` who is scored, ``constant_velocity``
-    (W, P, 12, 2) the baseline's prediction."""
+    (W, P, 12, 2) the baseline's prediction, ``frame_s`` (W floats) the seconds between two
+    samples."""
 
     start: np.ndarray
     velocity: np.ndarray
@@ -438,6 +457,9 @@ class PredictionWindows:
     future: np.ndarray
     complete: np.ndarray
     constant_velocity: np.ndarray
+    # static (a tuple of floats): a calibration passes the windows through jit, and the steps a
+    # window's horizon takes are part of the program
+    frame_s: tuple = struct.field(pytree_node=False, default=())
 
     def take(self, index, bucket: int = 16) -> PredictionWindows:
         """The windows at ``index`` (an index array or slice), their people cut to the most any
@@ -445,7 +467,8 @@ class PredictionWindows:
         the rounding bounds the shapes a jit compiles for)."""
         people = int(np.asarray(self.present)[index].sum(axis=1).max(initial=1))
         keep = min(self.start.shape[1], -(-people // bucket) * bucket)
-        return PredictionWindows(*(getattr(self, f.name)[index][:, :keep] for f in dataclasses.fields(self)))
+        arrays = (getattr(self, f.name)[index][:, :keep] for f in dataclasses.fields(self) if f.name != "frame_s")
+        return PredictionWindows(*arrays, tuple(np.asarray(self.frame_s)[index].tolist()))
 
 
 @functools.lru_cache(maxsize=16)
@@ -453,19 +476,20 @@ def prediction_windows(scene: str, split: str = "test", reach_m: float = 1.0) ->
     """:class:`PredictionWindows` of ``scene``'s ``split`` (:func:`eth_ucy_windows`); walking
     groups detected within ``reach_m`` (:func:`evaluation.pedestrian_measures.walking_groups`).
     Cached: a validation scores every model three ways on each test split (read-only arrays)."""
-    observed, future, complete, present = eth_ucy_windows(recorded.eth_ucy_split(scene, split))
+    observed, future, complete, present, frame_s = eth_ucy_windows(recorded.eth_ucy_split(scene, split))
     last, before = observed[:, :, -1], observed[:, :, -2]
-    velocity = np.nan_to_num((last - before) / ETH_UCY_FRAME_S)
-    horizon = ETH_UCY_FRAME_S * np.arange(1, PREDICT_FRAMES + 1)
-    cv = last[:, :, None, :] + velocity[:, :, None, :] * horizon[None, None, :, None]
+    velocity = np.nan_to_num((last - before) / frame_s[:, None, None])
+    horizon = frame_s[:, None] * np.arange(1, PREDICT_FRAMES + 1)  # (W, 12) s
+    cv = last[:, :, None, :] + velocity[:, :, None, :] * horizon[:, None, :, None]
     start = np.nan_to_num(last, nan=FAR_M)
-    goal = np.where(complete[..., None], np.nan_to_num(future[:, :, -1]), start + velocity * horizon[-1])
+    goal = np.where(complete[..., None], np.nan_to_num(future[:, :, -1]), start + velocity * horizon[:, -1, None, None])
     windows = PredictionWindows(start.astype(np.float32), velocity.astype(np.float32),
                                 np.linalg.norm(velocity, axis=-1).astype(np.float32), present,
                                 goal.astype(np.float32), measures.walking_groups(observed, reach_m),
-                                np.nan_to_num(future), complete, cv)  # fmt: skip
+                                np.nan_to_num(future), complete, cv, tuple(frame_s.tolist()))  # fmt: skip
     for f in dataclasses.fields(windows):
-        getattr(windows, f.name).setflags(write=False)  # shared by the cache
+        if f.name != "frame_s":
+            getattr(windows, f.name).setflags(write=False)  # shared by the cache
     return windows
 
 
@@ -473,24 +497,36 @@ def window_predictor(name: str, dt_s: float, aim: str = "velocity", groups: bool
     """``predict(params, windows, key) -> (W, P, 12, 2)``: human model ``name`` stepped
     from each window's last observed frame (``aim``: along the last velocity, or at the true
     ``"destination"``), walking groups felt if ``groups``; pure and jit-able, so a loss over it
-    differentiates with respect to ``params`` (:class:`~jaxsim.humans.HumanParams`)."""
-    steps = int(round(ETH_UCY_FRAME_S / dt_s))
+    differentiates with respect to ``params`` (:class:`~jaxsim.humans.HumanParams`). Windows
+    of one sample interval are stepped together, each interval for its own 12 samples (a batch of
+    ETH/UCY's 0.4 s windows does not pay for biwi_eth's 8 s horizon)."""
     field = _open_field()
 
-    def one(params, xy, v, s, here, g, gid, key):
+    def one(params, xy, v, s, here, g, gid, key, frame_s):
         along = lambda p: v * 10.0 / jnp.maximum(jnp.linalg.norm(v, axis=-1, keepdims=True), 1e-6)
         towards = lambda p: g - p
-        return _predict(name, params, field, xy, v, along if aim == "velocity" else towards, s, here, key, steps,
-                        gid if groups else None)  # fmt: skip
+        return _predict(name, params, field, xy, v, along if aim == "velocity" else towards, s, here, key, frame_s,
+                        dt_s, gid if groups else None)  # fmt: skip
 
-    @jax.jit
-    def batched(params, start, velocity, speed, present, goal, group_id, key):
+    @functools.partial(jax.jit, static_argnames="frame_s")
+    def batched(params, start, velocity, speed, present, goal, group_id, key, frame_s):
         keys = jax.random.split(key, start.shape[0])
-        return jax.vmap(one, in_axes=(None, 0, 0, 0, 0, 0, 0, 0))(params, start, velocity, speed, present, goal,
-                                                                   group_id, keys)  # fmt: skip
+        return jax.vmap(functools.partial(one, frame_s=frame_s), in_axes=(None, 0, 0, 0, 0, 0, 0, 0))(
+            params, start, velocity, speed, present, goal, group_id, keys)  # fmt: skip
 
     def predict(params, w: PredictionWindows, key):
-        return batched(params, w.start, w.velocity, w.speed, w.present, w.goal, w.group_id, key)
+        intervals = np.unique(np.asarray(w.frame_s))
+        if len(intervals) == 1:
+            return batched(params, w.start, w.velocity, w.speed, w.present, w.goal, w.group_id, key,
+                           frame_s=float(intervals[0]))  # fmt: skip
+        parts, order = [], []
+        for k, interval in enumerate(intervals):
+            index = np.flatnonzero(np.asarray(w.frame_s) == interval)
+            part = w.take(index, bucket=w.start.shape[1])
+            parts.append(batched(params, part.start, part.velocity, part.speed, part.present, part.goal,
+                                 part.group_id, jax.random.fold_in(key, k), frame_s=float(interval)))  # fmt: skip
+            order.append(index)
+        return jnp.concatenate(parts)[np.argsort(np.concatenate(order))]
 
     return predict
 

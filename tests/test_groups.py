@@ -162,7 +162,7 @@ def _synthetic_windows(truth: hv.HumanModel, n_windows: int = 32) -> hv.Predicti
     group = np.tile(np.array([0, 1, 0, 1], np.int32), (n_windows, 1))
     w = hv.PredictionWindows(start, velocity, speed, np.ones((n_windows, 4), bool), start, group,
                              np.zeros((n_windows, 4, 12, 2), np.float32), np.ones((n_windows, 4), bool),
-                             np.zeros((n_windows, 4, 12, 2), np.float32))  # fmt: skip
+                             np.zeros((n_windows, 4, 12, 2), np.float32), (0.4,) * n_windows)  # fmt: skip
     future = hv.window_predictor(truth.name, truth.dt_s, "velocity", True)(truth.params, w, jax.random.key(1))
     return w.replace(future=np.asarray(future))
 

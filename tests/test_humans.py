@@ -192,6 +192,31 @@ def test_constant_velocity_on_eth_ucy_matches_the_published_figure():
     assert all(r["samples"] > 300 for r in results)
 
 
+def test_prediction_windows_keep_each_runs_sample_interval_and_a_lone_walker_is_read_at_those_times():
+    """biwi_eth is sampled every 2/3 s, the other runs every 0.4 s: a window's velocity and its
+    horizon are its own run's, and the model's path is read at its own samples (interpolated
+    between steps where the interval is not a multiple of the model's step)."""
+    assert np.allclose(hv.prediction_windows("eth").frame_s, 2 / 3)  # a tuple: static under jit
+    assert np.allclose(hv.prediction_windows("hotel").frame_s, 0.4)
+    steps, lo, frac = hv._sample_steps(0.4, 0.1)
+    assert steps == 48 and list(lo[:3]) == [3, 7, 11] and not frac.any()
+    steps, lo, frac = hv._sample_steps(2 / 3, 0.1)
+    assert steps == 80 and lo[0] == 5 and frac[0] == pytest.approx(2 / 3, abs=1e-5) and lo[-1] == 79
+    # one free walker per window, at their desired speed, far from anyone: constant velocity,
+    # each window at its own interval, in the order given
+    n = 4
+    frame_s = np.array([0.4, 2 / 3, 0.4, 2 / 3], np.float32)
+    start = np.zeros((n, 1, 2), np.float32)
+    velocity = np.tile(np.array([[[1.2, 0.0]]], np.float32), (n, 1, 1))
+    truth = start[:, :, None] + velocity[:, :, None] * (frame_s[:, None] * np.arange(1, 13))[:, None, :, None]
+    one = np.ones((n, 1), bool)
+    w = hv.PredictionWindows(start, velocity, np.full((n, 1), 1.2, np.float32), one, start,
+                             np.full((n, 1), -1, np.int32), truth, one, truth, tuple(frame_s.tolist()))  # fmt: skip
+    model = hv.HumanModel("collision_free_speed")
+    predicted = np.asarray(hv.window_predictor(model.name, model.dt_s)(model.params, w, jax.random.key(0)))
+    np.testing.assert_allclose(predicted, truth, atol=0.02)
+
+
 @pytest.mark.slow
 def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_report(tmp_path, capsys):
     points = hv.data_fundamental_diagram(("uo-070-180-180", "uo-180-180-070"))
