@@ -1,8 +1,10 @@
 """People's tracks as demonstrations for learning costs through the planner (:mod:`planners.irl`).
 
-Two sources: a user's files (below), and the arena's own people (:func:`simulated_tracks`: the
-crowd model walking a scene's variants with no robot among them, the tracks and the scene's
-occupancy in the same form as a file's).
+Three sources: a user's files (below), the real pedestrians shipped with the package
+(:func:`recorded_tracks`: an ETH/UCY file or a Jülich run, with the walls where the data has
+them), and the arena's own people (:func:`simulated_tracks`: the crowd model walking a scene's
+variants with no robot among them). Each gives the tracks and the occupancy in the same form
+as a file's.
 
 **The file formats** (a user's own data):
 
@@ -320,6 +322,51 @@ def concatenate(parts):
         "ids": [i for p in parts for i in p[2]["ids"]],
     }
     return maps, demos, report
+
+
+RECORDED_MARGIN_M = 8.0  # free space around a recording's people: a track's 16 m window stays on the map
+
+
+def recorded_tracks(run: str, resolution_m: float = 0.1):
+    """The tracks of a shipped recorded run (:mod:`data.recorded`) and its walls.
+
+    ETH/UCY ships no map of its walls, so its map is free everywhere (the people's extent and
+    :data:`RECORDED_MARGIN_M` around it): what a cost learnt from it can show is how people keep
+    clear of each other, not of the buildings they walked past. A Jülich run's map is its
+    corridor: occupied outside the walkable polygon and inside its obstacles.
+
+    Returns:
+      ``(tracks, occupancy, resolution_m, origin_xy_m)`` as :func:`read_tracks` and
+      :func:`read_ros_map` give them, ids ``"<run>:<person>"``, frames the run's own numbers.
+
+    Raises:
+      KeyError: no shipped run of that name (naming the ones shipped).
+    """
+    from matplotlib.path import Path as Polygon
+
+    from socialnav.data import recorded
+
+    info = recorded.run_info(run)
+    rows = recorded.trajectories(run)
+    out = {
+        f"{run}:{person}": g[["frame", "x_m", "y_m"]].to_numpy(np.float64)
+        for person, g in rows.groupby("person", sort=True)
+    }
+    xy = rows[["x_m", "y_m"]].to_numpy()
+    lo, hi = xy.min(0) - RECORDED_MARGIN_M, xy.max(0) + RECORDED_MARGIN_M
+    shape = np.ceil((hi - lo) / resolution_m).astype(int)[::-1]  # (rows along y, columns along x)
+    occupancy = np.zeros(shape, np.float32)
+    geometry = info.get("geometry")
+    if geometry is not None:
+        row, col = np.mgrid[: shape[0], : shape[1]]
+        centres = np.column_stack(
+            [lo[0] + (col.ravel() + 0.5) * resolution_m, lo[1] + (row.ravel() + 0.5) * resolution_m]
+        )
+        blocked = ~Polygon(np.asarray(geometry["walkable_polygon_m"])).contains_points(centres)
+        for obstacle in geometry.get("obstacles_m", []):
+            blocked |= Polygon(np.asarray(obstacle)).contains_points(centres)
+        occupancy = blocked.reshape(shape).astype(np.float32)
+    return out, occupancy, resolution_m, (float(lo[0]), float(lo[1]))
 
 
 ROBOT_AWAY_M = 1.0e4  # where the robot is while people walk alone: too far for any force

@@ -291,7 +291,8 @@ def add_parser(top) -> None:
         "fit-tracks",
         help="a cost model learnt from people's tracks by maximum-entropy IRL through the soft planner",
         description="Read tracks (CSV or Parquet: frame, id, x, y in metres) and the walls (a ROS map_server "
-        "YAML and its image), or walk the people of arena scenes with no robot (--scene), make each track a "
+        "YAML and its image), or the real pedestrians shipped with the package (--recording), or walk the people "
+        "of arena scenes with no robot (--scene), make each track a "
         "demonstration on the GSCL network's 16 m window from where the "
         "person starts (planners.tracks), and fit the U-Net to them (planners.irl_fit). Writes an exported model "
         "(config.json, weights.msgpack, model.json with the report of tracks used and left out) that --gscl-run "
@@ -305,6 +306,13 @@ def add_parser(top) -> None:
         default=None,
         help="instead of --tracks and --map: the people of this arena scene (a built-in name or a JSON file; "
         "repeatable), walked by the arena's crowd model with no robot",
+    )
+    ft.add_argument(
+        "--recording",
+        action="append",
+        default=None,
+        help="instead of --tracks and --map: a shipped recorded run (an ETH/UCY file such as students001, or a "
+        "Jülich run; repeatable), its people's tracks and its walls where the data has them (ETH/UCY has none)",
     )
     ft.add_argument(
         "--variants", type=positive_int, default=50, help="--scene: variants of each scene walked (default 50)"
@@ -667,12 +675,19 @@ def _fit_tracks(args) -> int:
         config = TrainConfig(
             objective="paths", temperature=args.temperature, batch_size=args.batch_size, seed=args.seed
         )
-        if (args.scene is None) == (args.tracks is None or args.map is None) or (
-            args.scene and (args.tracks or args.map)
-        ):
-            raise ValueError("give --tracks and --map, or --scene")
+        given = [bool(args.scene), bool(args.recording), bool(args.tracks or args.map)]
+        if sum(given) != 1 or (given[2] and (args.tracks is None or args.map is None)):
+            raise ValueError("give --tracks and --map, or --recording, or --scene")
         if args.scene:
             specs = _scene_specs(args.scene)
+        elif args.recording:
+            from socialnav.data import recorded
+
+            unknown = [r for r in args.recording if r not in recorded.run_names()]
+            if unknown:
+                raise ValueError(
+                    f"--recording: no shipped run {unknown[0]!r} (shipped: {', '.join(recorded.run_names())})"
+                )
         else:
             sources = [(tracks.read_tracks(args.tracks), *tracks.read_ros_map(args.map))]
             tracks.check_on_map(*sources[0], args.tracks, args.map, args.min_on_map)
@@ -684,6 +699,8 @@ def _fit_tracks(args) -> int:
         raise SystemExit(f"socialnav gscl fit-tracks: {err}") from None
     if args.scene:
         sources = [tracks.simulated_tracks(spec, args.seed, args.variants) for spec in specs]
+    elif args.recording:
+        sources = [tracks.recorded_tracks(run) for run in args.recording]
     maps, demos, report = tracks.concatenate([tracks.track_demonstrations(*source) for source in sources])
     left = ", ".join(f"{n} {why}" for why, n in report["left_out"].items()) or "none"
     print(f"{report['used']} of {report['tracks']} tracks made demonstrations (left out: {left})", flush=True)
@@ -696,6 +713,8 @@ def _fit_tracks(args) -> int:
         + (
             " ".join(f"--scene {n}" for n in args.scene) + f" --variants {args.variants}"
             if args.scene
+            else " ".join(f"--recording {n}" for n in args.recording)
+            if args.recording
             else f"--tracks {args.tracks.name} --map {args.map.name}"
         )
         + f" --steps {args.steps} --seed {args.seed}",

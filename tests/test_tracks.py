@@ -226,6 +226,32 @@ def test_fit_tracks_refuses_an_unknown_scene_or_missing_sources_before_writing(t
     out = tmp_path / "m"
     with pytest.raises(SystemExit, match="--scene: no scene .*no_such_scene.json \\(built-in: casn_crossing"):
         cli.main(["gscl", "fit-tracks", "--scene", "no_such_scene", "--out", str(out)])
-    with pytest.raises(SystemExit, match="give --tracks and --map, or --scene"):
+    with pytest.raises(SystemExit, match="give --tracks and --map, or --recording, or --scene"):
         cli.main(["gscl", "fit-tracks", "--tracks", "t.csv", "--out", str(out)])
+    with pytest.raises(SystemExit, match="give --tracks and --map, or --recording, or --scene"):
+        cli.main(["gscl", "fit-tracks", "--recording", "students001", "--scene", "casn_crossing", "--out", str(out)])
+    with pytest.raises(SystemExit, match="--recording: no shipped run 'students009' \\(shipped: .*students001"):
+        cli.main(["gscl", "fit-tracks", "--recording", "students009", "--out", str(out)])
     assert not out.exists()
+
+
+def test_recorded_tracks_are_the_runs_people_on_a_map_with_the_data_walls():
+    """An ETH/UCY file: every person a track, in time order, on a map free everywhere and wide
+    enough for each track's 16 m window; a Jülich corridor: its walls occupied, its floor free."""
+    from socialnav.data import recorded
+
+    people, occupancy, resolution, origin = tracks.recorded_tracks("crowds_zara03")
+    rows = recorded.trajectories("crowds_zara03")
+    assert len(people) == rows["person"].nunique() and not occupancy.any()
+    assert sum(len(t) for t in people.values()) == len(rows)
+    assert all(np.all(np.diff(t[:, 0]) > 0) for t in people.values())
+    extent = np.array(origin) + np.array(occupancy.shape[::-1]) * resolution
+    assert np.all(rows[["x_m", "y_m"]].min().to_numpy() - origin >= grid.HALF_M - 1e-6)
+    assert np.all(extent - rows[["x_m", "y_m"]].max().to_numpy() >= grid.HALF_M - 1e-6)
+    maps, _, report = tracks.track_demonstrations(people, occupancy, resolution, origin)
+    assert report["used"] == report["tracks"] and not (maps == grid.WALL).any()
+
+    people, occupancy, resolution, origin = tracks.recorded_tracks("bi_corr_400_b_03")
+    width = recorded.run_info("bi_corr_400_b_03")["geometry"]["corridor_width_m"]
+    cell = lambda x, y: occupancy[int((y - origin[1]) / resolution), int((x - origin[0]) / resolution)]
+    assert cell(0.0, width / 2) == 0 and cell(0.0, -0.5) == 1 and cell(0.0, width + 0.5) == 1
