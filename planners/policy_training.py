@@ -42,6 +42,7 @@ from flax import struct
 
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes import rule_monitor
+from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
 from socialnav.models import policy_net
@@ -68,6 +69,9 @@ class PPOConfig:
       seed: the run's seed (network initialisation, pools, every key).
       checkpoint_every: updates between checkpoints.
       policy: the network's and features' shape (:class:`planners.policy.PolicyConfig`).
+      human_model: how the people the policy trains among move
+        (:data:`jaxsim.scenes.people.HUMAN_MODELS`; the arena's default, the social force, unless
+        asked). A run that predates the setting trained among the social force.
     """
 
     scenes: tuple[str, ...] = ()
@@ -88,8 +92,11 @@ class PPOConfig:
     seed: int = 0
     checkpoint_every: int = 10
     policy: policy_lib.PolicyConfig = policy_lib.PolicyConfig()
+    human_model: str = "social_force"
 
     def __post_init__(self):
+        if self.human_model not in HUMAN_MODELS:
+            raise ValueError(f"human_model must be one of {', '.join(HUMAN_MODELS)}, got {self.human_model!r}")
         for name in ("envs_per_scene", "rollout_steps", "updates", "epochs", "minibatches", "pool_per_scene"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -116,10 +123,10 @@ def reward_params() -> env_lib.RewardParams:
     return env_lib.RewardParams(progress_weight=0.0)
 
 
-def scene_env(spec: SceneSpec) -> env_lib.Env:
+def scene_env(spec: SceneSpec, human_model: str = "social_force") -> env_lib.Env:
     """The environment of ``spec`` as the arena runs it (0.1 s steps, the timeout in whole
-    seconds), with :func:`reward_params`."""
-    config = env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, 0.1, 10))
+    seconds), its people moved by ``human_model``, with :func:`reward_params`."""
+    config = env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, 0.1, 10), human_model=human_model)
     return env_lib.make_env(spec, config, reward=reward_params())
 
 
@@ -179,7 +186,7 @@ class Batch:
 
 def make_scene(spec: SceneSpec, config: PPOConfig, gscl_weights=None) -> Scene:
     """``spec``'s env and its training pool with the pool's guidance fields (host side)."""
-    env = scene_env(spec)
+    env = scene_env(spec, config.human_model)
     pool = sample_variants(
         spec, config.seed, config.pool_per_scene, n_slots=padded_slots(spec.n_people_slots), training=True
     )

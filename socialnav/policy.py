@@ -19,6 +19,7 @@ import time
 from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.common import runfolder
 from socialnav.common.runfolder import RunFolderError
+from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.locking import locks_folder
 from socialnav.planners.policy_social import SOCIAL_LAYERS
 
@@ -40,7 +41,16 @@ def add_parser(top) -> None:
         "--scenes",
         type=comma_names,
         default=None,
-        help="comma-separated built-in scene names to train on (default: all of them)",
+        help="comma-separated built-in scene names to train on: seed scenes, recorded-crowd scenes "
+        "(data/scenes/recorded; they train on their own training windows), or 'recorded' for all of those "
+        "(default: every seed scene)",
+    )
+    tr.add_argument(
+        "--human-model",
+        choices=HUMAN_MODELS,
+        default=None,
+        help="how the people trained among move (default social_force, the arena's default; a recorded scene's "
+        "reactive people follow their recording through it)",
     )
     tr.add_argument("--updates", type=positive_int, default=None, help="PPO updates in all (default 300)")
     tr.add_argument(
@@ -76,6 +86,7 @@ def _config(args, scene_names: tuple[str, ...]):
         "envs_per_scene": args.envs_per_scene,
         "rollout_steps": args.rollout_steps,
         "seed": args.seed,
+        "human_model": args.human_model,
     }
     given = {k: v for k, v in given.items() if v is not None}
     if args.gscl_run is not None and args.social_layer != "gscl":
@@ -116,7 +127,7 @@ def _shown(value) -> str:
 
 @locks_folder(lambda args: args.out, "policy train")
 def _train(args) -> int:
-    from socialnav.data import SCENES_DIR
+    from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.jaxsim.scenario import ScenarioError
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners import policy_run
@@ -126,22 +137,27 @@ def _train(args) -> int:
     except RunFolderError as err:
         print(f"socialnav policy train: {err}", file=sys.stderr)
         return 2
-    available = sorted(p.stem for p in SCENES_DIR.glob("*.json"))
+    seed_scenes = {p.stem: p for p in sorted(SCENES_DIR.glob("*.json"))}
+    recorded_scenes = {p.stem: p for p in sorted(RECORDED_SCENES_DIR.glob("*.json"))}
+    available = {**seed_scenes, **recorded_scenes}
+    asked = None
+    if args.scenes:
+        asked = tuple(n for name in args.scenes for n in (recorded_scenes if name == "recorded" else [name]))
     try:
-        config = _config(args, tuple(args.scenes) if args.scenes else ())
+        config = _config(args, asked or ())
     except (ValueError, policy_run.PolicyRunError) as err:
         print(f"socialnav policy train: {err}", file=sys.stderr)
         return 2
-    names = list(config.scenes) or available
+    names = list(config.scenes) or list(seed_scenes)
     unknown = [n for n in names if n not in available]
     if unknown:
         print(
-            f"socialnav policy train: --scenes: unknown {', '.join(unknown)} (known: {', '.join(available)})",
+            f"socialnav policy train: --scenes: unknown {', '.join(unknown)} (known: {', '.join(available)}, recorded)",
             file=sys.stderr,
         )
         return 2
     try:
-        specs = [load_scene(SCENES_DIR / f"{n}.json") for n in names]
+        specs = [load_scene(available[n]) for n in names]
     except ScenarioError as err:
         print(f"socialnav policy train: {err}", file=sys.stderr)
         return 2
@@ -149,7 +165,8 @@ def _train(args) -> int:
     per_update = len(specs) * config.envs_per_scene * config.rollout_steps
     print(
         f"PPO on {len(specs)} scene(s): {config.updates} updates of {per_update:,} env-steps "
-        f"({config.envs_per_scene} episodes x {config.rollout_steps} steps per scene) -> {args.out}"
+        f"({config.envs_per_scene} episodes x {config.rollout_steps} steps per scene), people moved by "
+        f"{config.human_model} -> {args.out}"
     )
     t0 = time.perf_counter()
     try:

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from socialnav.cli import main
-from socialnav.data import SCENES_DIR
+from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
@@ -200,6 +200,11 @@ def test_config_round_trips_and_refuses_bad_values():
         policy_training.PPOConfig(envs_per_scene=0)
     with pytest.raises(ValueError, match="unknown setting"):
         policy_training.PPOConfig.from_json({**config.to_json(), "learning_rat": 1.0})
+    with pytest.raises(ValueError, match="human_model must be one of social_force"):
+        policy_training.PPOConfig(human_model="zombies")
+    # a run written before the setting existed trained among the social force
+    old = {k: v for k, v in config.to_json().items() if k != "human_model"}
+    assert policy_training.PPOConfig.from_json(old).human_model == "social_force"
 
 
 def _tiny(updates: int, seed: int = 0) -> policy_training.PPOConfig:
@@ -295,6 +300,23 @@ def test_a_resume_keeps_the_recorded_settings_and_says_when_one_changes(tmp_path
     assert main([*argv[:-2], "--rollout-steps", "16", "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "other settings (rollout_steps)" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_a_policy_trains_among_a_recorded_crowd_moved_by_the_human_model_asked(tmp_path, capsys):
+    """``--scenes`` takes a recorded scene by name, ``--human-model`` is recorded in the run and
+    moves the reactive people of the env the policy trains in."""
+    run = tmp_path / "ppo"
+    argv = ["policy", "train", "--out", str(run), "--scenes", "hotel_reactive", "--updates", "1"]
+    argv += ["--envs-per-scene", "4", "--rollout-steps", "8", "--human-model", "collision_free_speed_calibrated"]
+    assert main([*argv, "--no-progress"]) == 0
+    assert "people moved by collision_free_speed_calibrated" in capsys.readouterr().out
+    config = policy_run.read_config(run)[0]
+    assert config.scenes == ("hotel_reactive",) and config.human_model == "collision_free_speed_calibrated"
+    spec = load_scene(RECORDED_SCENES_DIR / "hotel_reactive.json")
+    assert policy_training.make_scene(spec, config).env.config.human_model == "collision_free_speed_calibrated"
+    assert main([*argv[:-2], "--human-model", "orca", "--no-progress"]) == 2  # a resumed run keeps its people
+    assert "other settings (human_model)" in capsys.readouterr().err
 
 
 def _truncate_step(folder):
