@@ -12,6 +12,7 @@ variants (a random stream the benchmark never draws from).
 from __future__ import annotations
 
 import dataclasses
+import fnmatch
 import pathlib
 import sys
 import time
@@ -41,9 +42,9 @@ def add_parser(top) -> None:
         "--scenes",
         type=comma_names,
         default=None,
-        help="comma-separated built-in scene names to train on: seed scenes, recorded-crowd scenes "
-        "(data/scenes/recorded; they train on their own training windows), or 'recorded' for all of those "
-        "(default: every seed scene)",
+        help="comma-separated built-in scenes to train on, each a name (a seed scene or a recorded-crowd "
+        "scene, which trains on its own training windows), 'seed' or 'recorded' for all of either, or a "
+        "pattern such as '*_reactive' (default: seed)",
     )
     tr.add_argument(
         "--human-model",
@@ -140,9 +141,12 @@ def _train(args) -> int:
     seed_scenes = {p.stem: p for p in sorted(SCENES_DIR.glob("*.json"))}
     recorded_scenes = {p.stem: p for p in sorted(RECORDED_SCENES_DIR.glob("*.json"))}
     available = {**seed_scenes, **recorded_scenes}
+    groups = {"seed": list(seed_scenes), "recorded": list(recorded_scenes)}
     asked = None
     if args.scenes:
-        asked = tuple(n for name in args.scenes for n in (recorded_scenes if name == "recorded" else [name]))
+        # a group's name, a shell pattern (fnmatch) over the scenes' names, or a name
+        expand = lambda name: groups.get(name) or fnmatch.filter(available, name) or [name]
+        asked = tuple(dict.fromkeys(n for name in args.scenes for n in expand(name)))
     try:
         config = _config(args, asked or ())
     except (ValueError, policy_run.PolicyRunError) as err:

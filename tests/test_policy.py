@@ -304,10 +304,10 @@ def test_a_resume_keeps_the_recorded_settings_and_says_when_one_changes(tmp_path
 
 @pytest.mark.slow
 def test_a_policy_trains_among_a_recorded_crowd_moved_by_the_human_model_asked(tmp_path, capsys):
-    """``--scenes`` takes a recorded scene by name, ``--human-model`` is recorded in the run and
+    """``--scenes`` takes a recorded scene by a pattern of its name, ``--human-model`` is recorded in the run and
     moves the reactive people of the env the policy trains in."""
     run = tmp_path / "ppo"
-    argv = ["policy", "train", "--out", str(run), "--scenes", "hotel_reactive", "--updates", "1"]
+    argv = ["policy", "train", "--out", str(run), "--scenes", "hotel_reac*", "--updates", "1"]
     argv += ["--envs-per-scene", "4", "--rollout-steps", "8", "--human-model", "collision_free_speed_calibrated"]
     assert main([*argv, "--no-progress"]) == 0
     assert "people moved by collision_free_speed_calibrated" in capsys.readouterr().out
