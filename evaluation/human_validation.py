@@ -521,10 +521,10 @@ def window_predictor(name: str, dt_s: float, aim: str = "velocity", groups: bool
                            frame_s=float(intervals[0]))  # fmt: skip
         parts, order = [], []
         for k, interval in enumerate(intervals):
-            index = np.flatnonzero(np.asarray(w.frame_s) == interval)
-            part = w.take(index, bucket=w.start.shape[1])
-            parts.append(batched(params, part.start, part.velocity, part.speed, part.present, part.goal,
-                                 part.group_id, jax.random.fold_in(key, k), frame_s=float(interval)))  # fmt: skip
+            index = np.flatnonzero(np.asarray(w.frame_s) == interval)  # static; the arrays may be traced
+            part = (w.start[index], w.velocity[index], w.speed[index], w.present[index], w.goal[index],
+                    w.group_id[index])  # fmt: skip
+            parts.append(batched(params, *part, jax.random.fold_in(key, k), frame_s=float(interval)))
             order.append(index)
         return jnp.concatenate(parts)[np.argsort(np.concatenate(order))]
 

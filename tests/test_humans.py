@@ -213,8 +213,12 @@ def test_prediction_windows_keep_each_runs_sample_interval_and_a_lone_walker_is_
     w = hv.PredictionWindows(start, velocity, np.full((n, 1), 1.2, np.float32), one, start,
                              np.full((n, 1), -1, np.int32), truth, one, truth, tuple(frame_s.tolist()))  # fmt: skip
     model = hv.HumanModel("collision_free_speed")
-    predicted = np.asarray(hv.window_predictor(model.name, model.dt_s)(model.params, w, jax.random.key(0)))
+    predict = hv.window_predictor(model.name, model.dt_s)
+    predicted = np.asarray(predict(model.params, w, jax.random.key(0)))
     np.testing.assert_allclose(predicted, truth, atol=0.02)
+    # as a calibration calls it: the windows traced, their intervals static
+    traced = jax.jit(lambda windows: predict(model.params, windows, jax.random.key(0)))(w)
+    np.testing.assert_allclose(np.asarray(traced), predicted, atol=1e-5)
 
 
 @pytest.mark.slow
