@@ -20,6 +20,7 @@ from scipy import stats
 from socialnav.common.intervals import wilson
 from socialnav.evaluation import arena, nav_metrics
 from socialnav.evaluation.arena_params import ArenaParams
+from socialnav.evaluation.papers import RATES
 from socialnav.jaxsim.scenes.actor import Actor, check_actor
 from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
 from socialnav.jaxsim.scenes.variant import Variant, sample_variants
@@ -292,7 +293,8 @@ def mean_interval(values) -> tuple[float, float]:
 
 
 def summary(episodes: pd.DataFrame) -> pd.DataFrame:
-    """One row per (scene, method): n, goal and social success (%) with Wilson 95 % intervals
+    """One row per (scene, method): n, goal and social success and the share of episodes with a
+    personal-space intrusion (%, :data:`RATES`) with Wilson 95 % intervals
     (``_ci`` as text, ``_lo``/``_hi`` in %), means, t intervals of :data:`INTERVAL_MEANS`, and
     ``invalid_action_pct``, the share of episodes in which the actor gave a NaN or infinite
     action at least once (its rows measure a robot stopped on those steps, not the method)."""
@@ -300,7 +302,9 @@ def summary(episodes: pd.DataFrame) -> pd.DataFrame:
     for (scene, method), g in episodes.groupby(["scene", "method"], sort=False):
         n = len(g)
         row = {"scene": scene, "method": method, "n": n}
-        for key in ("goal_success", "social_success"):
+        for key in RATES:
+            if key not in g:  # a run from before a rate existed
+                continue
             k = int(g[key].sum())
             lo, hi = wilson(k, n)
             row[key + "_pct"] = 100.0 * k / n

@@ -22,8 +22,10 @@ for the proxemic and person-distance metrics (after that the robot has arrived).
 * ``zone_share``: share of time with the nearest person in each Hall zone, intimate < 0.45 m,
   personal < 1.2, social < 3.6, public beyond or nobody present (seeds 002, 004; seed 000 uses 0.5
   for intimate); the four shares sum to 1.
-* ``intrusions``: personal-space intrusions as seed 001 counts them: entries of the robot into a
-  person's 1.2 m (one per entry, per person).
+* ``intrusions``: personal-space entries: entries of the robot into a person's 1.2 m (one per
+  entry, per person); ``intruded``: whether the robot entered anyone's 1.2 m at all, which is
+  what seed 001 counts ("the number of times the robot intrudes the personal spaces" never
+  exceeds its number of trials: SNL's 33 in 33 head-on trials, "every trial" in the group).
 * ``ttc_min_s``: smallest time to collision at constant velocities over the episode (inf if none).
 * ``group_share``: share of time inside a group's circle (its members' mean distance to their
   centroid); ``group_intrusions``: entries into such a circle (an F-formation's o- and p-space,
@@ -78,7 +80,7 @@ from socialnav.evaluation.metrics import collision_encounters
 from socialnav.jaxsim.scenes import rule_monitor
 from socialnav.planners.scene import wrap_angle
 
-VERSION = "nav-metrics 2"
+VERSION = "nav-metrics 3"
 ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}
 ZONE_NAMES = ("intimate", "personal", "social", "public")
 STALLED_MPS = 0.05
@@ -261,6 +263,7 @@ def episode_metrics(
         "d_person_m": d_person,
         "zone_share": zone_share,
         "intrusions": intrusions,
+        "intruded": intrusions > 0,
         "ttc_min_s": jnp.min(ttc),
         "group_share": group_share,
     }

@@ -13,25 +13,34 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+# The shares of episodes the arena's summary keeps in % with Wilson 95 % intervals
+# (``<key>_pct``, ``_ci``, ``_lo``, ``_hi``; evaluation.arena_report.summary).
+RATES = ("goal_success", "social_success", "intruded")
+
 # (source, scene, method, metric, paper value). Metrics: d_min_m (mean minimum distance, m),
-# intrusions (personal-space intrusions per trial), goal_success_pct, social_success_pct,
+# intruded_pct (trials with a personal-space intrusion, %), goal_success_pct, social_success_pct,
 # zone_personal_pct (share of time in the nearest person's personal zone, %).
 PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
-    # Seed 001, Tables 1-3 (CASN vs SNL); intrusions per trial = count / trials.
+    # Seed 001, Tables 1-3 (CASN vs SNL). Its "i" counts trials with an intrusion (never more than
+    # n: SNL 33 of 33 head-on); Table 2's "All" rows (our head-on walkers span its speeds, 0.4-1.35
+    # m/s), Table 3's "Slow" rows (our crossing walker is slow, 0.3-0.5 m/s, as Sec. 3.3 sets the
+    # scene: "slow enough to force a collision"; the paper's slow walkers 0.38 and 0.51 m/s).
     ("seed 001 Table 1", "casn_static_person", "casn", "d_min_m", 1.29),
     ("seed 001 Table 1", "casn_static_person", "snl_matched", "d_min_m", 1.25),
-    ("seed 001 Table 1", "casn_static_person", "casn", "intrusions", 4 / 30),
-    ("seed 001 Table 1", "casn_static_person", "snl_matched", "intrusions", 14 / 30),
+    ("seed 001 Table 1", "casn_static_person", "casn", "intruded_pct", 100 * 4 / 30),
+    ("seed 001 Table 1", "casn_static_person", "snl_matched", "intruded_pct", 100 * 14 / 30),
     ("seed 001 Sec. 4.2", "casn_static_group", "casn", "d_min_m", 1.39),
     ("seed 001 Sec. 4.2", "casn_static_group", "snl_matched", "d_min_m", 0.76),
-    ("seed 001 Sec. 4.2", "casn_static_group", "casn", "intrusions", 0 / 10),
-    ("seed 001 Sec. 4.2", "casn_static_group", "snl_matched", "intrusions", 10 / 10),
+    ("seed 001 Sec. 4.2", "casn_static_group", "casn", "intruded_pct", 100 * 0 / 10),
+    ("seed 001 Sec. 4.2", "casn_static_group", "snl_matched", "intruded_pct", 100 * 10 / 10),
     ("seed 001 Table 2", "casn_head_on", "casn", "d_min_m", 1.11),
     ("seed 001 Table 2", "casn_head_on", "snl_matched", "d_min_m", 0.84),
-    ("seed 001 Table 3", "casn_crossing", "casn", "d_min_m", 1.70),
-    ("seed 001 Table 3", "casn_crossing", "snl_matched", "d_min_m", 0.99),
-    ("seed 001 Table 3", "casn_crossing", "casn", "intrusions", 0 / 15),
-    ("seed 001 Table 3", "casn_crossing", "snl_matched", "intrusions", 12 / 15),
+    ("seed 001 Table 2", "casn_head_on", "casn", "intruded_pct", 100 * 16 / 29),
+    ("seed 001 Table 2", "casn_head_on", "snl_matched", "intruded_pct", 100 * 33 / 33),
+    ("seed 001 Table 3 slow", "casn_crossing", "casn", "d_min_m", 1.71),
+    ("seed 001 Table 3 slow", "casn_crossing", "snl_matched", "d_min_m", 1.02),
+    ("seed 001 Table 3 slow", "casn_crossing", "casn", "intruded_pct", 100 * 0 / 5),
+    ("seed 001 Table 3 slow", "casn_crossing", "snl_matched", "intruded_pct", 100 * 4 / 5),
     # Seed 002, Table 1 (goal / social success, %).
     *(
         ("seed 002 Table 1", scene, method, metric, value)
@@ -74,7 +83,7 @@ def _episode_column(metric: str) -> tuple[str, float]:
     """The episodes frame's column of a paper's metric and its scale to the paper's unit."""
     if metric == "zone_personal_pct":
         return "zone_personal", 100.0
-    if metric.endswith("_success_pct"):
+    if metric.endswith("_pct") and metric.removesuffix("_pct") in RATES:
         return metric.removesuffix("_pct"), 100.0
     return metric, 1.0
 
@@ -83,7 +92,7 @@ def _ours(row: pd.Series, metric: str, suffix: str = "") -> float:
     """A summary row's value of a paper's metric in the paper's unit (``suffix``: ``_lo``, ``_hi``
     for the interval); the summary keeps success rates in % already (``_pct``, ``_lo``, ``_hi``)."""
     column, scale = _episode_column(metric)
-    if column.endswith("_success"):
+    if column in RATES:
         column, scale = column + (suffix or "_pct"), 1.0
     else:
         column += suffix

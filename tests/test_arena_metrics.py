@@ -74,6 +74,18 @@ def test_a_straight_pass_at_a_known_distance():
     assert int(m["collisions"]) == 0
 
 
+def test_a_trial_intrudes_once_however_many_entries_as_seed_001_counts():
+    """Two people 1 m beside the line: two personal-space entries, one trial with an intrusion;
+    1.5 m beside it: none."""
+    x = np.linspace(-5, 5, 101)
+    robot = np.stack([x, np.zeros_like(x)], 1)
+    present = np.ones((101, 2), bool)
+    near = _metrics(robot, np.tile([[[-2.0, 1.0], [2.0, -1.0]]], (101, 1, 1)), present)
+    assert int(near["intrusions"]) == 2 and bool(near["intruded"])
+    far = _metrics(robot, np.tile([[[-2.0, 1.5], [2.0, -1.5]]], (101, 1, 1)), present)
+    assert int(far["intrusions"]) == 0 and not bool(far["intruded"])
+
+
 def test_a_collision_is_counted_once_per_encounter():
     x = np.linspace(-3, 3, 61)
     robot = np.stack([x, np.zeros_like(x)], 1)
