@@ -1,0 +1,86 @@
+"""Two methods of two arena runs, episode by episode: the paired difference of each metric per
+scene and pooled over scene groups, with 95 % intervals.
+
+    python scripts/compare_arena_runs.py runs/a:gscl runs/b:gscl --metrics social_success,goal_success
+
+Each side is ``RUN_FOLDER:METHOD``. Episodes pair by scene and variant: two runs of the same
+scenes, variants and seed draw the same variants (common random numbers), so the difference of a
+pair is the methods' (or the models', or the people's) alone. Success rates are in percentage
+points. Pools: every scene, and for recorded crowds each playback (``replayed``, ``reactive``)
+on the evaluated and the held-out windows apart. Intervals: Student t of the paired differences
+(``evaluation.arena_report.mean_interval``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+import pandas as pd
+
+from socialnav.evaluation.arena_report import mean_interval
+
+RATES = ("goal_success", "social_success", "intruded")
+
+
+def episodes(side: str) -> pd.DataFrame:
+    """The episodes of ``RUN:METHOD``."""
+    folder, _, method = side.rpartition(":")
+    frames = [pd.read_parquet(f) for f in sorted(pathlib.Path(folder, "episodes").glob("*.parquet"))]
+    if not frames:
+        raise SystemExit(f"{folder}: no episodes/ (not an arena run folder)")
+    table = pd.concat(frames, ignore_index=True)
+    if method not in set(table["method"]):
+        raise SystemExit(f"{side}: no method {method!r} in {folder} (it has {', '.join(sorted(set(table['method'])))})")
+    return table[table["method"] == method]
+
+
+def group_of(scene: str) -> str:
+    """A scene's pool: its playback and whether held out, for recorded crowds; else ``seed``."""
+    held = "held-out" if scene.endswith("@held_out") else "evaluated"
+    base = scene.removesuffix("@held_out")
+    for playback in ("replayed", "reactive"):
+        if base.endswith(f"_{playback}"):
+            return f"{playback}, {held}"
+    return f"seed scenes, {held}"
+
+
+def paired(a: pd.DataFrame, b: pd.DataFrame, metrics) -> pd.DataFrame:
+    """Rows of (pool, metric, n, a's mean, b's mean, mean difference a - b, its interval)."""
+    both = a.merge(b, on=["scene", "variant"], suffixes=("_a", "_b"))
+    both["pool"] = both["scene"].map(group_of)
+    rows = []
+    for pool, g in [("every scene", both), *both.groupby("pool", sort=True)]:
+        for metric in metrics:
+            scale = 100.0 if metric in RATES else 1.0
+            x, y = scale * g[f"{metric}_a"].astype(float), scale * g[f"{metric}_b"].astype(float)
+            lo, hi = mean_interval(x - y)
+            rows.append(
+                {
+                    "pool": pool,
+                    "metric": metric,
+                    "n": len(g),
+                    "a": x.mean(),
+                    "b": y.mean(),
+                    "a - b": (x - y).mean(),
+                    "lo": lo,
+                    "hi": hi,
+                }  # fmt: skip
+            )
+    return pd.DataFrame(rows)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("a", help="RUN_FOLDER:METHOD")
+    parser.add_argument("b", help="RUN_FOLDER:METHOD")
+    parser.add_argument("--metrics", default="social_success,goal_success,collisions", help="comma-separated")
+    args = parser.parse_args(argv)
+    table = paired(episodes(args.a), episodes(args.b), args.metrics.split(","))
+    print(f"a = {args.a}, b = {args.b}; rates in %, differences paired by scene and variant")
+    print(table.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
