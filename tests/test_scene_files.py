@@ -89,6 +89,20 @@ def test_a_bad_scene_file_gives_one_error_naming_file_and_field(tmp_path, mutate
     assert e.value.field == field and str(path) in str(e.value)
 
 
+def test_a_person_standing_on_the_robots_start_is_refused_with_both_radii(tmp_path):
+    from socialnav.jaxsim.scenes.robot import RobotParams
+    from socialnav.jaxsim.scenes.spec import PERSON_RADIUS_M
+
+    def on_the_robot(o):
+        o["people"] = [{"behaviour": "standing", "position": o["robot"]["start"], "heading_deg": [0, 0]}]
+        o["rule"] = {"type": "min_distance", "distance_m": 0.45}
+
+    with pytest.raises(ScenarioError) as e:
+        load_scene(_mutated(tmp_path, on_the_robot))
+    assert e.value.field == "people[0].position"
+    assert f"radii {PERSON_RADIUS_M} m and {RobotParams().radius_m} m" in str(e.value)
+
+
 def _queue_person(obj):
     (queue,) = [p for p in obj["people"] if p["behaviour"] == "queue"]
     return queue

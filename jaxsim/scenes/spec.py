@@ -485,7 +485,7 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
                 r.fail(
                     f"people[{i}].{key}",
                     f"can be within {robot_radius + PERSON_RADIUS_M:.3f} m of robot.start: the person would stand "
-                    "on the robot (radii 0.2 m and 0.275 m)",
+                    f"on the robot (radii {PERSON_RADIUS_M} m and {robot_radius} m)",
                 )
             placed.append((i, key, point))
         if person["behaviour"] == "group":
