@@ -19,8 +19,7 @@ import pathlib
 import pandas as pd
 
 from socialnav.evaluation.arena_report import mean_interval
-
-RATES = ("goal_success", "social_success", "intruded")
+from socialnav.evaluation.papers import RATES
 
 
 def episodes(side: str) -> pd.DataFrame:
