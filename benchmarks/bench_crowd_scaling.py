@@ -32,7 +32,13 @@ from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.evaluation import human_calibration as hc  # noqa: E402
 from socialnav.evaluation import human_validation as hv  # noqa: E402
 
-MODELS = ("social_force", "orca", "collision_free_speed_calibrated", "anticipation_calibrated")
+MODELS = (
+    "social_force",
+    "orca",
+    "collision_free_speed_calibrated",
+    "anticipation_calibrated",
+    "steering_speed_calibrated",
+)
 
 
 def crowd(n: int, worlds: int, seed: int = 0):

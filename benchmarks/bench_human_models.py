@@ -31,7 +31,13 @@ from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.evaluation import human_calibration as hc  # noqa: E402
 from socialnav.evaluation import human_validation as hv  # noqa: E402
 
-MODELS = ("social_force", "collision_free_speed_calibrated", "anticipation_calibrated", "orca")
+MODELS = (
+    "social_force",
+    "collision_free_speed_calibrated",
+    "anticipation_calibrated",
+    "steering_speed_calibrated",
+    "orca",
+)
 
 
 def program(model: hv.HumanModel, n: int, worlds: int, steps: int, seed: int = 0, pairs: bool = False):

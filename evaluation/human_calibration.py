@@ -44,8 +44,9 @@ FITTED = {
     "collision_free_speed": ("time_gap_s", "neighbor_strength", "neighbor_range_m", "radius_m"),
     "anticipation": ("time_gap_s", "neighbor_strength", "neighbor_range_m", "radius_m", "anticipation_time_s"),
     "orca": ("time_horizon_s", "radius_m"),
+    "steering_speed": ("time_gap_s", "neighbor_strength", "neighbor_range_m", "radius_m", "steering_max_rad"),
 }
-_FIELD = {"collision_free_speed": "speed", "anticipation": "anticipation", "orca": "orca"}
+_FIELD = {"collision_free_speed": "speed", "anticipation": "anticipation", "orca": "orca", "steering_speed": "speed"}
 # Models whose step holds a loop of unknown length (ORCA's fallback, :func:`jaxsim.orca._fallback`,
 # a ``while_loop``): reverse mode cannot run through it, so their gradient is taken forward
 # (one tangent per fitted parameter: as cheap for the few parameters fitted here).

@@ -46,7 +46,7 @@ from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.world import Grid
 
-HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation")
+HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation", "steering_speed")
 FAR_M = 1.0e4  # where the robot is: no robot in these protocols
 # The ETH/UCY protocol counts samples: 8 observed, 12 predicted (3.2 s and 4.8 s at 2.5 Hz). A
 # window's sample interval is its run's (PredictionWindows.frame_s): biwi_eth's samples are 0.67 s
@@ -93,7 +93,7 @@ class HumanModel:
         is the workers')."""
         if self.name == "orca":
             return float(self.orca.radius_m)
-        if self.name == "collision_free_speed":
+        if speed_model.uses_speed_params(self.name):
             return float(self.speed.radius_m)
         if self.name == "anticipation":
             return float(self.anticipation.radius_m)

@@ -41,6 +41,8 @@ FITTED = {
         "anticipation.anticipation_time_s", *_GROUP,
     ),
     "orca": ("orca.time_horizon_s", *_GROUP),
+    "steering_speed": ("speed.time_gap_s", "speed.neighbor_strength", "speed.neighbor_range_m",
+                       "speed.steering_max_rad", *_GROUP),
 }  # fmt: skip
 # ORCA's fallback is a while_loop: its gradient is taken forward (evaluation.minimise.value_and_grad).
 FORWARD_MODE = ("orca",)

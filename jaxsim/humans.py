@@ -8,7 +8,9 @@ The models (``docs/humans.md`` measures each against the Jülich corridors and E
   (:func:`jaxsim.crowd.step_crowd`), the default;
 - ``orca``: RVO2's reciprocal velocity obstacles (:func:`jaxsim.orca.step_orca`);
 - ``collision_free_speed`` and ``anticipation``: first-order velocity models with bodies
-  (:mod:`jaxsim.speed_model`), and their ``_calibrated`` fits to the Jülich training runs.
+  (:mod:`jaxsim.speed_model`), and their ``_calibrated`` fits to the Jülich training runs;
+- ``steering_speed``: the collision-free speed model with Moussaïd et al. 2011's choice of
+  heading, so that people overtake (:func:`jaxsim.speed_model.step_speed_model`'s ``headings``).
 
 Every model takes the same arrays and returns ``(x, y, vx, vy)``; ``model`` is static (a
 change recompiles), the constants in :class:`HumanParams` are traced. People who walk together
@@ -29,8 +31,10 @@ HUMAN_MODELS = (
     "orca",
     "collision_free_speed",
     "anticipation",
+    "steering_speed",
     "collision_free_speed_calibrated",
     "anticipation_calibrated",
+    "steering_speed_calibrated",
 )
 
 
@@ -65,7 +69,7 @@ def human_params(model: str, crowd_params: SimParams, orca_params: orca.ORCAPara
     speed, anticipation = speed_model.SpeedModelParams(), speed_model.AnticipationParams()
     if kind in speed_model.VELOCITY_MODELS:
         chosen = speed_model.params_of(model) if velocity is None else velocity
-        speed, anticipation = (chosen, anticipation) if kind == "collision_free_speed" else (speed, chosen)
+        speed, anticipation = (chosen, anticipation) if speed_model.uses_speed_params(kind) else (speed, chosen)
     chosen_orca = orca.ORCAParams() if orca_params is None else orca_params
     return HumanParams(crowd_params, chosen_orca, speed, anticipation, groups.GroupParams() if group is None else group)
 
@@ -113,10 +117,11 @@ def step_humans(
         aim_dx, aim_dy, speed_mps = groups.group_aim(
             params.group, x, y, aim_dx, aim_dy, speed_mps, max_speed_mps, group_id, present
         )
-    if kind == "collision_free_speed":
+    if speed_model.uses_speed_params(kind):
+        headings = speed_model.STEERING_HEADINGS if kind == "steering_speed" else 1
         return speed_model.step_speed_model(
             params.speed, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, present, moving, robot_xyv,
-            robot_radius_m, ignores_robot=ignores_robot,
+            robot_radius_m, ignores_robot=ignores_robot, headings=headings,
         )  # fmt: skip
     if kind == "anticipation":
         return speed_model.step_anticipation(

@@ -145,6 +145,10 @@ STEPS = {
         speed_model.AnticipationParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0],
         to[:, 1], s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, u, u,
     ),
+    "steering_speed": lambda xy, v, to, s, u: speed_model.step_speed_model(
+        speed_model.SpeedModelParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
+        s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, headings=speed_model.STEERING_HEADINGS,
+    ),
 }  # fmt: skip
 
 
@@ -167,7 +171,49 @@ def test_the_speed_model_in_single_file_walks_at_its_headway_over_the_time_gap()
     np.testing.assert_allclose(speed[:-1], np.minimum((gaps - 0.4) / 1.0, 1.5), atol=1e-3)
 
 
-@pytest.mark.parametrize("name", ["collision_free_speed", "anticipation", "social_force"])
+def test_candidate_headings_keep_straight_first_then_right_before_left():
+    np.testing.assert_allclose(speed_model.heading_offsets(5), [0.0, -0.5, 0.5, -1.0, 1.0])
+    np.testing.assert_allclose(speed_model.heading_offsets(1), [0.0])
+
+
+def test_the_steering_model_overtakes_a_slower_walker_where_the_published_one_follows():
+    """Known answer: behind a walker at 0.5 m/s in open space, the published speed model follows
+    at the leader's speed (its heading never leaves the lane); the steering one turns out of the
+    lane and passes."""
+    xy, aim, speed = [[0.0, 0.0], [2.0, 0.0]], [[100.0, 0.0], [100.0, 0.0]], [1.4, 0.5]
+    follows = _walk(STEPS["collision_free_speed"], xy, aim, speed, 200)
+    passes = _walk(STEPS["steering_speed"], xy, aim, speed, 200)
+    assert follows[-1, 0, 0] < follows[-1, 1, 0]  # still behind after 20 s
+    assert passes[-1, 0, 0] > passes[-1, 1, 0] + 5.0  # well past
+    assert passes[:, 0, 1].min() < -0.3  # out of the lane: to the right, the tie's side
+    gap = np.linalg.norm(passes[:, 0] - passes[:, 1], axis=-1)
+    assert gap.min() > 2 * 0.2 - 1e-3  # bodies never overlap while passing
+
+
+def test_the_steering_model_is_the_published_one_where_nobody_is_in_the_way():
+    """Bit for bit: people far apart walk as the published speed model walks them."""
+    xy = [[0.0, 0.0], [0.0, 5.0], [5.0, -5.0]]
+    aim = [[10.0, 3.0], [-10.0, 5.0], [5.0, 10.0]]
+    plain = _walk(STEPS["collision_free_speed"], xy, aim, [1.2, 1.3, 0.9], 30)
+    steered = _walk(STEPS["steering_speed"], xy, aim, [1.2, 1.3, 0.9], 30)
+    np.testing.assert_array_equal(plain, steered)
+
+
+def test_the_steering_model_passes_on_the_side_away_from_a_wall():
+    """A slower walker ahead, a wall 0.3 m to the right: the turn to the right (the tie's side)
+    would walk into the wall, so the faster one passes on the left and stays inside the corridor."""
+    model = hv.HumanModel("steering_speed")
+    field = hv.corridor_field(1.8, 40.0)
+    step = lambda xy, v, to, s, u: speed_model.step_speed_model(
+        model.speed, field, 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1], s,
+        jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, headings=speed_model.STEERING_HEADINGS,
+    )  # fmt: skip
+    path = _walk(step, [[0.0, 0.3], [2.0, 0.3]], [[100.0, 0.3], [100.0, 0.3]], [1.4, 0.5], 200)
+    assert path[-1, 0, 0] > path[-1, 1, 0] + 3.0
+    assert path[:, 0, 1].max() > 0.6 and path[:, 0, 1].min() >= model.speed.radius_m - 1e-3
+
+
+@pytest.mark.parametrize("name", ["collision_free_speed", "anticipation", "steering_speed", "social_force"])
 def test_speed_falls_with_density_in_the_corridor(name):
     model = hv.HumanModel(name)
     speeds = []
