@@ -90,8 +90,8 @@ def test_a_bad_scene_file_gives_one_error_naming_file_and_field(tmp_path, mutate
 
 
 def test_a_person_standing_on_the_robots_start_is_refused_with_both_radii(tmp_path):
+    from socialnav.jaxsim.params import PERSON_RADIUS_M
     from socialnav.jaxsim.scenes.robot import RobotParams
-    from socialnav.jaxsim.scenes.spec import PERSON_RADIUS_M
 
     def on_the_robot(o):
         o["people"] = [{"behaviour": "standing", "position": o["robot"]["start"], "heading_deg": [0, 0]}]
@@ -101,6 +101,25 @@ def test_a_person_standing_on_the_robots_start_is_refused_with_both_radii(tmp_pa
         load_scene(_mutated(tmp_path, on_the_robot))
     assert e.value.field == "people[0].position"
     assert f"radii {PERSON_RADIUS_M} m and {RobotParams().radius_m} m" in str(e.value)
+
+
+@pytest.mark.parametrize("gap_m, refused", [(0.50, True), (0.55, False)])
+def test_the_placement_check_uses_the_body_the_arena_measures_contacts_with(tmp_path, gap_m, refused):
+    """The env's person (0.25 m) and the robot (0.275 m) touch below 0.525 m: a person standing
+    0.5 m from the robot's start is refused (the warehouse workers' 0.2 m let it through)."""
+
+    def beside(o):
+        x, (y0, y1) = o["robot"]["start"]
+        o["people"] = [{"behaviour": "standing", "position": [x + gap_m, [y1, y1]], "heading_deg": [0, 0]}]
+        o["robot"]["start"] = [x, [y1, y1]]
+        o["rule"] = {"type": "min_distance", "distance_m": 0.45}
+
+    path = _mutated(tmp_path, beside)
+    if refused:
+        with pytest.raises(ScenarioError, match="would stand on the robot"):
+            load_scene(path)
+    else:
+        assert load_scene(path).people[0]["behaviour"] == "standing"
 
 
 def _queue_person(obj):

@@ -105,6 +105,7 @@ from typing import Any
 import numpy as np
 
 from socialnav.common.names import SAFE_NAME_RULE, is_safe_name, name_problem
+from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenario.errors import ScenarioError
 
 BEHAVIOURS = ("standing", "walk", "group", "queue", "stream")
@@ -436,10 +437,11 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict], bounds, walls_m
     }
 
 
-# Bodies for the placement checks of :func:`load_scene`: a person's radius is the crowd model's
-# (``data/warehouse/params.json`` workers.radius_m, 0.2 m, which the scenes' social force uses),
-# the robot's :class:`jaxsim.scenes.robot.RobotParams` radius (0.275 m, TIAGo's footprint).
-PERSON_RADIUS_M = 0.2
+# Bodies for the placement checks of :func:`load_scene`: a person's is the arena's
+# (:data:`jaxsim.params.PERSON_RADIUS_M`, 0.25 m, the body the env measures contacts with; it was
+# the warehouse workers' 0.2 m here, so a person the check let stand 0.45 m from the robot's
+# start touched the robot in the env), the robot's :class:`jaxsim.scenes.robot.RobotParams` radius
+# (0.275 m, TIAGo's footprint).
 # A goal closer to the start than this is reached before the robot moves (the arena's goal
 # tolerance is 0.3 m): an episode that tests nothing.
 MIN_START_GOAL_M = 0.5
