@@ -9,6 +9,9 @@ for the proxemic and person-distance metrics (after that the robot has arrived).
 * ``goal_success``: the centre within the goal tolerance before the timeout (HuNavSim's reading;
   a collision does not void it, unlike Francis et al.'s S; ``collisions`` is reported apart).
 * ``social_success``: goal success and the scene's rule (:mod:`jaxsim.scenes.spec`).
+* ``goal_no_collision``, ``social_no_collision``: the same with no collision before arrival, as
+  if a collision ended the run: seed 002's reading (Sec. 5.3.1: the baselines "frequently result
+  in collisions that prevent goal completion") and Francis et al.'s S.
 * ``collisions``: encounters of a present person closer than robot radius + person radius,
   counted once per encounter (:func:`evaluation.metrics.collision_encounters`), split into
   ``collisions_robot`` (the robot moving towards the person faster than the person towards it,
@@ -80,7 +83,7 @@ from socialnav.evaluation.metrics import collision_encounters
 from socialnav.jaxsim.scenes import rule_monitor
 from socialnav.planners.scene import wrap_angle
 
-VERSION = "nav-metrics 3"
+VERSION = "nav-metrics 4"  # 4: goal_no_collision, social_no_collision; 3: intruded
 ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}
 ZONE_NAMES = ("intimate", "personal", "social", "public")
 STALLED_MPS = 0.05
@@ -250,6 +253,8 @@ def episode_metrics(
         "intrusions_person": jnp.sum(entered & ~entered_by_robot),
         "group_intrusions": jnp.sum(entered_group),
         "social_success": success & rule_ok,
+        "goal_no_collision": success & (jnp.sum(by_robot) + jnp.sum(by_person) == 0),
+        "social_no_collision": success & rule_ok & (jnp.sum(by_robot) + jnp.sum(by_person) == 0),
         "collisions": jnp.sum(by_robot) + jnp.sum(by_person),
         "collisions_robot": jnp.sum(by_robot),
         "collisions_person": jnp.sum(by_person),

@@ -15,10 +15,11 @@ import pandas as pd
 
 # The shares of episodes the arena's summary keeps in % with Wilson 95 % intervals
 # (``<key>_pct``, ``_ci``, ``_lo``, ``_hi``; evaluation.arena_report.summary).
-RATES = ("goal_success", "social_success", "intruded")
+RATES = ("goal_success", "social_success", "intruded", "goal_no_collision", "social_no_collision")
 
 # (source, scene, method, metric, paper value). Metrics: d_min_m (mean minimum distance, m),
 # intruded_pct (trials with a personal-space intrusion, %), goal_success_pct, social_success_pct,
+# goal_no_collision_pct and social_no_collision_pct (the same, a collision failing the run),
 # zone_personal_pct (share of time in the nearest person's personal zone, %).
 PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
     # Seed 001, Tables 1-3 (CASN vs SNL). Its "i" counts trials with an intrusion (never more than
@@ -41,7 +42,8 @@ PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
     ("seed 001 Table 3 slow", "casn_crossing", "snl_matched", "d_min_m", 1.02),
     ("seed 001 Table 3 slow", "casn_crossing", "casn", "intruded_pct", 100 * 0 / 5),
     ("seed 001 Table 3 slow", "casn_crossing", "snl_matched", "intruded_pct", 100 * 4 / 5),
-    # Seed 002, Table 1 (goal / social success, %).
+    # Seed 002, Table 1 (goal / social success, %). A collision fails the run: the baselines
+    # "frequently result in collisions that prevent goal completion" (Sec. 5.3.1).
     *(
         ("seed 002 Table 1", scene, method, metric, value)
         for scene, values in {
@@ -62,7 +64,7 @@ PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
             "gscl_queue": {"navfn": (100, 0), "snl_small": (100, 0), "snl_large": (100, 0), "gscl": (100, 93)},
         }.items()
         for method, (goal, social) in values.items()
-        for metric, value in (("goal_success_pct", goal), ("social_success_pct", social))
+        for metric, value in (("goal_no_collision_pct", goal), ("social_no_collision_pct", social))
         if value is not None
     ),
     # Seed 004, Tables 2-3 (social EB vs EB): time in the personal zone, %.

@@ -95,6 +95,19 @@ def test_a_collision_is_counted_once_per_encounter():
     assert float(m["ttc_min_s"]) == 0.0
 
 
+def test_a_collision_before_arrival_fails_the_run_where_a_collision_ends_it_and_one_after_does_not():
+    """Seed 002's reading (a collision ends the run): reached, but through a person, is a goal
+    success and not a goal without collision; a person met only after arrival does not count."""
+    x = np.linspace(-3, 3, 61)
+    robot = np.stack([x, np.zeros_like(x)], 1)
+    person = np.tile([[[0.0, 0.3]]], (61, 1, 1))  # met at step 30
+    through = _metrics(robot, person, np.ones((61, 1), bool), reached_at=50)
+    assert bool(through["goal_success"]) and not bool(through["goal_no_collision"])
+    assert not bool(through["social_no_collision"])
+    before = _metrics(robot, person, np.ones((61, 1), bool), reached_at=20)
+    assert bool(before["goal_no_collision"]) and int(before["collisions"]) == 0
+
+
 def test_rules_on_hand_made_trajectories():
     x = np.linspace(-3, 3, 61)
     robot = jnp.asarray(np.stack([x, -0.5 + 0 * x], 1), jnp.float32)

@@ -34,15 +34,18 @@ def test_the_comparison_gives_our_interval_and_whether_the_paper_lies_in_it():
     summary = pd.DataFrame(
         [
             {"scene": "casn_crossing", "method": "casn", "d_min_m": 1.5, "d_min_m_lo": 1.4, "d_min_m_hi": 1.75},
-            {"scene": "gscl_queue", "method": "navfn", "goal_success_pct": 90.0, "goal_success_lo": 82.0,
-             "goal_success_hi": 95.0, "social_success_pct": 0.0, "social_success_lo": 0.0, "social_success_hi": 4.0},
+            {"scene": "gscl_queue", "method": "navfn", "goal_no_collision_pct": 90.0, "goal_no_collision_lo": 82.0,
+             "goal_no_collision_hi": 95.0, "social_no_collision_pct": 0.0, "social_no_collision_lo": 0.0,
+             "social_no_collision_hi": 4.0, "goal_success_pct": 100.0, "goal_success_lo": 96.0},
         ]
     )  # fmt: skip
     c = papers.comparison(summary).dropna(subset=["ours"]).set_index(["scene", "metric"])
     assert c.loc[("casn_crossing", "d_min_m"), "paper_inside"]  # 1.70 in 1.4-1.75
-    assert not c.loc[("gscl_queue", "goal_success_pct"), "paper_inside"]  # 100 outside 82-95
-    assert c.loc[("gscl_queue", "social_success_pct"), "paper_inside"]  # 0 in 0-4
-    assert c.loc[("gscl_queue", "goal_success_pct"), "ours_hi"] == 95.0
+    # seed 002 counts a collision as a failed run: its rows read the no-collision rates
+    assert not c.loc[("gscl_queue", "goal_no_collision_pct"), "paper_inside"]  # 100 outside 82-95
+    assert c.loc[("gscl_queue", "social_no_collision_pct"), "paper_inside"]  # 0 in 0-4
+    assert c.loc[("gscl_queue", "goal_no_collision_pct"), "ours_hi"] == 95.0
+    assert ("gscl_queue", "goal_success_pct") not in c.index
 
 
 def _paired_episodes(scene, metric, proposed, baseline, a, b):
@@ -76,12 +79,13 @@ def test_directions_pair_by_variant_and_give_a_verdict():
     )
     assert noisy.iloc[0]["verdict"] in ("same sign, not significant", "opposite, not significant")
     # Seed 002's queue: goal success 100 for every method in the paper; equal here too -> reproduced.
-    ep = _paired_episodes("gscl_queue", "goal_success", "gscl", "navfn", [True] * 10, [True] * 10)
-    ep["social_success"] = False
+    ep = _paired_episodes("gscl_queue", "goal_no_collision", "gscl", "navfn", [True] * 10, [True] * 10)
+    ep["social_no_collision"] = False
     same = papers.directions(ep).set_index("metric")
-    assert same.loc["goal_success_pct", "verdict"] == "reproduced"
-    assert same.loc["social_success_pct", "paper_diff"] == 93 and same.loc["social_success_pct", "ours_diff"] == 0
-    assert same.loc["social_success_pct", "verdict"] == "no difference here"
+    assert same.loc["goal_no_collision_pct", "verdict"] == "reproduced"
+    assert same.loc["social_no_collision_pct", "paper_diff"] == 93
+    assert same.loc["social_no_collision_pct", "ours_diff"] == 0
+    assert same.loc["social_no_collision_pct", "verdict"] == "no difference here"
 
 
 def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_hand():
