@@ -47,6 +47,11 @@ class StackMap:
     objects_valid: jax.Array
 
 
+# Nav2's default local costmap is a 3 m x 3 m rolling window (nav2_bringup's nav2_params.yaml):
+# the people inside it are obstacles the controller avoids, whatever the global costmap holds.
+LOCAL_COSTMAP_HALF_M = 1.5
+
+
 @struct.dataclass
 class StackParams:
     """A stack's dynamic inputs: the map, the robot's speed limit (m/s) and body radius used by
@@ -54,7 +59,9 @@ class StackParams:
     planners' parameters (:class:`planners.stack.LayerParams`), the GSCL weights (``None``
     without the gscl layer) and ``people_are_obstacles`` () bool: whether the global planner
     sees the people as obstacles (a scene's ``people_in_global_plan``, :mod:`jaxsim.scenes.spec`;
-    false: only the social layer shapes the path round them)."""
+    false: only the social layer shapes the path round them, but for the people inside
+    ``local_costmap_half_m`` (m) of the robot along x and y, the rolling local costmap that Nav2's
+    controller keeps clear of what its sensors see: 1.5 m, Nav2's default 3 m x 3 m window)."""
 
     map: StackMap
     max_speed_mps: jax.Array
@@ -64,6 +71,7 @@ class StackParams:
     layers: stack.LayerParams
     gscl_weights: Any = None
     people_are_obstacles: jax.Array = True
+    local_costmap_half_m: jax.Array = LOCAL_COSTMAP_HALF_M
 
 
 @struct.dataclass
@@ -191,10 +199,13 @@ def stack_actor(
             gscl_fn = lambda s: gscl_layer.gscl_layer(predict, occupancy, grid, s)
         social, casn_state = stack.social_layer(method, scene, x_m, y_m, st.casn, gscl_fn, params.layers)
         # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the
-        # walls, unless the scene leaves them to the social layer (people_are_obstacles false).
+        # walls; where the scene leaves them to the social layer (people_are_obstacles false),
+        # those inside the local costmap's window still are: the path the robot follows is the
+        # one its controller would keep clear of them.
         pxy = obs.people_xy_m
         d = jnp.hypot(x_m[None] - pxy[:, 0, None, None], y_m[None] - pxy[:, 1, None, None])
-        seen = obs.people_visible & params.people_are_obstacles
+        local = jnp.max(jnp.abs(pxy - obs.robot_xy_m), axis=-1) <= params.local_costmap_half_m
+        seen = obs.people_visible & (params.people_are_obstacles | local)
         bodies = jnp.any((d <= params.person_radius_m) & seen[:, None, None], axis=0)
         # A social layer's lethal cells (the GSCL queue's U) are inflated with the walls, as Nav2's
         # inflation layer grows every lethal cell a layer before it wrote: uninflated, the robot's

@@ -1,6 +1,7 @@
 """The queue scene (seed 002 Sec. 5.2.5/5.3.5) as the arena runs it: the stop-and-go every
 method gets there (planners.actors.with_stop_and_go), the people left to the social layer by the
-global planner (people_in_global_plan false), and the queue rule (jaxsim/scenes/rule_monitor.py)
+global planner (people_in_global_plan false) but for those inside the local costmap's window,
+and the queue rule (jaxsim/scenes/rule_monitor.py)
 on whole episodes: a robot that joins the line at its tail and advances with it obeys the rule
 and reaches the goal in time; one that drives straight to the desk cuts in."""
 
@@ -83,6 +84,13 @@ def test_the_global_planner_leaves_the_people_to_the_social_layer_when_the_scene
         offsets[seen] = np.abs(path[:, 1]).max()
     assert offsets[True] > 0.4  # at least a body and the robot's radius off the person's centre
     assert offsets[False] < 0.15  # the straight line, to a cell
+    # A person inside the local costmap's window (1.5 m, Nav2's 3 m x 3 m) is an obstacle either way:
+    # the path the robot follows is the one its controller would keep clear of them.
+    near = _observation([(1.2, 0.0)], goal=(3.8, 0.0)).replace(robot_xy_m=jnp.array([0.0, 0.0], jnp.float32))
+    params = actors.stack_params(setup.env, setup.map, people_are_obstacles=False)
+    assert float(params.local_costmap_half_m) == actors.LOCAL_COSTMAP_HALF_M == 1.5
+    st = actor.plan(params, actor.init(jax.random.PRNGKey(0), near), near, jax.random.PRNGKey(0))
+    assert np.abs(np.asarray(st.path[: int(st.path_len)])[:, 1]).max() > 0.4
 
 
 def _band_costs(level):
