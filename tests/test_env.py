@@ -428,3 +428,20 @@ def test_the_arena_refuses_an_actor_whose_action_has_another_shape(tmp_path, cap
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and f"actor '{function}'" in err and "shape (2,)" in err, err
     assert not (tmp_path / "o" / "run.json").exists()
+
+
+def test_a_velocity_models_people_feel_the_robot_widened_to_the_envs_bodies(setup):
+    """A velocity model's people keep their own fitted body (0.18 m for the steering model),
+    narrower than the env's person (0.25 m) whose contacts the metrics count: they feel the robot
+    widened by the difference, so the contact distance is the env's; the social force's people
+    feel the robot as it is."""
+    from socialnav.jaxsim.scenes.env import EnvConfig, make_env
+    from socialnav.jaxsim.speed_model import CALIBRATED
+
+    steering = make_env(setup.spec, EnvConfig(human_model="steering_speed_calibrated"))
+    body = CALIBRATED["steering_speed_calibrated"].radius_m
+    felt = float(steering.robot_radius_felt_m())
+    assert felt == pytest.approx(steering.robot.radius_m + steering.config.person_radius_m - body)
+    assert felt + body == pytest.approx(steering.robot.radius_m + steering.config.person_radius_m)
+    plain = make_env(setup.spec, EnvConfig())
+    assert float(plain.robot_radius_felt_m()) == pytest.approx(plain.robot.radius_m)

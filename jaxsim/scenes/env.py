@@ -219,6 +219,17 @@ class Env:
 
     # ------------------------------------------------------------------ API
 
+    def robot_radius_felt_m(self):
+        """The robot's radius as the people's model feels it. A velocity model's people keep their
+        own fitted body (0.16-0.18 m), narrower than the person the env counts contacts with
+        (``config.person_radius_m``, 0.25 m): the robot is widened by the difference, so a person
+        keeps off it by the bodies the metrics measure, and "a person walked into the robot" is not
+        an artefact of two radii. The other models' people have the env's body (ORCA) or none (the
+        social force)."""
+        if self.velocity is None:
+            return self.robot.radius_m
+        return self.robot.radius_m + jnp.maximum(self.config.person_radius_m - self.velocity.radius_m, 0.0)
+
     def reset(self, key: jax.Array, variant: Variant) -> tuple[EnvState, TimeStep]:
         """The episode of ``variant`` at time 0 (the variant fixes the people and the crowd's
         random force, so every actor meets the same crowd: common random numbers)."""
@@ -263,7 +274,7 @@ class Env:
             state.step,
             cfg.human_model,
             self.orca,
-            self.robot.radius_m,
+            self.robot_radius_felt_m(),
             self.velocity,
             state.variant.walking_group if self.walking_groups else None,
             self.recorded,
