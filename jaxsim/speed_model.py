@@ -22,9 +22,9 @@ The published model never overtakes: a person behind a slower walker follows at 
 speed unless a neighbour's (short-ranged) repulsion turns them, so in a corridor a lane closes
 up behind its slowest walker. ``step_speed_model(..., headings=STEERING_HEADINGS)`` (the human
 model ``steering_speed``) adds Moussaïd, Helbing & Theraulaz 2011's choice of heading: of the
-heading and its turns up to ``steering_max_rad`` either side, a person walks the one along which
-the headway speed makes the most progress (:func:`_steer`). Where nobody is in the way it is the
-published model, bit for bit.
+heading and its turns up to ``steering_max_rad`` either side, a person walks the one that leads
+closest to the point ``steering_horizon_m`` ahead, given where they would meet someone walking on
+(:func:`_steer`). Where nobody is in the way it is the published model, bit for bit.
 
 Everything is a smooth function of positions almost everywhere (the ``min``/``max`` and the lane
 test are piecewise), so a loss over a rollout differentiates through it
@@ -49,7 +49,9 @@ class SpeedModelParams:
     """The collision-free speed model's constants (dynamic floats: traced, fittable).
 
     JuPedSim's defaults: ``time_gap_s`` 1 s, ``radius_m`` 0.2 m, neighbour repulsion strength 8
-    and range 0.1 m, geometry repulsion strength 5 and range 0.02 m, neighbours within 3 m.
+    and range 0.1 m, geometry repulsion strength 5 and range 0.02 m, neighbours within 3 m. The
+    steering model's (``steering_speed``, :func:`_steer`): turns up to 75 degrees either side and a
+    10 m horizon, Moussaïd et al. 2011's field of view and ``d_max``.
     """
 
     time_gap_s: float = 1.0
