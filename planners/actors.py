@@ -131,6 +131,7 @@ def stack_params(
         person_radius_m=jnp.float32(person),
         gscl_weights=gscl_weights,
         people_are_obstacles=jnp.asarray(people_are_obstacles),
+        local_costmap_half_m=jnp.float32(LOCAL_COSTMAP_HALF_M),
     )
 
 
