@@ -165,6 +165,7 @@ def episode_metrics(
     _, (by_robot, by_person) = jax.lax.scan(
         collide, jnp.zeros(dist.shape[1], bool), (dist, seen, robot_closing, person_closing)
     )
+    collisions = jnp.sum(by_robot) + jnp.sum(by_person)
 
     # Time to collision at constant velocities (the bodies touching), over steps and people.
     rel_v = people_velocity - robot_v[:, None, :]
@@ -253,9 +254,9 @@ def episode_metrics(
         "intrusions_person": jnp.sum(entered & ~entered_by_robot),
         "group_intrusions": jnp.sum(entered_group),
         "social_success": success & rule_ok,
-        "goal_no_collision": success & (jnp.sum(by_robot) + jnp.sum(by_person) == 0),
-        "social_no_collision": success & rule_ok & (jnp.sum(by_robot) + jnp.sum(by_person) == 0),
-        "collisions": jnp.sum(by_robot) + jnp.sum(by_person),
+        "goal_no_collision": success & (collisions == 0),
+        "social_no_collision": success & rule_ok & (collisions == 0),
+        "collisions": collisions,
         "collisions_robot": jnp.sum(by_robot),
         "collisions_person": jnp.sum(by_person),
         "time_s": time_s,

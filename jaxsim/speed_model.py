@@ -78,15 +78,19 @@ def _move(x, y, vx, vy, wall, nx, ny, moving, dt: float):
     )
 
 
-def _spacing(ex, ey, dx, dy, dist, reach, others):
-    """(...,) the room ahead along heading ``(ex, ey)`` (..., ): ``d_ij - l_ij`` to the nearest
-    neighbour ahead in the heading's lane (``dx, dy, dist, reach, others`` (N, N + 1), the
-    heading's leading axes broadcast against them)."""
+def _blocking(ex, ey, dx, dy, reach, others):
+    """(..., N + 1) bool: the neighbours ahead of heading ``(ex, ey)`` (...,) in its lane
+    (``dx, dy, reach, others`` (N, N + 1), the heading's leading axes broadcast against them)."""
     ahead = ex[..., None] * dx + ey[..., None] * dy >= 0.0
     lane = jnp.abs(-ey[..., None] * dx + ex[..., None] * dy) <= reach
+    return others & ahead & lane
+
+
+def _spacing(blocking, dist, reach):
+    """(...,) the room ahead: ``d_ij - l_ij`` to the nearest of the ``blocking`` neighbours."""
     # Nobody ahead: a spacing of 1 km (an infinite one would give the speed's gradient with
     # respect to the time gap as 0 x inf = NaN where the desired speed binds).
-    return jnp.min(jnp.where(others & ahead & lane, dist - reach, FREE_SPACING_M), axis=-1)
+    return jnp.min(jnp.where(blocking, dist - reach, FREE_SPACING_M), axis=-1)
 
 
 def heading_offsets(headings: int) -> jnp.ndarray:
@@ -127,11 +131,9 @@ def _steer(params, headings: int, ex, ey, dx, dy, dist, reach, others, vxs, vys,
     cos, sin = jnp.cos(turn), jnp.sin(turn)
     cx = ex[:, None] * cos[None, :] - ey[:, None] * sin[None, :]  # (N, K)
     cy = ex[:, None] * sin[None, :] + ey[:, None] * cos[None, :]
-    ahead = cx[..., None] * dx[:, None] + cy[..., None] * dy[:, None] >= 0.0  # (N, K, N + 1)
-    lane = jnp.abs(-cy[..., None] * dx[:, None] + cx[..., None] * dy[:, None]) <= reach[:, None]
-    blocking = others[:, None] & ahead & lane
+    blocking = _blocking(cx, cy, dx[:, None], dy[:, None], reach[:, None], others[:, None])  # (N, K, N + 1)
+    room = _spacing(blocking, dist[:, None], reach[:, None])  # (N, K)
     gap = (dist - reach)[:, None, :]
-    room = jnp.min(jnp.where(blocking, gap, FREE_SPACING_M), axis=-1)  # (N, K)
     v0 = desired_speed_mps[:, None, None]
     closing = v0 - (vxs[None, None, :] * cx[..., None] + vys[None, None, :] * cy[..., None])
     meet = jnp.where(closing > _EPS, jnp.maximum(gap, 0.0) * v0 / jnp.maximum(closing, _EPS), FREE_SPACING_M)
@@ -206,7 +208,7 @@ def step_speed_model(
         ex, ey, spacing = _steer(params, headings, ex, ey, dx, dy, dist, reach, others, vxs, vys, wall, nx, ny,
                                  desired_speed_mps)  # fmt: skip
     else:
-        spacing = _spacing(ex, ey, dx, dy, dist, reach, others)
+        spacing = _spacing(_blocking(ex, ey, dx, dy, reach, others), dist, reach)
     speed = jnp.minimum(jnp.maximum(spacing / params.time_gap_s, 0.0), desired_speed_mps)
     speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
     new_vx, new_vy = speed * ex, speed * ey
