@@ -109,3 +109,36 @@ def trajectory_fit(rows: list[dict], title: str, path: pathlib.Path) -> pathlib.
     ax.legend(fontsize=6, ncol=2)
     ax.set_title(title, fontsize=10)
     return figures.save(fig, path)
+
+
+def joint_tradeoff(rows: list[dict], data: dict, title: str, path: pathlib.Path) -> pathlib.Path:
+    """The joint fits (:func:`evaluation.joint_calibration.sweep`'s rows, each with its held-out
+    ``checks`` as ``"held_out"``): left, the two training terms (the diagram's loss against the
+    percent ADE behind constant velocity), the start hollow; right, held out, the density bins inside
+    the data's ±1 s.d. against the five-scene ADE minus constant velocity's (m, left of 0 is ahead)."""
+    fig = figures.figure(figsize=(8.4, 3.6), layout="constrained")
+    train, held = fig.subplots(1, 2)
+    train.plot(rows[0]["start_behind_pct"], rows[0]["start_fd_loss"], "o", mfc="none", color="k", label="start")
+    cv_ade = float(data["constant_velocity"]["ade_m"].mean())
+    for colour, row in zip(COLOURS, rows, strict=False):
+        label = f"w = {row['weight']:g}"
+        train.plot(row["behind_pct"], row["fd_loss"], "o", color=colour, label=label)
+        k = row["held_out"]
+        inside = int(k["fd_bins_inside_1sd"].split()[0])
+        held.plot(
+            k["eth_ucy_ade_fde"][0] - cv_ade,
+            inside,
+            "o",
+            color=colour,
+            label=f"{label}: ahead in {k['eth_ucy_scenes_ahead']} of 5 scenes",
+        )
+    train.set_xlabel("training: ADE behind constant velocity (%)")
+    train.set_ylabel("training: diagram loss (s.d.²)")
+    train.legend(fontsize=7)
+    held.axvline(0.0, color="0.6", lw=0.8)
+    held.set_xlabel("held out: ETH/UCY ADE - constant velocity's (m)")
+    held.set_ylabel("held out: density bins inside ±1 s.d.")
+    held.set_ylim(-0.3, len(measures.DENSITY_BINS) + 0.3)
+    held.legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    return figures.save(fig, path)

@@ -476,7 +476,13 @@ def prediction_windows(scene: str, split: str = "test", reach_m: float = 1.0) ->
     """:class:`PredictionWindows` of ``scene``'s ``split`` (:func:`eth_ucy_windows`); walking
     groups detected within ``reach_m`` (:func:`evaluation.pedestrian_measures.walking_groups`).
     Cached: a validation scores every model three ways on each test split (read-only arrays)."""
-    observed, future, complete, present, frame_s = eth_ucy_windows(recorded.eth_ucy_split(scene, split))
+    return windows_of(recorded.eth_ucy_split(scene, split), reach_m)
+
+
+def windows_of(rows, reach_m: float = 1.0) -> PredictionWindows:
+    """:class:`PredictionWindows` of trajectory ``rows`` (:func:`socialnav.data.recorded.trajectories`'
+    table, any recordings), read-only."""
+    observed, future, complete, present, frame_s = eth_ucy_windows(rows)
     last, before = observed[:, :, -1], observed[:, :, -2]
     velocity = np.nan_to_num((last - before) / frame_s[:, None, None])
     horizon = frame_s[:, None] * np.arange(1, PREDICT_FRAMES + 1)  # (W, 12) s

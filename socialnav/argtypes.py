@@ -87,6 +87,11 @@ def comma_probabilities(text: str) -> list[float]:
     return values
 
 
+def comma_positive_floats(text: str) -> list[float]:
+    """Comma-separated finite numbers > 0, e.g. ``0.1,0.3,1``."""
+    return [positive_float(v) for v in text.split(",")]
+
+
 def non_negative_float(text: str) -> float:
     """A finite number >= 0."""
     try:

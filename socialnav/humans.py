@@ -3,6 +3,7 @@
     socialnav humans validate --out runs/humans                       # the social force
     socialnav humans validate --models social_force,orca --quick --out runs/humans-quick
     socialnav humans calibrate --model collision_free_speed --out runs/calibration
+    socialnav humans calibrate --data joint --model steering_speed_calibrated --out runs/joint
 
 Writes ``summary.json`` (each model's checks against the bar of issue 61), the tables
 (``fundamental_diagram.csv``, ``prediction.csv``, ``counterflow.csv``, ``bodies.csv``) and three
@@ -16,7 +17,15 @@ import pathlib
 import sys
 import time
 
-from socialnav.argtypes import comma_names, non_negative_int, output_folder, positive_float, positive_int, seed_int
+from socialnav.argtypes import (
+    comma_names,
+    comma_positive_floats,
+    non_negative_int,
+    output_folder,
+    positive_float,
+    positive_int,
+    seed_int,
+)
 from socialnav.common import runfolder
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 
@@ -59,16 +68,21 @@ def add_parser(top) -> None:
     )
     c.add_argument("--model", choices=CALIBRATABLE, default="collision_free_speed",
                    help="the model to fit, from its parameters (a _calibrated one: from the Jülich fit)")  # fmt: skip
-    c.add_argument("--data", choices=("juelich", "eth_ucy"), default="juelich",
+    c.add_argument("--data", choices=("juelich", "eth_ucy", "joint"), default="juelich",
                    help="juelich: the fundamental diagram of the training runs (default); eth_ucy: the prediction "
-                        "ADE, one fit a scene on its training split, scored on its test split")  # fmt: skip
+                        "ADE, one fit a scene on its training split, scored on its test split; joint: both at once "
+                        "(the diagram's loss + w x the percent ADE behind constant velocity on the ETH/UCY "
+                        "recordings no scene tests on), one fit a --weights value, each scored by the "
+                        "validation")  # fmt: skip
+    c.add_argument("--weights", type=comma_positive_floats, default=None,
+                   help="with --data joint: the exchange rates w swept (0.03,0.1,0.3,1)")  # fmt: skip
     c.add_argument("--scenes", type=comma_names, default=None, help="with --data eth_ucy: the held-out scenes (all)")
     c.add_argument("--out", type=output_folder, default=pathlib.Path("runs/calibration"), help="folder")
     c.add_argument("--steps", type=positive_int, default=None, help="gradient steps (80; eth_ucy 60 a scene)")
     c.add_argument("--learning-rate", type=positive_float, default=None,
                    help="Adam's, on log-parameters (0.02; eth_ucy 0.2)")  # fmt: skip
     c.add_argument("--evaluations", type=non_negative_int, default=None,
-                   help="Nelder-Mead's loss evaluations (250; eth_ucy 60, 0: none)")  # fmt: skip
+                   help="Nelder-Mead's loss evaluations (250; eth_ucy 60, 0: none; joint 150 a weight)")  # fmt: skip
     c.add_argument("--sample", type=positive_int, default=256,
                    help="eth_ucy: training windows the loss is taken over, drawn once (256)")  # fmt: skip
     c.add_argument("--seed", type=seed_int, default=0)
@@ -77,7 +91,7 @@ def add_parser(top) -> None:
 
 
 CALIBRATE_JOB = "socialnav humans calibrate"
-CALIBRATE_RESULTS = ("fit.json", "curve.png")
+CALIBRATE_RESULTS = ("fit.json", "curve.png", "held_out")
 
 
 def calibrate(args) -> int:
@@ -93,8 +107,13 @@ def calibrate(args) -> int:
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
         return 2
+    if args.data != "joint" and args.weights is not None:
+        print("socialnav humans calibrate: --weights goes with --data joint", file=sys.stderr)
+        return 2
     if args.data == "eth_ucy":
         return _calibrate_trajectories(args)
+    if args.data == "joint":
+        return _calibrate_joint(args)
     if args.model.endswith("_calibrated") or args.scenes is not None:
         what = "--model " + args.model if args.model.endswith("_calibrated") else "--scenes"
         print(f"socialnav humans calibrate: {what} goes with --data eth_ucy (the Jülich fit starts from a model's "
@@ -189,6 +208,59 @@ def _calibrate_trajectories(args) -> int:
             print(f"{label}: test ADE/FDE {mean(key, 0):.3f} / {mean(key, 1):.3f} m over {len(rows)} held-out scenes"
                   + ("" if key == "constant_velocity" else f", ahead of constant velocity in {ahead}"))  # fmt: skip
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def _calibrate_joint(args) -> int:
+    """``--data joint``: :func:`evaluation.joint_calibration.sweep`, each fit scored by the
+    validation (:func:`evaluation.human_validation.validate`) on held-out data."""
+    import types
+
+    from socialnav.evaluation import human_calibration as hc
+    from socialnav.evaluation import human_plots
+    from socialnav.evaluation import human_validation as hv
+    from socialnav.evaluation import joint_calibration as jc
+
+    if args.scenes is not None:
+        print("socialnav humans calibrate: --scenes goes with --data eth_ucy", file=sys.stderr)
+        return 2
+    if args.model.startswith("orca"):
+        print("socialnav humans calibrate: --data joint fits the velocity models (ORCA's Jülich and ETH/UCY fits "
+              "are apart)", file=sys.stderr)  # fmt: skip
+        return 2
+    if args.evaluations == 0:
+        print("socialnav humans calibrate: --evaluations must be >= 1 with --data joint", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+    say = lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True)
+    model = hc.named_model(args.model)
+    weights = args.weights or list(jc.WEIGHTS)
+    data = jc.joint_data(model, args.seed)
+    say(f"{args.model}: fitting {', '.join(hc.FITTED[model.name])} to the runs {', '.join(hc.TRAIN_RUNS)} and "
+        f"{len(data.windows.start)} ETH/UCY windows of {', '.join(jc.TRAIN_RECORDINGS)} (constant velocity's ADE "
+        f"{data.constant_velocity_ade_m:.3f} m), weights {', '.join(f'{w:g}' for w in weights)}")  # fmt: skip
+    rows = jc.sweep(model, data, weights, args.evaluations or 150, args.seed, say)
+    reference = hv.reference(say)
+    results = {f"w={r['weight']:g}": hv.validate(r.pop("model"), reference, seed=args.seed, progress=say,
+                                                 label=f"w={r['weight']:g}") for r in rows}  # fmt: skip
+    for row, result in zip(rows, results.values(), strict=True):
+        row["held_out"] = result["checks"]
+    fit = {"model": args.model, "data": "joint", "fields": list(hc.FITTED[model.name]),
+           "train_runs": list(hc.TRAIN_RUNS), "train_recordings": list(jc.TRAIN_RECORDINGS),
+           "train_windows": len(data.windows.start), "constant_velocity_ade_m": data.constant_velocity_ade_m,
+           "start": hc.fitted_values(model), "weights": rows, "seed": args.seed,
+           "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
+    try:
+        with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
+            human_plots.joint_tradeoff(rows, reference, f"{args.model}: one fit, both data", stage / "curve.png")
+            (stage / "held_out").mkdir()
+            _write(stage / "held_out", reference, results, types.SimpleNamespace(quick=False, seed=args.seed))
+            (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
+    except runfolder.RunFolderError as e:
+        print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
+        return 2
+    _headline(reference, results)
+    print(f"wrote {args.out}/{{fit.json, curve.png, held_out}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
 
