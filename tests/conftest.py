@@ -6,24 +6,38 @@ import os
 
 import pytest
 
-# Tests do not write JAX's compilation cache into the user's home (the command line turns it on).
-os.environ.setdefault("SOCIALNAV_JAX_CACHE", "off")
-# The C++ social force (jaxsim.native) is built afresh into a folder of this session's own, once
-# (about 3 s; the processes the tests start inherit it): every run checks the build from source.
-if "SOCIALNAV_NATIVE_CACHE" not in os.environ:
+
+def _session_folder(variable: str, prefix: str) -> None:
+    """``$variable`` set to a new folder of this test session's own, removed at its end, unless
+    already set. Set once by the first process (pytest-xdist's controller loads this file before it
+    starts its workers), so the workers and the processes the tests start share it."""
+    if variable in os.environ:
+        return
     import atexit
     import shutil
     import tempfile
 
-    _native_cache = tempfile.mkdtemp(prefix="socialnav-native-")
-    os.environ["SOCIALNAV_NATIVE_CACHE"] = _native_cache
-    atexit.register(shutil.rmtree, _native_cache, ignore_errors=True)
+    folder = tempfile.mkdtemp(prefix=prefix)
+    os.environ[variable] = folder
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
 
-from plans import scipy_shortest_plan
 
-from socialnav.jaxsim.route_follower import route_follower
-from socialnav.jaxsim.scenario import load_scenario
-from socialnav.jaxsim.world import build_world
+# JAX's compilation cache in a folder of the session's own, never the user's home: a program one
+# test (or worker, or command it runs) compiled is read back by the next that needs it.
+# SOCIALNAV_JAX_CACHE=off runs every test cold.
+_session_folder("SOCIALNAV_JAX_CACHE", "socialnav-xla-")
+from socialnav import runtime  # noqa: E402  (before jax is imported)
+
+runtime.request_compilation_cache()
+# The C++ social force (jaxsim.native) is built afresh into a folder of this session's own, once
+# (about 3 s; the processes the tests start inherit it): every run checks the build from source.
+_session_folder("SOCIALNAV_NATIVE_CACHE", "socialnav-native-")
+
+from plans import scipy_shortest_plan  # noqa: E402  (after the folders above are set)
+
+from socialnav.jaxsim.route_follower import route_follower  # noqa: E402
+from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
+from socialnav.jaxsim.world import build_world  # noqa: E402
 
 
 @pytest.fixture(autouse=True, scope="module")

@@ -1,0 +1,59 @@
+"""The papers' claims in two arena runs side by side: each run's ``directions.csv`` (a claim's
+paired difference with its 95 % interval and verdict, :mod:`evaluation.papers`) joined by claim,
+printed as a markdown table with the claims whose verdict differs between the runs counted.
+
+    python scripts/claims_two_runs.py runs/arena-sf runs/arena-steer --labels "social force" "steering speed"
+
+Two runs of the same scenes, variants and seed pair their episodes (common random numbers), so a
+claim's difference between the runs is the runs' own (the people's model, say).
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+import pandas as pd
+
+KEY = ["source", "scene", "metric", "proposed", "baseline"]
+
+
+def directions(folder: str) -> pd.DataFrame:
+    path = pathlib.Path(folder, "directions.csv")
+    if not path.is_file():
+        raise SystemExit(f"{folder}: no directions.csv (not a finished arena run folder)")
+    return pd.read_csv(path)
+
+
+def cell(row, suffix: str) -> str:
+    return (f"{row['ours_diff' + suffix]:+.2f} [{row['ours_diff_lo' + suffix]:+.2f}, "
+            f"{row['ours_diff_hi' + suffix]:+.2f}] | {row['verdict' + suffix]}")  # fmt: skip
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("runs", nargs=2, help="two arena run folders")
+    parser.add_argument("--labels", nargs=2, default=None, help="the two columns' names (default: the folders)")
+    args = parser.parse_args(argv)
+    labels = args.labels or args.runs
+    a, b = (directions(r) for r in args.runs)
+    both = a.merge(b, on=KEY, suffixes=("_a", "_b"), how="outer", indicator=True)
+    print(f"| source | scene | metric | proposed - baseline | paper | {labels[0]} | verdict | {labels[1]} | verdict |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for _, row in both.iterrows():
+        left = cell(row, "_a") if row["_merge"] != "right_only" else "- | not run"
+        right = cell(row, "_b") if row["_merge"] != "left_only" else "- | not run"
+        paper = row["paper_diff_a"] if row["_merge"] != "right_only" else row["paper_diff_b"]
+        print(f"| {row['source']} | `{row['scene']}` | {row['metric']} | {row['proposed']} - {row['baseline']} | "
+              f"{paper:+.2f} | {left} | {right} |")  # fmt: skip
+    matched = both[both["_merge"] == "both"]
+    changed = matched[matched["verdict_a"] != matched["verdict_b"]]
+    print(f"\n{len(matched)} claims in both runs; the verdict differs in {len(changed)}:")
+    for _, row in changed.iterrows():
+        print(f"- {row['scene']} {row['metric']} ({row['proposed']} - {row['baseline']}): {row['verdict_a']} -> "
+              f"{row['verdict_b']}")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
