@@ -1,0 +1,53 @@
+"""scripts/claims_two_runs.py: two arena runs' claims side by side, the changed verdicts counted."""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+
+import pandas as pd
+import pytest
+
+SCRIPT = pathlib.Path(__file__).resolve().parent.parent / "scripts" / "claims_two_runs.py"
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("claims_two_runs", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _run(tmp_path, name, rows):
+    folder = tmp_path / name
+    folder.mkdir()
+    columns = ["source", "scene", "metric", "proposed", "baseline", "paper_diff", "ours_diff", "ours_diff_lo",
+               "ours_diff_hi", "n_pairs", "verdict"]  # fmt: skip
+    pd.DataFrame(rows, columns=columns).to_csv(folder / "directions.csv", index=False)
+    return folder
+
+
+def test_claims_join_by_claim_and_the_changed_verdicts_are_counted(tmp_path, capsys):
+    a = _run(tmp_path, "a", [
+        ["s1", "x", "d_min_m", "casn", "snl", 0.3, 0.1, 0.05, 0.15, 100, "reproduced"],
+        ["s1", "y", "goal", "gscl", "navfn", 7, 3.0, -1.0, 7.0, 100, "same sign, not significant"],
+        ["s1", "z", "goal", "gscl", "navfn", 7, 3.0, 1.0, 5.0, 100, "reproduced"],
+    ])  # fmt: skip
+    b = _run(tmp_path, "b", [
+        ["s1", "y", "goal", "gscl", "navfn", 7, 5.0, 2.0, 8.0, 100, "reproduced"],
+        ["s1", "x", "d_min_m", "casn", "snl", 0.3, 0.2, 0.1, 0.3, 100, "reproduced"],
+    ])  # fmt: skip
+    assert _script().main([str(a), str(b), "--labels", "sf", "steer"]) == 0
+    out = capsys.readouterr().out
+    assert "| sf | verdict | steer | verdict |" in out
+    assert (
+        "| s1 | `x` | d_min_m | casn - snl | +0.30 | +0.10 [+0.05, +0.15] | reproduced | +0.20 [+0.10, +0.30] |" in out
+    )
+    assert "- | not run" in out  # z only in the first run
+    assert "2 claims in both runs; the verdict differs in 1:" in out
+    assert "- y goal (gscl - navfn): same sign, not significant -> reproduced" in out
+
+
+def test_a_folder_without_directions_is_named(tmp_path):
+    with pytest.raises(SystemExit, match="no directions.csv"):
+        _script().main([str(tmp_path), str(tmp_path)])
