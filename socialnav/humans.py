@@ -231,6 +231,10 @@ def _calibrate_joint(args) -> int:
     if args.evaluations == 0:
         print("socialnav humans calibrate: --evaluations must be >= 1 with --data joint", file=sys.stderr)
         return 2
+    if args.steps is not None or args.learning_rate is not None:
+        print("socialnav humans calibrate: --data joint fits by Nelder-Mead alone (no --steps, --learning-rate)",
+              file=sys.stderr)  # fmt: skip
+        return 2
     t0 = time.perf_counter()
     say = lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True)
     model = hc.named_model(args.model)
