@@ -136,7 +136,7 @@ class TrainConfig:
         inference mode, no gradient computed through it), and the loss is the forbidden head's
         cross-entropy alone. Needs ``init_from`` and ``forbidden_features``. Why: a fine-tune of
         the shared network learnt the U but drew the blind corner beside a queue weaker than the
-        shipped model (93.5 % against 95.8 % of the rule suite's scenes, commit 826782f); a
+        shipped model (93.5 % against 95.8 % of the rule suite's scenes); a
         frozen graded network keeps every graded cost the source drew.
       seed: seeds the data streams and the initialisation.
       checkpoint_every_steps: orbax checkpoint interval within an epoch (epochs' ends always).

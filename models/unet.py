@@ -21,8 +21,8 @@ This project's choices (the paper does not give them):
   regression, as Nav2 keeps a keepout mask apart from its graded layers. The call returns one
   map: :data:`models.social_costs.FORBIDDEN` where the probability is at least 1/2, else the
   graded channel scaled to ``[0, GRADED_TOP]``, so that a cost reader needs no second output.
-  Why not one regressed channel with a forbidden level above the graded ones (tried, commit
-  0d92bc9): the least-squares answer where the network is unsure is the mean, and along the
+  Why not one regressed channel with a forbidden level above the graded ones (tried): the
+  least-squares answer where the network is unsure is the mean, and along the
   line's tail it stayed below the lethal threshold, so plans crossed the line's side.
   With ``forbidden_features`` the head is a **separate branch** (:data:`BRANCH`): a second U-Net
   of its own widths whose one output is the forbidden logit, the main network keeping its one graded
@@ -80,7 +80,7 @@ class UpConv(nnx.ConvTranspose):
     the zero-dilated input, 18 % of a training step (``benchmarks/profile_gscl_step.py``); as a
     product the default model's training loop is faster on both instruction sets
     (``benchmarks/bench_gscl_loop.py`` against ``--transposed-conv``, batch 32, 2 cores,
-    2026-11-27, interleaved processes: AVX-512 166-175 -> 230-253 samples/s; AVX2 emulated 173-197
+    interleaved processes: AVX-512 166-175 -> 230-253 samples/s; AVX2 emulated 173-197
     -> 224-259)."""
 
     def __init__(self, in_features: int, out_features: int, *, use_bias: bool = True, rngs: nnx.Rngs):

@@ -199,7 +199,7 @@ RESULTS = (
 # The time printed before a run, as a range on this project's 2-core machine: start-up, then a
 # compilation per program (one per scene file and method, and two per scene for the people
 # without the robot and the metrics; a held-out mirror shares its scene's), then the simulated
-# seconds of every episode. Measured here on 2026-11-28 with no compilation cache
+# seconds of every episode. Measured here with no compilation cache
 # (SOCIALNAV_JAX_CACHE=off): seed 001's four scenes x 11 methods in 75 s at 2 variants and 89 s
 # at 50 (1.2 s a program; the 48 variants more, 84,000 simulated seconds, at 6,000 a second);
 # the default table with --held-out x 100 variants took 9.3 min (docs/arena-results.md). The

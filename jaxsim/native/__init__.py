@@ -55,8 +55,8 @@ FLAGS = (
 # pressure-aware. The social force's pair loop runs one chain of dependent operations per vector
 # of worlds (2 square roots, 3 divisions, 2 exponentials in a row), too long for the processor's
 # out-of-order window to overlap two of them; social_force.cc writes the block's vectors as
-# independent chains in one loop body, and this pass interleaves them. On one core (2026-11-27,
-# AMD EPYC, 1024 worlds of 51 agents, ns per pair): AVX2 build 6.0 -> 3.1, AVX-512 build
+# independent chains in one loop body, and this pass interleaves them. On one core (AMD
+# EPYC, 1024 worlds of 51 agents, ns per pair): AVX2 build 6.0 -> 3.1, AVX-512 build
 # 3.5 -> 2.3; the chains without the pass, or the pass without the chains, gained nothing. The
 # float operations are the same, so the results are the same bits. Only for the social force:
 # the planners' Dijkstra (no such chains) measured 0-15 % slower with it.
