@@ -43,19 +43,18 @@ def _tiny(model: hv.HumanModel, windows: int = 48) -> jc.JointData:
 
 def test_a_lone_walker_is_predicted_as_constant_velocity_so_the_model_trails_it_by_nothing():
     """Known answer: with one person in every window nobody interacts, the model walks on at
-    the last observed velocity, and the percent behind constant velocity is zero."""
+    the last observed velocity, and its ADE is constant velocity's."""
     model = hc.named_model("steering_speed_calibrated")
     all_windows = jc.training_windows()
     alone = np.flatnonzero(np.asarray(all_windows.present).sum(axis=1) == 1)
     assert len(alone) >= 5
     windows = all_windows.take(alone)
     ade_cv, _ = hv.measures.ade_fde(windows.constant_velocity[windows.complete], windows.future[windows.complete])
-    data = dataclasses.replace(_tiny(model), windows=windows, constant_velocity_ade_m=float(ade_cv.mean()))
-    fd, behind = jc.joint_terms(model, data, hc.theta_of(model), jax.random.key(0))
-    assert float(behind) == pytest.approx(0.0, abs=0.05)
-    assert np.isfinite(float(fd)) and float(fd) >= 0.0
+    ade = jc.prediction_ade(model, windows, jax.random.key(0))
+    assert float(ade) == pytest.approx(float(ade_cv.mean()), rel=5e-4)
 
 
+@pytest.mark.slow
 def test_each_weights_fit_is_at_least_as_good_as_its_start_and_is_the_model_it_returns():
     model = hc.named_model("steering_speed_calibrated")
     data = _tiny(model)
