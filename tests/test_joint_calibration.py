@@ -1,5 +1,5 @@
 """One human-model fit to both kinds of data (:mod:`evaluation.joint_calibration`): what it reads,
-its loss on a known answer, the fit's plumbing and the command's bad input."""
+its prediction term on a known answer, the fit's plumbing and the command's bad input."""
 
 from __future__ import annotations
 
