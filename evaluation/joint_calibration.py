@@ -96,11 +96,20 @@ def joint_loss(model: hv.HumanModel, data: JointData, theta, key, weight: float)
     return fd + weight * behind_pct
 
 
-def fit(model: hv.HumanModel, data: JointData, weight: float, evaluations: int = 150, seed: int = 0, log=print):
+def compiled_loss(model: hv.HumanModel, data: JointData):
+    """``loss(theta, key, weight)``: :func:`joint_loss` jitted once, the weight traced, so a sweep
+    compiles one program for all its weights."""
+    return jax.jit(lambda th, key, weight: joint_loss(model, data, th, key, weight))
+
+
+def fit(model: hv.HumanModel, data: JointData, weight: float, evaluations: int = 150, seed: int = 0, log=print,
+        loss=None):  # fmt: skip
     """Nelder-Mead on :func:`joint_loss` at ``weight`` from ``model``'s values: ``(fitted model,
-    history)``, ``history`` a list of ``(evaluation, loss, seconds)``."""
-    loss = jax.jit(lambda th, key: joint_loss(model, data, th, key, weight))
-    x, history = minimise.nelder_mead(loss, hc.theta_of(model), evaluations, 1e-3, (jax.random.key(seed),), log)
+    history)``, ``history`` a list of ``(evaluation, loss, seconds)``. ``loss``: a
+    :func:`compiled_loss` of the same model and data to reuse (default: one made here)."""
+    loss = compiled_loss(model, data) if loss is None else loss
+    args = (jax.random.key(seed), jnp.float32(weight))
+    x, history = minimise.nelder_mead(loss, hc.theta_of(model), evaluations, 1e-3, args, log)
     return hc.with_theta(model, jnp.asarray(x, jnp.float32)), history
 
 
@@ -109,12 +118,13 @@ def sweep(model: hv.HumanModel, data: JointData, weights=WEIGHTS, evaluations: i
     """One fit a weight: a row each with the weight, the fitted values, both training terms at the
     start and at the fit, the seconds and the fitted model (``"model"``)."""
     terms = jax.jit(lambda th, key: joint_terms(model, data, th, key))
+    loss = compiled_loss(model, data)
     key = jax.random.key(seed)
     start = [float(t) for t in terms(hc.theta_of(model), key)]
     rows = []
     for weight in weights:
         log(f"weight {weight:g}: Nelder-Mead on the diagram's loss + {weight:g} x the percent behind constant velocity")
-        fitted, history = fit(model, data, weight, evaluations, seed, log)
+        fitted, history = fit(model, data, weight, evaluations, seed, log, loss)
         fd, behind = (float(t) for t in terms(hc.theta_of(fitted), key))
         rows.append({"weight": weight, "values": hc.fitted_values(fitted), "start_fd_loss": start[0],
                      "start_behind_pct": start[1], "fd_loss": fd, "behind_pct": behind,
@@ -124,5 +134,5 @@ def sweep(model: hv.HumanModel, data: JointData, weights=WEIGHTS, evaluations: i
     return rows
 
 
-__all__ = ["TRAIN_RECORDINGS", "WEIGHTS", "JointData", "fit", "joint_data", "joint_loss", "joint_terms",
-           "prediction_ade", "sweep", "training_windows"]  # fmt: skip
+__all__ = ["TRAIN_RECORDINGS", "WEIGHTS", "JointData", "compiled_loss", "fit", "joint_data", "joint_loss",
+           "joint_terms", "prediction_ade", "sweep", "training_windows"]  # fmt: skip
