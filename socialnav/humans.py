@@ -214,8 +214,6 @@ def _calibrate_trajectories(args) -> int:
 def _calibrate_joint(args) -> int:
     """``--data joint``: :func:`evaluation.joint_calibration.sweep`, each fit scored by the
     validation (:func:`evaluation.human_validation.validate`) on held-out data."""
-    import types
-
     from socialnav.evaluation import human_calibration as hc
     from socialnav.evaluation import human_plots
     from socialnav.evaluation import human_validation as hv
@@ -258,7 +256,7 @@ def _calibrate_joint(args) -> int:
         with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
             human_plots.joint_tradeoff(rows, reference, f"{args.model}: one fit, both data", stage / "curve.png")
             (stage / "held_out").mkdir()
-            _write(stage / "held_out", reference, results, types.SimpleNamespace(quick=False, seed=args.seed))
+            _write(stage / "held_out", reference, results, quick=False, seed=args.seed)
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
@@ -294,7 +292,7 @@ def validate(args) -> int:
     results = {name: hv.validate(hc.named_model(name), data, args.quick, args.seed, say, name) for name in args.models}
     try:
         with runfolder.staged(args.out, "summary.json", args.overwrite, job=JOB) as stage:
-            _write(stage, data, results, args)
+            _write(stage, data, results, quick=args.quick, seed=args.seed)
     except runfolder.RunFolderError as e:
         print(f"socialnav humans validate: --out {e}", file=sys.stderr)
         return 2
@@ -303,7 +301,7 @@ def validate(args) -> int:
     return 0
 
 
-def _write(stage: pathlib.Path, data: dict, results: dict, args) -> None:
+def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: int) -> None:
     import pandas as pd
 
     from socialnav.evaluation import human_plots
@@ -325,8 +323,8 @@ def _write(stage: pathlib.Path, data: dict, results: dict, args) -> None:
     human_plots.counterflow_and_bodies(data, results, stage / "pictures" / "counterflow_bodies.png")
     summary = {
         "models": {name: r["checks"] for name, r in results.items()},
-        "quick": bool(args.quick),
-        "seed": args.seed,
+        "quick": bool(quick),
+        "seed": seed,
         "data": {"counterflow": data["counterflow"]},
     }
     (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")

@@ -2,20 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
-import pathlib
-
 import pandas as pd
 import pytest
-
-SCRIPT = pathlib.Path(__file__).resolve().parent.parent / "scripts" / "claims_two_runs.py"
+import script_loader
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("claims_two_runs", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return script_loader.load("claims_two_runs")
 
 
 def _run(tmp_path, name, rows):

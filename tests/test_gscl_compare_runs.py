@@ -2,22 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import pathlib
 
 import pytest
+import script_loader
 
 from socialnav.models.config import TrainConfig
 
-SCRIPT = pathlib.Path(__file__).resolve().parent.parent / "scripts" / "gscl_compare_runs.py"
-
 
 def _script():
-    spec = importlib.util.spec_from_file_location("gscl_compare_runs", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return script_loader.load("gscl_compare_runs")
 
 
 def _run_folder(tmp_path, lines, name="run_a"):
