@@ -71,6 +71,17 @@ def quantise_heading(heading_rad):
     return jnp.round(heading_rad / (jnp.pi / 4)) * (jnp.pi / 4)
 
 
+def snap_person(x_m: float, y_m: float, heading_rad: float) -> tuple[float, float, float]:
+    """One person's drawn cell centre and heading (:func:`snap_to_cell`, :func:`quantise_heading`)
+    as Python floats, in numpy's float32: the same bits as those functions on float32 scalars
+    (tested), without three JAX dispatches a person (a scene builder placing thousands of people
+    spent half its time in them)."""
+    cell, octant = np.float32(CELL_M), np.float32(np.pi / 4)
+    x, y, h = np.float32(x_m), np.float32(y_m), np.float32(heading_rad)
+    snap = lambda v: (np.floor(v / cell) + np.float32(0.5)) * cell
+    return float(snap(x)), float(snap(y)), float(np.round(h / octant) * octant)
+
+
 def heading_offset(heading_rad):
     """(drow, dcol) of the 8-neighbour closest to the heading direction."""
     k = jnp.round(heading_rad / (jnp.pi / 4))

@@ -135,8 +135,7 @@ class _Scene:
     costs: list = dataclasses.field(default_factory=list)  # (rule, (40, 40) cost), combined by max
 
     def add_person(self, x, y, heading):
-        x, y = (float(v) for v in grid.snap_to_cell(jnp.float32(x), jnp.float32(y)))
-        self.people.append((x, y, float(grid.quantise_heading(jnp.float32(heading)))))
+        self.people.append(grid.snap_person(x, y, heading))
 
     def render(self):
         """(image (40, 40) uint8, maps): ``maps[""]`` the expected costs, ``maps[rule]`` the same

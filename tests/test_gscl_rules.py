@@ -20,6 +20,20 @@ def cases():
     return rules.build_suite(SCENES)
 
 
+def test_a_person_is_snapped_in_numpy_as_the_generator_snaps_them():
+    """grid.snap_person (the rule suite's, in numpy) gives the bits of snap_to_cell and
+    quantise_heading (the generator's, in JAX) on float32 scalars, cell borders and octant
+    borders included (where a rounding difference would move a person by a cell)."""
+    import jax.numpy as jnp
+
+    rng = np.random.default_rng(0)
+    xs = np.concatenate([rng.uniform(-9, 9, 300), np.arange(-40, 41) * 0.2, np.arange(-80, 81) * 0.1])
+    hs = np.concatenate([rng.uniform(-7, 7, 300), np.arange(-64, 65) * np.pi / 32, np.arange(-16, 17) * 0.3927])
+    for x, y, h in zip(xs, xs[::-1], np.resize(hs, xs.shape), strict=True):
+        cx, cy = grid.snap_to_cell(jnp.float32(x), jnp.float32(y))
+        assert grid.snap_person(x, y, h) == (float(cx), float(cy), float(grid.quantise_heading(jnp.float32(h))))
+
+
 def _lookup(cases, attribute):
     """A 'model' that returns, for each input map of the cases, that map's ``attribute`` map."""
     table = {}
