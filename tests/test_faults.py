@@ -33,6 +33,8 @@ KILLER = textwrap.dedent(
     KILL_AT = int(os.environ["KILL_AT"])
     FOLDER = os.path.realpath(sys.argv[1])
     SKIP_STAGED = os.environ.get("SKIP_STAGED", "0")  # "1": writes inside the private staging folder are not counted
+    # Set: before each counted operation k, copy the folder to SNAPSHOTS/k (what a kill there leaves).
+    SNAPSHOTS = os.environ.get("SNAPSHOTS", "")
     count = [0]
     def counted(fn):
         def wrapper(*a, **k):
@@ -41,8 +43,11 @@ KILLER = textwrap.dedent(
                 count[0] += 1
                 if count[0] == KILL_AT:
                     os._exit(9)
+                if SNAPSHOTS:
+                    copy_tree(FOLDER, os.path.join(SNAPSHOTS, str(count[0])), symlinks=True)
             return fn(*a, **k)
         return wrapper
+    copy_tree = shutil.copytree  # the copy's own writes land outside FOLDER and are never counted
     for name in ("replace", "unlink", "rmdir", "mkdir", "rename"):
         setattr(os, name, counted(getattr(os, name)))
     shutil.rmtree = counted(shutil.rmtree)
@@ -98,9 +103,17 @@ def _state(folder: pathlib.Path) -> str:
     return marker
 
 
-def _run(code: str, folder: pathlib.Path, kill_at: int, count_file: pathlib.Path, skip_staged: bool = False) -> int:
+def _run(
+    code: str,
+    folder: pathlib.Path,
+    kill_at: int,
+    count_file: pathlib.Path,
+    skip_staged: bool = False,
+    snapshots: pathlib.Path | None = None,
+) -> int:
     env = dict(os.environ, KILL_AT=str(kill_at), COUNT_FILE=str(count_file), PYTHONPATH=str(ROOT))
     env["SKIP_STAGED"] = "1" if skip_staged else "0"
+    env["SNAPSHOTS"] = str(snapshots or "")
     # Compiled programs shared between the runs of a test (its own folder, not the user's cache).
     env["SOCIALNAV_JAX_CACHE"] = str(count_file.parent / "xla-cache")
     return subprocess.run([sys.executable, "-c", KILLER + code, str(folder)], env=env, cwd=ROOT).returncode
@@ -206,17 +219,28 @@ def test_a_commit_failing_at_every_file_operation_leaves_one_whole_run(tmp_path,
     assert ("old", False) in outcomes and ("new", True) in outcomes
 
 
+def _entries(folder: pathlib.Path) -> list[str]:
+    """The folder's entries, pid-stamped names (``.tmp-<pid>-*``, ``.staging-<pid>``,
+    ``.old-<pid>``) with the pid written as ``PID``, so that two jobs' folders compare."""
+    import re
+
+    return sorted(re.sub(r"^(\.(?:tmp|staging|old)-)\d+", r"\1PID", p.relative_to(folder).as_posix()) for p in folder.rglob("*"))
+
+
 @pytest.mark.slow
 def test_simulate_killed_at_every_file_operation(tmp_path):
     """The same for ``socialnav simulate`` itself, a previous run (seed 1) replaced with
-    ``--overwrite`` (seed 0): after each kill the folder holds the old run whole, the new one
-    whole, or no run.json; a plain rerun is refused while any result is visible; the next job's
-    clean-up leaves no temporaries, and (at three of the kills, each a whole job in a
-    subprocess) ``--overwrite`` then writes the new run. The writes inside the private staging
-    folder are not counted here (the test above kills at every operation of a job, those
-    included); every operation on the run folder's own entries is."""
-    import shutil
+    ``--overwrite`` (seed 0): after a kill at any operation the folder holds the old run whole,
+    the new one whole, or no run.json; a plain rerun is refused while any result is visible; the
+    next job's clean-up leaves no temporaries, and (at three of the kills) ``--overwrite`` then
+    writes the new run. The writes inside the private staging folder are not counted here (the
+    test above kills at every operation of a job, those included); every operation on the run
+    folder's own entries is.
 
+    One job copies its folder just before each operation (what a kill there leaves: the job
+    writes through the OS, which the copy reads), instead of one killed job per operation (a
+    whole simulation each); at the first, a middle and the last operation a job is also killed
+    for real, and its folder holds the same entries as the copy."""
     from socialnav.simulate import RESULTS
 
     argv = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
@@ -226,15 +250,19 @@ def test_simulate_killed_at_every_file_operation(tmp_path):
     assert _run(cli.format(argv=argv + ["--seed", "1"]), pristine, 0, count_file) == 0
     old_meta = (pristine / "run.json").read_text()
     job = cli.format(argv=argv + ["--overwrite"])
-    probe = tmp_path / "probe"
+    probe, snapshots = tmp_path / "probe", tmp_path / "snapshots"
     shutil.copytree(pristine, probe)
-    assert _run(job, probe, 0, count_file, skip_staged=True) == 0
+    assert _run(job, probe, 0, count_file, skip_staged=True, snapshots=snapshots) == 0
     n_ops = int(count_file.read_text())
-    assert n_ops >= 6
+    assert n_ops >= 6 and sorted(int(p.name) for p in snapshots.iterdir()) == list(range(1, n_ops + 1))
     for k in range(1, n_ops + 1):
-        folder = tmp_path / f"kill{k}"
-        shutil.copytree(pristine, folder)
-        assert _run(job, folder, k, count_file, skip_staged=True) == 9
+        folder = snapshots / str(k)
+        if k in (1, n_ops // 2, n_ops):  # a real kill there leaves what the copy holds
+            killed = tmp_path / f"kill{k}"
+            shutil.copytree(pristine, killed)
+            assert _run(job, killed, k, count_file, skip_staged=True) == 9
+            assert _entries(killed) == _entries(folder), f"operation {k}"
+            folder = killed
         if (folder / "run.json").exists():
             meta = json.loads((folder / "run.json").read_text())
             assert (folder / "logs.parquet").exists() and meta["seed"] in (0, 1)
