@@ -26,6 +26,9 @@ def _session_folder(variable: str, prefix: str) -> None:
 # test (or worker, or command it runs) compiled is read back by the next that needs it.
 # SOCIALNAV_JAX_CACHE=off runs every test cold.
 _session_folder("SOCIALNAV_JAX_CACHE", "socialnav-xla-")
+# Every program, not only those that took a second to compile (JAX's default): a test session
+# compiles thousands of small ones, each again in every command a test starts.
+os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")
 from socialnav import runtime  # noqa: E402  (before jax is imported)
 
 runtime.request_compilation_cache()
@@ -40,22 +43,29 @@ from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
 from socialnav.jaxsim.world import build_world  # noqa: E402
 
 
+# Share of the process's memory-map limit above which the compiled programs are dropped after a
+# test module (below it, the next module reuses what this one compiled).
+MAP_SHARE_BEFORE_RELEASE = 0.4
+
+
 @pytest.fixture(autouse=True, scope="module")
-def _free_compiled_programs():
-    """After each test module, drop JAX's compiled programs. Each episode program holds several
-    hundred memory maps of JIT code (measured: 9,449 maps after 16 arena tests, 1,475 when the
-    programs are dropped after the module). Kept for the whole suite, they most likely reached
-    Linux's default limit of 65,530 maps per process: the full suite died inside native code
-    without a Python traceback (SIGABRT in test_gscl_model, SIGSEGV in test_simulation the stop
-    before), at a test that passes alone, each time the suite had grown by more compiled
-    programs; with this fixture it passes."""
+def _free_compiled_programs_when_crowded():
+    """After a test module, drop JAX's compiled programs (and the arena's caches of them) if the
+    process holds more than :data:`MAP_SHARE_BEFORE_RELEASE` of Linux's memory-map limit. Each
+    episode program holds several hundred memory maps of JIT code (measured: 9,449 maps after 16
+    arena tests); kept for the whole suite they reached the default limit of 65,530 maps per
+    process, and the suite died inside native code without a Python traceback at a test that
+    passes alone. Dropping them after every module kept the suite alive but made each module
+    trace and compile again what the one before had compiled; dropping them only when the maps
+    run high does both (the arena does the same between scenes,
+    :func:`evaluation.arena.release_programs_if_crowded`)."""
     yield
     import gc
 
-    import jax
+    from socialnav.evaluation import arena
 
-    jax.clear_caches()
-    gc.collect()
+    if arena.release_programs_if_crowded(MAP_SHARE_BEFORE_RELEASE):
+        gc.collect()
 
 
 @pytest.fixture(scope="session")
