@@ -42,7 +42,6 @@ from socialnav.jaxsim.route_follower import route_follower  # noqa: E402
 from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
 from socialnav.jaxsim.world import build_world  # noqa: E402
 
-
 # Share of the process's memory-map limit above which the compiled programs are dropped after a
 # test module (below it, the next module reuses what this one compiled).
 MAP_SHARE_BEFORE_RELEASE = 0.4

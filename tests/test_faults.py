@@ -15,6 +15,7 @@ import io
 import json
 import os
 import pathlib
+import re
 import shutil
 import subprocess
 import sys
@@ -222,9 +223,8 @@ def test_a_commit_failing_at_every_file_operation_leaves_one_whole_run(tmp_path,
 def _entries(folder: pathlib.Path) -> list[str]:
     """The folder's entries, pid-stamped names (``.tmp-<pid>-*``, ``.staging-<pid>``,
     ``.old-<pid>``) with the pid written as ``PID``, so that two jobs' folders compare."""
-    import re
-
-    return sorted(re.sub(r"^(\.(?:tmp|staging|old)-)\d+", r"\1PID", p.relative_to(folder).as_posix()) for p in folder.rglob("*"))
+    stamped = re.compile(r"^(\.(?:tmp|staging|old)-)\d+")
+    return sorted(stamped.sub(r"\1PID", p.relative_to(folder).as_posix()) for p in folder.rglob("*"))
 
 
 @pytest.mark.slow
