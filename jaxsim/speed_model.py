@@ -63,9 +63,6 @@ class SpeedModelParams:
     cutoff_m: float = 3.0
     steering_max_rad: float = 1.309  # 75 degrees: Moussaïd, Helbing & Theraulaz 2011's field of view
     steering_horizon_m: float = 10.0  # their d_max: how far ahead a collision counts
-    # How far ahead in time a person predicts a neighbour's motion across their heading when
-    # testing whether the neighbour stands in their lane (:func:`_blocking`); 0 is the published model.
-    lane_lookahead_s: float = 0.0
 
 
 def _move(x, y, vx, vy, wall, nx, ny, moving, dt: float):
@@ -81,25 +78,12 @@ def _move(x, y, vx, vy, wall, nx, ny, moving, dt: float):
     )
 
 
-def _blocking(ex, ey, dx, dy, reach, others, crossing=None):
+def _blocking(ex, ey, dx, dy, reach, others):
     """(..., N + 1) bool: the neighbours ahead of heading ``(ex, ey)`` (...,) in its lane
-    (``dx, dy, reach, others`` (N, N + 1), the heading's leading axes broadcast against them).
-
-    ``crossing``: ``(vxs, vys, desired_speed_mps, lookahead_s)``, everyone's velocity (N + 1,), the
-    person's desired speed (N,) and :attr:`SpeedModelParams.lane_lookahead_s`. A neighbour then
-    stands in the lane if they will be in it when the person gets there: their offset across the
-    heading moved on by their velocity across it for ``t = min(along / v0, lookahead_s)``, the time
-    to walk to them capped. Someone crossing the path who will have left the lane by then does
-    not slow the person; someone stepping into it does. With ``lookahead_s`` 0 it is the
-    published test, bit for bit (the offset plus 0)."""
-    along = ex[..., None] * dx + ey[..., None] * dy
-    across = -ey[..., None] * dx + ex[..., None] * dy
-    if crossing is not None:
-        vxs, vys, v0, lookahead_s = crossing
-        v0 = v0.reshape(v0.shape + (1,) * (along.ndim - v0.ndim))
-        t = jnp.clip(along / jnp.maximum(v0, _EPS), 0.0, lookahead_s)
-        across = across + (-ey[..., None] * vxs + ex[..., None] * vys) * t
-    return others & (along >= 0.0) & (jnp.abs(across) <= reach)
+    (``dx, dy, reach, others`` (N, N + 1), the heading's leading axes broadcast against them)."""
+    ahead = ex[..., None] * dx + ey[..., None] * dy >= 0.0
+    lane = jnp.abs(-ey[..., None] * dx + ex[..., None] * dy) <= reach
+    return others & ahead & lane
 
 
 def _spacing(blocking, dist, reach):
@@ -147,8 +131,7 @@ def _steer(params, headings: int, ex, ey, dx, dy, dist, reach, others, vxs, vys,
     cos, sin = jnp.cos(turn), jnp.sin(turn)
     cx = ex[:, None] * cos[None, :] - ey[:, None] * sin[None, :]  # (N, K)
     cy = ex[:, None] * sin[None, :] + ey[:, None] * cos[None, :]
-    crossing = (vxs, vys, desired_speed_mps, params.lane_lookahead_s)
-    blocking = _blocking(cx, cy, dx[:, None], dy[:, None], reach[:, None], others[:, None], crossing)  # (N, K, N + 1)
+    blocking = _blocking(cx, cy, dx[:, None], dy[:, None], reach[:, None], others[:, None])  # (N, K, N + 1)
     room = _spacing(blocking, dist[:, None], reach[:, None])  # (N, K)
     gap = (dist - reach)[:, None, :]
     v0 = desired_speed_mps[:, None, None]
@@ -220,13 +203,12 @@ def step_speed_model(
     norm = jnp.sqrt(ex * ex + ey * ey + _EPS * _EPS)
     ex, ey = ex / jnp.maximum(norm, _EPS), ey / jnp.maximum(norm, _EPS)
 
-    vxs, vys = jnp.concatenate([vx, robot_xyv[2][None]]), jnp.concatenate([vy, robot_xyv[3][None]])
     if headings > 1:
+        vxs, vys = jnp.concatenate([vx, robot_xyv[2][None]]), jnp.concatenate([vy, robot_xyv[3][None]])
         ex, ey, spacing = _steer(params, headings, ex, ey, dx, dy, dist, reach, others, vxs, vys, wall, nx, ny,
                                  desired_speed_mps)  # fmt: skip
     else:
-        crossing = (vxs, vys, desired_speed_mps, params.lane_lookahead_s)
-        spacing = _spacing(_blocking(ex, ey, dx, dy, reach, others, crossing), dist, reach)
+        spacing = _spacing(_blocking(ex, ey, dx, dy, reach, others), dist, reach)
     speed = jnp.minimum(jnp.maximum(spacing / params.time_gap_s, 0.0), desired_speed_mps)
     speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
     new_vx, new_vy = speed * ex, speed * ey

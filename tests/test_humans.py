@@ -171,31 +171,6 @@ def test_the_speed_model_in_single_file_walks_at_its_headway_over_the_time_gap()
     np.testing.assert_allclose(speed[:-1], np.minimum((gaps - 0.4) / 1.0, 1.5), atol=1e-3)
 
 
-def test_a_lane_lookahead_ignores_a_walker_crossing_out_of_the_lane_and_sees_one_stepping_in():
-    """Known answers for one step of the published speed model's person walking +x at 1.2 m/s
-    desired (time gap 1 s, bodies
-    0.2 m). A walker 0.8 m ahead crossing at 1.3 m/s: the published lane test (lookahead 0)
-    slows the person to the headway speed (0.8 - 0.4) / 1 = 0.4 m/s; with a lookahead of 1 s
-    the walker will have left the lane (by 1.3 x 0.8 / 1.2 m) and the person walks at 1.2. A
-    walker at (0.8, -0.8) m stepping in: not in the lane now (1.2 m/s), but will be, so the
-    lookahead gives the headway speed |(0.8, -0.8)| - 0.4 over 1 s."""
-
-    def speed(walker_xy, lookahead_s):
-        params = speed_model.SpeedModelParams(lane_lookahead_s=lookahead_s)
-        f32 = lambda *v: jnp.asarray(v, jnp.float32)
-        x, y, vx, vy = speed_model.step_speed_model(
-            params, _open_field(), 0.1, f32(0.0, walker_xy[0]), f32(0.0, walker_xy[1]), f32(0.0, 0.0),
-            f32(0.0, 1.3), f32(100.0, 0.0), f32(0.0, 1.0), f32(1.2, 1.3), jnp.ones(2, bool), jnp.ones(2, bool), FAR,
-            0.3,
-        )  # fmt: skip
-        return float(jnp.hypot(vx[0], vy[0]))
-
-    assert speed((0.8, 0.0), 0.0) == pytest.approx(0.4, abs=1e-5)
-    assert speed((0.8, 0.0), 1.0) == pytest.approx(1.2, abs=1e-5)
-    assert speed((0.8, -0.8), 0.0) == pytest.approx(1.2, abs=1e-5)
-    assert speed((0.8, -0.8), 1.0) == pytest.approx(np.hypot(0.8, 0.8) - 0.4, abs=1e-5)
-
-
 def test_candidate_headings_keep_straight_first_then_right_before_left():
     np.testing.assert_allclose(speed_model.heading_offsets(5), [0.0, -0.5, 0.5, -1.0, 1.0])
     np.testing.assert_allclose(speed_model.heading_offsets(1), [0.0])
