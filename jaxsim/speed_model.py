@@ -63,7 +63,6 @@ class SpeedModelParams:
     cutoff_m: float = 3.0
     steering_max_rad: float = 1.309  # 75 degrees: Moussaïd, Helbing & Theraulaz 2011's field of view
     steering_horizon_m: float = 10.0  # their d_max: how far ahead a collision counts
-    leader_share: float = 0.0  # probe: the share b of the leader's speed away added to the headway speed
 
 
 def _move(x, y, vx, vy, wall, nx, ny, moving, dt: float):
@@ -208,15 +207,9 @@ def step_speed_model(
         vxs, vys = jnp.concatenate([vx, robot_xyv[2][None]]), jnp.concatenate([vy, robot_xyv[3][None]])
         ex, ey, spacing = _steer(params, headings, ex, ey, dx, dy, dist, reach, others, vxs, vys, wall, nx, ny,
                                  desired_speed_mps)  # fmt: skip
-        blocking = _blocking(ex, ey, dx, dy, reach, others)
     else:
-        blocking = _blocking(ex, ey, dx, dy, reach, others)
-        spacing = _spacing(blocking, dist, reach)
-    vxs_, vys_ = jnp.concatenate([vx, robot_xyv[2][None]]), jnp.concatenate([vy, robot_xyv[3][None]])
-    lead = jnp.argmin(jnp.where(blocking, dist - reach, FREE_SPACING_M), axis=-1)
-    u_lead = jnp.maximum(ex * vxs_[lead] + ey * vys_[lead], 0.0) * jnp.any(blocking, axis=-1)
-    speed = spacing / params.time_gap_s + params.leader_share * u_lead
-    speed = jnp.minimum(jnp.maximum(speed, 0.0), desired_speed_mps)
+        spacing = _spacing(_blocking(ex, ey, dx, dy, reach, others), dist, reach)
+    speed = jnp.minimum(jnp.maximum(spacing / params.time_gap_s, 0.0), desired_speed_mps)
     speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
     new_vx, new_vy = speed * ex, speed * ey
     return _move(x, y, new_vx, new_vy, wall, nx, ny, moving, dt)
