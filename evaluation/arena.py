@@ -43,6 +43,7 @@ from socialnav.jaxsim.scenes.actor import Actor, rollout
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import Variant, padded_slots
 from socialnav.planners import actors, baselines, costmap, policy_social, stack
+from socialnav.planners.layers import CostLayer
 from socialnav.planners.scene import Scene
 
 
@@ -355,18 +356,25 @@ def run_spread(functions: list[Callable], variants: Variant, n_devices: int | No
             pool.shutdown(wait=True, cancel_futures=True)
 
 
-@functools.lru_cache(maxsize=64)
 def method_actor(
     method: stack.StackConfig,
     grid: costmap.GridSpec,
     robot_radius_m: float,
     config: ArenaConfig = ArenaConfig(),
-    gscl_apply: Callable | None = None,
+    layer: CostLayer | None = None,
 ) -> Actor:
-    """A built-in stack as an actor (cached: the same stack on the same grid is the same actor,
-    so its compiled program is reused)."""
+    """A built-in stack as an actor with its social ``layer`` (default: the method's,
+    :func:`planners.stack.cost_layer`), cached: the same stack with the same kind of layer on the
+    same grid is the same actor, so its compiled program is reused (the layer's parameters come
+    with the actor's params, not with the actor)."""
+    layer = stack.cost_layer(method) if layer is None else layer
+    return _method_actor(method, grid, robot_radius_m, config, layer.replace(()))
+
+
+@functools.lru_cache(maxsize=64)
+def _method_actor(method, grid, robot_radius_m, config, layer) -> Actor:
     return actors.stack_actor(
-        method, grid, robot_radius_m, config.replan_every_steps, config.max_path_cells, gscl_apply, name=method.layer
+        method, grid, robot_radius_m, config.replan_every_steps, config.max_path_cells, layer, name=method.layer
     )
 
 
@@ -387,40 +395,31 @@ def episode_function(
     crowd: SimParams | None = None,
     robot_params: robot_lib.RobotParams = robot_lib.RobotParams(),
     config: ArenaConfig = ArenaConfig(),
-    gscl_predict: Callable | None = None,
-    gscl_weights=None,
+    gscl_model=None,
     layers: stack.LayerParams | None = None,
 ):
-    """``variants -> Trajectory`` of a built-in stack. ``gscl_predict`` is either ``maps ->
-    costs`` (closing over its weights: each model compiles anew) or, with ``gscl_weights``,
-    ``(weights, maps) -> costs`` (the weights traced: a new checkpoint reuses the program).
-    ``layers``: the layers' and local planners' parameters (default: the method's,
-    :func:`planners.stack.layer_params`), traced: a sweep reuses the program."""
+    """``variants -> Trajectory`` of a built-in stack. ``gscl_model``: the gscl layer's network
+    (:func:`planners.layers.gscl`: a :class:`~socialnav.models.inference.SocialCostModel`, whose
+    weights enter the program traced, so another checkpoint reuses it; or a function of the maps,
+    closing over its weights). ``layers``: the layers' and local planners' parameters (default:
+    the method's, :func:`planners.stack.layer_params`), traced: a sweep reuses the program."""
     env = setup.env.replace(robot=robot_params)
     if crowd is not None:
         env = env.replace(crowd=crowd)
-    apply = None
-    if gscl_predict is not None and method.layer == "gscl":
-        apply = gscl_predict if gscl_weights is not None else _closed(gscl_predict)
-    if method.layer == "gscl" and apply is None:
-        raise ValueError("method 'gscl' needs a trained GSCL model")
-    actor = method_actor(stack.program_config(method), setup.grid, float(robot_params.radius_m), config, apply)
+    layers = stack.layer_params(method) if layers is None else layers
+    layer = stack.cost_layer(method, layers, gscl_model)
+    actor = method_actor(stack.program_config(method), setup.grid, float(robot_params.radius_m), config, layer)
     params = actors.stack_params(
         env,
         setup.map,
         config.safety_margin_m,
         config.person_radius_m,
-        gscl_weights,
+        layer,
         layers,
         method,
         people_are_obstacles=setup.spec.people_in_global_plan,
     )
     return actor_function(setup, actor, params, env)
-
-
-@functools.lru_cache(maxsize=16)
-def _closed(predict: Callable) -> Callable:
-    return lambda weights, maps: predict(maps)
 
 
 # Each compiled episode program holds 400-950 of the process's memory maps (XLA's CPU backend
@@ -468,7 +467,7 @@ def release_programs_if_crowded(share: float = MAP_SHARE_BEFORE_RELEASE, caches=
     if maps is None or maps[0] <= share * maps[1]:
         return False
     jax.clear_caches()
-    for cache in (_episode_program, method_actor, baseline_actor, _closed, actors.with_stop_and_go, *caches):
+    for cache in (_episode_program, _method_actor, baseline_actor, actors.with_stop_and_go, *caches):
         cache.cache_clear()
     return True
 

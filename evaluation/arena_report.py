@@ -187,13 +187,12 @@ def run_scene(
     seed: int = 0,
     first: int = 0,
     keep_trajectories: int = 0,
-    gscl_predict: Callable | None = None,
+    gscl_model=None,
     config: arena.ArenaConfig = arena.ArenaConfig(),
     on_method: Callable[[str], None] | None = None,
     held_out: bool = False,
     user_actors: dict[str, Callable] | None = None,
     params: ArenaParams | None = None,
-    gscl_weights=None,
     n_devices: int | None = None,
 ):
     """Every method on variants ``first .. first + n_variants - 1`` of one scene:
@@ -202,9 +201,10 @@ def run_scene(
     ``<scene>@held_out``. ``user_actors``: method name -> a factory ``env -> Actor`` or ``env ->
     (Actor, params)`` (:func:`user_actor`), for the names of ``methods`` that are not built in.
     ``params``: the robot's limits and the layers' parameters (:mod:`evaluation.arena_params`;
-    default: the seeds' values). ``gscl_weights``: with it, ``gscl_predict`` is ``(weights, maps)
-    -> costs`` and the weights are traced (another checkpoint of the same network reuses the
-    compiled program); without it, ``maps -> costs``. ``n_devices``: host devices the methods run
+    default: the seeds' values). ``gscl_model``: the network of method ``gscl``
+    (:func:`planners.layers.gscl`: a :class:`~socialnav.models.inference.SocialCostModel`, its
+    weights traced, so another checkpoint of the same network reuses the compiled program; or a
+    function of the maps). ``n_devices``: host devices the methods run
     on at the same time (:func:`evaluation.arena.run_spread`; default: every local one)."""
     name = spec.name + (HELD_OUT if held_out else "")
     if held_out:
@@ -236,8 +236,7 @@ def run_scene(
                     crowd,
                     robot,
                     config,
-                    gscl_predict,
-                    gscl_weights=gscl_weights,
+                    gscl_model,
                     layers=params.layers_for(method),
                 )
             )

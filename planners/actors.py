@@ -6,7 +6,9 @@ from what the robot perceives, adds the seen people as obstacles inflated with t
 plans the global path; its ``act`` runs the local planner on that path and a safety stop. The
 map (occupancy, interaction spaces, walls) and every float of the robot and the layers are the
 actor's ``params``, traced: another scene of the same shapes, another speed limit or another
-GSCL checkpoint reuses the compiled program.
+GSCL checkpoint reuses the compiled program. The social layer is a
+:class:`planners.layers.CostLayer`: the actor holds its function, its params carry the layer's
+parameters (``StackParams.layer``).
 
 :func:`go_to_goal` drives straight at the goal (a throughput baseline and the shape of a user's
 own actor). :func:`with_stop_and_go` wraps any actor with seed 002's queueing stop-and-go.
@@ -16,7 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Callable
 from typing import Any
 
 import jax
@@ -27,7 +28,8 @@ from flax import struct
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.actor import Actor
 from socialnav.jaxsim.scenes.env import Env, Observation
-from socialnav.planners import casn, costmap, gscl_layer, stack
+from socialnav.planners import costmap, stack
+from socialnav.planners.layers import CostLayer
 from socialnav.planners.scene import Scene
 
 
@@ -56,8 +58,9 @@ LOCAL_COSTMAP_HALF_M = 1.5
 class StackParams:
     """A stack's dynamic inputs: the map, the robot's speed limit (m/s) and body radius used by
     the safety stop (m), the safety margin (m), a person's radius (m), the layers' and local
-    planners' parameters (:class:`planners.stack.LayerParams`), the GSCL weights (``None``
-    without the gscl layer) and ``people_are_obstacles`` () bool: whether the global planner
+    planners' parameters (:class:`planners.stack.LayerParams`), ``layer``: the social layer's
+    own parameters (``CostLayer.params``: the paper's numbers, the GSCL network's weights, ``()``
+    for none) and ``people_are_obstacles`` () bool: whether the global planner
     sees the people as obstacles (a scene's ``people_in_global_plan``, :mod:`jaxsim.scenes.spec`;
     false: only the social layer shapes the path round them, but for the people inside
     ``local_costmap_half_m`` (m) of the robot along x and y, the rolling local costmap that Nav2's
@@ -69,20 +72,21 @@ class StackParams:
     safety_margin_m: jax.Array
     person_radius_m: jax.Array
     layers: stack.LayerParams
-    gscl_weights: Any = None
+    layer: Any = ()
     people_are_obstacles: jax.Array = True
     local_costmap_half_m: jax.Array = LOCAL_COSTMAP_HALF_M
 
 
 @struct.dataclass
 class StackState:
-    """path (L, 2) m, path_len () int32 (0: no plan yet), casn: CASN's frozen points,
+    """path (L, 2) m, path_len () int32 (0: no plan yet), layer: the social layer's state
+    (``CostLayer.init``: CASN's frozen points, ``()`` for the others),
     planner_velocity (P, 2) m/s (the velocity estimate of the previous control step, what the
     1 Hz planner sees), speed_gain () (the social band's factor; 1 otherwise)."""
 
     path: jax.Array
     path_len: jax.Array
-    casn: casn.CASNState
+    layer: Any
     planner_velocity: jax.Array
     speed_gain: jax.Array
 
@@ -112,16 +116,20 @@ def stack_params(
     map_: StackMap,
     safety_margin_m: float = 0.1,
     person_radius_m: float | None = None,
-    gscl_weights=None,
+    layer: CostLayer | None = None,
     layers: stack.LayerParams | None = None,
     method: stack.StackConfig | None = None,
     people_are_obstacles: bool = True,
 ) -> StackParams:
     """A stack's params for ``env`` (its robot's limits) on ``map_``; ``layers`` default to
-    ``method``'s (:func:`planners.stack.layer_params`)."""
+    ``method``'s (:func:`planners.stack.layer_params`); ``layer``: the stack's social layer, whose
+    params these carry (default: ``method``'s from ``layers``, :func:`planners.stack.cost_layer`;
+    without a method, NavFn's: none)."""
     person = env.config.person_radius_m if person_radius_m is None else person_radius_m
     if layers is None:
         layers = stack.layer_params(method) if method is not None else stack.LayerParams()
+    if layer is None:
+        layer = stack.cost_layer(method or stack.METHODS["navfn"], layers)
     return StackParams(
         layers=layers,
         map=map_,
@@ -129,7 +137,7 @@ def stack_params(
         robot_radius_m=jnp.float32(env.robot.radius_m),
         safety_margin_m=jnp.float32(safety_margin_m),
         person_radius_m=jnp.float32(person),
-        gscl_weights=gscl_weights,
+        layer=layer.params,
         people_are_obstacles=jnp.asarray(people_are_obstacles),
         local_costmap_half_m=jnp.float32(LOCAL_COSTMAP_HALF_M),
     )
@@ -157,7 +165,7 @@ def stack_actor(
     robot_radius_m: float,
     replan_every_steps: int = 10,
     max_path_cells: int = 256,
-    gscl_apply: Callable | None = None,
+    layer: CostLayer | None = None,
     name: str | None = None,
 ) -> Actor:
     """A navigation stack as an actor.
@@ -170,11 +178,15 @@ def stack_actor(
       replan_every_steps: the global planner's period (10: 1 Hz at 0.1 s); a stack with
         ``replan=False`` plans once.
       max_path_cells: the global path's length bound.
-      gscl_apply: ``(weights, maps (B, 40, 40)) -> costs (B, 40, 40)`` for the gscl layer; its
-        weights are ``params.gscl_weights``.
+      layer: the social layer (:class:`planners.layers.CostLayer`; its function is the actor's,
+        its parameters come with the actor's params, ``StackParams.layer``); default
+        ``method``'s (:func:`planners.stack.cost_layer`; the gscl layer needs one given:
+        ``layers.gscl(model)``).
     """
-    if method.layer == "gscl" and gscl_apply is None:
-        raise ValueError("method 'gscl' needs a trained GSCL model (gscl_apply)")
+    if layer is None:
+        if method.layer == "gscl":
+            raise ValueError("method 'gscl' needs a trained GSCL model: layer=layers.gscl(model)")
+        layer = stack.cost_layer(method)
     x_np, y_np = grid.cell_centres()
     max_len = max_path_cells + 1
 
@@ -184,7 +196,7 @@ def stack_actor(
         return StackState(
             path=jnp.zeros((max_len, 2), jnp.float32),
             path_len=jnp.int32(0),
-            casn=casn.initial_state(n),
+            layer=layer.init(n),
             planner_velocity=jnp.zeros((n, 2), jnp.float32),
             speed_gain=jnp.float32(1.0),
         )
@@ -194,11 +206,7 @@ def stack_actor(
         x_m, y_m = jnp.asarray(x_np), jnp.asarray(y_np)
         occupancy = params.map.occupancy
         scene = _scene(params, obs, st.planner_velocity)
-        gscl_fn = None
-        if method.layer == "gscl":
-            predict = lambda maps: gscl_apply(params.gscl_weights, maps)
-            gscl_fn = lambda s: gscl_layer.gscl_layer(predict, occupancy, grid, s)
-        social, casn_state = stack.social_layer(method, scene, x_m, y_m, st.casn, gscl_fn, params.layers)
+        social, layer_state = layer.apply(params.layer, scene, grid, st.layer, occupancy)
         # The people the sensors see are obstacles too (Nav2's obstacle layer), inflated with the
         # walls; where the scene leaves them to the social layer (people_are_obstacles false),
         # those inside the local costmap's window still are: the path the robot follows is the
@@ -221,7 +229,7 @@ def stack_actor(
         had = st.path_len > 0
         path = jnp.where(found, path, jnp.where(had, st.path, straight))
         length = jnp.where(found, length, jnp.where(had, st.path_len, max_len))
-        return st.replace(path=path, path_len=length, casn=casn_state)
+        return st.replace(path=path, path_len=length, layer=layer_state)
 
     def act(params: StackParams, st: StackState, obs: Observation, key):
         del key

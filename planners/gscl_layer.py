@@ -19,7 +19,8 @@ preferred robot heading: the goal pixel gives the direction of travel); ``robot_
 it with the robot's yaw.
 
 ``predict`` is any JAX function from (B, 40, 40) uint8 input maps to (B, 40, 40) costs in [0, 1]:
-``models.inference.SocialCostModel.load(run).function`` for a trained run.
+``models.inference.SocialCostModel.load(run).function`` for a trained run. A stack takes the layer
+as one object, :func:`planners.layers.gscl` (the network's function and its weights together).
 """
 
 from __future__ import annotations

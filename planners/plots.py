@@ -12,15 +12,13 @@ from __future__ import annotations
 
 import dataclasses
 import pathlib
-from collections.abc import Callable
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from socialnav.common import figures
 from socialnav.jaxsim.params import TIAGO_RADIUS_M
-from socialnav.planners import casn, costmap, grid_planner, snape, snl
+from socialnav.planners import costmap, grid_planner, layers, snl
 from socialnav.planners.scene import Scene, make_scene
 
 SPEC = costmap.GridSpec(height=80, width=120, resolution_m=0.1, origin_x_m=-6.0, origin_y_m=-4.0)
@@ -104,30 +102,29 @@ def demo_scenes() -> dict[str, DemoScene]:
     }
 
 
-def layer_functions(gscl_predict: Callable | None = None) -> dict[str, tuple[Callable, str]]:
-    """Panel name -> (``(scene, occupancy) -> social layer (H, W)``, planner: ``navfn`` or ``weighted``)."""
-    x, y = SPEC.cell_centres()
+def layer_functions(gscl_model=None) -> dict[str, tuple[layers.CostLayer, str]]:
+    """Panel name -> (the social layer, :class:`planners.layers.CostLayer`; planner: ``navfn`` or
+    ``weighted``). ``gscl_model``: the GSCL panel's network (:func:`planners.layers.gscl`)."""
     out = {
-        "no social layer": (lambda s, occ: jnp.zeros(SPEC.shape, jnp.float32), "navfn"),
-        "SNL sigma1 (cov 0.25)": (lambda s, occ: snl.snl_layer(s, x, y, snl.SIGMA_SMALL), "navfn"),
-        "SNL sigma2 (cov 0.5)": (lambda s, occ: snl.snl_layer(s, x, y, snl.SIGMA_LARGE), "navfn"),
-        "CASN": (lambda s, occ: casn.casn_layer(s, x, y)[0], "navfn"),
-        "SNAPE map (Dijkstra)": (lambda s, occ: snape.snape_layer(s, x, y), "weighted"),
+        "no social layer": (layers.none(), "navfn"),
+        "SNL sigma1 (cov 0.25)": (layers.snl(snl.SIGMA_SMALL), "navfn"),
+        "SNL sigma2 (cov 0.5)": (layers.snl(snl.SIGMA_LARGE), "navfn"),
+        "CASN": (layers.casn(), "navfn"),
+        "SNAPE map (Dijkstra)": (layers.snape(), "weighted"),
     }
-    if gscl_predict is not None:
-        from socialnav.planners.gscl_layer import gscl_layer
-
-        out["GSCL"] = (lambda s, occ: gscl_layer(gscl_predict, occ, SPEC, s), "navfn")
+    if gscl_model is not None:
+        out["GSCL"] = (layers.gscl(gscl_model), "navfn")
     return out
 
 
-def plan_panels(demo: DemoScene, layers: dict) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
+def plan_panels(demo: DemoScene, panel_layers: dict) -> list[tuple[str, np.ndarray, np.ndarray, bool]]:
     """For each layer: (name, combined costs (H, W), path (L, 2) in metres, reached)."""
     obstacles = costmap.obstacle_layer(demo.occupancy, SPEC, ROBOT_RADIUS_M)
     start, goal = demo.scene.robot_xy_m[None], demo.scene.goal_xy_m[None]
     panels = []
-    for name, (layer, planner) in layers.items():
-        costs = costmap.combine_max(obstacles, layer(demo.scene, demo.occupancy))
+    for name, (layer, planner) in panel_layers.items():
+        social, _ = layer(demo.scene, SPEC, occupancy=demo.occupancy)
+        costs = costmap.combine_max(obstacles, social)
         plan_fn = grid_planner.navfn_plans if planner == "navfn" else grid_planner.weighted_plans
         plan = jax.tree_util.tree_map(lambda a: a[0], plan_fn(costs[None], start, goal, SPEC))
         path = np.asarray(grid_planner.path_xy_m(plan, SPEC))[: int(plan.path_length)]
@@ -135,9 +132,9 @@ def plan_panels(demo: DemoScene, layers: dict) -> list[tuple[str, np.ndarray, np
     return panels
 
 
-def scene_figure(name: str, demo: DemoScene, layers: dict, path: str | pathlib.Path) -> pathlib.Path:
+def scene_figure(name: str, demo: DemoScene, panel_layers: dict, path: str | pathlib.Path) -> pathlib.Path:
     """Write one scene's figure: a panel per layer, costs in grey, the path in blue, people red."""
-    panels = plan_panels(demo, layers)
+    panels = plan_panels(demo, panel_layers)
     scene = demo.scene
     fig = figures.figure(figsize=(2.6 * len(panels), 2.2))
     axes = fig.subplots(1, len(panels), squeeze=False)[0]
@@ -168,9 +165,11 @@ def scene_figure(name: str, demo: DemoScene, layers: dict, path: str | pathlib.P
     return figures.save(fig, path, dpi=80)
 
 
-def write_all(out_dir: str | pathlib.Path, gscl_predict: Callable | None = None) -> list[pathlib.Path]:
+def write_all(out_dir: str | pathlib.Path, gscl_model=None) -> list[pathlib.Path]:
     """One ``layers_<scene>.png`` per demo scene in ``out_dir``."""
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    layers = layer_functions(gscl_predict)
-    return [scene_figure(name, demo, layers, out_dir / f"layers_{name}.png") for name, demo in demo_scenes().items()]
+    panel_layers = layer_functions(gscl_model)
+    return [
+        scene_figure(name, demo, panel_layers, out_dir / f"layers_{name}.png") for name, demo in demo_scenes().items()
+    ]

@@ -30,7 +30,6 @@ benchmark the actor takes the mean action (deterministic); training samples arou
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
@@ -238,18 +237,18 @@ def observe(config: PolicyConfig, obs: Observation, field, grid, robot: RobotPar
     return features(config, obs, field, grid, robot, window), social
 
 
-def policy_actor(
-    config: PolicyConfig, graphdef, grid: costmap.GridSpec, name: str = "ppo", gscl_apply: Callable | None = None
-) -> Actor:
+def policy_actor(config: PolicyConfig, graphdef, grid: costmap.GridSpec, name: str = "ppo", gscl_model=None) -> Actor:
     """The policy as an :class:`~jaxsim.scenes.actor.Actor` with :class:`PolicyParams`: it
     computes the guidance field once, at the start (``plan_every_steps = 0``), and then acts
-    with the network's mean action (deterministic). With the GSCL channel (``gscl_apply``:
-    ``(weights, maps (B, 40, 40)) -> costs``, its weights ``PolicyParams.gscl_weights``) it plans
+    with the network's mean action (deterministic). With the GSCL channel (``gscl_model``: a
+    :class:`~socialnav.models.inference.SocialCostModel`, its ``apply(weights, maps)`` with the
+    weights ``PolicyParams.gscl_weights``, traced) it plans
     every ``config.gscl_every_steps`` steps instead: the network's window each time, the
     guidance field once."""
     gscl = config.social_layer == "gscl"
-    if gscl and gscl_apply is None:
-        raise ValueError("policy_actor: the gscl channel needs the trained network (gscl_apply)")
+    if gscl and gscl_model is None:
+        raise ValueError("policy_actor: the gscl channel needs the trained network (gscl_model)")
+    network = gscl_model.apply if gscl else None
 
     def init(key, obs: Observation):
         del key
@@ -266,7 +265,7 @@ def policy_actor(
         )
         social = state.social
         if gscl:
-            predict = lambda maps: gscl_apply(params.gscl_weights, maps)
+            predict = lambda maps: network(params.gscl_weights, maps)
             social = policy_social.gscl_refresh(predict, params.occupancy, grid, obs, social)
         return PolicyState(field=field, social=social)
 
@@ -279,12 +278,13 @@ def policy_actor(
     return Actor(init=init, act=act, plan=plan, plan_every_steps=config.gscl_every_steps if gscl else 0, name=name)
 
 
-def policy_params(env: Env, weights, gscl_weights=None) -> PolicyParams:
-    """The actor's params in ``env`` with the network's ``weights`` (and the GSCL network's)."""
+def policy_params(env: Env, weights, gscl_model=None) -> PolicyParams:
+    """The actor's params in ``env`` with the network's ``weights`` (and the GSCL model's,
+    ``gscl_model.weights``)."""
     return PolicyParams(
         weights=weights,
         traversal_per_m=traversal(env),
         robot=env.robot,
         occupancy=jnp.asarray(env.occupancy.values, jnp.float32),
-        gscl_weights=gscl_weights,
+        gscl_weights=None if gscl_model is None else gscl_model.weights,
     )

@@ -160,10 +160,10 @@ def load_weights(out, log=None) -> tuple[PPOConfig, object, object, int]:
     return config, graphdef, weights, step
 
 
-def _gscl(config: PPOConfig, out) -> tuple:
-    """The GSCL channel's ``(apply, weights)`` of a run (``(None, None)`` without it)."""
+def _gscl(config: PPOConfig, out):
+    """The GSCL channel's model of a run (:func:`policy_social.load_gscl`; None without it)."""
     if config.policy.social_layer != "gscl":
-        return None, None
+        return None
     try:
         return policy_social.load_gscl(config.policy.gscl_run)
     except ValueError as e:
@@ -174,8 +174,8 @@ def run_digest(out) -> str:
     """The digest of what a run's actor computes with: its weights, and the GSCL channel's
     network's weights where it has one."""
     config, _, weights, _ = load_weights(out)
-    _, gscl_weights = _gscl(config, out)
-    return weights_digest(weights if gscl_weights is None else (weights, gscl_weights))
+    gscl_model = _gscl(config, out)
+    return weights_digest(weights if gscl_model is None else (weights, gscl_model.weights))
 
 
 def weights_digest(weights) -> str:
@@ -191,15 +191,15 @@ def actor_factory(out, name: str = "ppo"):
     form), the network restored once."""
     config, graphdef, weights, _ = load_weights(out)
     _, n_features = read_config(out)
-    gscl_apply, gscl_weights = _gscl(config, out)
+    gscl_model = _gscl(config, out)
 
     def factory(env):
         window = env.config.window_cells
         if config.policy.n_features(window) != n_features:
             raise PolicyRunError(f"{out}: the policy was trained with another observation window than {window} cells")
         grid = policy_lib.scene_grid(env)
-        actor = policy_lib.policy_actor(config.policy, graphdef, grid, name, gscl_apply)
-        return actor, policy_lib.policy_params(env, weights, gscl_weights)
+        actor = policy_lib.policy_actor(config.policy, graphdef, grid, name, gscl_model)
+        return actor, policy_lib.policy_params(env, weights, gscl_model)
 
     factory.__name__ = name
     return factory

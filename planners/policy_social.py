@@ -110,11 +110,10 @@ def gscl_refresh(predict: Callable, occupancy, spec: costmap.GridSpec, obs: Obse
     )
 
 
-def load_gscl(run) -> tuple[Callable, object]:
-    """``(apply, weights)`` of a GSCL model: a training run's latest checkpoint or an exported
-    model (``apply(weights, maps)``: :attr:`models.inference.SocialCostModel.apply`); ``ValueError``
-    naming the folder otherwise."""
+def load_gscl(run):
+    """The GSCL model of the channel: a training run's latest checkpoint or an exported model
+    (:class:`models.inference.SocialCostModel`: ``model.apply(weights, maps)`` with
+    ``model.weights`` traced); ``ValueError`` naming the folder otherwise."""
     from socialnav.models.inference import SocialCostModel
 
-    model = SocialCostModel.load(run)
-    return model.apply, model.weights
+    return SocialCostModel.load(run)

@@ -250,22 +250,21 @@ def _observe(config: PPOConfig, scene: Scene, grid, obs, index, social):
     return jax.vmap(one)(obs, index, social)
 
 
-def make_collect(
-    config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict, gscl_apply: Callable | None = None
-) -> Callable:
+def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict, gscl_model=None) -> Callable:
     """``collect(scene, weights, runner, key) -> (runner, batch, stats)``: ``rollout_steps``
     steps of the runner's episodes and their GAE, jitted (one program per scene shape and rule).
 
     ``stats``: the episodes that ended, ``(count, sum of returns, reached, touched a person,
     sum of lengths, socially successful)``; socially successful is the arena's
     ``social_success``: the goal reached and the scene's ``rule`` kept
-    (:mod:`jaxsim.scenes.rule_monitor`). ``gscl_apply``: ``(weights, maps) -> costs`` of the
-    GSCL channel (its weights ``scene.gscl_weights``), run for every episode at once on the
-    rollout's steps ``0, k, 2k, ...`` (``k = gscl_every_steps``)."""
+    (:mod:`jaxsim.scenes.rule_monitor`). ``gscl_model``: the GSCL channel's network
+    (``gscl_model.apply(weights, maps)``, its weights ``scene.gscl_weights``, traced), run for
+    every episode at once on the rollout's steps ``0, k, 2k, ...`` (``k = gscl_every_steps``)."""
     _, rule_update, rule_verdict = rule_monitor.monitor(rule)
     gscl = config.policy.social_layer == "gscl"
-    if gscl and gscl_apply is None:
-        raise ValueError("make_collect: the gscl channel needs the trained network (gscl_apply)")
+    if gscl and gscl_model is None:
+        raise ValueError("make_collect: the gscl channel needs the trained network (gscl_model)")
+    network = gscl_model.apply if gscl else None
 
     def collect(scene: Scene, weights, runner: Runner, key):
         env = scene.env
@@ -275,7 +274,7 @@ def make_collect(
         def refresh(social, obs, t):
             if not gscl:
                 return social
-            predict = lambda maps: gscl_apply(scene.gscl_weights, maps)
+            predict = lambda maps: network(scene.gscl_weights, maps)
             renew = jax.vmap(lambda o, s: policy_social.gscl_refresh(predict, occupancy, grid, o, s))
             return jax.lax.cond(t % config.policy.gscl_every_steps == 0, renew, lambda o, s: s, obs, social)
 
@@ -440,10 +439,10 @@ class Trainer:
             raise ValueError("PPO needs at least one scene")
         self.config = config
         self.specs = list(specs)
-        gscl_apply, gscl_weights = None, None
+        self.gscl_model = None
         if config.policy.social_layer == "gscl":
-            gscl_apply, gscl_weights = policy_social.load_gscl(config.policy.gscl_run)
-        self.gscl_apply = gscl_apply
+            self.gscl_model = policy_social.load_gscl(config.policy.gscl_run)
+        gscl_weights = None if self.gscl_model is None else self.gscl_model.weights
         self.scenes = [make_scene(s, config, gscl_weights) for s in self.specs]
         window = self.scenes[0].env.config.window_cells
         self.n_features = config.policy.n_features(window)
@@ -452,7 +451,7 @@ class Trainer:
         )
         self.grids = [policy_lib.scene_grid(s.env) for s in self.scenes]
         self._collect = [
-            make_collect(config, self.graphdef, g, spec.rule, gscl_apply)
+            make_collect(config, self.graphdef, g, spec.rule, self.gscl_model)
             for g, spec in zip(self.grids, self.specs, strict=True)
         ]
         self._update = make_update(config, self.graphdef)
@@ -515,8 +514,8 @@ def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int =
     config = trainer.config
     totals = []
     for scene, grid in zip(trainer.scenes, trainer.grids, strict=True):
-        actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid, gscl_apply=trainer.gscl_apply)
-        params = policy_lib.policy_params(scene.env, weights, scene.gscl_weights)
+        actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid, gscl_model=trainer.gscl_model)
+        params = policy_lib.policy_params(scene.env, weights, trainer.gscl_model)
         index = jnp.arange(n_variants) % config.pool_per_scene
         variants = _take(scene.pool, index)
         fields = scene.fields[index]

@@ -14,7 +14,7 @@ import dataclasses
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.planners import casn, costmap, elastic_band, grid_planner, pure_pursuit, snape, snl
+from socialnav.planners import casn, costmap, elastic_band, grid_planner, layers, pure_pursuit, snape, snl
 from socialnav.planners.scene import Scene
 
 LAYERS = ("none", "snl_small", "snl_large", "snl_matched", "casn", "snape", "gscl")
@@ -105,22 +105,24 @@ def layer_params(config: StackConfig) -> LayerParams:
     return LayerParams(snl=sigma)
 
 
-def social_layer(config: StackConfig, scene: Scene, x_m, y_m, casn_state, gscl_layer_fn=None, params=None):
-    """(H, W) the stack's social layer of a perceived scene, and CASN's next state (``params``:
-    :class:`LayerParams`, default :func:`layer_params`)."""
+def cost_layer(config: StackConfig, params: LayerParams | None = None, gscl_model=None) -> layers.CostLayer:
+    """The stack's social layer (:class:`planners.layers.CostLayer`) with its parameters: the SNL
+    variants' covariances, CASN's or SNAPE's from ``params`` (:class:`LayerParams`, default
+    :func:`layer_params`), GSCL's network and weights from ``gscl_model`` (a
+    :class:`socialnav.models.inference.SocialCostModel` or a function of the maps,
+    :func:`planners.layers.gscl`; ``ValueError`` without one)."""
     params = layer_params(config) if params is None else params
-    zeros = jnp.zeros(x_m.shape, jnp.float32)
     if config.layer == "none":
-        return zeros, casn_state
+        return layers.none()
     if config.layer in ("snl_small", "snl_large", "snl_matched"):
-        return snl.snl_layer(scene, x_m, y_m, params.snl), casn_state
+        return layers.snl(params.snl)
     if config.layer == "casn":
-        return casn.casn_layer(scene, x_m, y_m, casn_state, params.casn)
+        return layers.casn(params.casn)
     if config.layer == "snape":
-        return snape.snape_layer(scene, x_m, y_m, params.snape), casn_state
-    if gscl_layer_fn is None:
-        raise ValueError("the gscl layer needs a trained model (gscl_layer_fn)")
-    return gscl_layer_fn(scene), casn_state
+        return layers.snape(params.snape)
+    if gscl_model is None:
+        raise ValueError("the gscl layer needs a trained model (gscl_model)")
+    return layers.gscl(gscl_model)
 
 
 def global_plan(config: StackConfig, costs, start_xy, goal_xy, spec: costmap.GridSpec, max_steps: int = 0):

@@ -102,7 +102,7 @@ def run(reading: str, n: int, held_out: bool) -> dict:
     setup = arena.setup_scene(spec)
     variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 0, n, 0, held_out, setup.n_slots))
     predict = jax.vmap(oracle_costs)
-    tr = arena.episode_function(setup, METHODS["gscl"], arena.crowd_params(), gscl_predict=predict)(variants)
+    tr = arena.episode_function(setup, METHODS["gscl"], arena.crowd_params(), gscl_model=predict)(variants)
 
     def satisfied(rule):
         return np.asarray(jax.vmap(nav_metrics.rule_satisfied, in_axes=(None, 0, 0, 0, 0, 0, 0, 0))(

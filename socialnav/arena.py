@@ -671,7 +671,6 @@ def compute_shard(
         from socialnav.planners.policy_run import actor_factory
 
         users[POLICY_METHOD] = actor_factory(policy_run, POLICY_METHOD)
-    model = _gscl_model(gscl_run)
     return arena_report.run_scene(
         spec,
         list(methods),
@@ -679,12 +678,11 @@ def compute_shard(
         seed,
         first,
         keep,
-        None if model is None else model.apply,
+        _gscl_model(gscl_run),
         ArenaConfig(human_model=human_model),
         held_out=held_out,
         user_actors=users,
         params=arena_params.parse(params_text, "--params") if params_text else None,
-        gscl_weights=None if model is None else model.weights,
     )
 
 

@@ -46,11 +46,11 @@ def run(args) -> int:
     from socialnav.models.inference import SocialCostModel
 
     try:
-        predict = SocialCostModel.load(args.gscl_run).function
+        model = SocialCostModel.load(args.gscl_run)
     except (FileNotFoundError, ValueError) as e:  # not a model, no checkpoint restorable, a bad config.json
         print(f"socialnav layers: --gscl-run {e}", file=sys.stderr)
         return 2
-    for path in plots.write_all(args.out, predict):
+    for path in plots.write_all(args.out, model):
         runfolder.record(args.out, JOB, [path.name])
         print(f"wrote {path}", file=sys.stdout)
     return 0

@@ -45,7 +45,7 @@ def test_every_method_reaches_the_goal_of_a_scene_without_people_and_stays_out_o
     setup = arena.setup_scene(spec)
     variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 0, 3))
     for name, method in METHODS.items():
-        run = arena.episode_function(setup, method, arena.crowd_params(), gscl_predict=lambda m: model(m))
+        run = arena.episode_function(setup, method, arena.crowd_params(), gscl_model=lambda m: model(m))
         tr = run(variants)
         assert np.all(np.asarray(tr.reached[:, -1])), name
         d = world_lib.wall_distance(tr.robot_xy, setup.world.walls_m)[0]
@@ -115,7 +115,7 @@ def test_the_snl_variants_share_one_program_with_their_own_covariances():
     runs = {m: arena.episode_function(setup, METHODS[m]) for m in ("snl_small", "snl_large", "snl_matched", "navfn")}
     assert runs["snl_small"].func is runs["snl_large"].func is runs["snl_matched"].func
     assert runs["navfn"].func is not runs["snl_small"].func
-    sigmas = [jax.tree_util.tree_leaves(runs[m].args[1].layers.snl) for m in ("snl_small", "snl_large", "snl_matched")]
+    sigmas = [jax.tree_util.tree_leaves(runs[m].args[1].layer) for m in ("snl_small", "snl_large", "snl_matched")]
     assert not np.allclose(sigmas[0], sigmas[1]) and not np.allclose(sigmas[1], sigmas[2])
 
 

@@ -349,7 +349,8 @@ def test_demo_paths_reach_the_goal_and_keep_off_lethal_cells():
 
 def test_every_layer_in_one_shape_equals_its_own_function():
     """``layer(scene, grid, state) -> (costs, state)`` gives each paper's layer exactly, CASN's state
-    carried (its frozen points), the others' ``()``; under jit with the grid static too."""
+    carried (its frozen points), the others' ``()``; under jit with the grid static too. Two
+    layers of one kind are equal whatever their parameters (an actor built on one is cached)."""
     from socialnav.planners import layers
 
     scene = make_scene([[1.0, 0.5], [-1.0, -0.5]], people_velocity_mps=[[-1.0, 0.0], [0.0, 0.0]], goal_xy_m=(3, 0))
@@ -358,21 +359,25 @@ def test_every_layer_in_one_shape_equals_its_own_function():
         "snl": snl.snl_layer(scene, x, y),
         "casn": casn.casn_layer(scene, x, y)[0],
         "snape": snape.snape_layer(scene, x, y),
+        "none": jnp.zeros(SPEC.shape, jnp.float32),
     }
     for name, make in layers.BY_NAME.items():
         layer = make()
         costs, state = layer(scene, SPEC)
         np.testing.assert_array_equal(np.asarray(costs), np.asarray(expected[name]))
         assert costs.shape == SPEC.shape and costs.dtype == jnp.float32
-        jitted = jax.jit(layer.apply, static_argnums=2)(layer.params, scene, SPEC, layer.init(scene))
+        jitted = jax.jit(layer.apply, static_argnums=2)(layer.params, scene, SPEC, layer.init(scene.n_people), None)
         np.testing.assert_allclose(np.asarray(jitted[0]), np.asarray(costs), atol=1e-4)
         if name == "casn":
             assert isinstance(state, casn.CASNState)
         else:
             assert state == ()
     # Parameters are traced: another radius changes the costs through the same function.
-    wider = layers.casn(casn.CASNParams(personal_radius_m=1.5))(scene, SPEC)[0]
+    wider_layer = layers.casn(casn.CASNParams(personal_radius_m=1.5))
+    wider = wider_layer(scene, SPEC)[0]
     assert float(jnp.sum(wider > 0)) > float(jnp.sum(expected["casn"] > 0))
+    assert wider_layer == layers.casn() and hash(wider_layer) == hash(layers.casn())
+    assert layers.snl(passing=False) != layers.snl() and layers.casn() != layers.snape()
 
 
 def test_the_gscl_layer_in_one_shape_equals_gscl_layer():
@@ -382,6 +387,10 @@ def test_the_gscl_layer_in_one_shape_equals_gscl_layer():
     scene = make_scene([[1.0, 0.5]], people_heading_rad=[math.pi], robot_xy_m=(0.0, 0.0), goal_xy_m=(3.0, 0.0))
     occupancy = np.zeros(SPEC.shape, np.float32)
     occupancy[:, :3] = 1.0
-    costs, state = layers.gscl(predict, occupancy)(scene, SPEC)
+    costs, state = layers.gscl(predict)(scene, SPEC, occupancy=occupancy)
     np.testing.assert_array_equal(np.asarray(costs), np.asarray(gscl_layer.gscl_layer(predict, occupancy, SPEC, scene)))
     assert state == () and float(costs.max()) > 0.0
+    with pytest.raises(ValueError, match="occupancy"):
+        layers.gscl(predict)(scene, SPEC)
+    with pytest.raises(TypeError, match="SocialCostModel"):
+        layers.gscl("runs/gscl")

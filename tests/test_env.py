@@ -252,7 +252,7 @@ def test_a_layer_parameter_sweep_reuses_the_stacks_program(setup):
     variants = _variants(setup, 2)
     method = stack.METHODS["snl_small"]
     small = arena.episode_function(setup, method)(variants)
-    actor = arena.method_actor(method, setup.grid, float(setup.env.robot.radius_m), arena.ArenaConfig(), None)
+    actor = arena.method_actor(method, setup.grid, float(setup.env.robot.radius_m), arena.ArenaConfig())
     compiled = arena._episode_program(actor)._cache_size()  # other modules' shapes may be there too
     wide = stack.layer_params(method).replace(snl=snl.SNLParams(covariance=2.0))
     large = arena.episode_function(setup, method, layers=wide)(variants)

@@ -15,6 +15,7 @@ from socialnav import cli
 from socialnav.common import runfolder
 from socialnav.models import checkpoints, dataset, evaluation, grid, inference, quality, steps, streams, train, unet
 from socialnav.models.config import TrainConfig
+from socialnav.planners import layers
 
 TINY = dict(
     features=(4, 4, 8, 8),
@@ -116,6 +117,10 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     earlier = inference.SocialCostModel(graphdef, s0["params"], s0["batch_stats"])  # the untrained weights
     assert earlier.apply is model.apply
     assert float(jnp.max(jnp.abs(earlier.apply(earlier.weights, maps) - model.apply(model.weights, maps)))) > 1e-4
+    # As a stack's layer: one layer (the same compiled program) whose params are each model's weights.
+    assert layers.gscl(earlier) == layers.gscl(model)
+    leaves = zip(jax.tree_util.tree_leaves(layers.gscl(model).params), jax.tree_util.tree_leaves(model.weights))
+    assert all(a is b for a, b in leaves)
     with pytest.raises(ValueError, match="input maps must be"):
         model(np.zeros((2, 20, 20)))
 

@@ -23,7 +23,7 @@ from socialnav.jaxsim.scenes.spec import load_scene, mirror
 from socialnav.jaxsim.scenes.variant import sample_variants
 from socialnav.models import grid
 from socialnav.models import social_costs as sc
-from socialnav.planners import actors
+from socialnav.planners import actors, layers
 from socialnav.planners.stack import METHODS
 
 
@@ -94,12 +94,13 @@ def test_the_global_planner_leaves_the_people_to_the_social_layer_when_the_scene
 
 
 def _band_costs(level):
-    """``gscl_apply`` stand-in: a band of ``level`` across the way 1.6-2.4 m ahead of the robot
-    (|y| < 2 m), with one 0.4 m cell open at y 0-0.4 m, in the network's 40 x 40 window."""
+    """A GSCL network's stand-in (:func:`planners.layers.gscl`): a band of ``level`` across the
+    way 1.6-2.4 m ahead of the robot (|y| < 2 m), with one 0.4 m cell open at y 0-0.4 m, in the
+    network's 40 x 40 window."""
     x, y = np.asarray(grid.CELL_X_M), np.asarray(grid.CELL_Y_M)
     band = (x > 1.7) & (x < 2.3) & (np.abs(y) < 2.0) & ~np.isclose(y, 0.2)
     costs = jnp.asarray(np.where(band, level, 0.0), jnp.float32)
-    return lambda weights, maps: jnp.broadcast_to(costs, maps.shape)
+    return lambda maps: jnp.broadcast_to(costs, maps.shape)
 
 
 def test_a_forbidden_social_cost_is_inflated_with_the_walls_and_a_graded_one_is_not():
@@ -108,10 +109,11 @@ def test_a_forbidden_social_cost_is_inflated_with_the_walls_and_a_graded_one_is_
     round the band's end; at the top of the graded range the plan goes straight on."""
     setup = arena.setup_scene(load_scene(SCENES_DIR / "gscl_queue.json"))
     obs = _observation([(-5.0, 3.0)], goal=(3.8, 0.0))
-    params = actors.stack_params(setup.env, setup.map, people_are_obstacles=False)
     widest = {}
     for level in (sc.FORBIDDEN, sc.GRADED_TOP):
-        actor = actors.stack_actor(METHODS["gscl"], setup.grid, 0.275, gscl_apply=_band_costs(level))
+        layer = layers.gscl(_band_costs(level))
+        params = actors.stack_params(setup.env, setup.map, layer=layer, people_are_obstacles=False)
+        actor = actors.stack_actor(METHODS["gscl"], setup.grid, 0.275, layer=layer)
         st = actor.plan(params, actor.init(jax.random.PRNGKey(0), obs), obs, jax.random.PRNGKey(0))
         path = np.asarray(st.path[: int(st.path_len)])
         assert np.linalg.norm(path[-1] - [3.8, 0.0]) < 0.1, level
