@@ -41,6 +41,7 @@ def _metrics(robot_xy, people_xy=None, present=None, dt=0.1, reached_at=None, ya
     )
 
 
+@pytest.mark.slow
 def test_chc_of_a_square_path_and_its_length():
     side = np.linspace(0, 1, 11)[1:]
     square = np.concatenate(
@@ -59,6 +60,7 @@ def test_chc_of_a_square_path_and_its_length():
     np.testing.assert_allclose(m["zone_share"], [0.0, 0.0, 0.0, 1.0])  # nobody present: public
 
 
+@pytest.mark.slow
 def test_a_straight_pass_at_a_known_distance():
     x = np.linspace(-5, 5, 101)
     robot = np.stack([x, np.zeros_like(x)], 1)
@@ -74,6 +76,7 @@ def test_a_straight_pass_at_a_known_distance():
     assert int(m["collisions"]) == 0
 
 
+@pytest.mark.slow
 def test_a_trial_intrudes_once_however_many_entries_as_seed_001_counts():
     """Two people 1 m beside the line: two personal-space entries, one trial with an intrusion;
     1.5 m beside it: none."""
@@ -86,6 +89,7 @@ def test_a_trial_intrudes_once_however_many_entries_as_seed_001_counts():
     assert int(far["intrusions"]) == 0 and not bool(far["intruded"])
 
 
+@pytest.mark.slow
 def test_a_collision_is_counted_once_per_encounter():
     x = np.linspace(-3, 3, 61)
     robot = np.stack([x, np.zeros_like(x)], 1)
@@ -95,6 +99,7 @@ def test_a_collision_is_counted_once_per_encounter():
     assert float(m["ttc_min_s"]) == 0.0
 
 
+@pytest.mark.slow
 def test_a_collision_before_arrival_fails_the_run_where_a_collision_ends_it_and_one_after_does_not():
     """Seed 002's reading (a collision ends the run): reached, but through a person, is a goal
     success and not a goal without collision; a person met only after arrival does not count."""
@@ -108,6 +113,7 @@ def test_a_collision_before_arrival_fails_the_run_where_a_collision_ends_it_and_
     assert bool(before["goal_no_collision"]) and int(before["collisions"]) == 0
 
 
+@pytest.mark.slow
 def test_rules_on_hand_made_trajectories():
     x = np.linspace(-3, 3, 61)
     robot = jnp.asarray(np.stack([x, -0.5 + 0 * x], 1), jnp.float32)

@@ -76,6 +76,7 @@ def test_an_unreadable_file_is_named(tmp_path):
         arena_params.load(tmp_path / "nowhere.toml")
 
 
+@pytest.mark.slow
 def test_the_files_values_reach_the_episodes_without_a_new_compilation():
     """A slower robot takes longer; the pursuit's gain is traced: the same compiled program."""
     spec = load_scene(SCENES_DIR / "casn_static_person.json")
@@ -91,6 +92,7 @@ def test_the_files_values_reach_the_episodes_without_a_new_compilation():
     assert slower["goal_success"].all()
 
 
+@pytest.mark.slow
 def test_a_users_actor_before_a_built_in_method_keeps_the_files_values():
     """The user's actor gets the file's robot limits, and the built-in after it its layers."""
     from socialnav.jaxsim.scenes.actor import Actor

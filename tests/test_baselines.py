@@ -45,6 +45,7 @@ def _orca(xy, velocity, target, people, walls=FAR_WALL, params=orca_robot.ORCARo
     return np.asarray(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", range(len(ORCA_CASES)))
 def test_orca_robot_velocity_equals_navgrounds_orca(case):
     """navground's ORCABehavior (RVO2's programs, holonomic kinematics, the same horizons and radii)
@@ -109,6 +110,7 @@ def head_on():
     return arena.setup_scene(load_scene(SCENES_DIR / "casn_head_on.json"))
 
 
+@pytest.mark.slow
 def test_the_social_force_robot_feels_the_crowds_own_force(head_on):
     """The robot's social acceleration is the row of the crowd's all-pairs force (the people as
     sources of weight 1) for an agent in its place: the same force that moves the people."""
@@ -128,6 +130,7 @@ def test_the_social_force_robot_feels_the_crowds_own_force(head_on):
     np.testing.assert_array_equal(np.asarray(hidden), 0.0)  # unseen people do not push
 
 
+@pytest.mark.slow
 def test_the_social_force_robot_turns_away_from_a_person_ahead(head_on):
     ctx = _context(head_on)
     rule = social_force_robot.SocialForceRobotParams(crowd=arena.crowd_params())
@@ -167,6 +170,7 @@ def test_dwa_arcs_are_the_bases_own_steps(head_on):
     np.testing.assert_allclose(np.asarray(pts[0, -1]), [1.0 + 0.75 * np.cos(0.3), 2.0 + 0.75 * np.sin(0.3)], atol=1e-5)
 
 
+@pytest.mark.slow
 def test_dwa_brakes_when_every_arc_meets_a_person(head_on):
     ctx = _context(head_on)
     blocked = _observation((0, 0), 0.0, 0.5, (5, 0), [(0.6, 0.0)], [(-1.2, 0.0)])
@@ -192,6 +196,7 @@ def _empty(setup, n):
 SCENES = sorted(p.stem for p in pathlib.Path(SCENES_DIR).glob("*.json"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["gscl_l_hallway", "snape_static_table_fridge"])
 def test_every_baseline_reaches_the_goal_of_an_empty_scene_without_touching_a_wall(name):
     setup = arena.setup_scene(load_scene(SCENES_DIR / f"{name}.json"))
@@ -213,6 +218,7 @@ def test_dwa_reaches_the_goal_of_every_scene_without_people_and_never_enters_a_w
     assert gap.min() >= RobotParams().radius_m - 1e-4
 
 
+@pytest.mark.slow
 def test_the_baselines_are_methods_of_the_arena_command(tmp_path):
     from socialnav import cli
 

@@ -38,6 +38,7 @@ def run(tmp_path_factory):
     return scenario, out
 
 
+@pytest.mark.slow
 def test_the_log_has_every_schema_column_with_its_dtype(run):
     scenario, out = run
     schema = pq.read_schema(out / logschema.LOG_FILE)
@@ -52,6 +53,7 @@ def test_the_log_has_every_schema_column_with_its_dtype(run):
     assert set(logschema.META_KEYS) <= set(meta) and meta["schema_version"] == logschema.SCHEMA_VERSION
 
 
+@pytest.mark.slow
 def test_the_causal_reader_reads_what_the_simulator_writes(run):
     scenario, out = run
     df, meta = extract.read_run(out)
@@ -62,6 +64,7 @@ def test_the_causal_reader_reads_what_the_simulator_writes(run):
     pd.testing.assert_frame_equal(df, full[df.columns.tolist()])  # the same values, read through the contract
 
 
+@pytest.mark.slow
 def test_the_causal_reader_names_what_is_missing(run, tmp_path):
     _, out = run
     (tmp_path / logschema.META_FILE).write_text((out / logschema.META_FILE).read_text())

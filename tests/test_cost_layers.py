@@ -121,6 +121,7 @@ def test_snl_half_plane_is_the_ros_angle_test():
     np.testing.assert_array_equal(ours[margin], ros[margin])
 
 
+@pytest.mark.slow
 def test_snl_ignores_padding_and_takes_the_max_over_people():
     one = make_scene([[0.0, 0.0]])
     padded = make_scene([[0.0, 0.0]], max_people=5)
@@ -170,6 +171,7 @@ def test_casn_group_spaces_cover_the_inside_of_the_formation():
     assert value_at(np.asarray(layer(lone)), 1.0, 0.0)[0] == 0.0
 
 
+@pytest.mark.slow
 def test_casn_static_person_discs():
     layer, _ = casn.casn_layer(make_scene([[0.05, 0.05]]), X, Y)
     layer = np.asarray(layer)
@@ -347,6 +349,7 @@ def test_demo_paths_reach_the_goal_and_keep_off_lethal_cells():
 # ---------------------------------------------------------------- one shape for every layer (planners.layers)
 
 
+@pytest.mark.slow
 def test_every_layer_in_one_shape_equals_its_own_function():
     """``layer(scene, grid, state) -> (costs, state)`` gives each paper's layer exactly, CASN's state
     carried (its frozen points), the others' ``()``; under jit with the grid static too. Two
@@ -380,6 +383,7 @@ def test_every_layer_in_one_shape_equals_its_own_function():
     assert layers.snl(passing=False) != layers.snl() and layers.casn() != layers.snape()
 
 
+@pytest.mark.slow
 def test_the_gscl_layer_in_one_shape_equals_gscl_layer():
     from socialnav.planners import layers
 

@@ -26,6 +26,7 @@ def params():
     return load_scenario().params
 
 
+@pytest.mark.slow
 def test_the_warehouse_and_the_arena_move_people_with_one_function(monkeypatch, short_day, params):
     from socialnav.jaxsim import step as step_lib
 
@@ -112,6 +113,7 @@ def test_a_person_walking_into_a_wall_stops_at_the_clearance_without_velocity_in
     )
 
 
+@pytest.mark.slow
 def test_a_person_who_ignores_the_robot_moves_as_if_it_were_not_there(params):
     x, y = jnp.array([0.0, 3.0]), jnp.array([0.0, 0.0])
     vx, vy = jnp.array([0.8, 0.0]), jnp.array([0.0, 0.0])
@@ -144,6 +146,7 @@ def _orca_run(x, y, aim_x, aim_y, moving, steps):
     return x, y, vx, vy, np.array(gaps)
 
 
+@pytest.mark.slow
 def test_orca_two_people_head_on_swap_without_contact():
     x, y = jnp.array([-3.0, 3.0]), jnp.array([0.05, -0.05])
     x, y, _, _, gaps = _orca_run(x, y, jnp.array([3.0, -3.0]), jnp.array([0.05, -0.05]), jnp.ones(2, bool), 120)

@@ -14,6 +14,7 @@ def _straight(n=16, length=4.0):
     return jnp.stack([jnp.linspace(0, length, n), jnp.zeros(n)], axis=1)
 
 
+@pytest.mark.slow
 def test_the_band_contracts_a_slack_path_to_the_straight_line():
     band = _straight()
     band = band.at[1:-1, 1].add(0.4 * jnp.sin(jnp.linspace(0, 3 * math.pi, 14)))

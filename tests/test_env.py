@@ -40,6 +40,7 @@ def _one(variants, k):
     return jax.tree_util.tree_map(lambda a: a[k], variants)
 
 
+@pytest.mark.slow
 def test_reset_and_step_are_deterministic_and_follow_the_specs(setup):
     env = setup.env
     variant = _one(_variants(setup, 1), 0)
@@ -62,6 +63,7 @@ def test_reset_and_step_are_deterministic_and_follow_the_specs(setup):
     assert float(t1.observation.time_s) == pytest.approx(0.5)
 
 
+@pytest.mark.slow
 def test_the_base_clips_an_action_beyond_its_limits(setup):
     env = setup.env
     state, _ = env.reset(jax.random.key(0), _one(_variants(setup, 1), 0))
@@ -72,6 +74,7 @@ def test_the_base_clips_an_action_beyond_its_limits(setup):
         assert abs(float(ts.observation.robot_turn_rate_rps)) <= float(env.robot.max_turn_rate_rps) + 1e-6
 
 
+@pytest.mark.slow
 def test_a_variant_alone_equals_the_same_variant_in_a_batch(setup):
     """Through the arena's batch program (padded to a multiple of ``arena.LANES``: XLA
     vectorises other batch sizes differently)."""
@@ -104,6 +107,7 @@ def _open_room(tmp_path):
     return load_scene(path)
 
 
+@pytest.mark.slow
 def test_reward_pays_the_goal_once_and_charges_a_contact(tmp_path):
     """A scene without people: driving to the goal earns the progress made plus the goal reward,
     once. Then a person placed on the robot: the collision penalty."""
@@ -163,6 +167,7 @@ def broken(env):
 '''
 
 
+@pytest.mark.slow
 def test_a_users_actor_runs_from_the_command_line_beside_the_built_in_ones(tmp_path):
     module = tmp_path / "my_actor.py"
     module.write_text(MY_ACTOR)
@@ -224,6 +229,7 @@ def test_the_gymnasium_env_passes_the_env_checker():
     assert env.observation_space.contains(obs)
 
 
+@pytest.mark.slow
 def test_the_vector_env_steps_a_batch_and_resets_an_ended_episode_on_the_next_step():
     gym_env = pytest.importorskip("socialnav.jaxsim.scenes.gym_env")
     spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
@@ -263,6 +269,7 @@ def test_a_layer_parameter_sweep_reuses_the_stacks_program(setup):
 # ---------------------------------------------------------------- a scene file to the planner's Scene
 
 
+@pytest.mark.slow
 def test_planner_scene_is_the_variant_at_its_start_and_moves_with_time(setup):
     variant = _one(_variants(setup, 2, seed=3), 1)
     truth = arena.planner_scene(setup, variant)
@@ -282,6 +289,7 @@ def test_planner_scene_is_the_variant_at_its_start_and_moves_with_time(setup):
     np.testing.assert_allclose(np.asarray(seen.people_xy_m)[visible], np.asarray(truth.people_xy_m)[visible])
 
 
+@pytest.mark.slow
 def test_scene_from_file_draws_the_arenas_variant_and_names_a_bad_file(setup, tmp_path):
     from socialnav.evaluation import scene_from_file
 
@@ -331,6 +339,7 @@ def test_a_non_finite_action_stops_the_robot_and_is_marked(bad):
     assert not bool(ts.info.invalid_action) and float(ts.observation.robot_speed_mps) > 0.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("bad", [jnp.array([0.5]), jnp.array([0.5, 0.1, 9.0]), jnp.float32(0.5), jnp.zeros((1, 2))])
 def test_an_action_of_another_shape_is_refused_when_traced(setup, bad):
     env = setup.env
@@ -359,6 +368,7 @@ def test_check_actor_refuses_an_action_of_another_shape(setup, action):
     check_actor(setup.env, _actor_returning((0.1, 0.0)), (), setup.n_slots)  # a pair reads as (2,)
 
 
+@pytest.mark.slow
 def test_the_gymnasium_adapters_stop_on_a_nan_action_and_refuse_a_wrong_shape():
     gym_env = pytest.importorskip("socialnav.jaxsim.scenes.gym_env")
     spec = load_scene(DATA_DIR / "scenes" / "snape_walking.json")
@@ -402,6 +412,7 @@ def a_scalar(env):
 """
 
 
+@pytest.mark.slow
 def test_the_arena_marks_an_actor_whose_actions_go_non_finite(tmp_path, capsys):
     module = tmp_path / "nan_actors.py"
     module.write_text(NAN_ACTORS)

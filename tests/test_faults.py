@@ -120,6 +120,7 @@ def _run(
     return subprocess.run([sys.executable, "-c", KILLER + code, str(folder)], env=env, cwd=ROOT).returncode
 
 
+@pytest.mark.slow
 def test_a_run_folder_killed_at_every_file_operation(tmp_path):
     count_file = tmp_path / "count"
     whole = tmp_path / "whole"
@@ -315,6 +316,7 @@ def _commands(learned_run):
         "gscl generate",
     ],
 )
+@pytest.mark.slow
 def test_every_command_leaves_a_users_files_alone(job, learned_run, tmp_path):
     """Each command that writes a folder, run twice (the second time replacing its own run) into
     a folder of a user's files: they stay as they were, and every file the command left there is
@@ -347,6 +349,7 @@ def _victim_beside(folder: pathlib.Path) -> pathlib.Path:
     return victim
 
 
+@pytest.mark.slow
 def test_a_manifest_naming_a_file_through_a_symbolic_link_is_refused(tmp_path, capsys):
     """A hand-edited manifest listing ``link/precious.txt`` beside ``link -> ../victim``:
     ``--overwrite`` refuses it in one line naming the entry, before moving anything; the user's
@@ -387,6 +390,7 @@ def test_a_journal_naming_a_file_through_a_symbolic_link_is_not_settled(tmp_path
     assert _state(folder) == "old"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("entry", ["../victim/precious.txt", "/etc/passwd", "a/../../b"])
 def test_a_manifest_naming_a_path_outside_is_not_a_manifest(tmp_path, entry):
     folder = tmp_path / "run"

@@ -300,6 +300,7 @@ def test_fuzz_scenarios(tmp_path):
     _report("scenario", fuzz_scenarios(tmp_path, FAST_CASES, 0), FAST_CASES)
 
 
+@pytest.mark.slow
 def test_fuzz_logs(small_run, tmp_path):
     _report("logs", fuzz_logs(small_run, tmp_path, FAST_CASES, 0), FAST_CASES)
 

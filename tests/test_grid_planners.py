@@ -64,6 +64,7 @@ def test_potentials_equal_scipy_dijkstra_on_random_walled_grids(connectivity, so
         np.testing.assert_allclose(phi[k][reachable], ref[reachable], rtol=1e-5, atol=1e-4)
 
 
+@pytest.mark.slow
 def test_paths_descend_the_potential_and_avoid_impassable_cells():
     rng = np.random.default_rng(7)
     batch, h, w = 8, 30, 30
@@ -108,6 +109,7 @@ def test_free_grid_potential_is_the_octile_distance():
     np.testing.assert_allclose(phi, octile, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_a_standing_person_moves_the_path_further_with_a_larger_covariance():
     spec = costmap.GridSpec(40, 100, 0.1, origin_x_m=-5.0, origin_y_m=-2.0)
     x, y = spec.cell_centres()
@@ -127,6 +129,7 @@ def test_a_standing_person_moves_the_path_further_with_a_larger_covariance():
     assert 0.5 < clearances[1] < clearances[2]
 
 
+@pytest.mark.slow
 def test_smooth_planner_tends_to_the_exact_potential_and_its_gradient_is_right():
     rng = np.random.default_rng(1)
     costs = rng.uniform(0, 200, (12, 14))
@@ -171,6 +174,7 @@ def _random_batch(rng, batch, h, w, wall_share, low=1.0, high=5.0):
     return t, ij(), ij()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("connectivity", [8, 4])
 def test_dijkstra_plans_are_the_sweeps_plans_bit_for_bit(connectivity):
     """Both solvers reach the same float32 fixed point (Dijkstra settles each cell as the min of
@@ -198,6 +202,7 @@ def test_dijkstra_plans_are_the_sweeps_plans_bit_for_bit(connectivity):
     np.testing.assert_array_equal(np.asarray(one(t, start, goal).path_ij[:, 0]), np.asarray(whole.path_ij))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("low,high", [(0.0, 5.0), (1.0, 1e6)])
 def test_dijkstra_falls_back_to_a_heap_where_buckets_do_not_fit(low, high):
     """Free moves (cost 0: no bucket width) and costs spread over a million-fold range (too many
@@ -212,6 +217,7 @@ def test_dijkstra_falls_back_to_a_heap_where_buckets_do_not_fit(low, high):
     )
 
 
+@pytest.mark.slow
 def test_the_solver_is_checked_and_the_sweeps_keep_their_options():
     t = np.ones((1, 5, 5), np.float32)
     with pytest.raises(ValueError, match="solver must be one of"):

@@ -55,6 +55,7 @@ def test_the_one_ahead_slows_by_the_gaze_and_a_far_mate_is_pulled_in():
     assert dy[1] == pytest.approx(0.0, abs=1e-5)
 
 
+@pytest.mark.slow
 def test_mates_closer_than_the_repulsion_distance_push_apart_and_no_one_alone_is_touched():
     dx, dy, speed = _aim([[0, 0], [0, 0.4], [0, 0.2]], [[10, 0], [10, 0], [10, 0]], [1.0, 1.0, 1.0], [5, 5, -1])
     w = P.relaxation_s * P.repulsion_mps2  # 0.5 m/s sideways, away from the mate
@@ -105,6 +106,7 @@ def _walk(model: str, grouped: bool, n_steps: int):
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", humans.HUMAN_MODELS)
 def test_a_pair_walking_together_stays_within_1_m_where_alone_they_drift_apart(model):
     """Moussaïd's attraction starts where a pair is more than (2 - 1) / 2 m from its centre, so a
@@ -120,6 +122,7 @@ def test_a_pair_walking_together_stays_within_1_m_where_alone_they_drift_apart(m
     assert together[-1, :2, 0].min() > 12.0  # and the pair got past the walker
 
 
+@pytest.mark.slow
 def test_no_groups_and_everyone_alone_step_alike():
     params = humans.human_params("social_force", load_scenario(WAREHOUSE_DIR).params)
     x, y = jnp.array([0.0, 0.5, 3.0]), jnp.array([0.0, 0.2, 0.1])
@@ -167,6 +170,7 @@ def _synthetic_windows(truth: hv.HumanModel, n_windows: int = 32) -> hv.Predicti
     return w.replace(future=np.asarray(future))
 
 
+@pytest.mark.slow
 def test_calibration_on_trajectories_recovers_a_known_gaze_strength_by_gradient_and_by_search():
     model = hv.HumanModel("collision_free_speed")
     fields = ("group.gaze_per_rad",)
@@ -232,6 +236,7 @@ def _hall(tmp_path, paired: bool, human_model: str = "social_force"):
     return spec, env_lib.make_env(spec, env_lib.EnvConfig(human_model=human_model))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["social_force", "collision_free_speed_calibrated"])
 def test_walkers_declared_a_pair_in_a_scene_walk_together_in_the_arena(tmp_path, model):
     from socialnav.jaxsim.scenes.variant import sample_variant

@@ -57,6 +57,7 @@ def test_every_person_carries_proxemic_cost_and_a_heading_pixel(data):
                 assert (patch == grid.HEADING).any() or (patch == grid.PERSON).sum() > 1
 
 
+@pytest.mark.slow
 def test_the_interaction_zone_exists_only_when_people_face_inward():
     """Same layouts (same keys) facing in and out: only facing in fills the circle's centre."""
     keys = dataset.family_keys(0, "group", 32)

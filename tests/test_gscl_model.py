@@ -157,6 +157,7 @@ def test_trivial_baselines_and_quality_bar():
     assert not quality.meets_quality(0.004, {"a": 0.0, "b": 0.0}, b)
 
 
+@pytest.mark.slow
 def test_input_map_from_occupancy_people_and_goal():
     occupancy = np.zeros((400, 400), np.float32)  # 0.05 m cells, origin (-10, -10)
     occupancy[:, 300] = 1.0  # a thin wall at x = 5.0-5.05 m (one fine cell, an eighth of a GSCL cell)
@@ -198,6 +199,7 @@ def test_input_map_from_occupancy_people_and_goal():
     assert image[row, col] == grid.PERSON and image[row, col + 1] == grid.HEADING
 
 
+@pytest.mark.slow
 def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path, capsys):
     out = tmp_path / "d.npz"
     assert (
@@ -236,6 +238,7 @@ def _truncate_biggest_file(folder):
     biggest.write_bytes(biggest.read_bytes()[: biggest.stat().st_size // 3])
 
 
+@pytest.mark.slow
 def test_a_damaged_checkpoint_falls_back_and_a_foreign_config_is_named(tmp_path):
     """Killed at step 6 (checkpoints 4 and 6 kept): the newest damaged, the older one is used with
     a warning; every one damaged, or a config.json naming other widths, is one error naming it."""
@@ -264,6 +267,7 @@ def test_a_damaged_checkpoint_falls_back_and_a_foreign_config_is_named(tmp_path)
         inference.SocialCostModel.load(foreign)
 
 
+@pytest.mark.slow
 def test_training_stops_when_the_loss_turns_nan(tmp_path):
     config = TrainConfig(**{**TINY, "learning_rate": 1e30, "schedule": "constant"})
     with pytest.raises(train.TrainingDiverged, match="became nan"):
@@ -305,6 +309,7 @@ def test_model_inputs_outside_the_pixel_encoding_are_refused():
             inference.input_map(**(good | change))
 
 
+@pytest.mark.slow
 def test_the_cost_weighted_loss_changes_only_what_it_weighs():
     """``cost_weight`` weighs a pixel's error by 1 + w x target: on maps whose targets are all zero
     the step is the plain-MSE step exactly; on costed maps the update differs, and the loss the step
@@ -337,6 +342,7 @@ def test_the_cost_weighted_loss_changes_only_what_it_weighs():
     assert TrainConfig.from_json(old).cost_weight == 0.0
 
 
+@pytest.mark.slow
 def test_the_rotation_average_turns_with_the_map():
     """The average over quarter turns is equivariant to them (to float rounding); the network alone
     is not, so the check could fail; 1 rotation is the function itself; other counts are refused."""
@@ -379,6 +385,7 @@ def test_pair_contrast_is_the_twins_difference_on_both_twins_and_zero_elsewhere(
     assert dataset.pair_contrast(dataset.generate(5, {"corner": 2})).sum() == 0.0
 
 
+@pytest.mark.slow
 def test_the_pair_weighted_loss_weighs_only_the_contrast():
     """``pair_weight`` adds w x contrast to each pixel's weight: with a zero contrast (or none) the
     step is the unweighted step exactly; with the twins' contrast the update differs and the
@@ -411,6 +418,7 @@ def test_the_pair_weighted_loss_weighs_only_the_contrast():
     assert TrainConfig.paper().pair_weight == 0.0
 
 
+@pytest.mark.slow
 def test_the_forbidden_head_learns_the_queues_u_as_a_classification_beside_the_graded_costs():
     """Today's targets split exactly into the graded channel's targets and the forbidden head's
     (the U on queues with the goal at the head, nothing on groups); the combined output is
@@ -473,6 +481,7 @@ def test_the_forbidden_head_learns_the_queues_u_as_a_classification_beside_the_g
     assert not all(np.allclose(a, b) for a, b in zip(jax.tree.leaves(one), jax.tree.leaves(three), strict=True))
 
 
+@pytest.mark.slow
 def test_an_epoch_carries_its_contrast_through_the_shuffle():
     """``epoch_data`` computes the twins' contrast before it shuffles, and shuffles it with its
     samples: the same rows as :func:`dataset.pair_contrast` of the unshuffled epoch; runs without a
@@ -493,6 +502,7 @@ def test_an_epoch_carries_its_contrast_through_the_shuffle():
     assert "contrast" not in streams.epoch_data(TrainConfig(**{**TINY, "composites": 0, "pair_weight": 0.0}), 1)
 
 
+@pytest.mark.slow
 def test_an_exported_model_predicts_what_the_run_predicts_and_bad_folders_are_named(tmp_path):
     """socialnav gscl export's folder: the weights alone (no optimiser state), read back into the
     same predictions; a folder that is no model, or weights of another network, fail in one line."""
@@ -526,6 +536,7 @@ def test_an_exported_model_predicts_what_the_run_predicts_and_bad_folders_are_na
         inference.SocialCostModel.load(tmp_path / "m")
 
 
+@pytest.mark.slow
 def test_a_model_of_graded_targets_is_read_in_the_graded_range_and_cannot_be_trained_on(tmp_path):
     """A run saved before the targets had a forbidden level (its config.json has no 'targets')
     and a "paths" run learnt graded costs only: they have one output, and loaded, their costs are
@@ -625,6 +636,7 @@ def test_a_warm_start_copies_the_source_and_grows_a_head_and_bad_sources_are_nam
         TrainConfig.from_json({**now.to_json(), "init_from": 3})
 
 
+@pytest.mark.slow
 def test_a_frozen_graded_network_keeps_the_sources_costs_while_the_forbidden_branch_learns(tmp_path):
     """--forbidden-features with --freeze-graded: the forbidden logit comes from a separate U-Net;
     started from a one-output source, every graded weight and batch statistic stays the source's
@@ -710,6 +722,7 @@ def test_a_frozen_graded_network_keeps_the_sources_costs_while_the_forbidden_bra
     assert TrainConfig.from_json(config.to_json()) == config
 
 
+@pytest.mark.slow
 def test_the_decoders_upsampling_is_flaxs_transposed_convolution_with_the_same_parameters():
     """UpConv computes nnx.ConvTranspose(in, out, (2, 2), strides=(2, 2)) as one product: the same
     parameters (names, shapes, initial values: checkpoints load unchanged), the same outputs and

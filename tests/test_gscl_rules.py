@@ -99,6 +99,7 @@ def test_drawn_line_reads_the_line_from_the_peoples_cells():
     assert (float(hx), float(hy), float(heading), float(tail)) == pytest.approx((0.2, -1.0, np.pi / 4, 0.0))
 
 
+@pytest.mark.slow
 def test_the_suites_expected_maps_pass_and_rule_blind_maps_fail(cases):
     assert {c.rule for c in cases} == set(rules.RULES)
     assert {c.scene for c in cases} == set(rules.SCENES)
@@ -158,6 +159,7 @@ def test_the_blind_corner_beside_a_queue_is_scored_apart_from_the_queues_u():
     assert report["passed"].all()
 
 
+@pytest.mark.slow
 def test_the_suite_goes_beyond_the_generators_layouts():
     cases = rules.build_suite()  # the default suite, as `socialnav gscl rules` runs it
     groups = [c.params for c in cases if c.scene == "group"]
@@ -181,6 +183,7 @@ def test_the_suite_is_deterministic_by_seed():
         rules.build_suite(1, kinds=("spiral",))
 
 
+@pytest.mark.slow
 def test_composite_samples_hold_both_scenes_and_their_max():
     data = dataset.generate(3, {"composite": 64})
     inputs, targets = data["inputs"], data["targets"]
@@ -196,6 +199,7 @@ def test_composite_samples_hold_both_scenes_and_their_max():
     np.testing.assert_array_equal(again["inputs"], inputs)
 
 
+@pytest.mark.slow
 def test_paired_families_share_their_people():
     data = dataset.generate(0, {"queue": 6, "non_queue": 6, "group": 6, "non_group": 6})
     names = list(data["names"])

@@ -152,6 +152,7 @@ STEPS = {
 }  # fmt: skip
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(STEPS))
 def test_two_people_head_on_pass_without_their_bodies_overlapping(name):
     path = _walk(STEPS[name], [[0.0, 0.0], [6.0, 0.05]], [[12.0, 0.0], [-6.0, 0.05]], [1.2, 1.2], 150)
@@ -160,6 +161,7 @@ def test_two_people_head_on_pass_without_their_bodies_overlapping(name):
     assert path[-1, 0, 0] > 8.0 and path[-1, 1, 0] < -2.0  # and both got past each other
 
 
+@pytest.mark.slow
 def test_the_speed_model_in_single_file_walks_at_its_headway_over_the_time_gap():
     """Known answer (Tordeux et al. 2016): a file of people 1 m apart, faster ones behind, ends at
     the speed (spacing - 2 r) / T of the headway, whatever their desired speeds above it."""
@@ -176,6 +178,7 @@ def test_candidate_headings_keep_straight_first_then_right_before_left():
     np.testing.assert_allclose(speed_model.heading_offsets(1), [0.0])
 
 
+@pytest.mark.slow
 def test_the_steering_model_overtakes_a_slower_walker_where_the_published_one_follows():
     """Known answer: behind a walker at 0.5 m/s in open space, the published speed model follows
     at the leader's speed (its heading never leaves the lane); the steering one turns out of the
@@ -190,6 +193,7 @@ def test_the_steering_model_overtakes_a_slower_walker_where_the_published_one_fo
     assert gap.min() > 2 * 0.2 - 1e-3  # bodies never overlap while passing
 
 
+@pytest.mark.slow
 def test_the_steering_model_is_the_published_one_where_nobody_is_in_the_way():
     """Bit for bit: people far apart walk as the published speed model walks them."""
     xy = [[0.0, 0.0], [0.0, 5.0], [5.0, -5.0]]
@@ -199,6 +203,7 @@ def test_the_steering_model_is_the_published_one_where_nobody_is_in_the_way():
     np.testing.assert_array_equal(plain, steered)
 
 
+@pytest.mark.slow
 def test_the_steering_model_passes_on_the_side_away_from_a_wall():
     """A slower walker ahead, a wall 0.3 m to the right: the turn to the right (the tie's side)
     would walk into the wall, so the faster one passes on the left and stays inside the corridor."""
@@ -213,6 +218,7 @@ def test_the_steering_model_passes_on_the_side_away_from_a_wall():
     assert path[:, 0, 1].max() > 0.6 and path[:, 0, 1].min() >= model.speed.radius_m - 1e-3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["collision_free_speed", "anticipation", "steering_speed", "social_force"])
 def test_speed_falls_with_density_in_the_corridor(name):
     model = hv.HumanModel(name)
@@ -228,6 +234,7 @@ def test_speed_falls_with_density_in_the_corridor(name):
 # ---------------------------------------------------------------- the protocols' known figures
 
 
+@pytest.mark.slow
 def test_constant_velocity_on_eth_ucy_matches_the_published_figure():
     """Schöller et al. (2020), "The Simpler the Better": constant velocity ADE/FDE about 0.53 /
     1.15 m over the five test splits; the protocol here (8 observed, 12 predicted, people in all 20
@@ -238,6 +245,7 @@ def test_constant_velocity_on_eth_ucy_matches_the_published_figure():
     assert all(r["samples"] > 300 for r in results)
 
 
+@pytest.mark.slow
 def test_prediction_windows_keep_each_runs_sample_interval_and_a_lone_walker_is_read_at_those_times():
     """biwi_eth is sampled every 2/3 s, the other runs every 0.4 s: a window's velocity and its
     horizon are its own run's, and the model's path is read at its own samples (interpolated
@@ -299,6 +307,7 @@ def _walked_by(truth: hv.HumanModel, fields):
     return dataclasses.replace(corridors, speed_data=measured)
 
 
+@pytest.mark.slow
 def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search():
     """Known answer: the fundamental diagram of the speed model with a time gap of 0.6 s, fitted
     from 1.0 s by gradient through the crowd step and by Nelder-Mead, gives back 0.6 s."""
@@ -333,6 +342,7 @@ def test_orcas_parameters_are_fitted_by_a_forward_gradient_through_its_fallback_
     assert float(fitted.orca.radius_m) < 0.25
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["collision_free_speed", "anticipation", "collision_free_speed_calibrated"])
 def test_a_velocity_model_moves_the_arenas_people_around_a_standing_robot(name):
     """``--human-model``: the arena's env steps its people by the velocity model; the walker

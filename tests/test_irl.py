@@ -36,6 +36,7 @@ def _corridor_path(row, h=9, w=13):
     return down + along + back
 
 
+@pytest.mark.slow
 def test_implicit_gradient_equals_the_unrolled_one_and_finite_differences():
     rng = np.random.default_rng(3)
     with jax.enable_x64(True):
@@ -60,6 +61,7 @@ def test_implicit_gradient_equals_the_unrolled_one_and_finite_differences():
         assert out_of_start == pytest.approx(1.0, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_path_likelihood_gradient_equals_finite_differences():
     rng = np.random.default_rng(4)
     maps = _two_corridor_map()
@@ -85,6 +87,7 @@ def test_path_likelihood_gradient_equals_finite_differences():
         assert grad[0, 6] > 0 and grad[8, 6] < 0
 
 
+@pytest.mark.slow
 def test_likelihood_is_zero_only_for_a_certain_choice_and_ignores_empty_demonstrations():
     maps = _two_corridor_map()
     cheap_top = np.ones(maps.shape, np.float32)
@@ -147,6 +150,7 @@ def _walled_map_with_goal(seed):
     return maps, costs, phi, weights
 
 
+@pytest.mark.slow
 def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
     maps, costs, phi, weights = _walled_map_with_goal(5)
     demo = irl.planned_demonstration(jax.random.key(0), jnp.asarray(maps), jnp.asarray(costs), paths_per_map=3)
@@ -169,6 +173,7 @@ def test_planned_demonstrations_follow_the_exact_plan_on_the_known_map():
     np.testing.assert_allclose(balance, 0, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_every_cell_demonstration_is_the_exact_plans_each_step_once():
     maps, costs, phi, weights = _walled_map_with_goal(6)
     demo = irl.policy_demonstration(jax.random.key(0), jnp.asarray(maps), jnp.asarray(costs))
@@ -310,6 +315,7 @@ def test_a_paths_run_lowers_the_demonstrations_likelihood_and_loads_as_a_gscl_mo
     assert model(data["inputs"][:2]).shape == (2, grid.GRID, grid.GRID)
 
 
+@pytest.mark.slow
 def test_the_layer_reading_prices_costs_as_the_gscl_layer_and_never_enters_a_forbidden_cell():
     from socialnav.models.social_costs import FORBIDDEN, FORBIDDEN_FROM, GRADED_TOP
     from socialnav.planners import gscl_layer

@@ -29,6 +29,7 @@ def _run(scenario, out, **kw):
     )
 
 
+@pytest.mark.slow
 def test_logs_open_in_pandas_with_the_documented_columns(small, tmp_path):
     run = _run(small, tmp_path / "a", snapshot_time_s=10.0)
     df = pd.read_parquet(run.log_file)
@@ -57,6 +58,7 @@ def test_logs_open_in_pandas_with_the_documented_columns(small, tmp_path):
     assert run.snapshot is not None and run.snapshot["time_s"] == pytest.approx(10.0)
 
 
+@pytest.mark.slow
 def test_same_seed_same_file_whatever_the_chunking(small, tmp_path):
     def read(out, **kw):
         df = pd.read_parquet(_run(small, out, **kw).log_file)

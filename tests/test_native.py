@@ -36,6 +36,7 @@ def test_the_kernel_is_built_and_is_what_the_simulator_calls(warehouse):
     assert native.SOCIAL_FORCE_TARGET in text
 
 
+@pytest.mark.slow
 @needs_compiler
 @pytest.mark.parametrize("worlds", [1, 5, 64, 130])  # under, at and over one block of 64 lanes
 def test_kernel_equals_jax_over_a_batch_with_per_world_parameters(warehouse, worlds):
@@ -62,6 +63,7 @@ def test_kernel_equals_jax_over_a_batch_with_per_world_parameters(warehouse, wor
         assert float(jnp.max(jnp.abs(other[0][-1] - got[0][-1]))) > 1e-3
 
 
+@pytest.mark.slow
 @needs_compiler
 def test_a_world_gets_the_same_bits_alone_and_inside_any_batch(warehouse):
     p = warehouse.params
@@ -155,7 +157,8 @@ def test_the_avx2_build_passes_the_same_checks(tmp_path):
     )
     here = pathlib.Path(__file__)
     done = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(here), "-k", "equals or same_bits"],
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", "0", "-m", "slow or not slow"]
+        + [str(here), "-k", "equals or same_bits"],
         env=env,
         cwd=here.parent.parent,
         capture_output=True,

@@ -56,6 +56,7 @@ def _line(n, speed=0.5, y=0.0):
     return np.stack([x, np.full(n, y)], 1)
 
 
+@pytest.mark.slow
 def test_speed_acceleration_and_jerk_of_a_ramp_then_a_cruise():
     # Accelerates at 0.5 m/s^2 for 10 steps from rest, then cruises at 0.5 m/s for 40.
     speed = np.concatenate([0.05 * np.arange(11), np.full(40, 0.5)])
@@ -75,6 +76,7 @@ def test_turn_rate_of_a_constant_turn():
     assert float(m["turn_rate_mean_rps"]) == pytest.approx(0.3 * 49 / 50, abs=1e-5)  # the first step has no rate
 
 
+@pytest.mark.slow
 def test_path_irregularity_and_length_ratio_of_a_detour():
     side = np.linspace(0, 1, 11)[1:]
     square = np.concatenate(
@@ -94,6 +96,7 @@ def test_path_irregularity_and_length_ratio_of_a_detour():
     assert float(short["path_length_ratio"]) == pytest.approx(1.7 / 1.7, abs=1e-4)
 
 
+@pytest.mark.slow
 def test_deadlock_is_told_apart_from_a_slow_timeout():
     goal = np.array([10.0, 0.0])
     stuck = np.concatenate([_line(21), np.repeat(_line(21)[-1:], 80, axis=0)])  # 1 m, then 8 s still
@@ -106,6 +109,7 @@ def test_deadlock_is_told_apart_from_a_slow_timeout():
     assert float(m["no_progress_max_s"]) == 0.0
 
 
+@pytest.mark.slow
 def test_near_misses_and_body_edge_clearance():
     robot = _line(121, speed=0.5)  # x from 0 to 6 m
     person = np.tile([[[3.0, 0.6]]], (121, 1, 1))  # centre 0.6 m off the line: gap 0.075 m
@@ -119,6 +123,7 @@ def test_near_misses_and_body_edge_clearance():
     assert int(wide["near_misses"]) == 0
 
 
+@pytest.mark.slow
 def test_intrusions_are_split_by_who_closed_in():
     # The robot drives past a standing person: the robot intrudes.
     robot = _line(121, speed=0.5)
@@ -132,6 +137,7 @@ def test_intrusions_are_split_by_who_closed_in():
     assert int(m["intrusions_person"]) == 1 and int(m["intrusions_robot"]) == 0
 
 
+@pytest.mark.slow
 def test_group_intrusions_count_entries_into_the_groups_circle():
     robot = _line(121, speed=0.5)  # along y = 0 through x = 3
     members = np.tile([[[3.0, 0.8], [3.0, -0.8], [10.0, 10.0]]], (121, 1, 1))  # a pair facing across the line
@@ -141,6 +147,7 @@ def test_group_intrusions_count_entries_into_the_groups_circle():
     assert int(around["group_intrusions"]) == 0
 
 
+@pytest.mark.slow
 def test_people_effect_of_hand_made_runs():
     t = np.arange(50) * DT
     without = np.stack([t * 1.0, np.zeros(50)], 1)[:, None, :]  # 1 m/s along x
@@ -166,6 +173,7 @@ def _one_walker(setup, robot_xy):
     return jax.tree_util.tree_map(jnp.asarray, v)
 
 
+@pytest.mark.slow
 def test_the_counterfactual_is_nil_far_from_the_robot_and_positive_in_its_way():
     """snape_walking's person walks (0.5-1 m/s) from about (-1.25, -0.45) to (3, 1.5) and avoids the
     robot. A robot standing in a far corner changes nothing; one standing on the person's line
@@ -197,6 +205,7 @@ def test_the_counterfactual_is_nil_far_from_the_robot_and_positive_in_its_way():
     assert hit["people_deviation_m"] > 0.01
 
 
+@pytest.mark.slow
 def test_the_counterfactual_equals_a_run_whose_people_ignore_the_robot_bit_for_bit():
     """casn_head_on's walker ignores the robot: the run with any robot and the counterfactual (the
     robot far away) move them by the same arithmetic, so their tracks agree to the bit and every

@@ -66,6 +66,7 @@ def _second_program_fails(p, crowd) -> int:
 @pytest.mark.parametrize(
     "n", [pytest.param(2, marks=pytest.mark.slow), 7, 16, pytest.param(40, marks=pytest.mark.slow)]
 )
+@pytest.mark.slow
 def test_equal_to_the_step_that_solved_everything_for_everyone(n):
     """In float64 the same answers to 1e-9 (the same programs, in another layout and order of
     work). In float32, as the step runs, a third program that is ill-conditioned (its answer at
@@ -95,6 +96,7 @@ def test_equal_to_the_step_that_solved_everything_for_everyone(n):
         assert fails > 0  # the dense crowds reach the third program: the fallback was compared too
 
 
+@pytest.mark.slow
 def test_batched_over_worlds_equals_one_world_at_a_time():
     p = orca.ORCAParams()
     crowds = [_crowd(24, seed, density=2.0) for seed in range(3)]
@@ -106,6 +108,7 @@ def test_batched_over_worlds_equals_one_world_at_a_time():
             np.testing.assert_allclose(np.asarray(got[w]), np.asarray(want), atol=1e-6)
 
 
+@pytest.mark.slow
 def test_a_person_feels_only_its_nearest_neighbors():
     n, cap = 20, 3
     x, y, vx, vy, ax, ay, speed, present, moving = _crowd(n, 5, density=1.5)
@@ -166,6 +169,7 @@ def test_equal_to_the_old_step_on_the_arena_scenes(scene):
         np.testing.assert_allclose(np.asarray(new[:2]), np.asarray(old[:2]), atol=1e-5)
 
 
+@pytest.mark.slow
 def test_the_radius_is_the_toolkits_person_and_traced():
     assert orca.ORCAParams().radius_m == PERSON_RADIUS_M
     spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")

@@ -170,6 +170,7 @@ def test_random_force_is_gaussian_with_the_configured_spread(warehouse):
     assert abs(np.corrcoef(np.asarray(ax), np.asarray(ay))[0, 1]) < 0.01
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("force", [sf.social_force, sf.social_force_xla], ids=["default", "xla"])
 @pytest.mark.parametrize("n", [1, 2, 7, 8, 51])
 def test_pairwise_social_force_equals_dense(warehouse, n, force):
@@ -186,6 +187,7 @@ def test_pairwise_social_force_equals_dense(warehouse, n, force):
     np.testing.assert_allclose(np.stack(got), np.stack(want), atol=2e-5 * scale)
 
 
+@pytest.mark.slow
 def test_hash_uniforms_are_uniform_and_independent():
     from socialnav.jaxsim.rng import hash_uniform16
 
@@ -215,6 +217,7 @@ def test_no_robot_waypoint_within_the_robots_radius_of_a_wall(warehouse):
     assert _box_distance_m(warehouse.boxes_m, x, y).min() >= warehouse.params.robot_radius_m
 
 
+@pytest.mark.slow
 def test_robot_body_stays_out_of_walls(short_day):
     """A whole short day of 4 worlds: the robot's body (its radius, not only its centre) never
     overlaps a wall box, to the field's first-order error (1 mm), and it still does its tasks."""

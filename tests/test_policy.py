@@ -44,6 +44,7 @@ def _observation(people_xy, people_velocity, visible, yaw=0.0, goal=(5.0, 0.0)):
     )
 
 
+@pytest.mark.slow
 def test_features_read_the_goal_own_motion_and_nearest_people_in_the_robots_frame():
     config = policy_lib.PolicyConfig(n_people=2)
     grid = costmap.GridSpec(40, 40, 0.25, -5.0, -5.0)
@@ -74,6 +75,7 @@ def test_features_read_the_goal_own_motion_and_nearest_people_in_the_robots_fram
     assert np.all(np.asarray(none)[-12:] == 0.0)
 
 
+@pytest.mark.slow
 def test_the_optional_social_layer_channel_shows_a_person_ahead():
     grid = costmap.GridSpec(40, 40, 0.25, -5.0, -5.0)
     obs = _observation([(1.0, 0.0)], [(0.0, 0.0)], [True])
@@ -122,6 +124,7 @@ def test_the_casn_channel_shows_a_walker_at_its_collision_point_and_freezes_it()
     np.testing.assert_array_equal(np.asarray(x)[5 + 81 : 5 + 162], np.asarray(window))
 
 
+@pytest.mark.slow
 def test_the_gscl_channel_reads_the_networks_window_where_it_was_computed():
     # A stand-in network that puts 0.5 on two cells of its 40 x 40 window of 0.4 m: rows 19-20,
     # column 22 hold x in [0.8, 1.2), y in [-0.4, 0.4) from the window's centre, where only the

@@ -55,6 +55,7 @@ def setup(warehouse):
     return warehouse, world, build_methods(plans, world), {name: plan for name, (plan, _) in plans.items()}
 
 
+@pytest.mark.slow
 def test_off_slot_both_methods_take_the_same_routes_and_get_the_same_results(setup):
     scenario, world, methods, plans = setup
     off = int(np.flatnonzero(~scenario.slot_working)[0])
@@ -70,6 +71,7 @@ def test_off_slot_both_methods_take_the_same_routes_and_get_the_same_results(set
     assert (logs["baseline"].outcome[:, N_TASKS:] == NOT_RUN).all()
 
 
+@pytest.mark.slow
 def test_protocol_invariants_in_working_slots(setup):
     scenario, world, methods, plans = setup
     p = scenario.params
@@ -95,6 +97,7 @@ def test_protocol_invariants_in_working_slots(setup):
     assert not log.refused.any()
 
 
+@pytest.mark.slow
 def test_missed_deadlines_are_congestion_failures_and_the_robot_moves_on():
     scenario = load_scenario(robot_leg_deadline_s=1.0)
     world = _short(build_world(scenario), 4)

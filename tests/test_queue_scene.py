@@ -70,6 +70,7 @@ def test_stop_and_go_holds_the_forward_speed_for_the_next_person_in_line(person,
     assert wrapped is actors.with_stop_and_go(FORWARD, 0.9)  # cached: one compiled program
 
 
+@pytest.mark.slow
 def test_the_global_planner_leaves_the_people_to_the_social_layer_when_the_scene_says_so():
     """navfn (no social layer) from (0, 0) to (3.8, 0) with a person at (2, 0): round them when
     people are obstacles (the default), straight through their place when they are not."""
@@ -103,6 +104,7 @@ def _band_costs(level):
     return lambda maps: jnp.broadcast_to(costs, maps.shape)
 
 
+@pytest.mark.slow
 def test_a_forbidden_social_cost_is_inflated_with_the_walls_and_a_graded_one_is_not():
     """The gscl stack from (0, 0) to (3.8, 0) with a social band across the way and a 0.4 m gap in
     it: forbidden (lethal, then inflated by the robot's radius) the gap is closed and the plan goes
@@ -147,6 +149,7 @@ def _queue_then_goal(behind_xy):
     return Actor(init=init, act=act, name="queue_then_goal")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("held_out", [False, True])
 def test_joining_at_the_tail_obeys_the_queue_rule_and_driving_to_the_desk_does_not(held_out):
     spec = load_scene(SCENES_DIR / "gscl_queue.json")
@@ -194,6 +197,7 @@ def test_joining_at_the_tail_obeys_the_queue_rule_and_driving_to_the_desk_does_n
         assert not ok.any()
 
 
+@pytest.mark.slow
 def test_the_line_steps_up_from_the_front_and_stays_in_line():
     """people.queue_place: the head is served every interval and each place behind steps up
     QUEUE_STEP_UP_DELAY_S after the one ahead; in a run (the robot far away) the people waiting

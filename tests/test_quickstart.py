@@ -51,6 +51,7 @@ def test_no_generic_top_level_package_is_importable_outside_the_tree(tmp_path):
     assert out.split() == ["[]", "True"]
 
 
+@pytest.mark.slow
 def test_quickstart_scene_to_cost_map_to_plan(tmp_path):
     out = run_block(quickstart_blocks(README.read_text())[0], tmp_path)
     found = re.search(r"(\d+) people; plan of cost (\d+), (\d+) cells", out)

@@ -35,6 +35,7 @@ def _compare_with_recording(trajectory, variants):
     return np.asarray(trajectory.people_xy), np.asarray(trajectory.people_present), recording, present
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("robot", ["far away", "standing in the crowd"])
 def test_a_replayed_crowd_is_the_recording_at_every_step(robot):
     spec = load_scene(HOTEL)
@@ -72,6 +73,7 @@ def _walker_variant(spec, setup, robot_xy):
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["social_force", "collision_free_speed_calibrated", "orca"])
 def test_a_reactive_person_yields_to_a_robot_standing_on_the_path_and_returns_to_it(model):
     spec = load_scene(HOTEL_REACTIVE)
@@ -93,6 +95,7 @@ def test_a_reactive_person_yields_to_a_robot_standing_on_the_path_and_returns_to
     assert np.linalg.norm(xy[110] - on_track[110]) < 0.6
 
 
+@pytest.mark.slow
 def test_a_reactive_crowd_without_a_robot_stays_near_its_recording():
     spec = load_scene(HOTEL_REACTIVE)
     setup = arena.setup_scene(spec, arena.ArenaConfig(human_model="collision_free_speed_calibrated"))

@@ -98,6 +98,7 @@ def test_params_stack_to_a_leading_axis_and_refuse_other_statics(warehouse):
         SimParams.stack([p, p.replace(n_workers=3)])
 
 
+@pytest.mark.slow
 def test_a_new_dynamic_value_reuses_the_compiled_rollout(warehouse):
     """Dynamic parameters are inputs of the compiled program: another value compiles nothing new."""
     from plans import scipy_shortest_plan

@@ -26,6 +26,7 @@ def _untouched(folder, files):
     return all((folder / name).read_text() == text for name, text in files.items())
 
 
+@pytest.mark.slow
 def test_simulate_refuses_a_previous_run_and_overwrite_replaces_it_whole(tmp_path, capsys):
     out = tmp_path / "run"
     assert cli.main(["simulate", "--out", str(out), "--seed", "1", *SHORT]) == 0
@@ -78,6 +79,7 @@ def test_a_users_file_under_a_result_name_is_never_replaced(tmp_path, capsys, ov
     assert sorted(p.name for p in out.iterdir()) == ["logs.parquet"]
 
 
+@pytest.mark.slow
 def test_overwrite_on_a_folder_of_user_files_leaves_them(tmp_path):
     out = tmp_path / "mine"
     out.mkdir()
@@ -88,6 +90,7 @@ def test_overwrite_on_a_folder_of_user_files_leaves_them(tmp_path):
     assert _untouched(out, mine) and json.loads((out / "run.json").read_text())["seed"] == 3
 
 
+@pytest.mark.slow
 def test_learn_refuses_to_write_where_it_reads(learned_run, tmp_path, capsys):
     """``learn --logs L --out L --overwrite`` deleted its own logs once; now it is refused."""
     logs = (learned_run / "logs.parquet").read_bytes()
@@ -99,6 +102,7 @@ def test_learn_refuses_to_write_where_it_reads(learned_run, tmp_path, capsys):
     assert "contains the job's input" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_another_jobs_run_is_not_replaced(learned_run, tmp_path, capsys):
     """evaluate --overwrite into a folder holding a simulate run: refused, the run intact."""
     tables = learned_run / "causal" / "engine_tables.npz"

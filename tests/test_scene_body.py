@@ -3,6 +3,7 @@ estimated from tracks, the exact wall distance, a body that never enters a wall.
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from socialnav.data import DATA_DIR
 from socialnav.jaxsim.scenes import perception
@@ -30,6 +31,7 @@ def test_velocity_is_estimated_from_the_window_of_positions():
     np.testing.assert_array_equal(v[0], [0.0, 0.0])  # not seen now: no estimate
 
 
+@pytest.mark.slow
 def test_wall_distance_is_exact():
     walls = jnp.array([[0.0, 1.0, 0.0, 1.0]])
     d, n = world_lib.wall_distance(jnp.array([[2.0, 0.5], [1.3, 1.4], [0.5, 0.4]]), walls)
@@ -38,6 +40,7 @@ def test_wall_distance_is_exact():
     np.testing.assert_allclose(n[1], [0.6, 0.8], atol=1e-6)
 
 
+@pytest.mark.slow
 def test_wall_clearance_is_the_wall_distance_in_both_layouts():
     spec = load_scene(DATA_DIR / "scenes" / "snape_static_table_fridge.json")  # 7 boxes, one inside
     walls = world_lib.build_scene_world(spec).walls_m
@@ -58,6 +61,7 @@ def test_wall_clearance_is_the_wall_distance_in_both_layouts():
     np.testing.assert_allclose(corner, [0.5], atol=1e-6)  # 0.3-0.4-0.5 off the corner
 
 
+@pytest.mark.slow
 def test_the_base_never_puts_its_body_into_a_wall():
     spec = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
     world = world_lib.build_scene_world(spec)

@@ -35,6 +35,7 @@ def day_rollout(short_day):
     return scenario, to_numpy(final), to_numpy(rec)
 
 
+@pytest.mark.slow
 def test_no_nan_and_the_battery_discharges(day_rollout):
     _, final, rec = day_rollout
     for leaf in jax.tree.leaves(final):
@@ -45,6 +46,7 @@ def test_no_nan_and_the_battery_discharges(day_rollout):
     assert (np.diff(rec.battery_pct, axis=1) < 0).any()  # it does discharge (its law: the next test)
 
 
+@pytest.mark.slow
 def test_the_battery_follows_eq_1_and_2_step_by_step():
     """Every step's change is Eq. (1) of that step's speed, charging and obstacle, and the next
     level is the last plus that change (Eq. 2), clipped only at 0 and 100 (known answers, not
@@ -81,6 +83,7 @@ def test_nobody_inside_walls(day_rollout):
     assert rsd.min() > 0
 
 
+@pytest.mark.slow
 def test_speeds_bounded(day_rollout):
     scenario, final, rec = day_rollout
     p = scenario.params
@@ -94,6 +97,7 @@ def test_speeds_bounded(day_rollout):
     assert step.max() <= p.worker_max_speed_mps * 0.5 + 0.1
 
 
+@pytest.mark.slow
 def test_workers_conserved_and_off_slot_empty(day_rollout):
     scenario, _, rec = day_rollout
     n = scenario.params.n_workers
@@ -118,6 +122,7 @@ def test_robot_works(day_rollout):
     assert (np.diff(rec.tasks_started, axis=1) >= 0).all()
 
 
+@pytest.mark.slow
 def test_robot_charges_only_at_the_station_and_standing_still():
     """A robot that starts at 21 % must go and charge (below 20 % after its first legs)."""
     scenario = load_scenario(slot_length_s=60.0, n_workers=4, battery_initial_pct=21.0)
@@ -133,6 +138,7 @@ def test_robot_charges_only_at_the_station_and_standing_still():
     assert (np.diff(rec.battery_pct, axis=1)[charging[:, 1:] & charging[:, :-1]] >= 0).all()  # it charges
 
 
+@pytest.mark.slow
 def test_the_robot_follows_the_plan_it_is_given():
     """Any route table drives the robot: a plan whose first leg detours through a waypoint off
     the shortest route makes the robot pass there, and the task still succeeds."""
@@ -228,6 +234,7 @@ def test_reduced_day_reproduces_the_schedule():
     assert rec.n_present[rec.slot == scenario.n_slots - 1].max() == 0
 
 
+@pytest.mark.slow
 def test_world_without_workers_runs():
     """The off slot and the Sec. 6 ablation use worlds with nobody in them."""
     scenario = load_scenario(n_workers=0, slot_length_s=30.0)

@@ -118,6 +118,7 @@ def _with_obstacle(params, state):
     )
 
 
+@pytest.mark.slow
 def test_do_charging_moves_only_what_the_graph_reaches(worlds):
     params, world, driver, state, seeds = worlds
     # Robots on a task leg in an obstacle (so that charging has an obstacle to rule out).
@@ -129,6 +130,7 @@ def test_do_charging_moves_only_what_the_graph_reaches(worlds):
     _check("C", 0, [_moved(b, d, not_charging) for b, d in zip(base, do, strict=True)], not_charging)
 
 
+@pytest.mark.slow
 def test_do_obstacle_moves_only_what_the_graph_reaches(worlds):
     params, world, driver, state, seeds = worlds
     r = state.robot
@@ -139,6 +141,7 @@ def test_do_obstacle_moves_only_what_the_graph_reaches(worlds):
     _check("O", 0, [_moved(b, d, free_task) for b, d in zip(base, do, strict=True)], free_task)
 
 
+@pytest.mark.slow
 def test_do_speed_moves_only_what_the_graph_reaches(worlds):
     params, world, driver, state, seeds = worlds
     moving = np.asarray(state.robot.speed_mps) > 0.1
@@ -150,6 +153,7 @@ def test_do_speed_moves_only_what_the_graph_reaches(worlds):
     assert moved[1]["V"].any() and moved[1]["D"].any() and not moved[0]["D"].any()
 
 
+@pytest.mark.slow
 def test_do_empty_battery_moves_only_what_the_graph_reaches(worlds):
     params, world, driver, state, seeds = worlds
     moving = np.asarray(state.robot.speed_mps) > 0.1
@@ -244,6 +248,7 @@ def test_referee_command_scores_discovery_against_both_graphs_and_resumes(tmp_pa
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_a_forced_speed_is_the_speed_whatever_the_crowd_or_the_obstacle(worlds):
     from socialnav.referee import forced_speed_driver
 

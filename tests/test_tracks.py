@@ -25,6 +25,7 @@ def _write_map(folder, occupied_xy_m, size_m=30.0, resolution_m=0.1):
     return folder / "map.yaml"
 
 
+@pytest.mark.slow
 def test_a_planned_path_written_as_a_track_comes_back_as_the_same_demonstration(tmp_path):
     yaml_path = _write_map(tmp_path, [(12.0, 16.0, 18.0, 16.6)])  # a wall 1-1.6 m above the start
     occupancy, resolution, origin = tracks.read_ros_map(yaml_path)
@@ -72,6 +73,7 @@ def test_a_planned_path_written_as_a_track_comes_back_as_the_same_demonstration(
     assert 0 < nll < 1e3
 
 
+@pytest.mark.slow
 def test_a_track_through_a_wall_is_left_out_and_counted(tmp_path):
     yaml_path = _write_map(tmp_path, [(14.0, 16.0, 16.0, 16.6)])
     occupancy, resolution, origin = tracks.read_ros_map(yaml_path)
@@ -199,6 +201,7 @@ def test_fit_tracks_command_fits_exports_a_loadable_model_and_names_bad_files(tm
     assert not (tmp_path / "m2" / "weights.msgpack").exists()
 
 
+@pytest.mark.slow
 def test_simulated_tracks_keep_variants_apart_and_walkers_make_demonstrations():
     from socialnav.data import DATA_DIR
     from socialnav.jaxsim.scenes.spec import load_scene
@@ -235,6 +238,7 @@ def test_fit_tracks_refuses_an_unknown_scene_or_missing_sources_before_writing(t
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_recorded_tracks_are_the_runs_people_on_a_map_with_the_data_walls():
     """An ETH/UCY file: every person a track, in time order, on a map free everywhere and wide
     enough for each track's 16 m window; a Jülich corridor: its walls occupied, its floor free."""

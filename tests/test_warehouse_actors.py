@@ -73,6 +73,7 @@ def test_the_day_robot_of_an_actor_that_never_moves_stays_at_its_start(quiet):
     assert (rec.tasks_succeeded == 0).all() and (rec.tasks_started == 1).all()  # the first leg never ends
 
 
+@pytest.mark.slow
 def test_the_commanded_speed_is_capped_and_slows_the_robot(quiet):
     scenario, world = quiet
     follower = route_follower(shortest_path_plan(scenario), world)
@@ -89,6 +90,7 @@ def test_the_commanded_speed_is_capped_and_slows_the_robot(quiet):
     assert at(0.2).max() == pytest.approx(0.2) and at(9.0).max() == pytest.approx(scenario.params.robot_max_speed_mps)
 
 
+@pytest.mark.slow
 def test_the_causal_planner_refuses_by_eq_10_and_the_follower_never(quiet):
     """With a predicted cost of 85 % every task is refused (the battery reset first); with 0 none."""
     scenario, world = quiet
