@@ -187,6 +187,8 @@ def stack_actor(
         if method.layer == "gscl":
             raise ValueError("method 'gscl' needs a trained GSCL model: layer=layers.gscl(model)")
         layer = stack.cost_layer(method)
+    if layer.name != stack.layer_kind(method):
+        raise ValueError(f"stack_actor: the stack's layer is {method.layer!r}, the layer given is {layer.name!r}")
     x_np, y_np = grid.cell_centres()
     max_len = max_path_cells + 1
 

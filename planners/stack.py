@@ -105,6 +105,12 @@ def layer_params(config: StackConfig) -> LayerParams:
     return LayerParams(snl=sigma)
 
 
+def layer_kind(config: StackConfig) -> str:
+    """The kind of :class:`planners.layers.CostLayer` a stack's ``layer`` names (the SNL variants
+    are one kind, ``snl``, with other covariances)."""
+    return "snl" if config.layer.startswith("snl_") else config.layer
+
+
 def cost_layer(config: StackConfig, params: LayerParams | None = None, gscl_model=None) -> layers.CostLayer:
     """The stack's social layer (:class:`planners.layers.CostLayer`) with its parameters: the SNL
     variants' covariances, CASN's or SNAPE's from ``params`` (:class:`LayerParams`, default

@@ -398,3 +398,19 @@ def test_the_gscl_layer_in_one_shape_equals_gscl_layer():
         layers.gscl(predict)(scene, SPEC)
     with pytest.raises(TypeError, match="SocialCostModel"):
         layers.gscl("runs/gscl")
+
+
+def test_a_stack_takes_a_layer_of_its_own_kind_and_gscl_only_with_a_model():
+    from socialnav.planners import actors, layers, stack
+
+    with pytest.raises(ValueError, match="trained GSCL model"):
+        actors.stack_actor(stack.METHODS["gscl"], SPEC, 0.275)
+    with pytest.raises(ValueError, match="'casn', the layer given is 'snl'"):
+        actors.stack_actor(stack.METHODS["casn"], SPEC, 0.275, layer=layers.snl())
+    assert (
+        actors.stack_actor(stack.METHODS["snl_large"], SPEC, 0.275, layer=layers.snl(snl.SIGMA_LARGE)).name
+        == "snl_large"
+    )
+    assert stack.cost_layer(stack.METHODS["snl_large"]).params == snl.SIGMA_LARGE
+    with pytest.raises(ValueError, match="gscl_model"):
+        stack.cost_layer(stack.METHODS["gscl"])
