@@ -406,8 +406,7 @@ def episode_function(
     env = setup.env.replace(robot=robot_params)
     if crowd is not None:
         env = env.replace(crowd=crowd)
-    layers = stack.layer_params(method) if layers is None else layers
-    layer = stack.cost_layer(method, layers, gscl_model)
+    layer = stack.cost_layer(method, layers, gscl_model)  # both default to the method's layers
     actor = method_actor(stack.program_config(method), setup.grid, float(robot_params.radius_m), config, layer)
     params = actors.stack_params(
         env,
