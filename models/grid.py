@@ -33,6 +33,14 @@ def cell_of(x_m, y_m):
     return row, col
 
 
+def cell_of_point(x_m: float, y_m: float) -> tuple[int, int]:
+    """:func:`cell_of` of one point given as Python (or numpy) floats, as Python ints: the same
+    cell (tested), computed in numpy without JAX's dispatches (scene builders call it per person)."""
+    col = np.floor(np.float32(x_m / CELL_M + GRID / 2))
+    row = np.floor(np.float32(GRID / 2 - y_m / CELL_M))
+    return int(row), int(col)
+
+
 def inside(row, col):
     return (row >= 0) & (row < GRID) & (col >= 0) & (col < GRID)
 

@@ -123,6 +123,15 @@ def _render(segments, wall_valid, px, py, pheading, pvalid, goal, has_goal):
 
 
 _people_cost = jax.jit(sc.people_cost)
+# The scene builders' cost pieces, each compiled once (per queue length for the U): called
+# eagerly, each is dozens of JAX dispatches a scene, most of the suite's building time. Compiled,
+# their maps differ from the eager ones in the last bits (expected maps by up to 2e-6); the scenes
+# drawn, their images and regions do not change.
+_queue_u_cost = jax.jit(lambda x, y, heading, valid: sc.queue_u_cost(*sc.drawn_line(x, y, heading, valid)))
+_disc_plateau = jax.jit(sc.disc_plateau)
+_corner_cost = jax.jit(sc.corner_cost)
+_left_of_path = jax.jit(sc.left_of_path)
+_dilate = jax.jit(dilate, static_argnums=1)
 
 
 @dataclasses.dataclass
@@ -237,9 +246,8 @@ def _draw_queue(scene: _Scene, q: _Queue, goal: str, rng):
         d = rng.uniform(0.5, 1.1)
         scene.goal = _world(q.hx, q.hy, q.phi, d, 0.0)
         # The U along the line the people's cells show, as the generator draws it.
-        x, y, heading = (jnp.asarray(v, jnp.float32) for v in zip(*scene.people[-q.n :], strict=True))
-        line = sc.drawn_line(x, y, heading, jnp.ones(q.n, bool))
-        scene.costs.append(("queue_u", sc.queue_u_cost(*line)))
+        x, y, heading = (np.asarray(v, np.float32) for v in zip(*scene.people[-q.n :], strict=True))
+        scene.costs.append(("queue_u", _queue_u_cost(x, y, heading, np.ones(q.n, bool))))
     else:
         scene.goal = q.elsewhere_goal
 
@@ -308,7 +316,7 @@ def _draw_group(scene: _Scene, g: _Group, inward: bool):
     for x, y, a in g.people:
         scene.add_person(x, y, a + (np.pi if inward else 0.0))
     if inward:
-        scene.costs.append(("group_zone", sc.disc_plateau(g.cx, g.cy, g.radius)))
+        scene.costs.append(("group_zone", _disc_plateau(g.cx, g.cy, g.radius)))
 
 
 def _group_zone_region(g: _Group, images):
@@ -457,12 +465,12 @@ def _scene_hallway_l(rng):
     in1 = (lx <= a + half) & (np.abs(ly_m) < half) & (lx >= -back)
     in2 = (np.abs(lx - a) < half) & (ly_m >= -half)
     inside = in1 | in2
-    left = np.asarray(sc.left_of_path(lx, ly_m, a, turn > 0))
+    left = np.asarray(_left_of_path(lx, ly_m, a, turn > 0))
     s = _Scene(walls=walls)
     s.costs.append(("keep_right", np.where(inside, sc.HALLWAY_LEFT_COST * np.asarray(sc.smoothstep(left / half)), 0)))
     inner = world(a - half, half)
     outer = world(a + half, -half)
-    s.costs.append(("corner_wide", np.asarray(sc.corner_cost(*inner, inside))))
+    s.costs.append(("corner_wide", np.asarray(_corner_cost(*inner, inside))))
     s.goal = world(a, rng.uniform(1.5, 6.0))
     image, expected = s.render()
     free = inside & _free(image)
@@ -504,13 +512,13 @@ def _blind_corner_regions(corner, free_side, image, keep_out):
 def _scene_corner(rng):
     walls, corner, free_side, geometry = _corner_walls(rng)
     s = _Scene(walls=walls)
-    s.costs.append(("blind_corner", np.asarray(sc.corner_cost(*corner, free_side))))
+    s.costs.append(("blind_corner", np.asarray(_corner_cost(*corner, free_side))))
     people = []
     if rng.random() < 0.5:  # somebody standing 1.5-3 m from the corner, on the free side
         for _ in range(50):
             ang, dist = rng.uniform(-np.pi, np.pi), rng.uniform(1.5, 3.0)
             x, y = corner[0] + dist * np.cos(ang), corner[1] + dist * np.sin(ang)
-            r, c = (int(v) for v in grid.cell_of(x, y))
+            r, c = grid.cell_of_point(x, y)
             if grid.inside(r, c) and free_side[r, c] and all(_segment_distance(x, y, w) > 0.8 for w in walls):
                 s.add_person(x, y, rng.uniform(-np.pi, np.pi))
                 people.append((x, y))
@@ -572,12 +580,12 @@ def _scene_queue_corner(rng):
     walls, corner, free_side, geometry = _corner_walls(rng, distance=(1.5, 5.0))
     q = _queue(rng, length=(2.0, 6.0), head_box=5.0)
     clear = [min(_segment_distance(x, y, w) for w in walls) for x, y in q.people]
-    cells = [grid.cell_of(x, y) for x, y in q.people]
+    cells = [grid.cell_of_point(x, y) for x, y in q.people]
     if not (all(1.5 <= c <= 3.0 for c in clear[:1]) and min(clear) >= 1.5):
         return None
-    if not all(grid.inside(r, c) and free_side[int(r), int(c)] for r, c in cells):
+    if not all(grid.inside(r, c) and free_side[r, c] for r, c in cells):
         return None
-    out = _queue_pair(rng, walls, costs=[("blind_corner", np.asarray(sc.corner_cost(*corner, free_side)))], queue=q)
+    out = _queue_pair(rng, walls, costs=[("blind_corner", np.asarray(_corner_cost(*corner, free_side)))], queue=q)
     if out is None:
         return None
     q, images, expected, region = out
@@ -585,7 +593,7 @@ def _scene_queue_corner(rng):
     # and a cell round it (the U is forbidden, above every graded cost: in a region it would
     # decide the corner's contrast; the queue_u check scores it).
     head = _first(expected)
-    u_cells = np.asarray(dilate(jnp.asarray(head[""] > head["queue_u"] + 1e-3), 1))
+    u_cells = np.asarray(_dilate(jnp.asarray(head[""] > head["queue_u"] + 1e-3), 1))
     a, b = _blind_corner_regions(corner, free_side, images[0], _near(q.people + [q.elsewhere_goal], 2.0) | u_cells)
     return [
         _case("queue+corner", "queue_u", images, expected, region, region),
@@ -619,7 +627,7 @@ def _scene_queue_group(rng):
     # The queue's pair with the group facing in (its zone in both maps).
     facing_in = [(x, y, a + np.pi) for x, y, a in g.people]
     out = _queue_pair(
-        rng, costs=[("group_zone", np.asarray(sc.disc_plateau(g.cx, g.cy, g.radius)))], extra_people=facing_in, queue=q
+        rng, costs=[("group_zone", np.asarray(_disc_plateau(g.cx, g.cy, g.radius)))], extra_people=facing_in, queue=q
     )
     if out is None or not _apart(g, [q.elsewhere_goal], 1.5):
         return None

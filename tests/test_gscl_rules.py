@@ -34,6 +34,17 @@ def test_a_person_is_snapped_in_numpy_as_the_generator_snaps_them():
         assert grid.snap_person(x, y, h) == (float(cx), float(cy), float(grid.quantise_heading(jnp.float32(h))))
 
 
+def test_a_points_cell_in_numpy_is_the_cell_jax_gives():
+    """grid.cell_of_point (the rule suite's, in numpy) gives grid.cell_of's cell for Python floats,
+    on cell borders (multiples of the 0.4 m cell, and a hair either side) and off the grid."""
+    rng = np.random.default_rng(1)
+    borders = np.arange(-30, 31) * grid.CELL_M
+    xs = np.concatenate([rng.uniform(-12, 12, 300), borders, np.nextafter(borders, 99), np.nextafter(borders, -99)])
+    for x, y in zip(xs, rng.permutation(xs), strict=True):
+        x, y = float(x), float(y)
+        assert grid.cell_of_point(x, y) == tuple(int(v) for v in grid.cell_of(x, y)), (x, y)
+
+
 def _lookup(cases, attribute):
     """A 'model' that returns, for each input map of the cases, that map's ``attribute`` map."""
     table = {}
