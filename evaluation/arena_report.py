@@ -32,6 +32,8 @@ SUMMARY_MEANS = (
     "intrusions",
     "d_min_m",
     "d_h_m",
+    "d_1_m",
+    "d_2_m",
     "time_s",
     "path_length_m",
     "chc_rad",
@@ -274,7 +276,10 @@ def user_actor(factory: Callable, env, n_people: int | None = None) -> tuple[Act
 
 
 # The means that get a 95 % interval in the summary (``<key>_lo``, ``<key>_hi``).
-INTERVAL_MEANS = ("collisions", "intrusions", "d_min_m", "d_h_m", "time_s", "chc_rad", "spl", "zone_personal")
+INTERVAL_MEANS = (
+    "collisions", "intrusions", "d_min_m", "d_h_m", "d_1_m", "d_2_m", "time_s", "path_length_m", "chc_rad", "spl",
+    "zone_intimate", "zone_personal", "zone_social",
+)  # fmt: skip
 
 
 def mean_interval(values) -> tuple[float, float]:

@@ -26,6 +26,13 @@ def test_the_papers_rows_name_known_scenes_and_methods_and_take_ours_from_a_summ
     mine = compared[(compared["scene"] == "casn_crossing") & (compared["method"] == "casn")]
     assert dict(zip(mine["metric"], mine["ours"], strict=True)) == {"d_min_m": 1.5, "intruded_pct": 20.0}
     assert compared["ours"].isna().sum() == len(compared) - 2
+    # Zone shares are kept as fractions and compared in % (seed 004's Psi).
+    summary = pd.DataFrame(
+        [{"scene": "snape_walking", "method": "snape_eband", "zone_social": 0.5, "zone_social_lo": 0.4}]
+    )
+    mine = papers.comparison(summary).dropna(subset=["ours"]).set_index("metric")
+    assert mine.loc["zone_social_pct", "ours"] == 50.0 and mine.loc["zone_social_pct", "ours_lo"] == 40.0
+    assert mine.loc["zone_social_pct", "paper"] == pytest.approx(5.05345)
 
 
 def test_the_comparison_gives_our_interval_and_whether_the_paper_lies_in_it():
@@ -86,6 +93,16 @@ def test_directions_pair_by_variant_and_give_a_verdict():
     assert same.loc["social_no_collision_pct", "paper_diff"] == 93
     assert same.loc["social_no_collision_pct", "ours_diff"] == 0
     assert same.loc["social_no_collision_pct", "verdict"] == "no difference here"
+    # Seed 004 Table 2 test 1: the paper's d_2 (a second person); the scene has one: no pairs, no verdict
+    # of a direction. Its Psi(Social) reads the zone share in %: 0 in the paper, equal here -> reproduced.
+    ep = _paired_episodes(
+        "snape_static_person", "d_2_m", "snape_social_eband", "snape_eband", [np.nan] * 5, [np.nan] * 5
+    )
+    ep["zone_social"] = 0.25
+    by_metric = papers.directions(ep).set_index("metric")
+    assert by_metric.loc["d_2_m", "verdict"] == "not measured here" and by_metric.loc["d_2_m", "n_pairs"] == 0
+    assert by_metric.loc["zone_social_pct", "verdict"] == "reproduced"
+    assert by_metric.loc["zone_social_pct", "paper_diff"] == 0
 
 
 def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_hand():
