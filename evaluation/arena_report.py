@@ -43,6 +43,10 @@ SUMMARY_MEANS = (
     "zone_personal",
     "zone_social",
     "zone_public",
+    "zone_body_intimate",
+    "zone_body_personal",
+    "zone_body_social",
+    "zone_body_public",
     "group_share",
     "wall_contacts",
     "collisions_robot",
@@ -133,9 +137,9 @@ def episode_frame(
     n = len(m["goal_success"])
     rows = {"scene": [scene] * n, "method": [method] * n, "variant": np.arange(first, first + n)}
     for key, value in m.items():
-        if key == "zone_share":
+        if key in ("zone_share", "zone_share_body"):
             for z, name in enumerate(nav_metrics.ZONE_NAMES):
-                rows[f"zone_{name}"] = value[:, z]
+                rows[f"zone_{'body_' if key.endswith('body') else ''}{name}"] = value[:, z]
         elif key == "d_person_m":
             for p in range(min(value.shape[1], 2)):
                 rows[f"d_{p + 1}_m"] = np.where(np.isfinite(value[:, p]), value[:, p], np.nan)  # NaN: nobody there

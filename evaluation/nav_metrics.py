@@ -24,7 +24,11 @@ for the proxemic and person-distance metrics (after that the robot has arrived).
   ``d_min_m``: the smallest over time and people; ``d_person_m`` (P,): per person (d_1, d_2).
 * ``zone_share``: share of time with the nearest person in each Hall zone, intimate < 0.45 m,
   personal < 1.2, social < 3.6, public beyond or nobody present (seeds 002, 004; seed 000 uses 0.5
-  for intimate); the four shares sum to 1.
+  for intimate); the four shares sum to 1. ``zone_share_body``: the same zones body to body (the
+  nearest centre's distance less both radii: HuNavSim's reading). Centre to centre, the intimate
+  zone (0.45 m) lies inside contact (robot radius + person radius, 0.5 m for the arena's robot
+  and people): time in it means overlapping bodies. Seed 002 uses Hall's zones without saying
+  which distance; its Table 2 is compared both ways (:func:`evaluation.papers.stats_comparison`).
 * ``intrusions``: personal-space entries: entries of the robot into a person's 1.2 m (one per
   entry, per person); ``intruded``: whether the robot entered anyone's 1.2 m at all, which is
   what seed 001 counts ("the number of times the robot intrudes the personal spaces" never
@@ -83,7 +87,7 @@ from socialnav.evaluation.metrics import collision_encounters
 from socialnav.jaxsim.scenes import rule_monitor
 from socialnav.planners.scene import wrap_angle
 
-VERSION = "nav-metrics 4"  # 4: goal_no_collision, social_no_collision; 3: intruded
+VERSION = "nav-metrics 5"  # 5: zone_share_body; 4: goal_no_collision, social_no_collision; 3: intruded
 ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}
 ZONE_NAMES = ("intimate", "personal", "social", "public")
 STALLED_MPS = 0.05
@@ -118,7 +122,7 @@ def episode_metrics(
       (2,); group (P,) int32 group of each person (-1 none); rule_ok () bool, the scene's rule;
       goal_tolerance_m: the arrival radius (the path-length ratio's straight line ends on it).
 
-    Returns: a dict of arrays (scalars, ``d_person_m`` (P,), ``zone_share`` (4,)).
+    Returns: a dict of arrays (scalars, ``d_person_m`` (P,), ``zone_share`` and ``zone_share_body`` (4,)).
     """
     active = ~jnp.concatenate([jnp.zeros(1, bool), reached[:-1]])  # steps before arrival
     success = reached[-1]
@@ -143,6 +147,11 @@ def episode_metrics(
     edges = jnp.array([ZONES_M["intimate"], ZONES_M["personal"], ZONES_M["social"]])
     zone = jnp.where(has_near, jnp.sum(nearest[:, None] >= edges[None], axis=1), 3)  # nobody near: public
     zone_share = jnp.array([jnp.sum(active & (zone == z)) for z in range(4)]) / jnp.maximum(jnp.sum(active), 1)
+    clearance = nearest - robot_radius_m - person_radius_m
+    zone_body = jnp.where(has_near, jnp.sum(clearance[:, None] >= edges[None], axis=1), 3)
+    zone_share_body = jnp.array([jnp.sum(active & (zone_body == z)) for z in range(4)]) / jnp.maximum(
+        jnp.sum(active), 1
+    )
 
     # Personal-space intrusions: entries into a person's 1.2 m.
     inside = seen & (dist < ZONES_M["personal"])
@@ -268,6 +277,7 @@ def episode_metrics(
         "d_min_m": d_min,
         "d_person_m": d_person,
         "zone_share": zone_share,
+        "zone_share_body": zone_share_body,
         "intrusions": intrusions,
         "intruded": intrusions > 0,
         "ttc_min_s": jnp.min(ttc),

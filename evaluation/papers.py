@@ -124,6 +124,85 @@ PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
 )
 
 
+# Seed 002, Table 2: Games-Howell tests after Welch's ANOVA of the share of time in the intimate
+# zone and in the intimate and personal zones together, GSCL against each baseline, among the
+# paper's four methods only (the studentized range depends on the number of groups) and its 30
+# trials a method: (scene, measure, baseline, p, Hedges' g). "<= .0001" is kept as 1e-4.
+PAPER_STATS_METHODS = ("navfn", "snl_small", "snl_large", "gscl")
+PAPER_STATS_TRIALS = 30
+PAPER_STATS: tuple[tuple[str, str, str, float, float], ...] = tuple(
+    (scene, measure, baseline, p, g)
+    for scene, cells in (
+        ("gscl_l_hallway", ((0.0050, -2.058), (0.0018, -2.497), (0.0043, -2.161),
+                            (0.0022, -2.333), (0.0046, -2.305), (0.0189, -1.837))),
+        ("gscl_group", ((1e-4, -8.774), (1e-4, -6.641), (0.4680, -0.372),
+                        (1e-4, -4.508), (1e-4, -3.535), (0.0010, -1.052))),
+        ("gscl_non_group", ((0.0362, -10.770), (1e-4, -2.220), (1e-4, -1.306),
+                            (1e-4, -5.926), (1e-4, -4.781), (1e-4, -2.975))),
+        ("gscl_crowded_entrance", ((1e-4, -3.195), (1e-4, -2.213), (0.0012, -0.969),
+                                   (1e-4, -2.808), (1e-4, -1.340), (0.9977, -0.047))),
+    )
+    for (measure, baseline), (p, g) in zip(
+        [(m, b) for m in ("zone_intimate", "zone_intimate_personal") for b in ("navfn", "snl_small", "snl_large")],
+        cells,
+        strict=True,
+    )
+)  # fmt: skip
+SIGNIFICANCE = 0.05
+
+
+def _stats_verdict(p_paper: float, g_paper: float, p_ours: float, g_ours: float) -> str:
+    """Does a Games-Howell cell reproduce: the same significance at :data:`SIGNIFICANCE` and, where
+    the paper's is significant, Hedges' g of the same sign."""
+    if not np.isfinite(p_ours):
+        return "not measured here"
+    paper_significant, ours_significant = p_paper < SIGNIFICANCE, p_ours < SIGNIFICANCE
+    if not paper_significant:
+        return "reproduced" if not ours_significant else "differs (significant here)"
+    if g_ours == 0:
+        return "no difference here"  # both at the same constant (no time in the zone at all)
+    if np.sign(g_ours) == np.sign(g_paper):
+        return "reproduced" if ours_significant else "same sign, not significant"
+    return "opposite" if ours_significant else "opposite, not significant"
+
+
+def stats_comparison(episodes: pd.DataFrame) -> pd.DataFrame:
+    """Seed 002's Table 2 beside ours: for each of its cells, the Games-Howell p and Hedges' g of
+    GSCL against the baseline among :data:`PAPER_STATS_METHODS` (the share of time in the
+    intimate zone, ``zone_intimate``, or in the intimate and personal zones, their sum), with the
+    episodes each method has (the paper: :data:`PAPER_STATS_TRIALS`), and a ``verdict``; each
+    cell twice, the zones by ``distance`` "centre to centre" and "body to body" (the paper does
+    not say which: :mod:`evaluation.nav_metrics`). Scenes the run lacks, or lacking one of the
+    four methods, are left out.
+
+    Args:
+      episodes: the arena's episodes (``scene``, ``method``, ``zone_intimate``, ``zone_personal``).
+    """
+    from socialnav.evaluation import arena_stats
+
+    rows = []
+    for distance, prefix in (("centre to centre", "zone_"), ("body to body", "zone_body_")):
+        if prefix + "intimate" not in episodes:  # a run from before the body-to-body zones
+            continue
+        for scene, measure, baseline, p_paper, g_paper in PAPER_STATS:
+            g = episodes[(episodes["scene"] == scene) & episodes["method"].isin(PAPER_STATS_METHODS)]
+            if set(g["method"]) != set(PAPER_STATS_METHODS):
+                continue
+            shares = g[prefix + "intimate"] + (g[prefix + "personal"] if measure == "zone_intimate_personal" else 0.0)
+            samples = {m: shares[g["method"] == m].to_numpy(float) for m in PAPER_STATS_METHODS}
+            with np.errstate(divide="ignore", invalid="ignore"):  # a method always at 0: no variance
+                _, p_ours = arena_stats.games_howell(samples, "gscl", baseline)
+                g_ours = arena_stats.hedges_g(samples["gscl"], samples[baseline])
+            rows.append(
+                {
+                    "source": "seed 002 Table 2", "scene": scene, "measure": measure, "baseline": baseline,
+                    "distance": distance, "n": len(samples["gscl"]), "paper_p": p_paper, "ours_p": p_ours,
+                    "paper_g": g_paper, "ours_g": g_ours, "verdict": _stats_verdict(p_paper, g_paper, p_ours, g_ours),
+                }
+            )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
 def _episode_column(metric: str) -> tuple[str, float]:
     """The episodes frame's column of a paper's metric and its scale to the paper's unit."""
     if metric in ("zone_intimate_pct", "zone_personal_pct", "zone_social_pct"):

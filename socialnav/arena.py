@@ -14,7 +14,9 @@ Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
 (variant 0), ``summary.csv`` (one row per scene and method), ``papers.csv`` (the seeds' published
 numbers beside ours with our 95 % intervals, for the scenes and methods the run has),
 ``directions.csv`` (each paper's difference against its baseline and ours, paired by variant,
-with a verdict: :func:`evaluation.papers.directions`), ``stats.csv`` (Fisher, Welch ANOVA,
+with a verdict: :func:`evaluation.papers.directions`), ``papers_stats.csv`` (seed 002's Table 2,
+its Games-Howell p and Hedges' g beside ours: :func:`evaluation.papers.stats_comparison`),
+``stats.csv`` (Fisher, Welch ANOVA,
 Games-Howell, Hedges' g: :mod:`evaluation.arena_stats`) and ``run.json`` (the settings, the
 backend and the shard layout). Work is cut into shards (``--shard-variants`` variants of one
 scene; :mod:`socialnav.backend` runs them here or as Ray tasks), each saved atomically under
@@ -191,6 +193,7 @@ RESULTS = (
     "stats.csv",
     "papers.csv",
     "directions.csv",
+    "papers_stats.csv",
     "episodes",
     "trajectories",
     "pictures",
@@ -258,9 +261,10 @@ def run(args) -> int:
 
 
 def _wrote(out: pathlib.Path) -> str:
-    """The line naming what a finished run holds (``papers.csv`` and ``directions.csv`` only
-    where the run has scenes of the papers)."""
-    names = ["summary.csv", "stats.csv", "papers.csv", "directions.csv", "episodes/", "trajectories/", "pictures/"]
+    """The line naming what a finished run holds (``papers.csv``, ``directions.csv`` and
+    ``papers_stats.csv`` only where the run has scenes of the papers)."""
+    names = ["summary.csv", "stats.csv", "papers.csv", "directions.csv", "papers_stats.csv", "episodes/"]
+    names += ["trajectories/", "pictures/"]
     there = [n for n in names if (pathlib.Path(out) / n.rstrip("/")).exists()]
     return f"wrote {out}/" + ", ".join(there)
 
@@ -586,6 +590,15 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         print("\ndo the papers' differences reproduce? (proposed - baseline, paired by variant)")
         with pd.option_context("display.width", 200, "display.max_rows", 500):
             print(turned.round(2).to_string(index=False))
+    tested = papers.stats_comparison(pd.concat(frames, ignore_index=True))
+    if len(tested):
+        write_atomic(out / "papers_stats.csv", lambda tmp: tested.to_csv(tmp, index=False))
+        written.append("papers_stats.csv")
+        print(
+            "\nseed 002 Table 2 (Games-Howell among its four methods; time in the intimate, intimate + personal zones):"
+        )
+        with pd.option_context("display.width", 200, "display.max_rows", 500):
+            print(tested.round(4).to_string(index=False))
     runfolder.record(out, JOB, written)
     return 0
 

@@ -73,6 +73,11 @@ def test_a_straight_pass_at_a_known_distance():
     share = np.asarray(m["zone_share"])
     assert share[0] == 0.0 and share[1] == pytest.approx(inside_personal, abs=1e-6)
     assert share.sum() == pytest.approx(1.0, abs=1e-6)
+    # Body to body (less the radii, 0.275 + 0.25 m): the gap is 0.475 m at the closest, so the
+    # robot is in the personal zone while the centres are within 1.2 + 0.525 m, never intimate.
+    body = np.asarray(m["zone_share_body"])
+    assert body[0] == 0.0 and body[1] == pytest.approx(np.sum(np.hypot(x, 1.0) - 0.525 < 1.2) / 101, abs=1e-6)
+    assert body[1] > share[1] and body.sum() == pytest.approx(1.0, abs=1e-6)
     assert int(m["collisions"]) == 0
 
 

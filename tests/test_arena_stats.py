@@ -105,6 +105,45 @@ def test_directions_pair_by_variant_and_give_a_verdict():
     assert by_metric.loc["zone_social_pct", "paper_diff"] == 0
 
 
+def test_seed_002s_table_2_is_tested_among_its_four_methods_and_gets_a_verdict_per_cell():
+    from socialnav.evaluation import arena_stats, papers
+
+    rng = np.random.default_rng(2)
+    n = papers.PAPER_STATS_TRIALS
+    shares = {"gscl": (0.0, 0.05), "navfn": (0.10, 0.2), "snl_small": (0.08, 0.15), "snl_large": (0.01, 0.06)}
+    rows = [
+        {"scene": "gscl_group", "method": m, "variant": k, "zone_intimate": rng.uniform(0, hi / 4),
+         "zone_personal": rng.uniform(lo, hi)}
+        for m, (lo, hi) in {**shares, "orca": (0.3, 0.4)}.items()
+        for k in range(n)
+    ]  # fmt: skip
+    episodes = pd.DataFrame(rows)
+    both_ways = papers.stats_comparison(episodes.assign(zone_body_intimate=0.0, zone_body_personal=0.1))
+    assert len(both_ways) == 12 and set(both_ways["distance"]) == {"centre to centre", "body to body"}
+    body = both_ways[both_ways["distance"] == "body to body"].set_index(["measure", "baseline"])
+    assert body.loc[("zone_intimate", "navfn"), "verdict"] == "no difference here"  # 0 for every method
+    t = papers.stats_comparison(episodes).set_index(["measure", "baseline"])
+    assert len(t) == 6 and set(t["scene"]) == {"gscl_group"} and (t["n"] == n).all()
+    # Among the paper's four methods only (orca, a fifth here, left out of the studentized range).
+    g = episodes[episodes["method"] != "orca"]
+    both = g["zone_intimate"] + g["zone_personal"]
+    samples = {m: both[g["method"] == m].to_numpy() for m in papers.PAPER_STATS_METHODS}
+    _, p = arena_stats.games_howell(samples, "gscl", "navfn")
+    assert t.loc[("zone_intimate_personal", "navfn"), "ours_p"] == pytest.approx(p)
+    assert t.loc[("zone_intimate_personal", "navfn"), "ours_g"] == pytest.approx(
+        arena_stats.hedges_g(samples["gscl"], samples["navfn"])
+    )
+    assert t.loc[("zone_intimate_personal", "navfn"), "verdict"] == "reproduced"  # paper: g -4.5, p <= .0001
+    # The paper's group cell GSCL - SNL large (intimate) is not significant (p 0.468): reproduced only if ours is not.
+    assert t.loc[("zone_intimate", "snl_large"), "paper_p"] == 0.4680
+    expected = "reproduced" if t.loc[("zone_intimate", "snl_large"), "ours_p"] >= 0.05 else "differs (significant here)"
+    assert t.loc[("zone_intimate", "snl_large"), "verdict"] == expected
+    assert papers._stats_verdict(0.001, -2.0, 0.001, 1.5) == "opposite"
+    assert papers._stats_verdict(0.001, -2.0, 0.2, -0.3) == "same sign, not significant"
+    # A scene without one of the four methods is left out.
+    assert papers.stats_comparison(episodes[episodes["method"] != "snl_small"]).empty
+
+
 def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_hand():
     from scipy import stats
 
