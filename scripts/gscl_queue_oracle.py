@@ -23,7 +23,7 @@ It prints the goal and social success (the scene's rule: join at the tail, never
 within 0.45 m) of each reading, and how often each part of the rule failed. The graded reading
 patches :func:`planners.gscl_layer.read_cost` for this process only.
 
-Measured before the targets had a forbidden level (commit 6016126; a graded U soft-edged at 0.7,
+Measured before the targets had a forbidden level (a graded U soft-edged at 0.7,
 and hard-edged Us written into this script): graded 0 % social (held out 25 %), a hard U at 1
 graded 0 % (32 %), the same U lethal 79 % (91 %), lethal and inflated 91 % (96 %).
 """

@@ -256,7 +256,7 @@ def test_a_tiny_model_trained_here_learns_a_rule(family, kind, check, untrained_
     the passing rule, seeds 0-3, the one-output model passed on 2 (92.5 and 100 %) and the model
     with the forbidden head on none (its MSE after 150 steps 0.0005-0.003, slower at first, also
     with the head's loss weighted 1e-6 or replaced by the MSE of the combined map, so not the
-    head's cross-entropy); after 400 steps each passed on 3 of the 4 seeds (2026-11-27)."""
+    head's cross-entropy); after 400 steps each passed on 3 of the 4 seeds."""
     config = TrainConfig(
         features=(8, 8, 16, 16), batch_size=32, warmup_steps=10, epochs=1, cost_weight=0.0, targets="graded"
     )
