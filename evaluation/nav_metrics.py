@@ -26,7 +26,7 @@ for the proxemic and person-distance metrics (after that the robot has arrived).
   personal < 1.2, social < 3.6, public beyond or nobody present (seeds 002, 004; seed 000 uses 0.5
   for intimate); the four shares sum to 1. ``zone_share_body``: the same zones body to body (the
   nearest centre's distance less both radii: HuNavSim's reading). Centre to centre, the intimate
-  zone (0.45 m) lies inside contact (robot radius + person radius, 0.5 m for the arena's robot
+  zone (0.45 m) lies inside contact (robot radius + person radius, 0.525 m for the arena's TIAGo
   and people): time in it means overlapping bodies. Seed 002 uses Hall's zones without saying
   which distance; its Table 2 is compared both ways (:func:`evaluation.papers.stats_comparison`).
 * ``intrusions``: personal-space entries: entries of the robot into a person's 1.2 m (one per
