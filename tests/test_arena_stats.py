@@ -182,3 +182,38 @@ def test_scene_statistics_compare_the_proposed_method_with_the_others():
     # A run of the proposed method alone (socialnav arena --methods casn) has nothing to compare.
     alone = arena_stats.scene_statistics(pd.DataFrame([r for r in rows if r["method"] == "casn"]))
     assert alone.empty
+
+
+def test_the_papers_tables_script_prints_a_runs_tables_with_their_source_and_counts(tmp_path, capsys, monkeypatch):
+    """scripts/papers_tables.py: a run folder's papers.csv and directions.csv as the docs' Markdown
+    tables, under the line naming the run; a folder without run.json is refused in one line."""
+    import json
+    import sys
+
+    import script_loader
+
+    from socialnav.evaluation import papers
+
+    run = tmp_path / "arena"
+    run.mkdir()
+    (run / "run.json").write_text(json.dumps({"socialnav_version": "9.9", "metrics_version": "m", "variants": 40}))
+    summary = pd.DataFrame(
+        [{"scene": "casn_crossing", "method": "casn", "d_min_m": 1.5, "d_min_m_lo": 1.4, "d_min_m_hi": 1.75}]
+    )
+    papers.comparison(summary).dropna(subset=["ours"]).to_csv(run / "papers.csv", index=False)
+    rng = np.random.default_rng(3)
+    base = rng.uniform(0.5, 1.5, 40)
+    papers.directions(_paired_episodes("casn_crossing", "d_min_m", "casn", "snl_matched", base + 0.3, base)).to_csv(
+        run / "directions.csv", index=False
+    )
+    script = script_loader.load("papers_tables")
+    monkeypatch.setattr(sys, "argv", ["papers_tables.py", str(run)])
+    script.main()
+    said = capsys.readouterr().out
+    assert said.startswith("From `arena`: socialnav 9.9, m,") and "40 variants" in said
+    assert "| seed 001 Table 3 slow | `casn_crossing` | casn | d_min_m | 1.71 | 1.50 [1.40, 1.75] | yes |" in said
+    assert "1 of 1 published numbers inside our intervals." in said
+    assert "| casn - snl_matched | +0.69 | +0.30 [" in said and "Of 1 differences: 1 reproduced." in said
+    monkeypatch.setattr(sys, "argv", ["papers_tables.py", str(tmp_path)])
+    with pytest.raises(SystemExit, match="no run.json"):
+        script.main()

@@ -1,0 +1,105 @@
+"""The papers' tables of an arena run folder in Markdown, as docs/arena-results.md shows them.
+
+    python scripts/papers_tables.py runs/arena > tables.md
+
+Prints, under a line naming the run (its folder, the package and metrics versions, the GSCL
+model's digest, the variants and the seed from ``run.json``): ``papers.csv`` (each published number
+beside ours and its 95 % interval), ``directions.csv`` (each paper's difference between its method
+and a baseline beside ours, paired by variant) and ``papers_stats.csv`` (seed 002's Table 2), each
+with a count of its verdicts. Tables in the docs made this way can be made again from the run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+
+import pandas as pd
+
+
+def _source(run: pathlib.Path) -> str:
+    info = json.loads((run / "run.json").read_text())
+    return (
+        f"From `{run.name}`: socialnav {info.get('socialnav_version')}, {info.get('metrics_version')}, "
+        f"GSCL model {info.get('gscl_model')}, {info.get('variants')} variants, seed {info.get('seed')}, "
+        f"human model {info.get('human_model')}."
+    )
+
+
+def _number(value: float, metric: str) -> str:
+    if value != value:
+        return "-"
+    return f"{value:.0f}" if metric.endswith("success_pct") or metric.endswith("collision_pct") else f"{value:.2f}"
+
+
+def papers_table(papers: pd.DataFrame) -> str:
+    lines = [
+        "| source | scene | method | metric | paper | ours [95 % interval] | paper inside |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in papers.itertuples():
+        ours = f"{_number(r.ours, r.metric)} [{_number(r.ours_lo, r.metric)}, {_number(r.ours_hi, r.metric)}]"
+        inside = {True: "yes", False: "no"}.get(r.paper_inside, "-") if isinstance(r.paper_inside, bool) else "-"
+        lines.append(
+            f"| {r.source} | `{r.scene}` | {r.method} | {r.metric} | {_number(r.paper, r.metric)} | {ours} | {inside} |"
+        )
+    inside = papers["paper_inside"].astype(str).str.lower() == "true"
+    lines.append(f"\n{int(inside.sum())} of {len(papers)} published numbers inside our intervals.")
+    return "\n".join(lines)
+
+
+def directions_table(directions: pd.DataFrame) -> str:
+    lines = [
+        "| source | scene | metric | proposed - baseline | paper | ours [95 % interval, paired] | verdict |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in directions.itertuples():
+        ours = (
+            "-" if r.ours_diff != r.ours_diff else f"{r.ours_diff:+.2f} [{r.ours_diff_lo:+.2f}, {r.ours_diff_hi:+.2f}]"
+        )
+        pair = f"{r.proposed} - {r.baseline}"
+        lines.append(f"| {r.source} | `{r.scene}` | {r.metric} | {pair} | {r.paper_diff:+.2f} | {ours} | {r.verdict} |")
+    counts = ", ".join(f"{n} {v}" for v, n in directions["verdict"].value_counts().items())
+    lines.append(f"\nOf {len(directions)} differences: {counts}.")
+    return "\n".join(lines)
+
+
+def stats_table(stats: pd.DataFrame) -> str:
+    def p(v: float) -> str:
+        return "≤ .0001" if v <= 1e-4 else f"{v:.4f}"
+
+    lines = [
+        "| scene | zone | GSCL against | distance | n | paper: p, g | ours: p, g | verdict |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in stats.itertuples():
+        lines.append(
+            f"| `{r.scene}` | {r.measure} | {r.baseline} | {r.distance} | {r.n} | {p(r.paper_p)}, {r.paper_g:+.3f} "
+            f"| {p(r.ours_p)}, {r.ours_g:+.2f} | {r.verdict} |"
+        )
+    for distance, g in stats.groupby("distance", sort=False):
+        counts = ", ".join(f"{n} {v}" for v, n in g["verdict"].value_counts().items())
+        lines.append(f"\n{distance}, {len(g)} cells: {counts}.")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("run", type=pathlib.Path, help="a socialnav arena run folder")
+    run = parser.parse_args().run
+    if not (run / "run.json").is_file():
+        raise SystemExit(f"{run}: no run.json (not a socialnav arena run folder)")
+    print(_source(run))
+    for name, table in (
+        ("papers.csv", papers_table),
+        ("directions.csv", directions_table),
+        ("papers_stats.csv", stats_table),
+    ):
+        if (run / name).is_file():
+            print(f"\n`{name}`:\n")
+            print(table(pd.read_csv(run / name)))
+
+
+if __name__ == "__main__":
+    main()
