@@ -43,7 +43,7 @@ def _cell(row: pd.Series, metric: str) -> str:
 
 def table(run: pathlib.Path) -> str:
     """The Markdown table of ``run`` (an arena run's folder)."""
-    from socialnav.evaluation.arena_report import HELD_OUT
+    from socialnav.evaluation.arena_run import HELD_OUT
     from socialnav.evaluation.papers import PAPER_ROWS
 
     summary_path = run / "summary.csv"

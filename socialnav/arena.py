@@ -385,12 +385,12 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         return 2
     if actor_specs:  # each factory called once here: a bad one fails before any work
         from socialnav.evaluation import arena as arena_lib
-        from socialnav.evaluation import arena_report as report_lib
+        from socialnav.evaluation import arena_run
 
         first = arena_lib.setup_scene(specs[0])
         for spec in actor_specs:
             try:
-                report_lib.user_actor(actor_spec.load(spec), first.env, first.n_slots)
+                arena_run.user_actor(actor_spec.load(spec), first.env, first.n_slots)
             except Exception as e:  # the user's code: any error, named in one line
                 print(f"socialnav arena: --actor {spec}: {type(e).__name__}: {e}", file=sys.stderr)
                 return 2
@@ -437,7 +437,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     import pandas as pd
 
     from socialnav.common import __version__
-    from socialnav.evaluation import arena_report, arena_stats, nav_metrics, papers
+    from socialnav.evaluation import arena_report, arena_run, arena_stats, nav_metrics, papers
     from socialnav.models.inference import model_identity
 
     settings = {
@@ -460,7 +460,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         "metrics_version": nav_metrics.VERSION,
         "socialnav_version": __version__,
     }
-    names = [spec.name + (arena_report.HELD_OUT if held_out else "") for spec, held_out in runs]
+    names = [spec.name + (arena_run.HELD_OUT if held_out else "") for spec, held_out in runs]
     digests = {name: scene_digest(spec.file, held_out, settings) for (spec, held_out), name in zip(runs, names)}
     settings["scene_digests"] = digests
     settings["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in specs}
@@ -675,7 +675,7 @@ def compute_shard(
     text (parsed here, so a worker needs no access to the file); ``policy_run``: a trained
     policy's run folder (``--policy-run``), restored here. The GSCL weights enter the
     episode program traced: a second checkpoint of the same network compiles nothing new."""
-    from socialnav.evaluation import arena_params, arena_report
+    from socialnav.evaluation import arena_params, arena_run
     from socialnav.evaluation.arena import ArenaConfig
 
     keep = max(0, min(n, keep_trajectories - first))
@@ -684,7 +684,7 @@ def compute_shard(
         from socialnav.planners.policy_run import actor_factory
 
         users[POLICY_METHOD] = actor_factory(policy_run, POLICY_METHOD)
-    return arena_report.run_scene(
+    return arena_run.run_scene(
         spec,
         list(methods),
         n,

@@ -68,12 +68,12 @@ def test_episodes_are_deterministic_and_the_same_variant_for_every_method():
 _SPREAD = """
 import jax
 from socialnav.data import DATA_DIR
-from socialnav.evaluation import arena_report
+from socialnav.evaluation import arena_run
 from socialnav.jaxsim.scenes.spec import load_scene
 spec = load_scene(DATA_DIR / 'scenes' / 'casn_head_on.json')
 methods = ['navfn', 'snl_small', 'orca', 'snl_large', 'snape_social_eband']
-one, _ = arena_report.run_scene(spec, methods, 9, n_devices=1)
-two, _ = arena_report.run_scene(spec, methods, 9, n_devices=2)
+one, _ = arena_run.run_scene(spec, methods, 9, n_devices=1)
+two, _ = arena_run.run_scene(spec, methods, 9, n_devices=2)
 print(jax.local_device_count(), one.equals(two), one.method.tolist() == two.method.tolist(), len(two))
 """
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import SCENES_DIR
-from socialnav.evaluation import arena, arena_params, arena_report
+from socialnav.evaluation import arena, arena_params, arena_run
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.planners import stack
@@ -80,13 +80,13 @@ def test_an_unreadable_file_is_named(tmp_path):
 def test_the_files_values_reach_the_episodes_without_a_new_compilation():
     """A slower robot takes longer; the pursuit's gain is traced: the same compiled program."""
     spec = load_scene(SCENES_DIR / "casn_static_person.json")
-    default = arena_report.run_scene(spec, ["navfn"], 2)[0]
+    default = arena_run.run_scene(spec, ["navfn"], 2)[0]
     grid = arena.setup_scene(spec).grid  # the same arguments as episode_function's: its cached actor
     actor = arena.method_actor(stack.METHODS["navfn"], grid, float(RobotParams().radius_m), arena.ArenaConfig(), None)
     program = arena._episode_program(actor)
     compiled = program._cache_size()
     slow = arena_params.parse("[robot]\nmax_speed_mps = 0.3\n[pursuit]\nturn_gain = 1.2")
-    slower = arena_report.run_scene(spec, ["navfn"], 2, params=slow)[0]
+    slower = arena_run.run_scene(spec, ["navfn"], 2, params=slow)[0]
     assert program._cache_size() == compiled  # traced values: no recompilation
     assert np.all(slower["time_s"].to_numpy() > default["time_s"].to_numpy() + 1.0)
     assert slower["goal_success"].all()
@@ -105,7 +105,7 @@ def test_a_users_actor_before_a_built_in_method_keeps_the_files_values():
 
     spec = load_scene(SCENES_DIR / "casn_static_person.json")
     params = arena_params.parse("[robot]\nmax_speed_mps = 0.4\n[pursuit]\nturn_gain = 1.2")
-    episodes = arena_report.run_scene(spec, ["still", "navfn"], 2, user_actors={"still": still}, params=params)[0]
+    episodes = arena_run.run_scene(spec, ["still", "navfn"], 2, user_actors={"still": still}, params=params)[0]
     assert seen["robot"].max_speed_mps == 0.4
     assert list(episodes["method"]) == ["still", "still", "navfn", "navfn"]
     assert not episodes[episodes["method"] == "still"]["goal_success"].any()

@@ -190,13 +190,13 @@ def test_a_bad_recording_gives_one_error_naming_file_and_field(tmp_path, mutate,
 def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     import pandas as pd
 
-    from socialnav.evaluation import arena_report
+    from socialnav.evaluation import arena_run
 
     if arena.memory_maps() is None:
         pytest.skip("no /proc/self/maps here: the arena never drops its programs")
     spec = load_scene(HOTEL_REACTIVE)
     config = arena.ArenaConfig(human_model="orca")
-    before, _ = arena_report.run_scene(spec, ["navfn", "orca"], 3, config=config)
+    before, _ = arena_run.run_scene(spec, ["navfn", "orca"], 3, config=config)
     held = arena.memory_maps()[0]
     assert arena.release_programs_if_crowded(share=0.0)
     assert arena.memory_maps()[0] < held  # the programs' code is unmapped
@@ -205,5 +205,5 @@ def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     assert key == arena.program_key(arena.setup_scene(load_scene(HOTEL), config))  # both playbacks: one program
     assert arena.release_programs_if_crowded(share=0.0, key=key)
     assert not arena.release_programs_if_crowded(share=0.0, key=key)  # the same scene's programs are kept
-    after, _ = arena_report.run_scene(spec, ["navfn", "orca"], 3, config=config)
+    after, _ = arena_run.run_scene(spec, ["navfn", "orca"], 3, config=config)
     pd.testing.assert_frame_equal(before, after)
