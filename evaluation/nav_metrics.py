@@ -145,13 +145,13 @@ def episode_metrics(
     d_person = jnp.min(dist_masked, axis=0)
     d_min = jnp.min(d_person)
     edges = jnp.array([ZONES_M["intimate"], ZONES_M["personal"], ZONES_M["social"]])
-    zone = jnp.where(has_near, jnp.sum(nearest[:, None] >= edges[None], axis=1), 3)  # nobody near: public
-    zone_share = jnp.array([jnp.sum(active & (zone == z)) for z in range(4)]) / jnp.maximum(jnp.sum(active), 1)
-    clearance = nearest - robot_radius_m - person_radius_m
-    zone_body = jnp.where(has_near, jnp.sum(clearance[:, None] >= edges[None], axis=1), 3)
-    zone_share_body = jnp.array([jnp.sum(active & (zone_body == z)) for z in range(4)]) / jnp.maximum(
-        jnp.sum(active), 1
-    )
+
+    def shares(distance):  # (4,) share of the steps before arrival in each zone; nobody near: public
+        zone = jnp.where(has_near, jnp.sum(distance[:, None] >= edges[None], axis=1), 3)
+        return jnp.array([jnp.sum(active & (zone == z)) for z in range(4)]) / jnp.maximum(jnp.sum(active), 1)
+
+    zone_share = shares(nearest)
+    zone_share_body = shares(nearest - robot_radius_m - person_radius_m)
 
     # Personal-space intrusions: entries into a person's 1.2 m.
     inside = seen & (dist < ZONES_M["personal"])

@@ -40,7 +40,7 @@ def papers_table(papers: pd.DataFrame) -> str:
     ]
     for r in papers.itertuples():
         ours = f"{_number(r.ours, r.metric)} [{_number(r.ours_lo, r.metric)}, {_number(r.ours_hi, r.metric)}]"
-        inside = {True: "yes", False: "no"}.get(r.paper_inside, "-") if isinstance(r.paper_inside, bool) else "-"
+        inside = {"True": "yes", "False": "no"}.get(str(r.paper_inside), "-")
         lines.append(
             f"| {r.source} | `{r.scene}` | {r.method} | {r.metric} | {_number(r.paper, r.metric)} | {ours} | {inside} |"
         )

@@ -537,7 +537,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         if not _finished(out, name, digests[name]):
             _finish_scene(args, out, spec, held_out, name, methods, digests[name])
         frames.append(pd.read_parquet(episodes_file))
-    summary = arena_report.summary(pd.concat(frames, ignore_index=True))
+    episodes = pd.concat(frames, ignore_index=True)
+    summary = arena_report.summary(episodes)
     write_atomic(out / "summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
     shown = [
         "scene",
@@ -568,7 +569,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
             "episodes/), so those rows measure a stopped robot, not the method",
             file=sys.stderr,
         )
-    statistics = arena_stats.scene_statistics(pd.concat(frames, ignore_index=True))
+    statistics = arena_stats.scene_statistics(episodes)
     write_atomic(out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
     written = ["summary.csv", "stats.csv"]
     if len(summary):
@@ -576,29 +577,22 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
 
         arena_plots.methods_figure(summary, runfolder.inside(out, out / "pictures" / "methods.png"))
         written.append("pictures/methods.png")
-    compared = papers.comparison(summary).dropna(subset=["ours"])
-    if len(compared):
-        write_atomic(out / "papers.csv", lambda tmp: compared.to_csv(tmp, index=False))
-        written.append("papers.csv")
-        print("\nthe papers' numbers and ours (95 % intervals):")
+    # The papers' tables, each written and printed where the run has their scenes.
+    for name, table, title, digits in (
+        ("papers.csv", papers.comparison(summary).dropna(subset=["ours"]),
+         "the papers' numbers and ours (95 % intervals)", 2),
+        ("directions.csv", papers.directions(episodes),
+         "do the papers' differences reproduce? (proposed - baseline, paired by variant)", 2),
+        ("papers_stats.csv", papers.stats_comparison(episodes),
+         "seed 002 Table 2 (Games-Howell among its four methods; time in the intimate, intimate + personal zones)", 4),
+    ):  # fmt: skip
+        if not len(table):
+            continue
+        write_atomic(out / name, lambda tmp, table=table: table.to_csv(tmp, index=False))
+        written.append(name)
+        print(f"\n{title}:")
         with pd.option_context("display.width", 200, "display.max_rows", 500):
-            print(compared.round(2).to_string(index=False))
-    turned = papers.directions(pd.concat(frames, ignore_index=True))
-    if len(turned):
-        write_atomic(out / "directions.csv", lambda tmp: turned.to_csv(tmp, index=False))
-        written.append("directions.csv")
-        print("\ndo the papers' differences reproduce? (proposed - baseline, paired by variant)")
-        with pd.option_context("display.width", 200, "display.max_rows", 500):
-            print(turned.round(2).to_string(index=False))
-    tested = papers.stats_comparison(pd.concat(frames, ignore_index=True))
-    if len(tested):
-        write_atomic(out / "papers_stats.csv", lambda tmp: tested.to_csv(tmp, index=False))
-        written.append("papers_stats.csv")
-        print(
-            "\nseed 002 Table 2 (Games-Howell among its four methods; time in the intimate, intimate + personal zones):"
-        )
-        with pd.option_context("display.width", 200, "display.max_rows", 500):
-            print(tested.round(4).to_string(index=False))
+            print(table.round(digits).to_string(index=False))
     runfolder.record(out, JOB, written)
     return 0
 
