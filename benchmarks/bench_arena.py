@@ -40,8 +40,8 @@ from socialnav.evaluation import arena  # noqa: E402
 from socialnav.jaxsim.params import TIAGO_RADIUS_M  # noqa: E402
 from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
 from socialnav.jaxsim.scenes.variant import sample_variants  # noqa: E402
-from socialnav.planners import costmap  # noqa: E402
-from socialnav.planners.baselines import BASELINES  # noqa: E402
+from socialnav.planners.layers import costmap  # noqa: E402
+from socialnav.planners.reactive.baselines import BASELINES  # noqa: E402
 from socialnav.planners.stack import METHODS, global_plan  # noqa: E402
 
 

@@ -30,7 +30,7 @@ import numpy as np  # noqa: E402
 from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.evaluation import warehouse  # noqa: E402
 from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
-from socialnav.planners.tables import CausalTables  # noqa: E402
+from socialnav.planners.warehouse.tables import CausalTables  # noqa: E402
 
 
 def schedule_tables(scenario) -> CausalTables:

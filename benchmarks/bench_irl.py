@@ -1,10 +1,10 @@
-"""Training costs through the planner (planners.irl): gradient steps per second and memory.
+"""Training costs through the planner (planners.learning.irl): gradient steps per second and memory.
 
 Two measurements, each at the batch sizes given (default 32 and 256), on the U-Net of the
 default GSCL recipe:
 
 * **the whole training step of the "paths" objective** (``models.steps.make_train_step`` with
-  ``planners.irl.PathObjective``: planning the batch's demonstrations on its target maps, the
+  ``planners.learning.irl.PathObjective``: planning the batch's demonstrations on its target maps, the
   U-Net forward and backward, the soft planner's implicit gradient, Adam), beside the "maps"
   objective's step (seed 002's regression) on the same batch;
 * **the soft planner's gradient alone** (the path likelihood of random costs, ``jax.grad``),
@@ -41,7 +41,8 @@ from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.models import dataset, grid  # noqa: E402
 from socialnav.models.config import TrainConfig  # noqa: E402
 from socialnav.models.steps import batch_sharding, compiled, initial_state  # noqa: E402
-from socialnav.planners import irl, smooth_planner  # noqa: E402
+from socialnav.planners.global_planners import smooth_planner  # noqa: E402
+from socialnav.planners.learning import irl  # noqa: E402
 
 
 def _rate(fn, args, seconds: float) -> tuple[float, float]:

@@ -29,8 +29,12 @@ import scipy.sparse as sp  # noqa: E402
 from scipy.sparse.csgraph import dijkstra  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from socialnav.planners import casn, costmap, grid_planner, snape, snl  # noqa: E402
-from socialnav.planners.scene import make_scene  # noqa: E402
+from socialnav.planners.global_planners import grid_planner  # noqa: E402
+from socialnav.planners.layers import casn_layer as casn  # noqa: E402
+from socialnav.planners.layers import costmap  # noqa: E402
+from socialnav.planners.layers import snape_layer as snape  # noqa: E402
+from socialnav.planners.layers import snl_layer as snl  # noqa: E402
+from socialnav.planners.layers.scene import make_scene  # noqa: E402
 
 RESOLUTION_M = 0.05
 

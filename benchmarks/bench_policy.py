@@ -1,4 +1,4 @@
-"""PPO's training throughput in the arena (planners/policy_training.py), beside published figures.
+"""PPO's training throughput in the arena (planners/learning/policy_training.py), beside published figures.
 
     python benchmarks/bench_policy.py                     # the 14 built-in scenes, the defaults
     python benchmarks/bench_policy.py --scenes gscl_group --envs-per-scene 256
@@ -30,9 +30,9 @@ import jax  # noqa: E402
 from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.data import SCENES_DIR  # noqa: E402
 from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
-from socialnav.planners import policy_training  # noqa: E402
-from socialnav.planners.policy import PolicyConfig  # noqa: E402
-from socialnav.planners.policy_social import SOCIAL_LAYERS  # noqa: E402
+from socialnav.planners.learning import policy_training  # noqa: E402
+from socialnav.planners.learning.policy import PolicyConfig  # noqa: E402
+from socialnav.planners.learning.policy_social import SOCIAL_LAYERS  # noqa: E402
 
 PUBLISHED = (
     ("CrowdNav_HEIGHT (PPO, 2e8 steps in ~50 h; i9-13900K + RTX 4090)", 1_100),

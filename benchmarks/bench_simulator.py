@@ -45,7 +45,7 @@ from socialnav.jaxsim.rollout import init_batch, run_samples, world_keys  # noqa
 from socialnav.jaxsim.route_follower import route_follower  # noqa: E402
 from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
 from socialnav.jaxsim.world import build_world  # noqa: E402
-from socialnav.planners.routes import shortest_path_plan  # noqa: E402
+from socialnav.planners.warehouse.routes import shortest_path_plan  # noqa: E402
 
 WARMUP_S = 200.0  # simulated seconds before timing: the workers have arrived
 

@@ -39,7 +39,7 @@ from socialnav.jaxsim import workers as workers_lib  # noqa: E402
 from socialnav.jaxsim.route_follower import route_follower  # noqa: E402
 from socialnav.jaxsim.scenario import load_scenario  # noqa: E402
 from socialnav.jaxsim.world import build_world  # noqa: E402
-from socialnav.planners.routes import shortest_path_plan  # noqa: E402
+from socialnav.planners.warehouse.routes import shortest_path_plan  # noqa: E402
 
 SAMPLES, EVERY = 10, 10  # one call: 100 steps
 

@@ -28,7 +28,7 @@ def write_tables(
 ) -> pathlib.Path:
     """Write the engine's tables (:meth:`causal.engine.CausalEngine.tables`) with the waypoint and
     slot names they belong to, atomically: ``engine_tables.npz``, the file the planners read with
-    their own reader (``planners.tables.CausalTables``; ``tests/test_contracts.py`` checks both ends)."""
+    their own reader (``planners.warehouse.tables.CausalTables``; ``tests/test_contracts.py`` checks both ends)."""
     return write_bytes_atomic(
         path, lambda h: np.savez(h, waypoints=np.array(waypoints), slots=np.array(slots), **tables)
     )

@@ -42,9 +42,11 @@ from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.actor import Actor, rollout
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import Variant, padded_slots
-from socialnav.planners import actors, baselines, costmap, policy_social, stack
-from socialnav.planners.layers import CostLayer
-from socialnav.planners.scene import Scene
+from socialnav.planners import actors, stack
+from socialnav.planners.layers import CostLayer, costmap
+from socialnav.planners.layers.scene import Scene
+from socialnav.planners.learning import policy_social
+from socialnav.planners.reactive import baselines
 
 
 @dataclasses.dataclass(frozen=True)
@@ -178,7 +180,7 @@ def setup_scene(
 
 
 def planner_scene(setup: SceneSetup, variant: Variant, time_s: float = 0.0, perceived: bool = False) -> Scene:
-    """The planner's :class:`~socialnav.planners.scene.Scene` of one variant of a scene at
+    """The planner's :class:`~socialnav.planners.layers.scene.Scene` of one variant of a scene at
     ``time_s`` (the people walked by the crowd model with the robot standing at its start).
 
     ``perceived=False`` gives the truth: every person present, with their true velocity and
@@ -215,7 +217,7 @@ def scene_from_file(
     file, variant: int = 0, seed: int = 0, time_s: float = 0.0, perceived: bool = False, held_out: bool = False
 ) -> tuple[Scene, SceneSetup]:
     """A scene file's variant ``variant`` (drawn under ``seed``, as ``socialnav arena --seed`` draws
-    it) as the planner's :class:`~socialnav.planners.scene.Scene`, with the scene's
+    it) as the planner's :class:`~socialnav.planners.layers.scene.Scene`, with the scene's
     :class:`SceneSetup` (its planner ``grid``, ``occupancy`` and environment). ``time_s``,
     ``perceived``: as :func:`planner_scene`; ``held_out``: the arena's held-out row (the scene
     mirrored, the variant drawn just outside the file's ranges). Raises ``ValueError`` naming the
@@ -473,7 +475,7 @@ def release_programs_if_crowded(share: float = MAP_SHARE_BEFORE_RELEASE, caches=
 
 @functools.lru_cache(maxsize=64)
 def baseline_actor(name: str, grid: costmap.GridSpec, robot_radius_m: float, config: ArenaConfig = ArenaConfig()):
-    """A reactive baseline (:data:`planners.baselines.BASELINES`) as an actor (cached as
+    """A reactive baseline (:data:`planners.reactive.baselines.BASELINES`) as an actor (cached as
     :func:`method_actor`)."""
     return baselines.baseline_actor(
         name, grid, robot_radius_m, config.dt_s, config.replan_every_steps, config.max_path_cells

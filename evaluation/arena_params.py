@@ -6,9 +6,9 @@ A file holds any of these sections, each field optional (the seeds' values are t
 
     [robot]                     # jaxsim.scenes.robot.RobotParams
     max_speed_mps = 0.6
-    [casn]                      # planners.casn.CASNParams, for every method with the CASN layer
+    [casn]                      # planners.layers.casn_layer.CASNParams, for every method with the CASN layer
     personal_radius_m = 1.0
-    [snl]                       # planners.snl.SNLParams, for every SNL method
+    [snl]                       # planners.layers.snl_layer.SNLParams, for every SNL method
     amplitude = 100.0
     [snape] / [band] / [pursuit]   # SNAPEParams, the social elastic band, pure pursuit
     [methods.snl_large.snl]     # one method only: methods.<method>.<section>

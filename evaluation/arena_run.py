@@ -22,7 +22,7 @@ from socialnav.evaluation.arena_report import episode_frame, trajectory_frame
 from socialnav.jaxsim.scenes.actor import Actor, check_actor
 from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
 from socialnav.jaxsim.scenes.variant import Variant, sample_variants
-from socialnav.planners.baselines import BASELINES
+from socialnav.planners.reactive.baselines import BASELINES
 from socialnav.planners.stack import METHODS
 
 

@@ -85,7 +85,7 @@ import numpy as np
 
 from socialnav.evaluation.metrics import collision_encounters
 from socialnav.jaxsim.scenes import rule_monitor
-from socialnav.planners.scene import wrap_angle
+from socialnav.planners.layers.scene import wrap_angle
 
 VERSION = "nav-metrics 5"  # 5: zone_share_body; 4: goal_no_collision, social_no_collision; 3: intruded
 ZONES_M = {"intimate": 0.45, "personal": 1.2, "social": 3.6}

@@ -4,7 +4,7 @@ The physics is the simulator's: every step calls :func:`jaxsim.step.crowd_step` 
 of :func:`jaxsim.rng.step_uniforms`, exactly as the day simulation does, and moves the robot
 with :func:`jaxsim.robot.drive` under the command of the method's actor (a
 :class:`jaxsim.actor.Driver`, as the day simulation takes: the route follower of a plan, the
-causal planner of :mod:`planners.warehouse_actors` with its Eq. 10 refusal, or a user's own);
+causal planner of :mod:`planners.warehouse.actors` with its Eq. 10 refusal, or a user's own);
 this module adds only the protocol (tasks, deadlines, battery resets, honouring a refusal) and
 its measurements.
 
@@ -75,7 +75,7 @@ from socialnav.jaxsim.rng import hash_uniform16, step_uniforms, world_seed_u32
 from socialnav.jaxsim.state import SimState
 from socialnav.jaxsim.step import actor_key, crowd_step, init_state
 from socialnav.jaxsim.world import World
-from socialnav.planners.waypoint import MIN_BATTERY_PCT
+from socialnav.planners.warehouse.waypoint import MIN_BATTERY_PCT
 
 # Stream constant that separates the per-task obstacle draws from the per-step ones.
 _OBSTACLE_STREAM = np.uint32(0x5BD1E995)

@@ -6,7 +6,7 @@ numbers), and returns one row per task; :func:`write_report` writes the tables, 
 
     from socialnav.jaxsim.scenario import load_scenario
     from socialnav.evaluation import warehouse
-    from socialnav.planners.tables import CausalTables
+    from socialnav.planners.warehouse.tables import CausalTables
     scenario = load_scenario()
     tables = CausalTables.load("runs/warehouse/causal/engine_tables.npz")
     result = warehouse.run_evaluation(scenario, tables, replicas=32)
@@ -32,10 +32,10 @@ from socialnav.jaxsim.actor import Driver
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import Scenario
 from socialnav.jaxsim.world import RobotPlan, World, build_world
-from socialnav.planners.routes import shortest_path_plan
-from socialnav.planners.tables import CausalTables
-from socialnav.planners.warehouse_actors import causal_planner
-from socialnav.planners.waypoint import MIN_BATTERY_PCT, CausalWeights, causal_plan
+from socialnav.planners.warehouse.actors import causal_planner
+from socialnav.planners.warehouse.routes import shortest_path_plan
+from socialnav.planners.warehouse.tables import CausalTables
+from socialnav.planners.warehouse.waypoint import MIN_BATTERY_PCT, CausalWeights, causal_plan
 
 METHODS = ("baseline", "causal")
 

@@ -2,7 +2,7 @@
 
 The simulator never searches a graph inside ``jit``: workers look up ``next_hop[here, goal]``,
 built here once; the robot follows a route table that a planner builds with the same search
-(``planners.routes``).
+(``planners.warehouse.routes``).
 """
 
 from __future__ import annotations

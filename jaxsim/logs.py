@@ -227,7 +227,7 @@ def simulate_to_parquet(
       out_dir: output folder (created); each file is renamed into place when written (the
         command line stages the whole run and commits it at once: :mod:`common.runfolder`).
       driver: the robot's actor and its params, e.g.
-        ``route_follower(planners.routes.shortest_path_plan(s), world)``
+        ``route_follower(planners.warehouse.routes.shortest_path_plan(s), world)``
         (:func:`jaxsim.route_follower.route_follower`).
       n_worlds: batch size; world ``b`` is the same world bit for bit for a given seed whatever
         ``n_worlds`` and the number of host devices.

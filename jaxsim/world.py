@@ -3,7 +3,7 @@
 :func:`build_world` turns a validated :class:`~jaxsim.scenario.Scenario` into a :class:`World`
 pytree once per scenario; every rollout then takes it as an ordinary (unbatched) argument.
 :class:`RobotPlan` is the format of the robot's route table, an input the planners produce
-(``planners.routes``); the simulator only follows it.
+(``planners.warehouse.routes``); the simulator only follows it.
 """
 
 from __future__ import annotations

@@ -35,11 +35,11 @@ ADDED_LATER = {
 OBJECTIVES = ("maps", "paths")
 # What the "paths" objective demonstrates on each map: "paths", ``paths_per_map`` exact plans to
 # the goal; "cells", the exact planner's move out of every free cell, each once
-# (planners.irl.policy_demonstration). scripts/irl_rule_oracle.py shows why the second exists: a
+# (planners.learning.irl.policy_demonstration). scripts/irl_rule_oracle.py shows why the second exists: a
 # free grid fitted to 4 exact plans on each rule-suite map keeps almost none of the rules, one
 # fitted to every cell's move most of them.
 DEMONSTRATIONS = ("paths", "cells")
-# How the "paths" objective prices costs (planners.irl.traversal_per_m), the demonstrator's
+# How the "paths" objective prices costs (planners.learning.irl.traversal_per_m), the demonstrator's
 # targets and the network's output alike: "graded", every cost on NavFn's graded scale (the
 # queue's U at 1 is then 5 times a free cell, and exact plans cross it); "layer", as the GSCL
 # layer reads a network's costs (graded up to models.social_costs.GRADED_TOP, lethal from
@@ -107,11 +107,11 @@ class TrainConfig:
         1 63 % / 0.41 and 3 69 % / 0.59.
       objective: ``"maps"`` (seed 002: regression on the generator's target maps, the loss
         above) or ``"paths"`` (maximum-entropy IRL through the soft planner,
-        :mod:`planners.irl`: the targets are used only to plan ``paths_per_map`` exact
+        :mod:`planners.learning.irl`: the targets are used only to plan ``paths_per_map`` exact
         demonstrations per map, and the loss is their negative log-likelihood under the soft
         planner of the network's costs; the test MSE is then a diagnostic, not the objective).
         A "paths" run is trained by :func:`models.train.train` with the objective passed in
-        (``planners.irl.PathObjective``): ``models`` never imports the planners.
+        (``planners.learning.irl.PathObjective``): ``models`` never imports the planners.
       temperature: the soft planner's temperature of the "paths" objective
         (:data:`PATH_TEMPERATURE`, below :data:`MAX_PATH_TEMPERATURE`).
       paths_per_map: demonstrations planned on each map by the "paths" objective.

@@ -6,7 +6,7 @@ Schulman et al. 2017; purejaxrl's and CleanRL's ``ppo_continuous``); the critic 
 and critic are separate MLPs with tanh activations and orthogonal initialisation (the actor's
 last layer scaled by 0.01, the critic's by 1: the "37 implementation details of PPO", Huang et
 al. 2022). The features and what ``u`` means to the robot are the actor's business
-(:mod:`planners.policy`); this module knows only vectors.
+(:mod:`planners.learning.policy`); this module knows only vectors.
 """
 
 from __future__ import annotations

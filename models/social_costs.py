@@ -19,7 +19,7 @@ project's rules:
 
 Two ranges (this project's choice; the paper draws the U as one more graded cost): every graded
 shape peaks at :data:`GRADED_TOP` (0.7), and the U is drawn at :data:`FORBIDDEN` (1). The GSCL
-layer (:mod:`planners.gscl_layer`) reads network costs from :data:`FORBIDDEN_FROM` (0.85, halfway)
+layer (:mod:`planners.layers.gscl_layer`) reads network costs from :data:`FORBIDDEN_FROM` (0.85, halfway)
 up as lethal and scales the graded ones back to Nav2's full graded range, so the planner sees the
 graded shapes as it did when they peaked at 1. Why: in closed loop a graded U, even at the top of
 the graded range, is crossed by every plan, since the way round a line is metres longer than the

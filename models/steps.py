@@ -94,7 +94,7 @@ def make_train_step(
     mean over pixels of ``(1 + cost_weight * target + pair_weight * contrast) * error**2`` (the
     plain MSE with both at 0 or no contrast given). With the forbidden head
     (:mod:`models.unet`), :func:`two_channel_loss`. With an ``objective`` (the "paths" one,
-    ``planners.irl.PathObjective``: ``prepare(key, inputs, targets)`` and ``loss(costs, inputs,
+    ``planners.learning.irl.PathObjective``: ``prepare(key, inputs, targets)`` and ``loss(costs, inputs,
     prepared) -> (B,)``), ``key`` draws the batch's demonstrations and the loss and ``loss`` are
     the mean of ``objective.loss``. The returned ``loss`` and the per-family accumulators are
     always the plain MSE of the model's output (the combined map) against the targets.

@@ -66,7 +66,7 @@ def train(
       max_steps: stop after this many steps in all (a checkpoint is written there), e.g. to
         test resuming; the run resumes from it when called again.
       objective: the training objective of a ``config.objective == "paths"`` run
-        (``planners.irl.PathObjective.of(config)``; see :func:`models.steps.make_train_step`);
+        (``planners.learning.irl.PathObjective.of(config)``; see :func:`models.steps.make_train_step`);
         None for the "maps" objective.
 
     Raises:
@@ -83,7 +83,7 @@ def train(
     if (objective is None) != (config.objective == "maps"):
         raise ValueError(
             f"objective: a {config.objective!r} run needs "
-            + ("socialnav.planners.irl.PathObjective.of(config)" if objective is None else "no objective")
+            + ("socialnav.planners.learning.irl.PathObjective.of(config)" if objective is None else "no objective")
         )
     data_sharding, replicated = batch_sharding(config.batch_size)  # a bad batch size fails before any file
     out = pathlib.Path(out)

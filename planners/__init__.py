@@ -1,29 +1,35 @@
-"""socialnav.planners: planning alone.
+"""socialnav.planners: planning alone, one folder a kind of part.
 
-Seed 000's waypoint planners: route tables (:mod:`~socialnav.planners.routes`: shortest path and
-any arc costs), the causal costs, A* and the abort decision (:mod:`~socialnav.planners.waypoint`,
-Eq. 8-10) and the typed reader of the causal engine's tables (:mod:`~socialnav.planners.tables`).
-The social cost layers in one shape (:mod:`~socialnav.planners.layers`: SNL, CASN, SNAPE, GSCL),
-the cost grid (:mod:`~socialnav.planners.costmap`), exact and differentiable grid planners
-(:mod:`~socialnav.planners.grid_planner`, :mod:`~socialnav.planners.smooth_planner`), local
-planners (elastic band, pure pursuit, ORCA, social force, DWA), the arena's actors
-(:mod:`~socialnav.planners.actors`, :mod:`~socialnav.planners.baselines`), the learned policy, and
-costs learned from demonstrated paths (:mod:`~socialnav.planners.irl`,
-:mod:`~socialnav.planners.tracks`).
+- :mod:`~socialnav.planners.layers`: the social cost layers in one shape (SNL, CASN, SNAPE,
+  GSCL), the cost grid, what a layer sees;
+- :mod:`~socialnav.planners.global_planners`: exact and differentiable grid planners (NavFn's
+  potential, its soft-min relaxation);
+- :mod:`~socialnav.planners.local`: a stack's local planners (pure pursuit, the elastic bands);
+- :mod:`~socialnav.planners.reactive`: the reactive baselines (ORCA, the social force, DWA), a
+  velocity rule steering to a carrot on the ``navfn`` stack's path;
+- :mod:`~socialnav.planners.learning`: the PPO policy and costs learned from demonstrated paths
+  (IRL);
+- :mod:`~socialnav.planners.warehouse`: seed 000's waypoint planners: route tables, causal costs,
+  A*, the causal planner's actor.
+
+Beside them, :mod:`~socialnav.planners.stack` composes a layer, a global planner and a local one
+into a navigation stack (the seeds' methods as named configurations), and
+:mod:`~socialnav.planners.actors` turns a stack into the arena's actor;
+:mod:`~socialnav.planners.plots` draws every layer and its planner's path side by side.
 
 Re-exported here: what a script needs to go from a scene to a cost map to a plan.
 """
 
 from socialnav.planners import layers
-from socialnav.planners.casn import CASNParams, CASNState
-from socialnav.planners.costmap import GridSpec, combine_max, obstacle_layer
-from socialnav.planners.grid_planner import GridPlan, navfn_plans, path_xy_m, weighted_plans
+from socialnav.planners.global_planners.grid_planner import GridPlan, navfn_plans, path_xy_m, weighted_plans
 from socialnav.planners.layers import CostLayer
-from socialnav.planners.routes import plan_from_costs, shortest_path_plan
-from socialnav.planners.scene import Scene, make_scene
-from socialnav.planners.snape import SNAPEParams
-from socialnav.planners.snl import SNLParams
+from socialnav.planners.layers.casn_layer import CASNParams, CASNState
+from socialnav.planners.layers.costmap import GridSpec, combine_max, obstacle_layer
+from socialnav.planners.layers.scene import Scene, make_scene
+from socialnav.planners.layers.snape_layer import SNAPEParams
+from socialnav.planners.layers.snl_layer import SNLParams
 from socialnav.planners.stack import LayerParams, StackConfig
+from socialnav.planners.warehouse.routes import plan_from_costs, shortest_path_plan
 
 __all__ = [
     "CASNParams",

@@ -28,9 +28,9 @@ from flax import struct
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.actor import Actor
 from socialnav.jaxsim.scenes.env import Env, Observation
-from socialnav.planners import costmap, stack
-from socialnav.planners.layers import CostLayer
-from socialnav.planners.scene import Scene
+from socialnav.planners import stack
+from socialnav.planners.layers import CostLayer, costmap
+from socialnav.planners.layers.scene import Scene
 
 
 @struct.dataclass

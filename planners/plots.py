@@ -18,8 +18,11 @@ import numpy as np
 
 from socialnav.common import figures
 from socialnav.jaxsim.params import TIAGO_RADIUS_M
-from socialnav.planners import costmap, grid_planner, layers, snl
-from socialnav.planners.scene import Scene, make_scene
+from socialnav.planners import layers
+from socialnav.planners.global_planners import grid_planner
+from socialnav.planners.layers import costmap
+from socialnav.planners.layers import snl_layer as snl
+from socialnav.planners.layers.scene import Scene, make_scene
 
 SPEC = costmap.GridSpec(height=80, width=120, resolution_m=0.1, origin_x_m=-6.0, origin_y_m=-4.0)
 ROBOT_RADIUS_M = TIAGO_RADIUS_M  # the inscribed radius of the obstacle layer

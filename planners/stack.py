@@ -14,8 +14,14 @@ import dataclasses
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.planners import casn, costmap, elastic_band, grid_planner, layers, pure_pursuit, snape, snl
-from socialnav.planners.scene import Scene
+from socialnav.planners import layers
+from socialnav.planners.global_planners import grid_planner
+from socialnav.planners.layers import casn_layer as casn
+from socialnav.planners.layers import costmap
+from socialnav.planners.layers import snape_layer as snape
+from socialnav.planners.layers import snl_layer as snl
+from socialnav.planners.layers.scene import Scene
+from socialnav.planners.local import elastic_band, pure_pursuit
 
 LAYERS = ("none", "snl_small", "snl_large", "snl_matched", "casn", "snape", "gscl")
 GLOBAL_PLANNERS = ("navfn", "weighted")

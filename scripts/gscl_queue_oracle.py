@@ -16,12 +16,12 @@ Two readings of that map (``--readings``):
 
 * ``graded``: every cost graded, the U at the top of Nav2's graded range (252) like a person's
   own cell: the paper's single graded layer.
-* ``layer``: the package's reading (:func:`planners.gscl_layer.read_cost`): the U lethal and
+* ``layer``: the package's reading (:func:`planners.layers.gscl_layer.read_cost`): the U lethal and
   inflated with the walls by the actor, the graded shapes below it.
 
 It prints the goal and social success (the scene's rule: join at the tail, never cut in, never
 within 0.45 m) of each reading, and how often each part of the rule failed. The graded reading
-patches :func:`planners.gscl_layer.read_cost` for this process only.
+patches :func:`planners.layers.gscl_layer.read_cost` for this process only.
 
 Measured before the targets had a forbidden level (a graded U soft-edged at 0.7,
 and hard-edged Us written into this script): graded 0 % social (held out 25 %), a hard U at 1
@@ -46,7 +46,7 @@ from socialnav.jaxsim.scenes.spec import load_scene, mirror
 from socialnav.jaxsim.scenes.variant import sample_variants
 from socialnav.models import grid
 from socialnav.models import social_costs as sc
-from socialnav.planners import costmap, gscl_layer
+from socialnav.planners.layers import costmap, gscl_layer
 from socialnav.planners.stack import METHODS
 
 MAX_PEOPLE = 24  # person pixels read from a map (the scene's line has at most 5)

@@ -4,9 +4,9 @@
     python scripts/irl_known_map.py --temperature 4 8    # the temperatures compared in the README
 
 A 40 x 40 map at 0.4 m with two walls and five Gaussian cost hills (the known costs, in [0, 1]);
-demonstrations: exact plans (planners.grid_planner) on it between random free start and goal
+demonstrations: exact plans (planners.global_planners.grid_planner) on it between random free start and goal
 cells (``--maps`` random goals, 4 starts each). Learnt: a free cost grid (sigmoid of one
-parameter per cell) by maximum-entropy IRL through the soft planner (planners.irl). Printed,
+parameter per cell) by maximum-entropy IRL through the soft planner (planners.learning.irl). Printed,
 per temperature: the held-out pairs' (64 random pairs no demonstration used) mean and worst
 excess of the learnt map's exact plans over the optimum, both costed under the known map; the
 same for the all-zero map (plans ignoring every social cost); and the correlation of the learnt
@@ -28,7 +28,7 @@ import numpy as np
 import optax
 
 from socialnav.models import grid
-from socialnav.planners import irl
+from socialnav.planners.learning import irl
 
 PATHS_PER_GOAL = 4
 

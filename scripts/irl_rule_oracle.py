@@ -11,7 +11,7 @@ training, or the likelihood itself? This script takes the network out: for each 
 cases (``--scenes`` scenes of each kind from the suite's own seed), demonstrations are planned
 exactly on the case's **expected** map (the rule's own costs: the best a generator could draw), and
 a free cost grid (the sigmoid of one parameter per cell, starting at the U-Net's initial 0.05) is
-fitted to them alone by Adam through the soft planner (planners.irl), as the paths objective
+fitted to them alone by Adam through the soft planner (planners.learning.irl), as the paths objective
 does. The fitted maps are then scored by the suite's own test (models.rules.score): a case passes
 when the fitted map keeps half of what the rule adds.
 
@@ -19,9 +19,9 @@ Demonstrations (``--demos``):
 
 * ``paths``: ``--paths-per-map`` exact plans to the map's goal (the first from the robot's cell),
   what ``socialnav gscl train --objective paths`` plans on each map;
-* ``cells``: the exact planner's move out of every free cell (planners.irl.policy_demonstration).
+* ``cells``: the exact planner's move out of every free cell (planners.learning.irl.policy_demonstration).
 
-Readings (``--reading``, planners.irl.traversal_per_m), how both the expected maps (for the exact
+Readings (``--reading``, planners.learning.irl.traversal_per_m), how both the expected maps (for the exact
 demonstrations) and the fitted grids (in the soft planner) are priced: ``graded``, every cost on
 NavFn's graded scale, the queue's U at 1 five times a free cell; ``layer``, as the GSCL layer
 reads a network's costs, the U lethal (no demonstration enters it) and the fitted grid able to
@@ -50,14 +50,15 @@ from socialnav.argtypes import positive_int
 from socialnav.models import grid, rules
 from socialnav.models.config import MAX_PATH_TEMPERATURE, READINGS
 from socialnav.models.social_costs import FORBIDDEN, FORBIDDEN_FROM, GRADED_TOP
-from socialnav.planners import grid_planner, irl
+from socialnav.planners.global_planners import grid_planner
+from socialnav.planners.learning import irl
 
 INITIAL_LOGIT = -3.0  # the U-Net's output bias at the start (models.unet: sigmoid(-3) = 0.05)
 
 
 def fit(maps, demos, temperature: float, steps: int, learning_rate: float = 0.1, reading: str = "graded"):
     """Free cost grids (M, 40, 40) fitted to demonstrations on maps (M, 40, 40) by Adam, priced by
-    ``reading`` (planners.irl.traversal_per_m): the grids and the final mean NLL."""
+    ``reading`` (planners.learning.irl.traversal_per_m): the grids and the final mean NLL."""
 
     def loss(theta):
         return jnp.mean(irl.batch_nll(jax.nn.sigmoid(theta), maps, demos, temperature, reading=reading))

@@ -7,7 +7,7 @@ recorded tracks none of the models read.
         --recording biwi_eth --recording biwi_hotel
 
 Each model (``label=folder``; the GSCL model shipped with the package is always added as
-``shipped``) is run on the same input windows (``planners.tracks.track_demonstrations`` of the
+``shipped``) is run on the same input windows (``planners.learning.tracks.track_demonstrations`` of the
 runs' tracks: one 16 m window a person, from where they start, the others present then with
 their headings). Costs are relative to the model's mean cost of free cells more than 3.2 m from
 anyone (a cost map's scale is not identified by paths alone), so 1.0 is "what this map charges
@@ -28,7 +28,7 @@ from scipy import ndimage
 
 from socialnav.models import grid
 from socialnav.models.inference import DEFAULT_MODEL, SocialCostModel
-from socialnav.planners import tracks
+from socialnav.planners.learning import tracks
 
 DISTANCE_EDGES_M = (0.4, 0.8, 1.2, 1.6, 2.4, 3.2, 8.0)
 NEAR_M = (0.4, 1.6)  # where the side of a person is compared

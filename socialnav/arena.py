@@ -310,7 +310,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.jaxsim.scenario.errors import ScenarioError
     from socialnav.jaxsim.scenes.spec import load_scene
-    from socialnav.planners.baselines import BASELINES
+    from socialnav.planners.reactive.baselines import BASELINES
     from socialnav.planners.stack import METHODS
 
     known = [*METHODS, *BASELINES]
@@ -344,7 +344,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     methods += actor_names
     policy_digest = None
     if args.policy_run is not None:
-        from socialnav.planners import policy_run
+        from socialnav.planners.learning import policy_run
 
         try:
             policy_digest = policy_run.run_digest(args.policy_run)
@@ -675,7 +675,7 @@ def compute_shard(
     keep = max(0, min(n, keep_trajectories - first))
     users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
     if policy_run is not None:
-        from socialnav.planners.policy_run import actor_factory
+        from socialnav.planners.learning.policy_run import actor_factory
 
         users[POLICY_METHOD] = actor_factory(policy_run, POLICY_METHOD)
     return arena_run.run_scene(

@@ -16,7 +16,7 @@ from socialnav.evaluation import warehouse
 from socialnav.evaluation.protocol import ProtocolConfig
 from socialnav.jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
 from socialnav.locking import locks_folder
-from socialnav.planners.tables import TABLES_FILE, CausalTables, TablesError
+from socialnav.planners.warehouse.tables import TABLES_FILE, CausalTables, TablesError
 
 STAGING = ".shards"
 

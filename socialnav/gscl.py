@@ -294,7 +294,8 @@ def add_parser(top) -> None:
         "YAML and its image), or the real pedestrians shipped with the package (--recording), or walk the people "
         "of arena scenes with no robot (--scene), make each track a "
         "demonstration on the GSCL network's 16 m window from where the "
-        "person starts (planners.tracks), and fit the U-Net to them (planners.irl_fit). Writes an exported model "
+        "person starts (planners.learning.tracks), and fit the U-Net to them "
+        "(planners.learning.irl_fit). Writes an exported model "
         "(config.json, weights.msgpack, model.json with the report of tracks used and left out) that --gscl-run "
         "of arena, layers and policy train takes.",
     )
@@ -541,7 +542,7 @@ def _train(args) -> int:
     try:
         objective = None
         if config.objective == "paths":
-            from socialnav.planners.irl import PathObjective
+            from socialnav.planners.learning.irl import PathObjective
 
             objective = PathObjective.of(config)
         line = train.train(
@@ -668,8 +669,8 @@ def _fit_tracks(args) -> int:
     import datetime
 
     from socialnav.models.config import TrainConfig
-    from socialnav.planners import tracks
-    from socialnav.planners.irl_fit import demonstrations_figure, fit_demonstrations
+    from socialnav.planners.learning import tracks
+    from socialnav.planners.learning.irl_fit import demonstrations_figure, fit_demonstrations
 
     try:
         config = TrainConfig(
@@ -718,7 +719,7 @@ def _fit_tracks(args) -> int:
             else f"--tracks {args.tracks.name} --map {args.map.name}"
         )
         + f" --steps {args.steps} --seed {args.seed}",
-        "objective": "maximum-entropy IRL through the soft planner (planners.irl)",
+        "objective": "maximum-entropy IRL through the soft planner (planners.learning.irl)",
         "temperature": args.temperature,
         "steps": args.steps,
         "tracks": {k: v for k, v in report.items() if k != "ids"},

@@ -27,8 +27,8 @@ from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.world import build_world
 from socialnav.locking import locks_folder
-from socialnav.planners.routes import shortest_path_plan
-from socialnav.planners.tables import TABLES_FILE
+from socialnav.planners.warehouse.routes import shortest_path_plan
+from socialnav.planners.warehouse.tables import TABLES_FILE
 
 
 def add_parsers(sub) -> None:

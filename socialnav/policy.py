@@ -5,7 +5,7 @@ socialnav policy train --out runs/ppo-hallway --scenes gscl_l_hallway --updates 
 socialnav arena --out runs/arena --policy-run runs/ppo       # its rows beside the other methods
 
 The run folder holds ``config.json``, orbax ``checkpoints/``, ``metrics.jsonl`` (one line per
-update) and ``curve.png`` (:mod:`planners.policy_run`). Training uses the scenes' training
+update) and ``curve.png`` (:mod:`planners.learning.policy_run`). Training uses the scenes' training
 variants (a random stream the benchmark never draws from).
 """
 
@@ -22,7 +22,7 @@ from socialnav.common import runfolder
 from socialnav.common.runfolder import RunFolderError
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.locking import locks_folder
-from socialnav.planners.policy_social import SOCIAL_LAYERS
+from socialnav.planners.learning.policy_social import SOCIAL_LAYERS
 
 TRAIN_JOB = "socialnav policy train"
 TRAIN_RESULTS = ("config.json", "checkpoints", "metrics.jsonl", "curve.png")
@@ -78,9 +78,9 @@ def add_parser(top) -> None:
 
 
 def _config(args, scene_names: tuple[str, ...]):
-    from socialnav.planners.policy import PolicyConfig
-    from socialnav.planners.policy_run import read_config
-    from socialnav.planners.policy_training import PPOConfig
+    from socialnav.planners.learning.policy import PolicyConfig
+    from socialnav.planners.learning.policy_run import read_config
+    from socialnav.planners.learning.policy_training import PPOConfig
 
     given = {
         "updates": args.updates,
@@ -131,7 +131,7 @@ def _train(args) -> int:
     from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.jaxsim.scenario import ScenarioError
     from socialnav.jaxsim.scenes.spec import load_scene
-    from socialnav.planners import policy_run
+    from socialnav.planners.learning import policy_run
 
     try:
         runfolder.claim(args.out, TRAIN_JOB, TRAIN_RESULTS)

@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     from socialnav.jaxsim.route_follower import route_follower
     from socialnav.jaxsim.scenario import ScenarioError, load_scenario
     from socialnav.jaxsim.world import build_world
-    from socialnav.planners.routes import shortest_path_plan
+    from socialnav.planners.warehouse.routes import shortest_path_plan
 
     if any(n < 1 for n in args.worlds) or any(s < 0 for s in args.seeds):
         print("socialnav referee: --worlds must be >= 1 and --seeds >= 0", file=sys.stderr)

@@ -17,7 +17,7 @@ from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import WAREHOUSE_DIR, ScenarioError, load_scenario
 from socialnav.jaxsim.world import build_world
 from socialnav.locking import locks_folder
-from socialnav.planners.routes import shortest_path_plan
+from socialnav.planners.warehouse.routes import shortest_path_plan
 
 
 def add_parser(sub) -> None:

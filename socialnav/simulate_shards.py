@@ -36,7 +36,7 @@ def compute_shard(
     from socialnav.jaxsim.route_follower import route_follower
     from socialnav.jaxsim.scenario import WAREHOUSE_DIR, load_scenario
     from socialnav.jaxsim.world import build_world
-    from socialnav.planners.routes import shortest_path_plan
+    from socialnav.planners.warehouse.routes import shortest_path_plan
 
     scenario = load_scenario(scenario_dir or WAREHOUSE_DIR, **overrides)
     with tempfile.TemporaryDirectory(prefix="socialnav-shard-") as tmp:

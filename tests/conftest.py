@@ -89,7 +89,7 @@ def learned_run(tmp_path_factory):
     """
     from socialnav.causal.learn import learn
     from socialnav.jaxsim.logs import simulate_to_parquet
-    from socialnav.planners.routes import shortest_path_plan
+    from socialnav.planners.warehouse.routes import shortest_path_plan
 
     run = tmp_path_factory.mktemp("learned_run")
     scenario = load_scenario(slot_length_s=60.0, battery_initial_pct=21.0)

@@ -128,3 +128,60 @@ def test_only_the_backend_module_imports_ray():
                 if any(n.split(".")[0] == "ray" for n in names):
                     users.append(str(file.relative_to(ROOT)))
     assert sorted(set(users)) == ["socialnav/backend.py"]
+
+
+# Inside planners/: the folders of parts and what each may import. The base parts (layers, the
+# global and local planners, the warehouse's planners) never import the compositions at the top
+# of planners/ (stack, actors, plots) nor the folders built on them (reactive, learning).
+PLANNER_FOLDERS = {
+    "layers": set(),
+    "global_planners": {"layers"},
+    "local": {"layers"},
+    "warehouse": set(),
+    "reactive": {"layers", "local", "global_planners", "top"},
+    "learning": {"layers", "local", "global_planners", "top"},
+}
+
+
+def planner_folder_arrows(root: pathlib.Path = ROOT) -> list[str]:
+    """Every import inside ``planners/`` that :data:`PLANNER_FOLDERS` does not allow, as
+    ``file:line imports folder`` (``top`` for a module at the top of planners/)."""
+    planners = root / "planners"
+    bad = []
+    for folder, allowed in PLANNER_FOLDERS.items():
+        for file in sorted((planners / folder).rglob("*.py")):
+            for node in ast.walk(ast.parse(file.read_text(), str(file))):
+                if not (isinstance(node, ast.ImportFrom) and node.module or isinstance(node, ast.Import)):
+                    continue
+                modules = [node.module] if isinstance(node, ast.ImportFrom) else [a.name for a in node.names]
+                for module in modules:
+                    names = module.split(".")
+                    if names[:2] != ["socialnav", "planners"]:
+                        continue
+                    if len(names) > 2:
+                        targets = [names[2]]
+                    else:  # from socialnav.planners import x, y
+                        targets = [a.name for a in node.names]
+                    for target in targets:
+                        other = target if (planners / target).is_dir() else "top"
+                        if other != folder and other not in allowed:
+                            bad.append(f"{file.relative_to(root)}:{node.lineno} imports {other}")
+    return bad
+
+
+def test_planner_folders_import_one_way():
+    assert planner_folder_arrows() == []
+
+
+def test_the_planner_folder_check_catches_a_climb(tmp_path):
+    """A cost layer that imports a stack (a composition above it) or a reactive rule is reported."""
+    for folder in PLANNER_FOLDERS:
+        (tmp_path / "planners" / folder).mkdir(parents=True)
+    (tmp_path / "planners" / "layers" / "bad.py").write_text(
+        "from socialnav.planners import stack\nfrom socialnav.planners.reactive import dwa\n"
+    )
+    (tmp_path / "planners" / "local" / "good.py").write_text("from socialnav.planners.layers import costmap\n")
+    assert planner_folder_arrows(tmp_path) == [
+        "planners/layers/bad.py:1 imports top",
+        "planners/layers/bad.py:2 imports reactive",
+    ]

@@ -17,7 +17,8 @@ from socialnav.jaxsim.scenes.env import Observation
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variants
-from socialnav.planners import baselines, dwa, orca_robot, reactive, social_force_robot
+from socialnav.planners.reactive import actor as reactive
+from socialnav.planners.reactive import baselines, dwa, orca_robot, social_force_robot
 
 FAR_WALL = np.array([[1e4, 1e4 + 1, 1e4, 1e4 + 1]], np.float32)  # no wall within reach
 

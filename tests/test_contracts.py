@@ -20,7 +20,7 @@ from socialnav.jaxsim import logs
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.world import build_world
-from socialnav.planners.tables import CausalTables, TablesError
+from socialnav.planners.warehouse.tables import CausalTables, TablesError
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Cost layers (planners.costmap, snl, casn, snape, gscl_layer): known values, shapes, batching."""
+"""Cost layers (planners.layers.costmap, snl, casn, snape, gscl_layer): known values, shapes, batching."""
 
 import math
 
@@ -11,8 +11,11 @@ from scipy import ndimage
 
 from socialnav.models import social_costs as sc
 from socialnav.models import unet
-from socialnav.planners import casn, costmap, gscl_layer, snape, snl
-from socialnav.planners.scene import make_scene
+from socialnav.planners.layers import casn_layer as casn
+from socialnav.planners.layers import costmap, gscl_layer
+from socialnav.planners.layers import snape_layer as snape
+from socialnav.planners.layers import snl_layer as snl
+from socialnav.planners.layers.scene import make_scene
 
 SPEC = costmap.GridSpec(height=60, width=80, resolution_m=0.1, origin_x_m=-4.0, origin_y_m=-3.0)
 X, Y = SPEC.cell_centres()

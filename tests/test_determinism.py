@@ -23,7 +23,7 @@ from socialnav.jaxsim.rollout import rollout
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.world import build_world
-from socialnav.planners.routes import shortest_path_plan
+from socialnav.planners.warehouse.routes import shortest_path_plan
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 N_STEPS, EVERY, COMPARED = 2600, 20, 2

@@ -7,7 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from socialnav.planners import elastic_band, snape
+from socialnav.planners.layers import snape_layer as snape
+from socialnav.planners.local import elastic_band
 
 
 def _straight(n=16, length=4.0):

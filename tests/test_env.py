@@ -253,7 +253,8 @@ def test_the_vector_env_steps_a_batch_and_resets_an_ended_episode_on_the_next_st
 @pytest.mark.slow
 def test_a_layer_parameter_sweep_reuses_the_stacks_program(setup):
     """The SNL covariance is a traced leaf: a wider one changes the episodes, not the program."""
-    from socialnav.planners import snl, stack
+    from socialnav.planners import stack
+    from socialnav.planners.layers import snl_layer as snl
 
     variants = _variants(setup, 2)
     method = stack.METHODS["snl_small"]

@@ -24,7 +24,7 @@ from socialnav.causal.extract import LogError, read_run
 from socialnav.data import WAREHOUSE_DIR
 from socialnav.jaxsim.scenario import ScenarioError, load_scenario
 from socialnav.models.config import TrainConfig
-from socialnav.planners.tables import CausalTables, TablesError
+from socialnav.planners.warehouse.tables import CausalTables, TablesError
 
 FAST_CASES = int(os.environ.get("FUZZ_CASES", "40"))
 SLOW_CASES = 400
@@ -113,7 +113,7 @@ def small_run(tmp_path_factory):
     from socialnav.jaxsim.logs import simulate_to_parquet
     from socialnav.jaxsim.route_follower import route_follower
     from socialnav.jaxsim.world import build_world
-    from socialnav.planners.routes import shortest_path_plan
+    from socialnav.planners.warehouse.routes import shortest_path_plan
 
     run = tmp_path_factory.mktemp("fuzz_run")
     scenario = load_scenario(slot_length_s=60.0)

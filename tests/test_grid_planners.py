@@ -8,8 +8,10 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from socialnav.planners import costmap, grid_planner, smooth_planner, snl
-from socialnav.planners.scene import make_scene
+from socialnav.planners.global_planners import grid_planner, smooth_planner
+from socialnav.planners.layers import costmap
+from socialnav.planners.layers import snl_layer as snl
+from socialnav.planners.layers.scene import make_scene
 
 
 def scipy_potential(traversal, goal, resolution_m, connectivity=8):

@@ -9,7 +9,8 @@ import optax
 import pytest
 
 from socialnav.models import grid
-from socialnav.planners import grid_planner, irl, smooth_planner
+from socialnav.planners.global_planners import grid_planner, smooth_planner
+from socialnav.planners.learning import irl
 
 
 def _two_corridor_map(h=9, w=13):
@@ -318,8 +319,8 @@ def test_a_paths_run_lowers_the_demonstrations_likelihood_and_loads_as_a_gscl_mo
 @pytest.mark.slow
 def test_the_layer_reading_prices_costs_as_the_gscl_layer_and_never_enters_a_forbidden_cell():
     from socialnav.models.social_costs import FORBIDDEN, FORBIDDEN_FROM, GRADED_TOP
-    from socialnav.planners import gscl_layer
-    from socialnav.planners.costmap import NAVFN_FACTOR, NAVFN_NEUTRAL
+    from socialnav.planners.layers import gscl_layer
+    from socialnav.planners.layers.costmap import NAVFN_FACTOR, NAVFN_NEUTRAL
 
     # Below FORBIDDEN_FROM the exact planner prices a cost as NavFn prices the layer's Nav2 cost
     # (the graded top from GRADED_TOP up), and from there up it cannot enter. The soft one prices

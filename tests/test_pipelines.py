@@ -13,7 +13,7 @@ from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.world import build_world
 from socialnav.pipelines import ablation_series
-from socialnav.planners.routes import shortest_path_plan
+from socialnav.planners.warehouse.routes import shortest_path_plan
 
 
 def test_one_batched_sweep_equals_separate_runs():

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy.sparse.csgraph import shortest_path
 
-from socialnav.planners import routes as routes_lib
-from socialnav.planners import waypoint as wp
-from socialnav.planners.tables import CausalTables, TablesError
+from socialnav.planners.warehouse import routes as routes_lib
+from socialnav.planners.warehouse import waypoint as wp
+from socialnav.planners.warehouse.tables import CausalTables, TablesError
 
 RATE = -0.0069  # % per s at 0.5 m/s, about the simulator's
 

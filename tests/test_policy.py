@@ -1,5 +1,5 @@
-"""The learned policy (planners/policy.py) and its PPO training (planners/policy_training.py,
-planners/policy_run.py): features on hand-made observations, GAE on a known answer, training that
+"""The learned policy (planners/learning/policy.py) and its PPO training (planners/learning/policy_training.py,
+planners/learning/policy_run.py): features on hand-made observations, GAE on a known answer, training that
 improves the return, a resumed run equal to an uninterrupted one, the arena's --policy-run."""
 
 from __future__ import annotations
@@ -21,8 +21,9 @@ from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
 from socialnav.models.social_costs import GRADED_TOP
-from socialnav.planners import costmap, policy_run, policy_social, policy_training
-from socialnav.planners import policy as policy_lib
+from socialnav.planners.layers import costmap
+from socialnav.planners.learning import policy as policy_lib
+from socialnav.planners.learning import policy_run, policy_social, policy_training
 
 EASY = "snape_static_person"  # untrained, the robot drives into the person and stays
 

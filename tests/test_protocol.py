@@ -13,9 +13,9 @@ from socialnav.evaluation.warehouse import build_methods, method_plans
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.world import build_world
-from socialnav.planners.routes import shortest_path_plan
-from socialnav.planners.tables import CausalTables
-from socialnav.planners.warehouse_actors import causal_planner
+from socialnav.planners.warehouse.actors import causal_planner
+from socialnav.planners.warehouse.routes import shortest_path_plan
+from socialnav.planners.warehouse.tables import CausalTables
 
 N_TASKS = 8
 CFG = dict(warmup_s=20.0, arrival_spread_s=10.0)
@@ -131,7 +131,7 @@ def test_battery_failures_reset_the_battery_and_refusals_prevent_them():
     assert (log.outcome[:, :6] != NOT_RUN).all()
     never = causal_planner(plan, world, np.zeros(plan.hops.shape))
     assert not _run(scenario, world, never, [10, 10]).log.refused.any()
-    # The threshold that runs is the one planners.waypoint.refuse_task applies: B_min = 20 % by default.
+    # The threshold that runs is the one planners.warehouse.waypoint.refuse_task applies: B_min = 20 % by default.
     assert ex.ProtocolConfig().min_battery_pct == 20.0
 
 

@@ -1,4 +1,4 @@
-"""People's tracks as demonstrations (planners.tracks): a planned path written as a track file
+"""People's tracks as demonstrations (planners.learning.tracks): a planned path written as a track file
 comes back as the same moves; the map and the other people are drawn; bad files are named."""
 
 import jax.numpy as jnp
@@ -8,7 +8,8 @@ import pytest
 from PIL import Image
 
 from socialnav.models import grid
-from socialnav.planners import grid_planner, irl, tracks
+from socialnav.planners.global_planners import grid_planner
+from socialnav.planners.learning import irl, tracks
 
 
 def _write_map(folder, occupied_xy_m, size_m=30.0, resolution_m=0.1):

@@ -19,8 +19,8 @@ from socialnav.jaxsim.rollout import rollout, to_numpy
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.world import build_world
-from socialnav.planners.routes import shortest_path_plan
-from socialnav.planners.warehouse_actors import causal_planner
+from socialnav.planners.warehouse.actors import causal_planner
+from socialnav.planners.warehouse.routes import shortest_path_plan
 
 SIMULATOR_PAGE = pathlib.Path(__file__).parent.parent / "docs" / "simulator.md"
 

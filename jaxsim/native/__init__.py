@@ -1,7 +1,7 @@
 """Hand-written CPU kernels called from JAX through XLA's FFI, compiled on first use.
 
-:func:`build` compiles any such source; the planners' Dijkstra (``planners/grid_dijkstra.cc``,
-:func:`socialnav.planners.grid_planner.dijkstra_available`) is built by it too. Here, the social
+:func:`build` compiles any such source; the planners' Dijkstra (``planners/global_planners/grid_dijkstra.cc``,
+:func:`socialnav.planners.global_planners.grid_planner.dijkstra_available`) is built by it too. Here, the social
 force over a batch of worlds (``social_force.cc``): XLA's CPU
 compiler runs that pair computation at 8.6 ns per pair per core, split into about 15 loop
 kernels, and no setting or rewriting in JAX moved it (README "Speed"); the C++ loop, with the

@@ -12,7 +12,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.planners.scene import wrap_angle
+from socialnav.planners.layers.scene import wrap_angle
 
 GOAL_SLOWDOWN_M = 0.5  # the speed falls linearly over the last half metre to the pursued point
 

@@ -1,16 +1,16 @@
 """The policy's optional social channel: a social cost layer seen on its guidance window.
 
 A learned policy can take a cost map as an input (``PolicyConfig.social_layer``): the layer's
-cost at the guidance window's points (:func:`planners.policy.window_points`: ``field_cells`` x
+cost at the guidance window's points (:func:`planners.learning.policy.window_points`: ``field_cells`` x
 ``field_cells`` around the robot, turned with it), over Nav2's lethal 254, computed from the
 people the robot sees (the env's observation, never the simulator's truth). The layers:
 
 * ``snl_small``, ``snl_large``, ``snl_matched``: the social navigation layer's Gaussians with
   the stacks' covariances (:func:`planners.stack.layer_params`); no state.
-* ``casn``: CASN's layer (:mod:`planners.casn`) with its default parameters; its frozen collision
+* ``casn``: CASN's layer (:mod:`planners.layers.casn_layer`) with its default parameters; its frozen collision
   points are state carried from step to step (:class:`SocialState`), as the CASN stack carries
   them between its layer updates.
-* ``gscl``: a trained GSCL U-Net (:mod:`planners.gscl_layer`; the run named by
+* ``gscl``: a trained GSCL U-Net (:mod:`planners.layers.gscl_layer`; the run named by
   ``PolicyConfig.gscl_run``). The network's 40 x 40 window of 0.4 m (world axes, centred on the
   robot) is recomputed every ``PolicyConfig.gscl_every_steps`` steps (10: 1 Hz, the rate the
   arena's stacks update their layers; a network call per step would cost the training about
@@ -32,8 +32,11 @@ from flax import struct
 
 from socialnav.jaxsim.scenes.env import Observation
 from socialnav.models import grid as gscl_grid
-from socialnav.planners import casn, costmap, gscl_layer, snl, stack
-from socialnav.planners.scene import Scene
+from socialnav.planners import stack
+from socialnav.planners.layers import casn_layer as casn
+from socialnav.planners.layers import costmap, gscl_layer
+from socialnav.planners.layers import snl_layer as snl
+from socialnav.planners.layers.scene import Scene
 
 SOCIAL_LAYERS = ("none", "snl_small", "snl_large", "snl_matched", "casn", "gscl")
 
@@ -62,7 +65,7 @@ def initial_state(n_people: int) -> SocialState:
 
 
 def perceived_scene(obs: Observation) -> Scene:
-    """The people the robot sees as a :class:`~planners.scene.Scene` (no objects)."""
+    """The people the robot sees as a :class:`~planners.layers.scene.Scene` (no objects)."""
     return Scene(
         people_xy_m=obs.people_xy_m,
         people_heading_rad=obs.people_heading_rad,

@@ -14,7 +14,7 @@ ORCA crowd solve the same problem.
 Defaults (:class:`ORCARobotParams`) are CrowdNav's ORCA policy's (``crowd_sim/envs/policy/orca.py``):
 time horizons 5 s for agents and obstacles, neighbour distance 10 m, radius the robot's plus
 0.01 m. The robot is a unicycle: ORCA's velocity is tracked by turning towards it
-(:func:`planners.reactive.track_velocity`), as CrowdNav drives its unicycle robot.
+(:func:`planners.reactive.actor.track_velocity`), as CrowdNav drives its unicycle robot.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from flax import struct
 
 from socialnav.jaxsim import orca
 from socialnav.jaxsim.scenes.env import Observation
-from socialnav.planners import reactive
+from socialnav.planners.reactive import actor as reactive
 
 
 @struct.dataclass

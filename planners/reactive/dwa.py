@@ -32,8 +32,8 @@ from flax import struct
 
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.env import Observation
-from socialnav.planners import reactive
-from socialnav.planners.scene import wrap_angle
+from socialnav.planners.layers.scene import wrap_angle
+from socialnav.planners.reactive import actor as reactive
 
 
 @struct.dataclass

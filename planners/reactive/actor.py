@@ -12,8 +12,8 @@ baseline differs from ``navfn`` only in what it does between the path and the wh
 L-shaped hallway it ends against the corner).
 
 A rule is ``command(rule_params, ctx, observation, carrot_xy, dt_s) -> (v, omega)``:
-:mod:`planners.orca_robot` and :mod:`planners.social_force_robot` find a velocity (2,) and track
-it with :func:`track_velocity`; :mod:`planners.dwa` samples (v, omega) itself.
+:mod:`planners.reactive.orca_robot` and :mod:`planners.reactive.social_force_robot` find a velocity (2,) and track
+it with :func:`track_velocity`; :mod:`planners.reactive.dwa` samples (v, omega) itself.
 """
 
 from __future__ import annotations
@@ -27,8 +27,10 @@ from flax import struct
 from socialnav.jaxsim.scenes.actor import Actor
 from socialnav.jaxsim.scenes.env import Observation
 from socialnav.jaxsim.scenes.robot import RobotParams
-from socialnav.planners import actors, costmap, pure_pursuit, stack
-from socialnav.planners.scene import wrap_angle
+from socialnav.planners import actors, stack
+from socialnav.planners.layers import costmap
+from socialnav.planners.layers.scene import wrap_angle
+from socialnav.planners.local import pure_pursuit
 
 GUIDES = ("path", "goal")
 

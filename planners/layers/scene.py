@@ -2,7 +2,7 @@
 
 People and objects are padded to fixed counts and masked (``*_valid``), so scenes with different
 numbers of people stack into one batch and a layer vmaps over them. The static occupancy grid
-travels beside the scene (it is the obstacle layer's input, see :mod:`planners.costmap`).
+travels beside the scene (it is the obstacle layer's input, see :mod:`planners.layers.costmap`).
 """
 
 from __future__ import annotations
@@ -131,7 +131,7 @@ def inside_convex(x_m, y_m, vertices_m):
 def objects_layer(scene: Scene, x_m, y_m):
     """(H, W) the cost of each object's interaction space (max over objects), 0 outside.
 
-    Args: x_m, y_m: (H, W) cell centres (:meth:`planners.costmap.GridSpec.cell_centres`).
+    Args: x_m, y_m: (H, W) cell centres (:meth:`planners.layers.costmap.GridSpec.cell_centres`).
     """
 
     def one(vertices, cost, valid):

@@ -3,7 +3,7 @@ simulator's :class:`~jaxsim.world.RobotPlan`.
 
 One function builds them from arc costs (:func:`plan_from_costs`): the shortest-path baseline
 is that function on Euclidean arc lengths (:func:`shortest_path_plan`), the causal planner on
-Eq. (9)'s costs (:func:`planners.waypoint.causal_plan`). On the warehouse's 73 waypoints an
+Eq. (9)'s costs (:func:`planners.warehouse.waypoint.causal_plan`). On the warehouse's 73 waypoints an
 all-pairs search per slot (Floyd-Warshall) is instant and gives the same routes as A* per query
 (``tests/test_planners.py`` checks it), so the batched simulator never searches inside ``jit``.
 """

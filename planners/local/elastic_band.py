@@ -24,7 +24,7 @@ Choices the paper leaves open (all parameters of :class:`BandParams`):
 * Eq. 6 inserts or merges points to keep them half a robot length apart; with a fixed number of
   points the band is instead resampled evenly along its length after every relaxation.
 * ``L_i``: the distance from p to person i's intimate zone of SNAPE's asymmetric Gaussian
-  (:mod:`planners.snape`), measured in side-equivalent metres (``sigma_side sqrt(-2 ln g_i)``
+  (:mod:`planners.layers.snape_layer`), measured in side-equivalent metres (``sigma_side sqrt(-2 ln g_i)``
   minus the intimate radius), so it is longer in front of a person than behind.
 * Eq. 5 as printed (``2 / (1 + exp((d_h - d_p)^lambda / d_p^lambda)) - 1`` with lambda 0.001) is
   about -0.46 at every distance (x^0.001 is about 1); we read lambda as a slope per millimetre (the
@@ -40,7 +40,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.params import PERSON_RADIUS_M
-from socialnav.planners.snape import SNAPEParams, person_gaussian
+from socialnav.planners.layers.snape_layer import SNAPEParams, person_gaussian
 
 
 @struct.dataclass

@@ -1,8 +1,8 @@
 """Seed 000's causal planner as a warehouse actor (:class:`jaxsim.actor.Actor`): it follows the
-causal plan's routes (Eq. 8-9, :func:`planners.routes.plan_from_costs`) like the route follower,
+causal plan's routes (Eq. 8-9, :func:`planners.warehouse.routes.plan_from_costs`) like the route follower,
 and on a task's first step answers ``recharge`` when Eq. (10) refuses the task: the battery left
 after the route's predicted cost ``C_L`` would fall below ``B_min``
-(:func:`planners.waypoint.refuse_task`). The protocol (:mod:`evaluation.protocol`) then resets
+(:func:`planners.warehouse.waypoint.refuse_task`). The protocol (:mod:`evaluation.protocol`) then resets
 the battery before the task, as the paper's robot recharged; the day simulation ignores it.
 """
 
@@ -20,7 +20,7 @@ from socialnav.jaxsim.robot import WarehouseObservation
 from socialnav.jaxsim.route_follower import RouteParams, RouteState, route_follower_actor, route_params
 from socialnav.jaxsim.state import TASK
 from socialnav.jaxsim.world import RobotPlan, World
-from socialnav.planners.waypoint import MIN_BATTERY_PCT, refuse_task
+from socialnav.planners.warehouse.waypoint import MIN_BATTERY_PCT, refuse_task
 
 
 @struct.dataclass
@@ -55,7 +55,8 @@ def causal_planner(
     """The causal method's driver: ``plan``'s routes, refusing tasks by Eq. (10).
 
     Args:
-      battery_cost_pct: (S, W, W) ``C_L`` of each route of ``plan`` (:func:`planners.waypoint.battery_cost_table`).
+      battery_cost_pct: (S, W, W) ``C_L`` of each route of ``plan``
+        (:func:`planners.warehouse.waypoint.battery_cost_table`).
     """
     cost = jnp.asarray(battery_cost_pct, jnp.float32)
     if cost.shape != plan.hops.shape:

@@ -39,8 +39,8 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.planners.costmap import MAX_GRADED
-from socialnav.planners.scene import Scene
+from socialnav.planners.layers.costmap import MAX_GRADED
+from socialnav.planners.layers.scene import Scene
 
 
 @struct.dataclass

@@ -2,13 +2,13 @@
 
 The graph: every cell of an (H, W) grid is a node; a move to one of the 8 neighbours (4 with
 ``connectivity=4``) costs its length in metres times the traversal cost per metre of the cell it
-enters (``inf`` for impassable cells, see :func:`planners.costmap.traversal_cost`); a diagonal
+enters (``inf`` for impassable cells, see :func:`planners.layers.costmap.traversal_cost`); a diagonal
 move may not cut the corner of an impassable cell. The potential ``phi(a)`` is the cheapest cost
 from cell ``a`` to the goal: exactly what ``scipy.sparse.csgraph.dijkstra`` gives on the same
 graph (a test holds it to 1e-5 relative on random grids with random walls).
 
 * **NavFn-like** (Nav2's NavFn, the GSCL paper's planner): ``navfn_plan`` = cell cost ``50 + 0.8 c``
-  (:func:`planners.costmap.navfn_traversal`), inscribed and lethal cells impassable. NavFn itself
+  (:func:`planners.layers.costmap.navfn_traversal`), inscribed and lethal cells impassable. NavFn itself
   propagates a 4-connected wave with a quadratic interpolation; here the potential is the exact
   8-connected shortest path (``connectivity=4`` for NavFn's neighbourhood).
 * **Weighted-grid Dijkstra** (SNAPE's global planner, seed 004 Sec. 3.3): ``weighted_plan`` = cell
@@ -47,7 +47,7 @@ import numpy as np
 from flax import struct
 
 from socialnav.jaxsim import native
-from socialnav.planners.costmap import GridSpec, navfn_traversal, weighted_traversal
+from socialnav.planners.layers.costmap import GridSpec, navfn_traversal, weighted_traversal
 
 DIJKSTRA_SOURCE = pathlib.Path(__file__).with_name("grid_dijkstra.cc")
 DIJKSTRA_TARGET = "socialnav_grid_dijkstra"
@@ -138,7 +138,7 @@ def potentials(
         threads; the sweeps on other devices), or ``"auto"`` (default): Dijkstra where it is
         built on the CPU (and neither ``max_sweeps`` nor ``return_rounds`` is asked for), else
         the sweeps. Both reach the same float32 fixed point, bit for bit
-        (tested). Neither is differentiable (the soft planner, :mod:`planners.smooth_planner`, is).
+        (tested). Neither is differentiable (the soft planner, :mod:`planners.global_planners.smooth_planner`, is).
 
     The batch is the innermost axis inside (arrays (H, W, B)): each sweep step then works on a
     contiguous (W, B) line, which on a CPU measured 2x faster than ``vmap`` over single grids.
@@ -203,7 +203,10 @@ def dijkstra_available() -> bool:
         jax.ffi.register_ffi_target(DIJKSTRA_TARGET, jax.ffi.pycapsule(library.GridDijkstra), platform="cpu")
         jax.ffi.register_ffi_target(PLAN_TARGET, jax.ffi.pycapsule(library.GridPlan), platform="cpu")
     except (RuntimeError, OSError) as e:
-        warnings.warn(f"socialnav.planners.grid_planner: plans run on the sweeps, not Dijkstra ({e})", stacklevel=2)
+        warnings.warn(
+            f"socialnav.planners.global_planners.grid_planner: plans run on the sweeps, not Dijkstra ({e})",
+            stacklevel=2,
+        )
         return False
     return True
 

@@ -31,8 +31,8 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.planners.costmap import LETHAL
-from socialnav.planners.scene import Scene, objects_layer
+from socialnav.planners.layers.costmap import LETHAL
+from socialnav.planners.layers.scene import Scene, objects_layer
 
 
 @struct.dataclass

@@ -8,7 +8,7 @@ Moussaid et al. 2009's interaction, pedsim's wall force; :mod:`jaxsim.social_for
     a = (v0 e_carrot - v) / tau + factor * sum_seen F_moussaid(person -> robot) + F_wall
     v' = cap(v + dt a, v_max)
 
-and the base turns towards ``v'`` (:func:`planners.reactive.track_velocity`). Differences from a
+and the base turns towards ``v'`` (:func:`planners.reactive.actor.track_velocity`). Differences from a
 person's step, each a choice: the people enter at their *estimated* velocities and only when
 seen (the robot has no simulator truth); no random force (the robot is deterministic); the wall
 force acts from the robot's body radius instead of a person's. The exact walls (boxes) give the
@@ -24,7 +24,7 @@ from socialnav.jaxsim import social_force as sf
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenes.env import Observation
 from socialnav.jaxsim.scenes.world import wall_distance
-from socialnav.planners import reactive
+from socialnav.planners.reactive import actor as reactive
 
 
 @struct.dataclass

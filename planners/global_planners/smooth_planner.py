@@ -1,6 +1,6 @@
 """A differentiable grid planner: the soft-min relaxation of the grid planner's Bellman recursion.
 
-The exact potential (:mod:`planners.grid_planner`) solves ``phi(a) = min_b w(a, b) + phi(b)``; its
+The exact potential (:mod:`planners.global_planners.grid_planner`) solves ``phi(a) = min_b w(a, b) + phi(b)``; its
 value at the start (the path's cost) is piecewise linear in the cost grid, with a gradient that is
 the path's cells and nothing else. Replacing ``min`` with the soft-min at temperature ``tau``,
 ``softmin(x) = -tau log sum exp(-x / tau)``, gives a potential ``phi_tau`` smooth in every cell's
@@ -19,7 +19,7 @@ where the sum over walks that the soft-min takes converges. Impassable cells cos
 Two gradients: :func:`soft_potential` is differentiated through every Jacobi step (memory grows
 with the steps); :func:`soft_potential_implicit` differentiates the fixed point by the implicit
 function theorem (an adjoint recursion: the soft policy's expected visits), in memory of one
-potential whatever the steps. :mod:`planners.irl` learns costs from demonstrated paths with the
+potential whatever the steps. :mod:`planners.learning.irl` learns costs from demonstrated paths with the
 second.
 """
 
@@ -31,8 +31,8 @@ import math
 import jax
 import jax.numpy as jnp
 
-from socialnav.planners.costmap import INSCRIBED, NAVFN_FACTOR, NAVFN_NEUTRAL, GridSpec
-from socialnav.planners.grid_planner import move_costs, moves
+from socialnav.planners.global_planners.grid_planner import move_costs, moves
+from socialnav.planners.layers.costmap import INSCRIBED, NAVFN_FACTOR, NAVFN_NEUTRAL, GridSpec
 
 BLOCKED = 1e7  # cost per metre of an impassable cell in the smooth planner
 
@@ -52,7 +52,7 @@ def _floating(a):
 def soft_weights(traversal_per_m, resolution_m: float, connectivity: int = 8):
     """(K, H, W) the cost of each move out of each cell (the exact planner's graph: corners not
     cut), impassable moves at :data:`BLOCKED` per metre instead of ``inf``; K = ``connectivity``
-    in :func:`planners.grid_planner.moves` order."""
+    in :func:`planners.global_planners.grid_planner.moves` order."""
     t = _floating(traversal_per_m)
     exact = move_costs(jnp.where(t >= BLOCKED, jnp.inf, t), resolution_m, connectivity)
     return jnp.stack(

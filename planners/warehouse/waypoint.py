@@ -13,7 +13,7 @@ weight.
 
 A* (Eq. 8) with the admissible heuristic ``lambda_dist * euclid(w, goal)`` finds the same paths as
 an all-pairs search on these non-negative costs; the batched simulator takes the all-pairs
-result as a :class:`~jaxsim.world.RobotPlan` table per slot (:func:`planners.routes.plan_from_costs`,
+result as a :class:`~jaxsim.world.RobotPlan` table per slot (:func:`planners.warehouse.routes.plan_from_costs`,
 the one function that builds the shortest and the causal tables), and :func:`astar` serves
 single queries and the check that both agree.
 
@@ -32,8 +32,8 @@ import numpy as np
 
 from socialnav.jaxsim.scenario import Scenario
 from socialnav.jaxsim.world import RobotPlan
-from socialnav.planners.routes import arc_lengths_m, plan_from_costs
-from socialnav.planners.tables import CausalTables
+from socialnav.planners.warehouse.routes import arc_lengths_m, plan_from_costs
+from socialnav.planners.warehouse.tables import CausalTables
 
 # B_min of Eq. (10), the critical battery level (seed 000 Sec. 5.2).
 MIN_BATTERY_PCT = 20.0

@@ -4,7 +4,7 @@ A cost map ``c`` (H, W) in [0, 1] (a GSCL network's output, or a free grid) pric
 network's 0.4 m grid at NavFn's cell cost, as the GSCL layer's planner does
 (:func:`traversal_per_m`: ``50 + 0.8 * 252 c`` per metre, walls impassable; with the "layer"
 reading, as the GSCL layer reads a network's costs, the queue's U lethal). The soft-min
-planner (:func:`planners.smooth_planner.soft_potential_implicit`) at temperature ``tau`` defines a
+planner (:func:`planners.global_planners.smooth_planner.soft_potential_implicit`) at temperature ``tau`` defines a
 stochastic policy ``pi(a | s) = exp(-(w(s, a) + phi(s')) / tau) / exp(-phi(s) / tau)``: maximum
 entropy IRL's soft value iteration (Ziebart et al., AAAI 2008). The log-likelihood of a path
 ``s_0 .. s_T`` ending at the goal telescopes, because ``phi(goal) = 0``:
@@ -23,13 +23,13 @@ goal (one per demonstration; several paths may share it and then share one poten
 
 Where they come from:
 
-* :func:`planned_demonstrations`: exact plans (:mod:`planners.grid_planner`) on known cost maps
+* :func:`planned_demonstrations`: exact plans (:mod:`planners.global_planners.grid_planner`) on known cost maps
   (the GSCL generator's targets): the map that made them is known, so the learned one can be
   checked against it. A map with a goal pixel is planned to that goal, from the robot's cell and
   from ``paths_per_map - 1`` random free cells; a map without (the generator's families with no
   goal) gets a random free goal.
-* :func:`planners.tracks.track_demonstrations`: people's tracks, from a user's file or the
-  arena's walkers (:func:`planners.tracks.simulated_tracks`).
+* :func:`planners.learning.tracks.track_demonstrations`: people's tracks, from a user's file or the
+  arena's walkers (:func:`planners.learning.tracks.simulated_tracks`).
 
 :class:`PathObjective` is the "paths" objective of a GSCL training run (``TrainConfig.objective``):
 :func:`models.train.train` calls it with each batch, so ``models`` needs no planner import.
@@ -47,9 +47,9 @@ from flax import struct
 from socialnav.models import grid
 from socialnav.models.config import PATH_TEMPERATURE, READINGS
 from socialnav.models.social_costs import FORBIDDEN_FROM, GRADED_TOP
-from socialnav.planners import grid_planner, smooth_planner
-from socialnav.planners.costmap import LETHAL, MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
-from socialnav.planners.gscl_layer import read_cost
+from socialnav.planners.global_planners import grid_planner, smooth_planner
+from socialnav.planners.layers.costmap import LETHAL, MAX_GRADED, NAVFN_FACTOR, NAVFN_NEUTRAL
+from socialnav.planners.layers.gscl_layer import read_cost
 
 CONNECTIVITY = 8
 K = CONNECTIVITY
@@ -72,7 +72,7 @@ class Demonstrations:
     """Demonstrated paths on one map (leading batch axes allowed on every field).
 
     Attributes:
-      moves: (K, H, W) float32, how many times the move ``k`` (:func:`planners.grid_planner.moves`
+      moves: (K, H, W) float32, how many times the move ``k`` (:func:`planners.global_planners.grid_planner.moves`
         order) is taken out of each cell.
       starts: (H, W) float32, how many paths start in each cell.
       goal_ij: (2,) int32, the goal cell every path ends in.
@@ -87,11 +87,11 @@ class Demonstrations:
 
 def traversal_per_m(maps, costs, impassable: float = smooth_planner.BLOCKED, reading: str = "graded"):
     """(..., H, W) cost per metre of entering a cell, ``impassable`` on the input map's walls
-    (:data:`planners.smooth_planner.BLOCKED` for the soft planner, ``inf`` for the exact one).
+    (:data:`planners.global_planners.smooth_planner.BLOCKED` for the soft planner, ``inf`` for the exact one).
 
     ``reading`` (:data:`READINGS`) says how a cost ``c`` in [0, 1] is priced: ``"graded"``,
     NavFn's ``50 + 0.8 * 252 c``; ``"layer"``, ``50 + 0.8 x`` with ``x`` the GSCL layer's Nav2
-    cost (:func:`planners.gscl_layer.read_cost`: ``252 c / GRADED_TOP`` clipped, lethal from
+    cost (:func:`planners.layers.gscl_layer.read_cost`: ``252 c / GRADED_TOP`` clipped, lethal from
     ``FORBIDDEN_FROM``). Lethal is ``impassable`` for the exact planner (``impassable`` inf).
 
     The soft planner needs a gradient all the way up, so for it the graded slope goes on past

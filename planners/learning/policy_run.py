@@ -1,6 +1,6 @@
 """The files of a policy training run, and the trained policy as an arena actor.
 
-* ``config.json``: the :class:`~planners.policy_training.PPOConfig` and the feature length (a
+* ``config.json``: the :class:`~planners.learning.policy_training.PPOConfig` and the feature length (a
   resumed run must match it);
 * ``checkpoints/<update>/``: orbax checkpoints of the whole :class:`TrainState` (``weights``
   apart, so the benchmark restores the network alone) and the metrics so far; orbax commits a
@@ -20,9 +20,9 @@ import jax
 import numpy as np
 
 from socialnav.common.atomic import write_text_atomic
-from socialnav.planners import policy as policy_lib
-from socialnav.planners import policy_social
-from socialnav.planners.policy_training import PPOConfig, TrainState
+from socialnav.planners.learning import policy as policy_lib
+from socialnav.planners.learning import policy_social
+from socialnav.planners.learning.policy_training import PPOConfig, TrainState
 
 CONFIG = "config.json"
 CHECKPOINTS = "checkpoints"
@@ -245,7 +245,7 @@ def train(
     import time
 
     from socialnav.common import progress as progress_lib
-    from socialnav.planners.policy_training import Trainer
+    from socialnav.planners.learning.policy_training import Trainer
 
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)

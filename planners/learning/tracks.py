@@ -1,4 +1,4 @@
-"""People's tracks as demonstrations for learning costs through the planner (:mod:`planners.irl`).
+"""People's tracks as demonstrations for learning costs through the planner (:mod:`planners.learning.irl`).
 
 Three sources: a user's files (below), the real pedestrians shipped with the package
 (:func:`recorded_tracks`: an ETH/UCY file or a Jülich run, with the walls where the data has
@@ -41,7 +41,7 @@ import numpy as np
 
 from socialnav.models import grid
 from socialnav.models.inference import input_map
-from socialnav.planners.irl import Demonstrations, K, path_moves
+from socialnav.planners.learning.irl import Demonstrations, K, path_moves
 
 REQUIRED_COLUMNS = ("frame", "id", "x", "y")
 SAMPLE_M = 0.05  # spacing of the points a segment between two positions is sampled at

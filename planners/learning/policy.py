@@ -1,6 +1,6 @@
 """A learned policy as an actor: what it observes, how its output drives the base.
 
-The policy is a local planner learned by reinforcement learning (:mod:`planners.policy_training`)
+The policy is a local planner learned by reinforcement learning (:mod:`planners.learning.policy_training`)
 on top of a static global guide, as robot_sf's and Nav2-style learned controllers follow a
 global path: at the start of an episode the actor computes the *guidance field*, the cost-to-goal
 of every cell of the scene's static map (:func:`guidance_field`: NavFn's cell costs on the
@@ -16,7 +16,7 @@ people are not in it), and at every step it sees:
 * ``social`` (optional, ``PolicyConfig.social_layer``): a social cost layer (SNL small, large
   or matched; CASN; a trained GSCL network) drawn from the people it sees, on the guidance
   window's points, over Nav2's 254: so a learned policy can use a cost map as an input channel
-  (:mod:`planners.policy_social`);
+  (:mod:`planners.learning.policy_social`);
 * ``people``: the ``n_people`` nearest people it sees, in its frame: position (/4 m), velocity
   (/1.5 m/s), the distance from its body to their centre (/4 m), and a flag (1 seen; all 0 for
   an empty slot).
@@ -39,8 +39,10 @@ from socialnav.jaxsim.scenes.actor import Actor
 from socialnav.jaxsim.scenes.env import Env, Observation
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.models import policy_net
-from socialnav.planners import costmap, grid_planner, policy_social
-from socialnav.planners.policy_social import SOCIAL_LAYERS, SocialState
+from socialnav.planners.global_planners import grid_planner
+from socialnav.planners.layers import costmap
+from socialnav.planners.learning import policy_social
+from socialnav.planners.learning.policy_social import SOCIAL_LAYERS, SocialState
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,13 +57,13 @@ class PolicyConfig:
       field_scale_m: field differences are divided by this (2 m: the window's half width).
       initial_log_std: the exploration noise at the start of training.
       social_layer: ``"none"`` or a social layer seen on the guidance window
-        (:data:`~planners.policy_social.SOCIAL_LAYERS`: SNL with the small, large or
+        (:data:`~planners.learning.policy_social.SOCIAL_LAYERS`: SNL with the small, large or
         CASN-matched covariances, their parameters the stacks' own; CASN; ``gscl``, a trained
         U-Net); it adds ``field_cells ** 2`` features.
       gscl_run: the trained GSCL run folder (``socialnav gscl train --out``) of ``social_layer
         = "gscl"``, an absolute path (empty otherwise).
       gscl_every_steps: the GSCL window is recomputed every this many steps (10: 1 Hz, the
-        arena's layer rate; :mod:`planners.policy_social`).
+        arena's layer rate; :mod:`planners.learning.policy_social`).
     """
 
     hidden: tuple[int, ...] = (128, 128)
@@ -112,14 +114,14 @@ class PolicyParams:
 @struct.dataclass
 class PolicyState:
     """field (H, W): cost-to-goal in metres of free space (:func:`guidance_field`); social: the
-    social channel's state (:class:`~planners.policy_social.SocialState`)."""
+    social channel's state (:class:`~planners.learning.policy_social.SocialState`)."""
 
     field: jax.Array
     social: SocialState
 
 
 def scene_grid(env: Env) -> costmap.GridSpec:
-    """The :class:`~planners.costmap.GridSpec` of ``env``'s occupancy grid (its origin is cell
+    """The :class:`~planners.layers.costmap.GridSpec` of ``env``'s occupancy grid (its origin is cell
     (0, 0)'s corner; the env's :class:`~jaxsim.world.Grid` keeps its centre)."""
     grid = env.occupancy
     h, w = grid.values.shape
@@ -138,7 +140,7 @@ def traversal(env: Env) -> jax.Array:
 
 def guidance_field(traversal_per_m, goal_xy_m, grid: costmap.GridSpec):
     """(H, W) cost-to-goal of every cell (metres of free space; ``inf`` unreachable): the exact
-    potential of :func:`planners.grid_planner.potential` from the goal's cell."""
+    potential of :func:`planners.global_planners.grid_planner.potential` from the goal's cell."""
     row = jnp.floor((goal_xy_m[1] - grid.origin_y_m) / grid.resolution_m)
     col = jnp.floor((goal_xy_m[0] - grid.origin_x_m) / grid.resolution_m)
     goal_ij = jnp.stack([jnp.clip(row, 0, grid.height - 1), jnp.clip(col, 0, grid.width - 1)]).astype(jnp.int32)
@@ -189,7 +191,7 @@ def features(config: PolicyConfig, obs: Observation, field, grid: costmap.GridSp
     """(F,) the policy's input from one observation and the episode's guidance field.
 
     ``social``: the social channel's window ((field_cells ** 2,),
-    :func:`planners.policy_social.window`); left out, a stateless layer (none, SNL) is computed
+    :func:`planners.learning.policy_social.window`); left out, a stateless layer (none, SNL) is computed
     here, while CASN and GSCL, which carry state, must be given.
     """
     xy, yaw = obs.robot_xy_m, obs.robot_yaw_rad

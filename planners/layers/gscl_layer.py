@@ -6,7 +6,7 @@ map placed into the planner's grid at the planner's resolution: each planner cel
 of the 0.4 m network cell holding its centre (nearest neighbour, the paper's "rescaled"), zero
 outside the 16 m window. The network's graded range ``[0, GRADED_TOP]``
 (:data:`models.social_costs.GRADED_TOP`) becomes ``[0, 252]`` on Nav2's scale, so that combined by
-max with the obstacle layer (:func:`planners.costmap.combine_max`) an obstacle always dominates,
+max with the obstacle layer (:func:`planners.layers.costmap.combine_max`) an obstacle always dominates,
 as the paper's Eq. 3 (``distance x max(obstacle cost, social cost)``) and Nav2's ``updateWithMax``
 have it; costs from :data:`models.social_costs.FORBIDDEN_FROM` up (the queue's U) are lethal
 (254), and the actor inflates them with the walls (:func:`planners.actors.stack_actor`). A model
@@ -33,8 +33,8 @@ import jax.numpy as jnp
 from socialnav.models import grid
 from socialnav.models.inference import input_map
 from socialnav.models.social_costs import FORBIDDEN_FROM, GRADED_TOP
-from socialnav.planners.costmap import LETHAL, MAX_GRADED, GridSpec
-from socialnav.planners.scene import Scene
+from socialnav.planners.layers.costmap import LETHAL, MAX_GRADED, GridSpec
+from socialnav.planners.layers.scene import Scene
 
 
 def window_input(occupancy, spec: GridSpec, scene: Scene, robot_frame: bool = False):

@@ -43,7 +43,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.planners.scene import Scene
+from socialnav.planners.layers.scene import Scene
 
 PASSING_OFFSET_RAD = 1.51  # passing_layer.cpp
 

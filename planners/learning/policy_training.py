@@ -1,4 +1,4 @@
-"""PPO in the vectorised arena: the policy of :mod:`planners.policy` trained on many scenes at once.
+"""PPO in the vectorised arena: the policy of :mod:`planners.learning.policy` trained on many scenes at once.
 
 A single-file PPO in the purejaxrl style (Lu et al. 2022; clipped surrogate, GAE, value
 clipping, per-minibatch advantage normalisation, Adam with gradient clipping: Schulman et al.
@@ -46,8 +46,9 @@ from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
 from socialnav.models import policy_net
-from socialnav.planners import costmap, policy_social
-from socialnav.planners import policy as policy_lib
+from socialnav.planners.layers import costmap
+from socialnav.planners.learning import policy as policy_lib
+from socialnav.planners.learning import policy_social
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,7 +69,7 @@ class PPOConfig:
       pool_per_scene: training variants drawn per scene (resets draw among them).
       seed: the run's seed (network initialisation, pools, every key).
       checkpoint_every: updates between checkpoints.
-      policy: the network's and features' shape (:class:`planners.policy.PolicyConfig`).
+      policy: the network's and features' shape (:class:`planners.learning.policy.PolicyConfig`).
       human_model: how the people the policy trains among move
         (:data:`jaxsim.scenes.people.HUMAN_MODELS`; the arena's default, the social force, unless
         asked). A run that predates the setting trained among the social force.
@@ -148,7 +149,7 @@ class Runner:
     of each one's variant (B,), and the episode's return (B,), length (B,), whether it has
     touched a person (B,) so far, its scene rule's running check ``rule_state``
     (:func:`jaxsim.scenes.rule_monitor.monitor`, batched) and its social channel's state
-    ``social`` (:class:`planners.policy_social.SocialState`, batched)."""
+    ``social`` (:class:`planners.learning.policy_social.SocialState`, batched)."""
 
     env_state: env_lib.EnvState
     observation: env_lib.Observation

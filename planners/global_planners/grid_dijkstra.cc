@@ -1,6 +1,6 @@
 // Dijkstra's cost-to-goal on a batch of grids, as an XLA FFI custom call for the CPU.
 //
-// The same graph and the same float32 arithmetic as planners/grid_planner.py's potentials (read
+// The same graph and the same float32 arithmetic as planners/global_planners/grid_planner.py's potentials (read
 // its docstring): every cell a node; the move from a to its neighbour b costs
 // float32(resolution * |move|) * t[b], t the traversal cost per metre of the cell entered (inf:
 // impassable); a diagonal move may not pass an impassable (or off-grid) orthogonal neighbour.
@@ -245,7 +245,7 @@ int threads_for(int64_t grids) {
   return static_cast<int>(std::clamp<int64_t>(n, 1, std::max<int64_t>(grids, 1)));
 }
 
-// The path down the potential from `start`, as planners/grid_planner.py's descend takes it: at
+// The path down the potential from `start`, as planners/global_planners/grid_planner.py's descend takes it: at
 // each step the move with the least w + phi (the first in move order on a tie), while that is
 // finite and the goal not reached; `steps` steps, the last cell repeated once it stops. A start off
 // the grid, or a goal off it, stays where it is. Returns the number of distinct cells.
@@ -279,7 +279,7 @@ int32_t descend(const Padded& g, const std::vector<Move>& moves, int64_t h, int6
 }
 
 std::vector<Move> moves_for(int32_t connectivity, float straight_m, float diagonal_m) {
-  std::vector<Move> moves;  // planners/grid_planner.py's MOVES_8 / MOVES_4 order
+  std::vector<Move> moves;  // planners/global_planners/grid_planner.py's MOVES_8 / MOVES_4 order
   for (int di = -1; di <= 1; ++di)
     for (int dj = -1; dj <= 1; ++dj) {
       if ((di == 0 && dj == 0) || (connectivity == 4 && di && dj)) continue;

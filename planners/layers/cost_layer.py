@@ -8,8 +8,8 @@ module each is the same thing::
     state = layer.init(n_people)               # what it carries in time (() for most)
     costs, state = layer(scene, grid, state)   # costs (H, W) float32 on Nav2's 0..253 scale
 
-``scene`` is a :class:`planners.scene.Scene` (the people, objects, robot and goal at one moment),
-``grid`` a :class:`planners.costmap.GridSpec` (static: its cells' centres are where the layer is
+``scene`` is a :class:`planners.layers.scene.Scene` (the people, objects, robot and goal at one moment),
+``grid`` a :class:`planners.layers.costmap.GridSpec` (static: its cells' centres are where the layer is
 read). ``state`` may be left out: the layer starts from ``init(scene.n_people)``. The GSCL layer
 also reads the walls: ``layer(scene, grid, occupancy=occupancy)``, (H, W) in [0, 1] on ``grid``.
 
@@ -39,12 +39,12 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
-from socialnav.planners import casn as casn_lib
-from socialnav.planners import gscl_layer
-from socialnav.planners import snape as snape_lib
-from socialnav.planners import snl as snl_lib
-from socialnav.planners.costmap import GridSpec
-from socialnav.planners.scene import Scene
+from socialnav.planners.layers import casn_layer as casn_lib
+from socialnav.planners.layers import gscl_layer
+from socialnav.planners.layers import snape_layer as snape_lib
+from socialnav.planners.layers import snl_layer as snl_lib
+from socialnav.planners.layers.costmap import GridSpec
+from socialnav.planners.layers.scene import Scene
 
 __all__ = ["BY_NAME", "CostLayer", "casn", "gscl", "none", "snape", "snl"]
 
@@ -117,7 +117,7 @@ def _casn_apply(p, scene, grid, state, occupancy):
 
 def casn(params: casn_lib.CASNParams = casn_lib.CASNParams()):
     """CASN's collision-point discs and group spaces; its state is the frozen collision points
-    (:class:`planners.casn.CASNState`), to be passed on from one moment of a scene to the next."""
+    (:class:`planners.layers.casn_layer.CASNState`), to be passed on from one moment of a scene to the next."""
     return CostLayer("casn", casn_lib.initial_state, _casn_apply, params)
 
 
@@ -156,7 +156,7 @@ def gscl(model, robot_frame: bool = False) -> CostLayer:
         traced: another checkpoint of the same network reuses the compiled program), or any JAX
         function ``maps (B, 40, 40) uint8 -> costs (B, 40, 40)`` in [0, 1] (its weights closed
         over; no params). The layer's costs are ``252 x`` the network's on the grid's cells
-        (:mod:`planners.gscl_layer`).
+        (:mod:`planners.layers.gscl_layer`).
       robot_frame: the window turned with the robot (the paper's) instead of on the world axes.
     """
     if hasattr(model, "apply") and hasattr(model, "weights"):

@@ -1,9 +1,9 @@
-"""Fit a GSCL cost network to a fixed set of demonstrations (people's tracks, :mod:`planners.tracks`).
+"""Fit a GSCL cost network to a fixed set of demonstrations (people's tracks, :mod:`planners.learning.tracks`).
 
 The generator-driven "paths" run (``socialnav gscl train --objective paths``) draws fresh maps
 every epoch through :func:`models.train.train`; a user's tracks are a fixed set instead, so this
 loop draws minibatches from them (with replacement, seeded), minimises the paths objective
-(:class:`planners.irl.PathObjective`) with Adam (linear warm-up, cosine decay), and returns a
+(:class:`planners.learning.irl.PathObjective`) with Adam (linear warm-up, cosine decay), and returns a
 :class:`models.inference.SocialCostModel` whose :meth:`~models.inference.SocialCostModel.export`
 folder the arena and the GSCL layer load like the shipped model (``--gscl-run FOLDER``). It keeps
 no checkpoints: a fit of a few thousand steps takes minutes.
@@ -20,7 +20,7 @@ from flax import nnx
 from socialnav.common import progress as progress_lib
 from socialnav.models.config import TrainConfig, make_model
 from socialnav.models.inference import SocialCostModel
-from socialnav.planners.irl import Demonstrations, PathObjective
+from socialnav.planners.learning.irl import Demonstrations, PathObjective
 
 
 def fit_demonstrations(

@@ -1,8 +1,8 @@
-"""The reactive baselines by name: ``orca``, ``social_force``, ``dwa`` (:mod:`planners.reactive`).
+"""The reactive baselines by name: ``orca``, ``social_force``, ``dwa`` (:mod:`planners.reactive.actor`).
 
 :data:`BASELINES` maps a name to its rule and its default parameters, which depend on the
 environment (the social-force robot takes the env's crowd constants). :func:`baseline_actor` makes
-the actor, :func:`baseline_params` its :class:`~planners.reactive.ReactiveParams`.
+the actor, :func:`baseline_params` its :class:`~planners.reactive.actor.ReactiveParams`.
 """
 
 from __future__ import annotations
@@ -12,7 +12,10 @@ from collections.abc import Callable
 from typing import Any
 
 from socialnav.jaxsim.scenes.env import Env
-from socialnav.planners import actors, costmap, dwa, orca_robot, reactive, social_force_robot
+from socialnav.planners import actors
+from socialnav.planners.layers import costmap
+from socialnav.planners.reactive import actor as reactive
+from socialnav.planners.reactive import dwa, orca_robot, social_force_robot
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,7 +52,7 @@ def baseline_actor(
     max_path_cells: int = 256,
     guide: str = "path",
 ):
-    """The actor of baseline ``name`` (:func:`planners.reactive.reactive_actor`)."""
+    """The actor of baseline ``name`` (:func:`planners.reactive.actor.reactive_actor`)."""
     if name not in BASELINES:
         raise ValueError(f"unknown baseline {name!r} (known: {', '.join(BASELINES)})")
     rule = BASELINES[name].rule
