@@ -34,7 +34,7 @@ import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav import cli  # noqa: E402
-from socialnav.arena import DEFAULT_METHODS  # noqa: E402
+from socialnav.cli.arena import DEFAULT_METHODS  # noqa: E402
 from socialnav.data import DATA_DIR  # noqa: E402
 from socialnav.evaluation import arena  # noqa: E402
 from socialnav.jaxsim.params import TIAGO_RADIUS_M  # noqa: E402

@@ -20,7 +20,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from socialnav.argtypes import positive_int, unet_widths
+from socialnav.cli.argtypes import positive_int, unet_widths
 from socialnav.runtime import request_host_devices, request_wide_vectors
 
 request_host_devices()

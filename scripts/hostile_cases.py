@@ -39,7 +39,7 @@ from collections.abc import Callable
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 WAREHOUSE = ROOT / "data" / "warehouse"
 PY = sys.executable
-SOCIALNAV = [PY, "-m", "socialnav.cli"]
+SOCIALNAV = [PY, "-m", "socialnav"]
 SHORT_DAY = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
 
 

@@ -46,7 +46,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from socialnav.argtypes import positive_int
+from socialnav.cli.argtypes import positive_int
 from socialnav.models import grid, rules
 from socialnav.models.config import MAX_PATH_TEMPERATURE, READINGS
 from socialnav.models.social_costs import FORBIDDEN, FORBIDDEN_FROM, GRADED_TOP

@@ -27,8 +27,6 @@ def on_config(config, **kwargs):
         target = tree.joinpath(*name.split("."))
         for source in (root / folder).rglob("*.py"):
             relative = source.relative_to(root / folder)
-            if name == "socialnav" and len(relative.parts) > 1:
-                continue  # the parts are mapped on their own
             (target / relative).parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(source, target / relative)
     return config

@@ -1,8 +1,12 @@
 """socialnav: the composition root of the toolkit.
 
-The ``socialnav`` command (:mod:`socialnav.cli`) with one subcommand per job, the runtime set-up
-(:mod:`socialnav.runtime`), shared argument types (:mod:`socialnav.argtypes`) and the pipelines
-that join parts (:mod:`socialnav.pipelines`). It may import every part; no part imports it.
+The ``socialnav`` command is :mod:`socialnav.cli`, one module a subcommand beside its entry point
+(:mod:`socialnav.cli.arena`, :mod:`socialnav.cli.gscl`, ...; the pipelines that join parts,
+``socialnav run`` and ``ablation``, in :mod:`socialnav.cli.pipelines`; shared argument types in
+:mod:`socialnav.cli.argtypes`). Beside it, what the commands share: the runtime set-up
+(:mod:`socialnav.runtime`), batch jobs in shards, locally or on Ray (:mod:`socialnav.backend`),
+run-folder locks (:mod:`socialnav.locking`) and a user's actor loaded from its file
+(:mod:`socialnav.actor_spec`). It may import every part; no part imports it.
 """
 
 from socialnav.common import __version__

@@ -69,7 +69,7 @@ def add_backend_options(parser) -> None:
         default=None,
         help="the Ray cluster (default: $RAY_ADDRESS, else a Ray instance started on this machine)",
     )
-    from socialnav.argtypes import positive_float
+    from socialnav.cli.argtypes import positive_float
 
     group.add_argument(
         "--ray-cpus-per-task",

@@ -39,7 +39,7 @@ def test_arena_command_writes_tables_resumes_and_refuses_other_settings(tmp_path
 def test_the_time_estimate_is_a_range_that_grows_with_the_work():
     """``estimate_s``: a low and a high end; more variants, methods or the held-out rows cost
     more; compilation alone is paid once per program, whatever the variants."""
-    from socialnav.arena import COMPILE_S_PER_PROGRAM, STARTUP_S, estimate_s
+    from socialnav.cli.arena import COMPILE_S_PER_PROGRAM, STARTUP_S, estimate_s
     from socialnav.data import SCENES_DIR
     from socialnav.jaxsim.scenes.spec import load_scene
 

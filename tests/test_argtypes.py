@@ -1,4 +1,4 @@
-"""socialnav.argtypes: values parsed, and one clear message naming the bad value."""
+"""socialnav.cli.argtypes: values parsed, and one clear message naming the bad value."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import argparse
 
 import pytest
 
-from socialnav.argtypes import unet_widths
+from socialnav.cli.argtypes import unet_widths
 
 
 def test_unet_widths_reads_four_positive_widths():

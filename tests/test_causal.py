@@ -215,7 +215,7 @@ def test_learn_job_end_to_end(tmp_path, monkeypatch):
     import json
 
     from socialnav import cli
-    from socialnav import simulate as simulate_command
+    from socialnav.cli import simulate as simulate_command
     from socialnav.jaxsim.scenario import load_scenario
 
     logs = tmp_path / "run"

@@ -242,7 +242,7 @@ def test_simulate_killed_at_every_file_operation(tmp_path):
     writes through the OS, which the copy reads), instead of one killed job per operation (a
     whole simulation each); at the first, a middle and the last operation a job is also killed
     for real, and its folder holds the same entries as the copy."""
-    from socialnav.simulate import RESULTS
+    from socialnav.cli.simulate import RESULTS
 
     argv = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
     cli = "import sys; from socialnav.cli import main; sys.exit(main(['simulate', '--out', sys.argv[1]] + {argv}))"

@@ -22,8 +22,6 @@ def packages_on_disk() -> set[str]:
     for name, folder in SETUPTOOLS["package-dir"].items():
         for init in (ROOT / folder).rglob("__init__.py"):
             relative = init.parent.relative_to(ROOT / folder)
-            if name == "socialnav" and relative.parts:
-                continue  # socialnav/ holds no sub-package; the parts are mapped on their own
             found.add(".".join((name, *relative.parts)))
     return found
 

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from socialnav.causal import ablation
+from socialnav.cli.pipelines import ablation_series
 from socialnav.jaxsim import rollout
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.world import build_world
-from socialnav.pipelines import ablation_series
 from socialnav.planners.warehouse.routes import shortest_path_plan
 
 

@@ -147,7 +147,7 @@ def test_windows_are_drawn_inside_their_range_held_out_ones_wholly_outside_and_b
 
 
 def test_every_shipped_recorded_scene_loads_and_the_arena_finds_them():
-    from socialnav.arena import RECORDED, _scene_files
+    from socialnav.cli.arena import RECORDED, _scene_files
 
     files = _scene_files([RECORDED], SCENES_DIR, RECORDED_SCENES_DIR)
     assert len(files) == 14 and {load_scene(f).recording["playback"] for f in files} == {"replayed", "reactive"}

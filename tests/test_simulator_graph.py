@@ -208,7 +208,7 @@ def test_sampled_graph_has_same_time_feedback_counted_once_and_what_jpcmci_can_f
 
 
 def test_the_referees_edge_table_counts_runs_per_edge():
-    from socialnav.referee import _edge_table
+    from socialnav.cli.referee import _edge_table
 
     runs = [{("V", "L", 0), ("D", "V", 0)}, {("D", "V", 0), ("~LV", "", 0)}]
     table = _edge_table(runs, {("V", "L", 0)}, {("V", "L", 0), ("D", "V", 0)}).set_index("edge")
@@ -250,7 +250,7 @@ def test_referee_command_scores_discovery_against_both_graphs_and_resumes(tmp_pa
 
 @pytest.mark.slow
 def test_a_forced_speed_is_the_speed_whatever_the_crowd_or_the_obstacle(worlds):
-    from socialnav.referee import forced_speed_driver
+    from socialnav.cli.referee import forced_speed_driver
 
     params, world, driver, state, seeds = worlds
     state = _with_obstacle(params, state)  # every task leg in an obstacle (speed factor 0.5)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pathlib
 import sys
 
-from socialnav.argtypes import output_folder
+from socialnav.cli.argtypes import output_folder
 
 
 def add_parser(top) -> None:

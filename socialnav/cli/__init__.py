@@ -11,7 +11,8 @@
     socialnav humans validate --out runs/humans                     # the human models against real pedestrians
 
 Runtime set-up (one XLA host device per core, JAX's persistent compilation cache) happens here,
-before JAX is imported; the subcommands' modules are imported after it.
+before JAX is imported; the subcommands' modules (one a command, beside this file) are imported
+after it.
 """
 
 from __future__ import annotations
@@ -21,10 +22,12 @@ import sys
 
 from socialnav import runtime
 
+__all__ = ["build_parser", "main"]
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
-    from socialnav import arena, evaluate, gscl, humans, layers, learn, pipelines, policy, referee, simulate
+    from socialnav.cli import arena, evaluate, gscl, humans, layers, learn, pipelines, policy, referee, simulate
     from socialnav.common import __version__
 
     parser = argparse.ArgumentParser(

@@ -6,8 +6,15 @@ import argparse
 import pathlib
 import sys
 
-from socialnav.argtypes import non_negative_float, output_folder, positive_float, positive_int, probability, seed_int
 from socialnav.backend import BackendError, add_backend_options
+from socialnav.cli.argtypes import (
+    non_negative_float,
+    output_folder,
+    positive_float,
+    positive_int,
+    probability,
+    seed_int,
+)
 from socialnav.common import runfolder
 from socialnav.common.logschema import LOG_FILE, META_FILE
 from socialnav.common.memory import available_bytes

@@ -17,7 +17,8 @@ import pathlib
 import time
 
 from socialnav import backend as backend_lib
-from socialnav.argtypes import (
+from socialnav.backend import BackendError, add_backend_options
+from socialnav.cli.argtypes import (
     non_negative_float,
     non_negative_int,
     output_folder,
@@ -27,7 +28,6 @@ from socialnav.argtypes import (
     seed_int,
     unet_widths,
 )
-from socialnav.backend import BackendError, add_backend_options
 from socialnav.common import runfolder
 from socialnav.common.atomic import write_text_atomic
 from socialnav.common.memory import available_bytes

@@ -8,8 +8,8 @@ import pathlib
 import sys
 
 from socialnav import backend as backend_lib
-from socialnav.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
 from socialnav.backend import add_backend_options
+from socialnav.cli.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
 from socialnav.common import runfolder
 from socialnav.common.memory import available_bytes
 from socialnav.evaluation import warehouse

@@ -39,7 +39,7 @@ import pathlib
 import sys
 import time
 
-from socialnav.argtypes import comma_ints, non_negative_int, output_folder, positive_float, positive_int
+from socialnav.cli.argtypes import comma_ints, non_negative_int, output_folder, positive_float, positive_int
 from socialnav.locking import locks_folder
 
 JOB = "socialnav referee"

@@ -17,7 +17,7 @@ import pathlib
 import sys
 import time
 
-from socialnav.argtypes import (
+from socialnav.cli.argtypes import (
     comma_names,
     comma_positive_floats,
     non_negative_int,

@@ -34,8 +34,8 @@ import pathlib
 import sys
 
 from socialnav import actor_spec
-from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.backend import add_backend_options
+from socialnav.cli.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.locking import locks_folder
 

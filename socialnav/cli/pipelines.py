@@ -17,9 +17,9 @@ import sys
 import jax.numpy as jnp
 import numpy as np
 
-from socialnav import arena, evaluate, learn, simulate
-from socialnav.argtypes import comma_ints, comma_probabilities, output_folder, positive_int, seed_int
 from socialnav.causal import ablation as causal_ablation
+from socialnav.cli import arena, evaluate, learn, simulate
+from socialnav.cli.argtypes import comma_ints, comma_probabilities, output_folder, positive_int, seed_int
 from socialnav.common import runfolder
 from socialnav.jaxsim import rollout
 from socialnav.jaxsim.params import SimParams

@@ -17,7 +17,7 @@ import pathlib
 import sys
 import time
 
-from socialnav.argtypes import comma_names, output_folder, positive_int, seed_int
+from socialnav.cli.argtypes import comma_names, output_folder, positive_int, seed_int
 from socialnav.common import runfolder
 from socialnav.common.runfolder import RunFolderError
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS

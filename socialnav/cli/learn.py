@@ -6,7 +6,9 @@ import argparse
 import pathlib
 import sys
 
-from socialnav.argtypes import (
+from socialnav.causal.extract import LogError
+from socialnav.causal.learn import learn
+from socialnav.cli.argtypes import (
     comma_ints,
     comma_names,
     non_negative_int,
@@ -14,8 +16,6 @@ from socialnav.argtypes import (
     output_folder,
     positive_int,
 )
-from socialnav.causal.extract import LogError
-from socialnav.causal.learn import learn
 from socialnav.common import runfolder
 from socialnav.common.logschema import LOG_FILE, META_FILE
 from socialnav.locking import locks_folder
