@@ -36,7 +36,7 @@ from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav import cli  # noqa: E402
 from socialnav.cli.arena import DEFAULT_METHODS  # noqa: E402
 from socialnav.data import DATA_DIR  # noqa: E402
-from socialnav.evaluation import arena  # noqa: E402
+from socialnav.evaluation.arena import episodes as arena  # noqa: E402
 from socialnav.jaxsim.params import TIAGO_RADIUS_M  # noqa: E402
 from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
 from socialnav.jaxsim.scenes.variant import sample_variants  # noqa: E402

@@ -4,7 +4,7 @@
   protocols' steps) and Hall's proxemic zones (:data:`HALL_ZONES_M`, :func:`zone_shares`).
 * Seed 000's metrics (Sec. 5.3) from the experiment's per-task table.
 * The social-navigation arena's per-episode metrics (seeds 001, 002, 004) live beside it in
-  :mod:`evaluation.nav_metrics`, built on the same collision counter.
+  :mod:`evaluation.arena.nav_metrics`, built on the same collision counter.
 
 Input of the latter: the task table of :func:`evaluation.warehouse.task_table`, one row per task with columns
 ``method, slot, replica, task, outcome, refused, time_s, stalled_s, distance_m, planned_m,

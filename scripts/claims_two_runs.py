@@ -1,5 +1,5 @@
 """The papers' claims in two arena runs side by side: each run's ``directions.csv`` (a claim's
-paired difference with its 95 % interval and verdict, :mod:`evaluation.papers`) joined by claim,
+paired difference with its 95 % interval and verdict, :mod:`evaluation.arena.papers`) joined by claim,
 printed as a markdown table with the claims whose verdict differs between the runs counted.
 
     python scripts/claims_two_runs.py runs/arena-sf runs/arena-steer --labels "social force" "steering speed"

@@ -8,7 +8,7 @@ scenes, variants and seed draw the same variants (common random numbers), so the
 pair is the methods' (or the models', or the people's) alone. Success rates are in percentage
 points. Pools: every scene, and for recorded crowds each playback (``replayed``, ``reactive``)
 on the evaluated and the held-out windows apart. Intervals: Student t of the paired differences
-(``evaluation.arena_report.mean_interval``).
+(``evaluation.arena.report.mean_interval``).
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import pathlib
 
 import pandas as pd
 
-from socialnav.evaluation.arena_report import mean_interval
-from socialnav.evaluation.papers import RATES
+from socialnav.evaluation.arena.papers import RATES
+from socialnav.evaluation.arena.report import mean_interval
 
 
 def episodes(side: str) -> pd.DataFrame:

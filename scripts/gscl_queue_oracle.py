@@ -41,7 +41,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from socialnav.data import SCENES_DIR
-from socialnav.evaluation import arena, nav_metrics
+from socialnav.evaluation.arena import episodes as arena
+from socialnav.evaluation.arena import nav_metrics
 from socialnav.jaxsim.scenes.spec import load_scene, mirror
 from socialnav.jaxsim.scenes.variant import sample_variants
 from socialnav.models import grid

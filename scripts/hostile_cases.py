@@ -586,7 +586,7 @@ def _waypoint_on_wall_face(obj):
 ENV_STEP = (
     "import jax, jax.numpy as jnp, numpy as np\n"
     "from socialnav.data import SCENES_DIR\n"
-    "from socialnav.evaluation import arena\n"
+    "from socialnav.evaluation.arena import episodes as arena\n"
     "from socialnav.jaxsim.scenes.spec import load_scene\n"
     "from socialnav.jaxsim.scenes.variant import sample_variant\n"
     "setup = arena.setup_scene(load_scene(SCENES_DIR / 'snape_walking.json'))\n"

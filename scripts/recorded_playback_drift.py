@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from socialnav.data import RECORDED_SCENES_DIR
-from socialnav.evaluation import arena
+from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variants
 

@@ -7,7 +7,7 @@
 
 Each cell is goal / social success % with their 95 % Wilson intervals (from the run's
 ``summary.csv``), a collision failing the run as in the paper (Sec. 5.3.1: collisions "prevent
-goal completion"); the paper's column is its Table 1 (``evaluation.papers.PAPER_ROWS``); then
+goal completion"); the paper's column is its Table 1 (``evaluation.arena.papers.PAPER_ROWS``); then
 the held-out row's social success (the scene mirrored, its ranges drawn just outside
 themselves), and goal success with collisions allowed (the arena's ``goal_success``). A missing
 run, or one without the table's scenes and methods, is named in one line.
@@ -43,8 +43,8 @@ def _cell(row: pd.Series, metric: str) -> str:
 
 def table(run: pathlib.Path) -> str:
     """The Markdown table of ``run`` (an arena run's folder)."""
-    from socialnav.evaluation.arena_run import HELD_OUT
-    from socialnav.evaluation.papers import PAPER_ROWS
+    from socialnav.evaluation.arena.papers import PAPER_ROWS
+    from socialnav.evaluation.arena.run import HELD_OUT
 
     summary_path = run / "summary.csv"
     if not summary_path.is_file():

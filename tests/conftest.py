@@ -57,11 +57,11 @@ def _free_compiled_programs_when_crowded():
     passes alone. Dropping them after every module kept the suite alive but made each module
     trace and compile again what the one before had compiled; dropping them only when the maps
     run high does both (the arena does the same between scenes,
-    :func:`evaluation.arena.release_programs_if_crowded`)."""
+    :func:`evaluation.arena.episodes.release_programs_if_crowded`)."""
     yield
     import gc
 
-    from socialnav.evaluation import arena
+    from socialnav.evaluation.arena import episodes as arena
 
     if arena.release_programs_if_crowded(MAP_SHARE_BEFORE_RELEASE):
         gc.collect()

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import DATA_DIR
-from socialnav.evaluation import arena
+from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.spec import load_scene
@@ -68,7 +68,7 @@ def test_episodes_are_deterministic_and_the_same_variant_for_every_method():
 _SPREAD = """
 import jax
 from socialnav.data import DATA_DIR
-from socialnav.evaluation import arena_run
+from socialnav.evaluation.arena import run as arena_run
 from socialnav.jaxsim.scenes.spec import load_scene
 spec = load_scene(DATA_DIR / 'scenes' / 'casn_head_on.json')
 methods = ['navfn', 'snl_small', 'orca', 'snl_large', 'snape_social_eband']

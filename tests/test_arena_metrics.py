@@ -8,7 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from socialnav.evaluation import arena_report, nav_metrics
+from socialnav.evaluation.arena import nav_metrics
+from socialnav.evaluation.arena import report as arena_report
 
 
 def _metrics(robot_xy, people_xy=None, present=None, dt=0.1, reached_at=None, yaw=None, group=None, people_v=None):

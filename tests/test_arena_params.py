@@ -1,4 +1,4 @@
-"""The arena's parameter file (evaluation/arena_params.py): precedence, one-line errors, the
+"""The arena's parameter file (evaluation/arena/params.py): precedence, one-line errors, the
 values reaching the episodes as traced inputs, and the command's --params."""
 
 from __future__ import annotations
@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 from socialnav.data import SCENES_DIR
-from socialnav.evaluation import arena, arena_params, arena_run
+from socialnav.evaluation.arena import episodes as arena
+from socialnav.evaluation.arena import params as arena_params
+from socialnav.evaluation.arena import run as arena_run
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.planners import stack

@@ -12,7 +12,7 @@ SCENES = sorted((DATA_DIR / "scenes").glob("*.json"))
 
 
 def test_the_papers_rows_name_known_scenes_and_methods_and_take_ours_from_a_summary():
-    from socialnav.evaluation import papers
+    from socialnav.evaluation.arena import papers
     from socialnav.jaxsim.scenes.spec import load_scene as load
 
     scenes = {load(f).name for f in SCENES}
@@ -36,7 +36,7 @@ def test_the_papers_rows_name_known_scenes_and_methods_and_take_ours_from_a_summ
 
 
 def test_the_comparison_gives_our_interval_and_whether_the_paper_lies_in_it():
-    from socialnav.evaluation import papers
+    from socialnav.evaluation.arena import papers
 
     summary = pd.DataFrame(
         [
@@ -64,7 +64,7 @@ def _paired_episodes(scene, metric, proposed, baseline, a, b):
 def test_directions_pair_by_variant_and_give_a_verdict():
     from scipy import stats
 
-    from socialnav.evaluation import papers
+    from socialnav.evaluation.arena import papers
 
     rng = np.random.default_rng(1)
     base = rng.uniform(0.5, 1.5, 40)
@@ -106,7 +106,8 @@ def test_directions_pair_by_variant_and_give_a_verdict():
 
 
 def test_seed_002s_table_2_is_tested_among_its_four_methods_and_gets_a_verdict_per_cell():
-    from socialnav.evaluation import arena_stats, papers
+    from socialnav.evaluation.arena import papers
+    from socialnav.evaluation.arena import stats as arena_stats
 
     rng = np.random.default_rng(2)
     n = papers.PAPER_STATS_TRIALS
@@ -147,7 +148,7 @@ def test_seed_002s_table_2_is_tested_among_its_four_methods_and_gets_a_verdict_p
 def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_hand():
     from scipy import stats
 
-    from socialnav.evaluation import arena_stats
+    from socialnav.evaluation.arena import stats as arena_stats
 
     rng = np.random.default_rng(0)
     a, b = rng.normal(0, 1, 30), rng.normal(0.5, 2, 40)
@@ -163,7 +164,7 @@ def test_games_howell_reduces_to_welchs_t_test_for_two_groups_and_hedges_g_by_ha
 
 
 def test_scene_statistics_compare_the_proposed_method_with_the_others():
-    from socialnav.evaluation import arena_stats
+    from socialnav.evaluation.arena import stats as arena_stats
 
     rng = np.random.default_rng(1)
     rows = []
@@ -192,7 +193,7 @@ def test_the_papers_tables_script_prints_a_runs_tables_with_their_source_and_cou
 
     import script_loader
 
-    from socialnav.evaluation import papers
+    from socialnav.evaluation.arena import papers
 
     run = tmp_path / "arena"
     run.mkdir()

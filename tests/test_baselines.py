@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import SCENES_DIR
-from socialnav.evaluation import arena
+from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim import social_force as sf
 from socialnav.jaxsim.scenes.env import Observation
 from socialnav.jaxsim.scenes.robot import RobotParams

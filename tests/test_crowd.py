@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import DATA_DIR
-from socialnav.evaluation import arena
+from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim import crowd, orca, rng
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.scenes import people as people_lib

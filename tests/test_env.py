@@ -13,7 +13,7 @@ import pytest
 
 from socialnav import cli
 from socialnav.data import DATA_DIR
-from socialnav.evaluation import arena
+from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes.actor import Actor, rollout
 from socialnav.jaxsim.scenes.spec import load_scene

@@ -348,7 +348,7 @@ def test_a_velocity_model_moves_the_arenas_people_around_a_standing_robot(name):
     """``--human-model``: the arena's env steps its people by the velocity model; the walker
     passes the robot without entering its body (a disc of the robot's radius to them)."""
     from socialnav.data import SCENES_DIR
-    from socialnav.evaluation import arena
+    from socialnav.evaluation.arena import episodes as arena
     from socialnav.jaxsim.scenes import env as env_lib
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.jaxsim.scenes.variant import sample_variant

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from socialnav.data import SCENES_DIR
-from socialnav.evaluation import arena, nav_metrics
+from socialnav.evaluation.arena import episodes as arena
+from socialnav.evaluation.arena import nav_metrics
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variants
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import DATA_DIR
-from socialnav.evaluation import arena
+from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim import orca
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenes import people as people_lib

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from socialnav.data import SCENES_DIR
-from socialnav.evaluation import arena, nav_metrics
+from socialnav.evaluation.arena import episodes as arena
+from socialnav.evaluation.arena import nav_metrics
 from socialnav.jaxsim.scenes import people
 from socialnav.jaxsim.scenes.actor import Actor
 from socialnav.jaxsim.scenes.env import Observation

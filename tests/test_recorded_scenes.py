@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR, recorded
-from socialnav.evaluation import arena
+from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenes import recording as recording_lib
 from socialnav.jaxsim.scenes.spec import load_scene, mirror
@@ -190,7 +190,7 @@ def test_a_bad_recording_gives_one_error_naming_file_and_field(tmp_path, mutate,
 def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     import pandas as pd
 
-    from socialnav.evaluation import arena_run
+    from socialnav.evaluation.arena import run as arena_run
 
     if arena.memory_maps() is None:
         pytest.skip("no /proc/self/maps here: the arena never drops its programs")

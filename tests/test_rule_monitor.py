@@ -1,5 +1,5 @@
 """The streaming rule monitor (jaxsim/scenes/rule_monitor.py) against the batch check the arena
-uses (evaluation.nav_metrics.rule_satisfied): the same verdict on random trajectories of every
+uses (evaluation.arena.nav_metrics.rule_satisfied): the same verdict on random trajectories of every
 built-in scene, mirrored ones included, and on hand-made ones for each rule kind; and the batch
 check with the rule's numbers as arguments (the arena's compiled form) against it with constants."""
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import SCENES_DIR
-from socialnav.evaluation import nav_metrics
+from socialnav.evaluation.arena import nav_metrics
 from socialnav.jaxsim.scenes import rule_monitor
 from socialnav.jaxsim.scenes.spec import load_scene, mirror
 from socialnav.jaxsim.scenes.variant import sample_variants

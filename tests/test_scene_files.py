@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from socialnav.data import DATA_DIR
-from socialnav.evaluation import nav_metrics
+from socialnav.evaluation.arena import nav_metrics
 from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant, sample_variants

@@ -1,6 +1,6 @@
 """A scene's social rule checked step by step: a constant-size state instead of a trajectory.
 
-:func:`evaluation.nav_metrics.rule_satisfied` checks a scene's rule (:mod:`jaxsim.scenes.spec`)
+:func:`evaluation.arena.nav_metrics.rule_satisfied` checks a scene's rule (:mod:`jaxsim.scenes.spec`)
 on a whole recorded trajectory, vectorised over its steps: what the arena does after a rollout.
 A training loop keeps no trajectory (thousands of episodes, each ending at its own step), so it
 needs the same verdict from a running state updated once per step: :func:`monitor`. The two are
@@ -57,7 +57,7 @@ def queue_cut_in(rule: dict, robot_xy, people_xy, present):
     its centre is in the line's lane and ahead, along the lane, of a present person still in it.
     ``robot_xy`` (..., 2), ``people_xy`` (..., P, 2), ``present`` (..., P): one step or a
     trajectory's steps. The lane's frame comes from the rule's ``head`` and ``right`` (the right of
-    the way the queue faces, :func:`evaluation.nav_metrics.right_of`) or ``direction_deg``."""
+    the way the queue faces, :func:`evaluation.arena.nav_metrics.right_of`) or ``direction_deg``."""
     if "right" in rule:
         right = jnp.asarray(rule["right"], jnp.float32)
     else:
@@ -163,7 +163,7 @@ def _leaf(rule: dict):
 def monitor(rule: dict) -> tuple[Callable, Callable, Callable]:
     """``(init() -> state, update(state, step, episode) -> state, verdict(state) -> () bool)`` of
     a scene's ``rule`` (a static dict; vmap the three over episodes). ``verdict`` after an
-    episode's last step equals :func:`evaluation.nav_metrics.rule_satisfied` on its trajectory."""
+    episode's last step equals :func:`evaluation.arena.nav_metrics.rule_satisfied` on its trajectory."""
     leaves = [_leaf(r) for r in _leaves(rule)]
 
     def init() -> MonitorState:

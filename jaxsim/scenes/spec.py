@@ -44,7 +44,7 @@ with, a walking group (Moussaïd et al. 2010's group terms, :mod:`jaxsim.groups`
 run's human model); pairs chain into larger groups.
 
 Rules (what "socially successful" means in the scene, checked on the trajectory by
-:func:`evaluation.nav_metrics.rule_satisfied`, and step by step by
+:func:`evaluation.arena.nav_metrics.rule_satisfied`, and step by step by
 :mod:`jaxsim.scenes.rule_monitor`): ``min_distance`` (never closer than ``distance_m`` to anyone,
 centre to centre), ``avoid_group`` (never inside group ``group``'s circle), ``avoid_circle`` (never
 within ``radius_m`` of ``centre``: a corner taken wide), ``keep_right``

@@ -117,7 +117,7 @@ class _Drawer:
 def padded_slots(n_slots: int) -> int:
     """The people slots a scene with ``n_slots`` is run with: a power of two, at least 2.
 
-    Scenes whose padded shapes agree share one compiled episode program (:mod:`evaluation.arena`);
+    Scenes whose padded shapes agree share one compiled episode program (:mod:`evaluation.arena.episodes`);
     the rule depends on the scene alone, so a scene gives the same episodes whichever other scenes
     run beside it. Empty slots change nothing: a slot's random force is drawn by its index
     (:func:`jaxsim.rng.hash_uniform16`) and every sum over people masks absent ones."""

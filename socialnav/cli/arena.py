@@ -14,10 +14,10 @@ Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
 (variant 0), ``summary.csv`` (one row per scene and method), ``papers.csv`` (the seeds' published
 numbers beside ours with our 95 % intervals, for the scenes and methods the run has),
 ``directions.csv`` (each paper's difference against its baseline and ours, paired by variant,
-with a verdict: :func:`evaluation.papers.directions`), ``papers_stats.csv`` (seed 002's Table 2,
-its Games-Howell p and Hedges' g beside ours: :func:`evaluation.papers.stats_comparison`),
+with a verdict: :func:`evaluation.arena.papers.directions`), ``papers_stats.csv`` (seed 002's Table 2,
+its Games-Howell p and Hedges' g beside ours: :func:`evaluation.arena.papers.stats_comparison`),
 ``stats.csv`` (Fisher, Welch ANOVA,
-Games-Howell, Hedges' g: :mod:`evaluation.arena_stats`) and ``run.json`` (the settings, the
+Games-Howell, Hedges' g: :mod:`evaluation.arena.stats`) and ``run.json`` (the settings, the
 backend and the shard layout). Work is cut into shards (``--shard-variants`` variants of one
 scene; :mod:`socialnav.backend` runs them here or as Ray tasks), each saved atomically under
 ``shards/`` as it finishes, then joined per scene; a rerun with the same settings computes only
@@ -116,7 +116,7 @@ def add_parser(sub) -> None:
         default=None,
         metavar="FILE.toml",
         help="the robot's limits and the layers' and local planners' parameters ([robot], [casn], [snl], [snape], "
-        "[band], [pursuit], [methods.<method>.<section>]; evaluation/arena_params.py); default: the seeds' values",
+        "[band], [pursuit], [methods.<method>.<section>]; evaluation/arena/params.py); default: the seeds' values",
     )
     p.add_argument(
         "--keep-trajectories",
@@ -366,7 +366,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         from socialnav.models.inference import DEFAULT_MODEL
 
         args.gscl_run = DEFAULT_MODEL
-    from socialnav.evaluation import arena_params
+    from socialnav.evaluation.arena import params as arena_params
 
     try:
         params = arena_params.ArenaParams() if args.params is None else arena_params.load(args.params)
@@ -384,8 +384,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         print(f"socialnav arena: {e}", file=sys.stderr)
         return 2
     if actor_specs:  # each factory called once here: a bad one fails before any work
-        from socialnav.evaluation import arena as arena_lib
-        from socialnav.evaluation import arena_run
+        from socialnav.evaluation.arena import episodes as arena_lib
+        from socialnav.evaluation.arena import run as arena_run
 
         first = arena_lib.setup_scene(specs[0])
         for spec in actor_specs:
@@ -437,7 +437,10 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     import pandas as pd
 
     from socialnav.common import __version__
-    from socialnav.evaluation import arena_report, arena_run, arena_stats, nav_metrics, papers
+    from socialnav.evaluation.arena import nav_metrics, papers
+    from socialnav.evaluation.arena import report as arena_report
+    from socialnav.evaluation.arena import run as arena_run
+    from socialnav.evaluation.arena import stats as arena_stats
     from socialnav.models.inference import model_identity
 
     settings = {
@@ -497,7 +500,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
 
     shards = []
     # A scene and its held-out mirror one after the other: they share their compiled programs,
-    # which the arena may drop between scenes (evaluation.arena.release_programs_if_crowded).
+    # which the arena may drop between scenes (evaluation.arena.episodes.release_programs_if_crowded).
     position = {id(spec): k for k, spec in enumerate(specs)}
     order = sorted(range(len(runs)), key=lambda i: (position[id(runs[i][0])], runs[i][1]))
     for (spec, held_out), name in ((runs[i], names[i]) for i in order):
@@ -573,7 +576,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     write_atomic(out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
     written = ["summary.csv", "stats.csv"]
     if len(summary):
-        from socialnav.evaluation import arena_plots
+        from socialnav.evaluation.arena import plots as arena_plots
 
         arena_plots.methods_figure(summary, runfolder.inside(out, out / "pictures" / "methods.png"))
         written.append("pictures/methods.png")
@@ -604,7 +607,7 @@ def _memory_bytes(specs, args, n_methods: int) -> float:
     """What a run holds at once: every episode's row in the joined tables, and one shard's
     variants in flight (their trajectories, T steps of the robot and every person slot, and the
     planner's grids, a few (H, W) float32 maps per variant)."""
-    from socialnav.evaluation.arena import ArenaConfig
+    from socialnav.evaluation.arena.episodes import ArenaConfig
 
     config = ArenaConfig()
     scenes = len(specs) * (2 if args.held_out else 1)
@@ -669,8 +672,9 @@ def compute_shard(
     text (parsed here, so a worker needs no access to the file); ``policy_run``: a trained
     policy's run folder (``--policy-run``), restored here. The GSCL weights enter the
     episode program traced: a second checkpoint of the same network compiles nothing new."""
-    from socialnav.evaluation import arena_params, arena_run
-    from socialnav.evaluation.arena import ArenaConfig
+    from socialnav.evaluation.arena import params as arena_params
+    from socialnav.evaluation.arena import run as arena_run
+    from socialnav.evaluation.arena.episodes import ArenaConfig
 
     keep = max(0, min(n, keep_trajectories - first))
     users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
@@ -720,7 +724,7 @@ def _finish_scene(args, out, spec, held_out, name, methods, digest) -> None:
 
     from socialnav.common import runfolder
     from socialnav.common.atomic import write_atomic
-    from socialnav.evaluation import arena_plots
+    from socialnav.evaluation.arena import plots as arena_plots
     from socialnav.jaxsim.scenes.spec import mirror
 
     folder = runfolder.inside(out, out / "shards" / f"{name}-{digest}")

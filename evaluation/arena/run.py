@@ -1,10 +1,10 @@
 """One scene of the arena: every method on the same seeded variants, measured.
 
 :func:`run_scene` draws a scene's variants (common random numbers: variant k is the same for every
-method), runs each method's episodes (:mod:`evaluation.arena`: the stacks, the reactive baselines,
+method), runs each method's episodes (:mod:`evaluation.arena.episodes`: the stacks, the reactive baselines,
 a user's actor) and the people without the robot, measures every episode
-(:func:`metrics_function`, :mod:`evaluation.nav_metrics`) and returns the episodes frame and the
-trajectories it keeps (:mod:`evaluation.arena_report`'s frames).
+(:func:`metrics_function`, :mod:`evaluation.arena.nav_metrics`) and returns the episodes frame and the
+trajectories it keeps (:mod:`evaluation.arena.report`'s frames).
 """
 
 from __future__ import annotations
@@ -16,9 +16,10 @@ import jax
 import jax.numpy as jnp
 import pandas as pd
 
-from socialnav.evaluation import arena, nav_metrics
-from socialnav.evaluation.arena_params import ArenaParams
-from socialnav.evaluation.arena_report import episode_frame, trajectory_frame
+from socialnav.evaluation.arena import episodes as arena
+from socialnav.evaluation.arena import nav_metrics
+from socialnav.evaluation.arena.params import ArenaParams
+from socialnav.evaluation.arena.report import episode_frame, trajectory_frame
 from socialnav.jaxsim.scenes.actor import Actor, check_actor
 from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
 from socialnav.jaxsim.scenes.variant import Variant, sample_variants
@@ -34,9 +35,9 @@ def _velocities(people_xy, present, dt_s):
 
 def metrics_function(setup: arena.SceneSetup, config: arena.ArenaConfig, robot_radius_m: float):
     """``(trajectories, variants, trajectories without the robot) -> dict of metric arrays``, jitted
-    and vmapped over episodes (the third from :func:`evaluation.arena.counterfactual_function`).
+    and vmapped over episodes (the third from :func:`evaluation.arena.episodes.counterfactual_function`).
 
-    The scene's rule enters as arguments (:func:`evaluation.nav_metrics.split_rule`), so a scene
+    The scene's rule enters as arguments (:func:`evaluation.arena.nav_metrics.split_rule`), so a scene
     and its held-out mirror, or two scenes with rules of the same kinds, share one compiled program
     (compiling it took 1.6 s a scene row)."""
     structure, numbers = nav_metrics.split_rule(setup.spec.rule)
@@ -105,12 +106,12 @@ def run_scene(
     (:func:`jaxsim.scenes.spec.mirror`) with every range drawn just outside itself, its rows named
     ``<scene>@held_out``. ``user_actors``: method name -> a factory ``env -> Actor`` or ``env ->
     (Actor, params)`` (:func:`user_actor`), for the names of ``methods`` that are not built in.
-    ``params``: the robot's limits and the layers' parameters (:mod:`evaluation.arena_params`;
+    ``params``: the robot's limits and the layers' parameters (:mod:`evaluation.arena.params`;
     default: the seeds' values). ``gscl_model``: the network of method ``gscl``
     (:func:`planners.layers.gscl`: a :class:`~socialnav.models.inference.SocialCostModel`, its
     weights traced, so another checkpoint of the same network reuses the compiled program; or a
     function of the maps). ``n_devices``: host devices the methods run
-    on at the same time (:func:`evaluation.arena.run_spread`; default: every local one)."""
+    on at the same time (:func:`evaluation.arena.episodes.run_spread`; default: every local one)."""
     name = spec.name + (HELD_OUT if held_out else "")
     if held_out:
         spec = mirror(spec)

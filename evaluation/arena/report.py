@@ -1,7 +1,7 @@
 """The arena's tables: per-episode metrics and trajectories as pandas frames, the per-scene summary.
 
 :func:`episode_frame` and :func:`trajectory_frame` turn one method's metric arrays and
-trajectories into frames (:func:`evaluation.arena_run.run_scene` calls them); :func:`summary`
+trajectories into frames (:func:`evaluation.arena.run.run_scene` calls them); :func:`summary`
 reduces episodes to one row per scene and method, success rates with Wilson 95 % intervals
 (``scipy.stats.binomtest``), the rest as means with Student t intervals (:func:`mean_interval`).
 """
@@ -13,8 +13,9 @@ import pandas as pd
 from scipy import stats
 
 from socialnav.common.intervals import wilson
-from socialnav.evaluation import arena, nav_metrics
-from socialnav.evaluation.papers import RATES
+from socialnav.evaluation.arena import episodes as arena
+from socialnav.evaluation.arena import nav_metrics
+from socialnav.evaluation.arena.papers import RATES
 
 SUMMARY_MEANS = (
     "collisions",

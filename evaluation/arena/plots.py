@@ -1,4 +1,4 @@
-"""Pictures of arena runs, from the trajectories frame (:func:`evaluation.arena_report.trajectory_frame`):
+"""Pictures of arena runs, from the trajectories frame (:func:`evaluation.arena.report.trajectory_frame`):
 each method's path with the people's tracks (as seed 002 Fig. 9-10), the distance to the nearest
 person over time (seed 001 Fig. 7-8), the speed profile with the speed gain (seed 004 Fig. 13),
 and an animation of one episode."""
@@ -169,7 +169,7 @@ METHOD_PANELS = (
 
 def methods_figure(summary: pd.DataFrame, path) -> pathlib.Path:
     """Per method, its mean over the run's scenes of each of :data:`METHOD_PANELS` (one panel per
-    metric, one bar per method, a dot per scene), from :func:`evaluation.arena_report.summary`.
+    metric, one bar per method, a dot per scene), from :func:`evaluation.arena.report.summary`.
     Scenes weigh equally; held-out rows count as scenes of their own."""
     panels = [p for p in METHOD_PANELS if p[0] in summary]
     methods = list(dict.fromkeys(summary["method"]))

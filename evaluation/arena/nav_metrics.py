@@ -28,7 +28,7 @@ for the proxemic and person-distance metrics (after that the robot has arrived).
   nearest centre's distance less both radii: HuNavSim's reading). Centre to centre, the intimate
   zone (0.45 m) lies inside contact (robot radius + person radius, 0.525 m for the arena's TIAGo
   and people): time in it means overlapping bodies. Seed 002 uses Hall's zones without saying
-  which distance; its Table 2 is compared both ways (:func:`evaluation.papers.stats_comparison`).
+  which distance; its Table 2 is compared both ways (:func:`evaluation.arena.papers.stats_comparison`).
 * ``intrusions``: personal-space entries: entries of the robot into a person's 1.2 m (one per
   entry, per person); ``intruded``: whether the robot entered anyone's 1.2 m at all, which is
   what seed 001 counts ("the number of times the robot intrudes the personal spaces" never
@@ -67,7 +67,7 @@ Safety apart from centres:
   the arena beside these.
 
 The robot's effect on the people (counterfactual, :func:`people_effect`): each variant is run a
-second time with the robot standing far away (:func:`evaluation.arena.without_robot`: its force
+second time with the robot standing far away (:func:`evaluation.arena.episodes.without_robot`: its force
 exactly 0), everything else equal: the same draws, the same random force stream (common random
 numbers), so the second run is the crowd as it would have moved without the robot.
 ``people_speed_drop_mps``: the people's mean speed without the robot minus with it (mean over the

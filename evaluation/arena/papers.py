@@ -14,14 +14,14 @@ import numpy as np
 import pandas as pd
 
 # The shares of episodes the arena's summary keeps in % with Wilson 95 % intervals
-# (``<key>_pct``, ``_ci``, ``_lo``, ``_hi``; evaluation.arena_report.summary).
+# (``<key>_pct``, ``_ci``, ``_lo``, ``_hi``; evaluation.arena.report.summary).
 RATES = ("goal_success", "social_success", "intruded", "goal_no_collision", "social_no_collision")
 
 # (source, scene, method, metric, paper value). Metrics: d_min_m (mean minimum distance, m),
 # intruded_pct (trials with a personal-space intrusion, %), goal_success_pct, social_success_pct,
 # goal_no_collision_pct and social_no_collision_pct (the same, a collision failing the run),
 # zone_intimate_pct, zone_personal_pct, zone_social_pct (share of time with the nearest person in
-# that Hall zone, %), path_length_m, time_s, chc_rad, d_1_m and d_2_m (evaluation.nav_metrics).
+# that Hall zone, %), path_length_m, time_s, chc_rad, d_1_m and d_2_m (evaluation.arena.nav_metrics).
 PAPER_ROWS: tuple[tuple[str, str, str, str, float], ...] = (
     # Seed 001, Tables 1-3 (CASN vs SNL). Its "i" counts trials with an intrusion (never more than
     # n: SNL 33 of 33 head-on); Table 2's "All" rows (our head-on walkers span its speeds, 0.4-1.35
@@ -172,13 +172,13 @@ def stats_comparison(episodes: pd.DataFrame) -> pd.DataFrame:
     intimate zone, ``zone_intimate``, or in the intimate and personal zones, their sum), with the
     episodes each method has (the paper: :data:`PAPER_STATS_TRIALS`), and a ``verdict``; each
     cell twice, the zones by ``distance`` "centre to centre" and "body to body" (the paper does
-    not say which: :mod:`evaluation.nav_metrics`). Scenes the run lacks, or lacking one of the
+    not say which: :mod:`evaluation.arena.nav_metrics`). Scenes the run lacks, or lacking one of the
     four methods, are left out.
 
     Args:
       episodes: the arena's episodes (``scene``, ``method``, ``zone_intimate``, ``zone_personal``).
     """
-    from socialnav.evaluation import arena_stats
+    from socialnav.evaluation.arena import stats as arena_stats
 
     rows = []
     for distance, prefix in (("centre to centre", "zone_"), ("body to body", "zone_body_")):
@@ -230,7 +230,7 @@ def comparison(summary: pd.DataFrame) -> pd.DataFrame:
     lacks the scene or method.
 
     Args:
-      summary: :func:`evaluation.arena_report.summary`'s frame.
+      summary: :func:`evaluation.arena.report.summary`'s frame.
     """
     rows = []
     for source, scene, method, metric, paper in PAPER_ROWS:
@@ -279,7 +279,7 @@ def directions(episodes: pd.DataFrame) -> pd.DataFrame:
     else ``differs``; ``not measured here`` where no variant has the metric (seed 004's d_2 in a
     scene with one person).
     """
-    from socialnav.evaluation.arena_report import mean_interval
+    from socialnav.evaluation.arena.report import mean_interval
 
     paper = {(src, scene, method, metric): value for src, scene, method, metric, value in PAPER_ROWS}
     have = set(zip(episodes["scene"], episodes["method"], strict=True))
