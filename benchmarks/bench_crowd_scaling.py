@@ -29,8 +29,8 @@ import numpy as np  # noqa: E402
 
 from benchmarks.bench_human_models import _timed  # noqa: E402
 from benchmarks.bench_simulator import machine  # noqa: E402
-from socialnav.evaluation import human_calibration as hc  # noqa: E402
-from socialnav.evaluation import human_validation as hv  # noqa: E402
+from socialnav.evaluation.humans import calibration as hc  # noqa: E402
+from socialnav.evaluation.humans import validation as hv  # noqa: E402
 
 MODELS = (
     "social_force",

@@ -4,7 +4,7 @@
     python benchmarks/bench_human_models.py --pairs          # and each model with everyone in pairs
     XLA_FLAGS=--xla_cpu_max_isa=AVX2 python benchmarks/bench_human_models.py   # AVX2 only
 
-The crowd is a periodic corridor's (:mod:`evaluation.human_validation`: 1.8 m wide, 2 persons/m²,
+The crowd is a periodic corridor's (:mod:`evaluation.humans.validation`: 1.8 m wide, 2 persons/m²,
 ghosts either side, so 3N bodies are felt), ``vmap``-ed over worlds as the arena and the
 validation batch them. Prints people-steps per second (worlds x N x steps over the wall time,
 compilation apart and printed, best of ``--repeats``) for each model, the ratio to the social
@@ -28,8 +28,8 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
-from socialnav.evaluation import human_calibration as hc  # noqa: E402
-from socialnav.evaluation import human_validation as hv  # noqa: E402
+from socialnav.evaluation.humans import calibration as hc  # noqa: E402
+from socialnav.evaluation.humans import validation as hv  # noqa: E402
 
 MODELS = (
     "social_force",

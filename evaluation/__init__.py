@@ -6,8 +6,8 @@ Seed 000's experiment as a protocol around the simulator's step
 zones, collisions once per encounter), the statistical tests
 (:mod:`~socialnav.evaluation.statistics`) and figures. The social-navigation arena, its episodes,
 metrics, tables, statistics, plots and the papers' numbers: :mod:`~socialnav.evaluation.arena`.
-The human models against real pedestrians: :mod:`~socialnav.evaluation.human_validation` and the
-calibrations beside it.
+The human models against real pedestrians, and their calibrations:
+:mod:`~socialnav.evaluation.humans`.
 
 Re-exported here: a scene file to the planner's scene, and one scene's benchmark.
 """

@@ -1,6 +1,6 @@
 """The one crowd function: a step of N people by the human model a run chose, for the warehouse
 (:func:`jaxsim.workers.move`), the arena (:func:`jaxsim.scenes.people.step_people`) and the
-validation against real pedestrians (:mod:`evaluation.human_validation`) alike.
+validation against real pedestrians (:mod:`evaluation.humans.validation`) alike.
 
 The models (``docs/humans.md`` measures each against the Jülich corridors and ETH/UCY):
 

@@ -28,7 +28,7 @@ closest to the point ``steering_horizon_m`` ahead, given where they would meet s
 
 Everything is a smooth function of positions almost everywhere (the ``min``/``max`` and the lane
 test are piecewise), so a loss over a rollout differentiates through it
-(:mod:`evaluation.human_calibration`).
+(:mod:`evaluation.humans.calibration`).
 """
 
 from __future__ import annotations

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from socialnav.data import WAREHOUSE_DIR
-from socialnav.evaluation import human_validation as hv
-from socialnav.evaluation import pedestrian_measures as measures
-from socialnav.evaluation import trajectory_calibration as tc
+from socialnav.evaluation.humans import measures
+from socialnav.evaluation.humans import trajectory_calibration as tc
+from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import groups, humans
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.world import Grid

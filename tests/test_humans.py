@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 
 from socialnav.data import recorded
-from socialnav.evaluation import human_validation as hv
-from socialnav.evaluation import pedestrian_measures as measures
+from socialnav.evaluation.humans import measures
+from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import speed_model
 from socialnav.jaxsim.world import Grid
 
@@ -298,7 +298,7 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
 def _walked_by(truth: hv.HumanModel, fields):
     """Short corridors at 1.5, 2.5 and 3.5 /m² whose "data" is the speed ``truth`` walks there
     (s.d. 0.05 m/s): a calibration's known answer."""
-    from socialnav.evaluation import human_calibration as hc
+    from socialnav.evaluation.humans import calibration as hc
 
     size = dict(length_m=6.0, warmup_steps=60, measured_steps=20)
     corridors = hc.corridors_at(truth, (1.5, 2.5, 3.5), np.zeros(3), np.full(3, 0.05), **size)
@@ -311,7 +311,7 @@ def _walked_by(truth: hv.HumanModel, fields):
 def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search():
     """Known answer: the fundamental diagram of the speed model with a time gap of 0.6 s, fitted
     from 1.0 s by gradient through the crowd step and by Nelder-Mead, gives back 0.6 s."""
-    from socialnav.evaluation import human_calibration as hc
+    from socialnav.evaluation.humans import calibration as hc
 
     truth = hv.HumanModel("collision_free_speed", speed=speed_model.SpeedModelParams(time_gap_s=0.6))
     fields = ("time_gap_s",)
@@ -331,7 +331,7 @@ def test_orcas_parameters_are_fitted_by_a_forward_gradient_through_its_fallback_
     """ORCA's step holds a ``while_loop`` (its third program only for those who need it), which
     reverse mode cannot run through: its gradient is taken forward. From CrowdNav's 0.3 m radius,
     against corridors walked with 0.2 m, the fit lowers the loss to under a tenth."""
-    from socialnav.evaluation import human_calibration as hc
+    from socialnav.evaluation.humans import calibration as hc
     from socialnav.jaxsim import orca
 
     fields = ("radius_m",)

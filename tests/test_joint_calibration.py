@@ -1,4 +1,4 @@
-"""One human-model fit to both kinds of data (:mod:`evaluation.joint_calibration`): what it reads,
+"""One human-model fit to both kinds of data (:mod:`evaluation.humans.joint_calibration`): what it reads,
 its prediction term on a known answer, the fit's plumbing and the command's bad input."""
 
 from __future__ import annotations
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from socialnav.data import recorded
-from socialnav.evaluation import human_calibration as hc
-from socialnav.evaluation import human_validation as hv
-from socialnav.evaluation import joint_calibration as jc
+from socialnav.evaluation.humans import calibration as hc
+from socialnav.evaluation.humans import joint_calibration as jc
+from socialnav.evaluation.humans import validation as hv
 
 
 def test_the_eth_ucy_windows_come_from_no_test_split_and_stop_at_each_files_validation_cut():

@@ -7,7 +7,7 @@
 
 Writes ``summary.json`` (each model's checks against the bar of issue 61), the tables
 (``fundamental_diagram.csv``, ``prediction.csv``, ``counterflow.csv``, ``bodies.csv``) and three
-pictures, all at once when the run is complete (:mod:`evaluation.human_validation`).
+pictures, all at once when the run is complete (:mod:`evaluation.humans.validation`).
 """
 
 from __future__ import annotations
@@ -98,8 +98,8 @@ def calibrate(args) -> int:
     import jax
 
     from socialnav.common import figures
-    from socialnav.evaluation import human_calibration as hc
-    from socialnav.evaluation import human_validation as hv
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import validation as hv
 
     try:
         runfolder.prepare(args.out, CALIBRATE_RESULTS, args.overwrite, marker="fit.json", job=CALIBRATE_JOB)
@@ -170,11 +170,11 @@ def calibrate(args) -> int:
 
 
 def _calibrate_trajectories(args) -> int:
-    """``--data eth_ucy``: :func:`evaluation.trajectory_calibration.leave_one_scene_out`."""
+    """``--data eth_ucy``: :func:`evaluation.humans.trajectory_calibration.leave_one_scene_out`."""
     from socialnav.data import recorded
-    from socialnav.evaluation import human_calibration as hc
-    from socialnav.evaluation import human_plots
-    from socialnav.evaluation import trajectory_calibration as tc
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import plots as human_plots
+    from socialnav.evaluation.humans import trajectory_calibration as tc
 
     scenes = args.scenes or list(recorded.ETH_UCY_SCENES)
     unknown = [s for s in scenes if s not in recorded.ETH_UCY_SCENES]
@@ -212,12 +212,12 @@ def _calibrate_trajectories(args) -> int:
 
 
 def _calibrate_joint(args) -> int:
-    """``--data joint``: :func:`evaluation.joint_calibration.sweep`, each fit scored by the
-    validation (:func:`evaluation.human_validation.validate`) on held-out data."""
-    from socialnav.evaluation import human_calibration as hc
-    from socialnav.evaluation import human_plots
-    from socialnav.evaluation import human_validation as hv
-    from socialnav.evaluation import joint_calibration as jc
+    """``--data joint``: :func:`evaluation.humans.joint_calibration.sweep`, each fit scored by the
+    validation (:func:`evaluation.humans.validation.validate`) on held-out data."""
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import joint_calibration as jc
+    from socialnav.evaluation.humans import plots as human_plots
+    from socialnav.evaluation.humans import validation as hv
 
     if args.scenes is not None:
         print("socialnav humans calibrate: --scenes goes with --data eth_ucy", file=sys.stderr)
@@ -267,8 +267,8 @@ def _calibrate_joint(args) -> int:
 
 
 def validate(args) -> int:
-    from socialnav.evaluation import human_calibration as hc
-    from socialnav.evaluation import human_validation as hv
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import validation as hv
 
     known = list(HUMAN_MODELS)
     unknown = [m for m in args.models if m not in known]
@@ -304,7 +304,7 @@ def validate(args) -> int:
 def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: int) -> None:
     import pandas as pd
 
-    from socialnav.evaluation import human_plots
+    from socialnav.evaluation.humans import plots as human_plots
 
     fd = [data["fd_bins"].assign(source="data: Jülich uo runs")]
     fd += [r["fd_bins"].assign(source=name) for name, r in results.items()]

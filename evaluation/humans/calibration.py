@@ -16,7 +16,7 @@ speed the arranged crowd walks at, which for a first-order velocity model is mos
 parameters are fitted as logarithms (they must stay positive) with Adam (optax); Nelder-Mead
 (scipy) minimises the same loss, with the warm-up included, from the same start.
 
-The corridors are the validation's (:mod:`evaluation.human_validation`: 1.8 m x 20 m, periodic,
+The corridors are the validation's (:mod:`evaluation.humans.validation`: 1.8 m x 20 m, periodic,
 the speed taken after 30 s): in a shorter one (10 m, 20 s) the velocity models, which do not
 overtake a walker ahead, had not yet closed up behind the slowest, and a fit there walked 0.3 m/s
 too slow at low density in the validation's. The density of a simulated corridor is its global
@@ -33,9 +33,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from socialnav.evaluation import human_validation as hv
-from socialnav.evaluation import minimise
-from socialnav.evaluation import pedestrian_measures as measures
+from socialnav.evaluation.humans import measures, minimise
+from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import speed_model
 
 TRAIN_RUNS, TEST_RUNS = hv.FD_TRAIN_RUNS, hv.FD_TEST_RUNS

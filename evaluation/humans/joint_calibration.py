@@ -9,9 +9,9 @@ velocity). The joint loss is::
 
     loss_w(theta) = fd_loss(theta) + w * 100 * (ADE(theta) / ADE_cv - 1)
 
-- ``fd_loss``: :func:`evaluation.human_calibration.fd_loss` on the Jülich *training* runs (mean
+- ``fd_loss``: :func:`evaluation.humans.calibration.fd_loss` on the Jülich *training* runs (mean
   over density bins of the squared speed error in the data's standard deviations);
-- ``ADE``: the prediction protocol's (:func:`evaluation.human_validation.eth_ucy_prediction`: 8
+- ``ADE``: the prediction protocol's (:func:`evaluation.humans.validation.eth_ucy_prediction`: 8
   frames observed, 12 predicted, every person aimed along their last observed velocity, no
   groups, as the bar's check) over the windows of :data:`TRAIN_RECORDINGS`, the two ETH/UCY
   recordings that no scene tests on (in every leave-one-scene-out fold's training split, in no
@@ -26,7 +26,7 @@ by the validation (the Jülich test runs, the bi-directional run, the five ETH/U
 
 The fit is Nelder-Mead (scipy) from the model's own values: the steering model's choice of
 heading is piecewise, and Adam through it stalled on the diagram alone (loss 2.85 against the
-search's 1.17, :mod:`evaluation.human_calibration`).
+search's 1.17, :mod:`evaluation.humans.calibration`).
 """
 
 from __future__ import annotations
@@ -37,10 +37,9 @@ import jax
 import jax.numpy as jnp
 
 from socialnav.data import recorded
-from socialnav.evaluation import human_calibration as hc
-from socialnav.evaluation import human_validation as hv
-from socialnav.evaluation import minimise
-from socialnav.evaluation import pedestrian_measures as measures
+from socialnav.evaluation.humans import calibration as hc
+from socialnav.evaluation.humans import measures, minimise
+from socialnav.evaluation.humans import validation as hv
 
 # The ETH/UCY recordings no scene's test split holds (Trajectron++'s splits: univ tests on
 # students001/003, zara2 on crowds_zara02).
@@ -68,7 +67,7 @@ def training_windows(recordings=TRAIN_RECORDINGS) -> hv.PredictionWindows:
 
 def joint_data(model: hv.HumanModel, seed: int = 0, recordings=TRAIN_RECORDINGS, **size) -> JointData:
     """The training data of :func:`joint_loss` for ``model`` (``size``: the corridors', as
-    :func:`evaluation.human_calibration.corridors_at`)."""
+    :func:`evaluation.humans.calibration.corridors_at`)."""
     windows = training_windows(recordings)
     ade, _ = measures.ade_fde(windows.constant_velocity[windows.complete], windows.future[windows.complete])
     return JointData(hc.training_corridors(model, seed, **size), windows, float(ade.mean()))
@@ -84,7 +83,7 @@ def prediction_ade(model: hv.HumanModel, windows: hv.PredictionWindows, key) -> 
 
 def joint_terms(model: hv.HumanModel, data: JointData, theta, key) -> tuple[jnp.ndarray, jnp.ndarray]:
     """``(fd_loss, percent of ADE behind constant velocity)`` of ``model`` with its fitted fields
-    (:data:`evaluation.human_calibration.FITTED`) at ``exp(theta)``."""
+    (:data:`evaluation.humans.calibration.FITTED`) at ``exp(theta)``."""
     fd = hc.fd_loss(model, data.corridors, theta, key, stop_warmup=False)
     ade = prediction_ade(hc.with_theta(model, theta), data.windows, key)
     return fd, 100.0 * (ade / data.constant_velocity_ade_m - 1.0)

@@ -4,7 +4,7 @@ the crowd step and by Nelder-Mead as the check.
 For each of the five scenes, the fit reads only that scene's *training* split (the other four
 scenes' recordings, :func:`socialnav.data.recorded.eth_ucy_split`) and is scored on the scene's
 test split, which it never reads. The loss is the prediction protocol's
-(:func:`evaluation.human_validation.eth_ucy_prediction`: 8 frames observed, 12 predicted, every
+(:func:`evaluation.humans.validation.eth_ucy_prediction`: 8 frames observed, 12 predicted, every
 person aimed along their last observed velocity, walking groups detected over the observed
 frames and walking on as groups)::
 
@@ -15,7 +15,7 @@ interaction, its time gap, and Moussaïd's group terms' strengths; the body radi
 Jülich fit). The loss is taken over one fixed sample of training windows (256 by default, drawn
 once), minimised by Adam (optax, the gradient clipped to a global norm of 1) and by Nelder-Mead
 (scipy) from the same start: one function for both, so their curves compare. The fields are
-named ``"<part>.<field>"`` of :class:`evaluation.human_validation.HumanModel` (``speed``,
+named ``"<part>.<field>"`` of :class:`evaluation.humans.validation.HumanModel` (``speed``,
 ``anticipation``, ``orca``, ``group``).
 """
 
@@ -29,9 +29,8 @@ import numpy as np
 import optax
 
 from socialnav.data import recorded
-from socialnav.evaluation import human_validation as hv
-from socialnav.evaluation import minimise
-from socialnav.evaluation import pedestrian_measures as measures
+from socialnav.evaluation.humans import measures, minimise
+from socialnav.evaluation.humans import validation as hv
 
 _GROUP = ("group.gaze_per_rad", "group.attraction_mps2")
 FITTED = {
@@ -44,7 +43,7 @@ FITTED = {
     "steering_speed": ("speed.time_gap_s", "speed.neighbor_strength", "speed.neighbor_range_m",
                        "speed.steering_max_rad", *_GROUP),
 }  # fmt: skip
-# ORCA's fallback is a while_loop: its gradient is taken forward (evaluation.minimise.value_and_grad).
+# ORCA's fallback is a while_loop: its gradient is taken forward (evaluation.humans.minimise.value_and_grad).
 FORWARD_MODE = ("orca",)
 
 

@@ -1,5 +1,5 @@
-"""The two minimisers the human-model calibrations share (:mod:`evaluation.human_calibration`,
-:mod:`evaluation.trajectory_calibration`): Adam (optax) through a loss's gradient, and
+"""The two minimisers the human-model calibrations share (:mod:`evaluation.humans.calibration`,
+:mod:`evaluation.humans.trajectory_calibration`): Adam (optax) through a loss's gradient, and
 Nelder-Mead (scipy) on its value as the check that the gradient finds what a search finds.
 
 Both take a loss of the log-parameters ``theta`` and return the best ``theta`` seen with a

@@ -2,14 +2,14 @@
 
 Each protocol runs a human model (the crowd step the arena and the warehouse use,
 ``--human-model``) where the data was recorded and measures both with the same code
-(:mod:`evaluation.pedestrian_measures`, PedPy's Voronoi method for densities and speeds):
+(:mod:`evaluation.humans.measures`, PedPy's Voronoi method for densities and speeds):
 
 * **Fundamental diagram** (:func:`data_fundamental_diagram`, :func:`model_fundamental_diagram`):
   the nine Jülich uni-directional runs in a 1.8 m corridor (their steady states) against the
   model in a periodic 1.8 m corridor at 0.5-3.5 persons/m², speed per density bin.
 * **Counterflow** (:func:`data_counterflow`, :func:`model_counterflow`): the bi-directional
   run ``bi_corr_400_b_03`` in a 4.1 m corridor against the model there at the run's density:
-  speed and lane order (:func:`evaluation.pedestrian_measures.lane_order`).
+  speed and lane order (:func:`evaluation.humans.measures.lane_order`).
 * **Prediction on ETH/UCY** (:func:`eth_ucy_prediction`): the field's protocol (observe 8
   frames, 3.2 s; predict 12, 4.8 s; people present in all 20; each scene's test split), the
   model stepped from the last observed frame with every person present aimed along their last
@@ -18,7 +18,7 @@ Each protocol runs a human model (the crowd step the arena and the warehouse use
   aimed along the velocity with the people who walked together over the observed frames walking
   on as groups (``"velocity_groups"``, :mod:`jaxsim.groups`; reported beside, the bar's check
   is the plain ``"velocity"``, as issue 61 defined it).
-* **Bodies** (:func:`evaluation.pedestrian_measures.overlaps`): how often and how deep two
+* **Bodies** (:func:`evaluation.humans.measures.overlaps`): how often and how deep two
   bodies overlap in the model's corridors.
 
 A simulated corridor is periodic: each person has two ghosts a corridor length ahead and behind
@@ -40,7 +40,7 @@ import pandas as pd
 from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR, recorded
-from socialnav.evaluation import pedestrian_measures as measures
+from socialnav.evaluation.humans import measures
 from socialnav.jaxsim import geometry, groups, humans, orca, speed_model
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
@@ -474,7 +474,7 @@ class PredictionWindows:
 @functools.lru_cache(maxsize=16)
 def prediction_windows(scene: str, split: str = "test", reach_m: float = 1.0) -> PredictionWindows:
     """:class:`PredictionWindows` of ``scene``'s ``split`` (:func:`eth_ucy_windows`); walking
-    groups detected within ``reach_m`` (:func:`evaluation.pedestrian_measures.walking_groups`).
+    groups detected within ``reach_m`` (:func:`evaluation.humans.measures.walking_groups`).
     Cached: a validation scores every model three ways on each test split (read-only arrays)."""
     return windows_of(recorded.eth_ucy_split(scene, split), reach_m)
 
@@ -546,7 +546,7 @@ def eth_ucy_prediction(
     observed frame, every person aimed along their last observed velocity (``aim="velocity"``) or
     at their true final position (``aim="destination"``), at their last observed speed; with
     ``groups``, the people who walked together over the observed frames
-    (:func:`evaluation.pedestrian_measures.walking_groups` within ``reach_m``) walk on as groups
+    (:func:`evaluation.humans.measures.walking_groups` within ``reach_m``) walk on as groups
     (:mod:`jaxsim.groups`). Returns ``ade_m``, ``fde_m``, ``samples``, ``grouped`` (the share of
     scored people in a group)."""
     w = prediction_windows(scene, split, reach_m)

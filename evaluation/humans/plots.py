@@ -7,7 +7,7 @@ import pathlib
 import numpy as np
 
 from socialnav.common import figures
-from socialnav.evaluation import pedestrian_measures as measures
+from socialnav.evaluation.humans import measures
 
 COLOURS = ("tab:orange", "tab:green", "tab:purple", "tab:red", "tab:brown")
 
@@ -94,7 +94,7 @@ def counterflow_and_bodies(data: dict, results: dict, path: pathlib.Path) -> pat
 
 def trajectory_fit(rows: list[dict], title: str, path: pathlib.Path) -> pathlib.Path:
     """The ETH/UCY fits' loss on their training sample, best so far, against loss evaluations
-    (:func:`evaluation.trajectory_calibration.leave_one_scene_out`'s rows): the gradient solid,
+    (:func:`evaluation.humans.trajectory_calibration.leave_one_scene_out`'s rows): the gradient solid,
     Nelder-Mead dotted, a colour a held-out scene."""
     fig = figures.figure(figsize=(6.4, 3.8), layout="constrained")
     ax = fig.add_subplot()
@@ -112,7 +112,7 @@ def trajectory_fit(rows: list[dict], title: str, path: pathlib.Path) -> pathlib.
 
 
 def joint_tradeoff(rows: list[dict], data: dict, title: str, path: pathlib.Path) -> pathlib.Path:
-    """The joint fits (:func:`evaluation.joint_calibration.sweep`'s rows, each with its held-out
+    """The joint fits (:func:`evaluation.humans.joint_calibration.sweep`'s rows, each with its held-out
     ``checks`` as ``"held_out"``): left, the two training terms (the diagram's loss against the
     percent ADE behind constant velocity), the start hollow; right, held out, the density bins inside
     the data's ±1 s.d. against the five-scene ADE minus constant velocity's (m, left of 0 is ahead)."""
