@@ -47,6 +47,35 @@ from socialnav.jaxsim.world import build_world  # noqa: E402
 MAP_SHARE_BEFORE_RELEASE = 0.4
 
 
+# Seconds this process spent making programs (tracing, lowering, XLA's compile or reading a
+# compiled one back from the cache), summed from JAX's own monitoring events.
+_COMPILE_EVENTS = (
+    "/jax/core/compile/jaxpr_trace_duration",
+    "/jax/core/compile/jaxpr_to_mlir_module_duration",
+    "/jax/core/compile/backend_compile_duration",
+)
+_compile_s = [0.0]
+
+
+def _count_compile_seconds(event: str, seconds: float, **_) -> None:
+    if event in _COMPILE_EVENTS:
+        _compile_s[0] += seconds
+
+
+import jax.monitoring  # noqa: E402  (after the cache settings above)
+
+jax.monitoring.register_event_duration_secs_listener(_count_compile_seconds)
+
+
+@pytest.fixture(autouse=True)
+def _record_compile_seconds(record_property):
+    """Each test's seconds spent making programs, as the JUnit property ``compile_s`` (CI sums it
+    per file beside the test time: what a faster test would have to cut)."""
+    start = _compile_s[0]
+    yield
+    record_property("compile_s", round(_compile_s[0] - start, 3))
+
+
 @pytest.fixture(autouse=True, scope="module")
 def _free_compiled_programs_when_crowded():
     """After a test module, drop JAX's compiled programs (and the arena's caches of them) if the
