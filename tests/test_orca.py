@@ -22,6 +22,10 @@ from tests import orca_reference as reference
 OPEN = Grid(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), origin_x_m=-50.0, origin_y_m=-50.0, resolution_m=30.0)
 ROBOT = (jnp.float32(0.3), jnp.float32(0.1), jnp.float32(0.2), jnp.float32(0.0))
 DT = 0.1
+# Both steps compiled, also where a test runs them once: run eagerly, every JAX operation inside
+# is compiled on its own (hundreds of small programs a call, most of this file's time).
+step = jax.jit(orca.step_orca)
+reference_step = jax.jit(reference.step_orca)
 
 
 def _reference_params(p: orca.ORCAParams) -> reference.ORCAParams:
@@ -45,6 +49,11 @@ def _crowd(n: int, seed: int, density: float = 1.0, dtype=jnp.float32):
 def _second_program_fails(p, crowd) -> int:
     """How many people of ``crowd`` the second program leaves to the third (the old step's
     lines: everyone against everyone)."""
+    return int(_count_second_program_fails(p, crowd))
+
+
+@jax.jit
+def _count_second_program_fails(p, crowd):
     x, y, vx, vy, ax, ay, speed, present, moving = crowd
     n = x.shape[0]
     xy, v = jnp.stack([x, y], -1), jnp.stack([vx, vy], -1)
@@ -60,7 +69,7 @@ def _second_program_fails(p, crowd) -> int:
         failed, _ = reference._lp2(v[i] + u, dirs, ok, speed[i], pref[i], False)
         return failed < n
 
-    return int(jnp.sum(jax.vmap(one)(jnp.arange(n)) & moving))
+    return jnp.sum(jax.vmap(one)(jnp.arange(n)) & moving)
 
 
 @pytest.mark.parametrize(
@@ -80,12 +89,12 @@ def test_equal_to_the_step_that_solved_everything_for_everyone(n):
     for seed in range(4):
         crowd = _crowd(n, seed, density=2.0)
         fails += _second_program_fails(p, crowd)
-        ours = jax.jit(orca.step_orca)(p, OPEN, DT, *crowd, ROBOT, 0.3)
-        before = jax.jit(reference.step_orca)(_reference_params(p), OPEN, DT, *crowd, ROBOT, 0.3)
+        ours = step(p, OPEN, DT, *crowd, ROBOT, 0.3)
+        before = reference_step(_reference_params(p), OPEN, DT, *crowd, ROBOT, 0.3)
         with jax.enable_x64(True):
             crowd = _crowd(n, seed, density=2.0, dtype=jnp.float64)
-            exact = orca.step_orca(p, OPEN, DT, *crowd, ROBOT, 0.3)
-            old = reference.step_orca(_reference_params(p), OPEN, DT, *crowd, ROBOT, 0.3)
+            exact = step(p, OPEN, DT, *crowd, ROBOT, 0.3)
+            old = reference_step(_reference_params(p), OPEN, DT, *crowd, ROBOT, 0.3)
             assert exact[0].dtype == jnp.float64
             np.testing.assert_allclose(np.asarray(exact), np.asarray(old), atol=1e-9)
 
@@ -103,7 +112,7 @@ def test_batched_over_worlds_equals_one_world_at_a_time():
     batched = jax.vmap(lambda *c: orca.step_orca(p, OPEN, DT, *c, ROBOT, 0.3))(
         *(jnp.stack(a) for a in zip(*crowds)))  # fmt: skip
     for w, crowd in enumerate(crowds):
-        alone = orca.step_orca(p, OPEN, DT, *crowd, ROBOT, 0.3)
+        alone = orca.step_orca(p, OPEN, DT, *crowd, ROBOT, 0.3)  # both eager, as they were written
         for got, want in zip(batched, alone):
             np.testing.assert_allclose(np.asarray(got[w]), np.asarray(want), atol=1e-6)
 
@@ -114,16 +123,16 @@ def test_a_person_feels_only_its_nearest_neighbors():
     x, y, vx, vy, ax, ay, speed, present, moving = _crowd(n, 5, density=1.5)
     present = jnp.ones(n, bool)
     moving = jnp.ones(n, bool)
-    capped = orca.step_orca(orca.ORCAParams(max_neighbors=cap), OPEN, DT, x, y, vx, vy, ax, ay, speed, present,
+    capped = step(orca.ORCAParams(max_neighbors=cap), OPEN, DT, x, y, vx, vy, ax, ay, speed, present,
                             moving, ROBOT, 0.3)  # fmt: skip
     d = np.hypot(np.asarray(x - x[0]), np.asarray(y - y[0]))
     d[0] = np.inf
     only_nearest = jnp.asarray(np.isin(np.arange(n), np.argsort(d)[:cap]) | (np.arange(n) == 0))
-    alone = reference.step_orca(reference.ORCAParams(radius_m=PERSON_RADIUS_M), OPEN, DT, x, y, vx, vy, ax, ay, speed,
+    alone = reference_step(reference.ORCAParams(radius_m=PERSON_RADIUS_M), OPEN, DT, x, y, vx, vy, ax, ay, speed,
                                 only_nearest, moving, ROBOT, 0.3)  # fmt: skip
     for got, want in zip(capped, alone):
         np.testing.assert_allclose(float(got[0]), float(want[0]), atol=1e-5)
-    everyone = orca.step_orca(orca.ORCAParams(max_neighbors=n), OPEN, DT, x, y, vx, vy, ax, ay, speed, present,
+    everyone = step(orca.ORCAParams(max_neighbors=n), OPEN, DT, x, y, vx, vy, ax, ay, speed, present,
                               moving, ROBOT, 0.3)  # fmt: skip
     assert not np.allclose(np.asarray(everyone[2]), np.asarray(capped[2]), atol=1e-4)  # the cap changed someone
 
@@ -182,5 +191,5 @@ def test_the_radius_is_the_toolkits_person_and_traced():
         return jnp.sum(orca.step_orca(p, OPEN, DT, *crowd, ROBOT, 0.3)[0])
 
     # Traced: one compiled program for every radius, and a forward-mode derivative through it.
-    _, slope = jax.jvp(final_x, (jnp.float32(0.25),), (jnp.float32(1.0),))
+    _, slope = jax.jit(lambda r, t: jax.jvp(final_x, (r,), (t,)))(jnp.float32(0.25), jnp.float32(1.0))
     assert np.isfinite(float(slope)) and abs(float(slope)) > 0
