@@ -4,9 +4,8 @@ The ``socialnav`` command is :mod:`socialnav.cli`, one module a subcommand besid
 (:mod:`socialnav.cli.arena`, :mod:`socialnav.cli.gscl`, ...; the pipelines that join parts,
 ``socialnav run`` and ``ablation``, in :mod:`socialnav.cli.pipelines`; shared argument types in
 :mod:`socialnav.cli.argtypes`). Beside it, what the commands share: the runtime set-up
-(:mod:`socialnav.runtime`), batch jobs in shards, locally or on Ray (:mod:`socialnav.backend`),
-run-folder locks (:mod:`socialnav.locking`) and a user's actor loaded from its file
-(:mod:`socialnav.actor_spec`). It may import every part; no part imports it.
+(:mod:`socialnav.runtime`), batch jobs in shards, locally or on Ray (:mod:`socialnav.backend`)
+and run-folder locks (:mod:`socialnav.locking`). It may import every part; no part imports it.
 """
 
 from socialnav.common import __version__

@@ -1,6 +1,8 @@
 """The ``socialnav arena`` command: bad input refused, tables written, a run resumed, other
 settings refused."""
 
+import dataclasses
+
 import pandas as pd
 import pytest
 
@@ -36,11 +38,45 @@ def test_arena_command_writes_tables_resumes_and_refuses_other_settings(tmp_path
     assert "other settings" in capsys.readouterr().err
 
 
+def test_the_table_made_from_python_is_the_one_the_command_makes_and_resumes(tmp_path, capsys):
+    """``evaluation.arena.table.run_table`` is the command's work without the command: the command
+    run after it on the same folder finds every scene done (nothing recomputed, the same summary),
+    and a request with other settings is refused with the folder named."""
+    from socialnav import cli
+    from socialnav.common import runfolder
+    from socialnav.data import SCENES_DIR
+    from socialnav.evaluation.arena import table
+    from socialnav.jaxsim.scenes.spec import load_scene
+
+    out = tmp_path / "run"
+    request = table.TableRequest(
+        specs=(load_scene(SCENES_DIR / "casn_static_person.json"),), methods=("navfn",), variants=2
+    )
+    episodes, tables = table.run_table(out, request)
+    assert list(episodes["variant"]) == [0, 1] and set(episodes["method"]) == {"navfn"}
+    assert list(tables) == ["summary.csv", "stats.csv"]  # no paper compares NavFn alone in this scene
+    assert (out / "trajectories" / "casn_static_person.parquet").exists()
+    stamp = (out / "episodes" / "casn_static_person.parquet").stat().st_mtime_ns
+    summary = (out / "summary.csv").read_text()
+    args = ["arena", "--out", str(out), "--scenes", "casn_static_person", "--methods", "navfn", "--variants", "2"]
+    assert cli.main([*args, "--no-progress"]) == 0
+    assert (out / "episodes" / "casn_static_person.parquet").stat().st_mtime_ns == stamp
+    assert (out / "summary.csv").read_text() == summary
+    with pytest.raises(ValueError, match="other settings .*variants"):
+        table.run_table(out, dataclasses.replace(request, variants=3))
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "summary.csv").write_text("a file of the user's\n")
+    with pytest.raises(runfolder.NotOurs, match="summary.csv"):
+        table.run_table(foreign, request)
+    assert (foreign / "summary.csv").read_text() == "a file of the user's\n"
+
+
 def test_the_time_estimate_is_a_range_that_grows_with_the_work():
     """``estimate_s``: a low and a high end; more variants, methods or the held-out rows cost
     more; compilation alone is paid once per program, whatever the variants."""
-    from socialnav.cli.arena import COMPILE_S_PER_PROGRAM, STARTUP_S, estimate_s
     from socialnav.data import SCENES_DIR
+    from socialnav.evaluation.arena.table import COMPILE_S_PER_PROGRAM, STARTUP_S, estimate_s
     from socialnav.jaxsim.scenes.spec import load_scene
 
     specs = [load_scene(SCENES_DIR / f"{n}.json") for n in ("casn_head_on", "gscl_group")]

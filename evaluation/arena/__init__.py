@@ -11,7 +11,11 @@
   with intervals;
 - :mod:`~socialnav.evaluation.arena.stats`: the tests between methods;
 - :mod:`~socialnav.evaluation.arena.papers`: the seeds' published numbers beside ours;
-- :mod:`~socialnav.evaluation.arena.plots`: the pictures.
+- :mod:`~socialnav.evaluation.arena.plots`: the pictures;
+- :mod:`~socialnav.evaluation.arena.table`: the whole table in a run folder (what
+  ``socialnav arena`` runs): settings and digests, shards, per-scene joins, the tables written;
+- :mod:`~socialnav.evaluation.arena.actor_spec`: a user's actor factory named
+  ``MODULE:FUNCTION`` (``--actor``).
 
 In code the modules are imported under the names they had before they were a folder
 (``from socialnav.evaluation.arena import episodes as arena``, ``run as arena_run``, ...).

@@ -1,0 +1,498 @@
+"""The arena's table in a run folder: scenes x methods x variants, computed in shards, joined per
+scene, summarised.
+
+What ``socialnav arena`` does between checking its arguments and printing its tables (the command,
+:mod:`socialnav.cli.arena`, holds only the parsing, the checks and the printing). A run folder
+holds:
+
+- ``run.json``: the run's settings (:func:`settings`); a run with other settings is refused;
+- ``shards/<scene>-<digest>/<first>.parquet``: a shard's episodes (and ``.trajectories.parquet``)
+  while its scene is in flight (:func:`plan_shards`, :func:`compute_shard`, :func:`save_shard`);
+- ``episodes/<scene>.parquet``: the scene's joined episodes, its digest in the file's metadata
+  (present and matching: the scene is done; :func:`finish_scene`, :func:`finished`);
+- ``trajectories/``, ``pictures/``: the kept variants' steps and their pictures;
+- ``summary.csv``, ``stats.csv``, ``papers.csv``, ``directions.csv``, ``papers_stats.csv``
+  (:func:`write_tables`).
+
+A rerun with the same settings computes only what is missing: the digest of a scene
+(:func:`scene_digest`) covers its file's bytes and every setting that changes an episode.
+
+From Python, with the shards run one after the other here::
+
+    from socialnav.evaluation.arena import table
+    from socialnav.jaxsim.scenes.spec import load_scene
+
+    request = table.TableRequest(specs=(load_scene(FILE),), methods=("navfn", "casn"), variants=10)
+    episodes, tables = table.run_table(out, request)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import json
+import pathlib
+import shutil
+from collections.abc import Callable, Sequence
+
+from socialnav.common import runfolder
+from socialnav.common.atomic import write_atomic
+from socialnav.evaluation.arena import actor_spec
+from socialnav.evaluation.arena.run import HELD_OUT
+from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
+
+JOB = "socialnav arena"  # the job that owns a run folder's files (common.runfolder's manifest)
+POLICY_METHOD = "ppo"  # the rows of a trained policy (``--policy-run``)
+# What an arena run leaves at the top of its folder (run.json first, summary.csv last).
+RESULTS = (
+    "run.json",
+    "summary.csv",
+    "stats.csv",
+    "papers.csv",
+    "directions.csv",
+    "papers_stats.csv",
+    "episodes",
+    "trajectories",
+    "pictures",
+    "shards",
+)
+# The time printed before a run, as a range on this project's 2-core machine: start-up, then a
+# compilation per program (one per scene file and method, and two per scene for the people
+# without the robot and the metrics; a held-out mirror shares its scene's), then the simulated
+# seconds of every episode. Measured here with no compilation cache
+# (SOCIALNAV_JAX_CACHE=off): seed 001's four scenes x 11 methods in 75 s at 2 variants and 89 s
+# at 50 (1.2 s a program; the 48 variants more, 84,000 simulated seconds, at 6,000 a second);
+# the default table with --held-out x 100 variants took 9.3 min (docs/arena-results.md). The
+# ends below widen those figures (a loaded machine, slower scenes); the estimate they replace,
+# episodes / 55 per second, said 40 s for a run of minutes. An earlier run's programs in the
+# compilation cache can beat the low end.
+STARTUP_S = 10.0
+COMPILE_S_PER_PROGRAM = (0.7, 2.0)
+SIMULATED_S_PER_S = (6000.0, 2000.0)  # the fast end first: it gives the low estimate
+# Bytes a finished episode's row costs in the joined tables: 146 measured in memory
+# (``memory_usage(deep=True)``, 26 columns, 80 episodes of casn_head_on and casn_crossing), times
+# about four for the copies the joins, the summary and the statistics make.
+EPISODE_ROW_BYTES = 600
+
+
+@dataclasses.dataclass(frozen=True)
+class TableRequest:
+    """What a table is made of: every input that changes an episode, and what is kept.
+
+    Attributes:
+      specs: the scenes (:func:`socialnav.jaxsim.scenes.spec.load_scene`), different names.
+      methods: the rows: built-in methods, then the ``actor_specs``' names, then
+        :data:`POLICY_METHOD` with ``policy_run``.
+      variants: variants a scene; seed: their random seed.
+      held_out: also every scene mirrored with its ranges exceeded (rows ``<scene>@held_out``).
+      shard_variants: variants a shard (None: a scene's variants in one).
+      keep_trajectories: variants a scene and method whose steps are kept.
+      gscl_run: the GSCL model of method ``gscl`` (a resolved folder), or None.
+      human_model: how the people move (:data:`socialnav.jaxsim.scenes.people.HUMAN_MODELS`).
+      params_file, params_text: the ``--params`` file and its text ("" for the seeds' values).
+      actor_specs: users' actor factories, ``MODULE:FUNCTION`` with a file path made absolute.
+      policy_run, policy_digest: a trained policy's run folder and its digest, or None.
+      animate: ``(scene, method)`` pairs whose variant 0 is drawn as a GIF.
+    """
+
+    specs: tuple[SceneSpec, ...]
+    methods: tuple[str, ...]
+    variants: int = 100
+    seed: int = 0
+    held_out: bool = False
+    shard_variants: int | None = None
+    keep_trajectories: int = 5
+    gscl_run: pathlib.Path | None = None
+    human_model: str = "social_force"
+    params_file: pathlib.Path | None = None
+    params_text: str = ""
+    actor_specs: tuple[str, ...] = ()
+    policy_run: pathlib.Path | None = None
+    policy_digest: str | None = None
+    animate: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def per_shard(self) -> int:
+        return self.variants if self.shard_variants is None else self.shard_variants
+
+    @property
+    def runs(self) -> list[tuple[SceneSpec, bool]]:
+        """``(spec, held_out)`` of every scene row: the scenes, then their held-out mirrors."""
+        return [(spec, False) for spec in self.specs] + ([(spec, True) for spec in self.specs] if self.held_out else [])
+
+    @property
+    def names(self) -> list[str]:
+        """Every scene row's name (``<scene>`` or ``<scene>@held_out``), as :attr:`runs`."""
+        return [spec.name + (HELD_OUT if held_out else "") for spec, held_out in self.runs]
+
+
+def estimate_s(specs, n_methods: int, variants: int, held_out: bool) -> tuple[float, float]:
+    """``(low, high)`` seconds a run of ``specs`` x ``n_methods`` x ``variants`` takes here
+    (see the constants above)."""
+    programs = len(specs) * (n_methods + 2)
+    simulated = sum(spec.timeout_s for spec in specs) * (2 if held_out else 1) * variants * n_methods
+    return tuple(
+        STARTUP_S + programs * c + simulated / rate for c, rate in zip(COMPILE_S_PER_PROGRAM, SIMULATED_S_PER_S)
+    )
+
+
+def memory_bytes(request: TableRequest) -> float:
+    """What a run holds at once: every episode's row in the joined tables, and one shard's
+    variants in flight (their trajectories, T steps of the robot and every person slot, and the
+    planner's grids, a few (H, W) float32 maps per variant)."""
+    from socialnav.evaluation.arena.episodes import ArenaConfig
+
+    config = ArenaConfig()
+    rows = len(request.runs) * request.variants * len(request.methods) * EPISODE_ROW_BYTES
+    flight = 0.0
+    for spec in request.specs:
+        steps = spec.timeout_s / config.dt_s
+        xmin, xmax, ymin, ymax = spec.bounds_m
+        cells = (xmax - xmin) * (ymax - ymin) / config.grid_resolution_m**2
+        per_variant = steps * (48 + 24 * spec.n_people_slots) + 16 * cells * 4
+        flight = max(flight, per_variant * min(request.per_shard, request.variants))
+    return rows + flight
+
+
+def settings(request: TableRequest) -> dict:
+    """The run's settings as ``run.json`` records them, with every scene row's digest
+    (``scene_digests``) and every scene file's (``scene_file_digests``)."""
+    from socialnav.common import __version__
+    from socialnav.evaluation.arena import nav_metrics
+    from socialnav.models.inference import model_identity
+
+    chosen = {
+        "scenes": [s.name for s in request.specs],
+        "scene_files": [str(s.file) for s in request.specs],
+        "methods": list(request.methods),
+        "variants": request.variants,
+        "seed": request.seed,
+        "keep_trajectories": request.keep_trajectories,
+        "held_out": request.held_out,
+        "shard_variants": request.per_shard,
+        "gscl_run": None if request.gscl_run is None else str(request.gscl_run),
+        "gscl_model": None if request.gscl_run is None else model_identity(request.gscl_run),
+        "human_model": request.human_model,
+        "params_file": None if request.params_file is None else str(request.params_file),
+        "params": request.params_text or None,  # None without a file: earlier runs' digests stay valid
+        "actors": list(request.actor_specs),
+        "actor_sources": [actor_spec.source_digest(spec) for spec in request.actor_specs],
+        **(
+            {}
+            if request.policy_digest is None
+            else {"policy_run": str(request.policy_run), "policy_model": request.policy_digest}
+        ),
+        "metrics_version": nav_metrics.VERSION,
+        "socialnav_version": __version__,
+    }
+    chosen["scene_digests"] = {
+        name: scene_digest(spec.file, held_out, chosen)
+        for (spec, held_out), name in zip(request.runs, request.names, strict=True)
+    }
+    chosen["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in request.specs}
+    return chosen
+
+
+def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str:
+    """A scene's results are these when this digest matches: the scene file's bytes, the held-out
+    flag, and every setting that changes an episode (methods, variants, seed, shard layout, the
+    GSCL model, the source files of the ``--actor`` factories, the human model, the ``--params``
+    file's text, the metrics' and the toolkit's versions)."""
+    h = hashlib.sha256()
+    h.update(pathlib.Path(spec_file).read_bytes())
+    keys = (
+        "methods",
+        "variants",
+        "seed",
+        "shard_variants",
+        "keep_trajectories",
+        "gscl_model",
+        "actor_sources",
+        "human_model",
+        "params",
+    )
+    chosen = {k: settings.get(k) for k in keys}
+    if settings.get("policy_model") is not None:  # absent without --policy-run: earlier digests stay valid
+        chosen["policy_model"] = settings["policy_model"]
+    h.update(json.dumps({"held_out": held_out, **chosen}, sort_keys=True).encode())
+    h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
+    return h.hexdigest()[:16]
+
+
+def settings_conflict(out: pathlib.Path, chosen: dict) -> str | None:
+    """What differs between ``chosen`` and the run already in ``out`` (its ``run.json``), in words,
+    or None where there is none or it has the same settings (to be resumed)."""
+    meta = out / "run.json"
+    if not meta.exists():
+        return None
+    try:
+        previous = json.loads(meta.read_text())
+    except (OSError, json.JSONDecodeError):
+        previous = None
+    differs = [k for k in chosen if not isinstance(previous, dict) or previous.get(k) != chosen[k]]
+    if not differs:
+        return None
+    files_before = previous.get("scene_file_digests") or {} if isinstance(previous, dict) else {}
+    changed = [n for n, d in chosen["scene_file_digests"].items() if files_before.get(n) not in (None, d)]
+    if changed:
+        return f"scene file(s) changed since: {', '.join(changed)}"
+    return f"other settings ({', '.join(differs)})"
+
+
+def finished(out: pathlib.Path, name: str, digest: str) -> bool:
+    """A scene's episodes file exists and was made with these settings (its ``scene_digest``)."""
+    import pyarrow.parquet as pq
+
+    path = out / "episodes" / f"{name}.parquet"
+    if not path.is_file():
+        return False
+    try:
+        metadata = pq.read_schema(path).metadata or {}
+        attrs = json.loads(metadata.get(b"PANDAS_ATTRS", b"{}"))
+    except (OSError, ValueError):
+        return False
+    return attrs.get("scene_digest") == digest
+
+
+def shard_file(out: pathlib.Path, name: str, digest: str, first: int) -> pathlib.Path:
+    """A shard's episodes file: under a folder named by its scene and the digest of what made it,
+    so a shard of an edited scene or of other settings is never joined with these."""
+    return out / "shards" / f"{name}-{digest}" / f"{first:06d}.parquet"
+
+
+def plan_shards(out: pathlib.Path, request: TableRequest, digests: dict) -> list[tuple[str, pathlib.Path, tuple, int]]:
+    """The shards still to compute: ``(name, output file, compute_shard's arguments, episodes)``
+    each. A scene and its held-out mirror come one after the other: they share their compiled
+    programs, which the arena may drop between scenes
+    (:func:`socialnav.evaluation.arena.episodes.release_programs_if_crowded`)."""
+    runs, names = request.runs, request.names
+    position = {id(spec): k for k, spec in enumerate(request.specs)}
+    order = sorted(range(len(runs)), key=lambda i: (position[id(runs[i][0])], runs[i][1]))
+    shards = []
+    for (spec, held_out), name in ((runs[i], names[i]) for i in order):
+        if finished(out, name, digests[name]):
+            continue  # the whole scene is done, with these settings
+        for first in range(0, request.variants, request.per_shard):
+            n = min(request.per_shard, request.variants - first)
+            args = (
+                spec,
+                held_out,
+                first,
+                n,
+                tuple(request.methods),
+                request.seed,
+                request.keep_trajectories,
+                request.gscl_run,
+                tuple(request.actor_specs),
+                request.human_model,
+                request.params_text or "",
+                None if request.policy_run is None else str(request.policy_run.resolve()),
+            )
+            output = runfolder.inside(out, shard_file(out, name, digests[name], first))
+            shards.append((f"{name}[{first}:{first + n}]", output, args, n * len(request.methods)))
+    return shards
+
+
+@functools.lru_cache(maxsize=4)
+def gscl_model(run: pathlib.Path | None):
+    """The GSCL model in ``run`` (loaded once per process and run), or None."""
+    if run is None:
+        return None
+    from socialnav.models.inference import SocialCostModel
+
+    return SocialCostModel.load(run)
+
+
+def compute_shard(
+    spec,
+    held_out,
+    first,
+    n,
+    methods,
+    seed,
+    keep_trajectories,
+    gscl_run,
+    actor_specs=(),
+    human_model="social_force",
+    params_text="",
+    policy_run=None,
+):
+    """One shard: every method on variants ``first .. first + n - 1`` of a scene (a Ray task with
+    ``--backend ray``): ``(episodes frame, trajectories frame or None)``. ``actor_specs``: the
+    ``--actor`` factories, loaded here (in the worker); ``params_text``: the ``--params`` file's
+    text (parsed here, so a worker needs no access to the file); ``policy_run``: a trained
+    policy's run folder (``--policy-run``), restored here. The GSCL weights enter the
+    episode program traced: a second checkpoint of the same network compiles nothing new."""
+    from socialnav.evaluation.arena import params as arena_params
+    from socialnav.evaluation.arena import run as arena_run
+    from socialnav.evaluation.arena.episodes import ArenaConfig
+
+    keep = max(0, min(n, keep_trajectories - first))
+    users = {actor_spec.name(text): actor_spec.load(text) for text in actor_specs}
+    if policy_run is not None:
+        from socialnav.planners.learning.policy_run import actor_factory
+
+        users[POLICY_METHOD] = actor_factory(policy_run, POLICY_METHOD)
+    return arena_run.run_scene(
+        spec,
+        list(methods),
+        n,
+        seed,
+        first,
+        keep,
+        gscl_model(gscl_run),
+        ArenaConfig(human_model=human_model),
+        held_out=held_out,
+        user_actors=users,
+        params=arena_params.parse(params_text, "--params") if params_text else None,
+    )
+
+
+def save_shard(shard, result) -> None:
+    """Write :func:`compute_shard`'s ``result`` to ``shard.output`` (the episodes, last: its
+    presence marks the shard done) and beside it the trajectories."""
+    episodes, trajectories = result
+    if trajectories is not None:
+        write_atomic(shard.output.with_suffix(".trajectories.parquet"), trajectories.to_parquet)
+    write_atomic(shard.output, episodes.to_parquet)  # last: its presence marks the shard done
+
+
+def finish_scene(out, request: TableRequest, spec, held_out, name, digest) -> None:
+    """Join a scene's shards into ``episodes/<name>.parquet`` and ``trajectories/``, draw its
+    pictures, then remove the shards (the episodes file last: its presence, with the scene's
+    digest in its metadata, marks the scene done)."""
+    import pandas as pd
+
+    from socialnav.evaluation.arena import plots as arena_plots
+
+    methods = request.methods
+    folder = runfolder.inside(out, out / "shards" / f"{name}-{digest}")
+    parts = sorted(folder.glob("[0-9]*[0-9].parquet"))
+    episodes = pd.concat([pd.read_parquet(f) for f in parts], ignore_index=True)
+    kept = [pd.read_parquet(f) for f in sorted(folder.glob("*.trajectories.parquet"))]
+    order = {m: k for k, m in enumerate(methods)}
+    episodes = episodes.sort_values(["method", "variant"], key=lambda c: c.map(order) if c.name == "method" else c)
+    episodes = episodes.reset_index(drop=True)
+    episodes.attrs = {"scene_digest": digest}
+    written = []
+    if kept:
+        trajectories = pd.concat(kept, ignore_index=True)
+        drawn = mirror(spec) if held_out else spec
+        write_atomic(runfolder.inside(out, out / "trajectories" / f"{name}.parquet"), trajectories.to_parquet)
+        written.append(f"trajectories/{name}.parquet")
+        pictures = out / "pictures"
+        drawings = [
+            (arena_plots.paths_figure, f"{name}_paths.png", ()),
+            (arena_plots.distance_figure, f"{name}_distance.png", ()),
+        ]
+        if "snape_social_eband" in methods:
+            drawings.append((arena_plots.speed_figure, f"{name}_speed.png", ("snape_social_eband",)))
+        for draw, file, extra in drawings:
+            draw(drawn, trajectories, *extra, runfolder.inside(out, pictures / file))
+            written.append(f"pictures/{file}")
+        for scene_name, method in request.animate:
+            if scene_name == name:
+                gif = runfolder.inside(out, pictures / f"{name}_{method}.gif")
+                arena_plots.animation(drawn, trajectories, method, gif)
+                written.append(f"pictures/{gif.name}")
+    runfolder.record(out, JOB, [*written, f"episodes/{name}.parquet"])
+    write_atomic(runfolder.inside(out, out / "episodes" / f"{name}.parquet"), episodes.to_parquet)
+    shutil.rmtree(folder, ignore_errors=True)
+    if out.joinpath("shards").is_dir() and not any(out.joinpath("shards").iterdir()):
+        out.joinpath("shards").rmdir()
+
+
+def join_scenes(out: pathlib.Path, request: TableRequest, digests: dict):
+    """Every scene row's episodes as one frame, each scene's shards joined first where that scene
+    is not yet finished."""
+    import pandas as pd
+
+    frames = []
+    for (spec, held_out), name in zip(request.runs, request.names, strict=True):
+        episodes_file = runfolder.inside(out, out / "episodes" / f"{name}.parquet")
+        if not finished(out, name, digests[name]):
+            finish_scene(out, request, spec, held_out, name, digests[name])
+        frames.append(pd.read_parquet(episodes_file))
+    return pd.concat(frames, ignore_index=True)
+
+
+def write_tables(out: pathlib.Path, episodes) -> dict:
+    """Write the run's tables from its joined ``episodes``: ``summary.csv`` (one row per scene and
+    method, with intervals), ``stats.csv`` (the tests between methods), ``pictures/methods.png``
+    and, where the run has the papers' scenes, ``papers.csv``, ``directions.csv`` and
+    ``papers_stats.csv``. Returns the tables written, by file name, in that order."""
+    from socialnav.evaluation.arena import papers
+    from socialnav.evaluation.arena import report as arena_report
+    from socialnav.evaluation.arena import stats as arena_stats
+
+    summary = arena_report.summary(episodes)
+    write_atomic(out / "summary.csv", lambda tmp: summary.to_csv(tmp, index=False))
+    statistics = arena_stats.scene_statistics(episodes)
+    write_atomic(out / "stats.csv", lambda tmp: statistics.to_csv(tmp, index=False))
+    tables = {"summary.csv": summary, "stats.csv": statistics}
+    written = ["summary.csv", "stats.csv"]
+    if len(summary):
+        from socialnav.evaluation.arena import plots as arena_plots
+
+        arena_plots.methods_figure(summary, runfolder.inside(out, out / "pictures" / "methods.png"))
+        written.append("pictures/methods.png")
+    for name, table in (
+        ("papers.csv", papers.comparison(summary).dropna(subset=["ours"])),
+        ("directions.csv", papers.directions(episodes)),
+        ("papers_stats.csv", papers.stats_comparison(episodes)),
+    ):
+        if not len(table):
+            continue
+        write_atomic(out / name, lambda tmp, table=table: table.to_csv(tmp, index=False))
+        written.append(name)
+        tables[name] = table
+    runfolder.record(out, JOB, written)
+    return tables
+
+
+def _run_here(compute: Callable, save: Callable, shards: Sequence) -> None:
+    for shard in shards:
+        save(shard, compute(*shard.args))
+
+
+@dataclasses.dataclass(frozen=True)
+class _Shard:
+    name: str
+    output: pathlib.Path
+    args: tuple
+    work: float
+
+
+def run_table(out, request: TableRequest, run_shards: Callable | None = None):
+    """The whole table into the run folder ``out`` (made if missing; a run with the same settings
+    is resumed): its episodes as one frame and the tables :func:`write_tables` wrote.
+
+    ``run_shards(compute, save, shards)`` runs the shards (objects with ``name``, ``output``,
+    ``args``, ``work``); default: one after the other in this process (the command line passes
+    :func:`socialnav.backend.run_shards` for a progress bar and Ray). Raises ``ValueError`` where
+    ``out`` holds a run with other settings, :class:`socialnav.common.runfolder.NotOurs` where it
+    holds another job's files. Unlike the command it takes no lock on ``out``: one run a folder.
+    """
+    out = pathlib.Path(out)
+    runfolder.claim(out, JOB, RESULTS)  # never writes over files no arena run wrote
+    chosen = settings(request)
+    conflict = settings_conflict(out, chosen)
+    if conflict is not None:
+        raise ValueError(f"{out} holds a run with {conflict} ({out / 'run.json'})")
+    start(out, chosen)
+    digests = chosen["scene_digests"]
+    shards = [_Shard(*s) for s in plan_shards(out, request, digests)]
+    (run_shards or _run_here)(compute_shard, save_shard, shards)
+    episodes = join_scenes(out, request, digests)
+    return episodes, write_tables(out, episodes)
+
+
+def start(out: pathlib.Path, chosen: dict, recorded: dict | None = None) -> None:
+    """Make ``out`` and write its ``run.json`` (``chosen`` and ``recorded``: what is noted but not
+    compared, such as the backend)."""
+    from socialnav.common.atomic import write_text_atomic
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(out / "run.json", json.dumps({**chosen, **(recorded or {})}, indent=1) + "\n")
+    runfolder.record(out, JOB, ["run.json", "shards/"])
