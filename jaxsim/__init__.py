@@ -12,7 +12,7 @@ Re-exported here: what a script needs to simulate worlds and read their logs (th
 them from their modules).
 """
 
-from socialnav.jaxsim.actor import Actor, Driver
+from socialnav.jaxsim.actor import Actor, Driver, replanning
 from socialnav.jaxsim.logs import record_table, simulate_to_parquet
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.rollout import to_numpy
@@ -29,6 +29,7 @@ __all__ = [
     "build_world",
     "load_scenario",
     "record_table",
+    "replanning",
     "simulate_to_parquet",
     "to_numpy",
 ]

@@ -4,7 +4,7 @@ One kind for both worlds of the toolkit: the arena's scenes (:mod:`jaxsim.scenes
 ``(v, omega)``) and the warehouse day and protocol (:mod:`jaxsim.step`, action
 :class:`jaxsim.robot.RobotCommand`).
 
-An :class:`Actor` is two pure functions and two static numbers::
+An :class:`Actor` is two pure functions::
 
     init(key, observation) -> actor_state
     act(params, actor_state, observation, key) -> (action, actor_state)
@@ -13,9 +13,10 @@ An :class:`Actor` is two pure functions and two static numbers::
 leaves are traced, so a new checkpoint or a parameter sweep does not recompile. ``actor_state``
 is any pytree of fixed shapes (a path, a recurrent state, a filter).
 
-A stack that replans at a slower rate adds ``plan(params, actor_state, observation, key) ->
-actor_state`` and ``plan_every_steps`` (the arena's rollout runs it; see
-:func:`jaxsim.scenes.actor.rollout`).
+A stack that plans at a slower rate than it acts is an actor wrapped by :func:`replanning`:
+``replanning(actor, plan, every_steps=10)`` runs ``plan(params, actor_state, observation, key)
+-> actor_state`` before every tenth ``act`` (``every_steps=0``: before the first only). The
+rollouts know nothing of planning.
 
 A :class:`Driver` is an actor with its params, the one pytree a rollout takes: the actor is its
 static part (the compiled program's cache key), the params its leaves.
@@ -28,6 +29,7 @@ from collections.abc import Callable
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 from flax import struct
 
 ActorState = Any
@@ -43,16 +45,64 @@ class Actor:
     Attributes:
       init: ``(key, observation) -> actor_state``.
       act: ``(params, actor_state, observation, key) -> (action, actor_state)``.
-      plan: optional ``(params, actor_state, observation, key) -> actor_state`` run every
-        ``plan_every_steps`` control steps (0: once, at the start).
       name: shown in tables and errors.
     """
 
     init: Callable[[jax.Array, Observation], ActorState]
     act: Callable[[Params, ActorState, Observation, jax.Array], tuple[Action, ActorState]]
-    plan: Callable[[Params, ActorState, Observation, jax.Array], ActorState] | None = None
-    plan_every_steps: int = 1
     name: str = "actor"
+
+
+Plan = Callable[[Params, ActorState, Observation, jax.Array], ActorState]
+# Folded into an act's key for the plan that runs before it (the act keeps its key as given).
+PLAN_FOLD = 1
+
+
+@struct.dataclass
+class Replanned:
+    """The state of an actor wrapped by :func:`replanning`.
+
+    Attributes:
+      inner: the wrapped actor's state.
+      steps: () int32, the control steps taken so far. It starts from a constant and only ever
+        counts up, so under ``vmap`` it stays one number for the whole batch (every episode of a
+        batch steps together): the ``lax.cond`` that asks whether a plan is due keeps a scalar
+        predicate and runs the plan only on the steps it is due, where a batched predicate
+        would turn it into a select that plans on every step.
+    """
+
+    inner: ActorState
+    steps: jax.Array
+
+
+def replanning(actor: Actor, plan: Plan, every_steps: int) -> Actor:
+    """``actor`` whose state ``plan`` updates before every ``every_steps``-th action, the first
+    included (``every_steps = 0``: before the first action only, a plan for the whole episode).
+    ``plan(params, actor_state, observation, key) -> actor_state`` sees the same params and
+    observation as the ``act`` that follows it. The wrapped actor's state is
+    :class:`Replanned` (``inner_state`` reads the wrapped one)."""
+    every = int(every_steps)
+    if every < 0:
+        raise ValueError(f"replanning: every_steps must be >= 0, got {every_steps}")
+
+    def init(key, observation) -> Replanned:
+        return Replanned(inner=actor.init(key, observation), steps=jnp.zeros((), jnp.int32))
+
+    def act(params, state: Replanned, observation, key):
+        due = state.steps == 0 if every == 0 else state.steps % every == 0
+        plan_key = jax.random.fold_in(key, PLAN_FOLD)
+        inner = jax.lax.cond(due, lambda s: plan(params, s, observation, plan_key), lambda s: s, state.inner)
+        action, inner = actor.act(params, inner, observation, key)
+        return action, Replanned(inner=inner, steps=state.steps + 1)
+
+    return Actor(init=init, act=act, name=actor.name)
+
+
+def inner_state(state: ActorState) -> ActorState:
+    """The innermost actor's state of ``state`` (through any :func:`replanning`)."""
+    while isinstance(state, Replanned):
+        state = state.inner
+    return state
 
 
 @struct.dataclass

@@ -1,9 +1,11 @@
 """The built-in methods as actors (:class:`jaxsim.scenes.actor.Actor`), and the simplest one.
 
 :func:`stack_actor` turns a :class:`~planners.stack.StackConfig` (a cost layer, a global grid
-planner at 1 Hz, a local planner at 10 Hz) into an actor: its ``plan`` draws the social layer
-from what the robot perceives, adds the seen people as obstacles inflated with the walls and
-plans the global path; its ``act`` runs the local planner on that path and a safety stop. The
+planner at 1 Hz, a local planner at 10 Hz) into an actor (:func:`stack_parts` gives its pieces):
+its ``plan`` draws the social layer from what the robot perceives, adds the seen people as
+obstacles inflated with the walls and plans the global path; its ``act`` runs the local planner
+on that path and a safety stop; :func:`jaxsim.actor.replanning` runs the plan before every tenth
+action. The
 map (occupancy, interaction spaces, walls) and every float of the robot and the layers are the
 actor's ``params``, traced: another scene of the same shapes, another speed limit or another
 GSCL checkpoint reuses the compiled program. The social layer is a
@@ -18,7 +20,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Any
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -26,7 +29,7 @@ import numpy as np
 from flax import struct
 
 from socialnav.jaxsim.scenes import world as world_lib
-from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.actor import Actor, replanning
 from socialnav.jaxsim.scenes.env import Env, Observation
 from socialnav.planners import stack
 from socialnav.planners.layers import CostLayer, costmap
@@ -159,7 +162,20 @@ def _scene(params: StackParams, obs: Observation, velocity) -> Scene:
     )
 
 
-def stack_actor(
+class StackParts(NamedTuple):
+    """A navigation stack's functions before :func:`jaxsim.actor.replanning` joins them:
+    ``init(key, obs)``, ``plan(params, state, obs, key)`` (the layer and the global path),
+    ``act(params, state, obs, key)`` (the local planner and the safety stop), the planning period
+    ``every_steps`` (0: once) and the ``name``."""
+
+    init: Callable
+    plan: Callable
+    act: Callable
+    every_steps: int
+    name: str
+
+
+def stack_parts(
     method: stack.StackConfig,
     grid: costmap.GridSpec,
     robot_radius_m: float,
@@ -167,8 +183,8 @@ def stack_actor(
     max_path_cells: int = 256,
     layer: CostLayer | None = None,
     name: str | None = None,
-) -> Actor:
-    """A navigation stack as an actor.
+) -> StackParts:
+    """A navigation stack's init, plan and act (:func:`stack_actor` joins them into an actor).
 
     Args:
       method: the stack (layer, global and local planner, replanning or not).
@@ -267,8 +283,23 @@ def stack_actor(
         return action, st.replace(planner_velocity=obs.people_velocity_mps, speed_gain=gain)
 
     every = replan_every_steps if method.replan else 0
-    label = name or method.layer
-    return Actor(init=init, act=act, plan=plan, plan_every_steps=every, name=label)
+    return StackParts(init=init, plan=plan, act=act, every_steps=every, name=name or method.layer)
+
+
+def stack_actor(
+    method: stack.StackConfig,
+    grid: costmap.GridSpec,
+    robot_radius_m: float,
+    replan_every_steps: int = 10,
+    max_path_cells: int = 256,
+    layer: CostLayer | None = None,
+    name: str | None = None,
+) -> Actor:
+    """A navigation stack as an actor: :func:`stack_parts`' ``act`` with its ``plan`` run before
+    every ``replan_every_steps``-th action (:func:`jaxsim.actor.replanning`; a stack with
+    ``replan=False`` plans before the first only). Arguments as :func:`stack_parts`."""
+    parts = stack_parts(method, grid, robot_radius_m, replan_every_steps, max_path_cells, layer, name)
+    return replanning(Actor(init=parts.init, act=parts.act, name=parts.name), parts.plan, parts.every_steps)
 
 
 def safety_stop(params: StackParams, obs: Observation) -> jax.Array:

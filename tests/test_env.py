@@ -459,3 +459,42 @@ def test_a_velocity_models_people_feel_the_robot_widened_to_the_envs_bodies(setu
     assert felt + body == pytest.approx(steering.robot.radius_m + steering.config.person_radius_m)
     plain = make_env(setup.spec, EnvConfig())
     assert float(plain.robot_radius_felt_m()) == pytest.approx(plain.robot.radius_m)
+
+
+def _counting_actor(every_steps: int) -> Actor:
+    """An actor whose plan counts its calls and whose action carries the count (v = plans so far)."""
+    from socialnav.jaxsim.actor import replanning
+
+    def plan(params, plans, obs, key):
+        return plans + 1
+
+    def act(params, plans, obs, key):
+        return jnp.stack([plans.astype(jnp.float32), jnp.float32(0.0)]), plans
+
+    inner = Actor(init=lambda key, obs: jnp.int32(0), act=act, name="counting")
+    return replanning(inner, plan, every_steps)
+
+
+@pytest.mark.parametrize("every, due", [(10, [0, 10, 20]), (7, [0, 7, 14, 21]), (0, [0])])
+def test_replanning_plans_before_every_nth_action_and_only_then_in_a_batch(setup, every, due):
+    """``replanning(actor, plan, every)``: the plan runs before actions 0, every, 2 every, ...
+    (``every = 0``: before the first only), the same in a vmapped batch as alone, and a batch's
+    program asks whether a plan is due with one scalar ``cond`` (a select would plan every step)."""
+    from socialnav.jaxsim.actor import Replanned, inner_state
+
+    actor = _counting_actor(every)
+    variants = _variants(setup, 3)
+    run = lambda v: rollout(setup.env, actor, setup.env.robot, v, jax.random.key(1), n_steps=25)
+    (_, final), records = jax.jit(jax.vmap(run))(variants)
+    plans_by_step = np.asarray(records.action)[:, :, 0]
+    expected = np.cumsum(np.isin(np.arange(25), due))
+    assert (plans_by_step == expected).all()
+    assert isinstance(final, Replanned) and (np.asarray(inner_state(final)) == len(due)).all()
+    (_, alone), _ = jax.jit(run)(_one(variants, 1))
+    assert int(inner_state(alone)) == len(due)
+    # Every cond of the single episode's program is still a cond in the batch's (a batched
+    # predicate would have made the plan's a select).
+    batched, single = jax.make_jaxpr(jax.vmap(run))(variants), jax.make_jaxpr(run)(_one(variants, 1))
+    assert str(batched).count("cond[") == str(single).count("cond[") >= 1
+    with pytest.raises(ValueError, match="every_steps must be >= 0"):
+        _counting_actor(-1)

@@ -76,7 +76,7 @@ def test_the_global_planner_leaves_the_people_to_the_social_layer_when_the_scene
     """navfn (no social layer) from (0, 0) to (3.8, 0) with a person at (2, 0): round them when
     people are obstacles (the default), straight through their place when they are not."""
     setup = arena.setup_scene(load_scene(SCENES_DIR / "gscl_queue.json"))
-    actor = actors.stack_actor(METHODS["navfn"], setup.grid, 0.275)
+    actor = actors.stack_parts(METHODS["navfn"], setup.grid, 0.275)  # its plan alone
     obs = _observation([(2.0, 0.0)], goal=(3.8, 0.0)).replace(robot_xy_m=jnp.array([0.0, 0.0], jnp.float32))
     offsets = {}
     for seen in (True, False):
@@ -116,7 +116,7 @@ def test_a_forbidden_social_cost_is_inflated_with_the_walls_and_a_graded_one_is_
     for level in (sc.FORBIDDEN, sc.GRADED_TOP):
         layer = layers.gscl(_band_costs(level))
         params = actors.stack_params(setup.env, setup.map, layer=layer, people_are_obstacles=False)
-        actor = actors.stack_actor(METHODS["gscl"], setup.grid, 0.275, layer=layer)
+        actor = actors.stack_parts(METHODS["gscl"], setup.grid, 0.275, layer=layer)
         st = actor.plan(params, actor.init(jax.random.PRNGKey(0), obs), obs, jax.random.PRNGKey(0))
         path = np.asarray(st.path[: int(st.path_len)])
         assert np.linalg.norm(path[-1] - [3.8, 0.0]) < 0.1, level

@@ -86,9 +86,7 @@ def _stopping(driver: Driver) -> Driver:
         return command.replace(speed_mps=jnp.zeros_like(command.speed_mps)), state
 
     actor = driver.actor
-    return Driver(
-        Actor(init=actor.init, act=act, plan=actor.plan, plan_every_steps=actor.plan_every_steps), driver.params
-    )
+    return Driver(Actor(init=actor.init, act=act, name=actor.name), driver.params)
 
 
 def _check(intervened: str, start_offset: int, moved_by_step: list[dict], where):

@@ -34,6 +34,7 @@ import numpy as np
 from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR
+from socialnav.jaxsim.actor import inner_state
 from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.scenes import env as env_lib
@@ -242,7 +243,7 @@ def _record(seen: env_lib.Observation, action, actor_state, timestep: env_lib.Ti
     ahead = seen.robot_xy_m + PREDICTION_HORIZON_S * seen.robot_speed_mps * heading
     predicted = seen.people_xy_m + PREDICTION_HORIZON_S * seen.people_velocity_mps
     pred_d = jnp.min(jnp.where(seen.people_visible, jnp.linalg.norm(predicted - ahead, axis=-1), jnp.inf))
-    gain = getattr(actor_state, "speed_gain", jnp.float32(1.0))
+    gain = getattr(inner_state(actor_state), "speed_gain", jnp.float32(1.0))
     return (
         o.robot_xy_m,
         o.robot_yaw_rad,

@@ -10,7 +10,7 @@ the environment (:mod:`~socialnav.jaxsim.scenes.env`) and the rollout of an acto
 (:mod:`~socialnav.jaxsim.scenes.gym_env`) need the ``gym`` extra and are not imported here.
 """
 
-from socialnav.jaxsim.scenes.actor import Actor, StepRecord, rollout
+from socialnav.jaxsim.scenes.actor import Actor, StepRecord, replanning, rollout
 from socialnav.jaxsim.scenes.env import Env, EnvConfig, Observation, RewardParams, TimeStep, make_env
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import SceneSpec, load_scene, mirror
@@ -30,6 +30,7 @@ __all__ = [
     "load_scene",
     "make_env",
     "mirror",
+    "replanning",
     "rollout",
     "sample_variant",
     "sample_variants",

@@ -8,14 +8,9 @@ with the arena's observation (:class:`jaxsim.scenes.env.Observation`) and action
 
 ``params`` is any pytree (weights, layer parameters, the map the actor was given); its leaves
 are traced, so a new checkpoint or a parameter sweep does not recompile. ``actor_state`` is any
-pytree of fixed shapes (a path, a recurrent state, a filter).
-
-A stack that replans at a slower rate adds ``plan(params, actor_state, observation, key) ->
-actor_state`` and ``plan_every_steps``: :func:`rollout` then runs an outer ``lax.scan`` over
-planning periods around an inner one over control steps. Under ``vmap`` a ``lax.cond`` on the
-step counter runs both branches for every variant, so a planner called every tenth step inside
-one flat scan would cost as much as one called every step; the two scans keep the 1 Hz planner
-at 1 Hz. ``plan_every_steps = 0`` plans once, at the start (SNAPE's stack).
+pytree of fixed shapes (a path, a recurrent state, a filter). A stack that plans at a slower
+rate is wrapped by :func:`jaxsim.actor.replanning`; :func:`rollout` is one ``lax.scan`` over
+control steps whatever the actor.
 """
 
 from __future__ import annotations
@@ -27,14 +22,14 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim.actor import Actor, ActorState, Params
+from socialnav.jaxsim.actor import Actor, ActorState, Params, replanning
 from socialnav.jaxsim.scenes.env import Env, EnvState, Observation, TimeStep, action_problem
 
-__all__ = ["Actor", "ActorState", "Params", "StepRecord", "check_actor", "default_record", "rollout"]
+__all__ = ["Actor", "ActorState", "Params", "StepRecord", "check_actor", "default_record", "replanning", "rollout"]
 
 
 def check_actor(env: Env, actor: Actor, params: Params, n_people: int) -> None:
-    """Trace ``actor``'s ``init``, ``plan`` and ``act`` once on an observation of ``env`` with
+    """Trace ``actor``'s ``init`` and ``act`` once on an observation of ``env`` with
     ``n_people`` slots (shapes only: ``jax.eval_shape``, nothing runs) and check its action.
 
     Raises:
@@ -45,8 +40,6 @@ def check_actor(env: Env, actor: Actor, params: Params, n_people: int) -> None:
     observation = Observation(**{k: jax.ShapeDtypeStruct(shape, dtype) for k, (shape, dtype) in spec.items()})
     key = jax.random.key(0)
     state = jax.eval_shape(actor.init, key, observation)
-    if actor.plan is not None:
-        state = jax.eval_shape(actor.plan, params, state, observation, key)
     action, _ = jax.eval_shape(actor.act, params, state, observation, key)
     try:  # as Env.step reads it: a tuple (v, omega) is an array of shape (2,)
         action = jax.eval_shape(jnp.asarray, action) if not hasattr(action, "shape") else action
@@ -110,11 +103,11 @@ def rollout(
 ) -> tuple[tuple[EnvState, ActorState], Any]:
     """One episode of ``variant`` driven by ``actor``; ``vmap`` it over variants (and keys).
 
-    Runs ``n_steps`` (default ``env.config.max_steps``, rounded up to whole planning periods)
-    whatever happens: an episode past its goal goes on with the base stopped, so every episode
-    of a batch has one length. Returns ``((final env state, final actor state), records)``,
-    ``records`` the pytree ``record(observation, action, actor_state, timestep)`` stacked over
-    steps (:class:`StepRecord` by default).
+    Runs ``n_steps`` (default ``env.config.max_steps``) whatever happens: an episode past its
+    goal goes on with the base stopped, so every episode of a batch has one length. Returns
+    ``((final env state, final actor state), records)``, ``records`` the pytree
+    ``record(observation, action, actor_state, timestep)`` stacked over steps
+    (:class:`StepRecord` by default).
     """
     n_steps = env.config.max_steps if n_steps is None else int(n_steps)
     key_reset, key_init, key_run = jax.random.split(key, 3)
@@ -128,25 +121,6 @@ def rollout(
         state, timestep = env.step(state, action)
         return (state, timestep, actor_state), record(observation, action, actor_state, timestep)
 
-    if actor.plan is None or not actor.plan_every_steps:
-        if actor.plan is not None:  # plans once, at the start
-            key_plan, key_run = jax.random.split(key_run)
-            actor_state = actor.plan(params, actor_state, timestep.observation, key_plan)
-        keys = jax.random.split(key_run, n_steps)
-        (state, _, actor_state), records = jax.lax.scan(control, (state, timestep, actor_state), keys)
-        return (state, actor_state), records
-
-    period = int(actor.plan_every_steps)
-    n_periods = -(-n_steps // period)
-
-    def one_period(carry, period_key):
-        state, timestep, actor_state = carry
-        key_plan, key_steps = jax.random.split(period_key)
-        actor_state = actor.plan(params, actor_state, timestep.observation, key_plan)
-        keys = jax.random.split(key_steps, period)
-        return jax.lax.scan(control, (state, timestep, actor_state), keys)
-
-    carry = (state, timestep, actor_state)
-    (state, _, actor_state), records = jax.lax.scan(one_period, carry, jax.random.split(key_run, n_periods))
-    records = jax.tree_util.tree_map(lambda a: a.reshape((-1,) + a.shape[2:]), records)
+    keys = jax.random.split(key_run, n_steps)
+    (state, _, actor_state), records = jax.lax.scan(control, (state, timestep, actor_state), keys)
     return (state, actor_state), records

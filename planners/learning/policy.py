@@ -35,7 +35,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.actor import Actor, replanning
 from socialnav.jaxsim.scenes.env import Env, Observation
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.models import policy_net
@@ -241,7 +241,8 @@ def observe(config: PolicyConfig, obs: Observation, field, grid, robot: RobotPar
 
 def policy_actor(config: PolicyConfig, graphdef, grid: costmap.GridSpec, name: str = "ppo", gscl_model=None) -> Actor:
     """The policy as an :class:`~jaxsim.scenes.actor.Actor` with :class:`PolicyParams`: it
-    computes the guidance field once, at the start (``plan_every_steps = 0``), and then acts
+    computes the guidance field once, at the start (:func:`jaxsim.actor.replanning` with
+    ``every_steps = 0``), and then acts
     with the network's mean action (deterministic). With the GSCL channel (``gscl_model``: a
     :class:`~socialnav.models.inference.SocialCostModel`, its ``apply(weights, maps)`` with the
     weights ``PolicyParams.gscl_weights``, traced) it plans
@@ -277,7 +278,7 @@ def policy_actor(config: PolicyConfig, graphdef, grid: costmap.GridSpec, name: s
         mean, _, _ = policy_net.apply(graphdef, params.weights, x)
         return command(mean, params.robot), state.replace(social=social)
 
-    return Actor(init=init, act=act, plan=plan, plan_every_steps=config.gscl_every_steps if gscl else 0, name=name)
+    return replanning(Actor(init=init, act=act, name=name), plan, config.gscl_every_steps if gscl else 0)
 
 
 def policy_params(env: Env, weights, gscl_model=None) -> PolicyParams:

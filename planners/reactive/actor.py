@@ -24,7 +24,7 @@ from typing import Any
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim.scenes.actor import Actor
+from socialnav.jaxsim.scenes.actor import Actor, replanning
 from socialnav.jaxsim.scenes.env import Observation
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.planners import actors, stack
@@ -105,7 +105,7 @@ def reactive_actor(
     """
     if guide not in GUIDES:
         raise ValueError(f"guide must be one of {', '.join(GUIDES)}, got {guide!r}")
-    path_stack = actors.stack_actor(stack.METHODS["navfn"], grid, robot_radius_m, replan_every_steps, max_path_cells)
+    path_stack = actors.stack_parts(stack.METHODS["navfn"], grid, robot_radius_m, replan_every_steps, max_path_cells)
 
     def plan(params: ReactiveParams, st, obs, key):
         return path_stack.plan(params.guide, st, obs, key)
@@ -122,4 +122,4 @@ def reactive_actor(
 
     if guide == "goal":
         return Actor(init=path_stack.init, act=act, name=name)
-    return Actor(init=path_stack.init, act=act, plan=plan, plan_every_steps=path_stack.plan_every_steps, name=name)
+    return replanning(Actor(init=path_stack.init, act=act, name=name), plan, path_stack.every_steps)

@@ -239,7 +239,7 @@ def forced_speed_driver(driver):
         command, state = inner.act(params[0], state, obs, key)
         return command.replace(speed_mps=params[1], force_speed=jnp.array(True)), state
 
-    actor = Actor(init=inner.init, act=act, plan=inner.plan, plan_every_steps=inner.plan_every_steps, name="forced")
+    actor = Actor(init=inner.init, act=act, name="forced")
     return lambda v: Driver(actor=actor, params=(driver.params, jnp.float32(v)))
 
 
