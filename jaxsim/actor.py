@@ -90,8 +90,8 @@ def replanning(actor: Actor, plan: Plan, every_steps: int) -> Actor:
 
     def act(params, state: Replanned, observation, key):
         due = state.steps == 0 if every == 0 else state.steps % every == 0
-        plan_key = jax.random.fold_in(key, PLAN_FOLD)
-        inner = jax.lax.cond(due, lambda s: plan(params, s, observation, plan_key), lambda s: s, state.inner)
+        replan = lambda s: plan(params, s, observation, jax.random.fold_in(key, PLAN_FOLD))  # only when due
+        inner = jax.lax.cond(due, replan, lambda s: s, state.inner)
         action, inner = actor.act(params, inner, observation, key)
         return action, Replanned(inner=inner, steps=state.steps + 1)
 

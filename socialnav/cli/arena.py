@@ -243,6 +243,7 @@ def _request(args, shown_as: pathlib.Path):
     from socialnav.common import runfolder
     from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.evaluation.arena import actor_spec
+    from socialnav.evaluation.arena.run import HELD_OUT
     from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
     from socialnav.jaxsim.scenario.errors import ScenarioError
     from socialnav.jaxsim.scenes.spec import load_scene
@@ -323,7 +324,7 @@ def _request(args, shown_as: pathlib.Path):
             )
         seen[spec.name] = spec.file
     for scene_name, _ in args.animate:
-        if scene_name.removesuffix(_HELD_OUT) not in seen:
+        if scene_name.removesuffix(HELD_OUT) not in seen:
             return _fail(f"--animate {scene_name}: not a scene of this run")
     if gscl_run is not None:
         from socialnav.models.inference import model_problem
@@ -396,11 +397,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         return _fail(str(e))
     episodes = table.join_scenes(out, request, digests)
     tables = table.write_tables(out, episodes)
-    _print_tables(tables, episodes, request.specs)
+    _print_tables(tables, request.specs)
     return 0
 
 
-def _print_tables(tables: dict, episodes, specs) -> None:
+def _print_tables(tables: dict, specs) -> None:
     """The summary's main columns, the warnings it calls for, and the papers' tables the run wrote."""
     import pandas as pd
 
@@ -444,9 +445,6 @@ def _print_tables(tables: dict, episodes, specs) -> None:
             print(f"\n{title}:")
             with pd.option_context("display.width", 200, "display.max_rows", 500):
                 print(tables[name].round(digits).to_string(index=False))
-
-
-_HELD_OUT = "@held_out"
 
 
 def _absolute_spec(spec: str) -> str:
