@@ -31,7 +31,7 @@ MODELS = ("social_force", "collision_free_speed_calibrated", "orca")
 def drift_m(scene_file, model: str, variants: int, seed: int = 0) -> np.ndarray:
     """Every present person's distance (m) from their recorded position, every step, ``variants`` windows."""
     spec = load_scene(scene_file)
-    setup = arena.setup_scene(spec, arena.ArenaConfig(human_model=model))
+    setup = arena.setup_scene(spec, arena.ArenaConfig.of(model))
     drawn = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, variants, n_slots=setup.n_slots))
     without = jax.block_until_ready(arena.counterfactual_function(setup)(drawn))
     t = without.people_xy.shape[1]

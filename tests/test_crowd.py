@@ -74,9 +74,7 @@ def test_the_warehouse_and_the_arena_move_people_by_the_chosen_human_model(monke
     chosen = step_lib.crowd_step(scenario.params, world, w, state.robot, *args)
     social = step_lib.crowd_step(scenario.params, sf_world, w, state.robot, *args)
     assert not np.allclose(np.asarray(chosen.x_m[:2]), np.asarray(social.x_m[:2]), atol=1e-4)
-    setup = arena.setup_scene(
-        load_scene(DATA_DIR / "scenes" / "casn_head_on.json"), arena.ArenaConfig(human_model=model)
-    )
+    setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"), arena.ArenaConfig.of(model))
     variant = jax.tree_util.tree_map(jnp.asarray, sample_variant(setup.spec, 0, 0))
     people_lib.step_people(params, setup.env.world, variant, people_lib.init_people(variant), jnp.zeros(2),
                            jnp.zeros(2), jnp.int32(0), model, setup.env.orca)  # fmt: skip
@@ -167,7 +165,7 @@ def test_the_arena_runs_with_orca_humans():
 
     spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
     sf = arena.setup_scene(spec)
-    oc = arena.setup_scene(spec, arena.ArenaConfig(human_model="orca"))
+    oc = arena.setup_scene(spec, arena.ArenaConfig.of("orca"))
     variants = jax.tree_util.tree_map(jnp.asarray, sample_variant(spec, 0, 0, n_slots=sf.n_slots))
     variants = jax.tree_util.tree_map(lambda a: a[None], variants)
     actor = actors.go_to_goal()

@@ -14,6 +14,7 @@ from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim import orca
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenes import people as people_lib
+from socialnav.jaxsim.scenes.env import EnvConfig
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
 from socialnav.jaxsim.world import Grid
@@ -153,7 +154,7 @@ def test_nearest_neighbors_by_index_the_far_and_absent_left_out():
 @pytest.mark.parametrize("scene", ["casn_crossing", "gscl_crowded_entrance", "snape_two_walking", "gscl_queue"])
 def test_equal_to_the_old_step_on_the_arena_scenes(scene):
     spec = load_scene(DATA_DIR / "scenes" / f"{scene}.json")
-    setup = arena.setup_scene(spec, arena.ArenaConfig(human_model="orca"))
+    setup = arena.setup_scene(spec, arena.ArenaConfig.of("orca"))
     env = setup.env
     p = env.orca  # the default cap: no seed scene has more than 11 people at once
     v = jax.tree_util.tree_map(jnp.asarray, sample_variant(spec, 0, 3, n_slots=setup.n_slots))
@@ -182,7 +183,7 @@ def test_equal_to_the_old_step_on_the_arena_scenes(scene):
 def test_the_radius_is_the_toolkits_person_and_traced():
     assert orca.ORCAParams().radius_m == PERSON_RADIUS_M
     spec = load_scene(DATA_DIR / "scenes" / "casn_head_on.json")
-    env = arena.setup_scene(spec, arena.ArenaConfig(human_model="orca", person_radius_m=0.3)).env
+    env = arena.setup_scene(spec, arena.ArenaConfig(env=EnvConfig(human_model="orca", person_radius_m=0.3))).env
     assert env.orca.radius_m == 0.3  # the env's people: the body it counts contacts with
     crowd = _crowd(10, 1, density=2.0)
 

@@ -77,7 +77,7 @@ def _walker_variant(spec, setup, robot_xy):
 @pytest.mark.parametrize("model", ["social_force", "collision_free_speed_calibrated", "orca"])
 def test_a_reactive_person_yields_to_a_robot_standing_on_the_path_and_returns_to_it(model):
     spec = load_scene(HOTEL_REACTIVE)
-    setup = arena.setup_scene(spec, arena.ArenaConfig(human_model=model))
+    setup = arena.setup_scene(spec, arena.ArenaConfig.of(model))
     robot_xy = (0.0, -2.95)  # on the path, a hair to its left: the person passes on the right
     v = _batch(_walker_variant(spec, setup, robot_xy))
     tr = arena.actor_function(setup, arena.STAND_STILL, ())(jax.tree_util.tree_map(lambda a: a[None], v))
@@ -98,7 +98,7 @@ def test_a_reactive_person_yields_to_a_robot_standing_on_the_path_and_returns_to
 @pytest.mark.slow
 def test_a_reactive_crowd_without_a_robot_stays_near_its_recording():
     spec = load_scene(HOTEL_REACTIVE)
-    setup = arena.setup_scene(spec, arena.ArenaConfig(human_model="collision_free_speed_calibrated"))
+    setup = arena.setup_scene(spec, arena.ArenaConfig.of("collision_free_speed_calibrated"))
     variants = _batch(sample_variants(spec, 0, 4, n_slots=setup.n_slots))
     xy, present, recording_xy, recording_present = _compare_with_recording(
         arena.counterfactual_function(setup)(variants), variants
@@ -195,7 +195,7 @@ def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     if arena.memory_maps() is None:
         pytest.skip("no /proc/self/maps here: the arena never drops its programs")
     spec = load_scene(HOTEL_REACTIVE)
-    config = arena.ArenaConfig(human_model="orca")
+    config = arena.ArenaConfig.of("orca")
     before, _ = arena_run.run_scene(spec, ["navfn", "orca"], 3, config=config)
     held = arena.memory_maps()[0]
     assert arena.release_programs_if_crowded(share=0.0)

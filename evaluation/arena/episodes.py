@@ -35,7 +35,7 @@ from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR
 from socialnav.jaxsim.actor import inner_state
-from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
+from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes import robot as robot_lib
@@ -52,28 +52,33 @@ from socialnav.planners.reactive import baselines
 
 @dataclasses.dataclass(frozen=True)
 class ArenaConfig:
-    """Static settings of the episodes.
+    """Static settings of the episodes: the environment's own (``env``) and the arena's.
+
+    Each quantity has one home: the step, the goal tolerance, a person's body and the human model
+    are the environment's (:class:`jaxsim.scenes.env.EnvConfig`, read here as ``config.env.dt_s``
+    and so on); what only the arena's stacks use is here.
 
     Attributes:
-      dt_s: simulation and control step (0.1 s: 10 Hz control, as the seeds' local planners).
+      env: the environment's settings; its ``max_steps`` is set per scene from the scene's
+        timeout (whole replanning periods), whatever it holds here.
       replan_every_steps: global replanning period in steps (10: 1 Hz, seed 002's behaviour tree).
       grid_resolution_m: the global planner's cell size.
-      goal_tolerance_m: reached when the robot's centre is this close to the goal.
       safety_margin_m: the base stops when a visible person in front (within 60 deg) is closer
         than robot radius + person radius + this margin.
-      person_radius_m: a person's body radius (:data:`jaxsim.params.PERSON_RADIUS_M`).
       max_path_cells: the global path's length bound in cells.
-      human_model: how the people move: ``social_force`` (the warehouse's crowd) or ``orca``.
     """
 
-    dt_s: float = 0.1
+    env: env_lib.EnvConfig = env_lib.EnvConfig()
     replan_every_steps: int = 10
     grid_resolution_m: float = 0.2
-    goal_tolerance_m: float = 0.3
     safety_margin_m: float = 0.1
-    person_radius_m: float = PERSON_RADIUS_M
     max_path_cells: int = 256
-    human_model: str = "social_force"
+
+    @classmethod
+    def of(cls, human_model: str = "social_force", **arena) -> ArenaConfig:
+        """The default settings with the people moved by ``human_model``
+        (:data:`jaxsim.scenes.people.HUMAN_MODELS`) and ``arena`` the arena's own fields."""
+        return cls(env=env_lib.EnvConfig(human_model=human_model), **arena)
 
 
 # The look-ahead of the trajectory's predicted distance to the nearest seen person (the pictures'
@@ -151,23 +156,13 @@ def setup_scene(
     crowd: SimParams | None = None,
     reward: env_lib.RewardParams = env_lib.RewardParams(),
 ) -> SceneSetup:
-    period_s = config.dt_s * config.replan_every_steps
+    period_s = config.env.dt_s * config.replan_every_steps
     n_periods = int(math.ceil(spec.timeout_s / period_s))
-    env_config = env_lib.EnvConfig(
-        dt_s=config.dt_s,
-        max_steps=n_periods * config.replan_every_steps,
-        goal_tolerance_m=config.goal_tolerance_m,
-        person_radius_m=config.person_radius_m,
-        human_model=config.human_model,
-    )
+    env_config = dataclasses.replace(config.env, max_steps=n_periods * config.replan_every_steps)
     crowd = crowd_params() if crowd is None else crowd
     env = env_lib.make_env(spec, env_config, robot, crowd, reward, config.grid_resolution_m)
     occ = np.asarray(env.occupancy.values)
-    origin = (
-        env.occupancy.origin_x_m - config.grid_resolution_m / 2,
-        env.occupancy.origin_y_m - config.grid_resolution_m / 2,
-    )
-    grid = costmap.GridSpec(occ.shape[0], occ.shape[1], config.grid_resolution_m, origin[0], origin[1])
+    grid = costmap.GridSpec.of_grid(env.occupancy)
     obstacles = np.asarray(costmap.obstacle_layer(occ, grid, float(robot.radius_m)))
     return SceneSetup(
         spec=spec,
@@ -415,7 +410,7 @@ def episode_function(
         env,
         setup.map,
         config.safety_margin_m,
-        config.person_radius_m,
+        config.env.person_radius_m,
         layer,
         layers,
         method,
@@ -479,7 +474,7 @@ def baseline_actor(name: str, grid: costmap.GridSpec, robot_radius_m: float, con
     """A reactive baseline (:data:`planners.reactive.baselines.BASELINES`) as an actor (cached as
     :func:`method_actor`)."""
     return baselines.baseline_actor(
-        name, grid, robot_radius_m, config.dt_s, config.replan_every_steps, config.max_path_cells
+        name, grid, robot_radius_m, config.env.dt_s, config.replan_every_steps, config.max_path_cells
     )
 
 

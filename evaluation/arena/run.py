@@ -48,11 +48,11 @@ def metrics_function(setup: arena.SceneSetup, config: arena.ArenaConfig, robot_r
 @functools.lru_cache(maxsize=64)
 def _metrics_program(rule_structure, n_periods: int, config: arena.ArenaConfig, robot_radius_m: float):
     """The jitted metrics of :func:`metrics_function` for one rule structure (cached)."""
-    timeout = n_periods * config.replan_every_steps * config.dt_s
+    timeout = n_periods * config.replan_every_steps * config.env.dt_s
 
     def one(tr: arena.Trajectory, v: Variant, without: arena.Trajectory, numbers):
         rule = nav_metrics.join_rule(rule_structure, numbers)
-        velocity = _velocities(tr.people_xy, tr.people_present, config.dt_s)
+        velocity = _velocities(tr.people_xy, tr.people_present, config.env.dt_s)
         ok = nav_metrics.rule_satisfied(
             rule, tr.robot_xy, tr.reached, tr.people_xy, v.start_xy, v.end_xy, tr.people_present, v.group
         )
@@ -67,16 +67,16 @@ def _metrics_program(rule_structure, n_periods: int, config: arena.ArenaConfig, 
             v.goal_xy,
             v.robot_xy,
             v.group,
-            config.dt_s,
+            config.env.dt_s,
             timeout,
             robot_radius_m,
-            config.person_radius_m,
+            config.env.person_radius_m,
             ok,
-            config.goal_tolerance_m,
+            config.env.goal_tolerance_m,
         )
 
         effect = nav_metrics.people_effect(
-            tr.people_xy, tr.people_present, without.people_xy, without.people_present, config.dt_s
+            tr.people_xy, tr.people_present, without.people_xy, without.people_present, config.env.dt_s
         )
         return {**metrics, **effect}
 
@@ -151,7 +151,7 @@ def run_scene(
     for method, tr in zip(methods, results):
         metrics = measure(tr, variants, without)
         episodes.append(episode_frame(name, method, first, metrics, tr.wall_contacts, tr.invalid_actions))
-        kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.dt_s)
+        kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.env.dt_s)
         if kept is not None:
             trajectories.append(kept)
         if on_method is not None:

@@ -147,7 +147,7 @@ def memory_bytes(request: TableRequest) -> float:
     rows = len(request.runs) * request.variants * len(request.methods) * EPISODE_ROW_BYTES
     flight = 0.0
     for spec in request.specs:
-        steps = spec.timeout_s / config.dt_s
+        steps = spec.timeout_s / config.env.dt_s
         xmin, xmax, ymin, ymax = spec.bounds_m
         cells = (xmax - xmin) * (ymax - ymin) / config.grid_resolution_m**2
         per_variant = steps * (48 + 24 * spec.n_people_slots) + 16 * cells * 4
@@ -342,7 +342,7 @@ def compute_shard(
         first,
         keep,
         gscl_model(gscl_run),
-        ArenaConfig(human_model=human_model),
+        ArenaConfig.of(human_model),
         held_out=held_out,
         user_actors=users,
         params=arena_params.parse(params_text, "--params") if params_text else None,

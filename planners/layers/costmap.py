@@ -64,6 +64,17 @@ class GridSpec:
     def shape(self) -> tuple[int, int]:
         return (int(self.height), int(self.width))
 
+    @classmethod
+    def of_grid(cls, grid) -> GridSpec:
+        """The geometry of a simulator's value grid (:class:`jaxsim.world.Grid`, values (H, W, ...)).
+
+        The one place where the two origin conventions meet: a ``Grid``'s origin is cell (0, 0)'s
+        centre (its lookups round to the nearest centre), a ``GridSpec``'s that cell's lower-left
+        corner (Nav2's ``costmap_2d``), half a cell lower and to the left."""
+        h, w = grid.values.shape[:2]
+        half = grid.resolution_m / 2
+        return cls(h, w, grid.resolution_m, grid.origin_x_m - half, grid.origin_y_m - half)
+
     def cell_centres(self) -> tuple[np.ndarray, np.ndarray]:
         """(x_m, y_m), each (H, W) float32: the world position of every cell's centre."""
         xs = self.origin_x_m + (np.arange(self.width) + 0.5) * self.resolution_m

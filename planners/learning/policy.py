@@ -123,10 +123,7 @@ class PolicyState:
 def scene_grid(env: Env) -> costmap.GridSpec:
     """The :class:`~planners.layers.costmap.GridSpec` of ``env``'s occupancy grid (its origin is cell
     (0, 0)'s corner; the env's :class:`~jaxsim.world.Grid` keeps its centre)."""
-    grid = env.occupancy
-    h, w = grid.values.shape
-    half = grid.resolution_m / 2
-    return costmap.GridSpec(h, w, grid.resolution_m, grid.origin_x_m - half, grid.origin_y_m - half)
+    return costmap.GridSpec.of_grid(env.occupancy)
 
 
 def traversal(env: Env) -> jax.Array:
