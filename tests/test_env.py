@@ -498,3 +498,34 @@ def test_replanning_plans_before_every_nth_action_and_only_then_in_a_batch(setup
     assert str(batched).count("cond[") == str(single).count("cond[") >= 1
     with pytest.raises(ValueError, match="every_steps must be >= 0"):
         _counting_actor(-1)
+
+
+@pytest.mark.slow
+def test_reset_where_restarts_only_the_episodes_asked_and_runs_no_reset_when_none_is(setup):
+    """jaxsim.scenes.wrappers: a batch of four, two restarted from pool draws, equal bit for bit to
+    env.reset of those draws; the other two as stepped; with an empty mask nothing is reset."""
+    from socialnav.jaxsim.scenes import wrappers
+
+    env = setup.env
+    pool = wrappers.VariantPool(_variants(setup, 6, seed=3))
+    assert pool.size == 6
+    index = pool.draw(jax.random.key(0), 4)
+    assert index.shape == (4,) and bool(jnp.all((index >= 0) & (index < 6)))
+    keys = jax.random.split(jax.random.key(1), 4)
+    state, ts = jax.vmap(env.reset)(keys, pool.take(index))
+    state, ts = jax.vmap(env.step)(state, jnp.full((4, 2), 0.3))
+    mask = jnp.array([True, False, True, False])
+    fresh_keys = jax.random.split(jax.random.key(2), 4)
+    fresh_index = jnp.array([5, 4, 3, 2])
+    restart = jax.jit(lambda m: wrappers.reset_where(env, m, fresh_keys, pool.take(fresh_index), state, ts))
+    new_state, new_ts = restart(mask)
+    for b in range(4):
+        if mask[b]:
+            want = jax.jit(env.reset)(fresh_keys[b], _one(pool.variants, int(fresh_index[b])))
+        else:
+            want = (_one(state, b), _one(ts, b))
+        for got, expected in zip(_leaves(_one((new_state, new_ts), b)), _leaves(want), strict=True):
+            np.testing.assert_array_equal(got, expected)
+    assert int(new_state.step[0]) == 0 and int(new_state.step[1]) == 1
+    for got, expected in zip(_leaves(restart(jnp.zeros(4, bool))), _leaves((state, ts)), strict=True):
+        np.testing.assert_array_equal(got, expected)

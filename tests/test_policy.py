@@ -197,6 +197,20 @@ def test_training_variants_are_a_stream_of_their_own():
         sample_variant(spec, 0, 0, held_out=True, training=True)
 
 
+def test_training_episodes_end_where_the_arenas_do():
+    """The trainer's episodes have the arena's step and time limit (whole replanning periods)."""
+    from socialnav.evaluation.arena.episodes import ArenaConfig
+
+    config = ArenaConfig()
+    assert policy_training.ARENA_PERIOD_STEPS == config.replan_every_steps
+    for name in ("casn_head_on", "gscl_crowded_entrance", "snape_walking"):
+        spec = load_scene(SCENES_DIR / f"{name}.json")
+        trainer_env = policy_training.scene_env(spec).config
+        assert trainer_env.dt_s == config.env.dt_s
+        periods = math.ceil(spec.timeout_s / (config.env.dt_s * config.replan_every_steps))
+        assert trainer_env.max_steps == periods * config.replan_every_steps
+
+
 def test_config_round_trips_and_refuses_bad_values():
     config = policy_training.PPOConfig(scenes=("a", "b"), updates=7, policy=policy_lib.PolicyConfig(hidden=(16,)))
     assert policy_training.PPOConfig.from_json(json.loads(json.dumps(config.to_json()))) == config

@@ -25,6 +25,7 @@ from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
 
 from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes import wrappers
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
 
@@ -58,18 +59,6 @@ def _numpy(observation: env_lib.Observation) -> dict[str, np.ndarray]:
     return {k: np.asarray(v, np.float32) for k, v in vars(observation).items()}
 
 
-class _Pool:
-    """A scene's variants drawn once, padded to one shape; ``take(indices)`` stacks some."""
-
-    def __init__(self, spec: SceneSpec, pool: int, seed: int):
-        self.n_slots = padded_slots(spec.n_people_slots)
-        self.variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, pool, 0, False, self.n_slots))
-        self.size = pool
-
-    def take(self, indices):
-        return jax.tree_util.tree_map(lambda a: a[jnp.asarray(indices)], self.variants)
-
-
 class SocialNavVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` episodes of one scene, stepped together (see the module's docstring).
 
@@ -92,12 +81,14 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
     ):
         if num_envs < 1 or pool < 1:
             raise ValueError(f"num_envs and pool must be >= 1, got {num_envs} and {pool}")
-        config = config or env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, 0.1))
+        config = config or env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, env_lib.EnvConfig.dt_s))
         kwargs = {} if robot is None else {"robot": robot}
         self.env = env_lib.make_env(spec, config, reward=reward, **kwargs)
-        self._pool = _Pool(spec, pool, seed)
+        n_slots = padded_slots(spec.n_people_slots)
+        variants = sample_variants(spec, seed, pool, 0, False, n_slots)
+        self._pool = wrappers.VariantPool(jax.tree_util.tree_map(jnp.asarray, variants))
         self.num_envs = num_envs
-        self.single_observation_space = observation_space(self.env, self._pool.n_slots)
+        self.single_observation_space = observation_space(self.env, n_slots)
         self.single_action_space = action_space(self.env)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
@@ -109,19 +100,14 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
 
         def step(states, actions, reset_mask, keys, variants):
             stepped, ts = jax.vmap(env.step)(states, actions)
-
-            def reset_ended():  # only on a step after an episode ended (a cond: one branch runs)
-                fresh, ts0 = jax.vmap(env.reset)(keys, variants)
-                pick = lambda a, b: jnp.where(reset_mask.reshape((-1,) + (1,) * (a.ndim - 1)), a, b)
-                return jax.tree_util.tree_map(pick, fresh, stepped), jax.tree_util.tree_map(pick, ts0, ts)
-
-            return jax.lax.cond(jnp.any(reset_mask), reset_ended, lambda: (stepped, ts))
+            # Gymnasium's next-step autoreset: those that ended on the last step start afresh now.
+            return wrappers.reset_where(env, reset_mask, keys, variants, stepped, ts)
 
         self._step = jax.jit(step)
 
     def _draw(self, n: int):
         keys = jax.random.split(jax.random.key(int(self._rng.integers(2**31))), n)
-        return keys, self._pool.take(self._rng.integers(0, self._pool.size, n))
+        return keys, self._pool.take(jnp.asarray(self._rng.integers(0, self._pool.size, n)))
 
     def reset(self, *, seed: int | None = None, options=None):
         super().reset(seed=seed)

@@ -41,7 +41,7 @@ import optax
 from flax import struct
 
 from socialnav.jaxsim.scenes import env as env_lib
-from socialnav.jaxsim.scenes import rule_monitor
+from socialnav.jaxsim.scenes import rule_monitor, wrappers
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
@@ -124,21 +124,27 @@ def reward_params() -> env_lib.RewardParams:
     return env_lib.RewardParams(progress_weight=0.0)
 
 
+# The arena's replanning period in steps (``evaluation.arena.ArenaConfig.replan_every_steps``,
+# which this layer cannot import): an episode's time limit is rounded up to whole periods as there.
+ARENA_PERIOD_STEPS = 10
+
+
 def scene_env(spec: SceneSpec, human_model: str = "social_force") -> env_lib.Env:
-    """The environment of ``spec`` as the arena runs it (0.1 s steps, the timeout in whole
-    seconds), its people moved by ``human_model``, with :func:`reward_params`."""
-    config = env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, 0.1, 10), human_model=human_model)
+    """The environment of ``spec`` as the arena runs it (the env's default step, the timeout in
+    whole replanning periods), its people moved by ``human_model``, with :func:`reward_params`."""
+    steps = env_lib.episode_steps(spec.timeout_s, env_lib.EnvConfig.dt_s, ARENA_PERIOD_STEPS)
+    config = env_lib.EnvConfig(max_steps=steps, human_model=human_model)
     return env_lib.make_env(spec, config, reward=reward_params())
 
 
 @struct.dataclass
 class Scene:
-    """One scene's fixed inputs: its ``env``, the training ``pool`` of N variants, their
-    guidance ``fields`` (N, H, W), and the GSCL network's weights of the GSCL channel (else
-    None)."""
+    """One scene's fixed inputs: its ``env``, the training ``pool`` of N variants
+    (:class:`jaxsim.scenes.wrappers.VariantPool`), their guidance ``fields`` (N, H, W), and the
+    GSCL network's weights of the GSCL channel (else None)."""
 
     env: env_lib.Env
-    pool: object
+    pool: wrappers.VariantPool
     fields: jax.Array
     gscl_weights: object = None
 
@@ -191,10 +197,10 @@ def make_scene(spec: SceneSpec, config: PPOConfig, gscl_weights=None) -> Scene:
     pool = sample_variants(
         spec, config.seed, config.pool_per_scene, n_slots=padded_slots(spec.n_people_slots), training=True
     )
-    pool = jax.tree_util.tree_map(jnp.asarray, pool)
+    pool = wrappers.VariantPool(jax.tree_util.tree_map(jnp.asarray, pool))
     grid = policy_lib.scene_grid(env)
     t = policy_lib.traversal(env)
-    fields = jax.jit(jax.vmap(lambda g: policy_lib.guidance_field(t, g, grid)))(pool.goal_xy)
+    fields = jax.jit(jax.vmap(lambda g: policy_lib.guidance_field(t, g, grid)))(pool.variants.goal_xy)
     return Scene(env=env, pool=pool, fields=fields, gscl_weights=gscl_weights)
 
 
@@ -202,13 +208,9 @@ def _optimizer(config: PPOConfig):
     return optax.chain(optax.clip_by_global_norm(config.max_grad_norm), optax.adam(config.learning_rate, eps=1e-5))
 
 
-def _take(pool, index):
-    return jax.tree_util.tree_map(lambda a: a[index], pool)
-
-
 def _reset(scene: Scene, key, index):
     keys = jax.random.split(key, index.shape[0])
-    state, ts = jax.vmap(scene.env.reset)(keys, _take(scene.pool, index))
+    state, ts = jax.vmap(scene.env.reset)(keys, scene.pool.take(index))
     return state, ts.observation
 
 
@@ -302,7 +304,7 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
             ep_return = runner.episode_return + reward
             ep_steps = runner.episode_steps + 1
             ep_contact = runner.episode_contact | ts.info.person_contact
-            variant = _take(scene.pool, runner.pool_index)
+            variant = scene.pool.take(runner.pool_index)
             rule_state = jax.vmap(rule_update)(
                 runner.rule_state,
                 rule_monitor.Step(state.robot.xy, ts.info.reached, ts.info.people_xy_m, ts.info.people_present),
@@ -318,36 +320,22 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
                 stats[5] + (done & social_success).sum(),
             )
 
-            def restart(_):
-                index = jax.random.randint(k_pick, done.shape, 0, config.pool_per_scene)
-                fresh, fresh_obs = _reset(scene, k_reset, index)
-
-                def pick(a, b):
-                    return jnp.where(done.reshape((-1,) + (1,) * (a.ndim - 1)), a, b)
-
-                return jax.tree_util.tree_map(
-                    pick, (fresh, fresh_obs, index), (state, ts.observation, runner.pool_index)
-                )
-
-            def carry_on(_):
-                return state, ts.observation, runner.pool_index
-
-            state, obs, index = jax.lax.cond(jnp.any(done), restart, carry_on, None)
+            # The episodes that ended restart now, from fresh draws of the pool (the others go on).
+            drawn = jax.random.randint(k_pick, done.shape, 0, config.pool_per_scene)
+            reset_keys = jax.random.split(k_reset, done.shape[0])
+            state, ts = wrappers.reset_where(env, done, reset_keys, scene.pool.take(drawn), state, ts)
+            index = jnp.where(done, drawn, runner.pool_index)
             keep = ~done
             fresh_rules = _fresh_rules(rule, done.shape[0])
-            fresh_social = _fresh_social(obs, done.shape[0])
+            fresh_social = _fresh_social(ts.observation, done.shape[0])
             new_runner = Runner(
                 state,
-                obs,
+                ts.observation,
                 index,
                 jnp.where(keep, ep_return, 0.0),
                 jnp.where(keep, ep_steps, 0),
                 keep & ep_contact,
-                *jax.tree_util.tree_map(
-                    lambda a, b: jnp.where(keep.reshape((-1,) + (1,) * (a.ndim - 1)), a, b),
-                    (rule_state, social),
-                    (fresh_rules, fresh_social),
-                ),
+                *wrappers.select_where(keep, (rule_state, social), (fresh_rules, fresh_social)),
             )
             return (new_runner, stats), (x, u, log_prob, value, reward, done)
 
@@ -518,7 +506,7 @@ def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int =
         actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid, gscl_model=trainer.gscl_model)
         params = policy_lib.policy_params(scene.env, weights, trainer.gscl_model)
         index = jnp.arange(n_variants) % config.pool_per_scene
-        variants = _take(scene.pool, index)
+        variants = scene.pool.take(index)
         fields = scene.fields[index]
         keys = jax.random.split(jax.random.PRNGKey(seed), n_variants)
         totals.append(_episode_returns(scene.env, actor, params, variants, fields, keys, grid, config.progress_weight))
