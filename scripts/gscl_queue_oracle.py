@@ -107,7 +107,7 @@ def run(reading: str, n: int, held_out: bool) -> dict:
 
     def satisfied(rule):
         return np.asarray(jax.vmap(nav_metrics.rule_satisfied, in_axes=(None, 0, 0, 0, 0, 0, 0, 0))(
-            rule, tr.robot_xy, tr.reached, tr.people_xy, variants.start_xy, variants.end_xy,
+            rule, tr.robot_xy_m, tr.reached, tr.people_xy_m, variants.start_xy, variants.end_xy,
             tr.people_present, variants.group,
         ))  # fmt: skip
 

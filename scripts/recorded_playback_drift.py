@@ -34,10 +34,10 @@ def drift_m(scene_file, model: str, variants: int, seed: int = 0) -> np.ndarray:
     setup = arena.setup_scene(spec, arena.ArenaConfig.of(model))
     drawn = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, seed, variants, n_slots=setup.n_slots))
     without = jax.block_until_ready(arena.counterfactual_function(setup)(drawn))
-    t = without.people_xy.shape[1]
+    t = without.people_xy_m.shape[1]
     recorded_xy = np.asarray(drawn.track_xy)[:, :, 1 : t + 1].transpose(0, 2, 1, 3)
     present = np.asarray(without.people_present)
-    return np.linalg.norm(np.asarray(without.people_xy) - recorded_xy, axis=-1)[present]
+    return np.linalg.norm(np.asarray(without.people_xy_m) - recorded_xy, axis=-1)[present]
 
 
 def main() -> None:

@@ -48,7 +48,7 @@ def test_every_method_reaches_the_goal_of_a_scene_without_people_and_stays_out_o
         run = arena.episode_function(setup, method, arena.crowd_params(), gscl_model=lambda m: model(m))
         tr = run(variants)
         assert np.all(np.asarray(tr.reached[:, -1])), name
-        d = world_lib.wall_distance(tr.robot_xy, setup.world.walls_m)[0]
+        d = world_lib.wall_distance(tr.robot_xy_m, setup.world.walls_m)[0]
         assert float(jnp.min(d)) >= robot_lib.RobotParams().radius_m - 1e-4, name
 
 
@@ -62,7 +62,7 @@ def test_episodes_are_deterministic_and_the_same_variant_for_every_method():
     for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b), strict=True):
         np.testing.assert_array_equal(x, y)
     other = arena.episode_function(setup, METHODS["navfn"], arena.crowd_params())(variants)
-    np.testing.assert_array_equal(a.people_xy[:, 0], other.people_xy[:, 0])  # same start for both
+    np.testing.assert_array_equal(a.people_xy_m[:, 0], other.people_xy_m[:, 0])  # same start for both
 
 
 _SPREAD = """
@@ -192,6 +192,6 @@ def test_padding_walls_changes_no_episode_and_padding_people_only_rounding():
         np.testing.assert_array_equal(x, y)
     wide = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 1, 2, n_slots=4))
     c = arena.episode_function(setup, METHODS["snape_social_eband"], arena.crowd_params())(wide)
-    np.testing.assert_allclose(c.robot_xy, a.robot_xy, atol=1e-3)
-    np.testing.assert_allclose(c.people_xy[:, :, :2], a.people_xy, atol=1e-3)
+    np.testing.assert_allclose(c.robot_xy_m, a.robot_xy_m, atol=1e-3)
+    np.testing.assert_allclose(c.people_xy_m[:, :, :2], a.people_xy_m, atol=1e-3)
     assert not np.asarray(c.people_present[:, :, 2:]).any()

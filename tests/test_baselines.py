@@ -215,7 +215,7 @@ def test_dwa_reaches_the_goal_of_every_scene_without_people_and_never_enters_a_w
     assert np.asarray(tr.reached[:, -1]).all()
     assert int(np.asarray(tr.wall_contacts).max()) == 0
     # The body never enters a wall: the centre keeps at least the radius from every box.
-    gap = np.asarray(jax.vmap(lambda q: arena.world_lib.wall_distance(q, setup.env.world.walls_m)[0])(tr.robot_xy))
+    gap = np.asarray(jax.vmap(lambda q: arena.world_lib.wall_distance(q, setup.env.world.walls_m)[0])(tr.robot_xy_m))
     assert gap.min() >= RobotParams().radius_m - 1e-4
 
 

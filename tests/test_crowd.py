@@ -171,6 +171,6 @@ def test_the_arena_runs_with_orca_humans():
     actor = actors.go_to_goal()
     a = arena.actor_function(sf, actor, sf.env.robot)(variants)
     b = arena.actor_function(oc, actor, oc.env.robot)(variants)
-    assert not np.allclose(np.asarray(a.people_xy), np.asarray(b.people_xy))
-    walked = np.linalg.norm(np.asarray(b.people_xy)[0, -1, 0] - np.asarray(b.people_xy)[0, 0, 0])
+    assert not np.allclose(np.asarray(a.people_xy_m), np.asarray(b.people_xy_m))
+    walked = np.linalg.norm(np.asarray(b.people_xy_m)[0, -1, 0] - np.asarray(b.people_xy_m)[0, 0, 0])
     assert walked > 3.0  # the walker crossed the room

@@ -141,7 +141,7 @@ def test_a_parameter_sweep_reuses_the_compiled_program(setup):
     fast_tr = arena.actor_function(setup, actor, setup.env.robot)(variants)
     compiled = arena._episode_program(actor)._cache_size()  # other modules' shapes may be there too
     slow_tr = arena.actor_function(setup, actor, setup.env.robot.replace(max_speed_mps=0.25))(variants)
-    assert float(jnp.max(slow_tr.robot_speed)) <= 0.25 + 1e-6 < float(jnp.max(fast_tr.robot_speed))
+    assert float(jnp.max(slow_tr.robot_speed_mps)) <= 0.25 + 1e-6 < float(jnp.max(fast_tr.robot_speed_mps))
     assert arena._episode_program(actor)._cache_size() == compiled  # the speed limit is traced
 
 
@@ -264,7 +264,7 @@ def test_a_layer_parameter_sweep_reuses_the_stacks_program(setup):
     wide = stack.layer_params(method).replace(snl=snl.SNLParams(covariance=2.0))
     large = arena.episode_function(setup, method, layers=wide)(variants)
     assert arena._episode_program(actor)._cache_size() == compiled
-    assert not np.array_equal(np.asarray(small.robot_xy), np.asarray(large.robot_xy))
+    assert not np.array_equal(np.asarray(small.robot_xy_m), np.asarray(large.robot_xy_m))
 
 
 # ---------------------------------------------------------------- a scene file to the planner's Scene

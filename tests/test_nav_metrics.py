@@ -192,14 +192,14 @@ def test_the_counterfactual_is_nil_far_from_the_robot_and_positive_in_its_way():
         return {
             k: float(v[0])
             for k, v in jax.vmap(nav_metrics.people_effect, in_axes=(0, 0, 0, 0, None))(
-                tr.people_xy, tr.people_present, wo.people_xy, wo.people_present, 0.1
+                tr.people_xy_m, tr.people_present, wo.people_xy_m, wo.people_present, 0.1
             ).items()
         }, wo
 
     nil, wo = effect(far)
     assert nil["people_deviation_max_m"] < 1e-3 and abs(nil["people_speed_drop_mps"]) < 1e-3
     # The counterfactual person walks straight through the robot's spot (they ignore it).
-    d = np.linalg.norm(np.asarray(wo.people_xy[0, :, 0]) - middle, axis=1)
+    d = np.linalg.norm(np.asarray(wo.people_xy_m[0, :, 0]) - middle, axis=1)
     assert d.min() < 0.1
     hit, _ = effect(near)
     assert hit["people_deviation_max_m"] > 0.3  # at least around the robot's body
@@ -217,5 +217,5 @@ def test_the_counterfactual_equals_a_run_whose_people_ignore_the_robot_bit_for_b
     assert bool(np.asarray(variants.ignore_robot)[:, 0].all())
     tr = arena.baseline_function(setup, "orca", arena.crowd_params())(variants)
     wo = arena.counterfactual_function(setup)(variants)
-    np.testing.assert_array_equal(np.asarray(tr.people_xy), np.asarray(wo.people_xy))
-    assert np.abs(np.asarray(wo.robot_xy) - arena.FAR_AWAY_M).max() < 1.0  # it stood far away
+    np.testing.assert_array_equal(np.asarray(tr.people_xy_m), np.asarray(wo.people_xy_m))
+    assert np.abs(np.asarray(wo.robot_xy_m) - arena.FAR_AWAY_M).max() < 1.0  # it stood far away

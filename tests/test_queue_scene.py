@@ -165,9 +165,9 @@ def test_joining_at_the_tail_obeys_the_queue_rule_and_driving_to_the_desk_does_n
         tr = arena.actor_function(setup, actor, setup.env.robot)(variants)
         ok = jax.vmap(nav_metrics.rule_satisfied, in_axes=(None, 0, 0, 0, 0, 0, 0, 0))(
             spec.rule,
-            tr.robot_xy,
+            tr.robot_xy_m,
             tr.reached,
-            tr.people_xy,
+            tr.people_xy_m,
             variants.start_xy,
             variants.end_xy,
             tr.people_present,
@@ -180,13 +180,13 @@ def test_joining_at_the_tail_obeys_the_queue_rule_and_driving_to_the_desk_does_n
     # It waited its turn: in the scene's own lines (3-5 people, one served every 5-8 s) it
     # stood behind someone for several seconds.
     at = np.argmax(np.asarray(tr.reached), axis=1)
-    stood_s = [0.1 * np.sum(np.asarray(tr.robot_speed[k, : at[k]]) < 0.02) for k in range(n)]
+    stood_s = [0.1 * np.sum(np.asarray(tr.robot_speed_mps[k, : at[k]]) < 0.02) for k in range(n)]
     assert held_out or min(stood_s) > 3.0  # this actor never stops of itself
     reached, ok, tr = verdicts(actors.go_to_goal())
     # Straight to the desk: never a social success while someone still waits in line when it
     # arrives (a held-out line can be short and served quickly enough to be gone by then).
     at = np.argmax(np.asarray(tr.reached), axis=1)
-    people = np.asarray(tr.people_xy)[np.arange(n), at]
+    people = np.asarray(tr.people_xy_m)[np.arange(n), at]
     waiting = (np.asarray(tr.people_present)[np.arange(n), at] & (np.abs(people[..., 1]) < 0.6)).any(axis=1)
     assert waiting.all() or held_out
     assert not (ok & reached & waiting).any()
@@ -219,8 +219,8 @@ def test_the_line_steps_up_from_the_front_and_stays_in_line():
     variants = jax.tree_util.tree_map(jnp.asarray, sample_variants(spec, 0, 4, 0, False, setup.n_slots))
     run = arena.counterfactual_function(setup)(variants)
     place = jax.vmap(jax.vmap(people.queue_place, in_axes=(None, 0)), in_axes=(0, None))(
-        variants, jnp.arange(run.people_xy.shape[1]) * 0.1
+        variants, jnp.arange(run.people_xy_m.shape[1]) * 0.1
     )
     waiting = np.asarray(place >= 0) & np.asarray(run.people_present) & np.asarray(variants.valid)[:, None]
-    assert np.abs(np.asarray(run.people_xy)[..., 1])[waiting].max() < 0.01  # on the axis y = 0
+    assert np.abs(np.asarray(run.people_xy_m)[..., 1])[waiting].max() < 0.01  # on the axis y = 0
     assert not np.asarray(run.people_present)[:, -1].any()  # everyone served by the timeout

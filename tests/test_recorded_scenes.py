@@ -29,10 +29,10 @@ def _batch(variants):
 
 def _compare_with_recording(trajectory, variants):
     """(people_xy, present) of an episode set against the recording at the same steps."""
-    t = trajectory.people_xy.shape[1]  # the record holds steps 1 .. T
+    t = trajectory.people_xy_m.shape[1]  # the record holds steps 1 .. T
     recording = np.asarray(variants.track_xy)[:, :, 1 : t + 1].transpose(0, 2, 1, 3)
     present = np.asarray(variants.track_present)[:, :, 1 : t + 1].transpose(0, 2, 1)
-    return np.asarray(trajectory.people_xy), np.asarray(trajectory.people_present), recording, present
+    return np.asarray(trajectory.people_xy_m), np.asarray(trajectory.people_present), recording, present
 
 
 @pytest.mark.slow
@@ -81,7 +81,7 @@ def test_a_reactive_person_yields_to_a_robot_standing_on_the_path_and_returns_to
     robot_xy = (0.0, -2.95)  # on the path, a hair to its left: the person passes on the right
     v = _batch(_walker_variant(spec, setup, robot_xy))
     tr = arena.actor_function(setup, arena.STAND_STILL, ())(jax.tree_util.tree_map(lambda a: a[None], v))
-    xy = np.asarray(tr.people_xy)[0, :, 0]  # (T, 2) the walker, steps 1 .. T
+    xy = np.asarray(tr.people_xy_m)[0, :, 0]  # (T, 2) the walker, steps 1 .. T
     steps = np.arange(1, len(xy) + 1)
     on_track = np.asarray(v.track_xy)[0, steps]
     present = np.asarray(tr.people_present)[0, :, 0]

@@ -91,7 +91,8 @@ class Trajectory:
     """One episode's record, T steps (a batch adds a leading axis).
 
     Attributes:
-      robot_xy (T, 2), robot_yaw (T,), robot_speed (T,); people_xy (T, P, 2), people_heading (T, P),
+      robot_xy_m (T, 2), robot_yaw_rad (T,), robot_speed_mps (T,); people_xy_m (T, P, 2),
+      people_heading_rad (T, P),
       people_present (T, P), people_visible (T, P); reached (T,) bool (the goal has been reached by
       then); speed_gain (T,) the local planner's speed factor (1 without one); predicted_distance_m
       (T,) nearest person's predicted distance to the robot 2 s ahead; wall_contacts () int32;
@@ -99,11 +100,11 @@ class Trajectory:
       stopped instead: :meth:`jaxsim.scenes.env.Env.step`).
     """
 
-    robot_xy: jnp.ndarray
-    robot_yaw: jnp.ndarray
-    robot_speed: jnp.ndarray
-    people_xy: jnp.ndarray
-    people_heading: jnp.ndarray
+    robot_xy_m: jnp.ndarray
+    robot_yaw_rad: jnp.ndarray
+    robot_speed_mps: jnp.ndarray
+    people_xy_m: jnp.ndarray
+    people_heading_rad: jnp.ndarray
     people_present: jnp.ndarray
     people_visible: jnp.ndarray
     reached: jnp.ndarray
@@ -266,11 +267,11 @@ def run_episode(env: env_lib.Env, actor: Actor, params, variant: Variant) -> Tra
     (state, _), records = rollout(env, actor, params, variant, episode_key(variant), record=_record)
     robot_xy, yaw, speed, pxy, pheading, present, seen, reached, gain, pred_d, invalid = records
     return Trajectory(
-        robot_xy=robot_xy,
-        robot_yaw=yaw,
-        robot_speed=speed,
-        people_xy=pxy,
-        people_heading=pheading,
+        robot_xy_m=robot_xy,
+        robot_yaw_rad=yaw,
+        robot_speed_mps=speed,
+        people_xy_m=pxy,
+        people_heading_rad=pheading,
         people_present=present,
         people_visible=seen,
         reached=reached,

@@ -86,18 +86,27 @@ def episode_frame(
     return frame
 
 
-_KEPT = ("robot_xy", "robot_yaw", "robot_speed", "reached", "speed_gain", "people_xy", "people_present")
+# The trajectory's fields kept, each under its column name in the trajectory files.
+_KEPT = {
+    "robot_xy_m": "robot_xy",
+    "robot_yaw_rad": "robot_yaw",
+    "robot_speed_mps": "robot_speed",
+    "reached": "reached",
+    "speed_gain": "speed_gain",
+    "people_xy_m": "people_xy",
+    "people_present": "people_present",
+}
 
 
 def trajectory_frame(scene: str, method: str, first: int, tr: arena.Trajectory, keep: int, dt_s: float):
     """Long frame of the first ``keep`` episodes: one row per (variant, step), the robot's pose and
     speed, and ``p<k>_x, p<k>_y, p<k>_present`` per person slot."""
-    keep = min(keep, tr.robot_xy.shape[0])
+    keep = min(keep, tr.robot_xy_m.shape[0])
     if keep == 0:
         return None
     # To the host first, then the first ``keep``: slicing the device arrays compiled a small
     # program per array and scene shape (0.1-0.15 s a method, half a minute over the full table).
-    host = {k: np.asarray(getattr(tr, k))[:keep] for k in _KEPT}
+    host = {column: np.asarray(getattr(tr, name))[:keep] for name, column in _KEPT.items()}
     t = host["robot_xy"].shape[1]
     xy = host["robot_xy"].reshape(-1, 2)
     cols = {

@@ -52,15 +52,15 @@ def _metrics_program(rule_structure, n_periods: int, config: arena.ArenaConfig, 
 
     def one(tr: arena.Trajectory, v: Variant, without: arena.Trajectory, numbers):
         rule = nav_metrics.join_rule(rule_structure, numbers)
-        velocity = _velocities(tr.people_xy, tr.people_present, config.env.dt_s)
+        velocity = _velocities(tr.people_xy_m, tr.people_present, config.env.dt_s)
         ok = nav_metrics.rule_satisfied(
-            rule, tr.robot_xy, tr.reached, tr.people_xy, v.start_xy, v.end_xy, tr.people_present, v.group
+            rule, tr.robot_xy_m, tr.reached, tr.people_xy_m, v.start_xy, v.end_xy, tr.people_present, v.group
         )
         metrics = nav_metrics.episode_metrics(
-            tr.robot_xy,
-            tr.robot_yaw,
-            tr.robot_speed,
-            tr.people_xy,
+            tr.robot_xy_m,
+            tr.robot_yaw_rad,
+            tr.robot_speed_mps,
+            tr.people_xy_m,
             velocity,
             tr.people_present,
             tr.reached,
@@ -76,7 +76,7 @@ def _metrics_program(rule_structure, n_periods: int, config: arena.ArenaConfig, 
         )
 
         effect = nav_metrics.people_effect(
-            tr.people_xy, tr.people_present, without.people_xy, without.people_present, config.env.dt_s
+            tr.people_xy_m, tr.people_present, without.people_xy_m, without.people_present, config.env.dt_s
         )
         return {**metrics, **effect}
 
