@@ -24,13 +24,13 @@ from flax import struct
 
 @struct.dataclass
 class Step:
-    """One step: robot_xy (2,), reached () bool (at the goal at this step), people_xy (P, 2),
-    present (P,) bool."""
+    """One step: robot_xy_m (2,), reached () bool (at the goal at this step), people_xy_m (P, 2),
+    people_present (P,) bool (the names of :class:`jaxsim.scenes.env.StepInfo`)."""
 
-    robot_xy: jax.Array
+    robot_xy_m: jax.Array
     reached: jax.Array
-    people_xy: jax.Array
-    present: jax.Array
+    people_xy_m: jax.Array
+    people_present: jax.Array
 
 
 @struct.dataclass
@@ -94,18 +94,18 @@ def _leaf(rule: dict):
 
         def update(s, step: Step, ep: Episode, active):
             if kind == "min_distance":
-                d = jnp.linalg.norm(step.people_xy - step.robot_xy, axis=-1)
-                ok = jnp.all(jnp.where(step.present & active, d >= rule["distance_m"], True))
+                d = jnp.linalg.norm(step.people_xy_m - step.robot_xy_m, axis=-1)
+                ok = jnp.all(jnp.where(step.people_present & active, d >= rule["distance_m"], True))
             elif kind == "avoid_circle":
-                d = jnp.linalg.norm(step.robot_xy - jnp.asarray(rule["centre"], jnp.float32))
+                d = jnp.linalg.norm(step.robot_xy_m - jnp.asarray(rule["centre"], jnp.float32))
                 ok = ~active | (d >= rule["radius_m"])
             else:
                 member = ep.group == rule["group"]
                 count = jnp.maximum(jnp.sum(member), 1)
-                centre = jnp.sum(jnp.where(member[:, None], step.people_xy, 0.0), axis=0) / count
-                spread = jnp.linalg.norm(step.people_xy - centre, axis=-1)
+                centre = jnp.sum(jnp.where(member[:, None], step.people_xy_m, 0.0), axis=0) / count
+                spread = jnp.linalg.norm(step.people_xy_m - centre, axis=-1)
                 radius = jnp.sum(jnp.where(member, spread, 0.0)) / count
-                ok = ~active | (jnp.linalg.norm(step.robot_xy - centre) >= radius)
+                ok = ~active | (jnp.linalg.norm(step.robot_xy_m - centre) >= radius)
             return (s[0] & ok,)
 
         return init, update, lambda s: s[0]
@@ -120,7 +120,7 @@ def _leaf(rule: dict):
             return (jnp.int32(0), jnp.int32(0))  # steps inside the box, of them on its right half
 
         def update(s, step: Step, ep: Episode, active):
-            xy = step.robot_xy
+            xy = step.robot_xy_m
             inside = (xy[0] >= box[0]) & (xy[0] <= box[1]) & (xy[1] >= box[2]) & (xy[1] <= box[3]) & active
             on_right = jnp.sum((xy - centre) * right) > 0
             return (s[0] + inside, s[1] + (inside & on_right))
@@ -140,9 +140,9 @@ def _leaf(rule: dict):
             start, end = ep.start_xy[i], ep.end_xy[i]
             direction = (end - start) / jnp.maximum(jnp.linalg.norm(end - start), 1e-9)
             normal = jnp.array([-direction[1], direction[0]])
-            side = jnp.sum((step.robot_xy - start) * normal)
+            side = jnp.sum((step.robot_xy_m - start) * normal)
             crosses = s[2] & (jnp.sign(side) != jnp.sign(s[1])) & active
-            ahead = jnp.sum((step.people_xy[i] - step.robot_xy) * direction) > 0
+            ahead = jnp.sum((step.people_xy_m[i] - step.robot_xy_m) * direction) > 0
             return (s[0] & (~crosses | ahead), side, jnp.array(True))
 
         return init, update, lambda s: s[0]
@@ -153,7 +153,7 @@ def _leaf(rule: dict):
             return (jnp.array(True),)
 
         def update(s, step: Step, ep: Episode, active):
-            return (s[0] & ~(active & queue_cut_in(rule, step.robot_xy, step.people_xy, step.present)),)
+            return (s[0] & ~(active & queue_cut_in(rule, step.robot_xy_m, step.people_xy_m, step.people_present)),)
 
         return init, update, lambda s: s[0]
 
