@@ -12,6 +12,12 @@ def select(cond: jax.Array, a, b):
     return jax.tree.map(lambda x, y: jnp.where(cond, x, y), a, b)
 
 
+def select_rows(mask: jax.Array, a, b):
+    """``a`` where ``mask`` else ``b``, leaf by leaf, ``mask`` (B,) choosing along every leaf's
+    leading batch axis (B, ...)."""
+    return jax.tree.map(lambda x, y: jnp.where(mask.reshape((-1,) + (1,) * (x.ndim - 1)), x, y), a, b)
+
+
 def to_numpy(tree, copy: bool = True):
     """Bring a pytree of device arrays to host numpy arrays (one transfer); ``copy=True`` makes
     every leaf a writable copy, ``copy=False`` may return read-only views."""

@@ -40,6 +40,8 @@ def test_pytree_helpers():
     np.testing.assert_array_equal(host["x"], [7, -1, -2, 3])
     stacked = pytree.stack([a, b])
     assert stacked["x"].shape == (2, 4)
+    rows = pytree.select_rows(jnp.array([False, True]), {"m": jnp.zeros((2, 3, 2))}, {"m": jnp.ones((2, 3, 2))})
+    np.testing.assert_array_equal(rows["m"][:, 0, 0], [1.0, 0.0])  # a row's every entry follows its mask
 
 
 def test_a_disabled_bar_does_nothing(capsys):

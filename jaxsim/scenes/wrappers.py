@@ -20,17 +20,8 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
+from socialnav.common import pytree
 from socialnav.jaxsim.scenes.variant import Variant
-
-
-def select_where(mask: jax.Array, new, old):
-    """``new`` where ``mask`` else ``old``, leaf by leaf: pytrees whose leaves have a leading batch
-    axis B; ``mask`` (B,) bool."""
-
-    def pick(a, b):
-        return jnp.where(mask.reshape((-1,) + (1,) * (a.ndim - 1)), a, b)
-
-    return jax.tree_util.tree_map(pick, new, old)
 
 
 def reset_where(env, mask: jax.Array, keys: jax.Array, variants: Variant, state, timestep):
@@ -49,7 +40,7 @@ def reset_where(env, mask: jax.Array, keys: jax.Array, variants: Variant, state,
 
     def restart():
         fresh = jax.vmap(env.reset)(keys, variants)
-        return select_where(mask, fresh, (state, timestep))
+        return pytree.select_rows(mask, fresh, (state, timestep))
 
     return jax.lax.cond(jnp.any(mask), restart, lambda: (state, timestep))
 
@@ -72,7 +63,7 @@ class VariantPool:
 
     def take(self, index: jax.Array) -> Variant:
         """The variants at ``index`` (int array of any shape; leaves ``index.shape + (...)``)."""
-        return jax.tree_util.tree_map(lambda a: a[index], self.variants)
+        return pytree.take(self.variants, index)
 
     def draw(self, key: jax.Array, n: int) -> jax.Array:
         """``n`` indices into the pool, uniform with replacement."""

@@ -40,6 +40,7 @@ import numpy as np
 import optax
 from flax import struct
 
+from socialnav.common import pytree
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes import rule_monitor, wrappers
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
@@ -230,7 +231,7 @@ def init_runner(scene: Scene, config: PPOConfig, key, rule: dict) -> Runner:
     """``envs_per_scene`` episodes of the scene at time 0 on random pool variants (``rule``: the
     scene's social rule, :attr:`jaxsim.scenes.spec.SceneSpec.rule`)."""
     k_pick, k_reset = jax.random.split(key)
-    index = jax.random.randint(k_pick, (config.envs_per_scene,), 0, config.pool_per_scene)
+    index = scene.pool.draw(k_pick, config.envs_per_scene)
     state, obs = _reset(scene, k_reset, index)
     zeros = jnp.zeros(config.envs_per_scene, jnp.float32)
     return Runner(
@@ -321,7 +322,7 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
             )
 
             # The episodes that ended restart now, from fresh draws of the pool (the others go on).
-            drawn = jax.random.randint(k_pick, done.shape, 0, config.pool_per_scene)
+            drawn = scene.pool.draw(k_pick, done.shape[0])
             reset_keys = jax.random.split(k_reset, done.shape[0])
             state, ts = wrappers.reset_where(env, done, reset_keys, scene.pool.take(drawn), state, ts)
             index = jnp.where(done, drawn, runner.pool_index)
@@ -335,7 +336,7 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
                 jnp.where(keep, ep_return, 0.0),
                 jnp.where(keep, ep_steps, 0),
                 keep & ep_contact,
-                *wrappers.select_where(keep, (rule_state, social), (fresh_rules, fresh_social)),
+                *pytree.select_rows(keep, (rule_state, social), (fresh_rules, fresh_social)),
             )
             return (new_runner, stats), (x, u, log_prob, value, reward, done)
 
