@@ -171,19 +171,19 @@ def local_command(
         v, w = pure_pursuit.pursue(target, robot_xy, robot_yaw, max_speed_mps, pursuit)
         band = jnp.broadcast_to(target, (config.band_points, 2))
         return v, w, band, jnp.float32(1.0)
-    social = config.local_planner == "social_eband"
-    params = band_params if social else band_params.replace(k_s=0.0)
+    social = config.local_planner == "social_eband"  # the classic band: no social term (k_s ignored)
     band = elastic_band.band_from_path(path_xy, path_len, robot_xy, config.band_horizon_m, config.band_points)
-    predicted = people.people_xy_m + params.predict_s * people.people_velocity_mps
+    predicted = people.people_xy_m + band_params.predict_s * people.people_velocity_mps
     band = elastic_band.relax(
         band,
         clearance_fn,
         predicted,
         people.people_heading_rad,
         people.people_valid,
-        params,
+        band_params,
         snape_params,
         config.band_iterations,
+        social=social,
     )
     target = pure_pursuit.lookahead_point(band, config.band_points, robot_xy, pursuit.lookahead_m)
     v, w = pure_pursuit.pursue(target, robot_xy, robot_yaw, max_speed_mps, pursuit)
@@ -195,6 +195,6 @@ def local_command(
             people.people_xy_m,
             people.people_velocity_mps,
             people.people_valid,
-            params,
+            band_params,
         )
     return v * gain, w, band, gain

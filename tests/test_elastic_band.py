@@ -49,6 +49,12 @@ def test_the_social_band_keeps_out_of_a_standing_persons_personal_space():
     social = elastic_band.relax(
         _straight(), walls, person, heading, valid, elastic_band.BandParams(), snape.SNAPEParams(), 100
     )
+    # The classic band (social=False) skips the social term that k_s = 0 multiplies by zero,
+    # whatever k_s: the same band.
+    skipped = elastic_band.relax(
+        _straight(), walls, person, heading, valid, elastic_band.BandParams(), snape.SNAPEParams(), 100, social=False
+    )
+    np.testing.assert_array_equal(np.asarray(skipped), np.asarray(classic))
     d_classic = float(jnp.min(jnp.linalg.norm(classic - person, axis=-1)))
     d_social = float(jnp.min(jnp.linalg.norm(social - person, axis=-1)))
     assert d_classic < 0.6 < 1.2 < d_social
