@@ -6,7 +6,8 @@ Each relaxation moves every inner point by ``step_m_per_unit x (k_c f_c + k_f f_
 (Eq. 12): contraction ``f_c`` (Eq. 7), repulsion ``f_r = (D0 - D) dD/dp`` within ``D0`` of an
 obstacle (Eq. 8-9, ``D`` the clearance to walls and people, its gradient by central differences),
 social ``f_s = sum_i (L0 - L_i) dL_i/dp`` within ``L0`` of a person's interaction space (Eq.
-10-11, people predicted ``predict_s`` ahead). The classic band is ``k_s = 0``.
+10-11, people predicted ``predict_s`` ahead). The classic band is ``k_s = 0``, computed without
+the social term (:func:`relax`'s ``social=False``).
 
 Choices the paper leaves open (all parameters of :class:`BandParams`):
 
@@ -118,8 +119,9 @@ def relax(
       clearance_fn: (N, 2) -> (N,) distance to the nearest obstacle (walls and people), ``D``.
       people_xy, people_heading, people_valid: (P,) people as predicted for the social force.
       social: static; ``False`` is the classic band (Eq. 12 without ``k_s f_s``, whatever
-        ``p.k_s``): the social term is then not computed at all, where ``k_s = 0`` would compute it
-        and multiply it by zero (the same band; the classic band's episodes about twice as fast).
+        ``p.k_s``): the social term is not computed at all, where ``k_s = 0`` would compute it and
+        multiply it by zero. The same band as ``k_s = 0`` (bit for bit in one call; inside a
+        larger program XLA may fuse the shorter sum differently, a float rounding apart).
     """
 
     def social_distance(q):
@@ -136,7 +138,7 @@ def relax(
         f_c = unit(prev - cur) + unit(nxt - cur)
         d = clearance_fn(cur)
         f_r = jnp.where((d < p.d0_m)[:, None], (p.d0_m - d)[:, None] * _gradient(clearance_fn, cur, p.delta_m), 0.0)
-        f_s = jnp.zeros_like(f_r)  # the classic band (kept in the sum: the same arithmetic, the same bits)
+        f_s = jnp.zeros_like(f_r)  # the classic band: Eq. 12's sum with a zero social term
         if social:
             l_i = social_distance(cur)  # (P, N)
             grad_l = _gradient(social_distance, cur, p.delta_m)  # (P, N, 2)
