@@ -256,13 +256,14 @@ def stack_parts(
         person_r = params.person_radius_m
 
         def clearance(q):
-            # Walls, then each seen person's body, one at a time (elementwise over the band's
-            # points: see world_lib.wall_clearance).
-            nearest = world_lib.wall_clearance(q, walls)
-            for i in range(obs.people_xy_m.shape[0]):
+            # Walls, then each seen person's body, one at a time in a fori_loop (elementwise over
+            # the band's points, a program that does not grow with the people slots: see
+            # world_lib.wall_clearance).
+            def body(i, nearest):
                 to_body = jnp.linalg.norm(q - obs.people_xy_m[i], axis=-1) - person_r
-                nearest = jnp.minimum(nearest, jnp.where(obs.people_visible[i], to_body, jnp.inf))
-            return nearest
+                return jnp.minimum(nearest, jnp.where(obs.people_visible[i], to_body, jnp.inf))
+
+            return jax.lax.fori_loop(0, obs.people_xy_m.shape[0], body, world_lib.wall_clearance(q, walls))
 
         v, w, _, gain = stack.local_command(
             method,
