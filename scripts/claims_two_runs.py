@@ -3,6 +3,7 @@ paired difference with its 95 % interval and verdict, :mod:`evaluation.arena.pap
 printed as a markdown table with the claims whose verdict differs between the runs counted.
 
     python scripts/claims_two_runs.py runs/arena-sf runs/arena-steer --labels "social force" "steering speed"
+    python scripts/claims_two_runs.py runs/arena-sf runs/arena-steer --held-out   # runs made with --held-out
 
 Two runs of the same scenes, variants and seed pair their episodes (common random numbers), so a
 claim's difference between the runs is the runs' own (the people's model, say).
@@ -18,10 +19,11 @@ import pandas as pd
 KEY = ["source", "scene", "metric", "proposed", "baseline"]
 
 
-def directions(folder: str) -> pd.DataFrame:
-    path = pathlib.Path(folder, "directions.csv")
+def directions(folder: str, name: str = "directions.csv") -> pd.DataFrame:
+    path = pathlib.Path(folder, name)
     if not path.is_file():
-        raise SystemExit(f"{folder}: no directions.csv (not a finished arena run folder)")
+        why = "not a finished arena run folder" if name == "directions.csv" else "a run made without --held-out?"
+        raise SystemExit(f"{folder}: no {name} ({why})")
     return pd.read_csv(path)
 
 
@@ -34,9 +36,13 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("runs", nargs=2, help="two arena run folders")
     parser.add_argument("--labels", nargs=2, default=None, help="the two columns' names (default: the folders)")
+    parser.add_argument(
+        "--held-out", action="store_true", help="the claims on the held-out rows (directions_held_out.csv)"
+    )
     args = parser.parse_args(argv)
     labels = args.labels or args.runs
-    a, b = (directions(r) for r in args.runs)
+    name = "directions_held_out.csv" if args.held_out else "directions.csv"
+    a, b = (directions(r, name) for r in args.runs)
     both = a.merge(b, on=KEY, suffixes=("_a", "_b"), how="outer", indicator=True)
     print(f"| source | scene | metric | proposed - baseline | paper | {labels[0]} | verdict | {labels[1]} | verdict |")
     print("|---|---|---|---|---|---|---|---|---|")

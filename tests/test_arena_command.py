@@ -103,3 +103,27 @@ def test_the_arena_names_only_the_files_it_wrote(tmp_path, capsys):
     assert cli.main([*argv, "--variants", "2", "--no-progress"]) == 0
     said = [line for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")][-1]
     assert "summary.csv" in said and "papers.csv" not in said and not (out / "papers.csv").exists()
+
+
+@pytest.mark.slow
+def test_a_held_out_run_writes_the_claims_on_its_held_out_rows(tmp_path, capsys):
+    """``--held-out`` on a paper's scene: ``directions_held_out.csv`` holds the scene's claims
+    measured on its held-out rows, under the scene's own name, beside ``directions.csv``."""
+    import pandas as pd
+
+    from socialnav import cli
+
+    out = tmp_path / "run"
+    argv = ["arena", "--out", str(out), "--scenes", "casn_static_person", "--methods", "casn,snl_matched"]
+    assert cli.main([*argv, "--variants", "3", "--held-out", "--no-progress"]) == 0
+    said = [line for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")][-1]
+    assert "directions.csv" in said and "directions_held_out.csv" in said
+    evaluated = pd.read_csv(out / "directions.csv")
+    held_out = pd.read_csv(out / "directions_held_out.csv")
+    assert set(held_out["scene"]) == {"casn_static_person"}
+    key = ["source", "metric", "proposed", "baseline"]
+    assert held_out[key].equals(evaluated[key]) and (held_out["n_pairs"] == 3).all()
+    episodes = pd.read_parquet(out / "episodes" / "casn_static_person@held_out.parquet")
+    d_min = episodes.pivot(index="variant", columns="method", values="d_min_m")
+    row = held_out.set_index("metric").loc["d_min_m"]
+    assert row["ours_diff"] == pytest.approx((d_min["casn"] - d_min["snl_matched"]).mean())

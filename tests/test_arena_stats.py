@@ -61,6 +61,23 @@ def _paired_episodes(scene, metric, proposed, baseline, a, b):
     return pd.DataFrame(rows)
 
 
+def test_directions_of_the_held_out_rows_are_their_own():
+    from socialnav.evaluation.arena import papers
+    from socialnav.evaluation.arena.run import HELD_OUT
+
+    base = np.random.default_rng(2).uniform(0.5, 1.5, 30)
+    # CASN farther than SNL on the evaluated variants, nearer on the held-out ones.
+    evaluated = _paired_episodes("casn_crossing", "d_min_m", "casn", "snl_matched", base + 0.3, base)
+    held_out = _paired_episodes("casn_crossing", "d_min_m", "casn", "snl_matched", base, base + 0.3)
+    held_out["scene"] = "casn_crossing" + HELD_OUT
+    both = pd.concat([evaluated, held_out], ignore_index=True)
+    assert papers.directions(both)["verdict"].tolist() == ["reproduced"]
+    row = papers.directions(both, HELD_OUT).iloc[0]
+    assert (row["scene"], row["verdict"], row["n_pairs"]) == ("casn_crossing", "opposite", 30)
+    assert row["ours_diff"] == pytest.approx(-0.3)
+    assert papers.directions(evaluated, HELD_OUT).empty
+
+
 def test_directions_pair_by_variant_and_give_a_verdict():
     from scipy import stats
 

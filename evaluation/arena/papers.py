@@ -265,7 +265,7 @@ def _episode_values(episodes: pd.DataFrame, scene: str, method: str, metric: str
     return scale * g[column].astype(float)
 
 
-def directions(episodes: pd.DataFrame) -> pd.DataFrame:
+def directions(episodes: pd.DataFrame, suffix: str = "") -> pd.DataFrame:
     """Does each paper's direction reproduce? For every paper row of a proposed method and each
     baseline the paper compared it with on that scene and metric: the paper's difference
     (proposed - baseline), ours, and ours' 95 % interval, paired by variant (common random
@@ -278,8 +278,16 @@ def directions(episodes: pd.DataFrame) -> pd.DataFrame:
     difference, ``reproduced`` when our interval holds 0,
     else ``differs``; ``not measured here`` where no variant has the metric (seed 004's d_2 in a
     scene with one person).
+
+    ``suffix``: the claims on the scene rows named ``<scene><suffix>`` instead: ``""`` the
+    evaluated rows, ``"@held_out"`` (:data:`evaluation.arena.run.HELD_OUT`) the held-out mirrors
+    (each scene mirrored with its ranges exceeded; the rows keep the scene's name).
     """
     from socialnav.evaluation.arena.report import mean_interval
+
+    if suffix:
+        rows_of = episodes["scene"].str.endswith(suffix)
+        episodes = episodes[rows_of].assign(scene=episodes.loc[rows_of, "scene"].str.removesuffix(suffix))
 
     paper = {(src, scene, method, metric): value for src, scene, method, metric, value in PAPER_ROWS}
     have = set(zip(episodes["scene"], episodes["method"], strict=True))

@@ -11,8 +11,8 @@ holds:
 - ``episodes/<scene>.parquet``: the scene's joined episodes, its digest in the file's metadata
   (present and matching: the scene is done; :func:`finish_scene`, :func:`finished`);
 - ``trajectories/``, ``pictures/``: the kept variants' steps and their pictures;
-- ``summary.csv``, ``stats.csv``, ``papers.csv``, ``directions.csv``, ``papers_stats.csv``
-  (:func:`write_tables`).
+- ``summary.csv``, ``stats.csv``, ``papers.csv``, ``directions.csv``,
+  ``directions_held_out.csv``, ``papers_stats.csv`` (:func:`write_tables`).
 
 A rerun with the same settings computes only what is missing: the digest of a scene
 (:func:`scene_digest`) covers its file's bytes and every setting that changes an episode.
@@ -51,6 +51,7 @@ RESULTS = (
     "stats.csv",
     "papers.csv",
     "directions.csv",
+    "directions_held_out.csv",
     "papers_stats.csv",
     "episodes",
     "trajectories",
@@ -420,8 +421,10 @@ def join_scenes(out: pathlib.Path, request: TableRequest, digests: dict):
 def write_tables(out: pathlib.Path, episodes) -> dict:
     """Write the run's tables from its joined ``episodes``: ``summary.csv`` (one row per scene and
     method, with intervals), ``stats.csv`` (the tests between methods), ``pictures/methods.png``
-    and, where the run has the papers' scenes, ``papers.csv``, ``directions.csv`` and
-    ``papers_stats.csv``. Returns the tables written, by file name, in that order."""
+    and, where the run has the papers' scenes, ``papers.csv``, ``directions.csv`` (the claims on
+    the evaluated variants), ``directions_held_out.csv`` (the same claims on the held-out rows,
+    where the run has them) and ``papers_stats.csv``. Returns the tables written, by file name,
+    in that order."""
     from socialnav.evaluation.arena import papers
     from socialnav.evaluation.arena import report as arena_report
     from socialnav.evaluation.arena import stats as arena_stats
@@ -440,6 +443,7 @@ def write_tables(out: pathlib.Path, episodes) -> dict:
     for name, table in (
         ("papers.csv", papers.comparison(summary).dropna(subset=["ours"])),
         ("directions.csv", papers.directions(episodes)),
+        ("directions_held_out.csv", papers.directions(episodes, HELD_OUT)),
         ("papers_stats.csv", papers.stats_comparison(episodes)),
     ):
         if not len(table):

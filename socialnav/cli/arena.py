@@ -14,7 +14,8 @@ Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
 (variant 0), ``summary.csv`` (one row per scene and method), ``papers.csv`` (the seeds' published
 numbers beside ours with our 95 % intervals, for the scenes and methods the run has),
 ``directions.csv`` (each paper's difference against its baseline and ours, paired by variant,
-with a verdict: :func:`evaluation.arena.papers.directions`), ``papers_stats.csv`` (seed 002's Table 2,
+with a verdict: :func:`evaluation.arena.papers.directions`; ``directions_held_out.csv`` the same
+on the held-out rows, with ``--held-out``), ``papers_stats.csv`` (seed 002's Table 2,
 its Games-Howell p and Hedges' g beside ours: :func:`evaluation.arena.papers.stats_comparison`),
 ``stats.csv`` (Fisher, Welch ANOVA,
 Games-Howell, Hedges' g: :mod:`evaluation.arena.stats`) and ``run.json`` (the settings, the
@@ -219,7 +220,8 @@ def run(args) -> int:
 def _wrote(out: pathlib.Path) -> str:
     """The line naming what a finished run holds (``papers.csv``, ``directions.csv`` and
     ``papers_stats.csv`` only where the run has scenes of the papers)."""
-    names = ["summary.csv", "stats.csv", "papers.csv", "directions.csv", "papers_stats.csv", "episodes/"]
+    names = ["summary.csv", "stats.csv", "papers.csv", "directions.csv", "directions_held_out.csv", "papers_stats.csv"]
+    names += ["episodes/"]
     names += ["trajectories/", "pictures/"]
     there = [n for n in names if (pathlib.Path(out) / n.rstrip("/")).exists()]
     return f"wrote {out}/" + ", ".join(there)
@@ -438,6 +440,7 @@ def _print_tables(tables: dict, specs) -> None:
     for name, title, digits in (
         ("papers.csv", "the papers' numbers and ours (95 % intervals)", 2),
         ("directions.csv", "do the papers' differences reproduce? (proposed - baseline, paired by variant)", 2),
+        ("directions_held_out.csv", "the same on the held-out variants (each scene mirrored, its ranges exceeded)", 2),
         ("papers_stats.csv", "seed 002 Table 2 (Games-Howell among its four methods; time in the intimate, "
          "intimate + personal zones)", 4),
     ):  # fmt: skip
