@@ -286,8 +286,8 @@ def directions(episodes: pd.DataFrame, suffix: str = "") -> pd.DataFrame:
     from socialnav.evaluation.arena.report import mean_interval
 
     if suffix:
-        rows_of = episodes["scene"].str.endswith(suffix)
-        episodes = episodes[rows_of].assign(scene=episodes.loc[rows_of, "scene"].str.removesuffix(suffix))
+        episodes = episodes[episodes["scene"].str.endswith(suffix)]
+        episodes = episodes.assign(scene=episodes["scene"].str.removesuffix(suffix))
 
     paper = {(src, scene, method, metric): value for src, scene, method, metric, value in PAPER_ROWS}
     have = set(zip(episodes["scene"], episodes["method"], strict=True))

@@ -221,10 +221,11 @@ def _wrote(out: pathlib.Path) -> str:
     """The line naming what a finished run holds (``papers.csv``, ``directions.csv`` and
     ``papers_stats.csv`` only where the run has scenes of the papers; ``directions_held_out.csv``
     where it has their held-out rows too)."""
-    names = ["summary.csv", "stats.csv", "papers.csv", "directions.csv", "directions_held_out.csv", "papers_stats.csv"]
-    names += ["episodes/", "trajectories/", "pictures/"]
-    there = [n for n in names if (pathlib.Path(out) / n.rstrip("/")).exists()]
-    return f"wrote {out}/" + ", ".join(there)
+    from socialnav.evaluation.arena.table import RESULTS
+
+    folder = pathlib.Path(out)
+    names = [n for n in RESULTS if n not in ("run.json", "shards") and (folder / n).exists()]
+    return f"wrote {out}/" + ", ".join(n + "/" if (folder / n).is_dir() else n for n in names)
 
 
 class _Failed(Exception):
