@@ -241,15 +241,17 @@ def main() -> int:
         reference = reference_rate([best_b], args.seconds)  # the same batch: a like-for-like ratio
         print(f"the same step with the JAX social force (the reference), batch {best_b}: {reference / 1e6:.2f} M")
         print(f"ratio C++ kernel / JAX social force at batch {best_b}: {best / reference:.2f}x")
+    if args.no_peers:
+        return 0
     missing = [name for name in ("jupedsim", "pysocialforce") if importlib.util.find_spec(name) is None]
-    if not args.no_peers and missing:
+    if missing:
         print(f"peers skipped: {', '.join(missing)} not installed (pip install -e '.[bench]')")
-    elif not args.no_peers:
-        n = load_scenario().params.n_workers
-        jps_rate = bench_jupedsim(scenario, n, args.seconds)
-        psf_rate = bench_pysocialforce(scenario, n, args.seconds)
-        print(f"ratio jaxsim best / JuPedSim SFM:   {best / jps_rate:8.1f}x")
-        print(f"ratio jaxsim best / pysocialforce:  {best / psf_rate:8.0f}x")
+        return 0
+    n = scenario.params.n_workers
+    jps_rate = bench_jupedsim(scenario, n, args.seconds)
+    psf_rate = bench_pysocialforce(scenario, n, args.seconds)
+    print(f"ratio jaxsim best / JuPedSim SFM:   {best / jps_rate:8.1f}x")
+    print(f"ratio jaxsim best / pysocialforce:  {best / psf_rate:8.0f}x")
     return 0
 
 
