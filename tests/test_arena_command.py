@@ -85,6 +85,7 @@ def test_the_time_estimate_is_a_range_that_grows_with_the_work():
     assert estimate_s(specs, 3, 60, False)[0] > low and estimate_s(specs, 4, 6, False)[1] > high
     more_low, more_high = estimate_s(specs, 3, 6, True)
     assert more_low > low and more_high > high
+    assert estimate_s(specs, 3, 6, True, turned=True)[0] > more_low  # its own programs and episodes
     programs = len(specs) * (3 + 2)
     assert low - STARTUP_S == pytest.approx(programs * COMPILE_S_PER_PROGRAM[0] + (40 + 60) * 6 * 3 / 6000.0)
 
@@ -108,16 +109,21 @@ def test_the_arena_names_only_the_files_it_wrote(tmp_path, capsys):
 @pytest.mark.slow
 def test_a_held_out_run_writes_the_claims_on_its_held_out_rows(tmp_path, capsys):
     """``--held-out`` on a paper's scene: ``directions_held_out.csv`` holds the scene's claims
-    measured on its held-out rows, under the scene's own name, beside ``directions.csv``."""
+    measured on its held-out rows, under the scene's own name, beside ``directions.csv``; with
+    ``--turned`` too, ``directions_turned.csv`` the claims on the scene turned, paired by variant."""
     import pandas as pd
 
     from socialnav import cli
 
     out = tmp_path / "run"
     argv = ["arena", "--out", str(out), "--scenes", "casn_static_person", "--methods", "casn,snl_matched"]
-    assert cli.main([*argv, "--variants", "3", "--held-out", "--no-progress"]) == 0
+    assert cli.main([*argv, "--variants", "3", "--held-out", "--turned", "--no-progress"]) == 0
     said = [line for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")][-1]
-    assert "directions.csv" in said and "directions_held_out.csv" in said
+    assert "directions.csv" in said and "directions_held_out.csv" in said and "directions_turned.csv" in said
+    turned = pd.read_csv(out / "directions_turned.csv")
+    assert set(turned["scene"]) == {"casn_static_person"} and (turned["n_pairs"] == 3).all()
+    episodes = pd.read_parquet(out / "episodes" / "casn_static_person@turned.parquet")
+    assert sorted(episodes["variant"].unique()) == [0, 1, 2] and set(episodes["scene"]) == {"casn_static_person@turned"}
     evaluated = pd.read_csv(out / "directions.csv")
     held_out = pd.read_csv(out / "directions_held_out.csv")
     assert set(held_out["scene"]) == {"casn_static_person"}

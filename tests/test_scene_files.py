@@ -239,3 +239,81 @@ def test_the_l_hallways_held_out_rule_is_one_a_right_turn_can_keep():
     assert bool(nav_metrics.rule_satisfied(flipped.rule, walk, jnp.zeros(t, bool), *none))
     left_turn_rule_mirrored = mirror(dataclasses.replace(hall, held_out_rule=None)).rule
     assert not bool(nav_metrics.rule_satisfied(left_turn_rule_mirrored, walk, jnp.zeros(t, bool), *none))
+
+
+def _turned_back(xy, bounds_m):
+    """Points turned a quarter turn clockwise about ``bounds_m``'s centre: the inverse of the turn."""
+    cx, cy = (bounds_m[0] + bounds_m[1]) / 2, (bounds_m[2] + bounds_m[3]) / 2
+    xy = np.asarray(xy, np.float64)
+    return np.stack([cx + (xy[..., 1] - cy), cy - (xy[..., 0] - cx)], axis=-1)
+
+
+@pytest.mark.parametrize("file", SCENES, ids=[f.stem for f in SCENES])
+def test_a_turned_scene_is_the_scene_a_quarter_turn_on(file):
+    """``turn``: the walls' signed distance at a point is the turned walls' at the turned point;
+    the turned planner grid, rasterised at the turned scene's own cells, holds a wall wherever the
+    turned walls put one (every cell not on a tie, a face exactly half a cell off its centre); the
+    turned scene's variant k is variant k turned (positions, headings; start-goal distance kept)."""
+    from socialnav.jaxsim import geometry
+    from socialnav.jaxsim.scenes import world as world_lib
+    from socialnav.jaxsim.scenes.spec import turn, turn_bounds_m, turn_points
+
+    spec = load_scene(file)
+    turned = turn(spec)
+    about = turn_bounds_m(spec.bounds_m)
+    (x0, x1, y0, y1), (u0, u1, w0, w1) = about, turned.bounds_m
+    assert (u1 - u0, w1 - w0) == pytest.approx((y1 - y0, x1 - x0))
+
+    rng = np.random.default_rng(0)
+    points = np.stack([rng.uniform(x0, x1, 500), rng.uniform(y0, y1, 500)], 1)
+    walls, turned_walls = world_lib._boxes(spec), world_lib._boxes(turned)
+    before = geometry.box_signed_distance(points[:, 0], points[:, 1], walls)[0]
+    moved = turn_points(points, about)
+    after = geometry.box_signed_distance(moved[:, 0], moved[:, 1], turned_walls)[0]
+    np.testing.assert_allclose(after, before, atol=1e-6)
+
+    occ, (ox, oy) = world_lib.occupancy(turned, 0.2)
+    rows, cols = np.meshgrid(np.arange(occ.shape[0]), np.arange(occ.shape[1]), indexing="ij")
+    cx, cy = ox + (cols + 0.5) * 0.2, oy + (rows + 0.5) * 0.2
+    sd = geometry.box_signed_distance(cx, cy, turned_walls)[0]
+    inner = np.zeros(occ.shape, bool)
+    inner[1:-1, 1:-1] = True  # the border cells are walls by rule
+    clear = inner & (np.abs(sd - 0.1) > 1e-6)
+    np.testing.assert_array_equal(occ[clear] == 1.0, sd[clear] <= 0.1)
+    assert (occ[~inner] == 1.0).all()
+
+    v, vt = sample_variants(spec, 0, 4), sample_variants(turned, 0, 4)
+    for name in ("xy0", "start_xy", "end_xy", "queue_head", "exit_xy", "robot_xy", "goal_xy"):
+        np.testing.assert_allclose(_turned_back(getattr(vt, name), about), getattr(v, name), atol=1e-5, err_msg=name)
+    np.testing.assert_allclose(np.cos(vt.heading0), -np.sin(v.heading0), atol=1e-6)
+    np.testing.assert_allclose(np.sin(vt.robot_yaw), np.cos(v.robot_yaw), atol=1e-6)
+    np.testing.assert_allclose(
+        np.linalg.norm(vt.goal_xy - vt.robot_xy, axis=-1), np.linalg.norm(v.goal_xy - v.robot_xy, axis=-1), rtol=1e-6
+    )
+    np.testing.assert_array_equal(vt.speed_mps, v.speed_mps)
+    with pytest.raises(ValueError, match="already turned"):
+        turn(turned)
+
+
+def test_the_turned_l_hallway_keeps_its_rule():
+    """The L-hallway's rules turned with it: a walk keeping right along the first leg obeys the
+    turned rule turned, one keeping left breaks it, as in the file's own frame."""
+    from socialnav.jaxsim.scenes.spec import mirror, turn, turn_bounds_m, turn_points
+
+    hall = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
+    turned = turn(hall)
+    about = turn_bounds_m(hall.bounds_m)
+    x = np.linspace(-5.5, -0.5, 30)
+    t = len(x)
+    none = jnp.zeros((t, 1, 2)), jnp.zeros((1, 2)), jnp.zeros((1, 2)), jnp.zeros((t, 1), bool), jnp.full(1, -1)
+    for y, keeps in ((-0.5, True), (0.5, False)):
+        walk = np.stack([x, np.full(t, y)], 1)
+        walk_xy = jnp.asarray(walk, jnp.float32)
+        here = nav_metrics.rule_satisfied(hall.rule["rules"][0], walk_xy, jnp.zeros(t, bool), *none)
+        there = nav_metrics.rule_satisfied(
+            turned.rule["rules"][0], jnp.asarray(turn_points(walk, about), jnp.float32), jnp.zeros(t, bool), *none
+        )
+        assert bool(here) == bool(there) == keeps
+    assert turned.rule["rules"][0]["direction_deg"] == hall.rule["rules"][0]["direction_deg"] + 90.0
+    with pytest.raises(ValueError, match="not mirrored"):
+        mirror(turned)

@@ -84,6 +84,13 @@ def _metrics_program(rule_structure, n_periods: int, config: arena.ArenaConfig, 
 
 
 HELD_OUT = "@held_out"
+TURNED = "@turned"
+
+
+def row_name(spec: SceneSpec, held_out: bool = False) -> str:
+    """A scene row's name: ``<scene>``, ``<scene>@held_out`` (mirrored, its ranges exceeded) or
+    ``<scene>@turned`` (a quarter turn, :func:`jaxsim.scenes.spec.turn`)."""
+    return spec.name + (HELD_OUT if held_out else "") + (TURNED if spec.turned_from is not None else "")
 
 
 def run_scene(
@@ -104,7 +111,8 @@ def run_scene(
     """Every method on variants ``first .. first + n_variants - 1`` of one scene:
     ``(episodes frame, trajectories frame or None)``. ``held_out``: the scene mirrored
     (:func:`jaxsim.scenes.spec.mirror`) with every range drawn just outside itself, its rows named
-    ``<scene>@held_out``. ``user_actors``: method name -> a factory ``env -> Actor`` or ``env ->
+    ``<scene>@held_out``; a turned ``spec`` (:func:`jaxsim.scenes.spec.turn`) gives rows
+    ``<scene>@turned``. ``user_actors``: method name -> a factory ``env -> Actor`` or ``env ->
     (Actor, params)`` (:func:`user_actor`), for the names of ``methods`` that are not built in.
     ``params``: the robot's limits and the layers' parameters (:mod:`evaluation.arena.params`;
     default: the seeds' values). ``gscl_model``: the network of method ``gscl``
@@ -112,7 +120,7 @@ def run_scene(
     weights traced, so another checkpoint of the same network reuses the compiled program; or a
     function of the maps). ``n_devices``: host devices the methods run
     on at the same time (:func:`evaluation.arena.episodes.run_spread`; default: every local one)."""
-    name = spec.name + (HELD_OUT if held_out else "")
+    name = row_name(spec, held_out)
     if held_out:
         spec = mirror(spec)
     setup = arena.setup_scene(spec, config)

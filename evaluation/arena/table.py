@@ -12,7 +12,8 @@ holds:
   (present and matching: the scene is done; :func:`finish_scene`, :func:`finished`);
 - ``trajectories/``, ``pictures/``: the kept variants' steps and their pictures;
 - ``summary.csv``, ``stats.csv``, ``papers.csv``, ``directions.csv``,
-  ``directions_held_out.csv``, ``papers_stats.csv`` (:func:`write_tables`).
+  ``directions_held_out.csv``, ``directions_turned.csv``, ``papers_stats.csv``
+  (:func:`write_tables`).
 
 A rerun with the same settings computes only what is missing: the digest of a scene
 (:func:`scene_digest`) covers its file's bytes and every setting that changes an episode.
@@ -39,8 +40,8 @@ from collections.abc import Callable, Sequence
 from socialnav.common import runfolder
 from socialnav.common.atomic import write_atomic
 from socialnav.evaluation.arena import actor_spec
-from socialnav.evaluation.arena.run import HELD_OUT
-from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
+from socialnav.evaluation.arena.run import HELD_OUT, TURNED, row_name
+from socialnav.jaxsim.scenes.spec import SceneSpec, mirror, turn
 
 JOB = "socialnav arena"  # the job that owns a run folder's files (common.runfolder's manifest)
 POLICY_METHOD = "ppo"  # the rows of a trained policy (``--policy-run``)
@@ -52,6 +53,7 @@ RESULTS = (
     "papers.csv",
     "directions.csv",
     "directions_held_out.csv",
+    "directions_turned.csv",
     "papers_stats.csv",
     "episodes",
     "trajectories",
@@ -87,6 +89,8 @@ class TableRequest:
         :data:`POLICY_METHOD` with ``policy_run``.
       variants: variants a scene; seed: their random seed.
       held_out: also every scene mirrored with its ranges exceeded (rows ``<scene>@held_out``).
+      turned: also every scene turned a quarter turn, its own variants turned (rows
+        ``<scene>@turned``; :func:`socialnav.jaxsim.scenes.spec.turn`).
       shard_variants: variants a shard (None: a scene's variants in one).
       keep_trajectories: variants a scene and method whose steps are kept.
       gscl_run: the GSCL model of method ``gscl`` (a resolved folder), or None.
@@ -102,6 +106,7 @@ class TableRequest:
     variants: int = 100
     seed: int = 0
     held_out: bool = False
+    turned: bool = False
     shard_variants: int | None = None
     keep_trajectories: int = 5
     gscl_run: pathlib.Path | None = None
@@ -117,22 +122,28 @@ class TableRequest:
     def per_shard(self) -> int:
         return self.variants if self.shard_variants is None else self.shard_variants
 
-    @property
+    @functools.cached_property
     def runs(self) -> list[tuple[SceneSpec, bool]]:
-        """``(spec, held_out)`` of every scene row: the scenes, then their held-out mirrors."""
-        return [(spec, False) for spec in self.specs] + ([(spec, True) for spec in self.specs] if self.held_out else [])
+        """``(spec, held_out)`` of every scene row: the scenes, their held-out mirrors, then the
+        scenes turned (a turned row's spec is the turned scene, :func:`turn`)."""
+        held_out = [(spec, True) for spec in self.specs] if self.held_out else []
+        turned = [(turn(spec), False) for spec in self.specs] if self.turned else []
+        return [(spec, False) for spec in self.specs] + held_out + turned
 
     @property
     def names(self) -> list[str]:
-        """Every scene row's name (``<scene>`` or ``<scene>@held_out``), as :attr:`runs`."""
-        return [spec.name + (HELD_OUT if held_out else "") for spec, held_out in self.runs]
+        """Every scene row's name (``<scene>``, ``<scene>@held_out``, ``<scene>@turned``), as
+        :attr:`runs`."""
+        return [row_name(spec, held_out) for spec, held_out in self.runs]
 
 
-def estimate_s(specs, n_methods: int, variants: int, held_out: bool) -> tuple[float, float]:
+def estimate_s(specs, n_methods: int, variants: int, held_out: bool, turned: bool = False) -> tuple[float, float]:
     """``(low, high)`` seconds a run of ``specs`` x ``n_methods`` x ``variants`` takes here
-    (see the constants above)."""
-    programs = len(specs) * (n_methods + 2)
-    simulated = sum(spec.timeout_s for spec in specs) * (2 if held_out else 1) * variants * n_methods
+    (see the constants above; a turned scene's grid has other shapes, so it compiles its own
+    programs)."""
+    programs = len(specs) * (n_methods + 2) * (2 if turned else 1)
+    rows = 1 + int(held_out) + int(turned)
+    simulated = sum(spec.timeout_s for spec in specs) * rows * variants * n_methods
     return tuple(
         STARTUP_S + programs * c + simulated / rate for c, rate in zip(COMPILE_S_PER_PROGRAM, SIMULATED_S_PER_S)
     )
@@ -171,6 +182,7 @@ def settings(request: TableRequest) -> dict:
         "seed": request.seed,
         "keep_trajectories": request.keep_trajectories,
         "held_out": request.held_out,
+        **({"turned": True} if request.turned else {}),  # absent without --turned: earlier runs resume
         "shard_variants": request.per_shard,
         "gscl_run": None if request.gscl_run is None else str(request.gscl_run),
         "gscl_model": None if request.gscl_run is None else model_identity(request.gscl_run),
@@ -188,16 +200,16 @@ def settings(request: TableRequest) -> dict:
         "socialnav_version": __version__,
     }
     chosen["scene_digests"] = {
-        name: scene_digest(spec.file, held_out, chosen)
+        name: scene_digest(spec.file, held_out, chosen, turned=spec.turned_from is not None)
         for (spec, held_out), name in zip(request.runs, request.names, strict=True)
     }
     chosen["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in request.specs}
     return chosen
 
 
-def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str:
+def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict, turned: bool = False) -> str:
     """A scene's results are these when this digest matches: the scene file's bytes, the held-out
-    flag, and every setting that changes an episode (methods, variants, seed, shard layout, the
+    and turned flags, and every setting that changes an episode (methods, variants, seed, shard layout, the
     GSCL model, the source files of the ``--actor`` factories, the human model, the ``--params``
     file's text, the metrics' and the toolkit's versions)."""
     h = hashlib.sha256()
@@ -216,7 +228,8 @@ def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict) -> str
     chosen = {k: settings.get(k) for k in keys}
     if settings.get("policy_model") is not None:  # absent without --policy-run: earlier digests stay valid
         chosen["policy_model"] = settings["policy_model"]
-    h.update(json.dumps({"held_out": held_out, **chosen}, sort_keys=True).encode())
+    row = {"held_out": held_out, **({"turned": True} if turned else {})}  # an unturned row's digest as before
+    h.update(json.dumps({**row, **chosen}, sort_keys=True).encode())
     h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
     return h.hexdigest()[:16]
 
@@ -264,12 +277,14 @@ def shard_file(out: pathlib.Path, name: str, digest: str, first: int) -> pathlib
 
 def plan_shards(out: pathlib.Path, request: TableRequest, digests: dict) -> list[tuple[str, pathlib.Path, tuple, int]]:
     """The shards still to compute: ``(name, output file, compute_shard's arguments, episodes)``
-    each. A scene and its held-out mirror come one after the other: they share their compiled
-    programs, which the arena may drop between scenes
+    each. A scene, its held-out mirror and its turned row come one after the other: the first two
+    share their compiled programs, which the arena may drop between scenes
     (:func:`socialnav.evaluation.arena.episodes.release_programs_if_crowded`)."""
     runs, names = request.runs, request.names
-    position = {id(spec): k for k, spec in enumerate(request.specs)}
-    order = sorted(range(len(runs)), key=lambda i: (position[id(runs[i][0])], runs[i][1]))
+    position = {spec.name: k for k, spec in enumerate(request.specs)}
+    order = sorted(
+        range(len(runs)), key=lambda i: (position[runs[i][0].name], runs[i][0].turned_from is not None, runs[i][1])
+    )
     shards = []
     for (spec, held_out), name in ((runs[i], names[i]) for i in order):
         if finished(out, name, digests[name]):
@@ -422,9 +437,9 @@ def write_tables(out: pathlib.Path, episodes) -> dict:
     """Write the run's tables from its joined ``episodes``: ``summary.csv`` (one row per scene and
     method, with intervals), ``stats.csv`` (the tests between methods), ``pictures/methods.png``
     and, where the run has the papers' scenes, ``papers.csv``, ``directions.csv`` (the claims on
-    the evaluated variants), ``directions_held_out.csv`` (the same claims on the held-out rows,
-    where the run has them) and ``papers_stats.csv``. Returns the tables written, by file name,
-    in that order."""
+    the evaluated variants), ``directions_held_out.csv`` and ``directions_turned.csv`` (the same
+    claims on the held-out and the turned rows, where the run has them) and ``papers_stats.csv``.
+    Returns the tables written, by file name, in that order."""
     from socialnav.evaluation.arena import papers
     from socialnav.evaluation.arena import report as arena_report
     from socialnav.evaluation.arena import stats as arena_stats
@@ -444,6 +459,7 @@ def write_tables(out: pathlib.Path, episodes) -> dict:
         ("papers.csv", papers.comparison(summary).dropna(subset=["ours"])),
         ("directions.csv", papers.directions(episodes)),
         ("directions_held_out.csv", papers.directions(episodes, HELD_OUT)),
+        ("directions_turned.csv", papers.directions(episodes, TURNED)),
         ("papers_stats.csv", papers.stats_comparison(episodes)),
     ):
         if not len(table):

@@ -194,7 +194,7 @@ def step_people(
                              velocity_params, group_id, after)  # fmt: skip
         return jax.tree_util.tree_map(lambda a, b: jnp.where(v.reactive, a, b), reactive, replayed)
     target, speed, mobile = targets(v, s, time_s)
-    u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
+    u = _uniforms(v, step, s.xy.shape[0], model)
     robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
     x, y, vx, vy = s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1]
     aim_dx, aim_dy = target[:, 0] - x, target[:, 1] - y
@@ -245,7 +245,7 @@ def _reactive(
     lookahead_s = LOOKAHEAD_SAMPLES * RECORD_DT_S
     aim = recorded_ahead(v, time_s) - s.xy
     speed = jnp.minimum(jnp.linalg.norm(aim, axis=-1) / lookahead_s, REACTIVE_MAX_SPEED_MPS)
-    u = rng.hash_uniform16(v.seed_u32, step, (2, s.xy.shape[0]))
+    u = _uniforms(v, step, s.xy.shape[0], model)
     robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
     bundle = humans.human_params(model, params, orca_params, velocity_params)
     x, y, vx, vy = humans.step_humans(
@@ -258,6 +258,17 @@ def _reactive(
     xy = jnp.where(entering[:, None], entry_xy, jnp.stack([x, y], axis=-1))
     velocity = jnp.where(entering[:, None], entry_velocity, jnp.stack([vx, vy], axis=-1))
     return _moved(s, xy, velocity, present)
+
+
+def _uniforms(v: Variant, step, n: int, model: str):
+    """(2, n) the step's uniforms of the human model (:func:`jaxsim.humans.step_humans`'s ``u1``,
+    ``u2``). The social force's ``u2`` is its random push's angle in turns, and gets the variant's
+    ``noise_turns`` (a turned scene's pushes turned with it; ``+ 0`` changes no bit); the other
+    models' draws are not directions and stay as drawn."""
+    u = rng.hash_uniform16(v.seed_u32, step, (2, n))
+    if model != "social_force":
+        return u
+    return jnp.stack([u[0], u[1] + v.noise_turns])
 
 
 def stack_people(states: list[PeopleState]) -> PeopleState:

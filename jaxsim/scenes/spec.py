@@ -135,6 +135,7 @@ class SceneSpec:
     stop_and_go_m: float | None = None  # every robot stops for a person ahead closer than this
     people_in_global_plan: bool = True  # the seen people are obstacles for the global planner
     recording: dict | None = None  # the recorded people (:func:`_recording`); None: scripted people only
+    turned_from: SceneSpec | None = None  # the scene this one is a quarter turn of (:func:`turn`); None: as in its file
 
 
 # ------------------------------------------------------------------ typed reads
@@ -651,6 +652,8 @@ def mirror(spec: SceneSpec) -> SceneSpec:
     gives one (mirrored the same way), and the original rule becomes the mirror's held-out rule, so
     that mirroring twice gives the scene back. Used for held-out variants: a method that learnt a
     layout's handedness rather than its rule shows it here."""
+    if spec.turned_from is not None:
+        raise ValueError(f"{spec.file}: a turned scene is not mirrored; mirror the file's scene")
     c = spec.bounds_m[2] + spec.bounds_m[3]
 
     def y_range(r):
@@ -711,4 +714,105 @@ def mirror(spec: SceneSpec) -> SceneSpec:
         rule=rule(spec.rule if spec.held_out_rule is None else spec.held_out_rule),
         held_out_rule=None if spec.held_out_rule is None else rule(spec.rule),
         recording=recording,
+    )
+
+
+TURNED_DEG = 90.0  # the turned row's angle: a quarter turn, counter-clockwise
+TURN_CELL_M = 0.2  # the grid a turn keeps whole: the arena planner's cell (ArenaConfig.grid_resolution_m)
+
+
+def turn_bounds_m(bounds_m, cell_m: float = TURN_CELL_M) -> tuple[float, float, float, float]:
+    """The box a scene is turned about: ``bounds_m`` grown at its top and right to whole cells of
+    ``cell_m``, as a planner's grid over the bounds covers them (:func:`jaxsim.scenes.world.occupancy`),
+    so that the turned grid's cells are the scene's own cells, turned."""
+    xmin, xmax, ymin, ymax = (float(v) for v in bounds_m)
+    width, height = (math.ceil(extent / cell_m - 1e-6) * cell_m for extent in (xmax - xmin, ymax - ymin))
+    return xmin, round(xmin + width, 9), ymin, round(ymin + height, 9)
+
+
+def turn_points(xy, bounds_m) -> np.ndarray:
+    """Points (..., 2) turned a quarter turn counter-clockwise about the centre of ``bounds_m``
+    (``xmin, xmax, ymin, ymax``: a scene's :func:`turn_bounds_m`): ``(x, y) -> (cx - (y - cy),
+    cy + (x - cx))``."""
+    xy = np.asarray(xy)
+    cx, cy = (bounds_m[0] + bounds_m[1]) / 2, (bounds_m[2] + bounds_m[3]) / 2
+    return np.stack([cx - (xy[..., 1] - cy), cy + (xy[..., 0] - cx)], axis=-1).astype(xy.dtype)
+
+
+def turn(spec: SceneSpec) -> SceneSpec:
+    """The scene turned a quarter turn (:data:`TURNED_DEG`) counter-clockwise about the centre of
+    its :func:`turn_bounds_m` (its bounds in whole planner cells, which become its bounds): walls,
+    objects, people, the robot and the rule's geometry, with headings and directions turned too.
+    Its variants are the scene's own, turned (:func:`~jaxsim.scenes.variant.sample_variant` draws
+    them from ``turned_from`` and turns them), and its planner grid is the scene's own grid, turned
+    (:func:`jaxsim.scenes.world.occupancy`), so the turned row is a paired comparison that changes
+    the orientation alone: the same people, timings and ranges (in distribution), the same cells.
+
+    Why a quarter turn and not any angle: this simulator's walls are axis-aligned boxes (the
+    people's wall field, the robot's contacts, line of sight and every planner's grid use them as
+    such), and a quarter turn keeps a box a box, so the turned scene is exactly the scene; 30
+    degrees would need oriented walls. The GSCL window keeps the world's axes
+    (:mod:`planners.layers.gscl_layer`), so a learnt map meets its scene at an orientation the
+    scene file never had; the generator's own layouts are drawn at every orientation
+    (:mod:`models.families`), so this tests the rule, not the generator's coverage. A recorded
+    crowd is turned with its variants. Raises ``ValueError`` for a scene already turned."""
+    if spec.turned_from is not None:
+        raise ValueError(f"{spec.file}: the scene is already turned; turn the file's scene")
+    bounds = turn_bounds_m(spec.bounds_m)
+
+    def point(p):  # a point's ranges ((xlo, xhi), (ylo, yhi)): the corners' box, turned
+        corners = np.array([[x, y] for x in p[0] for y in p[1]], np.float64)
+        t = turn_points(corners, bounds)
+        lo, hi = np.round(t.min(axis=0), 9), np.round(t.max(axis=0), 9)
+        return (float(lo[0]), float(hi[0])), (float(lo[1]), float(hi[1]))
+
+    def angle(r):
+        return (r[0] + TURNED_DEG, r[1] + TURNED_DEG)
+
+    def box(b):  # xmin, xmax, ymin, ymax
+        (x0, x1), (y0, y1) = point(((b[0], b[1]), (b[2], b[3])))
+        return np.array([x0, x1, y0, y1], np.asarray(b).dtype)
+
+    people = []
+    for p in spec.people:
+        q = dict(p)
+        for key in ("position", "start", "end", "centre", "head", "exit"):
+            if key in q:
+                q[key] = point(q[key])
+        for key in ("heading_deg", "rotation_deg", "towards_deg"):
+            if key in q:
+                q[key] = angle(q[key])
+        people.append(q)
+
+    def rule(r):
+        r = dict(r)
+        if "box" in r:
+            r["box"] = box(r["box"])
+        for key in ("centre", "head"):
+            if key in r:
+                r[key] = turn_points(np.asarray(r[key], float), bounds)
+        if "direction_deg" in r:
+            r["direction_deg"] = r["direction_deg"] + TURNED_DEG
+        if "rules" in r:
+            r["rules"] = [rule(sub) for sub in r["rules"]]
+        return r
+
+    walls = np.stack([box(w) for w in spec.walls_m]).astype(np.float32) if len(spec.walls_m) else spec.walls_m
+    objects = tuple(
+        (name, turn_points(poly, bounds).astype(np.float32), cost) for name, poly, cost in spec.objects
+    )  # a turn keeps a polygon counter-clockwise
+    return dataclasses.replace(
+        spec,
+        bounds_m=tuple(float(v) for v in box(np.asarray(bounds, float))),
+        walls_m=walls,
+        objects=objects,
+        robot={
+            "start": point(spec.robot["start"]),
+            "goal": point(spec.robot["goal"]),
+            "yaw_deg": angle(spec.robot["yaw_deg"]),
+        },
+        people=tuple(people),
+        rule=rule(spec.rule),
+        held_out_rule=None if spec.held_out_rule is None else rule(spec.held_out_rule),
+        turned_from=spec,
     )

@@ -17,7 +17,7 @@ from flax import struct
 
 from socialnav.jaxsim.params import PERSON_RADIUS_M, TIAGO_RADIUS_M
 from socialnav.jaxsim.scenes import recording as recording_lib
-from socialnav.jaxsim.scenes.spec import KIND, SceneSpec
+from socialnav.jaxsim.scenes.spec import KIND, TURNED_DEG, SceneSpec, turn_bounds_m, turn_points
 
 # A recorded scene's robot starts at least this far from everyone recorded there at time 0
 # (centre to centre: the robot's and a person's radii and a quarter metre): its first step is
@@ -49,6 +49,8 @@ class Variant:
         reactively (False: replayed, or no recording).
       robot_xy: (2,) start; robot_yaw: (); goal_xy: (2,).
       seed_u32: () uint32 seed of the people's random force.
+      noise_turns: () float32 turns added to the angle of the social force's random push: 0, or a
+        turned scene's quarter (:func:`turn_variant`), so a person's pushes turn with the scene.
     """
 
     kind: np.ndarray
@@ -78,6 +80,7 @@ class Variant:
     robot_yaw: np.ndarray
     goal_xy: np.ndarray
     seed_u32: np.ndarray
+    noise_turns: np.ndarray
 
 
 class _Drawer:
@@ -146,9 +149,15 @@ def sample_variant(
 
     ``training`` draws from a stream of its own (the ranges as usual): the random generator's
     entropy gets a last word (2) that no evaluation draw has, so no training variant is ever a
-    variant the benchmark evaluates on, whatever the seeds."""
+    variant the benchmark evaluates on, whatever the seeds.
+
+    A turned scene (:func:`~jaxsim.scenes.spec.turn`) gives the variant of the scene it was turned
+    from, turned (:func:`turn_variant`): the same draw, paired with the scene's own variant ``k``."""
     if held_out and training:
         raise ValueError("a variant is drawn held out or for training, not both")
+    if spec.turned_from is not None:
+        drawn = sample_variant(spec.turned_from, seed, k, held_out, n_slots, training)
+        return turn_variant(drawn, turn_bounds_m(spec.turned_from.bounds_m))
     # A recorded scene draws by its run's name: its replayed and reactive scenes play the same
     # windows from the same starts (a paired comparison of the two playbacks).
     stream = spec.name if spec.recording is None else f"recording:{spec.recording['run']}"
@@ -275,6 +284,32 @@ def sample_variant(
         robot_yaw=np.float32(math.radians(draw.number(robot["yaw_deg"]))),
         goal_xy=draw.point(robot["goal"]),
         seed_u32=np.uint32(rng.integers(0, 2**32, dtype=np.uint64)),
+        noise_turns=np.float32(0.0),
+    )
+
+
+def turn_variant(variant: Variant, bounds_m) -> Variant:
+    """``variant`` (one, or a batch) turned a quarter turn counter-clockwise about the centre of
+    ``bounds_m`` (the scene's :func:`~jaxsim.scenes.spec.turn_bounds_m`;
+    :func:`~jaxsim.scenes.spec.turn_points`): every position, the queue's step between places, the
+    recorded tracks, every heading (kept in [-pi, pi)) and the people's random pushes
+    (``noise_turns``)."""
+    quarter = math.radians(TURNED_DEG)
+
+    def heading(a):
+        return ((a + quarter + np.pi) % (2 * np.pi) - np.pi).astype(a.dtype)
+
+    def step(v):  # a displacement: turned without the centre
+        return np.stack([-v[..., 1], v[..., 0]], axis=-1).astype(v.dtype)
+
+    points = ("xy0", "start_xy", "end_xy", "queue_head", "exit_xy", "track_xy", "robot_xy", "goal_xy")
+    return variant.replace(
+        **{name: turn_points(getattr(variant, name), bounds_m) for name in points},
+        queue_step=step(variant.queue_step),
+        heading0=heading(variant.heading0),
+        heading_turned=heading(variant.heading_turned),
+        robot_yaw=heading(np.asarray(variant.robot_yaw)),
+        noise_turns=(variant.noise_turns + TURNED_DEG / 360.0).astype(np.float32),
     )
 
 

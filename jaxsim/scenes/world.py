@@ -3,12 +3,15 @@ people's wall force, the robot's contact), and the occupancy grid a planner rast
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
 from socialnav.jaxsim import geometry
+from socialnav.jaxsim.scenes import spec as spec_lib
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.world import Grid
 
@@ -47,7 +50,18 @@ def build_scene_world(spec: SceneSpec) -> SceneWorld:
 
 def occupancy(spec: SceneSpec, resolution_m: float) -> tuple[np.ndarray, tuple[float, float]]:
     """(H, W) float32 occupancy (1 where a cell centre lies in a wall or off the scene's bounds'
-    border cells) over ``spec.bounds_m``, and its origin (x, y)."""
+    border cells) over ``spec.bounds_m``, and its origin (x, y).
+
+    A turned scene (:func:`jaxsim.scenes.spec.turn`) gets the grid of the scene it was turned
+    from, turned a quarter turn (``np.rot90(grid, -1)``): a wall face exactly half a cell from a
+    cell's centre is inside or outside by float rounding, which a turn decides differently (86
+    such cells at 0.2 m in gscl_group), so rasterised afresh the turned walls would differ by a
+    cell here and there. Exact at the cells :data:`~jaxsim.scenes.spec.TURN_CELL_M` divides
+    into whole numbers (0.2, 0.1, 0.05 m)."""
+    if spec.turned_from is not None and _whole(spec_lib.TURN_CELL_M / resolution_m):
+        original = dataclasses.replace(spec.turned_from, bounds_m=spec_lib.turn_bounds_m(spec.turned_from.bounds_m))
+        grid, _ = occupancy(original, resolution_m)
+        return np.ascontiguousarray(np.rot90(grid, -1)), (spec.bounds_m[0], spec.bounds_m[2])
     xmin, xmax, ymin, ymax = spec.bounds_m
     width = int(np.ceil((xmax - xmin) / resolution_m))
     height = int(np.ceil((ymax - ymin) / resolution_m))
@@ -59,6 +73,10 @@ def occupancy(spec: SceneSpec, resolution_m: float) -> tuple[np.ndarray, tuple[f
     occ[[0, -1], :] = 1.0  # the scene's edge is a wall for the planner
     occ[:, [0, -1]] = 1.0
     return occ, (xmin, ymin)
+
+
+def _whole(x: float) -> bool:
+    return abs(x - round(x)) < 1e-6
 
 
 def wall_distance(xy, walls_m):

@@ -6,6 +6,7 @@ socialnav arena --scenes my_scene.json --out runs/mine             # a scene fil
 socialnav arena --gscl-run runs/gscl                               # GSCL with your own model, not the shipped one
 socialnav arena --params my_params.toml                            # the robot's and layers' parameters
 socialnav arena --held-out                                         # and every scene mirrored, ranges exceeded
+socialnav arena --turned                                           # and every scene turned a quarter turn
 socialnav arena --backend ray --shard-variants 25                  # a Ray task per 25 variants of a scene
 
 Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
@@ -15,7 +16,8 @@ Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
 numbers beside ours with our 95 % intervals, for the scenes and methods the run has),
 ``directions.csv`` (each paper's difference against its baseline and ours, paired by variant,
 with a verdict: :func:`evaluation.arena.papers.directions`; ``directions_held_out.csv`` the same
-on the held-out rows, with ``--held-out``), ``papers_stats.csv`` (seed 002's Table 2,
+on the held-out rows, with ``--held-out``; ``directions_turned.csv`` on the turned rows, with
+``--turned``), ``papers_stats.csv`` (seed 002's Table 2,
 its Games-Howell p and Hedges' g beside ours: :func:`evaluation.arena.papers.stats_comparison`),
 ``stats.csv`` (Fisher, Welch ANOVA,
 Games-Howell, Hedges' g: :mod:`evaluation.arena.stats`) and ``run.json`` (the settings, the
@@ -139,6 +141,12 @@ def add_parser(sub) -> None:
         help="also run every scene mirrored with every range drawn just outside itself (rows <scene>@held_out)",
     )
     p.add_argument(
+        "--turned",
+        action="store_true",
+        help="also run every scene turned a quarter turn counter-clockwise, its variants the scene's own turned "
+        "(rows <scene>@turned: the orientation alone changes, paired by variant)",
+    )
+    p.add_argument(
         "--shard-variants",
         type=positive_int,
         default=None,
@@ -220,7 +228,7 @@ def run(args) -> int:
 def _wrote(out: pathlib.Path) -> str:
     """The line naming what a finished run holds (``papers.csv``, ``directions.csv`` and
     ``papers_stats.csv`` only where the run has scenes of the papers; ``directions_held_out.csv``
-    where it has their held-out rows too)."""
+    and ``directions_turned.csv`` where it has their held-out or turned rows too)."""
     from socialnav.evaluation.arena.table import RESULTS
 
     folder = pathlib.Path(out)
@@ -246,7 +254,7 @@ def _request(args, shown_as: pathlib.Path):
     from socialnav.common import runfolder
     from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.evaluation.arena import actor_spec
-    from socialnav.evaluation.arena.run import HELD_OUT
+    from socialnav.evaluation.arena.run import HELD_OUT, TURNED
     from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
     from socialnav.jaxsim.scenario.errors import ScenarioError
     from socialnav.jaxsim.scenes.spec import load_scene
@@ -326,9 +334,14 @@ def _request(args, shown_as: pathlib.Path):
                 "a run's scenes need different names (their results are filed under it)"
             )
         seen[spec.name] = spec.file
+    rows = {
+        *seen,
+        *([n + HELD_OUT for n in seen] if args.held_out else []),
+        *([n + TURNED for n in seen] if args.turned else []),
+    }
     for scene_name, _ in args.animate:
-        if scene_name.removesuffix(HELD_OUT) not in seen:
-            return _fail(f"--animate {scene_name}: not a scene of this run")
+        if scene_name not in rows:
+            return _fail(f"--animate {scene_name}: not a scene row of this run")
     if gscl_run is not None:
         from socialnav.models.inference import model_problem
 
@@ -346,6 +359,7 @@ def _request(args, shown_as: pathlib.Path):
         variants=args.variants,
         seed=args.seed,
         held_out=args.held_out,
+        turned=args.turned,
         shard_variants=args.shard_variants,
         keep_trajectories=args.keep_trajectories,
         gscl_run=gscl_run,
@@ -383,7 +397,9 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
             f"{shown_as} holds a run with {conflict} ({shown_as / 'run.json'}); "
             "pass --overwrite to replace it whole, or choose another --out"
         )
-    low, high = table.estimate_s(request.specs, len(request.methods), request.variants, request.held_out)
+    low, high = table.estimate_s(
+        request.specs, len(request.methods), request.variants, request.held_out, request.turned
+    )
     print(
         f"arena: {len(request.runs)} scene run(s) x {len(request.methods)} method(s) x {request.variants} variant(s) "
         f"= {n_episodes:,} episodes; about {_duration(low)} to {_duration(high)} (on 2 cores, compilation included; "
@@ -442,6 +458,7 @@ def _print_tables(tables: dict, specs) -> None:
         ("papers.csv", "the papers' numbers and ours (95 % intervals)", 2),
         ("directions.csv", "do the papers' differences reproduce? (proposed - baseline, paired by variant)", 2),
         ("directions_held_out.csv", "the same on the held-out variants (each scene mirrored, its ranges exceeded)", 2),
+        ("directions_turned.csv", "the same on the turned variants (each scene a quarter turn, the same draws)", 2),
         ("papers_stats.csv", "seed 002 Table 2 (Games-Howell among its four methods; time in the intimate, "
          "intimate + personal zones)", 4),
     ):  # fmt: skip
