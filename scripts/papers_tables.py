@@ -6,7 +6,12 @@ Prints, under a line naming the run (its folder, the package and metrics version
 model's digest, the variants and the seed from ``run.json``): ``papers.csv`` (each published number
 beside ours and its 95 % interval), ``directions.csv`` (each paper's difference between its method
 and a baseline beside ours, paired by variant) and ``papers_stats.csv`` (seed 002's Table 2), each
-with a count of its verdicts. Tables in the docs made this way can be made again from the run.
+with a count of its verdicts; where the run has turned rows (``socialnav arena --turned``), each
+method's social and goal success (a collision failing the run) on every scene beside the same on
+the scene turned, with the
+paired change's interval (:func:`turned_table`), and the papers' differences on the turned rows
+(``directions_turned.csv``) with the cells whose verdict the turn changed. Tables in the docs
+made this way can be made again from the run.
 """
 
 from __future__ import annotations
@@ -16,6 +21,8 @@ import json
 import pathlib
 
 import pandas as pd
+
+TURNED = "@turned"  # evaluation.arena.run.TURNED: a turned row's suffix
 
 
 def _source(run: pathlib.Path) -> str:
@@ -84,6 +91,60 @@ def stats_table(stats: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
+def turned_table(episodes: pd.DataFrame, metrics=("social_no_collision", "goal_no_collision")) -> str:
+    """Each scene and method's success (%, by default with a collision failing the run, seed 002's
+    reading) on the scene and on the scene turned, paired by variant:
+    ``own -> turned, change [95 % interval]`` (Student t of the per-variant differences, in
+    points; ``evaluation.arena.report.mean_interval``), and a count of the cells whose interval
+    excludes 0, per method."""
+    from socialnav.evaluation.arena.report import mean_interval
+
+    turned = episodes[episodes["scene"].str.endswith(TURNED)].assign(
+        scene=lambda f: f["scene"].str.removesuffix(TURNED)
+    )
+    own = episodes[episodes["scene"].isin(set(turned["scene"]))]
+    key = ["scene", "method", "variant"]
+    pairs = own.merge(turned, on=key, suffixes=("", "_turned"))
+    lines = [
+        "| scene | method | "
+        + " | ".join(f"{m.replace('_', ' ')} %: own -> turned, change [95 %]" for m in metrics)
+        + " |",
+        "|---|---|" + "---|" * len(metrics),
+    ]
+    moved: dict[str, list[int]] = {}
+    for (scene, method), g in pairs.groupby(["scene", "method"], sort=False):
+        cells = []
+        for m in metrics:
+            a, b = 100.0 * g[m].astype(float), 100.0 * g[f"{m}_turned"].astype(float)
+            lo, hi = mean_interval(b - a)
+            cells.append(f"{a.mean():.0f} -> {b.mean():.0f}, {(b - a).mean():+.0f} [{lo:+.0f}, {hi:+.0f}]")
+            if m == metrics[0]:
+                count = moved.setdefault(method, [0, 0])
+                count[0] += int(lo > 0 or hi < 0)
+                count[1] += 1
+        lines.append(f"| `{scene}` | {method} | " + " | ".join(cells) + " |")
+    lines.append(
+        f"\n{metrics[0].replace('_', ' ')} changed by the turn (interval excluding 0), scenes per method: "
+        + ", ".join(f"{method} {n} of {total}" for method, (n, total) in moved.items())
+        + "."
+    )
+    return "\n".join(lines)
+
+
+def verdict_changes(directions: pd.DataFrame, turned: pd.DataFrame) -> str:
+    """The papers' differences whose verdict differs on the turned rows, one line each."""
+    key = ["source", "scene", "metric", "proposed", "baseline"]
+    both = directions.merge(turned, on=key, suffixes=("", "_turned"))
+    changed = both[both["verdict"] != both["verdict_turned"]]
+    lines = [f"{len(changed)} of {len(both)} verdicts change on the turned rows" + (":" if len(changed) else ".")]
+    for r in changed.itertuples():
+        lines.append(
+            f"- {r.source}, `{r.scene}`, {r.metric}, {r.proposed} - {r.baseline}: {r.verdict} ({r.ours_diff:+.2f}) "
+            f"-> {r.verdict_turned} ({r.ours_diff_turned:+.2f})"
+        )
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("run", type=pathlib.Path, help="a socialnav arena run folder")
@@ -99,6 +160,18 @@ def main() -> None:
         if (run / name).is_file():
             print(f"\n`{name}`:\n")
             print(table(pd.read_csv(run / name)))
+    turned_files = sorted((run / "episodes").glob(f"*{TURNED}.parquet"))
+    if turned_files:
+        own_files = [run / "episodes" / f.name.replace(TURNED, "") for f in turned_files]
+        episodes = pd.concat([pd.read_parquet(f) for f in [*own_files, *turned_files] if f.is_file()])
+        print("\nEvery scene turned a quarter turn (`--turned`), paired by variant:\n")
+        print(turned_table(episodes))
+    if (run / "directions_turned.csv").is_file():
+        turned = pd.read_csv(run / "directions_turned.csv")
+        print("\n`directions_turned.csv`:\n")
+        print(directions_table(turned))
+        if (run / "directions.csv").is_file():
+            print("\n" + verdict_changes(pd.read_csv(run / "directions.csv"), turned))
 
 
 if __name__ == "__main__":

@@ -235,3 +235,29 @@ def test_the_papers_tables_script_prints_a_runs_tables_with_their_source_and_cou
     monkeypatch.setattr(sys, "argv", ["papers_tables.py", str(tmp_path)])
     with pytest.raises(SystemExit, match="no run.json"):
         script.main()
+
+
+def test_the_papers_tables_script_pairs_a_scenes_turned_row_by_variant():
+    """``turned_table``: own -> turned success per scene and method, the paired change with its
+    interval, and a count of the methods' cells the turn moved; ``verdict_changes`` lists the
+    papers' differences whose verdict the turn changed."""
+    import script_loader
+
+    script = script_loader.load("papers_tables")
+    rows = []
+    for v in range(10):
+        for scene, social in (("s", v < 8), ("s@turned", v < 3)):  # 80 % -> 30 %: moved
+            rows.append({"scene": scene, "method": "gscl", "variant": v, "social_no_collision": social})
+        for scene in ("s", "s@turned"):  # the same episodes turned: unmoved
+            rows.append({"scene": scene, "method": "navfn", "variant": v, "social_no_collision": v < 5})
+    rows = [{**r, "goal_no_collision": True} for r in rows]
+    said = script.turned_table(pd.DataFrame(rows))
+    assert "| `s` | gscl | 80 -> 30, -50 [" in said and "| 100 -> 100, +0 [+0, +0] |" in said
+    assert "| `s` | navfn | 50 -> 50, +0 [+0, +0] |" in said
+    assert "scenes per method: gscl 1 of 1, navfn 0 of 1." in said
+    key = {"source": "seed 002", "scene": "s", "metric": "social_success_pct", "proposed": "gscl", "baseline": "navfn"}
+    own = pd.DataFrame([{**key, "verdict": "reproduced", "ours_diff": 30.0}])
+    turned = pd.DataFrame([{**key, "verdict": "opposite", "ours_diff": -20.0}])
+    said = script.verdict_changes(own, turned)
+    assert said.startswith("1 of 1 verdicts change") and "reproduced (+30.00) -> opposite (-20.00)" in said
+    assert script.verdict_changes(own, own).startswith("0 of 1 verdicts change")

@@ -751,11 +751,13 @@ def turn(spec: SceneSpec) -> SceneSpec:
     Why a quarter turn and not any angle: this simulator's walls are axis-aligned boxes (the
     people's wall field, the robot's contacts, line of sight and every planner's grid use them as
     such), and a quarter turn keeps a box a box, so the turned scene is exactly the scene; 30
-    degrees would need oriented walls. The GSCL window keeps the world's axes
-    (:mod:`planners.layers.gscl_layer`), so a learnt map meets its scene at an orientation the
-    scene file never had; the generator's own layouts are drawn at every orientation
-    (:mod:`models.families`), so this tests the rule, not the generator's coverage. A recorded
-    crowd is turned with its variants. Raises ``ValueError`` for a scene already turned."""
+    degrees would need oriented walls. What a turn can expose: a learnt cost map read in the
+    world's axes (the GSCL window, :mod:`planners.layers.gscl_layer`) at an orientation the scene
+    never had (the generator draws its own layouts at every orientation, :mod:`models.families`,
+    so a rule learnt rather than a layout's look holds), and a grid planner whose choices depend
+    on the grid's orientation (a point on a cell boundary falls in the cell on the other side once
+    turned). A recorded crowd is turned with its variants. Raises ``ValueError`` for a scene
+    already turned."""
     if spec.turned_from is not None:
         raise ValueError(f"{spec.file}: the scene is already turned; turn the file's scene")
     bounds = turn_bounds_m(spec.bounds_m)
