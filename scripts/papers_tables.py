@@ -91,12 +91,15 @@ def stats_table(stats: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
-def turned_table(episodes: pd.DataFrame, metrics=("social_no_collision", "goal_no_collision")) -> str:
+def turned_table(
+    episodes: pd.DataFrame, metrics=("social_no_collision", "goal_no_collision"), moved_only: bool = False
+) -> str:
     """Each scene and method's success (%, by default with a collision failing the run, seed 002's
     reading) on the scene and on the scene turned, paired by variant:
     ``own -> turned, change [95 % interval]`` (Student t of the per-variant differences, in
     points; ``evaluation.arena.report.mean_interval``), and a count of the cells whose interval
-    excludes 0, per method."""
+    excludes 0, per method. ``moved_only``: only the rows whose first metric's interval excludes 0
+    (the table docs/arena-results.md shows)."""
     from socialnav.evaluation.arena.report import mean_interval
 
     turned = episodes[episodes["scene"].str.endswith(TURNED)].assign(
@@ -113,16 +116,18 @@ def turned_table(episodes: pd.DataFrame, metrics=("social_no_collision", "goal_n
     ]
     moved: dict[str, list[int]] = {}
     for (scene, method), g in pairs.groupby(["scene", "method"], sort=False):
-        cells = []
+        cells, first_moved = [], False
         for m in metrics:
             a, b = 100.0 * g[m].astype(float), 100.0 * g[f"{m}_turned"].astype(float)
             lo, hi = mean_interval(b - a)
             cells.append(f"{a.mean():.0f} -> {b.mean():.0f}, {(b - a).mean():+.0f} [{lo:+.0f}, {hi:+.0f}]")
             if m == metrics[0]:
+                first_moved = bool(lo > 0 or hi < 0)
                 count = moved.setdefault(method, [0, 0])
-                count[0] += int(lo > 0 or hi < 0)
+                count[0] += int(first_moved)
                 count[1] += 1
-        lines.append(f"| `{scene}` | {method} | " + " | ".join(cells) + " |")
+        if first_moved or not moved_only:
+            lines.append(f"| `{scene}` | {method} | " + " | ".join(cells) + " |")
     lines.append(
         f"\n{metrics[0].replace('_', ' ')} changed by the turn (interval excluding 0), scenes per method: "
         + ", ".join(f"{method} {n} of {total}" for method, (n, total) in moved.items())
@@ -148,7 +153,11 @@ def verdict_changes(directions: pd.DataFrame, turned: pd.DataFrame) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("run", type=pathlib.Path, help="a socialnav arena run folder")
-    run = parser.parse_args().run
+    parser.add_argument(
+        "--all-turned", action="store_true", help="every scene and method of the turned rows, not only those moved"
+    )
+    args = parser.parse_args()
+    run = args.run
     if not (run / "run.json").is_file():
         raise SystemExit(f"{run}: no run.json (not a socialnav arena run folder)")
     print(_source(run))
@@ -164,8 +173,9 @@ def main() -> None:
     if turned_files:
         own_files = [run / "episodes" / f.name.replace(TURNED, "") for f in turned_files]
         episodes = pd.concat([pd.read_parquet(f) for f in [*own_files, *turned_files] if f.is_file()])
-        print("\nEvery scene turned a quarter turn (`--turned`), paired by variant:\n")
-        print(turned_table(episodes))
+        which = "every scene and method" if args.all_turned else "the cells whose social success moved"
+        print(f"\nEvery scene turned a quarter turn (`--turned`), paired by variant; {which}:\n")
+        print(turned_table(episodes, moved_only=not args.all_turned))
     if (run / "directions_turned.csv").is_file():
         turned = pd.read_csv(run / "directions_turned.csv")
         print("\n`directions_turned.csv`:\n")

@@ -255,6 +255,8 @@ def test_the_papers_tables_script_pairs_a_scenes_turned_row_by_variant():
     assert "| `s` | gscl | 80 -> 30, -50 [" in said and "| 100 -> 100, +0 [+0, +0] |" in said
     assert "| `s` | navfn | 50 -> 50, +0 [+0, +0] |" in said
     assert "scenes per method: gscl 1 of 1, navfn 0 of 1." in said
+    moved = script.turned_table(pd.DataFrame(rows), moved_only=True)
+    assert "| `s` | gscl |" in moved and "navfn |" not in moved and "navfn 0 of 1" in moved
     key = {"source": "seed 002", "scene": "s", "metric": "social_success_pct", "proposed": "gscl", "baseline": "navfn"}
     own = pd.DataFrame([{**key, "verdict": "reproduced", "ours_diff": 30.0}])
     turned = pd.DataFrame([{**key, "verdict": "opposite", "ours_diff": -20.0}])
