@@ -1,7 +1,8 @@
-"""Two methods of two arena runs, episode by episode: the paired difference of each metric per
-scene and pooled over scene groups, with 95 % intervals.
+"""Two methods of two arena runs, episode by episode: the paired difference of each metric pooled
+over scene groups (and, with ``--by-scene``, per scene), with 95 % intervals.
 
     python scripts/compare_arena_runs.py runs/a:gscl runs/b:gscl --metrics social_success,goal_success
+    python scripts/compare_arena_runs.py runs/angles:casn runs/angles:snl_matched --by-scene   # two methods, one run
 
 Each side is ``RUN_FOLDER:METHOD``. Episodes pair by scene and variant: two runs of the same
 scenes, variants and seed draw the same variants (common random numbers), so the difference of a
@@ -44,12 +45,16 @@ def group_of(scene: str) -> str:
     return f"seed scenes, {held}"
 
 
-def paired(a: pd.DataFrame, b: pd.DataFrame, metrics) -> pd.DataFrame:
-    """Rows of (pool, metric, n, a's mean, b's mean, mean difference a - b, its interval)."""
+def paired(a: pd.DataFrame, b: pd.DataFrame, metrics, by_scene: bool = False) -> pd.DataFrame:
+    """Rows of (pool, metric, n, a's mean, b's mean, mean difference a - b, its interval); with
+    ``by_scene`` a pool per scene too, after the groups."""
     both = a.merge(b, on=["scene", "variant"], suffixes=("_a", "_b"))
     both["pool"] = both["scene"].map(group_of)
+    pools = [("every scene", both), *both.groupby("pool", sort=True)]
+    if by_scene:
+        pools += [(f"`{scene}`", g) for scene, g in both.groupby("scene", sort=True)]
     rows = []
-    for pool, g in [("every scene", both), *both.groupby("pool", sort=True)]:
+    for pool, g in pools:
         for metric in metrics:
             scale = 100.0 if metric in RATES else 1.0
             x, y = scale * g[f"{metric}_a"].astype(float), scale * g[f"{metric}_b"].astype(float)
@@ -74,8 +79,9 @@ def main(argv=None) -> int:
     parser.add_argument("a", help="RUN_FOLDER:METHOD")
     parser.add_argument("b", help="RUN_FOLDER:METHOD")
     parser.add_argument("--metrics", default="social_success,goal_success,collisions", help="comma-separated")
+    parser.add_argument("--by-scene", action="store_true", help="each scene's paired difference too")
     args = parser.parse_args(argv)
-    table = paired(episodes(args.a), episodes(args.b), args.metrics.split(","))
+    table = paired(episodes(args.a), episodes(args.b), args.metrics.split(","), args.by_scene)
     print(f"a = {args.a}, b = {args.b}; rates in %, differences paired by scene and variant")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
     return 0

@@ -317,3 +317,29 @@ def test_the_turned_l_hallway_keeps_its_rule():
     assert turned.rule["rules"][0]["direction_deg"] == hall.rule["rules"][0]["direction_deg"] + 90.0
     with pytest.raises(ValueError, match="not mirrored"):
         mirror(turned)
+
+
+def test_the_crossings_at_other_angles_are_the_crossing_turned_about_its_crossing_point():
+    """data/scenes/geometry: the crossing's walker at 60 and 120 deg to the robot's path (the
+    centres of its ranges), meeting the robot's line where the original's does (x in [0, 1]), the
+    rest of the scene the original's; the arena finds them by name and by 'geometry'."""
+    from socialnav.cli.arena import GEOMETRY, _scene_files
+    from socialnav.data import GEOMETRY_SCENES_DIR, RECORDED_SCENES_DIR, SCENES_DIR
+
+    original = load_scene(SCENES_DIR / "casn_crossing.json")
+    files = _scene_files([GEOMETRY], SCENES_DIR, RECORDED_SCENES_DIR, GEOMETRY_SCENES_DIR)
+    assert [f.stem for f in files] == ["casn_crossing_120", "casn_crossing_60"]
+    assert _scene_files(["casn_crossing_60"], SCENES_DIR, RECORDED_SCENES_DIR, GEOMETRY_SCENES_DIR) == [files[1]]
+    for file, angle in zip(files, (120, 60), strict=True):
+        spec = load_scene(file)
+        walker = spec.people[0]
+        start = np.array([np.mean(walker["start"][0]), np.mean(walker["start"][1])])
+        end = np.array([np.mean(walker["end"][0]), np.mean(walker["end"][1])])
+        step = end - start
+        assert np.degrees(np.arccos(step[0] / np.linalg.norm(step))) == pytest.approx(angle, abs=0.05)
+        crossing_x = start[0] + step[0] * (start[1] / (start[1] - end[1]))
+        assert crossing_x == pytest.approx(0.5, abs=1e-3)  # the original's range [0, 1], its centre
+        np.testing.assert_array_equal(spec.walls_m, original.walls_m)
+        assert spec.rule == original.rule and spec.robot == original.robot
+        v = sample_variants(spec, 0, 20)
+        assert np.all(np.abs(v.xy0[:, 0, 1] - 2.7) < 1e-6) and np.all(np.abs(v.end_xy[:, 0, 1] + 2.7) < 1e-6)

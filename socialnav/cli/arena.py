@@ -70,7 +70,8 @@ def add_parser(sub) -> None:
         type=comma_names,
         default=None,
         help="scene names or .json files (default: the 14 seed scenes); 'recorded' names the recorded-crowd scenes "
-        "(data/scenes/recorded: ETH/UCY and Jülich crowds, replayed and reactive)",
+        "(data/scenes/recorded: ETH/UCY and Jülich crowds, replayed and reactive); 'geometry' the seeds' scenes at "
+        "angles the papers did not test (data/scenes/geometry: the crossing at 60 and 120 deg)",
     )
     p.add_argument(
         "--methods",
@@ -172,23 +173,29 @@ def _scene_method(text: str) -> tuple[str, str]:
 
 
 RECORDED = "recorded"  # --scenes recorded: every recorded-crowd scene
+GEOMETRY = "geometry"  # --scenes geometry: the seeds' scenes at angles the papers did not test
 
 
-def _scene_files(names, scenes_dir: pathlib.Path, recorded_dir: pathlib.Path | None = None) -> list[pathlib.Path]:
+def _scene_files(
+    names, scenes_dir: pathlib.Path, recorded_dir: pathlib.Path | None = None, geometry_dir: pathlib.Path | None = None
+) -> list[pathlib.Path]:
     """The files of ``names`` (None: every seed scene): a ``.json`` path as given, a name in
-    ``recorded_dir`` if it is there and in ``scenes_dir`` otherwise (a missing one is reported
-    there), :data:`RECORDED` every file of ``recorded_dir``."""
+    ``recorded_dir`` or ``geometry_dir`` if it is there and in ``scenes_dir`` otherwise (a missing
+    one is reported there), :data:`RECORDED` every file of ``recorded_dir``, :data:`GEOMETRY`
+    every file of ``geometry_dir``."""
     if names is None:
         return sorted(scenes_dir.glob("*.json"))
+    groups = {RECORDED: recorded_dir, GEOMETRY: geometry_dir}
     files = []
     for name in names:
         path = pathlib.Path(name)
+        folder = next((d for d in groups.values() if d is not None and (d / f"{name}.json").is_file()), None)
         if path.suffix == ".json":
             files.append(path)
-        elif recorded_dir is not None and name == RECORDED:
-            files.extend(sorted(recorded_dir.glob("*.json")))
-        elif recorded_dir is not None and (recorded_dir / f"{name}.json").is_file():
-            files.append(recorded_dir / f"{name}.json")
+        elif groups.get(name) is not None:
+            files.extend(sorted(groups[name].glob("*.json")))
+        elif folder is not None:
+            files.append(folder / f"{name}.json")
         else:
             files.append(scenes_dir / f"{name}.json")
     return files
@@ -252,7 +259,7 @@ def _request(args, shown_as: pathlib.Path):
     """The run's :class:`~socialnav.evaluation.arena.table.TableRequest` from the parsed
     arguments, each checked, or the exit code after a one-line error naming the option."""
     from socialnav.common import runfolder
-    from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
+    from socialnav.data import GEOMETRY_SCENES_DIR, RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.evaluation.arena import actor_spec
     from socialnav.evaluation.arena.run import HELD_OUT, TURNED
     from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
@@ -310,7 +317,7 @@ def _request(args, shown_as: pathlib.Path):
         params = arena_params.ArenaParams() if args.params is None else arena_params.load(args.params)
     except arena_params.ParamsFileError as e:
         return _fail(f"--params {e}")
-    files = _scene_files(args.scenes, SCENES_DIR, RECORDED_SCENES_DIR)
+    files = _scene_files(args.scenes, SCENES_DIR, RECORDED_SCENES_DIR, GEOMETRY_SCENES_DIR)
     try:
         runfolder.check_inputs(shown_as, [*files, gscl_run, args.params, args.policy_run])
         specs = [load_scene(f) for f in files]
