@@ -133,3 +133,22 @@ def test_a_held_out_run_writes_the_claims_on_its_held_out_rows(tmp_path, capsys)
     d_min = episodes.pivot(index="variant", columns="method", values="d_min_m")
     row = held_out.set_index("metric").loc["d_min_m"]
     assert row["ours_diff"] == pytest.approx((d_min["casn"] - d_min["snl_matched"]).mean())
+
+
+def test_gscl_rotations_enter_the_settings_and_digests_only_when_asked(tmp_path, capsys):
+    """``--gscl-rotations 4`` is a setting of its own (a run with it is never resumed as one
+    without); at 1 the settings and digests are those of a run before the option existed; without
+    method gscl the option is refused in one line."""
+    from socialnav import cli
+    from socialnav.data import SCENES_DIR
+    from socialnav.evaluation.arena import table
+    from socialnav.jaxsim.scenes.spec import load_scene
+
+    specs = (load_scene(SCENES_DIR / "casn_head_on.json"),)
+    plain = table.settings(table.TableRequest(specs=specs, methods=("navfn",), variants=2))
+    averaged = table.settings(table.TableRequest(specs=specs, methods=("navfn",), variants=2, gscl_rotations=4))
+    assert "gscl_rotations" not in plain and averaged["gscl_rotations"] == 4
+    assert plain["scene_digests"] != averaged["scene_digests"]
+    argv = ["arena", "--out", str(tmp_path / "run"), "--scenes", "casn_head_on", "--methods", "navfn"]
+    assert cli.main([*argv, "--gscl-rotations", "4"]) == 2
+    assert "--gscl-rotations: the run has no method gscl" in capsys.readouterr().err

@@ -94,6 +94,9 @@ class TableRequest:
       shard_variants: variants a shard (None: a scene's variants in one).
       keep_trajectories: variants a scene and method whose steps are kept.
       gscl_run: the GSCL model of method ``gscl`` (a resolved folder), or None.
+      gscl_rotations: 1, or 4: the model's prediction averaged over the four quarter turns of its
+        input (:func:`socialnav.models.inference.rotation_averaged`: a map that turns with the scene,
+        at 4 times the inference).
       human_model: how the people move (:data:`socialnav.jaxsim.scenes.people.HUMAN_MODELS`).
       params_file, params_text: the ``--params`` file and its text ("" for the seeds' values).
       actor_specs: users' actor factories, ``MODULE:FUNCTION`` with a file path made absolute.
@@ -110,6 +113,7 @@ class TableRequest:
     shard_variants: int | None = None
     keep_trajectories: int = 5
     gscl_run: pathlib.Path | None = None
+    gscl_rotations: int = 1
     human_model: str = "social_force"
     params_file: pathlib.Path | None = None
     params_text: str = ""
@@ -186,6 +190,7 @@ def settings(request: TableRequest) -> dict:
         "shard_variants": request.per_shard,
         "gscl_run": None if request.gscl_run is None else str(request.gscl_run),
         "gscl_model": None if request.gscl_run is None else model_identity(request.gscl_run),
+        **({"gscl_rotations": request.gscl_rotations} if request.gscl_rotations != 1 else {}),
         "human_model": request.human_model,
         "params_file": None if request.params_file is None else str(request.params_file),
         "params": request.params_text or None,  # None without a file: earlier runs' digests stay valid
@@ -228,6 +233,8 @@ def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict, turned
     chosen = {k: settings.get(k) for k in keys}
     if settings.get("policy_model") is not None:  # absent without --policy-run: earlier digests stay valid
         chosen["policy_model"] = settings["policy_model"]
+    if settings.get("gscl_rotations", 1) != 1:  # absent at 1: earlier digests stay valid
+        chosen["gscl_rotations"] = settings["gscl_rotations"]
     row = {"held_out": held_out, **({"turned": True} if turned else {})}  # an unturned row's digest as before
     h.update(json.dumps({**row, **chosen}, sort_keys=True).encode())
     h.update(json.dumps([settings["metrics_version"], settings["socialnav_version"]]).encode())
@@ -304,6 +311,7 @@ def plan_shards(out: pathlib.Path, request: TableRequest, digests: dict) -> list
                 request.human_model,
                 request.params_text or "",
                 None if request.policy_run is None else str(request.policy_run.resolve()),
+                request.gscl_rotations,
             )
             output = runfolder.inside(out, shard_file(out, name, digests[name], first))
             shards.append((f"{name}[{first}:{first + n}]", output, args, n * len(request.methods)))
@@ -320,6 +328,17 @@ def gscl_model(run: pathlib.Path | None):
     return SocialCostModel.load(run)
 
 
+def _gscl_layer_model(run, rotations: int):
+    """The GSCL method's model: the network, or its prediction averaged over ``rotations`` quarter
+    turns (a function of the maps)."""
+    model = gscl_model(run)
+    if model is None or rotations == 1:
+        return model
+    from socialnav.models.inference import rotation_averaged
+
+    return rotation_averaged(model.function, rotations)
+
+
 def compute_shard(
     spec,
     held_out,
@@ -333,13 +352,15 @@ def compute_shard(
     human_model="social_force",
     params_text="",
     policy_run=None,
+    gscl_rotations=1,
 ):
     """One shard: every method on variants ``first .. first + n - 1`` of a scene (a Ray task with
     ``--backend ray``): ``(episodes frame, trajectories frame or None)``. ``actor_specs``: the
     ``--actor`` factories, loaded here (in the worker); ``params_text``: the ``--params`` file's
     text (parsed here, so a worker needs no access to the file); ``policy_run``: a trained
     policy's run folder (``--policy-run``), restored here. The GSCL weights enter the
-    episode program traced: a second checkpoint of the same network compiles nothing new."""
+    episode program traced: a second checkpoint of the same network compiles nothing new (with
+    ``gscl_rotations`` 4 the rotation-averaged prediction closes over them instead)."""
     from socialnav.evaluation.arena import params as arena_params
     from socialnav.evaluation.arena import run as arena_run
     from socialnav.evaluation.arena.episodes import ArenaConfig
@@ -357,7 +378,7 @@ def compute_shard(
         seed,
         first,
         keep,
-        gscl_model(gscl_run),
+        _gscl_layer_model(gscl_run, gscl_rotations),
         ArenaConfig.of(human_model),
         held_out=held_out,
         user_actors=users,

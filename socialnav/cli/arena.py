@@ -7,6 +7,7 @@ socialnav arena --gscl-run runs/gscl                               # GSCL with y
 socialnav arena --params my_params.toml                            # the robot's and layers' parameters
 socialnav arena --held-out                                         # and every scene mirrored, ranges exceeded
 socialnav arena --turned                                           # and every scene turned a quarter turn
+socialnav arena --gscl-rotations 4                                 # GSCL's map averaged over 4 quarter turns
 socialnav arena --backend ray --shard-variants 25                  # a Ray task per 25 variants of a scene
 
 Writes ``episodes/<scene>.parquet`` (one row per episode: every metric),
@@ -113,6 +114,14 @@ def add_parser(sub) -> None:
         default=None,
         help="the GSCL model of method 'gscl': a socialnav gscl train run folder or a socialnav gscl export folder "
         "(default: the model shipped with the package, data/gscl/default)",
+    )
+    p.add_argument(
+        "--gscl-rotations",
+        type=int,
+        choices=(1, 4),
+        default=1,
+        help="GSCL's prediction averaged over the 4 quarter turns of its input: a map that turns with the scene, "
+        "at 4 times the inference (default 1: the network alone)",
     )
     p.add_argument(
         "--params",
@@ -307,6 +316,8 @@ def _request(args, shown_as: pathlib.Path):
     if args.animate and args.keep_trajectories < 1:
         return _fail("--animate needs --keep-trajectories >= 1")
     gscl_run = args.gscl_run
+    if args.gscl_rotations != 1 and "gscl" not in methods:
+        return _fail("--gscl-rotations: the run has no method gscl")
     if "gscl" in methods and gscl_run is None:
         from socialnav.models.inference import DEFAULT_MODEL
 
@@ -370,6 +381,7 @@ def _request(args, shown_as: pathlib.Path):
         shard_variants=args.shard_variants,
         keep_trajectories=args.keep_trajectories,
         gscl_run=gscl_run,
+        gscl_rotations=args.gscl_rotations,
         human_model=args.human_model,
         params_file=args.params,
         params_text=params.text,
