@@ -7,11 +7,11 @@ model's digest, the variants and the seed from ``run.json``): ``papers.csv`` (ea
 beside ours and its 95 % interval), ``directions.csv`` (each paper's difference between its method
 and a baseline beside ours, paired by variant) and ``papers_stats.csv`` (seed 002's Table 2), each
 with a count of its verdicts; where the run has turned rows (``socialnav arena --turned``), each
-method's social and goal success (a collision failing the run) on every scene beside the same on
-the scene turned, with the
-paired change's interval (:func:`turned_table`), and the papers' differences on the turned rows
-(``directions_turned.csv``) with the cells whose verdict the turn changed. Tables in the docs
-made this way can be made again from the run.
+method's social and goal success (a collision failing the run) on the scenes where the turn moved
+it (``--all-turned``: on every scene) beside the same on the scene turned, with the paired
+change's interval (:func:`turned_table`), and the papers' differences on the turned rows
+(``directions_turned.csv``) with the verdicts the turn changed. Tables in the docs made this way
+can be made again from the run.
 """
 
 from __future__ import annotations
