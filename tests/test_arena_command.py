@@ -136,9 +136,9 @@ def test_a_held_out_run_writes_the_claims_on_its_held_out_rows(tmp_path, capsys)
 
 
 def test_gscl_rotations_enter_the_settings_and_digests_only_when_asked(tmp_path, capsys):
-    """``--gscl-rotations 4`` is a setting of its own (a run with it is never resumed as one
-    without); at 1 the settings and digests are those of a run before the option existed; without
-    method gscl the option is refused in one line."""
+    """``--gscl-rotations 4`` is a setting of its own (its digests differ: a run with it is never
+    resumed as one without); at 1 the settings hold no such key, so a run made before the option
+    resumes; without method gscl the option is refused in one line."""
     from socialnav import cli
     from socialnav.data import SCENES_DIR
     from socialnav.evaluation.arena import table
