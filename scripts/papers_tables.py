@@ -22,7 +22,7 @@ import pathlib
 
 import pandas as pd
 
-TURNED = "@turned"  # evaluation.arena.run.TURNED: a turned row's suffix
+from socialnav.evaluation.arena.run import TURNED
 
 
 def _source(run: pathlib.Path) -> str:

@@ -645,6 +645,43 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     )
 
 
+# A person's fields that are points (ranges per axis) and angles (degree ranges): what a mirror or
+# a turn moves.
+PERSON_POINTS = ("position", "start", "end", "centre", "head", "exit")
+PERSON_ANGLES = ("heading_deg", "rotation_deg", "towards_deg")
+
+
+def _moved_people(people, point, angle) -> tuple[dict, ...]:
+    """``people`` with every point field moved by ``point`` and every angle by ``angle``."""
+    moved = []
+    for p in people:
+        q = dict(p)
+        q.update({key: point(q[key]) for key in PERSON_POINTS if key in q})
+        q.update({key: angle(q[key]) for key in PERSON_ANGLES if key in q})
+        moved.append(q)
+    return tuple(moved)
+
+
+def _moved_robot(robot: dict, point, angle) -> dict:
+    return {"start": point(robot["start"]), "goal": point(robot["goal"]), "yaw_deg": angle(robot["yaw_deg"])}
+
+
+def _moved_rule(r: dict, box, xy, direction) -> dict:
+    """A rule's geometry moved: its ``box`` by ``box``, its ``centre`` and ``head`` points by ``xy``,
+    its ``direction_deg`` by ``direction``, and every sub-rule of an ``all`` the same way."""
+    r = dict(r)
+    if "box" in r:
+        r["box"] = box(r["box"])
+    for key in ("centre", "head"):
+        if key in r:
+            r[key] = xy(r[key])
+    if "direction_deg" in r:
+        r["direction_deg"] = direction(r["direction_deg"])
+    if "rules" in r:
+        r["rules"] = [_moved_rule(sub, box, xy, direction) for sub in r["rules"]]
+    return r
+
+
 def mirror(spec: SceneSpec) -> SceneSpec:
     """The scene mirrored across the horizontal line through its bounds' centre (y -> c - y):
     walls, objects, people, the robot, headings and the rule's geometry; "keep right" stays keep
@@ -671,36 +708,14 @@ def mirror(spec: SceneSpec) -> SceneSpec:
         (name, np.stack([poly[::-1, 0], c - poly[::-1, 1]], axis=1).astype(np.float32), cost)
         for name, poly, cost in spec.objects
     )
-    people = []
-    for p in spec.people:
-        q = dict(p)
-        for key in ("position", "start", "end", "centre", "head", "exit"):
-            if key in q:
-                q[key] = point(q[key])
-        for key in ("heading_deg", "rotation_deg", "towards_deg"):
-            if key in q:
-                q[key] = angle(q[key])
-        people.append(q)
+
+    def box(b):
+        b = np.asarray(b, float)
+        return np.array([b[0], b[1], c - b[3], c - b[2]])
 
     def rule(r):
-        r = dict(r)
-        if "box" in r:
-            b = np.asarray(r["box"], float)
-            r["box"] = np.array([b[0], b[1], c - b[3], c - b[2]])
-        for key in ("centre", "head"):
-            if key in r:
-                r[key] = np.array([r[key][0], c - r[key][1]])
-        if "direction_deg" in r:
-            r["direction_deg"] = -r["direction_deg"]
-        if "rules" in r:
-            r["rules"] = [rule(sub) for sub in r["rules"]]
-        return r
+        return _moved_rule(r, box, lambda xy: np.array([xy[0], c - xy[1]]), lambda d: -d)
 
-    robot = {
-        "start": point(spec.robot["start"]),
-        "goal": point(spec.robot["goal"]),
-        "yaw_deg": angle(spec.robot["yaw_deg"]),
-    }
     recording = spec.recording
     if recording is not None:  # the recorded people mirrored too (twice: as recorded)
         recording = {**recording, "mirror_y_m": c if recording["mirror_y_m"] is None else None}
@@ -709,8 +724,8 @@ def mirror(spec: SceneSpec) -> SceneSpec:
         name=spec.name,
         walls_m=walls,
         objects=objects,
-        robot=robot,
-        people=tuple(people),
+        robot=_moved_robot(spec.robot, point, angle),
+        people=_moved_people(spec.people, point, angle),
         rule=rule(spec.rule if spec.held_out_rule is None else spec.held_out_rule),
         held_out_rule=None if spec.held_out_rule is None else rule(spec.rule),
         recording=recording,
@@ -775,29 +790,8 @@ def turn(spec: SceneSpec) -> SceneSpec:
         (x0, x1), (y0, y1) = point(((b[0], b[1]), (b[2], b[3])))
         return np.array([x0, x1, y0, y1], np.asarray(b).dtype)
 
-    people = []
-    for p in spec.people:
-        q = dict(p)
-        for key in ("position", "start", "end", "centre", "head", "exit"):
-            if key in q:
-                q[key] = point(q[key])
-        for key in ("heading_deg", "rotation_deg", "towards_deg"):
-            if key in q:
-                q[key] = angle(q[key])
-        people.append(q)
-
     def rule(r):
-        r = dict(r)
-        if "box" in r:
-            r["box"] = box(r["box"])
-        for key in ("centre", "head"):
-            if key in r:
-                r[key] = turn_points(np.asarray(r[key], float), bounds)
-        if "direction_deg" in r:
-            r["direction_deg"] = r["direction_deg"] + TURNED_DEG
-        if "rules" in r:
-            r["rules"] = [rule(sub) for sub in r["rules"]]
-        return r
+        return _moved_rule(r, box, lambda xy: turn_points(np.asarray(xy, float), bounds), lambda d: d + TURNED_DEG)
 
     walls = np.stack([box(w) for w in spec.walls_m]).astype(np.float32) if len(spec.walls_m) else spec.walls_m
     objects = tuple(
@@ -808,12 +802,8 @@ def turn(spec: SceneSpec) -> SceneSpec:
         bounds_m=tuple(float(v) for v in box(np.asarray(bounds, float))),
         walls_m=walls,
         objects=objects,
-        robot={
-            "start": point(spec.robot["start"]),
-            "goal": point(spec.robot["goal"]),
-            "yaw_deg": angle(spec.robot["yaw_deg"]),
-        },
-        people=tuple(people),
+        robot=_moved_robot(spec.robot, point, angle),
+        people=_moved_people(spec.people, point, angle),
         rule=rule(spec.rule),
         held_out_rule=None if spec.held_out_rule is None else rule(spec.held_out_rule),
         turned_from=spec,
