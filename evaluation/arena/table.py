@@ -531,9 +531,13 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
 
 def start(out: pathlib.Path, chosen: dict, recorded: dict | None = None) -> None:
     """Make ``out`` and write its ``run.json`` (``chosen`` and ``recorded``: what is noted but not
-    compared, such as the backend)."""
+    compared, such as the backend; and the source commit, :func:`socialnav.common.provenance.source`,
+    noted too: a run resumed at a later commit records that one, and its digests say which
+    episodes it could reuse)."""
+    from socialnav.common import provenance
     from socialnav.common.atomic import write_text_atomic
 
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "run.json", json.dumps({**chosen, **(recorded or {})}, indent=1) + "\n")
+    noted = {**provenance.source(), **(recorded or {})}
+    write_text_atomic(out / "run.json", json.dumps({**chosen, **noted}, indent=1) + "\n")
     runfolder.record(out, JOB, ["run.json", "shards/"])
