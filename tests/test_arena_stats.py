@@ -228,7 +228,7 @@ def test_the_papers_tables_script_prints_a_runs_tables_with_their_source_and_cou
     monkeypatch.setattr(sys, "argv", ["papers_tables.py", str(run)])
     script.main()
     said = capsys.readouterr().out
-    assert said.startswith("From `arena`: socialnav 9.9, m,") and "40 variants" in said
+    assert said.startswith("From `arena`: commit not recorded, socialnav 9.9, m,") and "40 variants" in said
     assert "| seed 001 Table 3 slow | `casn_crossing` | casn | d_min_m | 1.71 | 1.50 [1.40, 1.75] | yes |" in said
     assert "1 of 1 published numbers inside our intervals." in said
     assert "| casn - snl_matched | +0.69 | +0.30 [" in said and "Of 1 differences: 1 reproduced." in said
@@ -237,13 +237,12 @@ def test_the_papers_tables_script_prints_a_runs_tables_with_their_source_and_cou
         script.main()
 
 
-def test_the_papers_tables_script_pairs_a_scenes_turned_row_by_variant():
-    """``turned_table``: own -> turned success per scene and method, the paired change with its
-    interval, and a count of the methods' cells the turn moved; ``verdict_changes`` lists the
-    papers' differences whose verdict the turn changed."""
-    import script_loader
+def test_the_turned_table_pairs_a_scenes_turned_row_by_variant():
+    """``turned_pairs`` and ``turned_table``: own -> turned success per scene and method, the
+    paired change with its interval, and a count of the methods' cells the turn moved;
+    ``verdict_changes`` lists the papers' differences whose verdict the turn changed."""
+    from socialnav.evaluation.arena import markdown as script
 
-    script = script_loader.load("papers_tables")
     rows = []
     for v in range(10):
         for scene, social in (("s", v < 8), ("s@turned", v < 3)):  # 80 % -> 30 %: moved
@@ -251,11 +250,13 @@ def test_the_papers_tables_script_pairs_a_scenes_turned_row_by_variant():
         for scene in ("s", "s@turned"):  # the same episodes turned: unmoved
             rows.append({"scene": scene, "method": "navfn", "variant": v, "social_no_collision": v < 5})
     rows = [{**r, "goal_no_collision": True} for r in rows]
-    said = script.turned_table(pd.DataFrame(rows))
+    pairs = script.turned_pairs(pd.DataFrame(rows))
+    assert len(pairs) == 4 and set(pairs["metric"]) == {"social_no_collision", "goal_no_collision"}
+    said = script.turned_table(pairs)
     assert "| `s` | gscl | 80 -> 30, -50 [" in said and "| 100 -> 100, +0 [+0, +0] |" in said
     assert "| `s` | navfn | 50 -> 50, +0 [+0, +0] |" in said
     assert "scenes per method: gscl 1 of 1, navfn 0 of 1." in said
-    moved = script.turned_table(pd.DataFrame(rows), moved_only=True)
+    moved = script.turned_table(pairs, moved_only=True)
     assert "| `s` | gscl |" in moved and "navfn |" not in moved and "navfn 0 of 1" in moved
     key = {"source": "seed 002", "scene": "s", "metric": "social_success_pct", "proposed": "gscl", "baseline": "navfn"}
     own = pd.DataFrame([{**key, "verdict": "reproduced", "ours_diff": 30.0}])

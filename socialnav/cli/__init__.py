@@ -55,6 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     runtime.request_compilation_cache()
     runtime.quiet_third_party_logs()
     args = build_parser().parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # a run folder records the command that made it
     return args.handler(args)
 
 

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import pathlib
+import shlex
 import sys
 
 from socialnav.backend import add_backend_options
@@ -392,6 +393,12 @@ def _request(args, shown_as: pathlib.Path):
     )
 
 
+def _command(args) -> dict:
+    """The command line as ``run.json`` notes it (not compared: a resumed run notes its own)."""
+    argv = getattr(args, "argv", None)
+    return {} if argv is None else {"command": "socialnav " + shlex.join(argv)}
+
+
 def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     from socialnav import backend as backend_lib
     from socialnav.common.memory import available_bytes
@@ -426,7 +433,7 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         flush=True,
     )
     # The backend is recorded, not compared: both give the same episodes for the same shards.
-    table.start(out, settings, backend_lib.describe(args))
+    table.start(out, settings, {**backend_lib.describe(args), **_command(args)})
     digests = settings["scene_digests"]
     shards = [backend_lib.Shard(*shard) for shard in table.plan_shards(out, request, digests)]
     try:

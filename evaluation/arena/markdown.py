@@ -1,0 +1,257 @@
+"""An arena run's tables in Markdown, as the README and docs/arena-results.md show them.
+
+Every function takes the frames an arena run folder holds (``summary.csv``, ``papers.csv``,
+``directions.csv``, ``directions_turned.csv``, ``papers_stats.csv``) or the paired frame
+:func:`turned_pairs` makes from its episodes, and returns a Markdown table with its count of
+verdicts where it has any. ``scripts/results_tables.py`` writes them into the docs from the
+committed snapshots of the docs' runs (``docs/results/``) and checks that the docs still say what
+those runs say; ``scripts/papers_tables.py`` and ``scripts/seed002_table1.py`` print them for any
+run folder.
+
+Success is shown with a collision failing the run (``goal_no_collision``,
+``social_no_collision``) unless a table says otherwise: seed 002 Sec. 5.3.1's reading, the one
+its Table 1 and the arena's verdicts use.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from socialnav.evaluation.arena.papers import PAPER_ROWS
+from socialnav.evaluation.arena.report import mean_interval
+from socialnav.evaluation.arena.run import HELD_OUT, TURNED
+
+# Seed 002's Table 1: its scenes and methods in the paper's order, under the paper's names.
+SEED002_SCENES = {
+    "gscl_l_hallway": "L-hallway",
+    "gscl_group": "group",
+    "gscl_non_group": "non-group",
+    "gscl_crowded_entrance": "crowded entrance",
+    "gscl_queue": "queue",
+}
+SEED002_METHODS = {"navfn": "NavFn (no layer)", "snl_small": "SNL small", "snl_large": "SNL large", "gscl": "GSCL"}
+
+# The rows of a run's summary a table may show: the scene as written, mirrored, turned.
+ROWS = {"own": "", "held_out": HELD_OUT, "turned": TURNED}
+
+
+def source_line(info: dict, where: str) -> str:
+    """One line naming the run a table came from: its folder (``where``), the command, the source
+    commit, the GSCL model's digest, the human model, variants and seed (``run.json``'s fields;
+    a field the run did not record is said to be missing, never guessed)."""
+    commit = info.get("source_commit")
+    if commit:
+        commit_text = f"commit {commit[:12]}" + (" with uncommitted changes" if info.get("source_dirty") else "")
+    else:
+        commit_text = "commit not recorded"
+    command = info.get("command")
+    return (
+        f"From `{where}`"
+        + (f" (`{command}`)" if command else "")
+        + f": {commit_text}, socialnav {info.get('socialnav_version')}, {info.get('metrics_version')}, "
+        f"GSCL model {info.get('gscl_model')}"
+        + (f" averaged over {info['gscl_rotations']} rotations" if info.get("gscl_rotations", 1) != 1 else "")
+        + f", human model {info.get('human_model')}, {info.get('variants')} variants, seed {info.get('seed')}."
+    )
+
+
+def _number(value: float, metric: str) -> str:
+    if value != value:
+        return "-"
+    return f"{value:.0f}" if metric.endswith("success_pct") or metric.endswith("collision_pct") else f"{value:.2f}"
+
+
+def _pct(value) -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.0f}"
+
+
+def _cell(row: pd.Series, metric: str) -> str:
+    return f"{row[f'{metric}_pct']:.0f} [{row[f'{metric}_lo']:.0f}, {row[f'{metric}_hi']:.0f}]"
+
+
+def success_table(
+    summary: pd.DataFrame, rows: str = "own", metrics=("goal_no_collision", "social_no_collision")
+) -> str:
+    """Scenes down, methods across, each cell ``goal / social`` success in % (``metrics``, by
+    default a collision failing the run) for the rows named by ``rows`` (``own``, ``held_out``
+    or ``turned``: :data:`ROWS`); scenes and methods in the run's order."""
+    if rows not in ROWS:
+        raise ValueError(f"rows='{rows}': one of {', '.join(ROWS)}")
+    suffix = ROWS[rows]
+    names = summary["scene"].astype(str)
+    chosen = summary[names.str.endswith(suffix)] if suffix else summary[~names.str.contains("@", regex=False)]
+    if chosen.empty:
+        raise ValueError(f"the run has no {rows} rows")
+    methods = list(dict.fromkeys(chosen["method"]))
+    lines = ["| scene | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
+    for scene, g in chosen.groupby("scene", sort=False):
+        by_method = g.set_index("method")
+        cells = [
+            " / ".join(_pct(by_method.loc[m, f"{metric}_pct"]) for metric in metrics) if m in by_method.index else "-"
+            for m in methods
+        ]
+        lines.append(f"| `{scene}` | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def seed002_table1(summary: pd.DataFrame) -> str:
+    """Seed 002's Table 1 beside the run: goal / social success with a collision failing the run
+    and their 95 % Wilson intervals, the paper's two numbers, the held-out row's social success
+    and goal success with collisions allowed (the arena's ``goal_success``). Raises ValueError
+    naming the first scene and method the run lacks."""
+    summary = summary.set_index(["scene", "method"])
+    paper = {(s, m, metric): v for src, s, m, metric, v in PAPER_ROWS if src == "seed 002 Table 1"}
+    lines = [
+        "| scene | method | paper: goal / social | ours: goal [95 % CI] | ours: social [95 % CI] | held out: social "
+        "| goal, collisions allowed |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for scene, scene_name in SEED002_SCENES.items():
+        for method, method_name in SEED002_METHODS.items():
+            if (scene, method) not in summary.index:
+                raise ValueError(f"no row for scene {scene}, method {method}")
+            row = summary.loc[(scene, method)]
+            held_key = (scene + HELD_OUT, method)
+            held_cell = _cell(summary.loc[held_key], "social_no_collision") if held_key in summary.index else "-"
+            theirs = f"{_pct(paper.get((scene, method, 'goal_no_collision_pct')))} / "
+            theirs += _pct(paper.get((scene, method, "social_no_collision_pct")))
+            lines.append(
+                f"| {scene_name} | {method_name} | {theirs} | {_cell(row, 'goal_no_collision')} | "
+                f"{_cell(row, 'social_no_collision')} | {held_cell} | {_cell(row, 'goal_success')} |"
+            )
+    return "\n".join(lines)
+
+
+def papers_table(papers: pd.DataFrame) -> str:
+    """``papers.csv``: each published number beside ours and its 95 % interval."""
+    lines = [
+        "| source | scene | method | metric | paper | ours [95 % interval] | paper inside |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in papers.itertuples():
+        ours = f"{_number(r.ours, r.metric)} [{_number(r.ours_lo, r.metric)}, {_number(r.ours_hi, r.metric)}]"
+        inside = {"True": "yes", "False": "no"}.get(str(r.paper_inside), "-")
+        lines.append(
+            f"| {r.source} | `{r.scene}` | {r.method} | {r.metric} | {_number(r.paper, r.metric)} | {ours} | {inside} |"
+        )
+    inside = papers["paper_inside"].astype(str).str.lower() == "true"
+    lines.append(f"\n{int(inside.sum())} of {len(papers)} published numbers inside our intervals.")
+    return "\n".join(lines)
+
+
+def directions_table(directions: pd.DataFrame) -> str:
+    """``directions.csv`` (or ``directions_turned.csv``): each paper's difference between its
+    method and a baseline beside ours, paired by variant, with its verdict and their count."""
+    lines = [
+        "| source | scene | metric | proposed - baseline | paper | ours [95 % interval, paired] | verdict |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in directions.itertuples():
+        ours = (
+            "-" if r.ours_diff != r.ours_diff else f"{r.ours_diff:+.2f} [{r.ours_diff_lo:+.2f}, {r.ours_diff_hi:+.2f}]"
+        )
+        pair = f"{r.proposed} - {r.baseline}"
+        lines.append(f"| {r.source} | `{r.scene}` | {r.metric} | {pair} | {r.paper_diff:+.2f} | {ours} | {r.verdict} |")
+    counts = ", ".join(f"{n} {v}" for v, n in directions["verdict"].value_counts().items())
+    lines.append(f"\nOf {len(directions)} differences: {counts}.")
+    return "\n".join(lines)
+
+
+def stats_table(stats: pd.DataFrame) -> str:
+    """``papers_stats.csv``: seed 002's Table 2 (Games-Howell p, Hedges' g) beside ours."""
+
+    def p(v: float) -> str:
+        return "≤ .0001" if v <= 1e-4 else f"{v:.4f}"
+
+    lines = [
+        "| scene | zone | GSCL against | distance | n | paper: p, g | ours: p, g | verdict |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in stats.itertuples():
+        lines.append(
+            f"| `{r.scene}` | {r.measure} | {r.baseline} | {r.distance} | {r.n} | {p(r.paper_p)}, {r.paper_g:+.3f} "
+            f"| {p(r.ours_p)}, {r.ours_g:+.2f} | {r.verdict} |"
+        )
+    for distance, g in stats.groupby("distance", sort=False):
+        counts = ", ".join(f"{n} {v}" for v, n in g["verdict"].value_counts().items())
+        lines.append(f"\n{distance}, {len(g)} cells: {counts}.")
+    return "\n".join(lines)
+
+
+def turned_pairs(episodes: pd.DataFrame, metrics=("social_no_collision", "goal_no_collision")) -> pd.DataFrame:
+    """Each scene and method's success (%) on the scene and on the scene turned, paired by
+    variant: one row per scene, method and metric with ``own_pct``, ``turned_pct``, the mean
+    change ``change_pts`` and its 95 % interval ``change_lo``, ``change_hi`` (Student t of the
+    per-variant differences, in points; :func:`evaluation.arena.report.mean_interval`)."""
+    turned = episodes[episodes["scene"].str.endswith(TURNED)].assign(
+        scene=lambda f: f["scene"].str.removesuffix(TURNED)
+    )
+    own = episodes[episodes["scene"].isin(set(turned["scene"]))]
+    pairs = own.merge(turned, on=["scene", "method", "variant"], suffixes=("", "_turned"))
+    rows = []
+    for (scene, method), g in pairs.groupby(["scene", "method"], sort=False):
+        for m in metrics:
+            a, b = 100.0 * g[m].astype(float), 100.0 * g[f"{m}_turned"].astype(float)
+            lo, hi = mean_interval(b - a)
+            rows.append(
+                {
+                    "scene": scene,
+                    "method": method,
+                    "metric": m,
+                    "own_pct": a.mean(),
+                    "turned_pct": b.mean(),
+                    "change_pts": (b - a).mean(),
+                    "change_lo": lo,
+                    "change_hi": hi,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def turned_table(pairs: pd.DataFrame, moved_only: bool = False) -> str:
+    """:func:`turned_pairs` as ``own -> turned, change [95 % interval]`` per metric (in the
+    frame's order of metrics), and a count per method of the scenes whose first metric's interval
+    excludes 0. ``moved_only``: only those rows."""
+    metrics = list(dict.fromkeys(pairs["metric"]))
+    lines = [
+        "| scene | method | "
+        + " | ".join(f"{m.replace('_', ' ')} %: own -> turned, change [95 %]" for m in metrics)
+        + " |",
+        "|---|---|" + "---|" * len(metrics),
+    ]
+    moved: dict[str, list[int]] = {}
+    for (scene, method), g in pairs.groupby(["scene", "method"], sort=False):
+        by_metric = g.set_index("metric")
+        cells = [
+            f"{r.own_pct:.0f} -> {r.turned_pct:.0f}, {r.change_pts:+.0f} [{r.change_lo:+.0f}, {r.change_hi:+.0f}]"
+            for r in (by_metric.loc[m] for m in metrics)
+        ]
+        first = by_metric.loc[metrics[0]]
+        first_moved = bool(first.change_lo > 0 or first.change_hi < 0)
+        count = moved.setdefault(method, [0, 0])
+        count[0] += int(first_moved)
+        count[1] += 1
+        if first_moved or not moved_only:
+            lines.append(f"| `{scene}` | {method} | " + " | ".join(cells) + " |")
+    lines.append(
+        f"\n{metrics[0].replace('_', ' ')} changed by the turn (interval excluding 0), scenes per method: "
+        + ", ".join(f"{method} {n} of {total}" for method, (n, total) in moved.items())
+        + "."
+    )
+    return "\n".join(lines)
+
+
+def verdict_changes(directions: pd.DataFrame, turned: pd.DataFrame) -> str:
+    """The papers' differences whose verdict differs on the turned rows, one line each."""
+    key = ["source", "scene", "metric", "proposed", "baseline"]
+    both = directions.merge(turned, on=key, suffixes=("", "_turned"))
+    changed = both[both["verdict"] != both["verdict_turned"]]
+    lines = [f"{len(changed)} of {len(both)} verdicts change on the turned rows" + (":" if len(changed) else ".")]
+    for r in changed.itertuples():
+        lines.append(
+            f"- {r.source}, `{r.scene}`, {r.metric}, {r.proposed} - {r.baseline}: {r.verdict} ({r.ours_diff:+.2f}) "
+            f"-> {r.verdict_turned} ({r.ours_diff_turned:+.2f})"
+        )
+    return "\n".join(lines)
