@@ -1,0 +1,243 @@
+"""The results tables of the README and the docs, made from the runs they came from.
+
+    python scripts/results_tables.py snapshot runs/arena arena   # keep a run's tables: docs/results/arena/
+    python scripts/results_tables.py write                       # every generated table made again
+    python scripts/results_tables.py check                       # exit 1 naming each table that differs
+
+A table in a Markdown page (README.md, docs/*.md) is generated when it stands between
+
+    <!-- results: KIND RUN [OPTION=VALUE ...] -->
+    <!-- /results -->
+
+where RUN names a snapshot under ``docs/results/`` and KIND one of :data:`KINDS` (``success``
+takes ``rows=own|held_out|turned``; ``directions`` takes ``source=...``, one paper's table
+(quoted: ``source="seed 002 Table 1"``); ``turned`` takes ``cells=all`` for every cell, not only those the
+turn moved, ``cells=moved``). ``write`` fills each such block with a line naming the run (its command, source
+commit, GSCL model, human model, variants and seed: ``run.json``) and the table
+(:mod:`socialnav.evaluation.arena.markdown`); ``check`` does the same in memory and names each
+block whose text differs (``tests/test_results_tables.py`` runs it, so a page that no longer
+says what its run says fails the tests).
+
+A **snapshot** is the part of an arena run folder the tables read, small enough to commit:
+``run.json``, the summary's rates and a few means (:data:`SUMMARY_COLUMNS`), ``papers.csv``,
+``directions.csv``, ``directions_turned.csv``, ``papers_stats.csv`` and, for a run with turned
+rows, ``turned.csv`` (:func:`~socialnav.evaluation.arena.markdown.turned_pairs` of its
+episodes). Run folders themselves (episodes, trajectories, pictures) stay out of git.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import re
+import shlex
+import sys
+
+import pandas as pd
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "docs" / "results"
+PAGES = ("README.md", "docs/*.md")
+RATES = ("goal_success", "social_success", "goal_no_collision", "social_no_collision", "intruded")
+MEANS = ("collisions", "intrusions", "d_min_m")
+SUMMARY_COLUMNS = (
+    "scene",
+    "method",
+    "n",
+    *(f"{r}_{part}" for r in RATES for part in ("pct", "lo", "hi")),
+    *(f"{m}{part}" for m in MEANS for part in ("", "_lo", "_hi")),
+)
+COPIED = ("run.json", "papers.csv", "directions.csv", "directions_turned.csv", "papers_stats.csv")
+DIFFERS = "differs from what its run says (python scripts/results_tables.py write)"
+BLOCK = re.compile(r"(<!-- results: (?P<spec>[^>]*?) -->\n)(?P<body>.*?)(<!-- /results -->)", re.S)
+
+
+def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, command: str | None = None) -> pathlib.Path:
+    """Copy what the tables read from the arena run folder ``run`` into ``results/name``
+    (replacing an earlier snapshot of that name whole); returns the folder. ``command``: the
+    command that made the run, noted in the snapshot's ``run.json`` where the run did not note
+    it (a run made before ``socialnav arena`` noted its command)."""
+    from socialnav.common.atomic import write_text_atomic
+    from socialnav.common.names import check_name
+    from socialnav.evaluation.arena.markdown import turned_pairs
+    from socialnav.evaluation.arena.run import TURNED
+
+    try:
+        check_name(name, "snapshot name")
+    except ValueError as e:
+        raise SystemExit(str(e)) from None
+    for needed in ("run.json", "summary.csv"):
+        if not (run / needed).is_file():
+            raise SystemExit(f"{run / needed}: no such file (an arena run folder, socialnav arena --out)")
+    folder = results / name
+    folder.mkdir(parents=True, exist_ok=True)
+    for stale in folder.iterdir():
+        stale.unlink()
+    summary = pd.read_csv(run / "summary.csv")
+    summary[[c for c in SUMMARY_COLUMNS if c in summary.columns]].to_csv(
+        folder / "summary.csv", index=False, float_format="%.6g"
+    )
+    for file in COPIED[1:]:
+        if (run / file).is_file():
+            write_text_atomic(folder / file, (run / file).read_text())
+    info = json.loads((run / "run.json").read_text())
+    if command is not None and info.get("command") not in (None, command):
+        raise SystemExit(f"{run / 'run.json'}: made by '{info['command']}', not '{command}'")
+    info.setdefault("command", command)
+    write_text_atomic(folder / "run.json", json.dumps(info, indent=1) + "\n")
+    turned = sorted((run / "episodes").glob(f"*{TURNED}.parquet"))
+    if turned:
+        own = [run / "episodes" / f.name.replace(TURNED, "") for f in turned]
+        episodes = pd.concat([pd.read_parquet(f) for f in [*own, *turned] if f.is_file()])
+        turned_pairs(episodes).to_csv(folder / "turned.csv", index=False, float_format="%.6g")
+    return folder
+
+
+def _read(folder: pathlib.Path, file: str) -> pd.DataFrame:
+    path = folder / file
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file")
+    return pd.read_csv(path)
+
+
+def _success(folder, rows="own"):
+    from socialnav.evaluation.arena.markdown import success_table
+
+    return success_table(_read(folder, "summary.csv"), rows=rows)
+
+
+def _seed002(folder):
+    from socialnav.evaluation.arena.markdown import seed002_table1
+
+    return seed002_table1(_read(folder, "summary.csv"))
+
+
+def _papers(folder):
+    from socialnav.evaluation.arena.markdown import papers_table
+
+    return papers_table(_read(folder, "papers.csv"))
+
+
+def _directions(folder, source=None):
+    from socialnav.evaluation.arena.markdown import directions_table
+
+    directions = _read(folder, "directions.csv")
+    if source is not None:
+        directions = directions[directions["source"] == source]
+        if directions.empty:
+            raise ValueError(f"source='{source}': no such source in {folder / 'directions.csv'}")
+    return directions_table(directions)
+
+
+def _directions_turned(folder):
+    from socialnav.evaluation.arena.markdown import directions_table, verdict_changes
+
+    turned = _read(folder, "directions_turned.csv")
+    return directions_table(turned) + "\n\n" + verdict_changes(_read(folder, "directions.csv"), turned)
+
+
+def _stats(folder):
+    from socialnav.evaluation.arena.markdown import stats_table
+
+    return stats_table(_read(folder, "papers_stats.csv"))
+
+
+def _turned(folder, cells="moved"):
+    from socialnav.evaluation.arena.markdown import turned_table
+
+    if cells not in ("moved", "all"):
+        raise ValueError(f"cells={cells}: moved or all")
+    return turned_table(_read(folder, "turned.csv"), moved_only=cells == "moved")
+
+
+KINDS = {
+    "success": _success,
+    "seed002_table1": _seed002,
+    "papers": _papers,
+    "directions": _directions,
+    "directions_turned": _directions_turned,
+    "stats": _stats,
+    "turned": _turned,
+}
+
+
+def render(spec: str, results: pathlib.Path = RESULTS) -> str:
+    """The text of the block ``<!-- results: spec -->``: the run's line and its table. Raises
+    ValueError naming what is wrong with ``spec`` (an unknown kind or option, a missing run)."""
+    from socialnav.evaluation.arena.markdown import source_line
+
+    words = shlex.split(spec)
+    if len(words) < 2:
+        raise ValueError(f"'{spec}': expected KIND RUN [OPTION=VALUE ...]")
+    kind, name, *options = words
+    if kind not in KINDS:
+        raise ValueError(f"'{kind}': not a kind of table ({', '.join(KINDS)})")
+    folder = results / name
+    if not (folder / "run.json").is_file():
+        raise ValueError(f"{folder}: no snapshot (python scripts/results_tables.py snapshot RUN {name})")
+    try:
+        kwargs = dict(o.split("=", 1) for o in options)
+    except ValueError:
+        raise ValueError(f"'{spec}': options are OPTION=VALUE") from None
+    try:
+        table = KINDS[kind](folder, **kwargs)
+    except TypeError:
+        raise ValueError(f"'{spec}': {kind} takes no option {', '.join(kwargs)}") from None
+    where = folder.relative_to(ROOT) if folder.is_relative_to(ROOT) else folder
+    return source_line(json.loads((folder / "run.json").read_text()), str(where)) + "\n\n" + table + "\n\n"
+
+
+def pages(root: pathlib.Path = ROOT) -> list[pathlib.Path]:
+    """The Markdown pages whose generated blocks are kept: README.md and docs/*.md."""
+    return sorted(p for pattern in PAGES for p in root.glob(pattern))
+
+
+def stale_blocks(page: pathlib.Path, results: pathlib.Path = RESULTS) -> tuple[str, list[str]]:
+    """The page's text with every generated block made again, and one line per block that
+    differed (``page:line: ...``) or could not be made."""
+    text = page.read_text()
+    problems: list[str] = []
+
+    def again(match: re.Match) -> str:
+        line = text.count("\n", 0, match.start()) + 1
+        try:
+            body = render(match["spec"], results)
+        except ValueError as e:
+            problems.append(f"{page}:{line}: {e}")
+            return match.group(0)
+        if body != match["body"]:
+            problems.append(f"{page}:{line}: '{match['spec']}' {DIFFERS}")
+        return match.group(1) + body + match.group(4)
+
+    return BLOCK.sub(again, text), problems
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="action", required=True)
+    snap = sub.add_parser("snapshot", help="keep an arena run's tables under docs/results/NAME")
+    snap.add_argument("run", type=pathlib.Path, help="an arena run folder (socialnav arena --out)")
+    snap.add_argument("name", help="the snapshot's name, as the pages' blocks give it")
+    snap.add_argument("--command", help="the command that made the run, where its run.json does not say")
+    sub.add_parser("write", help="make every generated table in README.md and docs/*.md again")
+    sub.add_parser("check", help="exit 1 naming each generated table that differs from its run")
+    args = parser.parse_args(argv)
+    if args.action == "snapshot":
+        print(f"snapshot: {snapshot(args.run, args.name, command=args.command)}")
+        return 0
+    problems = []
+    for page in pages():
+        text, found = stale_blocks(page)
+        problems += found
+        if args.action == "write" and text != page.read_text():
+            page.write_text(text)
+            print(f"written: {page.relative_to(ROOT)}")
+    shown = problems if args.action == "check" else [p for p in problems if not p.endswith(DIFFERS)]
+    for p in shown:
+        print(p)
+    return 1 if shown else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

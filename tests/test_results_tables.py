@@ -1,0 +1,143 @@
+"""The docs' results tables against the runs they came from (scripts/results_tables.py)."""
+
+import json
+import re
+import shutil
+
+import pandas as pd
+import pytest
+import script_loader
+
+from socialnav.evaluation.arena import markdown
+
+tables = script_loader.load("results_tables")
+
+
+def _summary_row(scene, method, goal, social):
+    row = {"scene": scene, "method": method, "n": 100}
+    for rate, pct in (("goal_no_collision", goal), ("social_no_collision", social), ("goal_success", 100.0)):
+        row |= {f"{rate}_pct": pct, f"{rate}_lo": max(pct - 9, 0), f"{rate}_hi": min(pct + 9, 100)}
+    return row
+
+
+def test_every_generated_table_in_the_pages_says_what_its_committed_run_says():
+    """The drift test: each ``<!-- results: ... -->`` block of README.md and docs/*.md is the
+    table its snapshot under docs/results/ makes now; the README and the results page have such
+    blocks (a page that lost them would pass vacuously)."""
+    blocks = {}
+    for page in tables.pages():
+        _, problems = tables.stale_blocks(page)
+        assert not problems, "\n".join(problems)
+        blocks[page.name] = len(tables.BLOCK.findall(page.read_text()))
+    assert blocks["README.md"] >= 1 and blocks["arena-results.md"] >= 5
+
+
+def test_a_changed_number_in_a_run_is_caught_and_written_back(tmp_path):
+    """One cell changed in a copy of the snapshot: the page's block is named with its line, and
+    the rewritten text holds the new number."""
+    page = tables.ROOT / "README.md"
+    match = tables.BLOCK.search(page.read_text())
+    name = match["spec"].split()[1]
+    results = tmp_path / "results"
+    shutil.copytree(tables.RESULTS / name, results / name)
+    summary = pd.read_csv(results / name / "summary.csv")
+    row = (summary["scene"] == "gscl_queue") & (summary["method"] == "gscl")
+    summary.loc[row, ["social_no_collision_pct", "social_no_collision_lo", "social_no_collision_hi"]] = [7, 3, 11]
+    summary.to_csv(results / name / "summary.csv", index=False)
+    text, problems = tables.stale_blocks(page, results)
+    line = page.read_text().count("\n", 0, match.start()) + 1
+    assert problems == [f"{page}:{line}: '{match['spec']}' {tables.DIFFERS}"]
+    assert "| queue | GSCL | 100 / 93 | " in text and "| 7 [3, 11] |" in text
+    assert text.count("<!-- /results -->") == page.read_text().count("<!-- /results -->")
+
+
+def test_the_success_table_puts_each_rows_goal_and_social_success_in_its_cell():
+    summary = pd.DataFrame(
+        [
+            _summary_row("a", "navfn", 100.0, 62.0),
+            _summary_row("a", "gscl", 98.0, 1.0),
+            _summary_row("a@held_out", "navfn", 90.0, 15.0),
+            _summary_row("a@turned", "navfn", 100.0, 60.0),
+            _summary_row("b", "navfn", 50.0, 0.0),
+        ]
+    )
+    own = markdown.success_table(summary)
+    assert own.splitlines() == [
+        "| scene | navfn | gscl |",
+        "|---|---|---|",
+        "| `a` | 100 / 62 | 98 / 1 |",
+        "| `b` | 50 / 0 | - |",
+    ]
+    assert markdown.success_table(summary, rows="held_out").splitlines()[2:] == ["| `a@held_out` | 90 / 15 |"]
+    assert markdown.success_table(summary, rows="turned").splitlines()[2:] == ["| `a@turned` | 100 / 60 |"]
+    with pytest.raises(ValueError, match="no turned rows"):
+        markdown.success_table(summary[~summary["scene"].str.contains("@")], rows="turned")
+
+
+def test_a_snapshot_keeps_what_the_tables_read_and_names_the_command(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "run.json").write_text(json.dumps({"variants": 100, "seed": 0, "source_commit": "ab" * 20}))
+    summary = pd.DataFrame([_summary_row("a", "navfn", 100.0, 62.0)]).assign(jerk_mean_mps3=1.0)
+    summary.to_csv(run / "summary.csv", index=False)
+    folder = tables.snapshot(run, "mine", tmp_path / "results", command="socialnav arena --scenes a")
+    assert sorted(p.name for p in folder.iterdir()) == ["run.json", "summary.csv"]
+    assert "jerk_mean_mps3" not in pd.read_csv(folder / "summary.csv").columns
+    said = tables.render("success mine", tmp_path / "results")
+    assert said.startswith("From `") and "(`socialnav arena --scenes a`): commit abababababab," in said
+    assert "| `a` | 100 / 62 |" in said
+    (run / "run.json").write_text(json.dumps({"command": "socialnav arena"}))
+    with pytest.raises(SystemExit, match="made by 'socialnav arena', not"):
+        tables.snapshot(run, "mine", tmp_path / "results", command="socialnav arena --scenes a")
+    with pytest.raises(SystemExit, match="cannot name a file"):
+        tables.snapshot(run, "../up", tmp_path / "results")
+    with pytest.raises(SystemExit, match="summary.csv: no such file"):
+        (run / "summary.csv").unlink()
+        tables.snapshot(run, "mine", tmp_path / "results")
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("success", "expected KIND RUN"),
+        ("table mine", "'table': not a kind of table"),
+        ("success nowhere", "no snapshot"),
+        ("success mine rows", "options are OPTION=VALUE"),
+        ("papers mine cells=all", "papers takes no option cells"),
+        ("success mine rows=sideways", "'sideways'"),
+        ("papers mine", "papers.csv: no such file"),
+    ],
+)
+def test_a_block_that_cannot_be_made_is_named_in_one_line(tmp_path, spec, message):
+    results = tmp_path / "results"
+    (results / "mine").mkdir(parents=True)
+    (results / "mine" / "run.json").write_text("{}")
+    pd.DataFrame([_summary_row("a", "navfn", 100.0, 62.0)]).to_csv(results / "mine" / "summary.csv", index=False)
+    with pytest.raises(ValueError, match=message):
+        tables.render(spec, results)
+    page = tmp_path / "page.md"
+    page.write_text(f"text\n\n<!-- results: {spec} -->\nold\n<!-- /results -->\n")
+    text, problems = tables.stale_blocks(page, results)
+    assert text == page.read_text() and len(problems) == 1 and problems[0].startswith(f"{page}:3: ")
+
+
+COMMAND = re.compile(r"socialnav (arena|gscl|humans|policy|run|simulate|layers)\b|python scripts/|benchmarks/")
+
+
+def test_every_other_table_on_the_results_page_follows_the_command_that_made_it():
+    """docs/arena-results.md: a table not made by the script (a measurement of its time: an
+    earlier model, scene or definition) has the command that made it earlier in its section."""
+    lines = (tables.ROOT / "docs" / "arena-results.md").read_text().splitlines()
+    generated, section_start, missing, previous = False, 0, [], ""
+    for number, line in enumerate(lines, 1):
+        if line.startswith("<!-- results:"):
+            generated = True
+        elif line.startswith("<!-- /results -->"):
+            generated = False
+        elif line.startswith("#"):
+            section_start = number
+        elif line.lstrip().startswith("|") and not previous.lstrip().startswith("|") and not generated:
+            if not any(COMMAND.search(text) for text in lines[section_start : number - 1]):
+                missing.append(f"docs/arena-results.md:{number}: {line.strip()[:60]}")
+        previous = line
+    assert not missing, "tables without the command that made them:\n" + "\n".join(missing)
