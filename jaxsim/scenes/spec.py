@@ -28,6 +28,7 @@ Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[
      "held_out_rule": {...},                                    # optional, see below
      "stop_and_go_m": 0.9,                                      # optional, see below
      "people_in_global_plan": true,                             # optional, see below
+     "variants_of": "gscl_crowded_entrance",                    # optional, see below
      "recording": {"run": "biwi_hotel", "playback": "replayed" | "reactive",
                    "window_within_s": [0, 480]}}                # optional, see below
 
@@ -82,6 +83,13 @@ it ("the static and the inflation layer"); the people then shape the global path
 the social layer, and the local planner, the safety stop and the stop-and-go keep the robot off
 them. A queue needs it: the way to the head is through the line, behind the people in it.
 
+``variants_of`` (optional; default the scene's ``name``): the name whose random stream draws the
+scene's variants (:func:`jaxsim.scenes.variant.sample_variant`). A copy of a scene that changes
+one number (``scripts/scene_sweep.py``: the crowded entrance's walkers starting later) names the
+scene it copies, so its variant ``k`` draws the same numbers as the scene's own variant ``k``
+(common random numbers across the copies) and a copy that changes nothing gives the scene's own
+episodes.
+
 ``recording`` (optional): the scene's people are a recorded crowd, a window of ``timeout_s``
 seconds of the shipped run ``run`` (:func:`socialnav.data.recorded.run_names`: the ETH/UCY
 scenes, the Jülich corridors; positions in the run's own frame) per variant, drawn from the
@@ -135,6 +143,7 @@ class SceneSpec:
     stop_and_go_m: float | None = None  # every robot stops for a person ahead closer than this
     people_in_global_plan: bool = True  # the seen people are obstacles for the global planner
     recording: dict | None = None  # the recorded people (:func:`_recording`); None: scripted people only
+    variants_of: str | None = None  # the name whose stream draws the variants (None: ``name``)
     turned_from: SceneSpec | None = None  # the scene this one is a quarter turn of (:func:`turn`); None: as in its file
 
 
@@ -623,6 +632,9 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     if stop_and_go is not None:
         stop_and_go = r.number(stop_and_go, "stop_and_go_m", 0.3, 5.0)[0]
     people_in_global_plan = r.flag(obj, "", "people_in_global_plan", True)
+    variants_of = r.get(obj, "", "variants_of", None)
+    if variants_of is not None and not is_safe_name(variants_of):
+        r.fail("variants_of", f"expected a scene's name, got {variants_of!r} ({name_problem(variants_of)})")
     _check_placements(r, robot, people)
     recording_obj = r.get(obj, "", "recording", None)
     recording = None if recording_obj is None else _recording(r, recording_obj, timeout, people)
@@ -642,6 +654,7 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         stop_and_go_m=stop_and_go,
         people_in_global_plan=people_in_global_plan,
         recording=recording,
+        variants_of=variants_of,
     )
 
 

@@ -2,8 +2,8 @@
 expanded into fixed-size, masked arrays (:class:`Variant`), a batch stacked on a leading axis.
 
 Variant ``k`` of a scene under seed ``s`` is drawn from ``numpy.random.default_rng((s, k,
-crc32(name)))``: the same for every method (common random numbers) and independent of how many
-variants are drawn.
+crc32(name)))`` (the scene file's ``variants_of`` in place of its name where it gives one): the
+same for every method (common random numbers) and independent of how many variants are drawn.
 """
 
 from __future__ import annotations
@@ -160,7 +160,8 @@ def sample_variant(
         return turn_variant(drawn, turn_bounds_m(spec.turned_from.bounds_m))
     # A recorded scene draws by its run's name: its replayed and reactive scenes play the same
     # windows from the same starts (a paired comparison of the two playbacks).
-    stream = spec.name if spec.recording is None else f"recording:{spec.recording['run']}"
+    # A copy of a scene (``variants_of``) draws by the name of the scene it copies.
+    stream = (spec.variants_of or spec.name) if spec.recording is None else f"recording:{spec.recording['run']}"
     entropy = (int(seed), int(k), zlib.crc32(stream.encode())) + ((1,) if held_out else ()) + ((2,) if training else ())
     rng = np.random.default_rng(entropy)
     draw = _Drawer(rng, held_out)

@@ -1,0 +1,175 @@
+"""A scene's free parameter swept: one copy of the scene per value, every chosen method on each,
+and the success rates against the value as a table and a figure.
+
+    python scripts/scene_sweep.py gscl_crowded_entrance people.start_s 0,0.5 1,2 2,4 4,6 \\
+        --methods navfn,snl_small,snl_large,gscl --out runs/entrance-sweep
+
+A paper that leaves a number open (seed 002 gives no timing for the crowded entrance's walkers)
+is reported over a range of it, not at one chosen value. ``FIELD`` is a dotted path into the
+scene file (``data/scenes/<scene>.json``); where it meets a list it applies to every element
+that has the next key (``people.start_s``: every person's start; ``rule.rules.min_share``: every
+sub-rule with a share). Each ``VALUE`` is a number or comma-separated numbers (a range,
+``0,0.5`` -> ``[0, 0.5]``). The copies are written to ``OUT/scenes/`` (named
+``<scene>+sweep<k>``, each drawing the scene's own variants: the scene file's ``variants_of``),
+``socialnav arena`` runs them into ``OUT/arena`` with the same variants and seed (common random
+numbers: variant k of every copy draws what variant k of the scene draws, so a copy that
+changes nothing gives the scene's own episodes; a run already there is resumed) and
+``OUT/arena/sweep.json`` records the field, the values and the command. Then it prints
+:func:`sweep_table` (``--metric``, default ``social_no_collision``: seed 002's social success, a
+collision failing the run) and draws ``OUT/sweep.png`` with the 95 % Wilson intervals. ``python
+scripts/results_tables.py snapshot OUT/arena NAME`` keeps the table for the docs (``<!--
+results: sweep NAME -->``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import pathlib
+import shlex
+import subprocess
+import sys
+
+import pandas as pd
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SWEEP_FILE = "sweep.json"
+
+
+def set_field(scene: dict, path: str, value) -> int:
+    """Set ``path`` (dotted) in ``scene`` to ``value`` in place, through lists (each element that
+    has the next key); returns how many places were set. Raises ValueError naming the path where
+    nothing was set."""
+
+    def walk(node, keys) -> int:
+        if isinstance(node, list):
+            return sum(walk(item, keys) for item in node if isinstance(item, dict) and keys[0] in item)
+        if not isinstance(node, dict) or keys[0] not in node:
+            return 0
+        if len(keys) == 1:
+            node[keys[0]] = copy.deepcopy(value)
+            return 1
+        return walk(node[keys[0]], keys[1:])
+
+    n = walk(scene, path.split("."))
+    if n == 0:
+        raise ValueError(f"{path}: no such field in scene {scene.get('name')!r}")
+    return n
+
+
+def parse_value(text: str):
+    """``"2"`` -> 2.0, ``"0,0.5"`` -> [0.0, 0.5]; ValueError naming the text otherwise."""
+    try:
+        numbers = [float(part) for part in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{text!r}: a number or comma-separated numbers") from None
+    return numbers[0] if len(numbers) == 1 else numbers
+
+
+def sweep_copies(scene_file: pathlib.Path, field: str, values: list, folder: pathlib.Path) -> list[pathlib.Path]:
+    """One scene file per value in ``folder``, named ``<scene>+sweep<k>``, its ``source`` saying
+    what was changed."""
+    base = json.loads(scene_file.read_text())
+    folder.mkdir(parents=True, exist_ok=True)
+    files = []
+    for k, value in enumerate(values):
+        scene = copy.deepcopy(base)
+        set_field(scene, field, value)
+        scene["name"] = f"{base['name']}+sweep{k}"
+        scene["variants_of"] = base.get("variants_of", base["name"])  # the scene's own draws
+        scene["source"] = f"{base['name']} with {field} = {json.dumps(value)} (scripts/scene_sweep.py)"
+        path = folder / f"{scene['name']}.json"
+        path.write_text(json.dumps(scene, indent=1) + "\n")
+        files.append(path)
+    return files
+
+
+def _label(value) -> str:
+    return "-".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
+
+
+def sweep_table(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_collision") -> str:
+    """Values down, methods across: ``metric`` in % with its 95 % interval per copy of the scene
+    (``sweep``: ``{"scene", "field", "values"}`` as ``sweep.json`` holds them)."""
+    rows = summary.set_index(["scene", "method"])
+    methods = list(dict.fromkeys(summary["method"]))
+    lines = [
+        f"| {sweep['field']} | " + " | ".join(methods) + " |",
+        "|---|" + "---|" * len(methods),
+    ]
+    for k, value in enumerate(sweep["values"]):
+        name = f"{sweep['scene']}+sweep{k}"
+        cells = []
+        for m in methods:
+            if (name, m) not in rows.index:
+                raise ValueError(f"no row for {name}, method {m}")
+            r = rows.loc[(name, m)]
+            cells.append(f"{r[f'{metric}_pct']:.0f} [{r[f'{metric}_lo']:.0f}, {r[f'{metric}_hi']:.0f}]")
+        lines.append(f"| {_label(value)} | " + " | ".join(cells) + " |")
+    n = int(summary["n"].iloc[0])
+    lines.append(f"\n{metric.replace('_', ' ')} %, [95 % Wilson interval], {n} variants a cell.")
+    return "\n".join(lines)
+
+
+def sweep_figure(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_collision"):
+    """``metric`` against the swept value, one line per method with its 95 % intervals."""
+    from socialnav.common import figures
+
+    fig = figures.figure(figsize=(5.5, 3.4))
+    ax = fig.add_subplot()
+    rows = summary.set_index(["scene", "method"])
+    x = list(range(len(sweep["values"])))
+    for m in dict.fromkeys(summary["method"]):
+        r = [rows.loc[(f"{sweep['scene']}+sweep{k}", m)] for k in x]
+        y = [row[f"{metric}_pct"] for row in r]
+        err = [[v - row[f"{metric}_lo"] for v, row in zip(y, r)], [row[f"{metric}_hi"] - v for v, row in zip(y, r)]]
+        ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=m)
+    ax.set_xticks(x, [_label(v) for v in sweep["values"]])
+    ax.set_xlabel(sweep["field"])
+    ax.set_ylabel(f"{metric.replace('_', ' ')} %")
+    ax.set_ylim(-3, 103)
+    ax.set_title(sweep["scene"], fontsize=10)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("scene", help="a scene name (data/scenes/<scene>.json) or a scene file")
+    parser.add_argument("field", help="a dotted path into the scene file, e.g. people.start_s")
+    parser.add_argument("values", nargs="+", help="each a number or comma-separated numbers (a range)")
+    parser.add_argument("--methods", default="navfn,snl_small,snl_large,gscl", help="socialnav arena's --methods")
+    parser.add_argument("--variants", type=int, default=100, help="variants per copy (default 100)")
+    parser.add_argument("--metric", default="social_no_collision", help="the rate shown (default social_no_collision)")
+    parser.add_argument("--out", type=pathlib.Path, required=True, help="the sweep's folder")
+    args = parser.parse_args(argv)
+    scene_file = pathlib.Path(args.scene)
+    if not scene_file.is_file():
+        scene_file = ROOT / "data" / "scenes" / f"{args.scene}.json"
+    if not scene_file.is_file():
+        raise SystemExit(f"{args.scene}: no such scene (data/scenes/<name>.json) or file")
+    try:
+        values = [parse_value(v) for v in args.values]
+        files = sweep_copies(scene_file, args.field, values, args.out / "scenes")
+    except ValueError as e:
+        raise SystemExit(f"{scene_file}: {e}") from None
+    arena = args.out / "arena"
+    command = ["socialnav", "arena", "--scenes", ",".join(map(str, files)), "--methods", args.methods]
+    command += ["--variants", str(args.variants), "--out", str(arena)]
+    done = subprocess.run([str(pathlib.Path(sys.executable).parent / "socialnav"), *command[1:]], check=False)
+    if done.returncode != 0:
+        return done.returncode
+    sweep = {"scene": json.loads(scene_file.read_text())["name"], "field": args.field, "values": values}
+    sweep["command"] = "python scripts/scene_sweep.py " + shlex.join(sys.argv[1:] if argv is None else argv)
+    (arena / SWEEP_FILE).write_text(json.dumps(sweep) + "\n")
+    summary = pd.read_csv(arena / "summary.csv")
+    print(sweep_table(summary, sweep, args.metric))
+    from socialnav.common import figures
+
+    print(f"figure: {figures.save(sweep_figure(summary, sweep, args.metric), args.out / 'sweep.png')}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,86 @@
+"""A scene's free parameter swept (scripts/scene_sweep.py) and the copies' shared variants
+(the scene file's ``variants_of``)."""
+
+import json
+
+import jax
+import numpy as np
+import pandas as pd
+import pytest
+import script_loader
+
+from socialnav.data import SCENES_DIR
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variants
+
+sweep = script_loader.load("scene_sweep")
+ENTRANCE = SCENES_DIR / "gscl_crowded_entrance.json"
+
+
+def _same(a, b) -> bool:
+    return all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True))
+
+
+def test_a_copy_that_changes_nothing_draws_the_scenes_own_variants(tmp_path):
+    """The copies name the scene they copy (``variants_of``): a copy with the scene's own value
+    draws its variants bit for bit; one with another start draws the same numbers but the
+    starts; a copy under another name without ``variants_of`` draws other variants."""
+    own = load_scene(ENTRANCE)
+    same, later = sweep.sweep_copies(ENTRANCE, "people.start_s", [[2.0, 4.0], [4.0, 6.0]], tmp_path)
+    assert load_scene(same).name == "gscl_crowded_entrance+sweep0"
+    assert _same(sample_variants(own, 0, 8), sample_variants(load_scene(same), 0, 8))
+    assert _same(sample_variants(own, 0, 8, held_out=True), sample_variants(load_scene(same), 0, 8, held_out=True))
+    a, b = sample_variants(own, 0, 8), sample_variants(load_scene(later), 0, 8)
+    assert np.array_equal(a.xy0, b.xy0) and np.array_equal(a.speed_mps, b.speed_mps)
+    assert not np.array_equal(a.start_s, b.start_s)
+    valid = np.asarray(b.valid) & (np.asarray(b.start_s) > 0)
+    assert valid.any() and np.all((np.asarray(b.start_s)[valid] >= 4.0) & (np.asarray(b.start_s)[valid] <= 6.0))
+    renamed = json.loads(same.read_text())
+    del renamed["variants_of"]
+    (tmp_path / "renamed.json").write_text(json.dumps(renamed))
+    assert not _same(sample_variants(own, 0, 8), sample_variants(load_scene(tmp_path / "renamed.json"), 0, 8))
+
+
+def test_a_variants_of_that_cannot_be_a_name_is_refused(tmp_path):
+    scene = json.loads(ENTRANCE.read_text()) | {"variants_of": "../up"}
+    (tmp_path / "bad.json").write_text(json.dumps(scene))
+    with pytest.raises(ScenarioError, match="variants_of"):
+        load_scene(tmp_path / "bad.json")
+
+
+def test_a_field_is_set_through_lists_and_a_missing_one_is_named():
+    scene = json.loads((SCENES_DIR / "gscl_l_hallway.json").read_text())
+    assert sweep.set_field(scene, "rule.rules.min_share", 0.5) == 2  # both legs' keep-right, not the others
+    assert [r.get("min_share") for r in scene["rule"]["rules"]] == [0.5, 0.5, None, None]
+    assert sweep.set_field(scene, "timeout_s", 30.0) == 1 and scene["timeout_s"] == 30.0
+    with pytest.raises(ValueError, match="rule.rules.nothing: no such field in scene 'gscl_l_hallway'"):
+        sweep.set_field(scene, "rule.rules.nothing", 1.0)
+    assert sweep.parse_value("0,0.5") == [0.0, 0.5] and sweep.parse_value("2") == 2.0
+    with pytest.raises(ValueError, match="'a,b': a number"):
+        sweep.parse_value("a,b")
+
+
+def test_the_sweep_table_puts_each_values_rate_in_its_row():
+    rows = []
+    for k, pct in enumerate((79.0, 28.0)):
+        for method, p in (("navfn", 0.0), ("gscl", pct)):
+            rows.append(
+                {
+                    "scene": f"s+sweep{k}",
+                    "method": method,
+                    "n": 100,
+                    "social_no_collision_pct": p,
+                    "social_no_collision_lo": max(p - 9, 0),
+                    "social_no_collision_hi": min(p + 9, 100),
+                }
+            )
+    said = sweep.sweep_table(pd.DataFrame(rows), {"scene": "s", "field": "people.start_s", "values": [[0, 0.5], 4]})
+    assert said.splitlines()[:4] == [
+        "| people.start_s | navfn | gscl |",
+        "|---|---|---|",
+        "| 0-0.5 | 0 [0, 9] | 79 [70, 88] |",
+        "| 4 | 0 [0, 9] | 28 [19, 37] |",
+    ]
+    fig = sweep.sweep_figure(pd.DataFrame(rows), {"scene": "s", "field": "people.start_s", "values": [[0, 0.5], 4]})
+    assert len(fig.axes[0].lines) >= 2
