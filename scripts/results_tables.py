@@ -20,7 +20,8 @@ says what its run says fails the tests).
 
 A **snapshot** is the part of an arena run folder the tables read, small enough to commit:
 ``run.json``, the summary's rates and a few means (:data:`SUMMARY_COLUMNS`), ``papers.csv``,
-``directions.csv``, ``directions_turned.csv``, ``papers_stats.csv`` and, for a run with turned
+``directions.csv``, ``directions_turned.csv``, ``papers_stats.csv``, ``sweep.json`` (a run of
+``scripts/scene_sweep.py``: ``<!-- results: sweep NAME -->``) and, for a run with turned
 rows, ``turned.csv`` (:func:`~socialnav.evaluation.arena.markdown.turned_pairs` of its
 episodes). Run folders themselves (episodes, trajectories, pictures) stay out of git.
 """
@@ -48,7 +49,7 @@ SUMMARY_COLUMNS = (
     *(f"{r}_{part}" for r in RATES for part in ("pct", "lo", "hi")),
     *(f"{m}{part}" for m in MEANS for part in ("", "_lo", "_hi")),
 )
-COPIED = ("run.json", "papers.csv", "directions.csv", "directions_turned.csv", "papers_stats.csv")
+COPIED = ("run.json", "papers.csv", "directions.csv", "directions_turned.csv", "papers_stats.csv", "sweep.json")
 DIFFERS = "differs from what its run says (python scripts/results_tables.py write)"
 BLOCK = re.compile(r"(<!-- results: (?P<spec>[^>]*?) -->\n)(?P<body>.*?)(<!-- /results -->)", re.S)
 
@@ -82,6 +83,8 @@ def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, comm
         if (run / file).is_file():
             write_text_atomic(folder / file, (run / file).read_text())
     info = json.loads((run / "run.json").read_text())
+    if (run / "sweep.json").is_file():  # a sweep's run: the command that made the sweep, not its arena call
+        info["command"] = json.loads((run / "sweep.json").read_text()).get("command", info.get("command"))
     if command is not None and info.get("command") not in (None, command):
         raise SystemExit(f"{run / 'run.json'}: made by '{info['command']}', not '{command}'")
     info.setdefault("command", command)
@@ -151,6 +154,26 @@ def _turned(folder, cells="moved"):
     return turned_table(_read(folder, "turned.csv"), moved_only=cells == "moved")
 
 
+def _sweep(folder, metric="social_no_collision"):
+    sweep_script = _sibling("scene_sweep")
+    path = folder / sweep_script.SWEEP_FILE
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file (a run of scripts/scene_sweep.py)")
+    if f"{metric}_pct" not in _read(folder, "summary.csv").columns:
+        raise ValueError(f"metric={metric}: not a rate the snapshot keeps")
+    return sweep_script.sweep_table(_read(folder, "summary.csv"), json.loads(path.read_text()), metric)
+
+
+def _sibling(name: str):
+    """Another script of this folder, imported by file (scripts/ is not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, pathlib.Path(__file__).with_name(f"{name}.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 KINDS = {
     "success": _success,
     "seed002_table1": _seed002,
@@ -159,6 +182,7 @@ KINDS = {
     "directions_turned": _directions_turned,
     "stats": _stats,
     "turned": _turned,
+    "sweep": _sweep,
 }
 
 
