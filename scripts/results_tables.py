@@ -73,8 +73,8 @@ def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, comm
             raise SystemExit(f"{run / needed}: no such file (an arena run folder, socialnav arena --out)")
     folder = results / name
     folder.mkdir(parents=True, exist_ok=True)
-    for stale in folder.iterdir():
-        stale.unlink()
+    for stale in (*COPIED, "summary.csv", "turned.csv"):  # an earlier snapshot's files; nothing else
+        (folder / stale).unlink(missing_ok=True)
     summary = pd.read_csv(run / "summary.csv")
     summary[[c for c in SUMMARY_COLUMNS if c in summary.columns]].to_csv(
         folder / "summary.csv", index=False, float_format="%.6g"
@@ -250,12 +250,14 @@ def main(argv=None) -> int:
     if args.action == "snapshot":
         print(f"snapshot: {snapshot(args.run, args.name, command=args.command)}")
         return 0
+    from socialnav.common.atomic import write_text_atomic
+
     problems = []
     for page in pages():
         text, found = stale_blocks(page)
         problems += found
         if args.action == "write" and text != page.read_text():
-            page.write_text(text)
+            write_text_atomic(page, text)
             print(f"written: {page.relative_to(ROOT)}")
     shown = problems if args.action == "check" else [p for p in problems if not p.endswith(DIFFERS)]
     for p in shown:

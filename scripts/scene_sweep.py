@@ -144,6 +144,8 @@ def main(argv=None) -> int:
     parser.add_argument("--metric", default="social_no_collision", help="the rate shown (default social_no_collision)")
     parser.add_argument("--out", type=pathlib.Path, required=True, help="the sweep's folder")
     args = parser.parse_args(argv)
+    if args.variants < 1:
+        parser.error(f"--variants {args.variants}: at least 1")
     scene_file = pathlib.Path(args.scene)
     if not scene_file.is_file():
         scene_file = ROOT / "data" / "scenes" / f"{args.scene}.json"
@@ -157,7 +159,7 @@ def main(argv=None) -> int:
     arena = args.out / "arena"
     command = ["socialnav", "arena", "--scenes", ",".join(map(str, files)), "--methods", args.methods]
     command += ["--variants", str(args.variants), "--out", str(arena)]
-    done = subprocess.run([str(pathlib.Path(sys.executable).parent / "socialnav"), *command[1:]], check=False)
+    done = subprocess.run([sys.executable, "-m", "socialnav", *command[1:]], check=False)
     if done.returncode != 0:
         return done.returncode
     sweep = {"scene": json.loads(scene_file.read_text())["name"], "field": args.field, "values": values}
