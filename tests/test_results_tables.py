@@ -82,6 +82,10 @@ def test_a_snapshot_keeps_what_the_tables_read_and_names_the_command(tmp_path):
     summary.to_csv(run / "summary.csv", index=False)
     folder = tables.snapshot(run, "mine", tmp_path / "results", command="socialnav arena --scenes a")
     assert sorted(p.name for p in folder.iterdir()) == ["run.json", "summary.csv"]
+    (folder / "notes.txt").write_text("mine")  # a user's file in the snapshot survives a new snapshot
+    (folder / "turned.csv").write_text("stale")  # an earlier snapshot's file the run no longer has does not
+    folder = tables.snapshot(run, "mine", tmp_path / "results", command="socialnav arena --scenes a")
+    assert sorted(p.name for p in folder.iterdir()) == ["notes.txt", "run.json", "summary.csv"]
     assert "jerk_mean_mps3" not in pd.read_csv(folder / "summary.csv").columns
     said = tables.render("success mine", tmp_path / "results")
     assert said.startswith("From `") and "(`socialnav arena --scenes a`): commit abababababab," in said
