@@ -1,6 +1,7 @@
 """The papers' claims in two arena runs side by side: each run's ``directions.csv`` (a claim's
 paired difference with its 95 % interval and verdict, :mod:`evaluation.arena.papers`) joined by claim,
-printed as a markdown table with the claims whose verdict differs between the runs counted.
+printed as a markdown table with the claims whose verdict differs between the runs counted
+(``evaluation.arena.markdown.claims_table``).
 
     python scripts/claims_two_runs.py runs/arena-sf runs/arena-steer --labels "social force" "steering speed"
     python scripts/claims_two_runs.py runs/arena-sf runs/arena-steer --held-out   # runs made with --held-out
@@ -16,7 +17,7 @@ import pathlib
 
 import pandas as pd
 
-KEY = ["source", "scene", "metric", "proposed", "baseline"]
+from socialnav.evaluation.arena.markdown import claims_table
 
 
 def directions(folder: str, name: str = "directions.csv") -> pd.DataFrame:
@@ -27,11 +28,6 @@ def directions(folder: str, name: str = "directions.csv") -> pd.DataFrame:
     return pd.read_csv(path)
 
 
-def cell(row, suffix: str) -> str:
-    return (f"{row['ours_diff' + suffix]:+.2f} [{row['ours_diff_lo' + suffix]:+.2f}, "
-            f"{row['ours_diff_hi' + suffix]:+.2f}] | {row['verdict' + suffix]}")  # fmt: skip
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("runs", nargs=2, help="two arena run folders")
@@ -40,24 +36,9 @@ def main(argv=None) -> int:
         "--held-out", action="store_true", help="the claims on the held-out rows (directions_held_out.csv)"
     )
     args = parser.parse_args(argv)
-    labels = args.labels or args.runs
     name = "directions_held_out.csv" if args.held_out else "directions.csv"
     a, b = (directions(r, name) for r in args.runs)
-    both = a.merge(b, on=KEY, suffixes=("_a", "_b"), how="outer", indicator=True)
-    print(f"| source | scene | metric | proposed - baseline | paper | {labels[0]} | verdict | {labels[1]} | verdict |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for _, row in both.iterrows():
-        left = cell(row, "_a") if row["_merge"] != "right_only" else "- | not run"
-        right = cell(row, "_b") if row["_merge"] != "left_only" else "- | not run"
-        paper = row["paper_diff_a"] if row["_merge"] != "right_only" else row["paper_diff_b"]
-        print(f"| {row['source']} | `{row['scene']}` | {row['metric']} | {row['proposed']} - {row['baseline']} | "
-              f"{paper:+.2f} | {left} | {right} |")  # fmt: skip
-    matched = both[both["_merge"] == "both"]
-    changed = matched[matched["verdict_a"] != matched["verdict_b"]]
-    print(f"\n{len(matched)} claims in both runs; the verdict differs in {len(changed)}:")
-    for _, row in changed.iterrows():
-        print(f"- {row['scene']} {row['metric']} ({row['proposed']} - {row['baseline']}): {row['verdict_a']} -> "
-              f"{row['verdict_b']}")  # fmt: skip
+    print(claims_table(a, b, args.labels or args.runs))
     return 0
 
 

@@ -9,21 +9,23 @@ A table in a Markdown page (README.md, docs/*.md) is generated when it stands be
     <!-- results: KIND RUN [OPTION=VALUE ...] -->
     <!-- /results -->
 
-where RUN names a snapshot under ``docs/results/`` and KIND one of :data:`KINDS` (``success``
-takes ``rows=own|held_out|turned``; ``directions`` takes ``source=...``, one paper's table
-(quoted: ``source="seed 002 Table 1"``); ``turned`` takes ``cells=all`` for every cell, not only those the
-turn moved, ``cells=moved``). ``write`` fills each such block with a line naming the run (its command, source
-commit, GSCL model, human model, variants and seed: ``run.json``) and the table
+where RUN names a snapshot under ``docs/results/`` and KIND one of :data:`KINDS`. Options:
+``success`` takes ``rows=own|held_out|turned``; ``directions`` ``source=...``, one paper's table
+(quoted: ``source="seed 002 Table 1"``); ``turned`` ``cells=all`` for every cell, not only those
+the turn moved (``cells=moved``); ``sweep`` ``metric=...``; ``claims`` sets the papers' claims of
+two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``). ``write`` fills
+each such block with a line naming the run (its command, source commit, GSCL model, human
+model, variants and seed: ``run.json``) and the table
 (:mod:`socialnav.evaluation.arena.markdown`); ``check`` does the same in memory and names each
 block whose text differs (``tests/test_results_tables.py`` runs it, so a page that no longer
 says what its run says fails the tests).
 
 A **snapshot** is the part of an arena run folder the tables read, small enough to commit:
-``run.json``, the summary's rates and a few means (:data:`SUMMARY_COLUMNS`), ``papers.csv``,
-``directions.csv``, ``directions_turned.csv``, ``papers_stats.csv``, ``sweep.json`` (a run of
-``scripts/scene_sweep.py``: ``<!-- results: sweep NAME -->``) and, for a run with turned
-rows, ``turned.csv`` (:func:`~socialnav.evaluation.arena.markdown.turned_pairs` of its
-episodes). Run folders themselves (episodes, trajectories, pictures) stay out of git.
+``run.json``, the summary's rates and a few means (:data:`SUMMARY_COLUMNS`), the files of
+:data:`COPIED` the run has (the papers' comparisons; ``sweep.json`` for a run of
+``scripts/scene_sweep.py``) and, for a run with turned rows, ``turned.csv``
+(:func:`~socialnav.evaluation.arena.markdown.turned_pairs` of its episodes). Run folders
+themselves (episodes, trajectories, pictures) stay out of git.
 """
 
 from __future__ import annotations
@@ -49,7 +51,15 @@ SUMMARY_COLUMNS = (
     *(f"{r}_{part}" for r in RATES for part in ("pct", "lo", "hi")),
     *(f"{m}{part}" for m in MEANS for part in ("", "_lo", "_hi")),
 )
-COPIED = ("run.json", "papers.csv", "directions.csv", "directions_turned.csv", "papers_stats.csv", "sweep.json")
+COPIED = (
+    "run.json",
+    "papers.csv",
+    "directions.csv",
+    "directions_held_out.csv",
+    "directions_turned.csv",
+    "papers_stats.csv",
+    "sweep.json",
+)
 DIFFERS = "differs from what its run says (python scripts/results_tables.py write)"
 BLOCK = re.compile(r"(<!-- results: (?P<spec>[^>]*?) -->\n)(?P<body>.*?)(<!-- /results -->)", re.S)
 
@@ -154,6 +164,28 @@ def _turned(folder, cells="moved"):
     return turned_table(_read(folder, "turned.csv"), moved_only=cells == "moved")
 
 
+def _claims(folder, other=None, labels=None, rows="own"):
+    from socialnav.evaluation.arena.markdown import claims_table, source_line
+
+    if other is None:
+        raise ValueError("claims needs other=NAME, the second run's snapshot")
+    files = {"own": "directions.csv", "held_out": "directions_held_out.csv"}
+    if rows not in files:
+        raise ValueError(f"rows='{rows}': own or held_out")
+    second = folder.parent / other
+    if not (second / "run.json").is_file():
+        raise ValueError(f"{second}: no snapshot (python scripts/results_tables.py snapshot RUN {other})")
+    names = labels.split("|") if labels else [folder.name, other]
+    if len(names) != 2:
+        raise ValueError(f"labels='{labels}': two names, as 'a|b'")
+    where = second.relative_to(ROOT) if second.is_relative_to(ROOT) else second
+    return (
+        source_line(json.loads((second / "run.json").read_text()), str(where)).replace("From", "And from", 1)
+        + "\n\n"
+        + claims_table(_read(folder, files[rows]), _read(second, files[rows]), names)
+    )
+
+
 def _sweep(folder, metric="social_no_collision"):
     sweep_script = _sibling("scene_sweep")
     path = folder / sweep_script.SWEEP_FILE
@@ -183,6 +215,7 @@ KINDS = {
     "stats": _stats,
     "turned": _turned,
     "sweep": _sweep,
+    "claims": _claims,
 }
 
 

@@ -110,6 +110,11 @@ def test_a_snapshot_keeps_what_the_tables_read_and_names_the_command(tmp_path):
         ("papers mine cells=all", "papers takes no option cells"),
         ("success mine rows=sideways", "'sideways'"),
         ("papers mine", "papers.csv: no such file"),
+        ("claims mine", "claims needs other=NAME"),
+        ("claims mine other=theirs", "theirs: no snapshot"),
+        ("claims mine other=mine labels=one", "two names"),
+        ("claims mine other=mine rows=turned", "rows='turned': own or held_out"),
+        ("claims mine other=mine", "directions.csv: no such file"),
     ],
 )
 def test_a_block_that_cannot_be_made_is_named_in_one_line(tmp_path, spec, message):

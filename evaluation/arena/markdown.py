@@ -243,6 +243,46 @@ def turned_table(pairs: pd.DataFrame, moved_only: bool = False) -> str:
     return "\n".join(lines)
 
 
+CLAIM_KEY = ["source", "scene", "metric", "proposed", "baseline"]
+
+
+def claims_table(a: pd.DataFrame, b: pd.DataFrame, labels=("a", "b")) -> str:
+    """Two runs' ``directions.csv`` (or ``directions_held_out.csv``) joined by claim: each
+    claim's paired difference with its interval and verdict in both, then the claims whose
+    verdict differs between the runs (two runs of the same scenes, variants and seed pair their
+    episodes, so the difference is the runs' own: the people's model, say)."""
+
+    def cell(row, suffix: str) -> str:
+        return (
+            f"{row['ours_diff' + suffix]:+.2f} [{row['ours_diff_lo' + suffix]:+.2f}, "
+            f"{row['ours_diff_hi' + suffix]:+.2f}] | {row['verdict' + suffix]}"
+        )
+
+    both = a.merge(b, on=CLAIM_KEY, suffixes=("_a", "_b"), how="outer", indicator=True)
+    lines = [
+        f"| source | scene | metric | proposed - baseline | paper | {labels[0]} | verdict | {labels[1]} | verdict |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for _, row in both.iterrows():
+        left = cell(row, "_a") if row["_merge"] != "right_only" else "- | not run"
+        right = cell(row, "_b") if row["_merge"] != "left_only" else "- | not run"
+        paper = row["paper_diff_a"] if row["_merge"] != "right_only" else row["paper_diff_b"]
+        lines.append(
+            f"| {row['source']} | `{row['scene']}` | {row['metric']} | {row['proposed']} - {row['baseline']} | "
+            f"{paper:+.2f} | {left} | {right} |"
+        )
+    matched = both[both["_merge"] == "both"]
+    changed = matched[matched["verdict_a"] != matched["verdict_b"]]
+    ending = ":" if len(changed) else "."
+    lines.append(f"\n{len(matched)} claims in both runs; the verdict differs in {len(changed)}{ending}")
+    for _, row in changed.iterrows():
+        lines.append(
+            f"- {row['scene']} {row['metric']} ({row['proposed']} - {row['baseline']}): {row['verdict_a']} -> "
+            f"{row['verdict_b']}"
+        )
+    return "\n".join(lines)
+
+
 def verdict_changes(directions: pd.DataFrame, turned: pd.DataFrame) -> str:
     """The papers' differences whose verdict differs on the turned rows, one line each."""
     key = ["source", "scene", "metric", "proposed", "baseline"]
