@@ -25,13 +25,12 @@ import pandas as pd
 from socialnav.evaluation.arena.markdown import (
     directions_table,
     papers_table,
+    run_turned_pairs,
     source_line,
     stats_table,
-    turned_pairs,
     turned_table,
     verdict_changes,
 )
-from socialnav.evaluation.arena.run import TURNED
 
 
 def main() -> None:
@@ -53,13 +52,11 @@ def main() -> None:
         if (run / name).is_file():
             print(f"\n`{name}`:\n")
             print(table(pd.read_csv(run / name)))
-    turned_files = sorted((run / "episodes").glob(f"*{TURNED}.parquet"))
-    if turned_files:
-        own_files = [run / "episodes" / f.name.replace(TURNED, "") for f in turned_files]
-        episodes = pd.concat([pd.read_parquet(f) for f in [*own_files, *turned_files] if f.is_file()])
+    pairs = run_turned_pairs(run)
+    if pairs is not None:
         which = "every scene and method" if args.all_turned else "the cells whose social success moved"
         print(f"\nEvery scene turned a quarter turn (`--turned`), paired by variant; {which}:\n")
-        print(turned_table(turned_pairs(episodes), moved_only=not args.all_turned))
+        print(turned_table(pairs, moved_only=not args.all_turned))
     if (run / "directions_turned.csv").is_file():
         turned = pd.read_csv(run / "directions_turned.csv")
         print("\n`directions_turned.csv`:\n")

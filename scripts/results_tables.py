@@ -39,6 +39,10 @@ import sys
 
 import pandas as pd
 
+from socialnav.common.atomic import write_text_atomic
+from socialnav.common.names import check_name
+from socialnav.evaluation.arena import markdown
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "docs" / "results"
 PAGES = ("README.md", "docs/*.md")
@@ -58,7 +62,7 @@ COPIED = (
     "directions_held_out.csv",
     "directions_turned.csv",
     "papers_stats.csv",
-    "sweep.json",
+    markdown.SWEEP_FILE,
 )
 DIFFERS = "differs from what its run says (python scripts/results_tables.py write)"
 BLOCK = re.compile(r"(<!-- results: (?P<spec>[^>]*?) -->\n)(?P<body>.*?)(<!-- /results -->)", re.S)
@@ -69,11 +73,6 @@ def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, comm
     (replacing an earlier snapshot of that name whole); returns the folder. ``command``: the
     command that made the run, noted in the snapshot's ``run.json`` where the run did not note
     it (a run made before ``socialnav arena`` noted its command)."""
-    from socialnav.common.atomic import write_text_atomic
-    from socialnav.common.names import check_name
-    from socialnav.evaluation.arena.markdown import turned_pairs
-    from socialnav.evaluation.arena.run import TURNED
-
     try:
         check_name(name, "snapshot name")
     except ValueError as e:
@@ -93,17 +92,15 @@ def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, comm
         if (run / file).is_file():
             write_text_atomic(folder / file, (run / file).read_text())
     info = json.loads((run / "run.json").read_text())
-    if (run / "sweep.json").is_file():  # a sweep's run: the command that made the sweep, not its arena call
-        info["command"] = json.loads((run / "sweep.json").read_text()).get("command", info.get("command"))
+    if (run / markdown.SWEEP_FILE).is_file():  # a sweep's run: the command that made the sweep, not its arena call
+        info["command"] = json.loads((run / markdown.SWEEP_FILE).read_text()).get("command", info.get("command"))
     if command is not None and info.get("command") not in (None, command):
         raise SystemExit(f"{run / 'run.json'}: made by '{info['command']}', not '{command}'")
     info.setdefault("command", command)
     write_text_atomic(folder / "run.json", json.dumps(info, indent=1) + "\n")
-    turned = sorted((run / "episodes").glob(f"*{TURNED}.parquet"))
-    if turned:
-        own = [run / "episodes" / f.name.replace(TURNED, "") for f in turned]
-        episodes = pd.concat([pd.read_parquet(f) for f in [*own, *turned] if f.is_file()])
-        turned_pairs(episodes).to_csv(folder / "turned.csv", index=False, float_format="%.6g")
+    pairs = markdown.run_turned_pairs(run)
+    if pairs is not None:
+        pairs.to_csv(folder / "turned.csv", index=False, float_format="%.6g")
     return folder
 
 
@@ -114,59 +111,50 @@ def _read(folder: pathlib.Path, file: str) -> pd.DataFrame:
     return pd.read_csv(path)
 
 
-def _success(folder, rows="own"):
-    from socialnav.evaluation.arena.markdown import success_table
+def _shown(folder: pathlib.Path) -> str:
+    """A snapshot's folder as a page names it: relative to the repository where it lies in it."""
+    return str(folder.relative_to(ROOT) if folder.is_relative_to(ROOT) else folder)
 
-    return success_table(_read(folder, "summary.csv"), rows=rows)
+
+def _success(folder, rows="own"):
+    return markdown.success_table(_read(folder, "summary.csv"), rows=rows)
 
 
 def _seed002(folder):
-    from socialnav.evaluation.arena.markdown import seed002_table1
-
-    return seed002_table1(_read(folder, "summary.csv"))
+    return markdown.seed002_table1(_read(folder, "summary.csv"))
 
 
 def _papers(folder):
-    from socialnav.evaluation.arena.markdown import papers_table
-
-    return papers_table(_read(folder, "papers.csv"))
+    return markdown.papers_table(_read(folder, "papers.csv"))
 
 
 def _directions(folder, source=None):
-    from socialnav.evaluation.arena.markdown import directions_table
-
     directions = _read(folder, "directions.csv")
     if source is not None:
         directions = directions[directions["source"] == source]
         if directions.empty:
             raise ValueError(f"source='{source}': no such source in {folder / 'directions.csv'}")
-    return directions_table(directions)
+    return markdown.directions_table(directions)
 
 
 def _directions_turned(folder):
-    from socialnav.evaluation.arena.markdown import directions_table, verdict_changes
-
     turned = _read(folder, "directions_turned.csv")
-    return directions_table(turned) + "\n\n" + verdict_changes(_read(folder, "directions.csv"), turned)
+    return (
+        markdown.directions_table(turned) + "\n\n" + markdown.verdict_changes(_read(folder, "directions.csv"), turned)
+    )
 
 
 def _stats(folder):
-    from socialnav.evaluation.arena.markdown import stats_table
-
-    return stats_table(_read(folder, "papers_stats.csv"))
+    return markdown.stats_table(_read(folder, "papers_stats.csv"))
 
 
 def _turned(folder, cells="moved"):
-    from socialnav.evaluation.arena.markdown import turned_table
-
     if cells not in ("moved", "all"):
         raise ValueError(f"cells={cells}: moved or all")
-    return turned_table(_read(folder, "turned.csv"), moved_only=cells == "moved")
+    return markdown.turned_table(_read(folder, "turned.csv"), moved_only=cells == "moved")
 
 
 def _claims(folder, other=None, labels=None, rows="own"):
-    from socialnav.evaluation.arena.markdown import claims_table, source_line
-
     if other is None:
         raise ValueError("claims needs other=NAME, the second run's snapshot")
     files = {"own": "directions.csv", "held_out": "directions_held_out.csv"}
@@ -178,32 +166,18 @@ def _claims(folder, other=None, labels=None, rows="own"):
     names = labels.split("|") if labels else [folder.name, other]
     if len(names) != 2:
         raise ValueError(f"labels='{labels}': two names, as 'a|b'")
-    where = second.relative_to(ROOT) if second.is_relative_to(ROOT) else second
     return (
-        source_line(json.loads((second / "run.json").read_text()), str(where)).replace("From", "And from", 1)
+        markdown.source_line(json.loads((second / "run.json").read_text()), _shown(second), lead="And from")
         + "\n\n"
-        + claims_table(_read(folder, files[rows]), _read(second, files[rows]), names)
+        + markdown.claims_table(_read(folder, files[rows]), _read(second, files[rows]), names)
     )
 
 
 def _sweep(folder, metric="social_no_collision"):
-    sweep_script = _sibling("scene_sweep")
-    path = folder / sweep_script.SWEEP_FILE
+    path = folder / markdown.SWEEP_FILE
     if not path.is_file():
         raise ValueError(f"{path}: no such file (a run of scripts/scene_sweep.py)")
-    if f"{metric}_pct" not in _read(folder, "summary.csv").columns:
-        raise ValueError(f"metric={metric}: not a rate the snapshot keeps")
-    return sweep_script.sweep_table(_read(folder, "summary.csv"), json.loads(path.read_text()), metric)
-
-
-def _sibling(name: str):
-    """Another script of this folder, imported by file (scripts/ is not a package)."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location(name, pathlib.Path(__file__).with_name(f"{name}.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return markdown.sweep_table(_read(folder, "summary.csv"), json.loads(path.read_text()), metric)
 
 
 KINDS = {
@@ -222,8 +196,6 @@ KINDS = {
 def render(spec: str, results: pathlib.Path = RESULTS) -> str:
     """The text of the block ``<!-- results: spec -->``: the run's line and its table. Raises
     ValueError naming what is wrong with ``spec`` (an unknown kind or option, a missing run)."""
-    from socialnav.evaluation.arena.markdown import source_line
-
     words = shlex.split(spec)
     if len(words) < 2:
         raise ValueError(f"'{spec}': expected KIND RUN [OPTION=VALUE ...]")
@@ -241,8 +213,7 @@ def render(spec: str, results: pathlib.Path = RESULTS) -> str:
         table = KINDS[kind](folder, **kwargs)
     except TypeError:
         raise ValueError(f"'{spec}': {kind} takes no option {', '.join(kwargs)}") from None
-    where = folder.relative_to(ROOT) if folder.is_relative_to(ROOT) else folder
-    return source_line(json.loads((folder / "run.json").read_text()), str(where)) + "\n\n" + table + "\n\n"
+    return markdown.source_line(json.loads((folder / "run.json").read_text()), _shown(folder)) + "\n\n" + table + "\n\n"
 
 
 def pages(root: pathlib.Path = ROOT) -> list[pathlib.Path]:
@@ -283,8 +254,6 @@ def main(argv=None) -> int:
     if args.action == "snapshot":
         print(f"snapshot: {snapshot(args.run, args.name, command=args.command)}")
         return 0
-    from socialnav.common.atomic import write_text_atomic
-
     problems = []
     for page in pages():
         text, found = stale_blocks(page)

@@ -15,10 +15,10 @@ sub-rule with a share). Each ``VALUE`` is a number or comma-separated numbers (a
 numbers: variant k of every copy draws what variant k of the scene draws, so a copy that
 changes nothing gives the scene's own episodes; a run already there is resumed) and
 ``OUT/arena/sweep.json`` records the field, the values and the command. Then it prints
-:func:`sweep_table` (``--metric``, default ``social_no_collision``: seed 002's social success, a
-collision failing the run) and draws ``OUT/sweep.png`` with the 95 % Wilson intervals. ``python
-scripts/results_tables.py snapshot OUT/arena NAME`` keeps the table for the docs (``<!--
-results: sweep NAME -->``).
+``evaluation.arena.markdown.sweep_table`` (``--metric``, default ``social_no_collision``: seed
+002's social success, a collision failing the run) and draws ``OUT/sweep.png`` with the 95 %
+Wilson intervals. ``python scripts/results_tables.py snapshot OUT/arena NAME`` keeps the table
+for the docs (``<!-- results: sweep NAME -->``).
 """
 
 from __future__ import annotations
@@ -33,8 +33,9 @@ import sys
 
 import pandas as pd
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-SWEEP_FILE = "sweep.json"
+from socialnav.common.atomic import write_text_atomic
+from socialnav.data import SCENES_DIR
+from socialnav.evaluation.arena.markdown import SWEEP_FILE, sweep_copy_name, sweep_table, sweep_value_label
 
 
 def set_field(scene: dict, path: str, value) -> int:
@@ -76,40 +77,13 @@ def sweep_copies(scene_file: pathlib.Path, field: str, values: list, folder: pat
     for k, value in enumerate(values):
         scene = copy.deepcopy(base)
         set_field(scene, field, value)
-        scene["name"] = f"{base['name']}+sweep{k}"
+        scene["name"] = sweep_copy_name(base["name"], k)
         scene["variants_of"] = base.get("variants_of", base["name"])  # the scene's own draws
         scene["source"] = f"{base['name']} with {field} = {json.dumps(value)} (scripts/scene_sweep.py)"
         path = folder / f"{scene['name']}.json"
         path.write_text(json.dumps(scene, indent=1) + "\n")
         files.append(path)
     return files
-
-
-def _label(value) -> str:
-    return "-".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
-
-
-def sweep_table(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_collision") -> str:
-    """Values down, methods across: ``metric`` in % with its 95 % interval per copy of the scene
-    (``sweep``: ``{"scene", "field", "values"}`` as ``sweep.json`` holds them)."""
-    rows = summary.set_index(["scene", "method"])
-    methods = list(dict.fromkeys(summary["method"]))
-    lines = [
-        f"| {sweep['field']} | " + " | ".join(methods) + " |",
-        "|---|" + "---|" * len(methods),
-    ]
-    for k, value in enumerate(sweep["values"]):
-        name = f"{sweep['scene']}+sweep{k}"
-        cells = []
-        for m in methods:
-            if (name, m) not in rows.index:
-                raise ValueError(f"no row for {name}, method {m}")
-            r = rows.loc[(name, m)]
-            cells.append(f"{r[f'{metric}_pct']:.0f} [{r[f'{metric}_lo']:.0f}, {r[f'{metric}_hi']:.0f}]")
-        lines.append(f"| {_label(value)} | " + " | ".join(cells) + " |")
-    n = int(summary["n"].iloc[0])
-    lines.append(f"\n{metric.replace('_', ' ')} %, [95 % Wilson interval], {n} variants a cell.")
-    return "\n".join(lines)
 
 
 def sweep_figure(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_collision"):
@@ -121,11 +95,11 @@ def sweep_figure(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_co
     rows = summary.set_index(["scene", "method"])
     x = list(range(len(sweep["values"])))
     for m in dict.fromkeys(summary["method"]):
-        r = [rows.loc[(f"{sweep['scene']}+sweep{k}", m)] for k in x]
+        r = [rows.loc[(sweep_copy_name(sweep["scene"], k), m)] for k in x]
         y = [row[f"{metric}_pct"] for row in r]
         err = [[v - row[f"{metric}_lo"] for v, row in zip(y, r)], [row[f"{metric}_hi"] - v for v, row in zip(y, r)]]
         ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=m)
-    ax.set_xticks(x, [_label(v) for v in sweep["values"]])
+    ax.set_xticks(x, [sweep_value_label(v) for v in sweep["values"]])
     ax.set_xlabel(sweep["field"])
     ax.set_ylabel(f"{metric.replace('_', ' ')} %")
     ax.set_ylim(-3, 103)
@@ -148,7 +122,7 @@ def main(argv=None) -> int:
         parser.error(f"--variants {args.variants}: at least 1")
     scene_file = pathlib.Path(args.scene)
     if not scene_file.is_file():
-        scene_file = ROOT / "data" / "scenes" / f"{args.scene}.json"
+        scene_file = SCENES_DIR / f"{args.scene}.json"
     if not scene_file.is_file():
         raise SystemExit(f"{args.scene}: no such scene (data/scenes/<name>.json) or file")
     try:
@@ -157,16 +131,19 @@ def main(argv=None) -> int:
     except ValueError as e:
         raise SystemExit(f"{scene_file}: {e}") from None
     arena = args.out / "arena"
-    command = ["socialnav", "arena", "--scenes", ",".join(map(str, files)), "--methods", args.methods]
-    command += ["--variants", str(args.variants), "--out", str(arena)]
-    done = subprocess.run([sys.executable, "-m", "socialnav", *command[1:]], check=False)
+    arena_args = ["arena", "--scenes", ",".join(map(str, files)), "--methods", args.methods]
+    arena_args += ["--variants", str(args.variants), "--out", str(arena)]
+    done = subprocess.run([sys.executable, "-m", "socialnav", *arena_args], check=False)
     if done.returncode != 0:
         return done.returncode
     sweep = {"scene": json.loads(scene_file.read_text())["name"], "field": args.field, "values": values}
     sweep["command"] = "python scripts/scene_sweep.py " + shlex.join(sys.argv[1:] if argv is None else argv)
-    (arena / SWEEP_FILE).write_text(json.dumps(sweep) + "\n")
+    write_text_atomic(arena / SWEEP_FILE, json.dumps(sweep) + "\n")
     summary = pd.read_csv(arena / "summary.csv")
-    print(sweep_table(summary, sweep, args.metric))
+    try:
+        print(sweep_table(summary, sweep, args.metric))
+    except ValueError as e:
+        raise SystemExit(f"{arena / 'summary.csv'}: {e}") from None
     from socialnav.common import figures
 
     print(f"figure: {figures.save(sweep_figure(summary, sweep, args.metric), args.out / 'sweep.png')}")

@@ -1,12 +1,13 @@
 """An arena run's tables in Markdown, as the README and docs/arena-results.md show them.
 
 Every function takes the frames an arena run folder holds (``summary.csv``, ``papers.csv``,
-``directions.csv``, ``directions_turned.csv``, ``papers_stats.csv``) or the paired frame
-:func:`turned_pairs` makes from its episodes, and returns a Markdown table with its count of
-verdicts where it has any. ``scripts/results_tables.py`` writes them into the docs from the
-committed snapshots of the docs' runs (``docs/results/``) and checks that the docs still say what
-those runs say; ``scripts/papers_tables.py`` and ``scripts/seed002_table1.py`` print them for any
-run folder.
+``directions.csv``, ``directions_turned.csv``, ``papers_stats.csv``, a sweep's
+:data:`SWEEP_FILE`) or the paired frame :func:`turned_pairs` makes from its episodes
+(:func:`run_turned_pairs` reads them), and returns a Markdown table with its count of verdicts
+where it has any. ``scripts/results_tables.py`` writes them into the docs from the committed
+snapshots of the docs' runs (``docs/results/``) and checks that the docs still say what those
+runs say; ``scripts/papers_tables.py``, ``scripts/seed002_table1.py``,
+``scripts/claims_two_runs.py`` and ``scripts/scene_sweep.py`` print them for any run folder.
 
 Success is shown with a collision failing the run (``goal_no_collision``,
 ``social_no_collision``) unless a table says otherwise: seed 002 Sec. 5.3.1's reading, the one
@@ -16,6 +17,7 @@ its Table 1 and the arena's verdicts use.
 from __future__ import annotations
 
 import math
+import pathlib
 
 import pandas as pd
 
@@ -37,10 +39,15 @@ SEED002_METHODS = {"navfn": "NavFn (no layer)", "snl_small": "SNL small", "snl_l
 ROWS = {"own": "", "held_out": HELD_OUT, "turned": TURNED}
 
 
-def source_line(info: dict, where: str) -> str:
+# A sweep's run (scripts/scene_sweep.py) notes its field and values in this file beside run.json.
+SWEEP_FILE = "sweep.json"
+
+
+def source_line(info: dict, where: str, lead: str = "From") -> str:
     """One line naming the run a table came from: its folder (``where``), the command, the source
     commit, the GSCL model's digest, the human model, variants and seed (``run.json``'s fields;
-    a field the run did not record is said to be missing, never guessed)."""
+    a field the run did not record is said to be missing, never guessed). ``lead`` opens it
+    ("And from" for a table's second run)."""
     commit = info.get("source_commit")
     if commit:
         commit_text = f"commit {commit[:12]}" + (" with uncommitted changes" if info.get("source_dirty") else "")
@@ -48,7 +55,7 @@ def source_line(info: dict, where: str) -> str:
         commit_text = "commit not recorded"
     command = info.get("command")
     return (
-        f"From `{where}`"
+        f"{lead} `{where}`"
         + (f" (`{command}`)" if command else "")
         + f": {commit_text}, socialnav {info.get('socialnav_version')}, {info.get('metrics_version')}, "
         f"GSCL model {info.get('gscl_model')}"
@@ -210,6 +217,16 @@ def turned_pairs(episodes: pd.DataFrame, metrics=("social_no_collision", "goal_n
     return pd.DataFrame(rows)
 
 
+def run_turned_pairs(run: pathlib.Path) -> pd.DataFrame | None:
+    """:func:`turned_pairs` of the arena run folder ``run`` (its scenes' episodes and their
+    turned rows' episodes), or None where the run has no turned rows."""
+    turned = sorted((run / "episodes").glob(f"*{TURNED}.parquet"))
+    if not turned:
+        return None
+    own = [run / "episodes" / f.name.replace(TURNED, "") for f in turned]
+    return turned_pairs(pd.concat([pd.read_parquet(f) for f in [*own, *turned] if f.is_file()]))
+
+
 def turned_table(pairs: pd.DataFrame, moved_only: bool = False) -> str:
     """:func:`turned_pairs` as ``own -> turned, change [95 % interval]`` per metric (in the
     frame's order of metrics), and a count per method of the scenes whose first metric's interval
@@ -294,4 +311,39 @@ def verdict_changes(directions: pd.DataFrame, turned: pd.DataFrame) -> str:
             f"- {r.source}, `{r.scene}`, {r.metric}, {r.proposed} - {r.baseline}: {r.verdict} ({r.ours_diff:+.2f}) "
             f"-> {r.verdict_turned} ({r.ours_diff_turned:+.2f})"
         )
+    return "\n".join(lines)
+
+
+def sweep_copy_name(scene: str, k: int) -> str:
+    """The name of a sweep's copy ``k`` of ``scene`` (``scripts/scene_sweep.py``)."""
+    return f"{scene}+sweep{k}"
+
+
+def sweep_value_label(value) -> str:
+    """A swept value as a table shows it: ``2`` or a range ``0-0.5``."""
+    return "-".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
+
+
+def sweep_table(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_collision") -> str:
+    """Values down, methods across: ``metric`` in % with its 95 % interval per copy of the scene
+    (``sweep``: ``{"scene", "field", "values"}`` as :data:`SWEEP_FILE` holds them). Raises
+    ValueError naming a copy and method the summary lacks, or a metric it does not hold."""
+    if f"{metric}_pct" not in summary.columns:
+        raise ValueError(f"metric={metric}: not a rate the summary holds")
+    rows = summary.set_index(["scene", "method"])
+    methods = list(dict.fromkeys(summary["method"]))
+    lines = [
+        f"| {sweep['field']} | " + " | ".join(methods) + " |",
+        "|---|" + "---|" * len(methods),
+    ]
+    for k, value in enumerate(sweep["values"]):
+        name = sweep_copy_name(sweep["scene"], k)
+        cells = []
+        for m in methods:
+            if (name, m) not in rows.index:
+                raise ValueError(f"no row for {name}, method {m}")
+            cells.append(_cell(rows.loc[(name, m)], metric))
+        lines.append(f"| {sweep_value_label(value)} | " + " | ".join(cells) + " |")
+    n = int(summary["n"].iloc[0])
+    lines.append(f"\n{metric.replace('_', ' ')} %, [95 % Wilson interval], {n} variants a cell.")
     return "\n".join(lines)
