@@ -11,8 +11,9 @@
     socialnav humans validate --out runs/humans                     # the human models against real pedestrians
 
 Runtime set-up (one XLA host device per core, JAX's persistent compilation cache) happens here,
-before JAX is imported; the subcommands' modules (one a command, beside this file) are imported
-after it.
+before JAX is imported; the module of the command asked for (one a command, beside this file) is
+imported after it, and only that one (``socialnav simulate`` does not import the arena's or the
+causal pipeline's libraries).
 """
 
 from __future__ import annotations
@@ -25,9 +26,29 @@ from socialnav import runtime
 __all__ = ["build_parser", "main"]
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser of every subcommand (imports the subcommands' modules, and so JAX)."""
-    from socialnav.cli import arena, evaluate, gscl, humans, layers, learn, pipelines, policy, referee, simulate
+# Each command and the module beside this file that defines it: a command imports its own module
+# only (one module's imports are JAX and the libraries its job uses; all of them take seconds).
+COMMAND_MODULES = {
+    "run": "pipelines",
+    "ablation": "pipelines",
+    "simulate": "simulate",
+    "learn": "learn",
+    "evaluate": "evaluate",
+    "gscl": "gscl",
+    "layers": "layers",
+    "arena": "arena",
+    "policy": "policy",
+    "referee": "referee",
+    "humans": "humans",
+}
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand, or of ``command`` alone (importing only its module; an
+    unknown name gets every subcommand, so that argparse names the choices). Importing a
+    subcommand's module imports JAX."""
+    import importlib
+
     from socialnav.common import __version__
 
     parser = argparse.ArgumentParser(
@@ -36,17 +57,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"socialnav-jax {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    pipelines.add_parsers(sub)
-    simulate.add_parser(sub)
-    learn.add_parser(sub)
-    evaluate.add_parser(sub)
-    gscl.add_parser(sub)
-    layers.add_parser(sub)
-    arena.add_parser(sub)
-    policy.add_parser(sub)
-    referee.add_parser(sub)
-    humans.add_parser(sub)
+    names = [COMMAND_MODULES[command]] if command in COMMAND_MODULES else list(dict.fromkeys(COMMAND_MODULES.values()))
+    for name in names:
+        module = importlib.import_module(f"socialnav.cli.{name}")
+        (module.add_parsers if name == "pipelines" else module.add_parser)(sub)
     return parser
+
+
+def _command(argv: list[str]) -> str | None:
+    """The subcommand ``argv`` asks for: its first word that is not an option (the top-level
+    parser's options, ``--version`` and ``--help``, take no value)."""
+    return next((a for a in argv if not a.startswith("-")), None)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -54,8 +75,9 @@ def main(argv: list[str] | None = None) -> int:
     runtime.request_wide_vectors()
     runtime.request_compilation_cache()
     runtime.quiet_third_party_logs()
-    args = build_parser().parse_args(argv)
-    args.argv = list(sys.argv[1:] if argv is None else argv)  # a run folder records the command that made it
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(_command(argv)).parse_args(argv)
+    args.argv = argv  # a run folder records the command that made it
     return args.handler(args)
 
 
