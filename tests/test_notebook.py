@@ -38,7 +38,7 @@ def test_evaluation_notebook_executes(learned_run, tmp_path, monkeypatch):
 def test_benchmark_notebook_executes(tmp_path, monkeypatch):
     monkeypatch.setenv("SOCIALNAV_VARIANTS", "2")
     monkeypatch.setenv("SOCIALNAV_SCENES", "casn_static_person,snape_walking")
-    monkeypatch.setenv("SOCIALNAV_METHODS", "navfn,casn,snape_social_eband")
+    monkeypatch.setenv("SOCIALNAV_METHODS", "navfn,casn")
     monkeypatch.setenv("SOCIALNAV_OUT", str(tmp_path / "out"))
     nb = nbformat.read(NOTEBOOKS / "benchmark.ipynb", as_version=4)
     NotebookClient(

@@ -186,7 +186,7 @@ def test_a_bad_recording_gives_one_error_naming_file_and_field(tmp_path, mutate,
     assert e.value.field == field and str(path) in str(e.value)
 
 
-@pytest.mark.slow  # two arena runs of two methods, compiled twice: 35 s
+@pytest.mark.slow  # two arena runs of one method, compiled twice
 def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     import pandas as pd
 
@@ -196,7 +196,7 @@ def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
         pytest.skip("no /proc/self/maps here: the arena never drops its programs")
     spec = load_scene(HOTEL_REACTIVE)
     config = arena.ArenaConfig.of("orca")
-    before, _ = arena_run.run_scene(spec, ["navfn", "orca"], 3, config=config)
+    before, _ = arena_run.run_scene(spec, ["orca"], 3, config=config)
     held = arena.memory_maps()[0]
     assert arena.release_programs_if_crowded(share=0.0)
     assert arena.memory_maps()[0] < held  # the programs' code is unmapped
@@ -205,5 +205,5 @@ def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     assert key == arena.program_key(arena.setup_scene(load_scene(HOTEL), config))  # both playbacks: one program
     assert arena.release_programs_if_crowded(share=0.0, key=key)
     assert not arena.release_programs_if_crowded(share=0.0, key=key)  # the same scene's programs are kept
-    after, _ = arena_run.run_scene(spec, ["navfn", "orca"], 3, config=config)
+    after, _ = arena_run.run_scene(spec, ["orca"], 3, config=config)
     pd.testing.assert_frame_equal(before, after)
