@@ -47,33 +47,49 @@ from socialnav.jaxsim.world import build_world  # noqa: E402
 MAP_SHARE_BEFORE_RELEASE = 0.4
 
 
-# Seconds this process spent making programs (tracing, lowering, XLA's compile or reading a
-# compiled one back from the cache), summed from JAX's own monitoring events.
-_COMPILE_EVENTS = (
-    "/jax/core/compile/jaxpr_trace_duration",
-    "/jax/core/compile/jaxpr_to_mlir_module_duration",
-    "/jax/core/compile/backend_compile_duration",
-)
-_compile_s = [0.0]
+# Seconds this process spent making programs, summed from JAX's own monitoring events: tracing and
+# lowering (paid again in every process, the compilation cache does not keep them) apart from
+# XLA's compile or reading a compiled program back from the cache; and how many programs the
+# compilation cache gave back.
+_TRACE_EVENTS = ("/jax/core/compile/jaxpr_trace_duration", "/jax/core/compile/jaxpr_to_mlir_module_duration")
+_XLA_EVENT = "/jax/core/compile/backend_compile_duration"
+_HIT_EVENT = "/jax/compilation_cache/cache_hits"
+_totals = {"trace_s": 0.0, "xla_s": 0.0, "xla_programs": 0, "cache_hits": 0}
 
 
 def _count_compile_seconds(event: str, seconds: float, **_) -> None:
-    if event in _COMPILE_EVENTS:
-        _compile_s[0] += seconds
+    if event in _TRACE_EVENTS:
+        _totals["trace_s"] += seconds
+    elif event == _XLA_EVENT:
+        _totals["xla_s"] += seconds
+        _totals["xla_programs"] += 1
+
+
+def _count_cache_hits(event: str, **_) -> None:
+    if event == _HIT_EVENT:
+        _totals["cache_hits"] += 1
 
 
 import jax.monitoring  # noqa: E402  (after the cache settings above)
 
 jax.monitoring.register_event_duration_secs_listener(_count_compile_seconds)
+jax.monitoring.register_event_listener(_count_cache_hits)
 
 
 @pytest.fixture(autouse=True)
 def _record_compile_seconds(record_property):
-    """Each test's seconds spent making programs, as the JUnit property ``compile_s`` (CI sums it
-    per file beside the test time: what a faster test would have to cut)."""
-    start = _compile_s[0]
+    """Each test's seconds spent making programs, as JUnit properties (CI sums them per file beside
+    the test time: what a faster test would have to cut): ``compile_s`` in all, of which
+    ``trace_s`` tracing and lowering and ``xla_s`` XLA's compiling or reading from the cache;
+    ``xla_programs`` programs given to XLA, ``cache_hits`` of them read back from the cache."""
+    start = dict(_totals)
     yield
-    record_property("compile_s", round(_compile_s[0] - start, 3))
+    done = {k: _totals[k] - start[k] for k in _totals}
+    record_property("compile_s", round(done["trace_s"] + done["xla_s"], 3))
+    for key in ("trace_s", "xla_s"):
+        record_property(key, round(done[key], 3))
+    for key in ("xla_programs", "cache_hits"):
+        record_property(key, done[key])
 
 
 @pytest.fixture(autouse=True, scope="module")
