@@ -33,6 +33,37 @@ class DistanceField:
     normal_y: np.ndarray
 
 
+def _to_box(offset, half, xp):
+    """Signed distance from points to a box and the unit normal away from it, given the points'
+    offset from the box's centre and the box's half size (any shapes that broadcast, last axis x, y).
+
+    Returns:
+      ((...,) distance to the box surface, negative inside; (..., 2) unit vector from that surface
+      towards the point: outside along the offset from the box, inside along the axis of the
+      closest face).
+    """
+    q = xp.abs(offset) - half
+    outside = xp.linalg.norm(xp.maximum(q, 0.0), axis=-1)
+    inside = xp.minimum(xp.max(q, axis=-1), 0.0)
+    sd = outside + inside
+    sign = xp.where(offset >= 0, 1.0, -1.0)
+    out_dir = sign * xp.maximum(q, 0.0) / xp.maximum(outside, 1e-9)[..., None]
+    face_x = q[..., 0] >= q[..., 1]
+    in_dir = xp.where(
+        face_x[..., None],
+        xp.stack([sign[..., 0], 0.0 * sign[..., 0]], -1),
+        xp.stack([0.0 * sign[..., 1], sign[..., 1]], -1),
+    )
+    normal = xp.where((outside > 0)[..., None], out_dir, in_dir)
+    return sd, normal
+
+
+def _centres_and_halves(boxes_m, xp):
+    centre = xp.stack([(boxes_m[:, 0] + boxes_m[:, 1]) / 2, (boxes_m[:, 2] + boxes_m[:, 3]) / 2], axis=-1)
+    half = xp.stack([(boxes_m[:, 1] - boxes_m[:, 0]) / 2, (boxes_m[:, 3] - boxes_m[:, 2]) / 2], axis=-1)
+    return centre, half
+
+
 def box_distance(xy, boxes_m, xp=np):
     """Exact signed distance from points to the union of axis-aligned boxes, and the unit
     normal pointing away from the nearest one. One formula for the host (``xp=numpy``, float64:
@@ -48,22 +79,8 @@ def box_distance(xy, boxes_m, xp=np):
       that surface towards the point: outside along the offset from the box, inside along the
       axis of the closest face).
     """
-    centre = xp.stack([(boxes_m[:, 0] + boxes_m[:, 1]) / 2, (boxes_m[:, 2] + boxes_m[:, 3]) / 2], axis=-1)
-    half = xp.stack([(boxes_m[:, 1] - boxes_m[:, 0]) / 2, (boxes_m[:, 3] - boxes_m[:, 2]) / 2], axis=-1)
-    offset = xy[..., None, :] - centre  # (..., B, 2)
-    q = xp.abs(offset) - half
-    outside = xp.linalg.norm(xp.maximum(q, 0.0), axis=-1)
-    inside = xp.minimum(xp.max(q, axis=-1), 0.0)
-    sd = outside + inside
-    sign = xp.where(offset >= 0, 1.0, -1.0)
-    out_dir = sign * xp.maximum(q, 0.0) / xp.maximum(outside, 1e-9)[..., None]
-    face_x = q[..., 0] >= q[..., 1]
-    in_dir = xp.where(
-        face_x[..., None],
-        xp.stack([sign[..., 0], 0.0 * sign[..., 0]], -1),
-        xp.stack([0.0 * sign[..., 1], sign[..., 1]], -1),
-    )
-    normal = xp.where((outside > 0)[..., None], out_dir, in_dir)
+    centre, half = _centres_and_halves(boxes_m, xp)
+    sd, normal = _to_box(xy[..., None, :] - centre, half, xp)  # (..., B), (..., B, 2)
     k = xp.argmin(sd, axis=-1)
     nearest = xp.min(sd, axis=-1)  # = sd at k, without a gather
     n = xp.take_along_axis(normal, k[..., None, None], axis=-2)[..., 0, :]
@@ -85,21 +102,52 @@ def box_signed_distance(px: np.ndarray, py: np.ndarray, boxes_m: np.ndarray):
     return sd, normal[..., 0], normal[..., 1]
 
 
+def _to_box_host(ox, oy, half_x, half_y):
+    """:func:`_to_box` on the host with x and y apart: the same float64 operations in the same
+    order (the same bits, tested), without numpy's slow reductions over a last axis of two.
+
+    Args:
+      ox, oy: (...,) the points' offset from the box's centre.
+      half_x, half_y: the box's half size.
+
+    Returns:
+      (sd, nx, ny), each (...,).
+    """
+    qx, qy = np.abs(ox) - half_x, np.abs(oy) - half_y
+    mx, my = np.maximum(qx, 0.0), np.maximum(qy, 0.0)
+    outside = np.sqrt(mx * mx + my * my)
+    sd = outside + np.minimum(np.maximum(qx, qy), 0.0)
+    sx, sy = np.where(ox >= 0, 1.0, -1.0), np.where(oy >= 0, 1.0, -1.0)
+    den = np.maximum(outside, 1e-9)
+    face_x = qx >= qy
+    out = outside > 0
+    nx = np.where(out, sx * mx / den, np.where(face_x, sx, 0.0 * sx))
+    ny = np.where(out, sy * my / den, np.where(face_x, 0.0 * sy, sy))
+    return sd, nx, ny
+
+
 def build_distance_field(
     boxes_m: np.ndarray, bounds_m: tuple[float, float, float, float], resolution_m: float = 0.05
 ) -> DistanceField:
-    """Precompute the signed distance field over ``bounds_m = (xmin, xmax, ymin, ymax)``."""
+    """Precompute the signed distance field over ``bounds_m = (xmin, xmax, ymin, ymax)``: what
+    :func:`box_distance` gives at each cell centre, the same bits (tested), one box at a time (a
+    running minimum; a tie keeps the earlier box, as ``argmin`` does) rather than every box at
+    once: four times faster here (the warehouse's 38 boxes on 712 x 644 cells: 0.6 s against
+    2.7 s), paid by every process that builds the warehouse."""
+    boxes_m = np.asarray(boxes_m, np.float64)
+    if not len(boxes_m):
+        raise ValueError("a distance field needs at least one box")
     xmin, xmax, ymin, ymax = bounds_m
     xs = np.arange(xmin, xmax + resolution_m / 2, resolution_m)
     ys = np.arange(ymin, ymax + resolution_m / 2, resolution_m)
-    sd = np.empty((len(ys), len(xs)))
-    nx, ny = np.empty_like(sd), np.empty_like(sd)
-    for row in range(0, len(ys), 64):  # bounded memory: 64 rows x W cells x B boxes at a time
-        gx, gy = np.meshgrid(xs, ys[row : row + 64])
-        sd[row : row + 64], nx[row : row + 64], ny[row : row + 64] = box_signed_distance(gx, gy, boxes_m)
-    return DistanceField(
-        np.array([xmin, ymin]), resolution_m, sd.astype(np.float32), nx.astype(np.float32), ny.astype(np.float32)
-    )
+    gx, gy = np.meshgrid(xs, ys)  # (H, W)
+    sd = np.full(gx.shape, np.inf)
+    nx, ny = np.zeros(gx.shape), np.zeros(gx.shape)
+    for centre, half in zip(*_centres_and_halves(boxes_m, np)):
+        box_sd, box_nx, box_ny = _to_box_host(gx - centre[0], gy - centre[1], half[0], half[1])
+        closer = box_sd < sd
+        sd, nx, ny = np.where(closer, box_sd, sd), np.where(closer, box_nx, nx), np.where(closer, box_ny, ny)
+    return DistanceField(np.array([xmin, ymin]), resolution_m, *(a.astype(np.float32) for a in (sd, nx, ny)))
 
 
 def segment_hits_boxes(p0, p1, boxes_m, xp=np):

@@ -48,6 +48,31 @@ def test_wall_field_and_obstacle_force(warehouse):
     np.testing.assert_allclose(near / far, np.exp(0.7 / p.worker_obstacle_sigma_m), rtol=1e-5)
 
 
+def test_the_distance_field_is_box_distance_at_every_cell_centre_bit_for_bit(warehouse):
+    """The field is built one box at a time with x and y apart; it must hold what the one formula
+    (:func:`geometry.box_distance`, every box at once) gives: on the warehouse, and on touching
+    and overlapping boxes where two boxes tie (the earlier one's normal is kept, as argmin does)
+    and cells lie inside two boxes at once."""
+    from socialnav.jaxsim.world import world_bounds
+
+    ties = np.array([[0.0, 1.0, 0.0, 1.0], [1.0, 2.0, 0.0, 1.0], [0.5, 1.5, 0.5, 2.0], [-1.0, 3.0, -0.5, -0.25]])
+    for boxes, bounds, resolution in (
+        (warehouse.boxes_m, world_bounds(warehouse), 0.05),
+        (ties, (-1.5, 3.5, -1.0, 2.5), 0.125),  # cell centres on the boxes' edges
+    ):
+        field = geometry.build_distance_field(boxes, bounds, resolution)
+        xs = np.arange(bounds[0], bounds[1] + resolution / 2, resolution)  # the cell centres
+        ys = np.arange(bounds[2], bounds[3] + resolution / 2, resolution)
+        assert field.sdf_m.shape == (len(ys), len(xs))
+        rows = slice(None, None, 7)  # every 7th row: the whole warehouse at once needs 1 GB here
+        sd, nx, ny = geometry.box_signed_distance(*np.meshgrid(xs, ys[rows]), boxes)
+        for built, direct in ((field.sdf_m, sd), (field.normal_x, nx), (field.normal_y, ny)):
+            np.testing.assert_array_equal(built[rows], direct.astype(np.float32))
+    assert (field.sdf_m < 0).any() and (field.sdf_m == 0).any()  # insides and edges were compared
+    with pytest.raises(ValueError, match="at least one box"):
+        geometry.build_distance_field(np.zeros((0, 4)), (0, 1, 0, 1))
+
+
 def test_segment_hits_boxes():
     boxes = np.array([[0.0, 1.0, 0.0, 1.0]])
     p0 = np.array([[-1.0, 0.5], [-1.0, 2.0], [0.5, -1.0], [2.0, 2.0]])
