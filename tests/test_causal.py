@@ -304,3 +304,43 @@ def test_a_learn_too_large_for_the_memory_is_refused_before_any_work():
     with pytest.raises(extract.LogError, match=r"2,771,930 samples need about 2.3 GB.*--worlds"):
         check_memory(2_771_930, 2 * 10**9)
     assert 2_771_930 * ENGINE_BYTES_PER_SAMPLE > 2.2e9  # the figure measured for one warehouse world
+
+
+def test_mle_from_the_distinct_rows_is_pyagrums_learner_on_every_row_bit_for_bit():
+    """``engine.learn_mle`` gives pyAgrum's learner each distinct discretised row once, weighted
+    by its count: the tables must be those of the learner reading every row (pyAgrum's own way,
+    through a CSV file), values beyond the bins' ends and on their edges included, and a missing
+    value or an unknown label refused by pyAgrum as before."""
+    import pyagrum as gum
+
+    rng = np.random.default_rng(0)
+    n = 4000
+    speed, obstacle = rng.gamma(2.0, 0.3, n), rng.integers(0, 2, n)
+    level = -0.01 * speed - 0.02 * obstacle + rng.normal(0, 0.005, n)
+    bins_v, bins_l = binning.Binning.fit(speed[: n // 2]), binning.Binning.fit(level[: n // 2])
+    speed[:3] = [bins_v.edges[0] - 1.0, bins_v.edges[-1] + 1.0, bins_v.edges[1]]  # beyond both ends, on an edge
+    bn = gum.BayesNet("known")
+    bn.add(engine_lib.discretized_variable("V", bins_v))
+    bn.add(engine_lib.discretized_variable("L", bins_l))
+    bn.add(gum.LabelizedVariable("O", "O", ["0", "1"]))
+    bn.addArc("V", "L")
+    bn.addArc("O", "L")
+    data = pd.DataFrame({"V": speed, "L": level, "O": obstacle.astype(str)})
+
+    def every_row(frame):
+        learner = gum.BNLearner(frame, bn)
+        learner.useSmoothingPrior(engine_lib.SMOOTHING)
+        return learner.learnParameters(bn.dag())
+
+    distinct, counts = engine_lib._distinct_rows(bn, data)
+    assert len(distinct) < n and counts.sum() == n
+    expected, got = every_row(data), engine_lib.learn_mle(bn, data)
+    for name in ("V", "L", "O"):
+        np.testing.assert_array_equal(np.asarray(got.cpt(name).tolist()), np.asarray(expected.cpt(name).tolist()))
+    for column, bad in (("V", np.nan), ("O", "2")):
+        frame = data.copy()
+        frame.loc[5, column] = bad
+        with pytest.raises(gum.GumException) as raised:
+            every_row(frame)
+        with pytest.raises(type(raised.value)):
+            engine_lib.learn_mle(bn, frame)
