@@ -23,7 +23,7 @@ import sys
 
 from socialnav import runtime
 
-__all__ = ["build_parser", "main"]
+__all__ = ["COMMAND_MODULES", "build_parser", "main"]
 
 
 # Each command and the module beside this file that defines it: a command imports its own module
