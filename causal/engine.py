@@ -93,7 +93,7 @@ def _distinct_rows(bn, data: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
             x = data[col].to_numpy(np.float64)
             ticks = np.asarray(var.ticks(), np.float64)
             index = np.clip(np.searchsorted(ticks, x, side="right") - 1, 0, len(ticks) - 2)
-            keys[col] = np.where(np.isnan(x), -1, index)
+            keys[col] = np.where(np.isnan(x), -1, index)  # -1: the label list's last entry, None (missing)
             labels[col] = np.array([var.label(i) for i in range(var.domainSize())] + [None], dtype=object)
         else:
             keys[col] = data[col].to_numpy()

@@ -33,31 +33,6 @@ class DistanceField:
     normal_y: np.ndarray
 
 
-def _to_box(offset, half, xp):
-    """Signed distance from points to a box and the unit normal away from it, given the points'
-    offset from the box's centre and the box's half size (any shapes that broadcast, last axis x, y).
-
-    Returns:
-      ((...,) distance to the box surface, negative inside; (..., 2) unit vector from that surface
-      towards the point: outside along the offset from the box, inside along the axis of the
-      closest face).
-    """
-    q = xp.abs(offset) - half
-    outside = xp.linalg.norm(xp.maximum(q, 0.0), axis=-1)
-    inside = xp.minimum(xp.max(q, axis=-1), 0.0)
-    sd = outside + inside
-    sign = xp.where(offset >= 0, 1.0, -1.0)
-    out_dir = sign * xp.maximum(q, 0.0) / xp.maximum(outside, 1e-9)[..., None]
-    face_x = q[..., 0] >= q[..., 1]
-    in_dir = xp.where(
-        face_x[..., None],
-        xp.stack([sign[..., 0], 0.0 * sign[..., 0]], -1),
-        xp.stack([0.0 * sign[..., 1], sign[..., 1]], -1),
-    )
-    normal = xp.where((outside > 0)[..., None], out_dir, in_dir)
-    return sd, normal
-
-
 def _centres_and_halves(boxes_m, xp):
     centre = xp.stack([(boxes_m[:, 0] + boxes_m[:, 1]) / 2, (boxes_m[:, 2] + boxes_m[:, 3]) / 2], axis=-1)
     half = xp.stack([(boxes_m[:, 1] - boxes_m[:, 0]) / 2, (boxes_m[:, 3] - boxes_m[:, 2]) / 2], axis=-1)
@@ -80,7 +55,20 @@ def box_distance(xy, boxes_m, xp=np):
       axis of the closest face).
     """
     centre, half = _centres_and_halves(boxes_m, xp)
-    sd, normal = _to_box(xy[..., None, :] - centre, half, xp)  # (..., B), (..., B, 2)
+    offset = xy[..., None, :] - centre  # (..., B, 2)
+    q = xp.abs(offset) - half
+    outside = xp.linalg.norm(xp.maximum(q, 0.0), axis=-1)
+    inside = xp.minimum(xp.max(q, axis=-1), 0.0)
+    sd = outside + inside
+    sign = xp.where(offset >= 0, 1.0, -1.0)
+    out_dir = sign * xp.maximum(q, 0.0) / xp.maximum(outside, 1e-9)[..., None]
+    face_x = q[..., 0] >= q[..., 1]
+    in_dir = xp.where(
+        face_x[..., None],
+        xp.stack([sign[..., 0], 0.0 * sign[..., 0]], -1),
+        xp.stack([0.0 * sign[..., 1], sign[..., 1]], -1),
+    )
+    normal = xp.where((outside > 0)[..., None], out_dir, in_dir)
     k = xp.argmin(sd, axis=-1)
     nearest = xp.min(sd, axis=-1)  # = sd at k, without a gather
     n = xp.take_along_axis(normal, k[..., None, None], axis=-2)[..., 0, :]
@@ -103,8 +91,9 @@ def box_signed_distance(px: np.ndarray, py: np.ndarray, boxes_m: np.ndarray):
 
 
 def _to_box_host(ox, oy, half_x, half_y):
-    """:func:`_to_box` on the host with x and y apart: the same float64 operations in the same
-    order (the same bits, tested), without numpy's slow reductions over a last axis of two.
+    """:func:`box_distance`'s terms for one box on the host with x and y apart: the same float64
+    operations in the same order (the same bits, tested), without numpy's slow reductions over a
+    last axis of two.
 
     Args:
       ox, oy: (...,) the points' offset from the box's centre.

@@ -60,7 +60,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     names = [COMMAND_MODULES[command]] if command in COMMAND_MODULES else list(dict.fromkeys(COMMAND_MODULES.values()))
     for name in names:
         module = importlib.import_module(f"socialnav.cli.{name}")
-        (module.add_parsers if name == "pipelines" else module.add_parser)(sub)
+        module.add_parser(sub)
     return parser
 
 

@@ -31,7 +31,8 @@ from socialnav.planners.warehouse.routes import shortest_path_plan
 from socialnav.planners.warehouse.tables import TABLES_FILE
 
 
-def add_parsers(sub) -> None:
+def add_parser(sub) -> None:
+    """The parsers of ``run`` and ``ablation``."""
     run = sub.add_parser(
         "run",
         help="the whole pipeline: simulate a day, learn the engine, evaluate the planners, a small arena run",
