@@ -9,7 +9,7 @@ scenes, variants and seed draw the same variants (common random numbers), so the
 pair is the methods' (or the models', or the people's) alone. Success rates are in percentage
 points. Pools: every scene, and for recorded crowds each playback (``replayed``, ``reactive``)
 on the evaluated and the held-out windows apart. Intervals: Student t of the paired differences
-(``evaluation.arena.report.mean_interval``).
+(``evaluation.arena.markdown.paired_difference``).
 """
 
 from __future__ import annotations
@@ -19,8 +19,7 @@ import pathlib
 
 import pandas as pd
 
-from socialnav.evaluation.arena.papers import RATES
-from socialnav.evaluation.arena.report import mean_interval
+from socialnav.evaluation.arena.markdown import paired_difference
 
 
 def episodes(side: str) -> pd.DataFrame:
@@ -53,24 +52,11 @@ def paired(a: pd.DataFrame, b: pd.DataFrame, metrics, by_scene: bool = False) ->
     pools = [("every scene", both), *both.groupby("pool", sort=True)]
     if by_scene:
         pools += [(f"`{scene}`", g) for scene, g in both.groupby("scene", sort=True)]
-    rows = []
-    for pool, g in pools:
-        for metric in metrics:
-            scale = 100.0 if metric in RATES else 1.0
-            x, y = scale * g[f"{metric}_a"].astype(float), scale * g[f"{metric}_b"].astype(float)
-            lo, hi = mean_interval(x - y)
-            rows.append(
-                {
-                    "pool": pool,
-                    "metric": metric,
-                    "n": len(g),
-                    "a": x.mean(),
-                    "b": y.mean(),
-                    "a - b": (x - y).mean(),
-                    "lo": lo,
-                    "hi": hi,
-                }  # fmt: skip
-            )
+    rows = [
+        {"pool": pool, "metric": metric, **paired_difference(g[f"{metric}_a"], g[f"{metric}_b"], metric)}
+        for pool, g in pools
+        for metric in metrics
+    ]
     return pd.DataFrame(rows)
 
 

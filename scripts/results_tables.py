@@ -1,6 +1,7 @@
 """The results tables of the README and the docs, made from the runs they came from.
 
     python scripts/results_tables.py snapshot runs/arena arena   # keep a run's tables: docs/results/arena/
+    python scripts/results_tables.py snapshot runs/angles angles --pairs casn:snl_matched   # and two methods paired
     python scripts/results_tables.py write                       # every generated table made again
     python scripts/results_tables.py check                       # exit 1 naming each table that differs
 
@@ -13,7 +14,9 @@ where RUN names a snapshot under ``docs/results/`` and KIND one of :data:`KINDS`
 ``success`` takes ``rows=own|held_out|turned``; ``directions`` ``source=...``, one paper's table
 (quoted: ``source="seed 002 Table 1"``); ``turned`` ``cells=all`` for every cell, not only those
 the turn moved (``cells=moved``); ``sweep`` ``metric=...``; ``claims`` sets the papers' claims of
-two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``). ``write`` fills
+two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``); ``pairs`` (a
+snapshot made with ``--pairs A:B``: two methods paired by variant in each scene) takes
+``metrics=a,b,...``. ``write`` fills
 each such block with a line naming the run (its command, source commit, GSCL model, human
 model, variants and seed: ``run.json``) and the table
 (:mod:`socialnav.evaluation.arena.markdown`); ``check`` does the same in memory and names each
@@ -24,7 +27,8 @@ A **snapshot** is the part of an arena run folder the tables read, small enough 
 ``run.json``, the summary's rates and a few means (:data:`SUMMARY_COLUMNS`), the files of
 :data:`COPIED` the run has (the papers' comparisons; ``sweep.json`` for a run of
 ``scripts/scene_sweep.py``) and, for a run with turned rows, ``turned.csv``
-(:func:`~socialnav.evaluation.arena.markdown.turned_pairs` of its episodes). Run folders
+(:func:`~socialnav.evaluation.arena.markdown.turned_pairs` of its episodes), and with ``--pairs``
+``pairs.csv``. Run folders
 themselves (episodes, trajectories, pictures) stay out of git.
 """
 
@@ -64,15 +68,25 @@ COPIED = (
     "papers_stats.csv",
     markdown.SWEEP_FILE,
 )
+# What a snapshot's paired differences hold (``--pairs``): the rates and the means of the summary.
+PAIRED_METRICS = (*RATES, *MEANS)
 DIFFERS = "differs from what its run says (python scripts/results_tables.py write)"
 BLOCK = re.compile(r"(<!-- results: (?P<spec>[^>]*?) -->\n)(?P<body>.*?)(<!-- /results -->)", re.S)
 
 
-def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, command: str | None = None) -> pathlib.Path:
+def snapshot(
+    run: pathlib.Path,
+    name: str,
+    results: pathlib.Path = RESULTS,
+    command: str | None = None,
+    pairs: tuple[str, ...] = (),
+) -> pathlib.Path:
     """Copy what the tables read from the arena run folder ``run`` into ``results/name``
     (replacing an earlier snapshot of that name whole); returns the folder. ``command``: the
     command that made the run, noted in the snapshot's ``run.json`` where the run did not note
-    it (a run made before ``socialnav arena`` noted its command)."""
+    it (a run made before ``socialnav arena`` noted its command). ``pairs``: ``"A:B"`` for each
+    two methods whose paired differences per scene are kept (``pairs.csv``, every metric of
+    :data:`PAIRED_METRICS` the episodes hold; :func:`~socialnav.evaluation.arena.markdown.method_pairs`)."""
     try:
         check_name(name, "snapshot name")
     except ValueError as e:
@@ -82,7 +96,12 @@ def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, comm
             raise SystemExit(f"{run / needed}: no such file (an arena run folder, socialnav arena --out)")
     folder = results / name
     folder.mkdir(parents=True, exist_ok=True)
-    for stale in (*COPIED, "summary.csv", "turned.csv"):  # an earlier snapshot's files; nothing else
+    for stale in (
+        *COPIED,
+        "summary.csv",
+        "turned.csv",
+        markdown.PAIRS_FILE,
+    ):  # an earlier snapshot's files; nothing else
         (folder / stale).unlink(missing_ok=True)
     summary = pd.read_csv(run / "summary.csv")
     summary[[c for c in SUMMARY_COLUMNS if c in summary.columns]].to_csv(
@@ -98,10 +117,30 @@ def snapshot(run: pathlib.Path, name: str, results: pathlib.Path = RESULTS, comm
         raise SystemExit(f"{run / 'run.json'}: made by '{info['command']}', not '{command}'")
     info.setdefault("command", command)
     write_text_atomic(folder / "run.json", json.dumps(info, indent=1) + "\n")
-    pairs = markdown.run_turned_pairs(run)
-    if pairs is not None:
-        pairs.to_csv(folder / "turned.csv", index=False, float_format="%.6g")
+    turned = markdown.run_turned_pairs(run)
+    if turned is not None:
+        turned.to_csv(folder / "turned.csv", index=False, float_format="%.6g")
+    if pairs:
+        _method_pairs(run, pairs).to_csv(folder / markdown.PAIRS_FILE, index=False, float_format="%.6g")
     return folder
+
+
+def _method_pairs(run: pathlib.Path, pairs: tuple[str, ...]) -> pd.DataFrame:
+    files = sorted((run / "episodes").glob("*.parquet"))
+    if not files:
+        raise SystemExit(f"{run / 'episodes'}: no episodes (an arena run folder, socialnav arena --out)")
+    episodes = pd.concat([pd.read_parquet(f) for f in files], ignore_index=True)
+    metrics = [m for m in PAIRED_METRICS if m in episodes.columns]
+    frames = []
+    for pair in pairs:
+        a, sep, b = pair.partition(":")
+        if not (sep and a and b):
+            raise SystemExit(f"--pairs {pair}: two methods as A:B")
+        try:
+            frames.append(markdown.method_pairs(episodes, a, b, metrics))
+        except ValueError as e:
+            raise SystemExit(f"{run / 'episodes'}: {e}") from None
+    return pd.concat(frames, ignore_index=True)
 
 
 def _read(folder: pathlib.Path, file: str) -> pd.DataFrame:
@@ -180,6 +219,10 @@ def _sweep(folder, metric="social_no_collision"):
     return markdown.sweep_table(_read(folder, "summary.csv"), json.loads(path.read_text()), metric)
 
 
+def _pairs(folder, metrics=None):
+    return markdown.pairs_table(_read(folder, markdown.PAIRS_FILE), metrics.split(",") if metrics else None)
+
+
 KINDS = {
     "success": _success,
     "seed002_table1": _seed002,
@@ -190,6 +233,7 @@ KINDS = {
     "turned": _turned,
     "sweep": _sweep,
     "claims": _claims,
+    "pairs": _pairs,
 }
 
 
@@ -248,11 +292,14 @@ def main(argv=None) -> int:
     snap.add_argument("run", type=pathlib.Path, help="an arena run folder (socialnav arena --out)")
     snap.add_argument("name", help="the snapshot's name, as the pages' blocks give it")
     snap.add_argument("--command", help="the command that made the run, where its run.json does not say")
+    snap.add_argument(
+        "--pairs", action="append", default=[], metavar="A:B", help="keep method A against B per scene (repeatable)"
+    )
     sub.add_parser("write", help="make every generated table in README.md and docs/*.md again")
     sub.add_parser("check", help="exit 1 naming each generated table that differs from its run")
     args = parser.parse_args(argv)
     if args.action == "snapshot":
-        print(f"snapshot: {snapshot(args.run, args.name, command=args.command)}")
+        print(f"snapshot: {snapshot(args.run, args.name, command=args.command, pairs=tuple(args.pairs))}")
         return 0
     problems = []
     for page in pages():

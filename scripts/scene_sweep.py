@@ -8,7 +8,16 @@ A paper that leaves a number open (seed 002 gives no timing for the crowded entr
 is reported over a range of it, not at one chosen value. ``FIELD`` is a dotted path into the
 scene file (``data/scenes/<scene>.json``); where it meets a list it applies to every element
 that has the next key (``people.start_s``: every person's start; ``rule.rules.min_share``: every
-sub-rule with a share). Each ``VALUE`` is a number or comma-separated numbers (a range,
+sub-rule with a share); an integer key picks one element of a list (``walls.4.2``), and several
+fields joined by ``+`` are set alike. With ``--shift`` each value is added to the fields' own
+numbers, which moves a wall: the L-hallway's dead end, 0.9 m past the goal in the scene file,
+moved 0-4 m further (the end wall, the side walls' and the map's top edge together)::
+
+    python scripts/scene_sweep.py gscl_l_hallway \\
+        bounds_m.3+walls.1.3+walls.2.3+walls.3.3+walls.4.2+walls.4.3 0 1 2 4 --shift \\
+        --label "dead end moved up (m)" --out runs/hallway-dead-end
+
+Each ``VALUE`` is a number or comma-separated numbers (a range,
 ``0,0.5`` -> ``[0, 0.5]``). The copies are written to ``OUT/scenes/`` (named
 ``<scene>+sweep<k>``, each drawing the scene's own variants: the scene file's ``variants_of``),
 ``socialnav arena`` runs them into ``OUT/arena`` with the same variants and seed (common random
@@ -38,20 +47,42 @@ from socialnav.data import SCENES_DIR
 from socialnav.evaluation.arena.markdown import SWEEP_FILE, sweep_copy_name, sweep_table, sweep_value_label
 
 
-def set_field(scene: dict, path: str, value) -> int:
+def set_field(scene: dict, path: str, value, shift: bool = False) -> int:
     """Set ``path`` (dotted) in ``scene`` to ``value`` in place, through lists (each element that
-    has the next key); returns how many places were set. Raises ValueError naming the path where
-    nothing was set."""
+    has the next key; an integer key picks one element: ``walls.4.2``); with ``shift``, add
+    ``value`` to the number (or to each number of the list) there instead. ``path`` may name
+    several fields joined by ``+``, each set alike. Returns how many places were set. Raises
+    ValueError naming the path where nothing was set, or a shift of something not numbers."""
+    if "+" in path:
+        return sum(set_field(scene, part, value, shift) for part in path.split("+"))
+
+    def moved(old):
+        if not shift:
+            return copy.deepcopy(value)
+        if isinstance(old, (int, float)) and not isinstance(old, bool):
+            return old + value
+        if isinstance(old, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in old):
+            return [v + value for v in old]
+        raise ValueError(f"{path}: {json.dumps(old)} is not a number or a list of numbers to shift")
 
     def walk(node, keys) -> int:
+        key = keys[0]
+        if isinstance(node, list) and key.lstrip("-").isdigit():
+            index = int(key)
+            if not -len(node) <= index < len(node):
+                return 0
+            if len(keys) == 1:
+                node[index] = moved(node[index])
+                return 1
+            return walk(node[index], keys[1:])
         if isinstance(node, list):
-            return sum(walk(item, keys) for item in node if isinstance(item, dict) and keys[0] in item)
-        if not isinstance(node, dict) or keys[0] not in node:
+            return sum(walk(item, keys) for item in node if isinstance(item, dict) and key in item)
+        if not isinstance(node, dict) or key not in node:
             return 0
         if len(keys) == 1:
-            node[keys[0]] = copy.deepcopy(value)
+            node[key] = moved(node[key])
             return 1
-        return walk(node[keys[0]], keys[1:])
+        return walk(node[key], keys[1:])
 
     n = walk(scene, path.split("."))
     if n == 0:
@@ -68,18 +99,21 @@ def parse_value(text: str):
     return numbers[0] if len(numbers) == 1 else numbers
 
 
-def sweep_copies(scene_file: pathlib.Path, field: str, values: list, folder: pathlib.Path) -> list[pathlib.Path]:
+def sweep_copies(
+    scene_file: pathlib.Path, field: str, values: list, folder: pathlib.Path, shift: bool = False
+) -> list[pathlib.Path]:
     """One scene file per value in ``folder``, named ``<scene>+sweep<k>``, its ``source`` saying
-    what was changed."""
+    what was changed (``shift``: each value added to the field's own, :func:`set_field`)."""
     base = json.loads(scene_file.read_text())
     folder.mkdir(parents=True, exist_ok=True)
     files = []
     for k, value in enumerate(values):
         scene = copy.deepcopy(base)
-        set_field(scene, field, value)
+        set_field(scene, field, value, shift)
         scene["name"] = sweep_copy_name(base["name"], k)
         scene["variants_of"] = base.get("variants_of", base["name"])  # the scene's own draws
-        scene["source"] = f"{base['name']} with {field} = {json.dumps(value)} (scripts/scene_sweep.py)"
+        change = f"{field} {'moved by' if shift else '='} {json.dumps(value)}"
+        scene["source"] = f"{base['name']} with {change} (scripts/scene_sweep.py)"
         path = folder / f"{scene['name']}.json"
         path.write_text(json.dumps(scene, indent=1) + "\n")
         files.append(path)
@@ -100,7 +134,7 @@ def sweep_figure(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_co
         err = [[v - row[f"{metric}_lo"] for v, row in zip(y, r)], [row[f"{metric}_hi"] - v for v, row in zip(y, r)]]
         ax.errorbar(x, y, yerr=err, marker="o", capsize=3, label=m)
     ax.set_xticks(x, [sweep_value_label(v) for v in sweep["values"]])
-    ax.set_xlabel(sweep["field"])
+    ax.set_xlabel(sweep.get("label") or sweep["field"])
     ax.set_ylabel(f"{metric.replace('_', ' ')} %")
     ax.set_ylim(-3, 103)
     ax.set_title(sweep["scene"], fontsize=10)
@@ -111,11 +145,13 @@ def sweep_figure(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_co
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("scene", help="a scene name (data/scenes/<scene>.json) or a scene file")
-    parser.add_argument("field", help="a dotted path into the scene file, e.g. people.start_s")
+    parser.add_argument("field", help="a dotted path into the scene file, e.g. people.start_s (several joined by +)")
     parser.add_argument("values", nargs="+", help="each a number or comma-separated numbers (a range)")
     parser.add_argument("--methods", default="navfn,snl_small,snl_large,gscl", help="socialnav arena's --methods")
     parser.add_argument("--variants", type=int, default=100, help="variants per copy (default 100)")
     parser.add_argument("--metric", default="social_no_collision", help="the rate shown (default social_no_collision)")
+    parser.add_argument("--shift", action="store_true", help="add each value to the field's own (move it)")
+    parser.add_argument("--label", help="the swept value's name in the table and figure (default: FIELD)")
     parser.add_argument("--out", type=pathlib.Path, required=True, help="the sweep's folder")
     args = parser.parse_args(argv)
     if args.variants < 1:
@@ -127,7 +163,9 @@ def main(argv=None) -> int:
         raise SystemExit(f"{args.scene}: no such scene (data/scenes/<name>.json) or file")
     try:
         values = [parse_value(v) for v in args.values]
-        files = sweep_copies(scene_file, args.field, values, args.out / "scenes")
+        if args.shift and any(isinstance(v, list) for v in values):
+            raise ValueError("--shift: each value one number (an offset)")
+        files = sweep_copies(scene_file, args.field, values, args.out / "scenes", args.shift)
     except ValueError as e:
         raise SystemExit(f"{scene_file}: {e}") from None
     arena = args.out / "arena"
@@ -137,6 +175,7 @@ def main(argv=None) -> int:
     if done.returncode != 0:
         return done.returncode
     sweep = {"scene": json.loads(scene_file.read_text())["name"], "field": args.field, "values": values}
+    sweep |= {"shift": args.shift, "label": args.label or args.field}
     sweep["command"] = "python scripts/scene_sweep.py " + shlex.join(sys.argv[1:] if argv is None else argv)
     write_text_atomic(arena / SWEEP_FILE, json.dumps(sweep) + "\n")
     summary = pd.read_csv(arena / "summary.csv")

@@ -100,6 +100,39 @@ def test_a_snapshot_keeps_what_the_tables_read_and_names_the_command(tmp_path):
         tables.snapshot(run, "mine", tmp_path / "results")
 
 
+def _episodes(scene, method, d_min, intruded):
+    return pd.DataFrame(
+        {"scene": scene, "method": method, "variant": range(len(d_min)), "d_min_m": d_min, "intruded": intruded}
+    )
+
+
+def test_two_methods_paired_by_variant_are_kept_by_the_snapshot_and_shown_per_scene(tmp_path):
+    """Hand-made episodes: in scene ``x`` method a passes 0.5 m further than b in every variant
+    and intrudes in one of four where b intrudes in all; the snapshot's pairs and the table say
+    so, pairing by variant (b's rows shuffled), with a zero-width interval where every pair
+    differs alike. A method the run lacks and a pair not written A:B are named."""
+    run = tmp_path / "run"
+    (run / "episodes").mkdir(parents=True)
+    (run / "run.json").write_text(json.dumps({"command": "socialnav arena --scenes x"}))
+    pd.DataFrame([_summary_row("x", "a", 100.0, 50.0)]).to_csv(run / "summary.csv", index=False)
+    b = _episodes("x", "b", [0.2, 0.4, 0.1, 0.3], [1, 1, 1, 1]).iloc[[2, 0, 3, 1]]
+    episodes = pd.concat([_episodes("x", "a", [0.7, 0.9, 0.6, 0.8], [0, 1, 0, 0]), b])
+    episodes.to_parquet(run / "episodes" / "x.parquet")
+    folder = tables.snapshot(run, "mine", tmp_path / "results", pairs=("a:b",))
+    pairs = pd.read_csv(folder / markdown.PAIRS_FILE)
+    assert set(pairs["metric"]) == {"d_min_m", "intruded"}
+    d = pairs.set_index("metric").loc["d_min_m"]
+    assert d["a - b"] == pytest.approx(0.5) and d["lo"] == pytest.approx(0.5) and d["hi"] == pytest.approx(0.5)
+    said = tables.render("pairs mine metrics=d_min_m,intruded", tmp_path / "results")
+    assert "| `x` | a - b | +0.50 [+0.50, +0.50] (0.75, 0.25) | -75 [" in said and "] (25, 100) |" in said
+    with pytest.raises(ValueError, match="metrics=collisions: not in the pairs"):
+        tables.render("pairs mine metrics=collisions", tmp_path / "results")
+    with pytest.raises(SystemExit, match="no method 'c' in the episodes"):
+        tables.snapshot(run, "mine", tmp_path / "results", pairs=("a:c",))
+    with pytest.raises(SystemExit, match="--pairs ab: two methods as A:B"):
+        tables.snapshot(run, "mine", tmp_path / "results", pairs=("ab",))
+
+
 @pytest.mark.parametrize(
     ("spec", "message"),
     [
@@ -115,6 +148,7 @@ def test_a_snapshot_keeps_what_the_tables_read_and_names_the_command(tmp_path):
         ("claims mine other=mine labels=one", "two names"),
         ("claims mine other=mine rows=turned", "rows='turned': own or held_out"),
         ("claims mine other=mine", "directions.csv: no such file"),
+        ("pairs mine", "pairs.csv: no such file"),
     ],
 )
 def test_a_block_that_cannot_be_made_is_named_in_one_line(tmp_path, spec, message):

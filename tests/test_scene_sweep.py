@@ -61,6 +61,33 @@ def test_a_field_is_set_through_lists_and_a_missing_one_is_named():
         sweep.parse_value("a,b")
 
 
+def test_a_wall_is_moved_by_index_and_shift_and_the_moved_copy_draws_the_same_variants(tmp_path):
+    """``walls.4.2`` picks one number of one wall; ``+`` sets several fields alike; ``--shift``
+    adds to what is there. The L-hallway's dead end moved 2 m up: the end wall, the side walls'
+    and the map's top edges move together, nothing else changes, and the copy's variants are the
+    scene's own (the draws do not read the walls)."""
+    hallway = SCENES_DIR / "gscl_l_hallway.json"
+    scene = json.loads(hallway.read_text())
+    top = "bounds_m.3+walls.1.3+walls.2.3+walls.3.3+walls.4.2+walls.4.3"
+    assert sweep.set_field(scene, top, 2.0, shift=True) == 6
+    before = json.loads(hallway.read_text())
+    assert scene["walls"][4] == [-7, 3, 8.9, 9] and scene["bounds_m"] == [-7, 3, -2, 9]
+    assert [w[3] for w in scene["walls"][1:4]] == [9, 9, 9] and scene["walls"][0] == before["walls"][0]
+    assert {k: v for k, v in scene.items() if k not in ("walls", "bounds_m")} == {
+        k: v for k, v in before.items() if k not in ("walls", "bounds_m")
+    }
+    assert sweep.set_field(scene, "robot.goal", 0.5, shift=True) == 1 and scene["robot"]["goal"] == [1.5, 6.5]
+    assert sweep.set_field(scene, "walls.-1", [0, 1, 2, 3]) == 1 and scene["walls"][-1] == [0, 1, 2, 3]
+    with pytest.raises(ValueError, match="walls.9.3: no such field"):
+        sweep.set_field(scene, "walls.9.3", 1.0)
+    with pytest.raises(ValueError, match='rule.type: "all" is not a number'):
+        sweep.set_field(scene, "rule.type", 1.0, shift=True)
+    (moved,) = sweep.sweep_copies(hallway, top, [2.0], tmp_path, shift=True)
+    assert "moved by 2.0" in json.loads(moved.read_text())["source"]
+    copy = load_scene(moved)
+    assert _same(sample_variants(load_scene(hallway), 0, 8), sample_variants(copy, 0, 8))
+
+
 def test_the_sweep_table_puts_each_values_rate_in_its_row():
     rows = []
     for k, pct in enumerate((79.0, 28.0)):
@@ -76,6 +103,8 @@ def test_the_sweep_table_puts_each_values_rate_in_its_row():
                 }
             )
     said = sweep.sweep_table(pd.DataFrame(rows), {"scene": "s", "field": "people.start_s", "values": [[0, 0.5], 4]})
+    named = {"scene": "s", "field": "a.b+c.d", "values": [0, 1], "label": "moved (m)"}
+    assert sweep.sweep_table(pd.DataFrame(rows), named).splitlines()[0] == "| moved (m) | navfn | gscl |"
     assert said.splitlines()[:4] == [
         "| people.start_s | navfn | gscl |",
         "|---|---|---|",

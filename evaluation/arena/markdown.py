@@ -21,7 +21,7 @@ import pathlib
 
 import pandas as pd
 
-from socialnav.evaluation.arena.papers import PAPER_ROWS
+from socialnav.evaluation.arena.papers import PAPER_ROWS, RATES
 from socialnav.evaluation.arena.report import mean_interval
 from socialnav.evaluation.arena.run import HELD_OUT, TURNED
 
@@ -41,6 +41,8 @@ ROWS = {"own": "", "held_out": HELD_OUT, "turned": TURNED}
 
 # A sweep's run (scripts/scene_sweep.py) notes its field and values in this file beside run.json.
 SWEEP_FILE = "sweep.json"
+# A snapshot's paired differences of two methods per scene (:func:`method_pairs`).
+PAIRS_FILE = "pairs.csv"
 
 
 def source_line(info: dict, where: str, lead: str = "From") -> str:
@@ -260,6 +262,74 @@ def turned_table(pairs: pd.DataFrame, moved_only: bool = False) -> str:
     return "\n".join(lines)
 
 
+def paired_difference(a: pd.Series, b: pd.Series, metric: str) -> dict:
+    """Two methods' values of ``metric`` over the same episodes (aligned by position): their
+    means, the mean difference ``a - b`` and its 95 % interval (Student t of the per-episode
+    differences); a rate in % and points (:data:`~socialnav.evaluation.arena.papers.RATES`)."""
+    scale = 100.0 if metric in RATES else 1.0
+    x, y = scale * a.astype(float).to_numpy(), scale * b.astype(float).to_numpy()
+    lo, hi = mean_interval(pd.Series(x - y))
+    return {"n": len(x), "a": x.mean(), "b": y.mean(), "a - b": (x - y).mean(), "lo": lo, "hi": hi}
+
+
+def method_pairs(episodes: pd.DataFrame, a: str, b: str, metrics) -> pd.DataFrame:
+    """Method ``a`` against method ``b`` in each scene of ``episodes``, paired by variant: one
+    row per scene and metric (:func:`paired_difference`) with the methods named. Raises
+    ValueError naming a method the episodes lack."""
+    for method in (a, b):
+        if method not in set(episodes["method"]):
+            raise ValueError(
+                f"no method {method!r} in the episodes (they have {', '.join(sorted(set(episodes['method'])))})"
+            )
+    first, second = (episodes[episodes["method"] == m] for m in (a, b))
+    both = first.merge(second, on=["scene", "variant"], suffixes=("_a", "_b"))
+    rows = []
+    for scene, g in both.groupby("scene", sort=True):
+        for m in metrics:
+            rows.append(
+                {
+                    "scene": scene,
+                    "method_a": a,
+                    "method_b": b,
+                    "metric": m,
+                    **paired_difference(g[f"{m}_a"], g[f"{m}_b"], m),
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def pairs_table(pairs: pd.DataFrame, metrics=None) -> str:
+    """:func:`method_pairs` rows as one line per scene and pair of methods: for each metric (all
+    the frame holds, or ``metrics`` in that order) ``a - b [95 %] (a, b)``, rates in % and
+    points. Raises ValueError naming a metric the frame lacks."""
+    held = list(dict.fromkeys(pairs["metric"]))
+    metrics = held if metrics is None else list(metrics)
+    missing = [m for m in metrics if m not in held]
+    if missing:
+        raise ValueError(f"metrics={','.join(missing)}: not in the pairs (they hold {', '.join(held)})")
+
+    def heading(m):
+        if m in RATES:
+            return f"{m.replace('_', ' ')} %"
+        return f"{m.removesuffix('_m').replace('_', ' ')}, m" if m.endswith("_m") else m.replace("_", " ")
+
+    lines = [
+        "| scene | a - b | " + " | ".join(f"{heading(m)}: a - b [95 %] (a, b)" for m in metrics) + " |",
+        "|---|---|" + "---|" * len(metrics),
+    ]
+    for (scene, a, b), g in pairs.groupby(["scene", "method_a", "method_b"], sort=False):
+        by_metric = g.set_index("metric")
+        cells = []
+        for m in metrics:
+            r = by_metric.loc[m]
+            f = ".0f" if m in RATES else ".2f"
+            cells.append(f"{r['a - b']:+{f}} [{r['lo']:+{f}}, {r['hi']:+{f}}] ({r['a']:{f}}, {r['b']:{f}})")
+        lines.append(f"| `{scene}` | {a} - {b} | " + " | ".join(cells) + " |")
+    n = pairs["n"].unique()
+    lines.append(f"\nPaired by variant ({', '.join(str(int(k)) for k in n)} pairs a scene); Student t intervals.")
+    return "\n".join(lines)
+
+
 CLAIM_KEY = ["source", "scene", "metric", "proposed", "baseline"]
 
 
@@ -326,14 +396,15 @@ def sweep_value_label(value) -> str:
 
 def sweep_table(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_collision") -> str:
     """Values down, methods across: ``metric`` in % with its 95 % interval per copy of the scene
-    (``sweep``: ``{"scene", "field", "values"}`` as :data:`SWEEP_FILE` holds them). Raises
+    (``sweep``: ``{"scene", "field", "values"}`` and optionally ``"label"``, the swept value's
+    name, as :data:`SWEEP_FILE` holds them). Raises
     ValueError naming a copy and method the summary lacks, or a metric it does not hold."""
     if f"{metric}_pct" not in summary.columns:
         raise ValueError(f"metric={metric}: not a rate the summary holds")
     rows = summary.set_index(["scene", "method"])
     methods = list(dict.fromkeys(summary["method"]))
     lines = [
-        f"| {sweep['field']} | " + " | ".join(methods) + " |",
+        f"| {sweep.get('label') or sweep['field']} | " + " | ".join(methods) + " |",
         "|---|" + "---|" * len(methods),
     ]
     for k, value in enumerate(sweep["values"]):
