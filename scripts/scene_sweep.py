@@ -9,7 +9,14 @@ is reported over a range of it, not at one chosen value. ``FIELD`` is a dotted p
 scene file (``data/scenes/<scene>.json``); where it meets a list it applies to every element
 that has the next key (``people.start_s``: every person's start; ``rule.rules.min_share``: every
 sub-rule with a share); an integer key picks one element of a list (``walls.4.2``), and several
-fields joined by ``+`` are set alike. With ``--shift`` each value is added to the fields' own
+fields joined by ``+`` are set alike; ``--also FIELD VALUE...`` sets another field with the swept
+one, a value per copy (seed 001's crossing walker at the paper's three speeds, each starting so
+that at its band's mean speed it meets the robot's line when the scene's own walker does)::
+
+    python scripts/scene_sweep.py casn_crossing people.speed_mps 0.3,0.5 0.55,0.75 0.85,1.15 \\
+        --also people.start_s 1.5,3 4.1,5.6 5.55,7.05 --methods navfn,snl_matched,casn --out runs/crossing-speed
+
+With ``--shift`` each value is added to the fields' own
 numbers, which moves a wall: the L-hallway's dead end, 0.9 m past the goal in the scene file,
 moved 0-4 m further (the end wall, the side walls' and the map's top edge together)::
 
@@ -100,19 +107,33 @@ def parse_value(text: str):
 
 
 def sweep_copies(
-    scene_file: pathlib.Path, field: str, values: list, folder: pathlib.Path, shift: bool = False
+    scene_file: pathlib.Path,
+    field: str,
+    values: list,
+    folder: pathlib.Path,
+    shift: bool = False,
+    also: tuple[tuple[str, list], ...] = (),
 ) -> list[pathlib.Path]:
     """One scene file per value in ``folder``, named ``<scene>+sweep<k>``, its ``source`` saying
-    what was changed (``shift``: each value added to the field's own, :func:`set_field`)."""
+    what was changed (``shift``: each value added to the field's own, :func:`set_field`).
+    ``also``: ``(field, values)`` pairs set with the swept field, copy ``k`` taking value ``k``
+    of each (a walker's start moved with its speed, say); ValueError where their counts differ."""
+    for other, other_values in also:
+        if len(other_values) != len(values):
+            raise ValueError(f"--also {other}: {len(other_values)} values for {len(values)} swept values")
     base = json.loads(scene_file.read_text())
     folder.mkdir(parents=True, exist_ok=True)
     files = []
     for k, value in enumerate(values):
         scene = copy.deepcopy(base)
         set_field(scene, field, value, shift)
+        changes = [f"{field} {'moved by' if shift else '='} {json.dumps(value)}"]
+        for other, other_values in also:
+            set_field(scene, other, other_values[k], shift)
+            changes.append(f"{other} {'moved by' if shift else '='} {json.dumps(other_values[k])}")
         scene["name"] = sweep_copy_name(base["name"], k)
         scene["variants_of"] = base.get("variants_of", base["name"])  # the scene's own draws
-        change = f"{field} {'moved by' if shift else '='} {json.dumps(value)}"
+        change = ", ".join(changes)
         scene["source"] = f"{base['name']} with {change} (scripts/scene_sweep.py)"
         path = folder / f"{scene['name']}.json"
         path.write_text(json.dumps(scene, indent=1) + "\n")
@@ -151,6 +172,14 @@ def main(argv=None) -> int:
     parser.add_argument("--variants", type=int, default=100, help="variants per copy (default 100)")
     parser.add_argument("--metric", default="social_no_collision", help="the rate shown (default social_no_collision)")
     parser.add_argument("--shift", action="store_true", help="add each value to the field's own (move it)")
+    parser.add_argument(
+        "--also",
+        nargs="+",
+        action="append",
+        default=[],
+        metavar="FIELD VALUE",
+        help="another field set with the swept one: FIELD and one value per swept value (repeatable)",
+    )
     parser.add_argument("--label", help="the swept value's name in the table and figure (default: FIELD)")
     parser.add_argument("--out", type=pathlib.Path, required=True, help="the sweep's folder")
     args = parser.parse_args(argv)
@@ -163,9 +192,11 @@ def main(argv=None) -> int:
         raise SystemExit(f"{args.scene}: no such scene (data/scenes/<name>.json) or file")
     try:
         values = [parse_value(v) for v in args.values]
-        if args.shift and any(isinstance(v, list) for v in values):
+        also = tuple((words[0], [parse_value(v) for v in words[1:]]) for words in args.also)
+        every = [*values, *(v for _, vs in also for v in vs)]
+        if args.shift and any(isinstance(v, list) for v in every):
             raise ValueError("--shift: each value one number (an offset)")
-        files = sweep_copies(scene_file, args.field, values, args.out / "scenes", args.shift)
+        files = sweep_copies(scene_file, args.field, values, args.out / "scenes", args.shift, also)
     except ValueError as e:
         raise SystemExit(f"{scene_file}: {e}") from None
     arena = args.out / "arena"
@@ -175,7 +206,7 @@ def main(argv=None) -> int:
     if done.returncode != 0:
         return done.returncode
     sweep = {"scene": json.loads(scene_file.read_text())["name"], "field": args.field, "values": values}
-    sweep |= {"shift": args.shift, "label": args.label or args.field}
+    sweep |= {"shift": args.shift, "label": args.label or args.field, "also": [list(a) for a in also]}
     sweep["command"] = "python scripts/scene_sweep.py " + shlex.join(sys.argv[1:] if argv is None else argv)
     write_text_atomic(arena / SWEEP_FILE, json.dumps(sweep) + "\n")
     summary = pd.read_csv(arena / "summary.csv")

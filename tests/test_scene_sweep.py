@@ -88,6 +88,30 @@ def test_a_wall_is_moved_by_index_and_shift_and_the_moved_copy_draws_the_same_va
     assert _same(sample_variants(load_scene(hallway), 0, 8), sample_variants(copy, 0, 8))
 
 
+def test_a_second_field_set_with_the_swept_one_takes_its_own_value_per_copy(tmp_path):
+    """``--also``: the crossing walker's speed swept with its start, copy k taking value k of
+    each; the speeds drawn are the scene's draws moved into each band; counts that differ are
+    refused naming the field."""
+    crossing = SCENES_DIR / "casn_crossing.json"
+    slow, fast = sweep.sweep_copies(
+        crossing,
+        "people.speed_mps",
+        [[0.3, 0.5], [0.85, 1.15]],
+        tmp_path,
+        also=(("people.start_s", [[1.5, 3.0], [5.55, 7.05]]),),
+    )
+    fast_scene = json.loads(fast.read_text())
+    assert fast_scene["people"][0]["speed_mps"] == [0.85, 1.15] and fast_scene["people"][0]["start_s"] == [5.55, 7.05]
+    assert "people.start_s = [5.55, 7.05]" in fast_scene["source"]
+    own, a, b = (sample_variants(load_scene(f), 0, 16) for f in (crossing, slow, fast))
+    assert _same(own, a)
+    u = (np.asarray(own.speed_mps)[:, 0] - 0.3) / 0.2  # the scene's uniform draws, mapped into the fast band
+    assert np.allclose(np.asarray(b.speed_mps)[:, 0], 0.85 + 0.3 * u, atol=1e-5)
+    assert np.all((np.asarray(b.start_s)[:, 0] >= 5.55) & (np.asarray(b.start_s)[:, 0] <= 7.05))
+    with pytest.raises(ValueError, match="--also people.start_s: 1 values for 2 swept values"):
+        sweep.sweep_copies(crossing, "people.speed_mps", [0.4, 1.0], tmp_path, also=(("people.start_s", [2.0]),))
+
+
 def test_the_sweep_table_puts_each_values_rate_in_its_row():
     rows = []
     for k, pct in enumerate((79.0, 28.0)):
