@@ -25,7 +25,8 @@ moved 0-4 m further (the end wall, the side walls' and the map's top edge togeth
         --label "dead end moved up (m)" --out runs/hallway-dead-end
 
 Each ``VALUE`` is a number or comma-separated numbers (a range,
-``0,0.5`` -> ``[0, 0.5]``). The copies are written to ``OUT/scenes/`` (named
+``0,0.5`` -> ``[0, 0.5]``; in brackets where the first is negative, ``[-5,5,-7.25,-7.1]``, so that
+argparse does not take it for an option). The copies are written to ``OUT/scenes/`` (named
 ``<scene>+sweep<k>``, each drawing the scene's own variants: the scene file's ``variants_of``),
 ``socialnav arena`` runs them into ``OUT/arena`` with the same variants and seed (common random
 numbers: variant k of every copy draws what variant k of the scene draws, so a copy that
@@ -98,12 +99,15 @@ def set_field(scene: dict, path: str, value, shift: bool = False) -> int:
 
 
 def parse_value(text: str):
-    """``"2"`` -> 2.0, ``"0,0.5"`` -> [0.0, 0.5]; ValueError naming the text otherwise."""
+    """``"2"`` -> 2.0, ``"0,0.5"`` -> [0.0, 0.5], ``"[-5,5]"`` -> [-5.0, 5.0] (brackets make a
+    list of numbers starting with a minus sign a value to argparse, not an option); ValueError
+    naming the text otherwise."""
+    bracketed = text.startswith("[") and text.endswith("]")
     try:
-        numbers = [float(part) for part in text.split(",")]
+        numbers = [float(part) for part in (text[1:-1] if bracketed else text).split(",")]
     except ValueError:
         raise ValueError(f"{text!r}: a number or comma-separated numbers") from None
-    return numbers[0] if len(numbers) == 1 else numbers
+    return numbers[0] if len(numbers) == 1 and not bracketed else numbers
 
 
 def sweep_copies(

@@ -57,6 +57,7 @@ def test_a_field_is_set_through_lists_and_a_missing_one_is_named():
     with pytest.raises(ValueError, match="rule.rules.nothing: no such field in scene 'gscl_l_hallway'"):
         sweep.set_field(scene, "rule.rules.nothing", 1.0)
     assert sweep.parse_value("0,0.5") == [0.0, 0.5] and sweep.parse_value("2") == 2.0
+    assert sweep.parse_value("[-5,5,-7.25]") == [-5.0, 5.0, -7.25] and sweep.parse_value("[2]") == [2.0]
     with pytest.raises(ValueError, match="'a,b': a number"):
         sweep.parse_value("a,b")
 
