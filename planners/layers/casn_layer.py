@@ -26,6 +26,11 @@ speed-to-``p`` mapping open. This project's choices, all parameters of :class:`C
     so the shorter way round passes behind them. (The paper shifts "along ``-v_y``", the side
     opposite the person's lateral offset: the same direction while the person approaches the
     robot's line, and still behind them once they have crossed it.)
+  - the head-on test comes first, so a walker crossing the robot's path counts as head-on while
+    its velocity points within ``head_on_half_angle_rad`` of the robot: far up its path, or near
+    the crossing point when the robot is too. The paper gives no angle for either test; at the
+    crossing, how fast walkers are treated depends on this one (the results page's seed 001
+    speed classes sweep it).
   - other moving people (walking away, alongside) keep their discs at their position.
   - **freeze**: once ``|h_hat - r| < 2 m`` the collision point is frozen until the robot has passed
     the person (the person is behind the robot). The frozen points are state carried between
