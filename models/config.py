@@ -14,6 +14,7 @@ import optax
 from flax import nnx
 
 from socialnav.models import dataset, unet
+from socialnav.models.families import CLOSED_L
 
 # Settings added after runs were saved, with the value those runs used.
 ADDED_LATER = {
@@ -31,6 +32,7 @@ ADDED_LATER = {
     "init_from": "",
     "forbidden_features": [],
     "freeze_graded": False,
+    "closed_l_hallways": 0,
 }
 OBJECTIVES = ("maps", "paths")
 # What the "paths" objective demonstrates on each map: "paths", ``paths_per_map`` exact plans to
@@ -84,6 +86,10 @@ class TrainConfig:
         by ``scripts/gscl_group_zone.py``); twice the groups raised the zone beside a hallway and
         beside a queue by 2-3 points on a fresh draw for 30 % more training time (README, "The
         held-out rule suite").
+      closed_l_hallways: samples of ``hallway_l_closed`` (an L whose second leg ends in a wall
+        0.3-3 m past the goal, :mod:`models.families`) per 24,200 of the paper's, scaled like the
+        others; 0 by default (the paper's hallways and the shipped model's). The arena's L-hallway
+        ends 0.9 m past its goal, a geometry the open L's never show.
       cost_weight: the training loss weighs each pixel's squared error by ``1 + cost_weight *
         target`` (0: the plain MSE of the paper), so the cells a rule makes costly count more than
         the free space that fills most of a map; test errors are always the plain MSE. 10 by
@@ -156,6 +162,7 @@ class TrainConfig:
     fresh_samples: bool = True
     composites: int = 10000
     group_scale: int = 2
+    closed_l_hallways: int = 0
     cost_weight: float = 10.0
     pair_weight: float = 20.0
     forbidden_weight: float = 1.0
@@ -217,6 +224,8 @@ class TrainConfig:
             raise ValueError(f"composites must be >= 0, got {self.composites}")
         if self.group_scale < 1:
             raise ValueError(f"group_scale must be >= 1, got {self.group_scale}")
+        if self.closed_l_hallways < 0:
+            raise ValueError(f"closed_l_hallways must be >= 0, got {self.closed_l_hallways}")
         for name in ("epochs", "batch_size", "checkpoint_every_steps", "keep_checkpoints"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -264,9 +273,10 @@ class TrainConfig:
     @property
     def counts(self) -> dict[str, int]:
         """Samples per family of the whole (train + test) set: the paper's (groups and non-groups
-        times :attr:`group_scale`), plus the composites."""
+        times :attr:`group_scale`), plus the composites and the closed L-hallways."""
         groups = {f: dataset.PAPER_COUNTS[f] * self.group_scale for f in ("group", "non_group")}
-        return {**dataset.PAPER_COUNTS, **groups, **({"composite": self.composites} if self.composites else {})}
+        extra = {"composite": self.composites, CLOSED_L: self.closed_l_hallways}
+        return {**dataset.PAPER_COUNTS, **groups, **{name: n for name, n in extra.items() if n}}
 
     @property
     def train_counts(self) -> dict[str, int]:

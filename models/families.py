@@ -35,6 +35,10 @@ Families (paper's Fig. 1 (a)-(h), the hallway split in its three configurations)
   with proxemics only.
 * ``composite`` (:attr:`models.config.TrainConfig.composites`; not in the paper): two of the above
   in one scene, the target their max (:func:`sample_composite`).
+* ``hallway_l_closed`` (:attr:`models.config.TrainConfig.closed_l_hallways`, 0 by default; not in
+  the paper): ``hallway_l``'s L with its second leg closed by a wall 0.3-3 m past the goal. The
+  open L's walls run 24 m, so a network trained without these has never seen a hallway end near
+  its goal, as the arena's L-hallway does.
 
 The first version's ranges were the paper's where it gives them; they were widened towards,
 but not as far as, the held-out rule suite's (:mod:`models.rules`), which keeps scenes beyond.
@@ -182,13 +186,17 @@ MAX_WALKERS = 4
 
 
 def _sample_hallway(key, kind: str):
-    """A hallway through the robot (``straight``, ``l_shaped``, ``people``); travel towards the goal.
+    """A hallway through the robot (``straight``, ``l_shaped``, ``l_closed``, ``people``); travel
+    towards the goal.
 
     Local frame: travel along +x through the origin (the robot). Straight: walls at y = +-h.
     L-shaped: the corridor turns left (or right, mirrored) at x = a: leg 1 is y in [-h, h] up to
     the outer wall x = a + h, leg 2 is x in [a - h, a + h] from there on; the inner corner
-    (a - h, h) is a blind corner. Cost: the left half of the corridor relative to the travel
-    direction (keep right), and for the L the blind corner's cost.
+    (a - h, h) is a blind corner. ``l_closed``: an L drawn as the open one is, its leg 2 closed
+    by a wall across it 0.3-3 m past the goal (that distance from a key folded off ``key``, so
+    the other draws are split as the open L's); the keep-right cost stops at that wall. Cost: the left half of the
+    corridor relative to the travel direction (keep right), and for the L the blind corner's
+    cost.
     """
     k_w, k_o, k_l, k_a, k_g, k_t, k_p = jax.random.split(key, 7)
     h = 0.5 * jax.random.uniform(k_w, (), minval=HALLWAY_WIDTH_M[0], maxval=HALLWAY_WIDTH_M[1])
@@ -196,27 +204,33 @@ def _sample_hallway(key, kind: str):
     behind_m, ahead_m = jax.random.uniform(k_l, (2,), minval=3.0, maxval=12.0)  # wall extents
     back, front = -behind_m, ahead_m
     lx, ly = _local(phi)
-    if kind == "l_shaped":
+    if kind in ("l_shaped", "l_closed"):
         a = jax.random.uniform(k_a, (), minval=1.2, maxval=5.5)
         side = jnp.where(jax.random.bernoulli(k_t), 1.0, -1.0)  # +1 turns left, -1 right
         ly = ly * side  # mirror a right turn onto a left one
-        far = WALL_LENGTH_M
-        local_segments = jnp.array(
-            [
-                [back, -h, a + h, -h],  # leg 1 outer wall, up to the outer corner
-                [a + h, -h, a + h, far],  # outer wall of leg 2
-                [back, h, a - h, h],  # leg 1 inner wall, up to the inner corner
-                [a - h, h, a - h, far],
-            ]
-        )  # inner wall of leg 2
+        goal_l = jnp.stack([a, jax.random.uniform(k_g, (), minval=2.0, maxval=5.0)])
+        if kind == "l_closed":
+            far = goal_l[1] + jax.random.uniform(jax.random.fold_in(key, 1), (), minval=0.3, maxval=3.0)
+        else:
+            far = WALL_LENGTH_M
+        segments_l = [
+            [back, -h, a + h, -h],  # leg 1 outer wall, up to the outer corner
+            [a + h, -h, a + h, far],  # outer wall of leg 2
+            [back, h, a - h, h],  # leg 1 inner wall, up to the inner corner
+            [a - h, h, a - h, far],  # inner wall of leg 2
+        ]
+        if kind == "l_closed":
+            segments_l.append([a - h, far, a + h, far])  # the dead end across leg 2
+        local_segments = jnp.array(segments_l)
         in_leg1 = (lx <= a + h) & (jnp.abs(ly) < h) & (lx >= back)
         in_leg2 = (jnp.abs(lx - a) < h) & (ly >= -h)
+        if kind == "l_closed":
+            in_leg2 = in_leg2 & (ly <= far)
         inside = in_leg1 | in_leg2
         # Left of the way (leg 1's centre line up to x = a, then leg 2's): the distance to that
         # path on its left, as a fraction of the half-width (continuous through the turn). In
         # the mirrored frame of a right turn the traveller's left is the outer side.
         left = sc.left_of_path(lx, ly, a, side > 0) / h
-        goal_l = jnp.stack([a, jax.random.uniform(k_g, (), minval=2.0, maxval=5.0)])
         corner_l = jnp.stack([a - h, h])
     else:
         local_segments = jnp.array([[back, -h, front, -h], [back, h, front, h]])
@@ -235,7 +249,7 @@ def _sample_hallway(key, kind: str):
     image = _walls_image(segments, jnp.ones(segments.shape[0], bool))
     gx, gy = to_world(goal_l[0], goal_l[1])
     cost = jnp.where(inside, sc.HALLWAY_LEFT_COST * sc.smoothstep(left), 0.0)
-    if kind == "l_shaped":
+    if kind in ("l_shaped", "l_closed"):
         cx, cy = to_world(corner_l[0], corner_l[1])
         cost = jnp.maximum(cost, sc.corner_cost(cx, cy, inside))
     if kind == "people":
@@ -255,6 +269,7 @@ def _sample_hallway(key, kind: str):
 
 sample_hallway_straight = functools.partial(_sample_hallway, kind="straight")
 sample_hallway_l = functools.partial(_sample_hallway, kind="l_shaped")
+sample_hallway_l_closed = functools.partial(_sample_hallway, kind="l_closed")
 sample_hallway_people = functools.partial(_sample_hallway, kind="people")
 
 MAX_QUEUE = 24
@@ -461,3 +476,7 @@ def composite_contrast(key):
 
 COMPOSITE = "composite"
 FAMILIES = {**FAMILIES, COMPOSITE: sample_composite}  # last, so the other families' keys are unchanged
+# Not the paper's and not in the default recipe (TrainConfig.closed_l_hallways = 0): after the
+# composites, so every other family's keys stay what they were.
+CLOSED_L = "hallway_l_closed"
+FAMILIES = {**FAMILIES, CLOSED_L: sample_hallway_l_closed}

@@ -179,3 +179,25 @@ def test_a_composites_contrast_is_its_scenes_twin_difference():
     # atol: XLA rounds a few cells' costs differently in a batch of 40 than in generate's chunks
     np.testing.assert_allclose(with_seed[rows], expected_rows, atol=1e-2)
     assert with_seed[~rows].max() == 0.0 and dataset.pair_contrast(data).max() == 0.0
+
+
+@pytest.mark.slow
+def test_a_closed_l_is_the_open_one_cut_at_a_wall_past_its_goal():
+    """``hallway_l_closed`` from a key is ``hallway_l`` from that key with its second leg ended by
+    a wall: a wall pixel the open L lacks, and no cost the open L lacks (beyond the wall the cost
+    is gone, before it the same). Off by default: the default recipe draws none."""
+    import jax.numpy as jnp
+
+    from socialnav.models.config import TrainConfig
+
+    keys = dataset.family_keys(0, "hallway_l", 64)
+    open_x, open_y = (np.asarray(a) for a in jax.vmap(families.sample_hallway_l)(keys))
+    shut_x, shut_y = (np.asarray(a) for a in jax.vmap(families.sample_hallway_l_closed)(keys))
+    assert np.all(shut_y <= open_y + 1e-6)
+    assert (shut_y < open_y - 1e-3).any(axis=(1, 2)).mean() > 0.5  # cost cut beyond the wall in most
+    new_wall = (shut_x == grid.WALL) & (open_x != grid.WALL)
+    assert new_wall.any(axis=(1, 2)).mean() > 0.9  # the end wall (off the image in a few)
+    assert np.array_equal(shut_x == grid.GOAL, open_x == grid.GOAL)
+    assert families.CLOSED_L not in TrainConfig().counts
+    assert TrainConfig(closed_l_hallways=5).counts[families.CLOSED_L] == 5
+    assert float(jnp.max(shut_y)) <= 1.0

@@ -134,7 +134,7 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     # Evaluation: the same test MSE as the last epoch, per family, and the picture.
     report = evaluation.evaluate_run(tmp_path / "straight", examples=1)
     assert report["test_mse"] == pytest.approx(line["test_mse"], rel=1e-5)
-    assert set(report["test_mse_by_family"]) == set(dataset.FAMILIES)
+    assert set(report["test_mse_by_family"]) == set(dataset.FAMILIES) - {"hallway_l_closed"}  # not drawn by default
     assert (tmp_path / "straight" / "evaluation" / "predictions.png").stat().st_size > 10_000
 
 

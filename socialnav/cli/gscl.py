@@ -58,6 +58,7 @@ _TRAIN_OPTIONS = (
     "coords",
     "composites",
     "group_scale",
+    "closed_l_hallways",
     "cost_weight",
     "pair_weight",
     "forbidden_weight",
@@ -147,6 +148,12 @@ def add_parser(top) -> None:
         type=positive_int,
         default=None,
         help="the group and non-group families' samples times this (default 2; --paper: 1)",
+    )
+    tr.add_argument(
+        "--closed-l-hallways",
+        type=non_negative_int,
+        default=None,
+        help="L-hallways closed by a wall 0.3-3 m past the goal, per the paper's 24,200 (default 0)",
     )
     tr.add_argument(
         "--cost-weight",
