@@ -16,9 +16,8 @@ where RUN names a snapshot under ``docs/results/`` and KIND one of :data:`KINDS`
 the turn moved (``cells=moved``); ``sweep`` ``metric=...``; ``claims`` sets the papers' claims of
 two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``); ``pairs`` (a
 snapshot made with ``--pairs A:B``: two methods paired by variant in each scene) takes
-``metrics=a,b,...``. ``write`` fills
-each such block with a line naming the run (its command, source commit, GSCL model, human
-model, variants and seed: ``run.json``) and the table
+``metrics=a,b,...``. ``write`` fills each such block with a line naming the run (its command,
+source commit, GSCL model, human model, variants and seed: ``run.json``) and the table
 (:mod:`socialnav.evaluation.arena.markdown`); ``check`` does the same in memory and names each
 block whose text differs (``tests/test_results_tables.py`` runs it, so a page that no longer
 says what its run says fails the tests).
@@ -28,8 +27,7 @@ A **snapshot** is the part of an arena run folder the tables read, small enough 
 :data:`COPIED` the run has (the papers' comparisons; ``sweep.json`` for a run of
 ``scripts/scene_sweep.py``) and, for a run with turned rows, ``turned.csv``
 (:func:`~socialnav.evaluation.arena.markdown.turned_pairs` of its episodes), and with ``--pairs``
-``pairs.csv``. Run folders
-themselves (episodes, trajectories, pictures) stay out of git.
+``pairs.csv``. Run folders themselves (episodes, trajectories, pictures) stay out of git.
 """
 
 from __future__ import annotations
@@ -96,12 +94,8 @@ def snapshot(
             raise SystemExit(f"{run / needed}: no such file (an arena run folder, socialnav arena --out)")
     folder = results / name
     folder.mkdir(parents=True, exist_ok=True)
-    for stale in (
-        *COPIED,
-        "summary.csv",
-        "turned.csv",
-        markdown.PAIRS_FILE,
-    ):  # an earlier snapshot's files; nothing else
+    earlier = (*COPIED, "summary.csv", "turned.csv", markdown.PAIRS_FILE)  # an earlier snapshot's files only
+    for stale in earlier:
         (folder / stale).unlink(missing_ok=True)
     summary = pd.read_csv(run / "summary.csv")
     summary[[c for c in SUMMARY_COLUMNS if c in summary.columns]].to_csv(

@@ -16,17 +16,17 @@ that at its band's mean speed it meets the robot's line when the scene's own wal
     python scripts/scene_sweep.py casn_crossing people.speed_mps 0.3,0.5 0.55,0.75 0.85,1.15 \\
         --also people.start_s 1.5,3 4.1,5.6 5.55,7.05 --methods navfn,snl_matched,casn --out runs/crossing-speed
 
-With ``--shift`` each value is added to the fields' own
-numbers, which moves a wall: the L-hallway's dead end, 0.9 m past the goal in the scene file,
-moved 0-4 m further (the end wall, the side walls' and the map's top edge together)::
+With ``--shift`` each value is added to the fields' own numbers, which moves a wall: the
+L-hallway's dead end, 0.9 m past the goal in the scene file, moved 0-4 m further (the end wall,
+the side walls' and the map's top edge together)::
 
     python scripts/scene_sweep.py gscl_l_hallway \\
         bounds_m.3+walls.1.3+walls.2.3+walls.3.3+walls.4.2+walls.4.3 0 1 2 4 --shift \\
         --label "dead end moved up (m)" --out runs/hallway-dead-end
 
-Each ``VALUE`` is a number or comma-separated numbers (a range,
-``0,0.5`` -> ``[0, 0.5]``; in brackets where the first is negative, ``[-5,5,-7.25,-7.1]``, so that
-argparse does not take it for an option). The copies are written to ``OUT/scenes/`` (named
+Each ``VALUE`` is a number or comma-separated numbers (a range, ``0,0.5`` -> ``[0, 0.5]``; in
+brackets where the first is negative, ``[-5,5,-7.25,-7.1]``, so that argparse does not take it
+for an option). The copies are written to ``OUT/scenes/`` (named
 ``<scene>+sweep<k>``, each drawing the scene's own variants: the scene file's ``variants_of``),
 ``socialnav arena`` runs them into ``OUT/arena`` with the same variants and seed (common random
 numbers: variant k of every copy draws what variant k of the scene draws, so a copy that

@@ -397,8 +397,8 @@ def sweep_value_label(value) -> str:
 def sweep_table(summary: pd.DataFrame, sweep: dict, metric: str = "social_no_collision") -> str:
     """Values down, methods across: ``metric`` in % with its 95 % interval per copy of the scene
     (``sweep``: ``{"scene", "field", "values"}`` and optionally ``"label"``, the swept value's
-    name, as :data:`SWEEP_FILE` holds them). Raises
-    ValueError naming a copy and method the summary lacks, or a metric it does not hold."""
+    name, as :data:`SWEEP_FILE` holds them). Raises ValueError naming a copy and method the
+    summary lacks, or a metric it does not hold."""
     if f"{metric}_pct" not in summary.columns:
         raise ValueError(f"metric={metric}: not a rate the summary holds")
     rows = summary.set_index(["scene", "method"])
