@@ -185,6 +185,7 @@ def main(argv=None) -> int:
         help="another field set with the swept one: FIELD and one value per swept value (repeatable)",
     )
     parser.add_argument("--label", help="the swept value's name in the table and figure (default: FIELD)")
+    parser.add_argument("--gscl-run", help="socialnav arena's --gscl-run: GSCL with another model than the shipped one")
     parser.add_argument("--out", type=pathlib.Path, required=True, help="the sweep's folder")
     args = parser.parse_args(argv)
     if args.variants < 1:
@@ -206,6 +207,8 @@ def main(argv=None) -> int:
     arena = args.out / "arena"
     arena_args = ["arena", "--scenes", ",".join(map(str, files)), "--methods", args.methods]
     arena_args += ["--variants", str(args.variants), "--out", str(arena)]
+    if args.gscl_run:
+        arena_args += ["--gscl-run", args.gscl_run]
     done = subprocess.run([sys.executable, "-m", "socialnav", *arena_args], check=False)
     if done.returncode != 0:
         return done.returncode
