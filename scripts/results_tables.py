@@ -214,7 +214,9 @@ def _sweep(folder, metric="social_no_collision"):
 
 
 def _pairs(folder, metrics=None):
-    return markdown.pairs_table(_read(folder, markdown.PAIRS_FILE), metrics.split(",") if metrics else None)
+    sweep = folder / markdown.SWEEP_FILE  # a sweep's copies shown by their value
+    names = markdown.sweep_copy_labels(json.loads(sweep.read_text())) if sweep.is_file() else None
+    return markdown.pairs_table(_read(folder, markdown.PAIRS_FILE), metrics.split(",") if metrics else None, names)
 
 
 KINDS = {

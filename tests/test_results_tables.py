@@ -125,6 +125,12 @@ def test_two_methods_paired_by_variant_are_kept_by_the_snapshot_and_shown_per_sc
     assert d["a - b"] == pytest.approx(0.5) and d["lo"] == pytest.approx(0.5) and d["hi"] == pytest.approx(0.5)
     said = tables.render("pairs mine metrics=d_min_m,intruded", tmp_path / "results")
     assert "| `x` | a - b | +0.50 [+0.50, +0.50] (0.75, 0.25) | -75 [" in said and "] (25, 100) |" in said
+    sweep = {"scene": "s", "field": "people.speed_mps", "values": [[0.3, 0.5]], "label": "speed"}
+    (folder / markdown.SWEEP_FILE).write_text(json.dumps(sweep))  # a sweep's copy is shown by its value
+    pairs.assign(scene="s+sweep0").to_csv(folder / markdown.PAIRS_FILE, index=False)
+    assert "| `s`, speed: 0.3-0.5 | a - b | +0.50 [" in tables.render(
+        "pairs mine metrics=d_min_m", tmp_path / "results"
+    )
     with pytest.raises(ValueError, match="metrics=collisions: not in the pairs"):
         tables.render("pairs mine metrics=collisions", tmp_path / "results")
     with pytest.raises(SystemExit, match="no method 'c' in the episodes"):

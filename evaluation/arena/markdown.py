@@ -298,10 +298,11 @@ def method_pairs(episodes: pd.DataFrame, a: str, b: str, metrics) -> pd.DataFram
     return pd.DataFrame(rows)
 
 
-def pairs_table(pairs: pd.DataFrame, metrics=None) -> str:
+def pairs_table(pairs: pd.DataFrame, metrics=None, names: dict | None = None) -> str:
     """:func:`method_pairs` rows as one line per scene and pair of methods: for each metric (all
     the frame holds, or ``metrics`` in that order) ``a - b [95 %] (a, b)``, rates in % and
-    points. Raises ValueError naming a metric the frame lacks."""
+    points. ``names``: what to show for a scene (a sweep's copy: its value). Raises ValueError
+    naming a metric the frame lacks."""
     held = list(dict.fromkeys(pairs["metric"]))
     metrics = held if metrics is None else list(metrics)
     missing = [m for m in metrics if m not in held]
@@ -324,7 +325,8 @@ def pairs_table(pairs: pd.DataFrame, metrics=None) -> str:
             r = by_metric.loc[m]
             f = ".0f" if m in RATES else ".2f"
             cells.append(f"{r['a - b']:+{f}} [{r['lo']:+{f}}, {r['hi']:+{f}}] ({r['a']:{f}}, {r['b']:{f}})")
-        lines.append(f"| `{scene}` | {a} - {b} | " + " | ".join(cells) + " |")
+        shown = (names or {}).get(scene, f"`{scene}`")
+        lines.append(f"| {shown} | {a} - {b} | " + " | ".join(cells) + " |")
     n = pairs["n"].unique()
     lines.append(f"\nPaired by variant ({', '.join(str(int(k)) for k in n)} pairs a scene); Student t intervals.")
     return "\n".join(lines)
@@ -387,6 +389,15 @@ def verdict_changes(directions: pd.DataFrame, turned: pd.DataFrame) -> str:
 def sweep_copy_name(scene: str, k: int) -> str:
     """The name of a sweep's copy ``k`` of ``scene`` (``scripts/scene_sweep.py``)."""
     return f"{scene}+sweep{k}"
+
+
+def sweep_copy_labels(sweep: dict) -> dict[str, str]:
+    """Each copy's name -> ``<scene>, <label>: <value>`` (``sweep`` as :data:`SWEEP_FILE` holds it)."""
+    label = sweep.get("label") or sweep["field"]
+    return {
+        sweep_copy_name(sweep["scene"], k): f"`{sweep['scene']}`, {label}: {sweep_value_label(v)}"
+        for k, v in enumerate(sweep["values"])
+    }
 
 
 def sweep_value_label(value) -> str:
