@@ -194,9 +194,9 @@ def _sample_hallway(key, kind: str):
     the outer wall x = a + h, leg 2 is x in [a - h, a + h] from there on; the inner corner
     (a - h, h) is a blind corner. ``l_closed``: an L drawn as the open one is, its leg 2 closed
     by a wall across it 0.3-3 m past the goal (that distance from a key folded off ``key``, so
-    the other draws are split as the open L's); the keep-right cost stops at that wall. Cost: the left half of the
-    corridor relative to the travel direction (keep right), and for the L the blind corner's
-    cost.
+    the other draws are split as the open L's); the keep-right cost stops at that wall. Cost:
+    the left half of the corridor relative to the travel direction (keep right), and for the L
+    the blind corner's cost.
     """
     k_w, k_o, k_l, k_a, k_g, k_t, k_p = jax.random.split(key, 7)
     h = 0.5 * jax.random.uniform(k_w, (), minval=HALLWAY_WIDTH_M[0], maxval=HALLWAY_WIDTH_M[1])
@@ -204,28 +204,26 @@ def _sample_hallway(key, kind: str):
     behind_m, ahead_m = jax.random.uniform(k_l, (2,), minval=3.0, maxval=12.0)  # wall extents
     back, front = -behind_m, ahead_m
     lx, ly = _local(phi)
-    if kind in ("l_shaped", "l_closed"):
+    l_shaped, closed = kind in ("l_shaped", "l_closed"), kind == "l_closed"
+    if l_shaped:
         a = jax.random.uniform(k_a, (), minval=1.2, maxval=5.5)
         side = jnp.where(jax.random.bernoulli(k_t), 1.0, -1.0)  # +1 turns left, -1 right
         ly = ly * side  # mirror a right turn onto a left one
         goal_l = jnp.stack([a, jax.random.uniform(k_g, (), minval=2.0, maxval=5.0)])
-        if kind == "l_closed":
+        far = WALL_LENGTH_M
+        if closed:  # the dead end, 0.3-3 m past the goal
             far = goal_l[1] + jax.random.uniform(jax.random.fold_in(key, 1), (), minval=0.3, maxval=3.0)
-        else:
-            far = WALL_LENGTH_M
-        segments_l = [
-            [back, -h, a + h, -h],  # leg 1 outer wall, up to the outer corner
-            [a + h, -h, a + h, far],  # outer wall of leg 2
-            [back, h, a - h, h],  # leg 1 inner wall, up to the inner corner
-            [a - h, h, a - h, far],  # inner wall of leg 2
-        ]
-        if kind == "l_closed":
-            segments_l.append([a - h, far, a + h, far])  # the dead end across leg 2
-        local_segments = jnp.array(segments_l)
+        local_segments = jnp.array(
+            [
+                [back, -h, a + h, -h],  # leg 1 outer wall, up to the outer corner
+                [a + h, -h, a + h, far],  # outer wall of leg 2
+                [back, h, a - h, h],  # leg 1 inner wall, up to the inner corner
+                [a - h, h, a - h, far],  # inner wall of leg 2
+                *([[a - h, far, a + h, far]] if closed else []),  # the dead end across leg 2
+            ]
+        )
         in_leg1 = (lx <= a + h) & (jnp.abs(ly) < h) & (lx >= back)
-        in_leg2 = (jnp.abs(lx - a) < h) & (ly >= -h)
-        if kind == "l_closed":
-            in_leg2 = in_leg2 & (ly <= far)
+        in_leg2 = (jnp.abs(lx - a) < h) & (ly >= -h) & ((ly <= far) if closed else True)
         inside = in_leg1 | in_leg2
         # Left of the way (leg 1's centre line up to x = a, then leg 2's): the distance to that
         # path on its left, as a fraction of the half-width (continuous through the turn). In
@@ -249,7 +247,7 @@ def _sample_hallway(key, kind: str):
     image = _walls_image(segments, jnp.ones(segments.shape[0], bool))
     gx, gy = to_world(goal_l[0], goal_l[1])
     cost = jnp.where(inside, sc.HALLWAY_LEFT_COST * sc.smoothstep(left), 0.0)
-    if kind in ("l_shaped", "l_closed"):
+    if l_shaped:
         cx, cy = to_world(corner_l[0], corner_l[1])
         cost = jnp.maximum(cost, sc.corner_cost(cx, cy, inside))
     if kind == "people":
