@@ -16,7 +16,9 @@ where RUN names a snapshot under ``docs/results/`` and KIND one of :data:`KINDS`
 the turn moved (``cells=moved``); ``sweep`` ``metric=...``; ``claims`` sets the papers' claims of
 two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``); ``pairs`` (a
 snapshot made with ``--pairs A:B``: two methods paired by variant in each scene) takes
-``metrics=a,b,...``. ``write`` fills each such block with a line naming the run (its command,
+``metrics=a,b,...``; ``models`` sets one method's goal / social success in several runs side by
+side (the same scenes with another model: ``other=B,C``, ``labels="a|b|c"``, ``method=gscl``).
+``write`` fills each such block with a line naming the run (its command,
 source commit, GSCL model, human model, variants and seed: ``run.json``) and the table
 (:mod:`socialnav.evaluation.arena.markdown`); ``check`` does the same in memory and names each
 block whose text differs (``tests/test_results_tables.py`` runs it, so a page that no longer
@@ -206,6 +208,20 @@ def _claims(folder, other=None, labels=None, rows="own"):
     )
 
 
+def _models(folder, other=None, labels=None, method="gscl"):
+    runs = [folder, *(folder.parent / name for name in (other.split(",") if other else []))]
+    for run in runs[1:]:
+        if not (run / "run.json").is_file():
+            raise ValueError(f"{run}: no snapshot (python scripts/results_tables.py snapshot RUN {run.name})")
+    names = labels.split("|") if labels else [run.name for run in runs]
+    table = markdown.models_table([_read(run, "summary.csv") for run in runs], names, method)
+    lines = [
+        markdown.source_line(json.loads((run / "run.json").read_text()), _shown(run), lead="And from")
+        for run in runs[1:]
+    ]
+    return "\n\n".join([*lines, table])
+
+
 def _sweep(folder, metric="social_no_collision"):
     path = folder / markdown.SWEEP_FILE
     if not path.is_file():
@@ -230,6 +246,7 @@ KINDS = {
     "sweep": _sweep,
     "claims": _claims,
     "pairs": _pairs,
+    "models": _models,
 }
 
 

@@ -74,6 +74,37 @@ def test_the_success_table_puts_each_rows_goal_and_social_success_in_its_cell():
         markdown.success_table(summary[~summary["scene"].str.contains("@")], rows="turned")
 
 
+def test_the_models_table_sets_one_methods_cells_of_several_runs_side_by_side(tmp_path):
+    """Two runs of the same scenes with different GSCL models: each column is one run's gscl row,
+    other methods ignored, a scene the second run lacks shown as '-', each run named by its line."""
+    results = tmp_path / "results"
+    for name, rows in {
+        "first": [
+            _summary_row("a", "gscl", 100.0, 49.0),
+            _summary_row("a", "navfn", 100.0, 0.0),
+            _summary_row("a@held_out", "gscl", 87.0, 0.0),
+        ],
+        "second": [_summary_row("a", "gscl", 100.0, 98.0)],
+    }.items():
+        (results / name).mkdir(parents=True)
+        (results / name / "run.json").write_text(json.dumps({"gscl_model": name}))
+        pd.DataFrame(rows).to_csv(results / name / "summary.csv", index=False)
+    text = tables.render('models first other=second labels="open|closed"', results)
+    assert "And from `" in text and "GSCL model second" in text
+    assert text.strip().splitlines()[-4:] == [
+        "| scene (gscl) | open | closed |",
+        "|---|---|---|",
+        "| `a` | 100 / 49 | 100 / 98 |",
+        "| `a@held_out` | 87 / 0 | - |",
+    ]
+    with pytest.raises(ValueError, match="1 labels for 2 runs"):
+        tables.render("models first other=second labels=open", results)
+    with pytest.raises(ValueError, match="second: no row of method navfn"):
+        tables.render("models first other=second method=navfn", results)
+    with pytest.raises(ValueError, match="third: no snapshot"):
+        tables.render("models first other=third", results)
+
+
 def test_a_snapshot_keeps_what_the_tables_read_and_names_the_command(tmp_path):
     run = tmp_path / "run"
     run.mkdir()

@@ -332,6 +332,28 @@ def pairs_table(pairs: pd.DataFrame, metrics=None, names: dict | None = None) ->
     return "\n".join(lines)
 
 
+def models_table(summaries, labels, method: str = "gscl", metrics=("goal_no_collision", "social_no_collision")) -> str:
+    """One method's ``goal / social`` success in % (``metrics``) in several runs side by side, a
+    column a run (``labels``): the same scenes run with different models of one method (another
+    GSCL model, say). Scenes down in the first run's order; a scene a run lacks is ``-``. Raises
+    ValueError when a run has no row of ``method`` or the labels do not match the runs."""
+    if len(labels) != len(summaries):
+        raise ValueError(f"{len(labels)} labels for {len(summaries)} runs")
+    tables = []
+    for label, summary in zip(labels, summaries, strict=True):
+        rows = summary[summary["method"] == method]
+        if rows.empty:
+            raise ValueError(f"{label}: no row of method {method}")
+        tables.append(rows.set_index("scene"))
+    lines = [f"| scene ({method}) | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for scene in tables[0].index:
+        cells = [
+            " / ".join(_pct(t.loc[scene, f"{m}_pct"]) for m in metrics) if scene in t.index else "-" for t in tables
+        ]
+        lines.append(f"| `{scene}` | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 CLAIM_KEY = ["source", "scene", "metric", "proposed", "baseline"]
 
 
