@@ -18,8 +18,8 @@ two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``);
 snapshot made with ``--pairs A:B``: two methods paired by variant in each scene) takes
 ``metrics=a,b,...``; ``models`` sets one method's goal / social success in several runs side by
 side (the same scenes with another model: ``other=B,C``, ``labels="a|b|c"``, ``method=gscl``).
-``write`` fills each such block with a line naming the run (its command,
-source commit, GSCL model, human model, variants and seed: ``run.json``) and the table
+``write`` fills each such block with a line naming the run (its command, source commit, GSCL
+model, human model, variants and seed: ``run.json``) and the table
 (:mod:`socialnav.evaluation.arena.markdown`); ``check`` does the same in memory and names each
 block whose text differs (``tests/test_results_tables.py`` runs it, so a page that no longer
 says what its run says fails the tests).
