@@ -189,37 +189,41 @@ def _turned(folder, cells="moved"):
     return markdown.turned_table(_read(folder, "turned.csv"), moved_only=cells == "moved")
 
 
+def _other_snapshot(folder: pathlib.Path, name: str) -> pathlib.Path:
+    """A second snapshot a table reads beside ``folder`` (``other=NAME``); ValueError if there is none."""
+    second = folder.parent / name
+    if not (second / "run.json").is_file():
+        raise ValueError(f"{second}: no snapshot (python scripts/results_tables.py snapshot RUN {name})")
+    return second
+
+
+def _and_from(run: pathlib.Path) -> str:
+    """The source line of a table's second (third ...) run."""
+    return markdown.source_line(json.loads((run / "run.json").read_text()), _shown(run), lead="And from")
+
+
 def _claims(folder, other=None, labels=None, rows="own"):
     if other is None:
         raise ValueError("claims needs other=NAME, the second run's snapshot")
     files = {"own": "directions.csv", "held_out": "directions_held_out.csv"}
     if rows not in files:
         raise ValueError(f"rows='{rows}': own or held_out")
-    second = folder.parent / other
-    if not (second / "run.json").is_file():
-        raise ValueError(f"{second}: no snapshot (python scripts/results_tables.py snapshot RUN {other})")
+    second = _other_snapshot(folder, other)
     names = labels.split("|") if labels else [folder.name, other]
     if len(names) != 2:
         raise ValueError(f"labels='{labels}': two names, as 'a|b'")
     return (
-        markdown.source_line(json.loads((second / "run.json").read_text()), _shown(second), lead="And from")
+        _and_from(second)
         + "\n\n"
         + markdown.claims_table(_read(folder, files[rows]), _read(second, files[rows]), names)
     )
 
 
 def _models(folder, other=None, labels=None, method="gscl"):
-    runs = [folder, *(folder.parent / name for name in (other.split(",") if other else []))]
-    for run in runs[1:]:
-        if not (run / "run.json").is_file():
-            raise ValueError(f"{run}: no snapshot (python scripts/results_tables.py snapshot RUN {run.name})")
+    runs = [folder, *(_other_snapshot(folder, name) for name in (other.split(",") if other else []))]
     names = labels.split("|") if labels else [run.name for run in runs]
     table = markdown.models_table([_read(run, "summary.csv") for run in runs], names, method)
-    lines = [
-        markdown.source_line(json.loads((run / "run.json").read_text()), _shown(run), lead="And from")
-        for run in runs[1:]
-    ]
-    return "\n\n".join([*lines, table])
+    return "\n\n".join([*(_and_from(run) for run in runs[1:]), table])
 
 
 def _sweep(folder, metric="social_no_collision"):
