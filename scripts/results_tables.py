@@ -17,7 +17,9 @@ the turn moved (``cells=moved``); ``sweep`` ``metric=...``; ``claims`` sets the 
 two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``); ``pairs`` (a
 snapshot made with ``--pairs A:B``: two methods paired by variant in each scene) takes
 ``metrics=a,b,...``; ``models`` sets one method's goal / social success in several runs side by
-side (the same scenes with another model: ``other=B,C``, ``labels="a|b|c"``, ``method=gscl``).
+side (the same scenes with another model: ``other=B,C``, ``labels="a|b|c"``, ``method=gscl``);
+``speed_classes`` sets seed 001's rows by walker speed beside a sweep of the head-on's or the
+crossing's walker speed made with ``--pairs casn:snl_matched``, one copy a class.
 ``write`` fills each such block with a line naming the run (its command, source commit, GSCL
 model, human model, variants and seed: ``run.json``) and the table
 (:mod:`socialnav.evaluation.arena.markdown`); ``check`` does the same in memory and names each
@@ -45,7 +47,7 @@ import pandas as pd
 
 from socialnav.common.atomic import write_text_atomic
 from socialnav.common.names import check_name
-from socialnav.evaluation.arena import markdown
+from socialnav.evaluation.arena import markdown, papers
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "docs" / "results"
@@ -239,6 +241,18 @@ def _pairs(folder, metrics=None):
     return markdown.pairs_table(_read(folder, markdown.PAIRS_FILE), metrics.split(",") if metrics else None, names)
 
 
+def _speed_classes(folder):
+    path = folder / markdown.SWEEP_FILE
+    if not path.is_file():
+        raise ValueError(f"{path}: no such file (a run of scripts/scene_sweep.py)")
+    sweep = json.loads(path.read_text())
+    copies = [markdown.sweep_copy_name(sweep["scene"], k) for k in range(len(sweep["values"]))]
+    comparison = papers.speed_class_comparison(
+        _read(folder, "summary.csv"), _read(folder, markdown.PAIRS_FILE), sweep["scene"], copies
+    )
+    return markdown.speed_class_table(comparison, sweep)
+
+
 KINDS = {
     "success": _success,
     "seed002_table1": _seed002,
@@ -251,6 +265,7 @@ KINDS = {
     "claims": _claims,
     "pairs": _pairs,
     "models": _models,
+    "speed_classes": _speed_classes,
 }
 
 

@@ -122,6 +122,67 @@ def test_directions_pair_by_variant_and_give_a_verdict():
     assert by_metric.loc["zone_social_pct", "paper_diff"] == 0
 
 
+def _speed_class_frames(casn_d, snl_d, casn_intruded, snl_intruded):
+    """A hand-made head-on sweep's summary and pairs: one copy a class, CASN and SNL matched with
+    the given distances (m) and intruded shares (%), the pairs their differences with +-0.05 m
+    and +-5 points intervals."""
+    summary, pairs = [], []
+    for k in range(3):
+        copy = f"casn_head_on+sweep{k}"
+        for method, d, i in (("casn", casn_d[k], casn_intruded[k]), ("snl_matched", snl_d[k], snl_intruded[k])):
+            summary.append(
+                {"scene": copy, "method": method, "n": 100, "d_min_m": d, "d_min_m_lo": d - 0.1, "d_min_m_hi": d + 0.1,
+                 "intruded_pct": i, "intruded_lo": max(i - 10, 0), "intruded_hi": min(i + 10, 100)}
+            )  # fmt: skip
+        for metric, diff, half in (
+            ("d_min_m", casn_d[k] - snl_d[k], 0.05),
+            ("intruded", casn_intruded[k] - snl_intruded[k], 5),
+        ):
+            pairs.append(
+                {"scene": copy, "method_a": "casn", "method_b": "snl_matched", "metric": metric, "n": 100,
+                 "a - b": diff, "lo": diff - half, "hi": diff + half}
+            )  # fmt: skip
+    return pd.DataFrame(summary), pd.DataFrame(pairs)
+
+
+def test_seed_001s_speed_classes_sit_beside_a_sweep_with_a_verdict_per_difference():
+    """Each of Table 2's classes (slow, medium, fast) against one copy of a head-on sweep: the
+    paper's values (d; intrusions as a share of its trials, 5 of 9 = 56 %), ours with whether the
+    paper's lies in our interval, the differences and their verdicts; bad sweeps named."""
+    from socialnav.evaluation.arena import markdown, papers
+
+    copies = [markdown.sweep_copy_name("casn_head_on", k) for k in range(3)]
+    # Slow: the paper's own values (every interval holds them, both differences reproduce);
+    # medium: SNL further than CASN (the distance's direction opposite); fast: the same distance
+    # for both (no difference) and CASN intruding more (opposite).
+    summary, pairs = _speed_class_frames((0.99, 1.0, 1.2), (0.82, 1.3, 1.2), (100 * 5 / 9, 40, 90), (100, 90, 50))
+    out = papers.speed_class_comparison(summary, pairs, "casn_head_on", copies)
+    assert list(out["speed_class"]) == ["slow", "slow", "medium", "medium", "fast", "fast"]
+    assert list(out["metric"]) == ["d_min_m", "intruded_pct"] * 3
+    assert out["casn_paper"].tolist() == pytest.approx([0.99, 100 * 5 / 9, 1.18, 60.0, 1.13, 50.0])
+    assert out["snl_paper"].tolist() == pytest.approx([0.82, 100.0, 0.85, 100.0, 0.86, 100.0])
+    assert out["paper_diff"].tolist() == pytest.approx([0.17, 100 * 5 / 9 - 100, 0.33, -40.0, 0.27, -50.0])
+    assert out["casn_inside"].tolist() == [True, True, False, False, True, False]
+    assert out["snl_inside"].tolist() == [True, True, False, True, False, False]
+    assert out["verdict"].tolist() == [
+        "reproduced", "reproduced", "opposite", "reproduced", "no difference here", "opposite",
+    ]  # fmt: skip
+    assert (out["source"] == "seed 001 Table 2").all() and (out["n_pairs"] == 100).all()
+    table = markdown.speed_class_table(out, {"values": [[0.4, 0.55], [0.55, 0.8], [1.1, 1.35]]})
+    assert "| slow: 0.47, 0.42; 0.4-0.55 | d min, m | 0.99, 0.99 [0.89, 1.09] |" in table
+    assert "Of 6 differences: 3 reproduced, 2 opposite, 1 no difference here." in table
+    assert "Of the paper's 12 values, 6 inside our interval." in table
+
+    with pytest.raises(ValueError, match="casn_head_on, casn_crossing only"):
+        papers.speed_class_comparison(summary, pairs, "casn_static_person", copies)
+    with pytest.raises(ValueError, match="2 copies: a speed-class sweep has one a class"):
+        papers.speed_class_comparison(summary, pairs, "casn_head_on", copies[:2])
+    with pytest.raises(ValueError, match=r"no summary row for casn_head_on\+sweep2, method snl_matched"):
+        papers.speed_class_comparison(summary.iloc[:-1], pairs, "casn_head_on", copies)
+    with pytest.raises(ValueError, match=r"no pair casn - snl_matched for casn_head_on\+sweep0, metric intruded"):
+        papers.speed_class_comparison(summary, pairs[pairs["metric"] != "intruded"], "casn_head_on", copies)
+
+
 def test_seed_002s_table_2_is_tested_among_its_four_methods_and_gets_a_verdict_per_cell():
     from socialnav.evaluation.arena import papers
     from socialnav.evaluation.arena import stats as arena_stats

@@ -408,6 +408,43 @@ def verdict_changes(directions: pd.DataFrame, turned: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
+def speed_class_table(comparison: pd.DataFrame, sweep: dict) -> str:
+    """:func:`evaluation.arena.papers.speed_class_comparison` as one line per speed class and metric:
+    the paper's walkers' speeds and ours (``sweep``'s values), each method's value in the paper and
+    here [95 %], the difference CASN - SNL matched in both, paired by variant here, and its
+    verdict; then the count of verdicts and of the paper's values inside our intervals."""
+    lines = [
+        "| class: walkers' speed, paper (CASN, SNL); ours (m/s) | metric | CASN: paper, ours [95 %] "
+        "| SNL matched: paper, ours [95 %] | CASN - SNL: paper, ours [95 %, paired] | verdict |",
+        "|---|---|---|---|---|---|",
+    ]
+    ours_speed = dict(zip(comparison["copy"].drop_duplicates(), sweep["values"], strict=True))
+
+    def number(value: float, metric: str) -> str:
+        return f"{value:.0f}" if metric.endswith("_pct") else f"{value:.2f}"
+
+    for r in comparison.itertuples():
+        metric = "d min, m" if r.metric == "d_min_m" else "intruded %"
+        speeds = f"{r.speed_class}: {r.casn_paper_speed_mps:.2f}, {r.snl_paper_speed_mps:.2f}; "
+        speeds += sweep_value_label(ours_speed[r.copy])
+        cells = [
+            f"{number(getattr(r, f'{m}_paper'), r.metric)}, {number(getattr(r, f'{m}_ours'), r.metric)} "
+            f"[{number(getattr(r, f'{m}_lo'), r.metric)}, {number(getattr(r, f'{m}_hi'), r.metric)}]"
+            for m in ("casn", "snl")
+        ]
+        f = "+.0f" if r.metric.endswith("_pct") else "+.2f"
+        diff = f"{r.paper_diff:{f}}, {r.ours_diff:{f}} [{r.ours_diff_lo:{f}}, {r.ours_diff_hi:{f}}]"
+        lines.append(f"| {speeds} | {metric} | {cells[0]} | {cells[1]} | {diff} | {r.verdict} |")
+    counts = ", ".join(f"{n} {v}" for v, n in comparison["verdict"].value_counts().items())
+    inside = int(comparison["casn_inside"].sum() + comparison["snl_inside"].sum())
+    lines.append(
+        f"\nOf {len(comparison)} differences: {counts}. Of the paper's {2 * len(comparison)} values, "
+        f"{inside} inside our interval. {int(comparison['n_pairs'].iloc[0])} variants a class; the paper's "
+        "trials per class and method: 5-11."
+    )
+    return "\n".join(lines)
+
+
 def sweep_copy_name(scene: str, k: int) -> str:
     """The name of a sweep's copy ``k`` of ``scene`` (``scripts/scene_sweep.py``)."""
     return f"{scene}+sweep{k}"

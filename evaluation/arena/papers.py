@@ -265,6 +265,22 @@ def _episode_values(episodes: pd.DataFrame, scene: str, method: str, metric: str
     return scale * g[column].astype(float)
 
 
+def direction_verdict(paper_diff: float, ours: float, lo: float, hi: float) -> str:
+    """Does a paper's difference (proposed - baseline) reproduce, given ours and its 95 % interval
+    ``[lo, hi]``: ``reproduced`` (same sign, our interval excludes 0), ``same sign, not
+    significant``, ``opposite`` (our interval excludes 0 on the other side), ``opposite, not
+    significant``, ``no difference here`` (ours exactly 0); where the paper's difference is 0,
+    ``reproduced`` when our interval holds 0, else ``differs``."""
+    significant = not (lo <= 0 <= hi)
+    if abs(paper_diff) < 1e-9:
+        return "differs" if significant else "reproduced"
+    if np.sign(ours) == np.sign(paper_diff):
+        return "reproduced" if significant else "same sign, not significant"
+    if significant:
+        return "opposite"
+    return "no difference here" if ours == 0 else "opposite, not significant"
+
+
 def directions(episodes: pd.DataFrame, suffix: str = "") -> pd.DataFrame:
     """Does each paper's direction reproduce? For every paper row of a proposed method and each
     baseline the paper compared it with on that scene and metric: the paper's difference
@@ -305,19 +321,7 @@ def directions(episodes: pd.DataFrame, suffix: str = "") -> pd.DataFrame:
         ours = float(d.mean()) if len(d) else float("nan")
         lo, hi = mean_interval(d)
         paper_diff = paper[(src, scene, proposed, metric)] - value
-        if not len(d):  # the metric has no value here (a second person the scene does not have)
-            verdict = "not measured here"
-        elif abs(paper_diff) < 1e-9:
-            verdict = "reproduced" if lo <= 0 <= hi else "differs"
-        else:
-            sign = np.sign(paper_diff)
-            significant = not (lo <= 0 <= hi)
-            if np.sign(ours) == sign:
-                verdict = "reproduced" if significant else "same sign, not significant"
-            elif significant:
-                verdict = "opposite"
-            else:
-                verdict = "no difference here" if ours == 0 else "opposite, not significant"
+        verdict = direction_verdict(paper_diff, ours, lo, hi) if len(d) else "not measured here"
         rows.append(
             {
                 "source": src,
@@ -333,4 +337,102 @@ def directions(episodes: pd.DataFrame, suffix: str = "") -> pd.DataFrame:
                 "verdict": verdict,
             }
         )
+    return pd.DataFrame(rows)
+
+
+# Seed 001, Tables 2 (head-on) and 3 (crossing) by the walker's speed class, in the order slow,
+# medium, fast: per method (n trials, the walkers' mean speed v in m/s, the mean minimum distance
+# d in m, i the trials with an intrusion into the personal space). The "All" rows are in
+# :data:`PAPER_ROWS` (Table 2's against the head-on scene, Table 3's slow row against the
+# crossing); these are compared with a sweep of the scene's walker speed, one copy a class
+# (``scripts/scene_sweep.py SCENE people.speed_mps ...``, docs/arena-results.md).
+SPEED_CLASSES = ("slow", "medium", "fast")
+PAPER_SPEED_CLASSES: dict[str, tuple[str, dict[str, tuple[tuple[int, float, float, int], ...]]]] = {
+    "casn_head_on": (
+        "seed 001 Table 2",
+        {
+            "casn": ((9, 0.47, 0.99, 5), (10, 0.69, 1.18, 6), (10, 1.35, 1.13, 5)),
+            "snl_matched": ((11, 0.42, 0.82, 11), (11, 0.66, 0.85, 11), (11, 1.33, 0.86, 11)),
+        },
+    ),
+    "casn_crossing": (
+        "seed 001 Table 3",
+        {
+            "casn": ((5, 0.38, 1.71, 0), (5, 0.61, 1.69, 0), (5, 1.00, 1.72, 0)),
+            "snl_matched": ((5, 0.51, 1.02, 4), (5, 0.67, 0.73, 5), (5, 0.91, 1.21, 3)),
+        },
+    ),
+}
+# The metrics a speed class reports: (the summary's metric, the pairs' metric, the paper's value
+# from (n, v, d, i)).
+_SPEED_CLASS_METRICS = (
+    ("d_min_m", "d_min_m", lambda n, v, d, i: d),
+    ("intruded_pct", "intruded", lambda n, v, d, i: 100.0 * i / n),
+)
+
+
+def speed_class_comparison(summary: pd.DataFrame, pairs: pd.DataFrame, scene: str, copies) -> pd.DataFrame:
+    """Seed 001's rows by walker speed beside a sweep of ``scene``'s walker speed: for each class
+    and metric (``d_min_m``, ``intruded_pct``) the paper's CASN and SNL values, ours with their
+    95 % intervals and whether the paper's value lies in ours (``casn_inside``,
+    ``snl_inside``), the paper's difference CASN - SNL and ours paired by variant, and the
+    difference's ``verdict`` (:func:`direction_verdict`).
+
+    Args:
+      summary: the sweep's summary (:func:`evaluation.arena.report.summary`), rows named by copy.
+      pairs: the sweep's paired differences CASN - SNL matched
+        (:func:`evaluation.arena.markdown.method_pairs`: ``scene``, ``method_a``, ``method_b``,
+        ``metric``, ``a - b``, ``lo``, ``hi``, ``n``).
+      scene: ``casn_head_on`` or ``casn_crossing``.
+      copies: the sweep's copy names, one a class in the order of :data:`SPEED_CLASSES`.
+
+    Raises ValueError naming what is missing: another scene, another number of copies, or a copy,
+    method or metric the frames lack.
+    """
+    if scene not in PAPER_SPEED_CLASSES:
+        raise ValueError(f"scene {scene}: seed 001 reports speed classes for {', '.join(PAPER_SPEED_CLASSES)} only")
+    copies = list(copies)
+    if len(copies) != len(SPEED_CLASSES):
+        raise ValueError(f"{len(copies)} copies: a speed-class sweep has one a class ({', '.join(SPEED_CLASSES)})")
+    source, paper = PAPER_SPEED_CLASSES[scene]
+    rows = []
+    for k, (cls, copy) in enumerate(zip(SPEED_CLASSES, copies, strict=True)):
+        mine = {}
+        for method in paper:
+            match = summary[(summary["scene"] == copy) & (summary["method"] == method)]
+            if match.empty:
+                raise ValueError(f"no summary row for {copy}, method {method}")
+            mine[method] = match.iloc[0]
+        for metric, pair_metric, of in _SPEED_CLASS_METRICS:
+            pair = pairs[
+                (pairs["scene"] == copy)
+                & (pairs["method_a"] == "casn")
+                & (pairs["method_b"] == "snl_matched")
+                & (pairs["metric"] == pair_metric)
+            ]
+            if pair.empty:
+                raise ValueError(f"no pair casn - snl_matched for {copy}, metric {pair_metric}")
+            pair = pair.iloc[0]
+            row = {"source": source, "scene": scene, "speed_class": cls, "copy": copy, "metric": metric}
+            for method, short in (("casn", "casn"), ("snl_matched", "snl")):
+                n, v, d, i = paper[method][k]
+                value, lo, hi = (_ours(mine[method], metric, suffix) for suffix in ("", "_lo", "_hi"))
+                row |= {
+                    f"{short}_paper_speed_mps": v,
+                    f"{short}_paper": of(n, v, d, i),
+                    f"{short}_ours": value,
+                    f"{short}_lo": lo,
+                    f"{short}_hi": hi,
+                    f"{short}_inside": bool(lo <= of(n, v, d, i) <= hi),
+                }
+            diff, lo, hi = (float(pair[c]) for c in ("a - b", "lo", "hi"))
+            row |= {
+                "paper_diff": row["casn_paper"] - row["snl_paper"],
+                "ours_diff": diff,
+                "ours_diff_lo": lo,
+                "ours_diff_hi": hi,
+                "n_pairs": int(pair["n"]),
+            }
+            row["verdict"] = direction_verdict(row["paper_diff"], diff, lo, hi)
+            rows.append(row)
     return pd.DataFrame(rows)
