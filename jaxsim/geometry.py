@@ -76,18 +76,27 @@ def box_distance(xy, boxes_m, xp=np):
 
 
 def box_signed_distance(px: np.ndarray, py: np.ndarray, boxes_m: np.ndarray):
-    """:func:`box_distance` on the host in float64, the coordinates and normal apart.
+    """:func:`box_distance` on the host in float64, the coordinates and normal apart: the same
+    bits (tested), one box at a time (a running minimum; a tie keeps the earlier box, as
+    ``argmin`` does) rather than every box at once, which holds a (..., B, 2) array per operation
+    (a simulated day's 1.3 million positions against the warehouse's boxes: over a minute, a
+    second this way).
 
     Args:
       px, py: (...,) point coordinates.
-      boxes_m: (B, 4) boxes ``xmin, xmax, ymin, ymax``.
+      boxes_m: (B, 4) boxes ``xmin, xmax, ymin, ymax``, at least one.
 
     Returns:
       (sd, nx, ny), each shaped like ``px``.
     """
-    xy = np.stack([np.asarray(px, np.float64), np.asarray(py, np.float64)], axis=-1)
-    sd, normal = box_distance(xy, np.asarray(boxes_m, np.float64))
-    return sd, normal[..., 0], normal[..., 1]
+    px, py = np.broadcast_arrays(np.asarray(px, np.float64), np.asarray(py, np.float64))
+    sd = np.full(px.shape, np.inf)
+    nx, ny = np.zeros(px.shape), np.zeros(px.shape)
+    for centre, half in zip(*_centres_and_halves(np.asarray(boxes_m, np.float64), np)):
+        box_sd, box_nx, box_ny = _to_box_host(px - centre[0], py - centre[1], half[0], half[1])
+        closer = box_sd < sd
+        sd, nx, ny = np.where(closer, box_sd, sd), np.where(closer, box_nx, nx), np.where(closer, box_ny, ny)
+    return sd, nx, ny
 
 
 def _to_box_host(ox, oy, half_x, half_y):
@@ -119,22 +128,16 @@ def build_distance_field(
     boxes_m: np.ndarray, bounds_m: tuple[float, float, float, float], resolution_m: float = 0.05
 ) -> DistanceField:
     """Precompute the signed distance field over ``bounds_m = (xmin, xmax, ymin, ymax)``: what
-    :func:`box_distance` gives at each cell centre, the same bits (tested), one box at a time (a
-    running minimum; a tie keeps the earlier box, as ``argmin`` does) rather than every box at
-    once, several times faster: every process that builds the warehouse pays it."""
+    :func:`box_distance` gives at each cell centre, the same bits (tested), one box at a time
+    (:func:`box_signed_distance`), several times faster than every box at once: every process
+    that builds the warehouse pays it."""
     boxes_m = np.asarray(boxes_m, np.float64)
     if not len(boxes_m):
         raise ValueError("a distance field needs at least one box")
     xmin, xmax, ymin, ymax = bounds_m
     xs = np.arange(xmin, xmax + resolution_m / 2, resolution_m)
     ys = np.arange(ymin, ymax + resolution_m / 2, resolution_m)
-    gx, gy = np.meshgrid(xs, ys)  # (H, W)
-    sd = np.full(gx.shape, np.inf)
-    nx, ny = np.zeros(gx.shape), np.zeros(gx.shape)
-    for centre, half in zip(*_centres_and_halves(boxes_m, np)):
-        box_sd, box_nx, box_ny = _to_box_host(gx - centre[0], gy - centre[1], half[0], half[1])
-        closer = box_sd < sd
-        sd, nx, ny = np.where(closer, box_sd, sd), np.where(closer, box_nx, nx), np.where(closer, box_ny, ny)
+    sd, nx, ny = box_signed_distance(*np.meshgrid(xs, ys), boxes_m)  # (H, W)
     return DistanceField(np.array([xmin, ymin]), resolution_m, *(a.astype(np.float32) for a in (sd, nx, ny)))
 
 

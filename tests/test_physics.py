@@ -49,7 +49,8 @@ def test_wall_field_and_obstacle_force(warehouse):
 
 
 def test_the_distance_field_is_box_distance_at_every_cell_centre_bit_for_bit(warehouse):
-    """The field is built one box at a time with x and y apart; it must hold what the one formula
+    """The field (and the host's signed distance at any point) is built one box at a time with x
+    and y apart; it must hold what the one formula
     (:func:`geometry.box_distance`, every box at once) gives: on the warehouse, and on touching
     and overlapping boxes where two boxes tie (the earlier one's normal is kept, as argmin does)
     and cells lie inside two boxes at once."""
@@ -65,9 +66,16 @@ def test_the_distance_field_is_box_distance_at_every_cell_centre_bit_for_bit(war
         ys = np.arange(bounds[2], bounds[3] + resolution / 2, resolution)
         assert field.sdf_m.shape == (len(ys), len(xs))
         rows = slice(None, None, 7)  # every 7th row: the whole warehouse at once needs 1 GB here
-        sd, nx, ny = geometry.box_signed_distance(*np.meshgrid(xs, ys[rows]), boxes)
-        for built, direct in ((field.sdf_m, sd), (field.normal_x, nx), (field.normal_y, ny)):
+        gx, gy = np.meshgrid(xs, ys[rows])
+        sd, normal = geometry.box_distance(np.stack([gx, gy], -1), np.asarray(boxes, np.float64))
+        for built, direct in ((field.sdf_m, sd), (field.normal_x, normal[..., 0]), (field.normal_y, normal[..., 1])):
             np.testing.assert_array_equal(built[rows], direct.astype(np.float32))
+        # The host form for any points (the tests' wall checks): the same float64 bits, off the grid too.
+        px, py = gx + 0.0137, gy - 0.0071
+        host = geometry.box_signed_distance(px, py, boxes)
+        sd, normal = geometry.box_distance(np.stack([px, py], -1), np.asarray(boxes, np.float64))
+        for got, want in zip(host, (sd, normal[..., 0], normal[..., 1]), strict=True):
+            np.testing.assert_array_equal(got, want)
     assert (field.sdf_m < 0).any() and (field.sdf_m == 0).any()  # insides and edges were compared
     with pytest.raises(ValueError, match="at least one box"):
         geometry.build_distance_field(np.zeros((0, 4)), (0, 1, 0, 1))
