@@ -149,6 +149,12 @@ def test_walking_groups_are_people_moving_within_reach_all_window_long():
     np.testing.assert_array_equal(group[0], [0, 0, -1, -1, -1, 0])
     observed[0, 1, 3] = np.nan  # absent for a frame: no longer scored as walking with anyone
     np.testing.assert_array_equal(measures.walking_groups(observed)[0], [0, -1, -1, -1, -1, 0])
+    # Windows apart: a group never spans two windows, and its id is its lowest member's index in
+    # its own window (here people 2 and 4 of the second window; 0 and 1 walk 3 m apart).
+    second = np.stack([t + [0, 0], t + [0, 3.0], t + [0, 6.0], t + [0, 9.0], t + [0, 6.5], t + [0, 12.0]])
+    both = measures.walking_groups(np.concatenate([observed, second[None]]))
+    np.testing.assert_array_equal(both, [[0, -1, -1, -1, -1, 0], [-1, -1, 2, -1, 2, -1]])
+    assert measures.walking_groups(np.zeros((0, 3, 8, 2))).shape == (0, 3)
 
 
 def _synthetic_windows(truth: hv.HumanModel, n_windows: int = 32) -> hv.PredictionWindows:

@@ -21,6 +21,8 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 # Weidmann (1993): v(rho) = v_free (1 - exp(-gamma (1/rho - 1/rho_max))), v_free 1.34 m/s,
 # gamma 1.913 /m², rho_max 5.4 /m².
@@ -192,17 +194,19 @@ def walking_groups(observed_xy, reach_m: float = 1.0, moving_m: float = 0.5) -> 
     w, p = xy.shape[:2]
     seen = ~np.isnan(xy[..., 0]).any(axis=-1)  # (W, P) present throughout
     moved = np.linalg.norm(np.nan_to_num(xy[:, :, -1] - xy[:, :, 0]), axis=-1) >= moving_m
-    gap = np.linalg.norm(xy[:, :, None] - xy[:, None, :], axis=-1)  # (W, P, P, T)
+    # (W, P, P, T) distances with x and y apart: numpy's norm over a last axis of two is slow,
+    # and the square root of the same sum gives the same bits.
+    dx, dy = (xy[:, :, None, :, k] - xy[:, None, :, :, k] for k in (0, 1))
+    gap = np.sqrt(dx * dx + dy * dy)
     near = np.nan_to_num(gap, nan=np.inf).max(axis=-1) <= reach_m
     ok = seen & moved
-    linked = near & ok[:, :, None] & ok[:, None, :]
-    # connected components by repeated min-label propagation (P is at most a few dozen)
-    label = np.broadcast_to(np.arange(p), (w, p)).copy()
-    for _ in range(p):
-        spread = np.where(linked, label[:, None, :], p).min(axis=-1)
-        new = np.minimum(label, spread)
-        if np.array_equal(new, label):
-            break
-        label = new
-    alone = ~(linked & ~np.eye(p, dtype=bool)).any(axis=-1)
-    return np.where(alone, -1, label).astype(np.int32)
+    paired = near & ok[:, :, None] & ok[:, None, :] & ~np.eye(p, dtype=bool)  # (W, P, P)
+    # Groups are the connected components of the pairs, every window's people one block of one
+    # graph (scipy's connected components); a group's id is its lowest member's index.
+    window, a, b = np.nonzero(paired)
+    graph = coo_matrix((np.ones(len(a), bool), (window * p + a, window * p + b)), shape=(w * p, w * p))
+    _, component = connected_components(graph, directed=False)
+    lowest = np.full(component.max() + 1 if len(component) else 0, w * p)
+    np.minimum.at(lowest, component, np.arange(w * p))
+    label = lowest[component].reshape(w, p) - p * np.arange(w)[:, None]
+    return np.where(paired.any(axis=-1), label, -1).astype(np.int32)
