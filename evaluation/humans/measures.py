@@ -194,11 +194,16 @@ def walking_groups(observed_xy, reach_m: float = 1.0, moving_m: float = 0.5) -> 
     w, p = xy.shape[:2]
     seen = ~np.isnan(xy[..., 0]).any(axis=-1)  # (W, P) present throughout
     moved = np.linalg.norm(np.nan_to_num(xy[:, :, -1] - xy[:, :, 0]), axis=-1) >= moving_m
-    # (W, P, P, T) distances with x and y apart: numpy's norm over a last axis of two is slow,
-    # and the square root of the same sum gives the same bits.
-    dx, dy = (xy[:, :, None, :, k] - xy[:, None, :, :, k] for k in (0, 1))
-    gap = np.sqrt(dx * dx + dy * dy)
-    near = np.nan_to_num(gap, nan=np.inf).max(axis=-1) <= reach_m
+    # The farthest two people are over the window (inf where either is absent), a frame at a time
+    # with x and y apart: numpy's norm over a last axis of two is slow, every frame at once holds
+    # (W, P, P, T) arrays (a gigabyte each for a training split), and the square root of the same
+    # sum gives the same bits.
+    farthest = np.full((w, p, p), -np.inf)
+    for frame in np.moveaxis(xy, 2, 0):  # (W, P, 2)
+        dx, dy = (frame[:, :, None, k] - frame[:, None, :, k] for k in (0, 1))
+        gap = np.sqrt(dx * dx + dy * dy)
+        farthest = np.maximum(farthest, np.where(np.isnan(gap), np.inf, gap))
+    near = farthest <= reach_m
     ok = seen & moved
     paired = near & ok[:, :, None] & ok[:, None, :] & ~np.eye(p, dtype=bool)  # (W, P, P)
     # Groups are the connected components of the pairs, every window's people one block of one
