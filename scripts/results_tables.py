@@ -228,11 +228,16 @@ def _models(folder, other=None, labels=None, method="gscl"):
     return "\n\n".join([*(_and_from(run) for run in runs[1:]), table])
 
 
-def _sweep(folder, metric="social_no_collision"):
+def _sweep_of(folder: pathlib.Path) -> dict:
+    """A sweep's snapshot's :data:`~socialnav.evaluation.arena.markdown.SWEEP_FILE`; ValueError if it has none."""
     path = folder / markdown.SWEEP_FILE
     if not path.is_file():
         raise ValueError(f"{path}: no such file (a run of scripts/scene_sweep.py)")
-    return markdown.sweep_table(_read(folder, "summary.csv"), json.loads(path.read_text()), metric)
+    return json.loads(path.read_text())
+
+
+def _sweep(folder, metric="social_no_collision"):
+    return markdown.sweep_table(_read(folder, "summary.csv"), _sweep_of(folder), metric)
 
 
 def _pairs(folder, metrics=None):
@@ -242,10 +247,7 @@ def _pairs(folder, metrics=None):
 
 
 def _speed_classes(folder):
-    path = folder / markdown.SWEEP_FILE
-    if not path.is_file():
-        raise ValueError(f"{path}: no such file (a run of scripts/scene_sweep.py)")
-    sweep = json.loads(path.read_text())
+    sweep = _sweep_of(folder)
     copies = [markdown.sweep_copy_name(sweep["scene"], k) for k in range(len(sweep["values"]))]
     comparison = papers.speed_class_comparison(
         _read(folder, "summary.csv"), _read(folder, markdown.PAIRS_FILE), sweep["scene"], copies

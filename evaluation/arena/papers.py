@@ -415,15 +415,16 @@ def speed_class_comparison(summary: pd.DataFrame, pairs: pd.DataFrame, scene: st
             pair = pair.iloc[0]
             row = {"source": source, "scene": scene, "speed_class": cls, "copy": copy, "metric": metric}
             for method, short in (("casn", "casn"), ("snl_matched", "snl")):
-                n, v, d, i = paper[method][k]
-                value, lo, hi = (_ours(mine[method], metric, suffix) for suffix in ("", "_lo", "_hi"))
+                published = paper[method][k]
+                value = of(*published)
+                ours, lo, hi = (_ours(mine[method], metric, suffix) for suffix in ("", "_lo", "_hi"))
                 row |= {
-                    f"{short}_paper_speed_mps": v,
-                    f"{short}_paper": of(n, v, d, i),
-                    f"{short}_ours": value,
+                    f"{short}_paper_speed_mps": published[1],
+                    f"{short}_paper": value,
+                    f"{short}_ours": ours,
                     f"{short}_lo": lo,
                     f"{short}_hi": hi,
-                    f"{short}_inside": bool(lo <= of(n, v, d, i) <= hi),
+                    f"{short}_inside": bool(lo <= value <= hi),
                 }
             diff, lo, hi = (float(pair[c]) for c in ("a - b", "lo", "hi"))
             row |= {
