@@ -245,16 +245,21 @@ def corridor_run(
 
 def data_fundamental_diagram(runs=UO_RUNS) -> pd.DataFrame:
     """``run, frame, density, speed`` of the Jülich uni-directional runs' steady states."""
-    parts = []
-    for run in runs:
-        info = recorded.run_info(run)
-        g = info["geometry"]
-        points = measures.voronoi_density_speed(
-            recorded.trajectories(run), info["frames_per_s"], g["walkable_polygon_m"], g["measurement_area_m"],
-            g["walking_direction"], frames=tuple(info["steady_state_frames"]),
-        )  # fmt: skip
-        parts.append(points.assign(run=run))
-    return pd.concat(parts, ignore_index=True)
+    return pd.concat([_run_fundamental_diagram(run) for run in runs], ignore_index=True)
+
+
+@functools.lru_cache(maxsize=len(UO_RUNS))
+def _run_fundamental_diagram(run: str) -> pd.DataFrame:
+    """One run's steady-state points (PedPy's Voronoi method, a few seconds a run). Cached: the
+    data never changes within a process, and a validation, a calibration and a notebook each ask
+    for the same runs; callers get a new frame from :func:`data_fundamental_diagram`'s concat."""
+    info = recorded.run_info(run)
+    g = info["geometry"]
+    points = measures.voronoi_density_speed(
+        recorded.trajectories(run), info["frames_per_s"], g["walkable_polygon_m"], g["measurement_area_m"],
+        g["walking_direction"], frames=tuple(info["steady_state_frames"]),
+    )  # fmt: skip
+    return points.assign(run=run)
 
 
 def _corridor_measure(rows, width_m, length_m, frames_per_s, warmup_s, direction=(1.0, 0.0)):
