@@ -415,11 +415,11 @@ def speed_class_comparison(summary: pd.DataFrame, pairs: pd.DataFrame, scene: st
             pair = pair.iloc[0]
             row = {"source": source, "scene": scene, "speed_class": cls, "copy": copy, "metric": metric}
             for method, short in (("casn", "casn"), ("snl_matched", "snl")):
-                published = paper[method][k]
-                value = of(*published)
+                n, speed_mps, d, i = paper[method][k]
+                value = of(n, speed_mps, d, i)
                 ours, lo, hi = (_ours(mine[method], metric, suffix) for suffix in ("", "_lo", "_hi"))
                 row |= {
-                    f"{short}_paper_speed_mps": published[1],
+                    f"{short}_paper_speed_mps": speed_mps,
                     f"{short}_paper": value,
                     f"{short}_ours": ours,
                     f"{short}_lo": lo,
