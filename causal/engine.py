@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import pathlib
+import tempfile
 
 import numpy as np
 import pandas as pd
@@ -109,14 +110,19 @@ def learn_mle(bn, data: pd.DataFrame):
     that keeps unseen parent combinations from stopping the learner (notes: keep the learner in
     a variable, chaining its calls segfaulted).
 
-    pyAgrum's learner reads a DataFrame through a CSV file it writes; the learner is given each
-    distinct discretised row once, weighted by how often it occurs (``setRecordWeight``): the
-    same counts, so the same tables bit for bit (tested), without writing and parsing every row
-    (a simulated day has millions)."""
+    pyAgrum's learner reads its data from a CSV file; the learner is given each distinct
+    discretised row once, weighted by how often it occurs (``setRecordWeight``): the same counts,
+    so the same tables bit for bit (tested), without writing and parsing every row (a simulated
+    day has millions). The file is written here, in a temporary folder removed once the learner
+    has read it: given a DataFrame, pyAgrum writes two files to the system's temporary folder and
+    never removes them (pyAgrum 3.3), which a sweep of thousands of runs would pile up."""
     import pyagrum as gum
 
     distinct, weights = _distinct_rows(bn, data)
-    learner = gum.BNLearner(distinct, bn)
+    with tempfile.TemporaryDirectory(prefix="socialnav-mle-") as folder:
+        csv = pathlib.Path(folder) / "rows.csv"
+        distinct.to_csv(csv, na_rep="?", index=False)  # what pyAgrum's own DataFrame path writes
+        learner = gum.BNLearner(str(csv), bn)
     for i, weight in enumerate(weights):
         learner.setRecordWeight(i, float(weight))
     learner.useSmoothingPrior(SMOOTHING)

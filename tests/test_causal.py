@@ -306,12 +306,19 @@ def test_a_learn_too_large_for_the_memory_is_refused_before_any_work():
     assert 2_771_930 * ENGINE_BYTES_PER_SAMPLE > 2.2e9  # the figure measured for one warehouse world
 
 
-def test_mle_from_the_distinct_rows_is_pyagrums_learner_on_every_row_bit_for_bit():
+def test_mle_from_the_distinct_rows_is_pyagrums_learner_on_every_row_bit_for_bit(tmp_path, monkeypatch):
     """``engine.learn_mle`` gives pyAgrum's learner each distinct discretised row once, weighted
     by its count: the tables must be those of the learner reading every row (pyAgrum's own way,
     through a CSV file), values beyond the bins' ends and on their edges included, and a missing
-    value or an unknown label refused by pyAgrum as before."""
+    value or an unknown label refused by pyAgrum as before; it leaves nothing in the temporary
+    folder (pyAgrum's DataFrame path leaves two files there each call)."""
+    import tempfile
+
     import pyagrum as gum
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
 
     rng = np.random.default_rng(0)
     n = 4000
@@ -334,7 +341,10 @@ def test_mle_from_the_distinct_rows_is_pyagrums_learner_on_every_row_bit_for_bit
 
     distinct, counts = engine_lib._distinct_rows(bn, data)
     assert len(distinct) < n and counts.sum() == n
-    expected, got = every_row(data), engine_lib.learn_mle(bn, data)
+    got = engine_lib.learn_mle(bn, data)
+    assert list(scratch.iterdir()) == []
+    expected = every_row(data)
+    assert len(list(scratch.iterdir())) == 2  # pyAgrum's own way: a file and its CSV, left behind
     for name in ("V", "L", "O"):
         np.testing.assert_array_equal(np.asarray(got.cpt(name).tolist()), np.asarray(expected.cpt(name).tolist()))
     for column, bad in (("V", np.nan), ("O", "2")):
@@ -342,5 +352,7 @@ def test_mle_from_the_distinct_rows_is_pyagrums_learner_on_every_row_bit_for_bit
         frame.loc[5, column] = bad
         with pytest.raises(gum.GumException) as raised:
             every_row(frame)
+        left = set(scratch.iterdir())
         with pytest.raises(type(raised.value)):
             engine_lib.learn_mle(bn, frame)
+        assert set(scratch.iterdir()) == left  # refused, it leaves nothing either
