@@ -184,17 +184,29 @@ def check_on_map(
     return share
 
 
-def _cells(points_local_m: np.ndarray) -> np.ndarray:
-    """(N, 2) int cells crossed by the polyline of local points (M, 2), consecutive repeats dropped."""
+def _dense(points_local_m: np.ndarray) -> np.ndarray:
+    """(K, 2) points along the polyline of local points (M, 2), at most ``SAMPLE_M`` apart."""
     dense = [points_local_m[:1]]
     for a, b in zip(points_local_m[:-1], points_local_m[1:], strict=True):
         n = max(1, math.ceil(np.linalg.norm(b - a) / SAMPLE_M))
         dense.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
+    return np.concatenate(dense)
+
+
+def _cells_of_paths(paths: list[np.ndarray]) -> list[np.ndarray]:
+    """Each polyline's (N, 2) int cells crossed (:func:`models.grid.cell_of`), consecutive repeats
+    dropped. Every path's points go through ``cell_of`` in one call: called per path, each path's
+    length was a new shape and a new compiled program (one track file has hundreds)."""
+    dense = [_dense(p) for p in paths]
+    if not dense:
+        return []
     xy = np.concatenate(dense)
     row, col = (np.asarray(v) for v in grid.cell_of(xy[:, 0], xy[:, 1]))
-    cells = np.stack([row, col], axis=1)
-    keep = np.concatenate([[True], np.any(cells[1:] != cells[:-1], axis=1)])
-    return cells[keep]
+    out = []
+    for cells in np.split(np.stack([row, col], axis=1), np.cumsum([len(d) for d in dense])[:-1]):
+        keep = np.concatenate([[True], np.any(cells[1:] != cells[:-1], axis=1)])
+        out.append(cells[keep])
+    return out
 
 
 def _shortcut(cells: np.ndarray, walls: np.ndarray) -> np.ndarray:
@@ -285,9 +297,10 @@ def track_demonstrations(tracks: dict, occupancy, resolution_m: float, origin_xy
 
     chains, used = [], []
     skipped: dict[str, int] = {}
-    for n, (path, _) in enumerate(views):
+    crossed = _cells_of_paths([path for path, _ in views])
+    for n in range(len(views)):
         walls = images[n] == grid.WALL
-        cells = _shortcut(_cells(path), walls)
+        cells = _shortcut(crossed[n], walls)
         why = _feasible(cells, walls) if len(cells) >= min_cells else f"fewer than {min_cells} cells"
         if why:
             skipped[why] = skipped.get(why, 0) + 1
