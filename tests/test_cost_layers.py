@@ -278,8 +278,9 @@ def test_gscl_layer_reproduces_the_model_where_window_and_grid_align():
     occupancy = np.zeros(spec.shape, np.float32)
     occupancy[5, :] = 1.0
     scene = make_scene([[4.0, 3.5]], people_heading_rad=[1.0], robot_xy_m=robot, goal_xy_m=(8.0, 5.0))
-    layer = np.asarray(gscl_layer.gscl_layer(predict, occupancy, spec, scene))
-    window = np.asarray(predict(gscl_layer.window_input(occupancy, spec, scene)[None]))[0]
+    # Jitted as the stacks run them (op by op, this test compiled ~150 programs).
+    layer = np.asarray(jax.jit(lambda o, s: gscl_layer.gscl_layer(predict, o, spec, s))(occupancy, scene))
+    window = np.asarray(jax.jit(lambda o, s: predict(gscl_layer.window_input(o, spec, s)[None]))(occupancy, scene))[0]
     # The window's row 0 is the top (y up); the planner grid's row 0 is the bottom.
     np.testing.assert_allclose(layer, gscl_layer.read_cost(np.flipud(window)), rtol=1e-6)
 
@@ -300,11 +301,12 @@ def test_gscl_layers_batch_equals_one_by_one():
     ]
     occupancy = np.zeros(SPEC.shape, np.float32)
     batch = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *scenes)
-    together = np.asarray(gscl_layer.gscl_layers(predict, occupancy, SPEC, batch))
+    together = np.asarray(jax.jit(lambda o, b: gscl_layer.gscl_layers(predict, o, SPEC, b))(occupancy, batch))
+    alone = jax.jit(lambda o, s: gscl_layer.gscl_layer(predict, o, SPEC, s))
     for k, scene in enumerate(scenes):
         # Costs reach 252: a batch of two and a batch of one may pick different convolution
         # orders in XLA, a few float32 ulps apart (2.9e-6 at 12.0 seen on CI's processor).
-        one = gscl_layer.gscl_layer(predict, occupancy, SPEC, scene)
+        one = alone(occupancy, scene)
         np.testing.assert_allclose(together[k], one, rtol=1e-6, atol=1e-6)
     far = np.hypot(X - 0.0, Y - 0.0) > 8 * math.sqrt(2) + 0.1
     assert np.all(together[0][far] == 0.0)

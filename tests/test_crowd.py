@@ -71,13 +71,14 @@ def test_the_warehouse_and_the_arena_move_people_by_the_chosen_human_model(monke
         status=state.workers.status.at[:2].set(WALKING),
     )
     args = (jnp.float32(0.0), jnp.int32(0), u)
-    chosen = step_lib.crowd_step(scenario.params, world, w, state.robot, *args)
-    social = step_lib.crowd_step(scenario.params, sf_world, w, state.robot, *args)
+    # Each step compiled as one program (as the rollouts run it), not op by op.
+    chosen = jax.jit(lambda w: step_lib.crowd_step(scenario.params, world, w, state.robot, *args))(w)
+    social = jax.jit(lambda w: step_lib.crowd_step(scenario.params, sf_world, w, state.robot, *args))(w)
     assert not np.allclose(np.asarray(chosen.x_m[:2]), np.asarray(social.x_m[:2]), atol=1e-4)
     setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"), arena.ArenaConfig.of(model))
     variant = jax.tree_util.tree_map(jnp.asarray, sample_variant(setup.spec, 0, 0))
-    people_lib.step_people(params, setup.env.world, variant, people_lib.init_people(variant), jnp.zeros(2),
-                           jnp.zeros(2), jnp.int32(0), model, setup.env.orca)  # fmt: skip
+    jax.jit(lambda v: people_lib.step_people(params, setup.env.world, v, people_lib.init_people(v), jnp.zeros(2),
+                                             jnp.zeros(2), jnp.int32(0), model, setup.env.orca))(variant)  # fmt: skip
     assert calls == [model, "social_force", model]
     with pytest.raises(ValueError, match="human model must be one of"):
         build_world(scenario, "helbing")

@@ -66,7 +66,7 @@ def test_reset_and_step_are_deterministic_and_follow_the_specs(setup):
 @pytest.mark.slow
 def test_the_base_clips_an_action_beyond_its_limits(setup):
     env = setup.env
-    state, _ = env.reset(jax.random.key(0), _one(_variants(setup, 1), 0))
+    state, _ = jax.jit(env.reset)(jax.random.key(0), _one(_variants(setup, 1), 0))
     step = jax.jit(env.step)
     for _ in range(40):
         state, ts = step(state, jnp.array([50.0, -50.0]))
@@ -127,10 +127,10 @@ def test_reward_pays_the_goal_once_and_charges_a_contact(tmp_path):
     assert reward.sum() == pytest.approx(expected, rel=1e-4)
     assert np.all(reward[np.argmax(reached) + 1 :] == 0.0)
     # A person on top of the robot.
-    s, _ = env.reset(jax.random.key(0), variant)
+    s, _ = jax.jit(env.reset)(jax.random.key(0), variant)
     people = s.people.replace(xy=s.people.xy.at[0].set(s.robot.xy), present=s.people.present.at[0].set(True))
     s = s.replace(people=people, variant=s.variant.replace(valid=s.variant.valid.at[0].set(True)))
-    _, ts = env.step(s, jnp.zeros(2))
+    _, ts = jax.jit(env.step)(s, jnp.zeros(2))
     assert bool(ts.info.person_contact)
     assert float(ts.reward) <= env.reward.collision_penalty + 1e-6
 
@@ -322,7 +322,7 @@ def test_a_non_finite_action_stops_the_robot_and_is_marked(bad):
     avoid it, nor the reward."""
     setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "snape_walking.json"))
     env = setup.env
-    state, ts = env.reset(jax.random.key(0), _one(_variants(setup, 1), 0))
+    state, ts = jax.jit(env.reset)(jax.random.key(0), _one(_variants(setup, 1), 0))
     step = jax.jit(env.step)
     for _ in range(5):
         state, ts = step(state, jnp.array([0.5, 0.0]))
@@ -512,8 +512,8 @@ def test_reset_where_restarts_only_the_episodes_asked_and_runs_no_reset_when_non
     index = pool.draw(jax.random.key(0), 4)
     assert index.shape == (4,) and bool(jnp.all((index >= 0) & (index < 6)))
     keys = jax.random.split(jax.random.key(1), 4)
-    state, ts = jax.vmap(env.reset)(keys, pool.take(index))
-    state, ts = jax.vmap(env.step)(state, jnp.full((4, 2), 0.3))
+    state, ts = jax.jit(jax.vmap(env.reset))(keys, pool.take(index))
+    state, ts = jax.jit(jax.vmap(env.step))(state, jnp.full((4, 2), 0.3))
     mask = jnp.array([True, False, True, False])
     fresh_keys = jax.random.split(jax.random.key(2), 4)
     fresh_index = jnp.array([5, 4, 3, 2])

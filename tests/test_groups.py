@@ -258,7 +258,7 @@ def test_walkers_declared_a_pair_in_a_scene_walk_together_in_the_arena(tmp_path,
             state, _ = env.step(state, jnp.zeros(2))
             return state, state.people.xy
 
-        state, _ = env.reset(jax.random.key(0), variant)
+        state, _ = jax.jit(env.reset)(jax.random.key(0), variant)
         _, xy = jax.jit(lambda s, env=env: jax.lax.scan(step, s, None, length=120))(state)
         gaps[paired] = np.linalg.norm(np.asarray(xy)[20:, 0] - np.asarray(xy)[20:, 1], axis=-1)
     assert gaps[True].max() <= 1.1, gaps[True].max()

@@ -358,7 +358,7 @@ def test_a_velocity_model_moves_the_arenas_people_around_a_standing_robot(name):
     env = env_lib.make_env(spec, env_lib.EnvConfig(human_model=name, max_steps=300))
     assert env.velocity is not None
     variant = jax.tree.map(jnp.asarray, sample_variant(spec, 0, 0, n_slots=setup.n_slots))
-    state, _ = env.reset(jax.random.key(0), variant)
+    state, _ = jax.jit(env.reset)(jax.random.key(0), variant)
     step = jax.jit(env.step)
     start = np.asarray(state.people.xy)
     nearest = np.inf

@@ -19,6 +19,10 @@ from socialnav.jaxsim.scenes.variant import sample_variants
 DT = 0.1
 
 
+# One compiled program a trajectory's shape, as the arena runs it (op by op, each shape cost ~100 programs).
+_episode_metrics = jax.jit(nav_metrics.episode_metrics, static_argnums=(10, 11, 12, 13, 15))
+
+
 def _metrics(robot_xy, speed=None, yaw=None, people_xy=None, people_v=None, present=None, goal=None, reached_at=None,
              group=None, tolerance=0.0):  # fmt: skip
     robot_xy = np.asarray(robot_xy, np.float32)
@@ -32,7 +36,7 @@ def _metrics(robot_xy, speed=None, yaw=None, people_xy=None, people_v=None, pres
     if speed is None:
         speed = np.linalg.norm(np.diff(robot_xy, axis=0, prepend=robot_xy[:1]), axis=1) / DT
     reached = np.zeros(t, bool) if reached_at is None else np.arange(t) >= reached_at
-    return nav_metrics.episode_metrics(
+    return _episode_metrics(
         jnp.asarray(robot_xy),
         jnp.asarray(yaw, jnp.float32),
         jnp.asarray(speed, jnp.float32),

@@ -105,23 +105,23 @@ def test_the_casn_channel_shows_a_walker_at_its_collision_point_and_freezes_it()
     obs = _observation([(3.0, 0.0)], [(-1.0, 0.0)], [True])
     config = policy_lib.PolicyConfig(n_people=2, social_layer="casn")
     state = policy_social.initial_state(1)
-    window, state = policy_social.window("casn", obs, policy_lib.window_points(config, obs), state)
+    # Jitted as the policy runs it (op by op, this test compiled ~90 programs).
+    casn_window = jax.jit(lambda o, s: policy_social.window("casn", o, policy_lib.window_points(config, o), s))
+    window, state = casn_window(obs, state)
     channel = np.asarray(window).reshape(9, 9)
     assert channel[6, 4] == pytest.approx(252 / 254)  # 1 m ahead: intimate + personal discs
     assert channel[0, 4] == 0.0 and channel[8, 0] == 0.0  # 2 m behind; 2 m ahead, 2 m left (> 1.2 m)
     assert bool(state.casn.frozen[0]) and np.allclose(np.asarray(state.casn.frozen_xy_m[0]), (1.0, 0.0), atol=1e-5)
     # The person keeps walking (now 2 m ahead, their collision point 0.67 m): the frozen point stays.
     later = obs.replace(people_xy_m=jnp.array([[2.0, 0.0]]))
-    again, state = policy_social.window("casn", later, policy_lib.window_points(config, later), state)
+    again, state = casn_window(later, state)
     np.testing.assert_array_equal(np.asarray(again), np.asarray(window))
-    x, _ = policy_lib.observe(
-        config,
-        obs,
-        jnp.zeros((40, 40)),
-        costmap.GridSpec(40, 40, 0.25, -5, -5),
-        RobotParams(),
-        policy_social.initial_state(1),
-    )
+    x, _ = jax.jit(
+        lambda o: policy_lib.observe(
+            config, o, jnp.zeros((40, 40)), costmap.GridSpec(40, 40, 0.25, -5, -5), RobotParams(),
+            policy_social.initial_state(1),
+        )
+    )(obs)  # fmt: skip
     np.testing.assert_array_equal(np.asarray(x)[5 + 81 : 5 + 162], np.asarray(window))
 
 
