@@ -3,6 +3,7 @@ encounter, the scenes' rules, Wilson intervals."""
 
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pandas as pd
@@ -10,6 +11,9 @@ import pytest
 
 from socialnav.evaluation.arena import nav_metrics
 from socialnav.evaluation.arena import report as arena_report
+
+# One compiled program a trajectory's shape, as the arena runs it (op by op, each new shape cost ~100 programs).
+_episode_metrics = jax.jit(nav_metrics.episode_metrics, static_argnums=(10, 11, 12, 13))
 
 
 def _metrics(robot_xy, people_xy=None, present=None, dt=0.1, reached_at=None, yaw=None, group=None, people_v=None):
@@ -23,7 +27,7 @@ def _metrics(robot_xy, people_xy=None, present=None, dt=0.1, reached_at=None, ya
     speed = np.linalg.norm(np.diff(robot_xy, axis=0, prepend=robot_xy[:1]), axis=1) / dt
     reached = np.zeros(t, bool) if reached_at is None else np.arange(t) >= reached_at
     p = people_xy.shape[1]
-    return nav_metrics.episode_metrics(
+    return _episode_metrics(
         jnp.asarray(robot_xy, jnp.float32),
         jnp.asarray(yaw, jnp.float32),
         jnp.asarray(speed, jnp.float32),
