@@ -13,7 +13,10 @@ from socialnav.evaluation.arena import nav_metrics
 from socialnav.evaluation.arena import report as arena_report
 
 # One compiled program a trajectory's shape, as the arena runs it (op by op, each new shape cost ~100 programs).
-_episode_metrics = jax.jit(nav_metrics.episode_metrics, static_argnums=(10, 11, 12, 13))
+_episode_metrics = jax.jit(
+    nav_metrics.episode_metrics,
+    static_argnames=("dt_s", "timeout_s", "robot_radius_m", "person_radius_m", "goal_tolerance_m"),
+)
 
 
 def _metrics(robot_xy, people_xy=None, present=None, dt=0.1, reached_at=None, yaw=None, group=None, people_v=None):

@@ -20,7 +20,10 @@ DT = 0.1
 
 
 # One compiled program a trajectory's shape, as the arena runs it (op by op, each shape cost ~100 programs).
-_episode_metrics = jax.jit(nav_metrics.episode_metrics, static_argnums=(10, 11, 12, 13, 15))
+_episode_metrics = jax.jit(
+    nav_metrics.episode_metrics,
+    static_argnames=("dt_s", "timeout_s", "robot_radius_m", "person_radius_m", "goal_tolerance_m"),
+)
 
 
 def _metrics(robot_xy, speed=None, yaw=None, people_xy=None, people_v=None, present=None, goal=None, reached_at=None,

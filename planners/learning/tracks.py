@@ -198,8 +198,6 @@ def _cells_of_paths(paths: list[np.ndarray]) -> list[np.ndarray]:
     dropped. Every path's points go through ``cell_of`` in one call: called per path, each path's
     length was a new shape and a new compiled program (one track file has hundreds)."""
     dense = [_dense(p) for p in paths]
-    if not dense:
-        return []
     xy = np.concatenate(dense)
     row, col = (np.asarray(v) for v in grid.cell_of(xy[:, 0], xy[:, 1]))
     out = []
