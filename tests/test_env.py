@@ -135,6 +135,7 @@ def test_reward_pays_the_goal_once_and_charges_a_contact(tmp_path):
     assert float(ts.reward) <= env.reward.collision_penalty + 1e-6
 
 
+@pytest.mark.slow
 def test_a_parameter_sweep_reuses_the_compiled_program(setup):
     variants = _variants(setup, 2)
     actor = actors.go_to_goal()
@@ -475,7 +476,14 @@ def _counting_actor(every_steps: int) -> Actor:
     return replanning(inner, plan, every_steps)
 
 
-@pytest.mark.parametrize("every, due", [(10, [0, 10, 20]), (7, [0, 7, 14, 21]), (0, [0])])
+@pytest.mark.parametrize(
+    "every, due",  # one in the fast tier; each other period compiles two programs of its own
+    [
+        (10, [0, 10, 20]),
+        pytest.param(7, [0, 7, 14, 21], marks=pytest.mark.slow),
+        pytest.param(0, [0], marks=pytest.mark.slow),
+    ],
+)
 def test_replanning_plans_before_every_nth_action_and_only_then_in_a_batch(setup, every, due):
     """``replanning(actor, plan, every)``: the plan runs before actions 0, every, 2 every, ...
     (``every = 0``: before the first only), the same in a vmapped batch as alone, and a batch's

@@ -367,6 +367,7 @@ def test_the_rotation_average_turns_with_the_map():
         inference.rotation_averaged(plain, 2)
 
 
+@pytest.mark.slow
 def test_pair_contrast_is_the_twins_difference_on_both_twins_and_zero_elsewhere():
     """Sample i of ``non_group`` is sample i of ``group`` facing out: the contrast of both is
     |target_group - target_non_group|, positive in the circle's middle (the zone is there only

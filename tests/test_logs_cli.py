@@ -72,6 +72,7 @@ def test_same_seed_same_file_whatever_the_chunking(small, tmp_path):
     assert not np.array_equal(a[cols].to_numpy(), c[cols].to_numpy(), equal_nan=True)
 
 
+@pytest.mark.slow
 def test_positions_logged_on_request(small, tmp_path):
     df = pd.read_parquet(_run(small, tmp_path / "p", log_positions=True, duration_s=10.0).log_file)
     assert {"worker_x_0", "worker_y_7", "worker_status_3"} <= set(df.columns)
