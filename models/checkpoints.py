@@ -17,7 +17,7 @@ import numpy as np
 
 from socialnav.common.atomic import write_text_atomic
 from socialnav.models.config import TrainConfig
-from socialnav.models.steps import compiled, initial_state
+from socialnav.models.steps import compiled, state_template
 
 
 def write_metrics(out: pathlib.Path, meta: dict) -> None:
@@ -153,7 +153,7 @@ def restore(out, step: int | None = None, log=print):
     out = pathlib.Path(out)
     config = load_config(out)
     graphdef = compiled(config)[0]
-    template = initial_state(config)
+    template = state_template(config)
     with checkpoint_manager(out, config, read_only=True) as manager:
         _, state, meta = restore_state(manager, template, out, config, step, log)
     return config, graphdef, state, meta

@@ -352,12 +352,13 @@ def learning_rate_schedule(config: TrainConfig) -> optax.Schedule:
     )
 
 
-def make_model(config: TrainConfig) -> unet.UNet:
-    """A freshly initialised U-Net of ``config``'s widths (seeded by ``config.seed``)."""
+def make_model(config: TrainConfig, seed=None) -> unet.UNet:
+    """A freshly initialised U-Net of ``config``'s widths, seeded by ``seed`` (default
+    ``config.seed``; an integer or a ``jax.random.key``, traced or not)."""
     return unet.UNet(
         config.features,
         config.coords,
         config.reads_forbidden,
         forbidden_features=config.forbidden_features or None,
-        rngs=nnx.Rngs(config.seed),
+        rngs=nnx.Rngs(config.seed if seed is None else seed),
     )

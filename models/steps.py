@@ -7,6 +7,7 @@ core; a GPU is used when JAX sees one). Per-family train MSE is accumulated on t
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import jax
@@ -247,8 +248,19 @@ def weight_shapes(config: TrainConfig):
 
 
 def initial_state(config: TrainConfig) -> dict:
-    """The training state before the first step: fresh weights, Adam's state, zero accumulators."""
-    _, params, batch_stats = nnx.split(make_model(config), nnx.Param, nnx.BatchStat)
+    """The training state before the first step: fresh weights, Adam's state, zero accumulators.
+
+    Drawn by one compiled program (:func:`_initial_state`, the seed traced), the same bits as
+    drawing eagerly, where each layer's initialiser was a program of its own shape to compile
+    (docs/performance.md, "Compile time")."""
+    return _initial_state(dataclasses.replace(config, seed=0), jax.random.key(config.seed))
+
+
+@functools.partial(jax.jit, static_argnums=0)
+def _initial_state(config: TrainConfig, key) -> dict:
+    """:func:`initial_state` of ``config`` drawn from ``key`` (``jax.random.key(seed)``; the
+    config's seed set to 0, so that runs differing only in their seed share the program)."""
+    _, params, batch_stats = nnx.split(make_model(config, key), nnx.Param, nnx.BatchStat)
     n = len(config.counts)  # the families this run draws (runs before the composites: 9)
     return {
         "params": params,
@@ -257,3 +269,10 @@ def initial_state(config: TrainConfig) -> dict:
         "family_sse": jnp.zeros(n),
         "family_count": jnp.zeros(n),
     }
+
+
+def state_template(config: TrainConfig) -> dict:
+    """:func:`initial_state`'s tree and shapes as host zeros, without drawing anything: what a
+    checkpoint is restored into."""
+    shapes = jax.eval_shape(_initial_state, dataclasses.replace(config, seed=0), jax.random.key(0))
+    return jax.tree.map(lambda a: np.zeros(a.shape, a.dtype), shapes)
