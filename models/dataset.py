@@ -17,8 +17,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from socialnav.common.atomic import write_bytes_atomic
-from socialnav.models import grid
-from socialnav.models.families import COMPOSITE, FAMILIES, PAIRED_WITH, composite_contrast
+from socialnav.models import families, grid
+from socialnav.models.families import COMPOSITE, FAMILIES, PAIRED_WITH
 
 # Paper's sample counts per family (Sec. 4.1; the hallway's 5000 split over its three kinds).
 PAPER_COUNTS = {
@@ -40,8 +40,17 @@ CHUNK = 1024  # samples per generator call: one compilation per family serves ev
 
 @functools.cache
 def batched_sampler(name: str):
-    """``keys (B,) -> (inputs (B, 40, 40), targets (B, 40, 40))`` of family ``name``, jitted."""
+    """``keys (B,) -> (inputs (B, 40, 40), targets (B, 40, 40))`` of family ``name``, jitted (the
+    composite's from :data:`batched_composite`, the program its contrast comes from too)."""
+    if name == COMPOSITE:
+        return lambda keys: batched_composite(keys)[:2]
     return jax.jit(jax.vmap(FAMILIES[name]))
+
+
+# ``keys (B,) -> (inputs, targets, contrast)``, each (B, 40, 40), of the composite family
+# (:func:`models.families.composite_with_contrast`): one program for its samples and its contrast, since it
+# holds every candidate family twice and takes longer to compile than all of them together.
+batched_composite = jax.jit(jax.vmap(families.composite_with_contrast))
 
 
 def _as_key(seed) -> jax.Array:
@@ -83,11 +92,9 @@ def pair_contrast(data: dict[str, np.ndarray], seed=None) -> np.ndarray:
         contrast[rows_p[:n]] = diff
     if seed is not None and COMPOSITE in names:
         rows = np.flatnonzero(data["family"] == names.index(COMPOSITE))
-        contrast[rows] = np.concatenate(_in_chunks(_composite_contrast, family_keys(seed, COMPOSITE, len(rows))))
+        parts = _in_chunks(lambda keys: batched_composite(keys)[2], family_keys(seed, COMPOSITE, len(rows)))
+        contrast[rows] = np.concatenate(parts)
     return contrast
-
-
-_composite_contrast = jax.jit(jax.vmap(composite_contrast))
 
 
 def _family_base(seed, family: str) -> jax.Array:

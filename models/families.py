@@ -407,7 +407,7 @@ PAIRED_WITH = {"non_queue": "queue", "non_group": "group"}
 TWINS = {**PAIRED_WITH, **{partner: twin for twin, partner in PAIRED_WITH.items()}}
 
 
-def _composite(key):
+def composite_with_contrast(key):
     """``(image, target, contrast)`` of a composite; ``contrast`` is ``|target - twin's target|`` of
     each of the two scenes that has a twin (:data:`TWINS`: the same layout with the rule flipped),
     moved with its scene, their max, 0 elsewhere and on walls (:func:`composite_contrast`)."""
@@ -459,7 +459,7 @@ def _composite(key):
 def sample_composite(key):
     """Two families' scenes in one (see :data:`COMPOSITE_PAIRS`); the target is the cell-wise max
     of the two targets, zero on walls."""
-    image, cost, _ = _composite(key)
+    image, cost, _ = composite_with_contrast(key)
     return image, cost
 
 
@@ -469,7 +469,7 @@ def composite_contrast(key):
     difference of the two targets where the scene was placed; the max of the two, 0 elsewhere.
     The training loss's pair term (:attr:`models.config.TrainConfig.pair_weight`) weighs these
     cells as it weighs the paired families'."""
-    return _composite(key)[2]
+    return composite_with_contrast(key)[2]
 
 
 COMPOSITE = "composite"
