@@ -74,7 +74,7 @@ def pair_contrast(data: dict[str, np.ndarray], seed=None) -> np.ndarray:
     partner (:data:`PAIRED_WITH`), 0 for every other sample: the cells where the rule (the group's
     zone, the queue's U) and the headings it comes with change the cost. With ``seed`` (the one
     ``data`` was generated from), composites get the same for each of their two scenes that has a
-    twin (:func:`models.families.composite_contrast`).
+    twin (:func:`models.families.composite_with_contrast`).
 
     ``data`` must be in :func:`generate`'s order (each family's samples by index, before any
     shuffle): sample ``i`` of a twin is paired with sample ``i`` of its partner, the first

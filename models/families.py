@@ -408,9 +408,12 @@ TWINS = {**PAIRED_WITH, **{partner: twin for twin, partner in PAIRED_WITH.items(
 
 
 def composite_with_contrast(key):
-    """``(image, target, contrast)`` of a composite; ``contrast`` is ``|target - twin's target|`` of
-    each of the two scenes that has a twin (:data:`TWINS`: the same layout with the rule flipped),
-    moved with its scene, their max, 0 elsewhere and on walls (:func:`composite_contrast`)."""
+    """``(image, target, contrast)`` of a composite. ``contrast`` (40, 40): for each of its two
+    scenes that has a twin (:data:`TWINS`: a group and the same circle facing out, a queue and the
+    same queue with the goal elsewhere), ``|target - twin's target|`` moved with its scene; the max
+    of the two, 0 elsewhere and on walls. The training loss's pair term
+    (:attr:`models.config.TrainConfig.pair_weight`) weighs these cells as it weighs the paired
+    families'."""
     k_pair, k_a, k_b, k_shift = jax.random.split(key, 4)
     pair = jax.random.randint(k_pair, (), 0, len(COMPOSITE_PAIRS))
     a_names = sorted({a for a, _ in COMPOSITE_PAIRS})
@@ -461,15 +464,6 @@ def sample_composite(key):
     of the two targets, zero on walls."""
     image, cost, _ = composite_with_contrast(key)
     return image, cost
-
-
-def composite_contrast(key):
-    """(40, 40) for the composite of ``key``: for each of its two scenes that has a twin (a group
-    and the same circle facing out, a queue and the same queue with the goal elsewhere), the
-    difference of the two targets where the scene was placed; the max of the two, 0 elsewhere.
-    The training loss's pair term (:attr:`models.config.TrainConfig.pair_weight`) weighs these
-    cells as it weighs the paired families'."""
-    return composite_with_contrast(key)[2]
 
 
 COMPOSITE = "composite"
