@@ -352,13 +352,22 @@ def learning_rate_schedule(config: TrainConfig) -> optax.Schedule:
     )
 
 
+def network_args(config: TrainConfig) -> tuple[tuple[str, object], ...]:
+    """:class:`models.unet.UNet`'s arguments for ``config`` (its widths and heads), as sorted
+    ``(name, value)`` pairs: hashable, so that a compiled program can be keyed on them."""
+    return tuple(
+        sorted(
+            {
+                "features": config.features,
+                "coords": config.coords,
+                "forbidden_head": config.reads_forbidden,
+                "forbidden_features": config.forbidden_features or None,
+            }.items()
+        )
+    )
+
+
 def make_model(config: TrainConfig, seed=None) -> unet.UNet:
     """A freshly initialised U-Net of ``config``'s widths, seeded by ``seed`` (default
     ``config.seed``; an integer or a ``jax.random.key``, traced or not)."""
-    return unet.UNet(
-        config.features,
-        config.coords,
-        config.reads_forbidden,
-        forbidden_features=config.forbidden_features or None,
-        rngs=nnx.Rngs(config.seed if seed is None else seed),
-    )
+    return unet.UNet(**dict(network_args(config)), rngs=nnx.Rngs(config.seed if seed is None else seed))

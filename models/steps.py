@@ -16,9 +16,9 @@ import numpy as np
 import optax
 from flax import nnx
 
-from socialnav.models.config import TrainConfig, learning_rate_schedule, make_model
+from socialnav.models.config import TrainConfig, learning_rate_schedule, make_model, network_args
 from socialnav.models.social_costs import FORBIDDEN, GRADED_TOP
-from socialnav.models.unet import BRANCH, combine_heads
+from socialnav.models.unet import BRANCH, UNet, combine_heads
 
 
 def batch_sharding(batch_size: int):
@@ -200,10 +200,8 @@ def compiled(config: TrainConfig, objective=None):
     """``(graphdef, tx, train_step, predict)`` of a configuration (and training objective, see
     :func:`make_train_step`), built once per process so that resuming, restoring and evaluating in
     one process do not compile again."""
-    graphdef = nnx.graphdef(_abstract_model(config))
-    tx = optax.adam(learning_rate_schedule(config))
-    if config.freeze_graded:
-        tx = frozen_graded_tx(tx)
+    graphdef = nnx.graphdef(abstract_model(config))
+    tx = optimizer(learning_rate_schedule(config), config.freeze_graded)
     return (
         graphdef,
         tx,
@@ -221,6 +219,13 @@ def compiled(config: TrainConfig, objective=None):
     )
 
 
+def optimizer(schedule: optax.Schedule, freeze_graded: bool) -> optax.GradientTransformation:
+    """Adam on ``schedule``; on the forbidden branch alone with ``freeze_graded``
+    (:func:`frozen_graded_tx`)."""
+    tx = optax.adam(schedule)
+    return frozen_graded_tx(tx) if freeze_graded else tx
+
+
 def frozen_graded_tx(tx: optax.GradientTransformation) -> optax.GradientTransformation:
     """``tx`` on the forbidden branch's weights (paths through :data:`BRANCH`), zero updates on
     every other weight (the graded network, kept as its source drew it)."""
@@ -233,7 +238,7 @@ def frozen_graded_tx(tx: optax.GradientTransformation) -> optax.GradientTransfor
     return optax.multi_transform({"train": tx, "frozen": optax.set_to_zero()}, labels)
 
 
-def _abstract_model(config: TrainConfig):
+def abstract_model(config: TrainConfig):
     """``config``'s model with ``jax.ShapeDtypeStruct`` leaves: its structure without drawing
     weights (drawing the random initial weights eagerly took 3.8 s, a compiled operation per
     layer's shape; tracing them abstractly takes a fraction)."""
@@ -243,7 +248,7 @@ def _abstract_model(config: TrainConfig):
 def weight_shapes(config: TrainConfig):
     """``(params, batch_stats)`` of ``config``'s model as shapes only, a template to load weights
     into."""
-    _, params, batch_stats = nnx.split(_abstract_model(config), nnx.Param, nnx.BatchStat)
+    _, params, batch_stats = nnx.split(abstract_model(config), nnx.Param, nnx.BatchStat)
     return params, batch_stats
 
 
@@ -253,26 +258,52 @@ def initial_state(config: TrainConfig) -> dict:
     Drawn by one compiled program (:func:`_initial_state`, the seed traced), the same bits as
     drawing eagerly, where each layer's initialiser was a program of its own shape to compile
     (docs/performance.md, "Compile time")."""
-    return _initial_state(dataclasses.replace(config, seed=0), jax.random.key(config.seed))
+    return _initial_state(_StateShape.of(config), jax.random.key(config.seed))
 
 
-@functools.partial(jax.jit, static_argnums=0)
-def _initial_state(config: TrainConfig, key) -> dict:
-    """:func:`initial_state` of ``config`` drawn from ``key`` (``jax.random.key(seed)``; the
-    config's seed set to 0, so that runs differing only in their seed share the program)."""
-    _, params, batch_stats = nnx.split(make_model(config, key), nnx.Param, nnx.BatchStat)
-    n = len(config.counts)  # the families this run draws (runs before the composites: 9)
+@dataclasses.dataclass(frozen=True)
+class _StateShape:
+    """What a fresh training state depends on besides its key: the network's arguments
+    (:func:`models.config.network_args`), whether the graded network is frozen (the optimiser's
+    structure) and the number of families counted. A run's other fields (its data, loss weights,
+    schedule and seed) do not enter it, so runs that differ only there share one program."""
+
+    network: tuple[tuple[str, object], ...]
+    freeze_graded: bool
+    n_families: int
+
+    @classmethod
+    def of(cls, config: TrainConfig) -> _StateShape:
+        return cls(network_args(config), config.freeze_graded, len(config.counts))
+
+
+# The weight-drawing program compiled at LLVM's optimisation level 2 instead of XLA's default 3:
+# at 3 most of its compile goes to the random draws (threefry and the truncated normal's inverse
+# error function); at 2 it compiles about 3.5 times faster and draws the same weights
+# (docs/performance.md, "Compile time"). It runs once per training run, so its speed is moot.
+_DRAW_COMPILER_OPTIONS = {"xla_backend_optimization_level": 2}
+
+
+@functools.partial(jax.jit, static_argnums=0, compiler_options=_DRAW_COMPILER_OPTIONS)
+def _initial_state(shape: _StateShape, key) -> dict:
+    """:func:`initial_state` of a configuration of ``shape`` drawn from ``key``
+    (``jax.random.key(seed)``)."""
+    model = UNet(**dict(shape.network), rngs=nnx.Rngs(key))
+    _, params, batch_stats = nnx.split(model, nnx.Param, nnx.BatchStat)
+    # Adam's state holds moments and a step count, not the schedule's values: any schedule gives
+    # the same state as the run's own (compiled(config)'s optimiser).
+    tx = optimizer(optax.constant_schedule(0.0), shape.freeze_graded)
     return {
         "params": params,
         "batch_stats": batch_stats,
-        "opt_state": compiled(config)[1].init(params),
-        "family_sse": jnp.zeros(n),
-        "family_count": jnp.zeros(n),
+        "opt_state": tx.init(params),
+        "family_sse": jnp.zeros(shape.n_families),  # the families this run draws
+        "family_count": jnp.zeros(shape.n_families),
     }
 
 
 def state_template(config: TrainConfig) -> dict:
     """:func:`initial_state`'s tree and shapes as host zeros, without drawing anything: what a
     checkpoint is restored into."""
-    shapes = jax.eval_shape(_initial_state, dataclasses.replace(config, seed=0), jax.random.key(0))
+    shapes = jax.eval_shape(_initial_state, _StateShape.of(config), jax.random.key(0))
     return jax.tree.map(lambda a: np.zeros(a.shape, a.dtype), shapes)

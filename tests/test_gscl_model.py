@@ -47,6 +47,28 @@ def test_unet_shapes_batch_independence_and_paper_size():
         unet.UNet((8, 8, 8), rngs=nnx.Rngs(0))
 
 
+def test_a_fresh_state_fits_the_runs_optimiser_whatever_its_schedule_and_data():
+    # The fresh state is drawn by a program keyed on the network and the optimiser's structure
+    # alone: runs differing in schedule, learning rate, batch, loss weights or seed share it, and
+    # its Adam state is the run's own optimiser's, step count included.
+    tiny = TrainConfig(**TINY)
+    other = TrainConfig(**{**TINY, "schedule": "constant", "learning_rate": 0.5, "batch_size": 8, "pair_weight": 0.0})
+    assert steps._StateShape.of(tiny) == steps._StateShape.of(other)
+    assert steps._StateShape.of(tiny) != steps._StateShape.of(TrainConfig(**{**TINY, "features": (4, 4, 8, 16)}))
+    for config in (tiny, other):
+        state = steps.initial_state(config)
+        expected = steps.compiled(config)[1].init(state["params"])
+        assert jax.tree.structure(state["opt_state"]) == jax.tree.structure(expected)
+        jax.tree.map(np.testing.assert_array_equal, state["opt_state"], expected)
+        assert state["family_sse"].shape == (len(config.counts),)
+    # The same seed draws the same weights; another seed others.
+    same = jax.tree.leaves(steps.initial_state(other)["params"])
+    for a, b in zip(jax.tree.leaves(steps.initial_state(tiny)["params"]), same):
+        np.testing.assert_array_equal(a, b)
+    reseeded = steps.initial_state(TrainConfig(**{**TINY, "seed": 1}))["params"]
+    assert any(not np.array_equal(a, b) for a, b in zip(jax.tree.leaves(reseeded), same))
+
+
 def test_input_encoding_is_one_hot_per_code():
     maps = np.zeros((1, 40, 40), np.uint8)
     maps[0, 3, 4], maps[0, 3, 5], maps[0, 10, 10], maps[0, 0, :] = grid.PERSON, grid.HEADING, grid.GOAL, grid.WALL

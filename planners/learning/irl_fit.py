@@ -18,8 +18,9 @@ import optax
 from flax import nnx
 
 from socialnav.common import progress as progress_lib
-from socialnav.models.config import TrainConfig, make_model
+from socialnav.models.config import TrainConfig
 from socialnav.models.inference import SocialCostModel
+from socialnav.models.steps import abstract_model, initial_state
 from socialnav.planners.learning.irl import Demonstrations, PathObjective
 
 
@@ -42,13 +43,13 @@ def fit_demonstrations(
     if len(maps) == 0:
         raise ValueError("no demonstrations to fit (every track was left out: see the report)")
     objective = PathObjective.of(config)
-    model = make_model(config)
-    graphdef, params, batch_stats = nnx.split(model, nnx.Param, nnx.BatchStat)
+    fresh = initial_state(config)  # config's weights drawn by one compiled program
+    graphdef, params, batch_stats = nnx.graphdef(abstract_model(config)), fresh["params"], fresh["batch_stats"]
     schedule = optax.warmup_cosine_decay_schedule(
         0.0, config.learning_rate, min(config.warmup_steps, steps - 1), max(steps, 2), config.learning_rate * 0.02
     )
     tx = optax.adam(schedule)
-    opt_state = tx.init(params)
+    opt_state = jax.jit(tx.init)(params)  # one program, not one per weight shape
 
     maps_all, demos_all = jnp.asarray(maps), jax.tree.map(jnp.asarray, demos)
 

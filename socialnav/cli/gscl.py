@@ -601,10 +601,9 @@ def _evaluation_folder(args, names: tuple[str, ...]) -> pathlib.Path:
 
 
 def _parameters(config) -> int:
-    from socialnav.models import unet
-    from socialnav.models.config import make_model
+    from socialnav.models import steps, unet
 
-    return unet.parameter_count(make_model(config))
+    return unet.parameter_count(steps.abstract_model(config))  # shapes only: nothing drawn
 
 
 def _evaluate(args) -> int:
