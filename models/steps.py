@@ -240,8 +240,8 @@ def frozen_graded_tx(tx: optax.GradientTransformation) -> optax.GradientTransfor
 
 def abstract_model(config: TrainConfig):
     """``config``'s model with ``jax.ShapeDtypeStruct`` leaves: its structure without drawing
-    weights (drawing the random initial weights eagerly took 3.8 s, a compiled operation per
-    layer's shape; tracing them abstractly takes a fraction)."""
+    weights (drawn eagerly, every layer's initialiser is a program of its own shape to compile
+    and run; traced abstractly, nothing is compiled)."""
     return nnx.eval_shape(lambda: make_model(config))
 
 
@@ -279,7 +279,7 @@ class _StateShape:
 
 # The weight-drawing program compiled at LLVM's optimisation level 2 instead of XLA's default 3:
 # at 3 most of its compile goes to the random draws (threefry and the truncated normal's inverse
-# error function); at 2 it compiles about 3.5 times faster and draws the same weights
+# error function); at 2 it compiles several times faster and draws the same weights
 # (docs/performance.md, "Compile time"). It runs once per training run, so its speed is moot.
 _DRAW_COMPILER_OPTIONS = {"xla_backend_optimization_level": 2}
 
