@@ -37,9 +37,9 @@ import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.models import dataset, train, unet  # noqa: E402
-from socialnav.models.config import TrainConfig, make_model  # noqa: E402
+from socialnav.models.config import TrainConfig  # noqa: E402
 from socialnav.models.quality import quality_table  # noqa: E402
-from socialnav.models.steps import batch_sharding, compiled, initial_state  # noqa: E402
+from socialnav.models.steps import abstract_model, batch_sharding, compiled, initial_state  # noqa: E402
 
 
 def _generate_in_new_process(cache_dir: str | None) -> float:
@@ -110,7 +110,7 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
                 state, loss = step(state, *batch(i))
             loss.block_until_ready()
             rate = steps * bs / (time.perf_counter() - t0)
-            params = unet.parameter_count(make_model(config))
+            params = unet.parameter_count(abstract_model(config))  # shapes only: nothing drawn
             flops = _step_flops(step, state, *batch(0))
             if flops is not None and data_sharding is not None:
                 flops *= jax.device_count()  # XLA counts one device's share of a sharded step

@@ -367,7 +367,6 @@ def network_args(config: TrainConfig) -> tuple[tuple[str, object], ...]:
     )
 
 
-def make_model(config: TrainConfig, seed=None) -> unet.UNet:
-    """A freshly initialised U-Net of ``config``'s widths, seeded by ``seed`` (default
-    ``config.seed``; an integer or a ``jax.random.key``, traced or not)."""
-    return unet.UNet(**dict(network_args(config)), rngs=nnx.Rngs(config.seed if seed is None else seed))
+def make_model(config: TrainConfig) -> unet.UNet:
+    """A freshly initialised U-Net of ``config``'s widths (seeded by ``config.seed``)."""
+    return unet.UNet(**dict(network_args(config)), rngs=nnx.Rngs(config.seed))
