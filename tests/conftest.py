@@ -130,13 +130,36 @@ def learned_run(tmp_path_factory):
     """A short simulated day (60 s slots, 2 worlds) and the causal engine learnt from it.
 
     The robot starts at 21 % battery so that it charges and C varies. Returns the run folder;
-    the engine's tables are in ``causal/engine_tables.npz``.
+    the engine's tables are in ``causal/engine_tables.npz``. Made once per test session: under
+    pytest-xdist the first worker to ask makes it in the session's shared temporary folder while
+    the others wait on a lock, then read it (every test only reads it: the commands that would
+    write there are the ones the tests show refused).
     """
+    if os.environ.get("PYTEST_XDIST_WORKER") is None:
+        return _learn_a_short_day(tmp_path_factory.mktemp("learned_run"))
+    import fcntl
+
+    shared = tmp_path_factory.getbasetemp().parent  # pytest-N/, the parent of every worker's own
+    with open(shared / "learned_run.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, also if making it fails
+        run, done = shared / "learned_run", shared / "learned_run.done"
+        if not done.exists():
+            if run.exists():  # a worker that failed half way
+                import shutil
+
+                shutil.rmtree(run)
+            run.mkdir()
+            _learn_a_short_day(run)
+            done.touch()
+    return run
+
+
+def _learn_a_short_day(run):
+    """:func:`learned_run`'s folder made in ``run`` (an empty folder)."""
     from socialnav.causal.learn import learn
     from socialnav.jaxsim.logs import simulate_to_parquet
     from socialnav.planners.warehouse.routes import shortest_path_plan
 
-    run = tmp_path_factory.mktemp("learned_run")
     scenario = load_scenario(slot_length_s=60.0, battery_initial_pct=21.0)
     simulate_to_parquet(
         scenario,

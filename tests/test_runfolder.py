@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from socialnav import cli
@@ -116,8 +117,31 @@ def test_another_jobs_run_is_not_replaced(learned_run, tmp_path, capsys):
     assert sorted(p.name for p in sim.iterdir()) == before
 
 
-def test_learn_and_evaluate_refuse_to_replace_their_results(learned_run, tmp_path, capsys):
+def _finished_learn_run(folder, scenario):
+    """``folder`` as ``simulate`` then ``learn`` leave it, as far as a command can tell before it
+    starts work: the two manifests and their files. The logs are not a day's logs (a refusal must
+    not read them), the engine's tables well-formed tables of the warehouse's waypoints and slots
+    (``evaluate`` checks its ``--tables`` before its output folder)."""
+    (folder / "causal").mkdir(parents=True)
+    (folder / "run.json").write_text("{}")
+    (folder / "logs.parquet").write_text("not read")
+    (folder / "causal" / "report.json").write_text("{}")
+    np.savez(
+        folder / "causal" / "engine_tables.npz",
+        density_ppm2=np.zeros((scenario.n_slots, scenario.n_waypoints)),
+        battery_pct_per_s=np.array([[-0.006, 0.01], [-0.007, 0.0]]),
+        speed_edges_mps=np.array([0.0, 0.3, 0.5]),
+        waypoints=np.array(scenario.waypoint_ids),
+        slots=np.array(scenario.slot_names),
+    )
+    runfolder.record(folder, "socialnav simulate", ["run.json", "logs.parquet"], marker="run.json")
+    runfolder.record(folder / "causal", "socialnav learn", ["report.json", "engine_tables.npz"], marker="report.json")
+    return folder
+
+
+def test_learn_and_evaluate_refuse_to_replace_their_results(warehouse, tmp_path, capsys):
     """Both refuse before any work (the learned engine is kept as it is)."""
+    learned_run = _finished_learn_run(tmp_path / "run", warehouse)
     report = (learned_run / "causal" / "report.json").read_bytes()
     assert cli.main(["learn", "--logs", str(learned_run), "--no-progress"]) == 2
     assert "causal holds a previous run" in capsys.readouterr().err
