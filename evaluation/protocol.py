@@ -64,6 +64,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
+from socialnav.common import xla
 from socialnav.common.pytree import select
 from socialnav.evaluation.metrics import collision_encounters
 from socialnav.evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
@@ -393,7 +394,8 @@ def _compiled_advance(cfg: ProtocolConfig, n_steps: int, world_chunk: int, n_dev
 @functools.lru_cache(maxsize=8)
 def _compiled_init(cfg: ProtocolConfig) -> Callable:
     init = lambda p, w, m, s, k: init_experiment(p, cfg, w, m, s, k)
-    return jax.jit(jax.vmap(init, in_axes=(None, None, None, 0, 0)))
+    # Run once per batch and mostly random draws: compiled for speed of compiling (common.xla).
+    return jax.jit(jax.vmap(init, in_axes=(None, None, None, 0, 0)), compiler_options=xla.ONCE_PER_RUN)
 
 
 def experiment_keys(seed: int, slots: np.ndarray, replicas: np.ndarray) -> jax.Array:

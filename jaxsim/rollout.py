@@ -35,6 +35,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from socialnav.common import xla
 from socialnav.common.pytree import put, take
 from socialnav.common.pytree import to_numpy as _to_numpy
 from socialnav.jaxsim.actor import Driver
@@ -63,7 +64,10 @@ def _init_fn(params_batched: bool):
     def init(params, world, driver, key):
         return init_state(params, world, driver, jax.random.fold_in(key, INIT_FOLD))
 
-    return jax.jit(jax.vmap(init, in_axes=(0 if params_batched else None, None, None, 0)))
+    # Run once per batch and mostly random draws: compiled for speed of compiling (common.xla).
+    return jax.jit(
+        jax.vmap(init, in_axes=(0 if params_batched else None, None, None, 0)), compiler_options=xla.ONCE_PER_RUN
+    )
 
 
 def init_batch(

@@ -16,6 +16,7 @@ import numpy as np
 import optax
 from flax import nnx
 
+from socialnav.common import xla
 from socialnav.models.config import TrainConfig, learning_rate_schedule, make_model, network_args
 from socialnav.models.social_costs import FORBIDDEN, GRADED_TOP
 from socialnav.models.unet import BRANCH, UNet, combine_heads
@@ -277,14 +278,7 @@ class _StateShape:
         return cls(network_args(config), config.freeze_graded, len(config.counts))
 
 
-# The weight-drawing program compiled at LLVM's optimisation level 2 instead of XLA's default 3:
-# at 3 most of its compile goes to the random draws (threefry and the truncated normal's inverse
-# error function); at 2 it compiles several times faster and draws the same weights
-# (docs/performance.md, "Compile time"). It runs once per training run, so its speed is moot.
-_DRAW_COMPILER_OPTIONS = {"xla_backend_optimization_level": 2}
-
-
-@functools.partial(jax.jit, static_argnums=0, compiler_options=_DRAW_COMPILER_OPTIONS)
+@functools.partial(jax.jit, static_argnums=0, compiler_options=xla.ONCE_PER_RUN)  # see common.xla
 def _initial_state(shape: _StateShape, key) -> dict:
     """:func:`initial_state` of a configuration of ``shape`` drawn from ``key``
     (``jax.random.key(seed)``)."""
