@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from plans import scipy_shortest_plan
 
-from socialnav.jaxsim import battery, geometry
+from socialnav.jaxsim import battery, geometry, logs
 from socialnav.jaxsim.rollout import init_batch, rollout, run_samples, to_numpy, world_keys
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
@@ -43,6 +43,7 @@ def test_no_nan_and_the_battery_discharges(day_rollout):
             assert not np.isnan(leaf).any()
     for name in ("robot_x_m", "robot_y_m", "robot_speed_mps", "battery_pct", "density_ppm2", "worker_x_m"):
         assert not np.isnan(getattr(rec, name)).any(), name
+    logs.check_finite(rec)  # what simulate checks before it writes a chunk: a normal day passes
     assert (np.diff(rec.battery_pct, axis=1) < 0).any()  # it does discharge (its law: the next test)
 
 
@@ -116,6 +117,7 @@ def test_workers_conserved_and_off_slot_empty(day_rollout):
     assert (rec.worker_status[was_left] == LEFT).all()
 
 
+@pytest.mark.slow
 def test_robot_works(day_rollout):
     _, _, rec = day_rollout
     assert (rec.tasks_succeeded[:, -1] > 0).all()
@@ -246,14 +248,37 @@ def test_world_without_workers_runs():
     assert (rec.robot_speed_mps.max(axis=1) > 0.4).all()  # the robot drives
 
 
-def test_a_diverged_state_stops_the_run(day_rollout):
-    """NaN in a logged signal (as extreme force parameters can cause) is an error naming the
-    field, the world and the time; absent workers' positions do not count."""
-    from socialnav.jaxsim import logs
+def _record(n_worlds: int = 2, n_samples: int = 10, n_workers: int = 3, n_waypoints: int = 4):
+    """A hand-made record of finite values every 0.5 s: worker 0 walking, 1 at an activity, 2 not
+    in the building (its position NaN, which the logs may hold for an absent worker)."""
+    from dataclasses import fields
 
-    _, _, rec = day_rollout
-    logs.check_finite(rec)  # a normal day passes
+    from socialnav.jaxsim.state import Record
+
+    shape = (n_worlds, n_samples)
+    per = {"density_ppm2": (n_waypoints,), "worker_dist_m": (n_workers,), "worker_x_m": (n_workers,)}
+    per |= {"worker_y_m": (n_workers,), "worker_status": (n_workers,)}
+    arrays = {f.name: np.zeros(shape + per.get(f.name, ())) for f in fields(Record)}
+    arrays["time_s"] = np.broadcast_to(np.arange(n_samples) * 0.5, shape)
+    arrays["worker_status"] = np.broadcast_to(np.array([WALKING, ACTIVITY, LEFT]), shape + (n_workers,))
+    for name in ("worker_x_m", "worker_y_m", "worker_dist_m"):
+        arrays[name][..., 2] = np.nan
+    return Record(**arrays)
+
+
+def test_a_diverged_state_stops_the_run():
+    """NaN in a logged signal (as extreme force parameters can cause) is an error naming the
+    field, the world and the time; absent workers' positions do not count. (A simulated day
+    passes: the slow tier checks this module's day, and every ``simulate`` checks its own.)"""
+    rec = _record()
+    logs.check_finite(rec)  # finite, and the absent worker's NaN does not count
     broken = rec.replace(robot_x_m=rec.robot_x_m.copy())
     broken.robot_x_m[1, 7] = np.nan
-    with pytest.raises(logs.SimulationDiverged, match=r"robot_x_m is nan in world 1 at t = "):
+    with pytest.raises(logs.SimulationDiverged, match=r"robot_x_m is nan in world 1 at t = 3.5 s"):
         logs.check_finite(broken)
+    with pytest.raises(logs.SimulationDiverged, match=r"in world 5 at t = 3.5 s"):  # a shard's first world is 4
+        logs.check_finite(broken, first_world=4)
+    walker_lost = rec.replace(worker_y_m=rec.worker_y_m.copy())
+    walker_lost.worker_y_m[0, 2, 1] = np.inf  # the worker at an activity
+    with pytest.raises(logs.SimulationDiverged, match=r"worker_y_m is inf in world 0 at t = 1.0 s"):
+        logs.check_finite(walker_lost)
