@@ -66,8 +66,8 @@ def test_monitor_equals_the_batch_check_on_every_scene(name):
         (robot, people), reached, present = _random_episodes(rng, variants, n)
         args = (robot, reached, people, present, jnp.asarray(variants.start_xy), jnp.asarray(variants.end_xy))
         group = jnp.asarray(variants.group)
-        streamed = jax.vmap(lambda *a, rule=s.rule: _streamed(rule, *a))(*args, group)
-        batch = jax.vmap(lambda *a, rule=s.rule: _batch(rule, *a))(*args, group)
+        streamed = jax.jit(jax.vmap(lambda *a, rule=s.rule: _streamed(rule, *a)))(*args, group)
+        batch = jax.jit(jax.vmap(lambda *a, rule=s.rule: _batch(rule, *a)))(*args, group)
         np.testing.assert_array_equal(np.asarray(streamed), np.asarray(batch), err_msg=f"{s.name}: {s.rule}")
         # The arena's form: the rule's numbers as arguments of one program per rule structure.
         structure, numbers = nav_metrics.split_rule(s.rule)
