@@ -256,8 +256,9 @@ def _record(n_worlds: int = 2, n_samples: int = 10, n_workers: int = 3, n_waypoi
     from socialnav.jaxsim.state import Record
 
     shape = (n_worlds, n_samples)
-    per = {"density_ppm2": (n_waypoints,), "worker_dist_m": (n_workers,), "worker_x_m": (n_workers,)}
-    per |= {"worker_y_m": (n_workers,), "worker_status": (n_workers,)}
+    per = {"density_ppm2": (n_waypoints,)} | dict.fromkeys(
+        ("worker_dist_m", "worker_x_m", "worker_y_m", "worker_status"), (n_workers,)
+    )
     arrays = {f.name: np.zeros(shape + per.get(f.name, ())) for f in fields(Record)}
     arrays["time_s"] = np.broadcast_to(np.arange(n_samples) * 0.5, shape)
     arrays["worker_status"] = np.broadcast_to(np.array([WALKING, ACTIVITY, LEFT]), shape + (n_workers,))
