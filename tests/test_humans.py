@@ -100,6 +100,27 @@ def test_overlaps_count_pairs_and_depth():
     assert measures.overlaps(_frame([[0, 0], [0.25, 0]]), 0.2)["share_deeper_0_1_m"] == 1.0  # 0.15 m deep
 
 
+def test_a_window_of_frames_is_measured_as_from_every_frame():
+    """``voronoi_density_speed`` hands PedPy only the rows a window's points read (each person's
+    own rows a speed step either side); the points are the ones every row gives, on a Jülich run's
+    frames with people entering and leaving, rows out of frame order and a person missing frames."""
+    run = "uo-060-180-180"
+    info, g = recorded.run_info(run), recorded.run_info(run)["geometry"]
+    rows = recorded.trajectories(run)
+    rows = rows[rows["frame"].between(220, 330)]
+    gap = rows["person"].iloc[len(rows) // 2]
+    rows = rows[~((rows["person"] == gap) & rows["frame"].between(262, 266))].sample(frac=1.0, random_state=0)
+    args = (info["frames_per_s"], g["walkable_polygon_m"], g["measurement_area_m"], g["walking_direction"])
+    window = (250, 300)
+    cut = measures.voronoi_density_speed(rows, *args, frames=window)
+    every = measures.voronoi_density_speed(rows, *args)
+    every = every[every["frame"].between(*window)].reset_index(drop=True)
+    assert len(cut) > 40 and cut["frame"].between(*window).all()
+    pd.testing.assert_frame_equal(cut, every)
+    kept = measures._rows_for_frames(rows.rename(columns={"person": "id"}), window, 5)
+    assert kept["frame"].min() < window[0] and len(kept) < len(rows)  # the speed's margin kept, the rest cut
+
+
 def test_ade_fde_of_a_known_offset():
     truth = np.zeros((2, 12, 2))
     predicted = truth + np.array([0.3, 0.4])

@@ -70,6 +70,9 @@ def voronoi_density_speed(
             "y": rows["y_m"].to_numpy(float),
         }
     )
+    step = speed_frame_step if speed_frame_step is not None else max(1, round(0.3 * frames_per_s))
+    if frames is not None:
+        data = _rows_for_frames(data, frames, step)
     traj = pedpy.TrajectoryData(data=data, frame_rate=float(frames_per_s))
     walkable = pedpy.WalkableArea(
         [tuple(p) for p in walkable_polygon_m], obstacles=[[tuple(p) for p in o] for o in obstacles_m] or None
@@ -79,7 +82,6 @@ def voronoi_density_speed(
         traj_data=traj, walkable_area=walkable, cut_off=pedpy.Cutoff(radius=1.2, quad_segments=3)
     )
     density, intersection = pedpy.compute_voronoi_density(individual_voronoi_data=cells, measurement_area=area)
-    step = speed_frame_step if speed_frame_step is not None else max(1, round(0.3 * frames_per_s))
     individual = pedpy.compute_individual_speed(
         traj_data=traj,
         frame_step=step,
@@ -93,6 +95,21 @@ def voronoi_density_speed(
     if frames is not None:
         out = out[(out["frame"] >= frames[0]) & (out["frame"] <= frames[1])]
     return out[out["density"] > 0].reset_index(drop=True)
+
+
+def _rows_for_frames(data: pd.DataFrame, frames: tuple[int, int], step: int) -> pd.DataFrame:
+    """The rows of ``id, frame, x, y`` that PedPy needs for the points of ``frames`` (inclusive):
+    each person's rows from ``step`` rows before their first row inside ``frames`` to ``step`` rows
+    after their last, and no one with no row inside. The points come out the same as from every
+    row: a frame's Voronoi cells are that frame's people's, and a person's speed at a row is taken
+    ``step`` of their own rows either side (PedPy's shift within a person), so the rows cut are
+    only ever read for points that are dropped. It saves the Voronoi cells of the frames outside
+    (a run's start-up, a simulation's warm-up: a third to a half of the frames)."""
+    inside = data["frame"].between(*frames)
+    position = data.groupby("id").cumcount()
+    first = position.where(inside).groupby(data["id"]).transform("min")
+    last = position.where(inside).groupby(data["id"]).transform("max")
+    return data[(position >= first - step) & (position <= last + step)]  # NaN (no row inside): dropped
 
 
 def binned(points: pd.DataFrame, bins: Sequence[float] = DENSITY_BINS, half_width: float = 0.25) -> pd.DataFrame:
