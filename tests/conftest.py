@@ -35,6 +35,8 @@ runtime.request_compilation_cache()
 # The C++ social force (jaxsim.native) is built afresh into a folder of this session's own, once
 # (about 3 s; the processes the tests start inherit it): every run checks the build from source.
 _session_folder("SOCIALNAV_NATIVE_CACHE", "socialnav-native-")
+# The recorded runs' Voronoi measures (evaluation.humans.datacache) likewise: never the user's home.
+_session_folder("SOCIALNAV_HUMANS_CACHE", "socialnav-humans-")
 
 from plans import scipy_shortest_plan  # noqa: E402  (after the folders above are set)
 

@@ -121,6 +121,42 @@ def test_a_window_of_frames_is_measured_as_from_every_frame():
     assert kept["frame"].min() < window[0] and len(kept) < len(rows)  # the speed's margin kept, the rest cut
 
 
+def test_the_datas_measures_are_read_back_from_disk_while_their_inputs_are_unchanged(tmp_path, monkeypatch):
+    from socialnav.evaluation.humans import datacache
+
+    monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", str(tmp_path / "cache"))
+    calls = []
+
+    def measure(run):
+        calls.append(run)
+        return pd.DataFrame({"frame": [7, 8], "density": [0.1, 1 / 3], "speed": [np.nan, 1.25], "run": [run] * 2})
+
+    def counter():
+        calls.append("counter")
+        return {"density": 0.98, "lane_order": 2 / 3}
+
+    kept, kept_counter = datacache.kept(measure), datacache.kept(counter)
+    first = kept("a")
+    pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)  # every bit, the NaN, the dtypes
+    assert kept_counter() == kept_counter() == {"density": 0.98, "lane_order": 2 / 3}
+    kept("b")
+    assert calls == ["a", "counter", "b"]  # each argument its own value, each computed once
+    for stored in (tmp_path / "cache").iterdir():  # a damaged file: computed again and replaced
+        stored.write_text('{"key": ')
+    kept("a"), kept("a")
+    assert calls == ["a", "counter", "b", "a"]
+    monkeypatch.setattr(datacache, "inputs_digest", lambda: "the data or the code changed")
+    pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)
+    assert calls[-1] == "a" and len(calls) == 5
+    monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", "off")
+    kept("a"), kept("a")
+    assert len(calls) == 7
+    (tmp_path / "a file").write_text("")
+    monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", str(tmp_path / "a file" / "cache"))  # cannot be written
+    pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)
+    assert len(calls) == 8
+
+
 def test_ade_fde_of_a_known_offset():
     truth = np.zeros((2, 12, 2))
     predicted = truth + np.array([0.3, 0.4])
@@ -309,6 +345,9 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
     said = capsys.readouterr().out
     assert "social_force: speed inside the data's" in said and (out / "pictures" / "fundamental_diagram.png").is_file()
     assert pd.read_csv(out / "prediction.csv")["model"].nunique() == 2
+    # The data's measures were kept on disk (evaluation.humans.datacache) and read back bit for bit.
+    from_disk, computed = hv._run_fundamental_diagram.__wrapped__, hv._run_fundamental_diagram.__wrapped__.__wrapped__
+    pd.testing.assert_frame_equal(from_disk("uo-060-180-180"), computed("uo-060-180-180"), check_exact=True)
     assert cli.main(["humans", "validate", "--quick", "--out", str(out), "--no-progress"]) == 2  # no --overwrite
     assert cli.main(["humans", "validate", "--models", "crowd_of_ghosts", "--out", str(tmp_path / "x")]) == 2
 

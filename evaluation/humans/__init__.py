@@ -9,6 +9,7 @@
 - :mod:`~socialnav.evaluation.humans.trajectory_calibration`: the fit to ETH/UCY trajectories,
   leave one scene out;
 - :mod:`~socialnav.evaluation.humans.joint_calibration`: both at once, and the trade-off;
+- :mod:`~socialnav.evaluation.humans.datacache`: the recorded runs' measures kept on disk between processes;
 - :mod:`~socialnav.evaluation.humans.minimise`: Adam and Nelder-Mead on a scalar loss;
 - :mod:`~socialnav.evaluation.humans.plots`: the pictures.
 

@@ -40,7 +40,7 @@ import pandas as pd
 from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR, recorded
-from socialnav.evaluation.humans import measures
+from socialnav.evaluation.humans import datacache, measures
 from socialnav.jaxsim import geometry, groups, humans, orca, speed_model
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
@@ -249,10 +249,12 @@ def data_fundamental_diagram(runs=UO_RUNS) -> pd.DataFrame:
 
 
 @functools.lru_cache(maxsize=len(UO_RUNS))
+@datacache.kept
 def _run_fundamental_diagram(run: str) -> pd.DataFrame:
     """One run's steady-state points (PedPy's Voronoi method, a few seconds a run). Cached: the
     data never changes within a process, and a validation, a calibration and a notebook each ask
-    for the same runs; callers get a new frame from :func:`data_fundamental_diagram`'s concat."""
+    for the same runs; callers get a new frame from :func:`data_fundamental_diagram`'s concat.
+    Kept on disk between processes too (:mod:`evaluation.humans.datacache`)."""
     info = recorded.run_info(run)
     g = info["geometry"]
     points = measures.voronoi_density_speed(
@@ -296,10 +298,12 @@ def model_fundamental_diagram(
 # ------------------------------------------------------------------ counterflow
 
 
+@datacache.kept
 def data_counterflow(run: str = COUNTERFLOW_RUN) -> dict:
     """The bi-directional run's ``density`` (persons/m²), ``speed_mps`` (mean speed along each
     person's own direction) in its measurement area and ``lane_order``, over the frames where the
-    area's density is within 20 % of its median (the steady part)."""
+    area's density is within 20 % of its median (the steady part). Kept on disk between processes
+    (:mod:`evaluation.humans.datacache`: every frame's Voronoi cells, half a minute)."""
     info = recorded.run_info(run)
     g = info["geometry"]
     rows = recorded.trajectories(run)
