@@ -139,22 +139,22 @@ def test_the_datas_measures_are_read_back_from_disk_while_their_inputs_are_uncha
     first = kept("a")
     pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)  # every bit, the NaN, the dtypes
     assert kept_counter() == kept_counter() == {"density": 0.98, "lane_order": 2 / 3}
-    kept("b")
-    assert calls == ["a", "counter", "b"]  # each argument its own value, each computed once
+    kept("b"), kept(run="b")
+    assert calls == ["a", "counter", "b", "b"]  # each argument its own value, each computed once
     for stored in (tmp_path / "cache").iterdir():  # a damaged file: computed again and replaced
         stored.write_text('{"key": ')
     kept("a"), kept("a")
-    assert calls == ["a", "counter", "b", "a"]
+    assert calls == ["a", "counter", "b", "b", "a"]
     monkeypatch.setattr(datacache, "inputs_digest", lambda: "the data or the code changed")
     pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)
-    assert calls[-1] == "a" and len(calls) == 5
+    assert calls[-1] == "a" and len(calls) == 6
     monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", "off")
     kept("a"), kept("a")
-    assert len(calls) == 7
+    assert len(calls) == 8
     (tmp_path / "a file").write_text("")
     monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", str(tmp_path / "a file" / "cache"))  # cannot be written
     pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)
-    assert len(calls) == 8
+    assert len(calls) == 9
 
 
 def test_ade_fde_of_a_known_offset():

@@ -73,16 +73,18 @@ def _decode(stored: dict):
 
 
 def kept(function: Callable) -> Callable:
-    """``function(*args)`` (JSON-able arguments; a DataFrame of numbers and strings, or a dict of
-    floats) computed once and read back from :func:`folder` in later calls and processes. JSON
-    keeps a float's every bit (Python writes the shortest repr that reads back the same)."""
+    """``function(*args, **kwargs)`` (JSON-able arguments; a DataFrame of numbers and strings, or
+    a dict of floats) computed once and read back from :func:`folder` in later calls and
+    processes. JSON keeps a float's every bit (Python writes the shortest repr that reads back the
+    same)."""
 
     @functools.wraps(function)
-    def wrapper(*args):
+    def wrapper(*args, **kwargs):
         where = folder()
         if where is None:
-            return function(*args)
-        key = json.dumps([function.__module__, function.__qualname__, list(args), inputs_digest()])
+            return function(*args, **kwargs)
+        called = [list(args), sorted(kwargs.items())]
+        key = json.dumps([function.__module__, function.__qualname__, called, inputs_digest()])
         path = where / f"{function.__name__.strip('_')}-{hashlib.sha256(key.encode()).hexdigest()[:24]}.json"
         try:
             stored = json.loads(path.read_text(encoding="utf-8"))
@@ -90,7 +92,7 @@ def kept(function: Callable) -> Callable:
                 return _decode(stored)
         except (OSError, ValueError, KeyError, TypeError, AttributeError):
             pass  # absent, half a file from elsewhere, or foreign: computed again below
-        value = function(*args)
+        value = function(*args, **kwargs)
         try:
             write_text_atomic(path, json.dumps({"key": key, **_encode(value)}))
         except OSError:
