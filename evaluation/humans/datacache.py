@@ -9,7 +9,8 @@ A value is read back only if everything it was computed from is unchanged: the k
 function's name and arguments, every file of the shipped data (``data/pedestrians``), the source
 of the modules that read and measure it, and the versions of PedPy, shapely, pandas and NumPy. An
 unreadable or foreign file is computed again and replaced. The folder is
-``$SOCIALNAV_HUMANS_CACHE``, else ``~/.cache/socialnav-jax/humans``; ``SOCIALNAV_HUMANS_CACHE=off``
+``$SOCIALNAV_HUMANS_CACHE``, else ``socialnav-jax/humans`` in the user's cache folder
+(:func:`socialnav.common.cache.user_cache_folder`); ``SOCIALNAV_HUMANS_CACHE=off``
 computes every time. A home that cannot be written computes every time and says nothing.
 """
 
@@ -25,16 +26,16 @@ from collections.abc import Callable
 import pandas as pd
 
 from socialnav.common.atomic import write_text_atomic
+from socialnav.common.cache import user_cache_folder
 
 _OFF = ("off", "0", "none", "false")
 
 
 def folder() -> pathlib.Path | None:
     """Where values are kept (None: switched off)."""
-    setting = os.environ.get("SOCIALNAV_HUMANS_CACHE", "")
-    if setting.lower() in _OFF:
+    if os.environ.get("SOCIALNAV_HUMANS_CACHE", "").lower() in _OFF:
         return None
-    return pathlib.Path(setting) if setting else pathlib.Path.home() / ".cache" / "socialnav-jax" / "humans"
+    return user_cache_folder("humans", "SOCIALNAV_HUMANS_CACHE")
 
 
 @functools.lru_cache(maxsize=1)

@@ -30,6 +30,8 @@ import subprocess
 import tempfile
 import warnings
 
+from socialnav.common.cache import user_cache_folder
+
 SOURCE = pathlib.Path(__file__).with_name("social_force.cc")
 SOCIAL_FORCE_TARGET = "socialnav_social_force"
 # -fno-trapping-math: without it GCC 12 leaves the pair loop scalar on AVX2 ("control flow in
@@ -106,11 +108,7 @@ def disabled() -> bool:
 
 
 def _cache_dir() -> pathlib.Path:
-    setting = os.environ.get("SOCIALNAV_NATIVE_CACHE")
-    if setting:
-        return pathlib.Path(setting)
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return pathlib.Path(base) / "socialnav-jax" / "native"
+    return user_cache_folder("native", "SOCIALNAV_NATIVE_CACHE")
 
 
 def _cpu_flags() -> str:
