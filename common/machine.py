@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import platform
 
 
@@ -14,3 +15,13 @@ def cpu_model() -> str:
     except (OSError, StopIteration):
         pass
     return cpu
+
+
+def usable_cores() -> int:
+    """The cores this process may run on: its CPU affinity (what ``taskset``, ``numactl`` or a
+    container's cpuset leave it), not the machine's count (``os.cpu_count()``), so that a job
+    pinned to 4 of 16 cores asks for 4 host devices and XLA's 4 threads, not 16 of each."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except (AttributeError, OSError):  # no affinity on this platform (macOS, Windows)
+        return os.cpu_count() or 1

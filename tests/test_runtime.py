@@ -1,4 +1,4 @@
-"""The process set-up of the ``socialnav`` command: XLA's vector width."""
+"""The process set-up of the ``socialnav`` command: XLA's host devices and vector width."""
 
 from __future__ import annotations
 
@@ -9,11 +9,35 @@ import sys
 import pytest
 
 from socialnav import runtime
+from socialnav.common.machine import usable_cores
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 ZEN5 = "processor\t: 0\nflags\t\t: fpu sse2 avx2 fma avx512f avx512dq avx512_bf16\n"
 ZEN3 = "processor\t: 0\nflags\t\t: fpu sse2 avx2 fma\n"
 FP16_ONLY = "flags\t\t: fpu avx2 avx512fp16\n"  # a name that starts like avx512f but is not it
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no CPU affinity on this platform")
+def test_host_devices_are_the_cores_the_process_may_run_on_not_the_machines():
+    """A process pinned to one core (as ``taskset -c 0`` pins it) asks for one host device, where
+    ``os.cpu_count()`` would still say every core of the machine; a count given, or one already in
+    ``XLA_FLAGS``, is kept."""
+    code = (
+        "import os; os.sched_setaffinity(0, {min(os.sched_getaffinity(0))}); "
+        "from socialnav import runtime; runtime.request_host_devices(); print(os.environ['XLA_FLAGS'])"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "--xla_force_host_platform_device_count=1"
+    assert usable_cores() == len(os.sched_getaffinity(0))
+
+
+def test_a_device_count_given_or_already_set_is_kept(monkeypatch):
+    monkeypatch.delenv("XLA_FLAGS", raising=False)
+    runtime.request_host_devices(3)
+    assert os.environ["XLA_FLAGS"] == "--xla_force_host_platform_device_count=3"
+    runtime.request_host_devices()  # already set: nothing added
+    assert os.environ["XLA_FLAGS"] == "--xla_force_host_platform_device_count=3"
 
 
 def test_avx512f_is_read_from_the_flags_line():
