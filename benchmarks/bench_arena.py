@@ -4,6 +4,7 @@
     python benchmarks/bench_arena.py --held-out          # and every scene's held-out row
     python benchmarks/bench_arena.py --variants 20 --gscl-run runs/gscl
     python benchmarks/bench_arena.py --held-out --summary summary.csv   # and the table it timed
+    python benchmarks/bench_arena.py --scenes gscl_group,casn_crossing --variants 20 --skip-profile   # a part of it
 
 Runs the command a user runs (``socialnav arena --held-out`` into a temporary folder, in this
 process) with JAX's on-disk compilation cache off, so every program is compiled in the run, as on
@@ -33,6 +34,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.record import record  # noqa: E402
 from socialnav import cli  # noqa: E402
 from socialnav.cli.arena import DEFAULT_METHODS  # noqa: E402
 from socialnav.data import DATA_DIR  # noqa: E402
@@ -86,6 +88,8 @@ def profile_scene(name: str, variants: int, methods) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--variants", type=int, default=100)
+    parser.add_argument("--scenes", default="", help="comma-separated scene names (default: all built-in)")
+    parser.add_argument("--skip-profile", action="store_true", help="only the command, not one scene's profile")
     parser.add_argument("--gscl-run", type=pathlib.Path, default=None)
     parser.add_argument("--profile-only", action="store_true")
     parser.add_argument("--held-out", action="store_true", help="also every scene's held-out row")
@@ -95,12 +99,15 @@ def main() -> None:
     args = parser.parse_args()
     print(f"machine: {machine()}")
     if not args.profile_only:
-        specs = [load_scene(f) for f in sorted((DATA_DIR / "scenes").glob("*.json"))]
+        names = [n for n in args.scenes.split(",") if n] or sorted(p.stem for p in (DATA_DIR / "scenes").glob("*.json"))
+        specs = [load_scene(DATA_DIR / "scenes" / f"{n}.json") for n in names]
         rows = 2 if args.held_out else 1
         episodes = len(specs) * rows * len(DEFAULT_METHODS) * args.variants
         simulated = sum(s.timeout_s for s in specs) * rows * len(DEFAULT_METHODS) * args.variants
         with tempfile.TemporaryDirectory() as tmp:
             argv = ["arena", "--out", f"{tmp}/run", "--variants", str(args.variants), "--no-progress"]
+            if args.scenes:
+                argv += ["--scenes", ",".join(names)]
             if args.held_out:
                 argv.append("--held-out")
             if args.gscl_run is not None:
@@ -118,6 +125,10 @@ def main() -> None:
             f"variants = {episodes} episodes in {wall / 60:.1f} min: {episodes / wall:.1f} episodes/s, "
             f"{simulated / wall:.0f} simulated s per wall s"
         )
+        record("arena", "episodes/s (compilation included)", episodes / wall, "episodes/s", wall_s=round(wall, 1),
+               scene_rows=len(specs) * rows, methods=len(DEFAULT_METHODS), variants=args.variants)  # fmt: skip
+    if args.skip_profile:
+        return
     profile_scene("gscl_group", args.variants, ["navfn", "casn", "snape_social_eband", *BASELINES])
 
 

@@ -36,17 +36,20 @@ import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.record import record  # noqa: E402
 from socialnav.models import dataset, train, unet  # noqa: E402
 from socialnav.models.config import TrainConfig  # noqa: E402
 from socialnav.models.quality import quality_table  # noqa: E402
 from socialnav.models.steps import abstract_model, batch_sharding, compiled, initial_state  # noqa: E402
 
 
-def _generate_in_new_process(cache_dir: str | None) -> float:
-    """Seconds for ``dataset.generate(0)`` in a fresh Python process (imports not counted)."""
+def _generate_in_new_process(cache_dir: str | None, fraction: float = 1.0) -> float:
+    """Seconds for ``dataset.generate(0, dataset.scaled_counts(fraction))`` in a fresh Python process
+    (imports not counted)."""
     code = (
         f"import sys, time; sys.path.insert(0, {str(ROOT)!r}); from models import dataset; "
-        "t = time.perf_counter(); dataset.generate(0); print(time.perf_counter() - t)"
+        f"counts = dataset.scaled_counts({fraction!r}); "
+        "t = time.perf_counter(); dataset.generate(0, counts); print(time.perf_counter() - t)"
     )
     env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
     if cache_dir is not None:
@@ -55,22 +58,25 @@ def _generate_in_new_process(cache_dir: str | None) -> float:
     return float(out.stdout.strip().splitlines()[-1])
 
 
-def bench_generation():
-    n = sum(dataset.PAPER_COUNTS.values())
+def bench_generation(fraction: float = 1.0):
+    counts = dataset.scaled_counts(fraction)
+    n = sum(counts.values())
     with tempfile.TemporaryDirectory() as cache:
-        first = _generate_in_new_process(cache)  # compiles, fills the empty cache
-        cached = _generate_in_new_process(cache)  # a later process: compiled programs from the cache
-    dataset.generate(0)
+        first = _generate_in_new_process(cache, fraction)  # compiles, fills the empty cache
+        cached = _generate_in_new_process(cache, fraction)  # a later process: compiled programs from the cache
+    dataset.generate(0, counts)
     warm = []
     for seed in (1, 2, 3):
         t0 = time.perf_counter()
-        dataset.generate(seed)
+        dataset.generate(seed, counts)
         warm.append(time.perf_counter() - t0)
     print(
         f"generation of {n:,} pairs: {first:.1f} s in a new process (compilation of {len(dataset.FAMILIES)} "
         f"families included), {cached:.1f} s in a later process with JAX's compilation cache "
         f"(on in the socialnav command), {min(warm):.2f} s once compiled ({n / min(warm):,.0f} pairs/s)"
     )
+    record("gscl_generate", "pairs/s", n / min(warm), "pairs/s", compile_s=first - min(warm), pairs=n,
+           new_process_s=round(first, 2), cached_process_s=round(cached, 2))  # fmt: skip
 
 
 def _step_flops(step, *args) -> float | None:
@@ -123,6 +129,8 @@ def bench_throughput(widths, batch_sizes, steps: int = 15):
                 f"  features {features!s:<22} {params:>10,} params  batch {bs:>4}: {rate:7.1f} samples/s "
                 f"(compile {compile_s:.1f} s{rate_flops})"
             )
+            record("gscl_throughput", "samples/s", rate, "samples/s", compile_s=compile_s, features=list(features),
+                   batch=bs)  # fmt: skip
 
 
 def bench_time_to_target(config: TrainConfig, stop_after_epochs: int | None = None, keep: pathlib.Path | None = None):
@@ -180,6 +188,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--skip-train", action="store_true", help="only generation and throughput")
     parser.add_argument("--skip-throughput", action="store_true")
+    parser.add_argument(
+        "--generation-fraction", type=float, default=1.0, help="generate this share of the paper's counts (default 1)"
+    )
     parser.add_argument("--features", default=None, help="widths for the time-to-target run, e.g. 16,32,64,128")
     parser.add_argument("--batch-size", type=int, default=None)
     parser.add_argument("--epochs", type=int, default=None)
@@ -207,7 +218,7 @@ def main(argv=None):
     )
     args = parser.parse_args(argv)
     print(machine())
-    bench_generation()
+    bench_generation(args.generation_fraction)
     if not args.skip_throughput:
         bench_throughput([unet.PAPER_FEATURES, (24, 48, 96, 192), unet.CPU_FEATURES, (8, 16, 32, 64)], [32, 64])
     if args.skip_train:

@@ -30,6 +30,7 @@ import jax  # noqa: E402
 from flax import nnx  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.record import record  # noqa: E402
 from socialnav.models import steps, train, unet  # noqa: E402
 from socialnav.models.config import TrainConfig  # noqa: E402
 
@@ -66,8 +67,10 @@ def main(argv=None):
     def batch(b):
         return train.epoch_batch(data, b, bs, data_sharding)
 
+    t0 = time.perf_counter()
     state, loss = train_step(state, *batch(0), None)
     jax.block_until_ready(loss)
+    first_s = time.perf_counter() - t0
     rates, b = [], 1
     for _ in range(args.rounds):
         t0 = time.perf_counter()
@@ -79,8 +82,11 @@ def main(argv=None):
     upsampling = "nnx.ConvTranspose" if args.transposed_conv else "UpConv"
     print(
         f"model {config.features}, batch {bs}, {jax.device_count()} device(s), upsampling {upsampling}: "
-        f"samples/s per round of {args.steps} steps: {', '.join(f'{r:.0f}' for r in rates)} (loss {float(loss):.6f})"
+        f"samples/s per round of {args.steps} steps: {', '.join(f'{r:.0f}' for r in rates)} (loss {float(loss):.6f}); "
+        f"the first step (compiling it) {first_s:.1f} s"
     )
+    record("gscl_train", "samples/s", max(rates), "samples/s", compile_s=first_s, features=list(config.features),
+           batch=bs)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.record import record  # noqa: E402
 from socialnav.evaluation.humans import calibration as hc  # noqa: E402
 from socialnav.evaluation.humans import validation as hv  # noqa: E402
 
@@ -85,6 +86,8 @@ def main() -> int:
             label = f"{name}{' in pairs' if pairs else ''}"
             print(f"N={n:4d} {label:41s} {rate / 1e6:8.2f} M people-steps/s  (x{rate / base:.2f} of the social "
                   f"force; compile and first run {compile_s:.1f} s)", flush=True)  # fmt: skip
+            record("human_models", f"people-steps/s ({label})", rate, "people-steps/s", compile_s=compile_s - best,
+                   people=n, worlds=args.worlds)  # fmt: skip
     return 0
 
 

@@ -38,6 +38,7 @@ import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.record import record  # noqa: E402
 from socialnav.models import dataset, grid  # noqa: E402
 from socialnav.models.config import TrainConfig  # noqa: E402
 from socialnav.models.steps import batch_sharding, compiled, initial_state  # noqa: E402
@@ -104,6 +105,7 @@ def main(argv=None) -> None:
             print(
                 f"  whole training step, {name}: {rate:.2f} steps/s ({rate * b:.0f} maps/s), first call {first:.1f} s"
             )
+            record("irl", f"maps/s ({name.split(' ')[0]} objective)", rate * b, "maps/s", compile_s=first, batch=b)
         demos = jax.jit(objective.prepare)(key, inputs, targets)
         costs = jnp.clip(targets + 0.05, 0.0, 1.0)
         for name, nll in (("implicit", _implicit_mean_nll), ("unrolled", _unrolled_mean_nll)):

@@ -28,6 +28,7 @@ sys.path.insert(0, str(ROOT))
 import jax  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
+from benchmarks.record import record  # noqa: E402
 from socialnav.data import SCENES_DIR  # noqa: E402
 from socialnav.jaxsim.scenes.spec import load_scene  # noqa: E402
 from socialnav.planners.learning import policy_training  # noqa: E402
@@ -86,6 +87,10 @@ def main() -> None:
     what = f"collect + {config.epochs} epochs x {config.minibatches} minibatches"
     print(f"whole update ({what}): {n / update_s:,.0f} env-steps/s")
     print(f"collection alone (policy forward, sampling, env step, resets, GAE): {n / collect_s:,.0f} env-steps/s")
+    size = {"scenes": len(specs), "envs_per_scene": config.envs_per_scene, "rollout_steps": config.rollout_steps}
+    record("ppo", "env-steps/s (whole update)", n / update_s, "env-steps/s", compile_s=setup_s, **size,
+           note=f"compile_s is the set-up and {args.warmup} warm-up update(s)")  # fmt: skip
+    record("ppo", "env-steps/s (collection)", n / collect_s, "env-steps/s", **size)
     for name, rate in PUBLISHED:
         print(f"  published, other machine: {name}: about {rate:,} env-steps/s ({n / update_s / rate:,.0f}x)")
 

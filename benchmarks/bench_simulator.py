@@ -40,7 +40,8 @@ request_wide_vectors()
 import jax  # noqa: E402
 import numpy as np  # noqa: E402
 
-from socialnav.common.machine import cpu_model  # noqa: E402
+from benchmarks.record import record  # noqa: E402
+from socialnav.common.machine import cpu_model, usable_cores  # noqa: E402
 from socialnav.jaxsim import native  # noqa: E402
 from socialnav.jaxsim.rollout import init_batch, run_samples, world_keys  # noqa: E402
 from socialnav.jaxsim.route_follower import route_follower  # noqa: E402
@@ -55,7 +56,8 @@ def machine() -> str:
     cpu = cpu_model()
     force = native.describe()
     return (
-        f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, jax {jax.__version__}, "
+        f"{cpu}, {usable_cores()} of {os.cpu_count()} cores usable, Python {platform.python_version()}, "
+        f"jax {jax.__version__}, "
         f"{jax.local_device_count()} host device(s); social force on the CPU: {force}"
     )
 
@@ -85,6 +87,8 @@ def bench_jaxsim(scenario, batches, seconds):
         steps = calls * chunk * every
         rate = agents * b * steps / wall
         rows.append((b, rate, compile_s))
+        record("warehouse", "agent-steps/s", rate, "agent-steps/s", compile_s=compile_s, batch=b,
+               note=f"compile_s includes {WARMUP_S:.0f} simulated s of warm-up")  # fmt: skip
         print(
             f"  jaxsim  batch {b:5d}: {rate / 1e6:7.2f} M agent-steps/s  "
             f"({steps} steps, {wall:.1f} s; compile + {WARMUP_S:.0f} s warm-up {compile_s:.1f} s)",
