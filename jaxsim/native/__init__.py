@@ -5,7 +5,8 @@
 force over a batch of worlds (``social_force.cc``): XLA's CPU
 compiler runs that pair computation at 8.6 ns per pair per core, split into about 15 loop
 kernels, and no setting or rewriting in JAX moved it (README "Speed"); the C++ loop, with the
-worlds as vector lanes, is the same arithmetic in one pass. The JAX version
+worlds as vector lanes, is the same arithmetic in one pass; a batch of more than one block of 64
+worlds is shared out over XLA's CPU threads (the bits of one thread). The JAX version
 (:func:`jaxsim.social_force.social_force_xla`) stays the reference, the GPU path and the
 fallback, and a test holds the two to float rounding.
 

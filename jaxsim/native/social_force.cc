@@ -16,9 +16,14 @@
 //   x, y, vx, vy, weight: (B, A)  positions (m), velocities (m/s), source weights
 //   params: (B, 5)  lambda, gamma, n', n, social force factor
 // Outputs: ax, ay: (B, A)  the social acceleration (m/s^2), scaled by the force factor.
+#include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <memory>
+#include <thread>
 #include <vector>
 
 #include "xla/ffi/api/ffi.h"
@@ -233,9 +238,45 @@ void block(const float* const in[5], const float* par, int64_t agents, int64_t s
   }
 }
 
-ffi::Error SocialForceImpl(ffi::Buffer<ffi::F32> x, ffi::Buffer<ffi::F32> y, ffi::Buffer<ffi::F32> vx,
-                           ffi::Buffer<ffi::F32> vy, ffi::Buffer<ffi::F32> weight, ffi::Buffer<ffi::F32> params,
-                           ffi::ResultBuffer<ffi::F32> ax, ffi::ResultBuffer<ffi::F32> ay) {
+// The worlds [begin, end) as blocks of 64, then of one vector, then the last few (see above).
+void worlds_range(const float* const in[5], const float* params, int64_t agents, int64_t begin, int64_t end,
+                  float* ax, float* ay) {
+  int64_t start = begin;
+  for (; end - start >= kWideLanes; start += kWideLanes) block<kWideLanes>(in, params, agents, start, kWideLanes, ax, ay);
+  for (; end - start >= kNarrowLanes; start += kNarrowLanes)
+    block<kNarrowLanes>(in, params, agents, start, kNarrowLanes, ax, ay);
+  if (start < end) {
+    // The last few worlds: one block of padded lanes, or each world alone with the agents as
+    // lanes (the same bits either way), whichever is faster. A world alone evaluates about
+    // pairs / lanes + agents vectors of forces against a block's pairs, but costs about 3 times
+    // that in its serial sums and loop tails (measured: alone wins for up to 3 worlds with
+    // AVX-512 and 51 agents, 2 with AVX2).
+    const int64_t left = end - start, pairs = agents * (agents - 1) / 2;
+    const int64_t alone = 3 * left * (pairs / kNarrowLanes + agents);
+    if (alone < pairs) {
+      std::vector<float> fx(agents), fy(agents);
+      for (int64_t t = start; t < end; ++t) one_world(in, params + 5 * t, agents, t, ax, ay, fx, fy);
+    } else {
+      block<kNarrowLanes>(in, params, agents, start, left, ax, ay);
+    }
+  }
+}
+
+// Chunks of whole 64-world blocks shared out over XLA's CPU threads: the calling thread and up to
+// one task per other thread each take the next chunk until none is left (the last chunk also
+// holds the worlds after the last whole block). A world's result does not depend on the block it
+// is computed in, so the bits are those of one thread. The caller waits only for chunks another
+// thread has taken and is computing, never for a task that has not started (which may never
+// start while the pool is busy: XLA runs this call on one of the pool's own threads); a task
+// that starts after the call has returned finds no chunk left and touches no buffer.
+struct Chunks {
+  std::atomic<int64_t> next{0}, done{0};
+};
+
+ffi::Error SocialForceImpl(ffi::ThreadPool pool, ffi::Buffer<ffi::F32> x, ffi::Buffer<ffi::F32> y,
+                           ffi::Buffer<ffi::F32> vx, ffi::Buffer<ffi::F32> vy, ffi::Buffer<ffi::F32> weight,
+                           ffi::Buffer<ffi::F32> params, ffi::ResultBuffer<ffi::F32> ax,
+                           ffi::ResultBuffer<ffi::F32> ay) {
   const auto dims = x.dimensions();
   if (dims.size() < 1) return ffi::Error::InvalidArgument("social_force: x must have an agent axis");
   const int64_t agents = dims.back();
@@ -243,28 +284,31 @@ ffi::Error SocialForceImpl(ffi::Buffer<ffi::F32> x, ffi::Buffer<ffi::F32> y, ffi
   const int64_t worlds = static_cast<int64_t>(x.element_count()) / agents;
   if (params.element_count() != static_cast<size_t>(worlds * 5))
     return ffi::Error::InvalidArgument("social_force: params must hold 5 values per world");
-  const float* const in[5] = {x.typed_data(), y.typed_data(), vx.typed_data(), vy.typed_data(), weight.typed_data()};
-  int64_t start = 0;
-  for (; worlds - start >= kWideLanes; start += kWideLanes)
-    block<kWideLanes>(in, params.typed_data(), agents, start, kWideLanes, ax->typed_data(), ay->typed_data());
-  for (; worlds - start >= kNarrowLanes; start += kNarrowLanes)
-    block<kNarrowLanes>(in, params.typed_data(), agents, start, kNarrowLanes, ax->typed_data(), ay->typed_data());
-  if (start < worlds) {
-    // The last few worlds: one block of padded lanes, or each world alone with the agents as
-    // lanes (the same bits either way), whichever is faster. A world alone evaluates about
-    // pairs / lanes + agents vectors of forces against a block's pairs, but costs about 3 times
-    // that in its serial sums and loop tails (measured: alone wins for up to 3 worlds with
-    // AVX-512 and 51 agents, 2 with AVX2).
-    const int64_t left = worlds - start, pairs = agents * (agents - 1) / 2;
-    const int64_t alone = 3 * left * (pairs / kNarrowLanes + agents);
-    if (alone < pairs) {
-      std::vector<float> fx(agents), fy(agents);
-      for (int64_t t = start; t < worlds; ++t)
-        one_world(in, params.typed_data() + 5 * t, agents, t, ax->typed_data(), ay->typed_data(), fx, fy);
-    } else {
-      block<kNarrowLanes>(in, params.typed_data(), agents, start, left, ax->typed_data(), ay->typed_data());
-    }
+  const std::array<const float*, 5> in = {x.typed_data(), y.typed_data(), vx.typed_data(), vy.typed_data(),
+                                          weight.typed_data()};
+  const float* const p = params.typed_data();
+  float* const out_x = ax->typed_data();
+  float* const out_y = ay->typed_data();
+  const int64_t blocks = worlds / kWideLanes;
+  const int64_t threads = pool.num_threads();
+  if (threads <= 1 || blocks < 2) {
+    worlds_range(in.data(), p, agents, 0, worlds, out_x, out_y);
+    return ffi::Error::Success();
   }
+  // A few chunks a thread, so that a thread slowed by other work leaves its share to the others.
+  const int64_t chunks = std::min(blocks, 4 * threads);
+  auto shared = std::make_shared<Chunks>();
+  auto work = [shared, in, p, out_x, out_y, agents, worlds, blocks, chunks]() {
+    for (int64_t c = shared->next.fetch_add(1); c < chunks; c = shared->next.fetch_add(1)) {
+      const int64_t begin = blocks * c / chunks * kWideLanes;
+      const int64_t end = c == chunks - 1 ? worlds : blocks * (c + 1) / chunks * kWideLanes;
+      worlds_range(in.data(), p, agents, begin, end, out_x, out_y);
+      shared->done.fetch_add(1, std::memory_order_release);
+    }
+  };
+  for (int64_t t = 1; t < std::min(threads, chunks); ++t) pool.Schedule(decltype(work)(work));
+  work();
+  while (shared->done.load(std::memory_order_acquire) < chunks) std::this_thread::yield();
   return ffi::Error::Success();
 }
 
@@ -272,6 +316,7 @@ ffi::Error SocialForceImpl(ffi::Buffer<ffi::F32> x, ffi::Buffer<ffi::F32> y, ffi
 
 XLA_FFI_DEFINE_HANDLER_SYMBOL(SocialForce, SocialForceImpl,
                               ffi::Ffi::Bind()
+                                  .Ctx<ffi::ThreadPool>()
                                   .Arg<ffi::Buffer<ffi::F32>>()
                                   .Arg<ffi::Buffer<ffi::F32>>()
                                   .Arg<ffi::Buffer<ffi::F32>>()
