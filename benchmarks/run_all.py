@@ -122,11 +122,9 @@ def parse_cores(text: str) -> list[int]:
     try:
         cores = sorted({int(v) for v in text.split(",") if v.strip()})
     except ValueError:
-        raise argparse.ArgumentTypeError(f"--cores: {text!r} is not a comma-separated list of integers") from None
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of integers") from None
     if not cores or cores[0] < 1 or cores[-1] > usable_cores():
-        raise argparse.ArgumentTypeError(
-            f"--cores: {text!r}: each count must be 1 to {usable_cores()} (the usable cores)"
-        )
+        raise argparse.ArgumentTypeError(f"{text!r}: each count must be 1 to {usable_cores()} (the usable cores)")
     return cores
 
 
@@ -134,7 +132,7 @@ def parse_jobs(text: str) -> list[str]:
     names = [v.strip() for v in text.split(",") if v.strip()]
     unknown = [n for n in names if n not in JOBS]
     if unknown or not names:
-        raise argparse.ArgumentTypeError(f"--jobs: unknown job(s) {unknown or [text]}; known: {', '.join(JOBS)}")
+        raise argparse.ArgumentTypeError(f"unknown job(s) {unknown or [text]}; known: {', '.join(JOBS)}")
     return names
 
 
