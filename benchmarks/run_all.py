@@ -81,7 +81,7 @@ JOBS = {
     ),
     "human_models": Job(
         "bench_human_models.py",
-        ("--people", "64", "--worlds", "64", "--steps", "50", "--repeats", "2"),
+        ("--people", "64", "--worlds", "256", "--steps", "20", "--repeats", "2"),
         (),
         "one crowd step of every human model",
     ),
