@@ -37,6 +37,7 @@ import numpy as np  # noqa: E402
 
 from benchmarks.bench_simulator import machine  # noqa: E402
 from benchmarks.record import record  # noqa: E402
+from socialnav.cli.argtypes import positive_float  # noqa: E402
 from socialnav.models import dataset, train, unet  # noqa: E402
 from socialnav.models.config import TrainConfig  # noqa: E402
 from socialnav.models.quality import quality_table  # noqa: E402
@@ -189,7 +190,7 @@ def main(argv=None):
     parser.add_argument("--skip-train", action="store_true", help="only generation and throughput")
     parser.add_argument("--skip-throughput", action="store_true")
     parser.add_argument(
-        "--generation-fraction", type=float, default=1.0, help="generate this share of the paper's counts (default 1)"
+        "--generation-fraction", type=positive_float, default=1.0, help="this share of the paper's counts (default 1)"
     )
     parser.add_argument("--features", default=None, help="widths for the time-to-target run, e.g. 16,32,64,128")
     parser.add_argument("--batch-size", type=int, default=None)

@@ -51,6 +51,7 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.record import RECORD_VARIABLE  # noqa: E402
+from socialnav.cli.argtypes import positive_float  # noqa: E402
 from socialnav.common.machine import cpu_model, usable_cores  # noqa: E402
 from socialnav.runtime import cpu_has_avx512  # noqa: E402
 
@@ -297,13 +298,11 @@ def main(argv=None) -> int:
     parser.add_argument("--size", choices=("quick", "full"), default="quick")
     parser.add_argument("--cores", type=parse_cores, default=None, help="pin the CPU runs to each count, e.g. 1,2,4")
     parser.add_argument("--platforms", choices=("all", "cpu"), default="all", help="cpu: skip an accelerator")
-    parser.add_argument("--timeout", type=float, default=900.0, help="seconds a run may take (default 900)")
+    parser.add_argument("--timeout", type=positive_float, default=900.0, help="seconds a run may take (default 900)")
     parser.add_argument(
         "--out", type=pathlib.Path, default=None, help="a new folder (default runs/bench-<host>-<time>)"
     )
     args = parser.parse_args(argv)
-    if args.timeout <= 0:
-        parser.error(f"--timeout: {args.timeout:g} must be positive")
     stamp = datetime.datetime.now(datetime.UTC).strftime("%Y%m%dT%H%M%SZ")
     out = args.out or ROOT / "runs" / f"bench-{socket.gethostname()}-{stamp}"
     if out.exists() and any(out.iterdir()):

@@ -55,7 +55,7 @@ def test_bad_arguments_are_refused_in_one_line_naming_the_option(tmp_path, capsy
         (["--cores", "0"], f"each count must be 1 to {usable}"),
         (["--cores", str(usable + 1)], f"each count must be 1 to {usable}"),
         (["--cores", "1,two"], "is not a comma-separated list of integers"),
-        (["--timeout", "0"], "--timeout: 0 must be positive"),
+        (["--timeout", "0"], "argument --timeout: must be a finite number > 0, got 0"),
     ):
         with pytest.raises(SystemExit) as exit_:
             run_all.main([*argv, "--out", str(tmp_path / "new")])
