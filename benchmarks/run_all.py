@@ -41,6 +41,7 @@ import os
 import pathlib
 import platform
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -142,7 +143,10 @@ def accelerator() -> str | None:
     child process so that this one never holds the accelerator's memory; None if the CPU."""
     env = {k: v for k, v in os.environ.items() if k != "JAX_PLATFORMS"}
     code = "import jax; print(jax.default_backend())"
-    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    try:
+        done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    except subprocess.TimeoutExpired:
+        return None
     backend = done.stdout.strip().splitlines()[-1] if done.returncode == 0 and done.stdout.strip() else "cpu"
     return None if backend == "cpu" else backend
 
@@ -220,13 +224,18 @@ def run_job(name: str, size: str, platform_name: str, cores: int | None, timeout
         with open(logs / f"{label}.log", "w", encoding="utf-8") as log:
             log.write(f"$ {shown}\n")
             log.flush()
+            # A session of its own, so that a run out of time is stopped with the processes it started
+            # (bench_simulator's reference, bench_gscl's generation), not only the script.
+            child = subprocess.Popen(
+                command, env=env, stdout=log, stderr=subprocess.STDOUT, preexec_fn=_pin(cores), start_new_session=True
+            )
             try:
-                done = subprocess.run(
-                    command, env=env, stdout=log, stderr=subprocess.STDOUT, timeout=timeout_s, preexec_fn=_pin(cores)
-                )
-                status = "ok" if done.returncode == 0 else f"failed (exit {done.returncode})"
+                code = child.wait(timeout=timeout_s)
+                status = "ok" if code == 0 else f"failed (exit {code})"
             except subprocess.TimeoutExpired:
-                status = f"timed out ({timeout_s:.0f} s)"
+                os.killpg(child.pid, signal.SIGKILL)
+                child.wait()
+                status = f"timed out ({timeout_s:g} s)"
         run_s = round(time.perf_counter() - t0, 1)
         figures = []
         if os.path.exists(record_path):

@@ -6,6 +6,7 @@ import importlib.util
 import json
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 
@@ -67,6 +68,20 @@ def test_bad_arguments_are_refused_in_one_line_naming_the_option(tmp_path, capsy
     assert "exists and is not empty" in capsys.readouterr().err
     assert (tmp_path / "used" / "results.md").read_text() == "an earlier run"
     assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.slow
+def test_a_run_out_of_time_is_stopped_with_its_children_and_named_in_the_table(tmp_path):
+    """bench_gscl.py starts a process of its own to generate (a few seconds in); stopped at 20 s,
+    neither is left, the row says so and the call exits 1."""
+    out = tmp_path / "bench"
+    assert run_all.main(["--jobs", "gscl_generate", "--timeout", "20", "--platforms", "cpu", "--out", str(out)]) == 1
+    (row,) = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
+    assert row["status"] == "timed out (20 s)" and row["value"] is None and row["job"] == "gscl_generate"
+    assert "| timed out (20 s) |" in (out / "results.md").read_text()
+    if shutil.which("pgrep"):
+        pattern = "bench_gscl.py|from models import dataset"
+        assert subprocess.run(["pgrep", "-f", pattern], capture_output=True, text=True).stdout == ""
 
 
 def test_every_job_is_a_script_here_that_records_its_figures():
