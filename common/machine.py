@@ -20,7 +20,7 @@ def cpu_model() -> str:
 def usable_cores() -> int:
     """The cores this process may run on: its CPU affinity (what ``taskset``, ``numactl`` or a
     container's cpuset leave it), not the machine's count (``os.cpu_count()``), so that a job
-    pinned to 4 of 16 cores asks for 4 host devices and XLA's 4 threads, not 16 of each."""
+    pinned to 4 of 16 cores asks for 4 host devices, not 16 (XLA sizes its threads the same way)."""
     try:
         return len(os.sched_getaffinity(0)) or 1
     except (AttributeError, OSError):  # no affinity on this platform (macOS, Windows)
