@@ -53,7 +53,9 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.record import RECORD_VARIABLE  # noqa: E402
 from socialnav.cli.argtypes import positive_float  # noqa: E402
+from socialnav.common.atomic import write_text_atomic  # noqa: E402
 from socialnav.common.machine import cpu_model, usable_cores  # noqa: E402
+from socialnav.common.provenance import source  # noqa: E402
 from socialnav.runtime import cpu_has_avx512  # noqa: E402
 
 
@@ -160,13 +162,12 @@ def machine_line() -> str:
 
 
 def _commit() -> str:
-    try:
-        done = subprocess.run(
-            ["git", "-C", str(ROOT), "rev-parse", "--short=12", "HEAD"], capture_output=True, text=True
-        )
-        return done.stdout.strip() or "unknown"
-    except OSError:
-        return "unknown"
+    """The checkout's commit as the run folders name it (:func:`common.provenance.source`)."""
+    made_from = source()
+    if made_from["source_commit"] is None:
+        return "commit unknown"
+    dirty = " with uncommitted changes" if made_from["source_dirty"] else ""
+    return f"commit {made_from['source_commit'][:12]}{dirty}"
 
 
 def child_env(platform_name: str, cores: int | None, record_path: str) -> dict[str, str]:
@@ -292,13 +293,8 @@ def table(rows: list[dict], header: str) -> str:
 
 def _write(out: pathlib.Path, rows: list[dict], header: str) -> None:
     add_efficiency(rows)
-    for name, text in (
-        ("results.jsonl", "".join(json.dumps(r) + "\n" for r in rows)),
-        ("results.md", table(rows, header)),
-    ):
-        part = out / f".{name}.part"
-        part.write_text(text, encoding="utf-8")
-        part.replace(out / name)
+    write_text_atomic(out / "results.jsonl", "".join(json.dumps(r) + "\n" for r in rows))
+    write_text_atomic(out / "results.md", table(rows, header))
 
 
 def main(argv=None) -> int:
@@ -318,7 +314,7 @@ def main(argv=None) -> int:
         parser.error(f"--out: {out} exists and is not empty; give a new folder")
     (out / "logs").mkdir(parents=True, exist_ok=True)
     gpu = None if args.platforms == "cpu" else accelerator()
-    header = f"machine: {machine_line()}; accelerator: {gpu or 'none'}; commit {_commit()}; {stamp}"
+    header = f"machine: {machine_line()}; accelerator: {gpu or 'none'}; {_commit()}; {stamp}"
     print(header, flush=True)
     runs = [(job, gpu, None) for job in args.jobs] if gpu else []
     runs += [(job, "cpu", k) for job in args.jobs for k in (args.cores or [None])]
