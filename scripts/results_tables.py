@@ -14,7 +14,8 @@ where RUN names a snapshot under ``docs/results/`` and KIND one of :data:`KINDS`
 ``success`` takes ``rows=own|held_out|turned``; ``directions`` ``source=...``, one paper's table
 (quoted: ``source="seed 002 Table 1"``); ``turned`` ``cells=all`` for every cell, not only those
 the turn moved (``cells=moved``); ``sweep`` ``metric=...``; ``claims`` sets the papers' claims of
-two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out``); ``pairs`` (a
+two runs side by side (``other=NAME``, ``labels="a|b"``, ``rows=own|held_out|turned``, ``source=``
+the claims whose source starts so, quoted: ``source="seed 002"``); ``pairs`` (a
 snapshot made with ``--pairs A:B``: two methods paired by variant in each scene) takes
 ``metrics=a,b,...``; ``models`` sets one method's goal / social success in several runs side by
 side (the same scenes with another model: ``other=B,C``, ``labels="a|b|c"``, ``method=gscl``);
@@ -204,21 +205,22 @@ def _and_from(run: pathlib.Path) -> str:
     return markdown.source_line(json.loads((run / "run.json").read_text()), _shown(run), lead="And from")
 
 
-def _claims(folder, other=None, labels=None, rows="own"):
+def _claims(folder, other=None, labels=None, rows="own", source=None):
     if other is None:
         raise ValueError("claims needs other=NAME, the second run's snapshot")
-    files = {"own": "directions.csv", "held_out": "directions_held_out.csv"}
+    files = {"own": "directions.csv", "held_out": "directions_held_out.csv", "turned": "directions_turned.csv"}
     if rows not in files:
-        raise ValueError(f"rows='{rows}': own or held_out")
+        raise ValueError(f"rows='{rows}': own, held_out or turned")
     second = _other_snapshot(folder, other)
     names = labels.split("|") if labels else [folder.name, other]
     if len(names) != 2:
         raise ValueError(f"labels='{labels}': two names, as 'a|b'")
-    return (
-        _and_from(second)
-        + "\n\n"
-        + markdown.claims_table(_read(folder, files[rows]), _read(second, files[rows]), names)
-    )
+    a, b = _read(folder, files[rows]), _read(second, files[rows])
+    if source is not None:  # one seed's claims (a run of its scenes and methods only: the rest not run)
+        a, b = (d[d["source"].str.startswith(source)] for d in (a, b))
+        if a.empty and b.empty:
+            raise ValueError(f"source='{source}': no claim's source starts so in either run")
+    return _and_from(second) + "\n\n" + markdown.claims_table(a, b, names)
 
 
 def _models(folder, other=None, labels=None, method="gscl"):

@@ -105,6 +105,33 @@ def test_the_models_table_sets_one_methods_cells_of_several_runs_side_by_side(tm
         tables.render("models first other=third", results)
 
 
+def _claim(source, scene, diff, verdict):
+    return {"source": source, "scene": scene, "metric": "social_no_collision_pct", "proposed": "gscl",
+            "baseline": "navfn", "paper_diff": 60.0, "ours_diff": diff, "ours_diff_lo": diff - 5,
+            "ours_diff_hi": diff + 5, "n_pairs": 100, "verdict": verdict}  # fmt: skip
+
+
+def test_the_claims_table_keeps_one_papers_claims_and_reads_turned_rows(tmp_path):
+    """``source=`` keeps the claims whose source starts so (a second run of one seed's scenes and
+    methods, the rest not run); ``rows=turned`` reads the turned rows' directions."""
+    results = tmp_path / "results"
+    whole = [_claim("seed 001 Table 1", "x", 10.0, "reproduced"), _claim("seed 002 Table 1", "q", 89.0, "reproduced")]
+    runs = {"whole": whole, "candidate": [_claim("seed 002 Table 1", "q", 3.0, "not reproduced")]}
+    for name, claims in runs.items():
+        (results / name).mkdir(parents=True)
+        (results / name / "run.json").write_text(json.dumps({"gscl_model": name}))
+        for file in ("directions.csv", "directions_turned.csv"):
+            pd.DataFrame(claims).to_csv(results / name / file, index=False)
+    text = tables.render('claims whole other=candidate labels="a|b" source="seed 002"', results)
+    assert "seed 001" not in text and "| seed 002 Table 1 | `q` |" in text
+    assert "1 claims in both runs; the verdict differs in 1:" in text
+    assert "- q social_no_collision_pct (gscl - navfn): reproduced -> not reproduced" in text
+    everything = tables.render("claims whole other=candidate rows=turned", results)
+    assert "| seed 001 Table 1 | `x` |" in everything and "- | not run" in everything
+    with pytest.raises(ValueError, match="source='seed 003': no claim"):
+        tables.render('claims whole other=candidate source="seed 003"', results)
+
+
 def test_a_snapshot_keeps_what_the_tables_read_and_names_the_command(tmp_path):
     run = tmp_path / "run"
     run.mkdir()
@@ -183,7 +210,7 @@ def test_two_methods_paired_by_variant_are_kept_by_the_snapshot_and_shown_per_sc
         ("claims mine", "claims needs other=NAME"),
         ("claims mine other=theirs", "theirs: no snapshot"),
         ("claims mine other=mine labels=one", "two names"),
-        ("claims mine other=mine rows=turned", "rows='turned': own or held_out"),
+        ("claims mine other=mine rows=sideways", "rows='sideways': own, held_out or turned"),
         ("claims mine other=mine", "directions.csv: no such file"),
         ("pairs mine", "pairs.csv: no such file"),
     ],
