@@ -120,14 +120,16 @@ def test_the_claims_table_keeps_one_papers_claims_and_reads_turned_rows(tmp_path
     for name, claims in runs.items():
         (results / name).mkdir(parents=True)
         (results / name / "run.json").write_text(json.dumps({"gscl_model": name}))
-        for file in ("directions.csv", "directions_turned.csv"):
-            pd.DataFrame(claims).to_csv(results / name / file, index=False)
+        pd.DataFrame(claims).to_csv(results / name / "directions.csv", index=False)
+        turned = [claim | {"verdict": "no difference here"} for claim in claims]  # the turned rows' own verdicts
+        pd.DataFrame(turned).to_csv(results / name / "directions_turned.csv", index=False)
     text = tables.render('claims whole other=candidate labels="a|b" source="seed 002"', results)
     assert "seed 001" not in text and "| seed 002 Table 1 | `q` |" in text
     assert "1 claims in both runs; the verdict differs in 1:" in text
     assert "- q social_no_collision_pct (gscl - navfn): reproduced -> not reproduced" in text
     everything = tables.render("claims whole other=candidate rows=turned", results)
     assert "| seed 001 Table 1 | `x` |" in everything and "- | not run" in everything
+    assert "2 claims" not in everything and "1 claims in both runs; the verdict differs in 0." in everything
     with pytest.raises(ValueError, match="source='seed 003': no claim"):
         tables.render('claims whole other=candidate source="seed 003"', results)
 
