@@ -17,6 +17,41 @@ def cpu_model() -> str:
     return cpu
 
 
+def cpu_flags() -> str:
+    """The ``flags`` line of ``/proc/cpuinfo`` (empty where there is none: macOS, Windows)."""
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
+            return next((line for line in f if line.startswith("flags")), "")
+    except OSError:
+        return ""
+
+
+def cpu_isa() -> str:
+    """The processor's widest x86 vector instructions: ``"AVX-512"``, ``"AVX2"``, or ``"other"``."""
+    names = set(cpu_flags().split())
+    if "avx512f" in names:
+        return "AVX-512"
+    return "AVX2" if "avx2" in names else "other"
+
+
+def compiler_host() -> dict:
+    """What a result's rounding depends on beyond its seed and settings: XLA compiles for the host
+    CPU's instruction set, so the same program rounds differently on another processor (or under
+    another ``--xla_cpu_max_isa``) and with other jax/jaxlib versions. ``{"jax", "jaxlib", "cpu",
+    "isa", "machine", "xla_flags"}``, for a run's records (``run.json``, a training's history)."""
+    import jax
+    import jaxlib
+
+    return {
+        "jax": jax.__version__,
+        "jaxlib": jaxlib.__version__,
+        "cpu": cpu_model(),
+        "isa": cpu_isa(),
+        "machine": platform.machine(),
+        "xla_flags": os.environ.get("XLA_FLAGS", ""),
+    }
+
+
 def usable_cores() -> int:
     """The cores this process may run on: its CPU affinity (what ``taskset``, ``numactl`` or a
     container's cpuset leave it), not the machine's count (``os.cpu_count()``), so that a job

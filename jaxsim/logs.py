@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import pathlib
 import time
 
@@ -167,20 +166,11 @@ def reproducibility() -> dict:
     logs bit for bit whatever the batch size, shard layout and number of host devices (tested:
     ``tests/test_determinism.py``); across machines, XLA compiles for the host CPU's instruction
     set, so the CPU model and the jax/jaxlib versions are recorded too (not tested across CPUs)."""
-    import platform
-
-    import jax
-    import jaxlib
-
-    from socialnav.common.machine import cpu_model
+    from socialnav.common.machine import compiler_host
 
     return {
         "independent_of": ["batch size", "shards", "number of host devices"],
-        "jax": jax.__version__,
-        "jaxlib": jaxlib.__version__,
-        "cpu": cpu_model(),
-        "machine": platform.machine(),
-        "xla_flags": os.environ.get("XLA_FLAGS", ""),
+        **compiler_host(),
         "social_force": native.describe(),  # floats differ between the kernel and JAX, not the model
     }
 

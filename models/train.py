@@ -11,7 +11,8 @@ Files in ``out``:
   written every :attr:`TrainConfig.checkpoint_every_steps` steps and at every epoch end;
   orbax commits a checkpoint by renaming it, so a kill loses at most the steps since the last;
 * ``metrics.jsonl`` - one line per epoch: train and test MSE, overall and per family, samples
-  seen and wall time; rewritten atomically from the checkpoint, so it never disagrees with it;
+  seen, wall time and the host it ran on (:func:`common.machine.compiler_host`); rewritten
+  atomically from the checkpoint, so it never disagrees with it;
 * ``baselines.json`` - the test MSE of two trivial predictors (all zeros; the mean training
   map), overall and per family;
 * ``init_from.json`` - a warm-started run's source model (:func:`models.warm_start.source_record`).
@@ -30,6 +31,7 @@ import numpy as np
 
 from socialnav.common import progress as progress_lib
 from socialnav.common.atomic import write_text_atomic
+from socialnav.common.machine import compiler_host
 from socialnav.models import dataset, rules
 from socialnav.models.checkpoints import (
     check_run_folder,
@@ -232,6 +234,9 @@ def _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule)
         "test_mse": float(mse.mean()),
         "train_mse_by_family": train_by_family,
         "test_mse_by_family": test_by_family,
+        # Where the epoch ran: another processor rounds differently, so one command and seed train
+        # another draw of the recipe there (a resumed run may span machines; the export's card lists them).
+        "host": compiler_host(),
     }
     line["meets_quality"] = meets_quality(line["test_mse"], test_by_family, meta["baselines"])
     t0 = time.perf_counter()

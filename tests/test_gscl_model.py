@@ -13,6 +13,7 @@ from flax import nnx, serialization
 
 from socialnav import cli
 from socialnav.common import runfolder
+from socialnav.common.machine import compiler_host
 from socialnav.models import checkpoints, dataset, evaluation, grid, inference, quality, steps, streams, train, unet
 from socialnav.models.config import TrainConfig
 from socialnav.planners import layers
@@ -90,6 +91,7 @@ def test_tiny_training_learns_and_resumes_after_a_kill_with_nothing_lost(tmp_pat
     config, line = _run(tmp_path, "straight")
     history = [json.loads(s) for s in (tmp_path / "straight" / "metrics.jsonl").read_text().splitlines()]
     assert [h["epoch"] for h in history] == [1, 2]
+    assert all(h["host"] == compiler_host() for h in history)  # where each epoch ran
     # The loss goes down: first steps' batches against the end of training, and the test set
     # against the untrained network.
     _, graphdef, state, _ = checkpoints.restore(tmp_path / "straight")
@@ -639,6 +641,7 @@ def test_a_warm_start_copies_the_source_and_grows_a_head_and_bad_sources_are_nam
     assert cli.main(["gscl", "export", "--run", str(run), "--out", str(tmp_path / "exp"), "--scenes", "1"]) == 0
     card = json.loads((tmp_path / "exp" / inference.CARD_FILE).read_text())
     assert card["init_from"]["identity"] == source_id and "started from the model in init_from" in card["made_by"]
+    assert card["trained_on"] == []  # no epoch ended in its 6 steps, so none recorded its host
     # A second export into the same folder: refused without --overwrite (it replaced the first
     # without a word), replaced whole with it; the manifest lists exactly the model's files.
     again = ["gscl", "export", "--run", str(run), "--out", str(tmp_path / "exp"), "--scenes", "1", "--step", "4"]
@@ -772,3 +775,14 @@ def test_the_decoders_upsampling_is_flaxs_transposed_convolution_with_the_same_p
     # The U-Net's decoder uses it.
     model = unet.UNet((4, 4, 8, 8), rngs=nnx.Rngs(0))
     assert all(isinstance(layer, unet.UpConv) for layer in model.up)
+
+
+def test_an_exported_cards_hosts_are_its_epochs_each_once_in_order():
+    """``trained_on``: the hosts of a run's epochs (a resumed run may span machines), each once in
+    the order first met; epochs written before hosts were recorded add none."""
+    from socialnav.cli.gscl import _hosts
+
+    here, there = {"cpu": "a", "isa": "AVX2"}, {"cpu": "b", "isa": "AVX-512"}
+    history = [{"epoch": 1}, {"epoch": 2, "host": here}, {"epoch": 3, "host": there}, {"epoch": 4, "host": here}]
+    assert _hosts(history) == [here, there]
+    assert _hosts([{"epoch": 1}]) == [] and _hosts([]) == []

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from socialnav import runtime
-from socialnav.common.machine import usable_cores
+from socialnav.common.machine import compiler_host, cpu_isa, usable_cores
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 ZEN5 = "processor\t: 0\nflags\t\t: fpu sse2 avx2 fma avx512f avx512dq avx512_bf16\n"
@@ -74,3 +74,17 @@ def test_a_day_is_bitwise_reproducible_with_either_width():
         out = subprocess.run(run, cwd=ROOT, env=env, capture_output=True, text=True, check=True)
         digests.setdefault(width, set()).add(out.stdout.strip())
     assert len(digests[256]) == 1 and len(digests[512]) == 1
+
+
+def test_the_compiler_host_names_what_a_results_rounding_depends_on():
+    """``compiler_host``: the versions, the processor and its widest vector instructions (as the
+    process set-up reads them) and XLA's flags; a simulated run's ``run.json`` records the same."""
+    import jax
+
+    from socialnav.jaxsim import logs, native
+
+    host = compiler_host()
+    assert list(host) == ["jax", "jaxlib", "cpu", "isa", "machine", "xla_flags"]
+    assert host["jax"] == jax.__version__ and host["xla_flags"] == os.environ.get("XLA_FLAGS", "")
+    assert host["isa"] == cpu_isa() == native.cpu_isa() and (host["isa"] == "AVX-512") == runtime.cpu_has_avx512()
+    assert logs.reproducibility().items() >= host.items()

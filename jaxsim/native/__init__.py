@@ -32,6 +32,7 @@ import tempfile
 import warnings
 
 from socialnav.common.cache import user_cache_folder
+from socialnav.common.machine import cpu_flags, cpu_isa
 
 SOURCE = pathlib.Path(__file__).with_name("social_force.cc")
 SOCIAL_FORCE_TARGET = "socialnav_social_force"
@@ -84,14 +85,6 @@ def flags(compiler_version: str = "", source: pathlib.Path = SOURCE) -> tuple[st
     return (*FLAGS, *(GCC_FLAGS if gcc else ()), f"-march={march()}")
 
 
-def cpu_isa() -> str:
-    """The processor's widest x86 vector instructions: ``"AVX-512"``, ``"AVX2"``, or ``"other"``."""
-    names = set(_cpu_flags().split())
-    if "avx512f" in names:
-        return "AVX-512"
-    return "AVX2" if "avx2" in names else "other"
-
-
 def describe() -> str:
     """Which social force runs on the CPU and for which instruction set, in one line (what the
     benchmarks print and a run's ``run.json`` records): the kernel's ``-march``, the processor's
@@ -112,14 +105,6 @@ def _cache_dir() -> pathlib.Path:
     return user_cache_folder("native", "SOCIALNAV_NATIVE_CACHE")
 
 
-def _cpu_flags() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
-            return next((line for line in f if line.startswith("flags")), "")
-    except OSError:
-        return ""
-
-
 def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
     """The shared library of ``source``, compiled now unless the cache already holds it.
 
@@ -138,7 +123,7 @@ def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
     key = hashlib.sha256(
         b"\0".join(
             s.encode() if isinstance(s, str) else s
-            for s in (source.read_bytes(), " ".join(flags(version, source)), version, header.read_bytes(), _cpu_flags())
+            for s in (source.read_bytes(), " ".join(flags(version, source)), version, header.read_bytes(), cpu_flags())
         )
     ).hexdigest()[:16]
     folder = _cache_dir()
