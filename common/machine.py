@@ -17,8 +17,11 @@ def cpu_model() -> str:
     return cpu
 
 
-def cpu_flags() -> str:
-    """The ``flags`` line of ``/proc/cpuinfo`` (empty where there is none: macOS, Windows)."""
+def cpu_flags(cpuinfo: str | None = None) -> str:
+    """The ``flags`` line of ``/proc/cpuinfo``, or of ``cpuinfo`` (that file's text) when given;
+    empty where there is none (macOS, Windows)."""
+    if cpuinfo is not None:
+        return next((line for line in cpuinfo.splitlines() if line.startswith("flags")), "")
     try:
         with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
             return next((line for line in f if line.startswith("flags")), "")
@@ -26,9 +29,10 @@ def cpu_flags() -> str:
         return ""
 
 
-def cpu_isa() -> str:
-    """The processor's widest x86 vector instructions: ``"AVX-512"``, ``"AVX2"``, or ``"other"``."""
-    names = set(cpu_flags().split())
+def cpu_isa(cpuinfo: str | None = None) -> str:
+    """The processor's widest x86 vector instructions: ``"AVX-512"``, ``"AVX2"``, or ``"other"``
+    (``cpuinfo``: :func:`cpu_flags`)."""
+    names = set(cpu_flags(cpuinfo).split())
     if "avx512f" in names:
         return "AVX-512"
     return "AVX2" if "avx2" in names else "other"

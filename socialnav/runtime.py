@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 
-from socialnav.common.machine import usable_cores
+from socialnav.common.machine import cpu_isa, usable_cores
 
 
 def request_host_devices(n: int | None = None) -> None:
@@ -33,14 +33,9 @@ _WIDTH_FLAG = "--xla_cpu_prefer_vector_width"
 
 
 def cpu_has_avx512(cpuinfo: str | None = None) -> bool:
-    """Whether the processor reports AVX-512F (Linux ``/proc/cpuinfo``; False where unreadable)."""
-    if cpuinfo is None:
-        try:
-            with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
-                cpuinfo = f.read()
-        except OSError:
-            return False
-    return any(line.startswith("flags") and "avx512f" in line.split() for line in cpuinfo.splitlines())
+    """Whether the processor reports AVX-512F (Linux ``/proc/cpuinfo``, or ``cpuinfo``, that file's
+    text; False where unreadable)."""
+    return cpu_isa(cpuinfo) == "AVX-512"
 
 
 def request_wide_vectors(cpuinfo: str | None = None) -> None:

@@ -759,18 +759,6 @@ def _source(run) -> dict:
         raise SystemExit(f"socialnav gscl export: {path}: not valid JSON ({e})") from None
 
 
-def _hosts(history: list[dict]) -> list[dict]:
-    """The hosts a run's epochs ran on (each epoch's ``host``, :func:`common.machine.compiler_host`),
-    each once, in the order first met; none for a run trained before epochs recorded theirs. A
-    model's weights round as its training's processor did: the same recipe and seed trained on
-    another instruction set is another model."""
-    hosts = []
-    for line in history:
-        if "host" in line and line["host"] not in hosts:
-            hosts.append(line["host"])
-    return hosts
-
-
 def _export(args) -> int:
     """The run's model alone, with a card of how it was made and what it reaches."""
     import datetime
@@ -778,7 +766,7 @@ def _export(args) -> int:
     import jax
 
     from socialnav import __version__
-    from socialnav.models import evaluation
+    from socialnav.models import evaluation, train
     from socialnav.models.checkpoints import restore
     from socialnav.models.inference import SocialCostModel
 
@@ -804,7 +792,7 @@ def _export(args) -> int:
         "baselines": meta["baselines"],
         **checks,
         **_source(args.run),
-        "trained_on": _hosts(meta["history"]),
+        "trained_on": train.hosts_of(meta["history"]),
         "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "socialnav_version": __version__,
         "jax_version": jax.__version__,
