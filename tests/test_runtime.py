@@ -33,7 +33,9 @@ def test_host_devices_are_the_cores_the_process_may_run_on_not_the_machines():
 
 
 def test_a_device_count_given_or_already_set_is_kept(monkeypatch):
-    monkeypatch.delenv("XLA_FLAGS", raising=False)
+    # setenv, not delenv(raising=False): that records nothing when the variable is absent, so the
+    # count set below outlived the test, and a later test's JAX started with 3 host devices.
+    monkeypatch.setenv("XLA_FLAGS", "")
     runtime.request_host_devices(3)
     assert os.environ["XLA_FLAGS"] == "--xla_force_host_platform_device_count=3"
     runtime.request_host_devices()  # already set: nothing added
