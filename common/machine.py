@@ -56,6 +56,18 @@ def compiler_host() -> dict:
     }
 
 
+def hosts_of(history: list[dict]) -> list[dict]:
+    """The hosts a training ran on: each line's ``host`` (:func:`compiler_host`, recorded per GSCL
+    epoch and per PPO update), each once, in the order first met; none for lines written before
+    hosts were recorded. A model's weights round as its training's processor did: the same recipe
+    and seed trained on another instruction set is another model."""
+    hosts = []
+    for line in history:
+        if "host" in line and line["host"] not in hosts:
+            hosts.append(line["host"])
+    return hosts
+
+
 def usable_cores() -> int:
     """The cores this process may run on: its CPU affinity (what ``taskset``, ``numactl`` or a
     container's cpuset leave it), not the machine's count (``os.cpu_count()``), so that a job

@@ -217,18 +217,6 @@ def _check_finite(loss, step: int, manager, out) -> None:
         )
 
 
-def hosts_of(history: list[dict]) -> list[dict]:
-    """The hosts a run's epochs ran on (each epoch's ``host``, :func:`common.machine.compiler_host`),
-    each once, in the order first met; none for a run trained before epochs recorded theirs. A
-    model's weights round as its training's processor did: the same recipe and seed trained on
-    another instruction set is another model."""
-    hosts = []
-    for line in history:
-        if "host" in line and line["host"] not in hosts:
-            hosts.append(line["host"])
-    return hosts
-
-
 def _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule) -> dict:
     sse, count = np.asarray(state["family_sse"]), np.asarray(state["family_count"])
     train_by_family = {names[i]: float(sse[i] / count[i]) for i in range(len(names)) if count[i] > 0}

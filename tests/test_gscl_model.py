@@ -775,12 +775,3 @@ def test_the_decoders_upsampling_is_flaxs_transposed_convolution_with_the_same_p
     # The U-Net's decoder uses it.
     model = unet.UNet((4, 4, 8, 8), rngs=nnx.Rngs(0))
     assert all(isinstance(layer, unet.UpConv) for layer in model.up)
-
-
-def test_an_exported_cards_hosts_are_its_epochs_each_once_in_order():
-    """``trained_on``: the hosts of a run's epochs (a resumed run may span machines), each once in
-    the order first met; epochs written before hosts were recorded add none."""
-    here, there = {"cpu": "a", "isa": "AVX2"}, {"cpu": "b", "isa": "AVX-512"}
-    history = [{"epoch": 1}, {"epoch": 2, "host": here}, {"epoch": 3, "host": there}, {"epoch": 4, "host": here}]
-    assert train.hosts_of(history) == [here, there]
-    assert train.hosts_of([{"epoch": 1}]) == [] and train.hosts_of([]) == []

@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 from socialnav.cli import main
+from socialnav.common.machine import compiler_host, hosts_of
 from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes.robot import RobotParams
@@ -274,6 +275,7 @@ def test_a_run_resumed_after_a_stop_equals_one_never_stopped(tmp_path):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     lines = (cut / "metrics.jsonl").read_text().splitlines()
     assert len(lines) == 4 and (cut / "curve.png").stat().st_size > 0
+    assert hosts_of([json.loads(line) for line in lines]) == [compiler_host()]  # where each update ran
     # Trained on for longer: the same run with more updates continues it.
     longer = policy_run.train([spec], _tiny(5), cut, progress=False, log=lambda _: None)
     assert [h["update"] for h in longer] == [1, 2, 3, 4, 5] and policy_run.read_config(cut)[0].updates == 5

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from socialnav import runtime
-from socialnav.common.machine import compiler_host, cpu_isa, usable_cores
+from socialnav.common.machine import compiler_host, cpu_isa, hosts_of, usable_cores
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 ZEN5 = "processor\t: 0\nflags\t\t: fpu sse2 avx2 fma avx512f avx512dq avx512_bf16\n"
@@ -90,3 +90,13 @@ def test_the_compiler_host_names_what_a_results_rounding_depends_on():
     assert host["jax"] == jax.__version__ and host["xla_flags"] == os.environ.get("XLA_FLAGS", "")
     assert host["isa"] == cpu_isa() == native.cpu_isa() and (host["isa"] == "AVX-512") == runtime.cpu_has_avx512()
     assert logs.reproducibility().items() >= host.items()
+
+
+def test_a_trainings_hosts_are_its_lines_each_once_in_order():
+    """``hosts_of``: the hosts of a training's lines (a GSCL card's ``trained_on``; a resumed run
+    may span machines), each once in the order first met; lines written before hosts were
+    recorded add none."""
+    here, there = {"cpu": "a", "isa": "AVX2"}, {"cpu": "b", "isa": "AVX-512"}
+    history = [{"epoch": 1}, {"epoch": 2, "host": here}, {"epoch": 3, "host": there}, {"epoch": 4, "host": here}]
+    assert hosts_of(history) == [here, there]
+    assert hosts_of([{"epoch": 1}]) == [] and hosts_of([]) == []

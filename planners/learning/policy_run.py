@@ -6,7 +6,8 @@
   apart, so the benchmark restores the network alone) and the metrics so far; orbax commits a
   checkpoint by renaming it, so a kill loses at most the updates since the last one;
 * ``metrics.jsonl``: one line per update, rewritten atomically from the newest checkpoint (it
-  never disagrees with it); ``curve.png``: the training curve.
+  never disagrees with it), each with the host it ran on (``host``,
+  :func:`common.machine.compiler_host`); ``curve.png``: the training curve.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import jax
 import numpy as np
 
 from socialnav.common.atomic import write_text_atomic
+from socialnav.common.machine import compiler_host
 from socialnav.planners.learning import policy as policy_lib
 from socialnav.planners.learning import policy_social
 from socialnav.planners.learning.policy_training import PPOConfig, TrainState
@@ -277,11 +279,15 @@ def train(
             log(f"resuming {out} at update {int(state.update)} of {config.updates}")
         done_here = 0
         wall0 = history[-1]["wall_s"] if history else 0.0
+        # Where the updates ran: another processor rounds differently, so the same settings and
+        # seed train other weights there (a resumed run may span machines: hosts_of lists them).
+        host = compiler_host()
         t0 = time.perf_counter()
         with progress_lib.bar("policy train", unit="update", enabled=progress) as bar:
             while int(state.update) < config.updates:
                 state, metrics = trainer.step(state)
                 metrics["wall_s"] = wall0 + time.perf_counter() - t0
+                metrics["host"] = host
                 history.append(metrics)
                 done_here += 1
                 bar.update(int(state.update), config.updates)

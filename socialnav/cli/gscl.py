@@ -30,6 +30,7 @@ from socialnav.cli.argtypes import (
 )
 from socialnav.common import runfolder
 from socialnav.common.atomic import write_text_atomic
+from socialnav.common.machine import hosts_of
 from socialnav.common.memory import available_bytes
 from socialnav.common.runfolder import RunFolderError
 from socialnav.locking import locks_folder
@@ -766,7 +767,7 @@ def _export(args) -> int:
     import jax
 
     from socialnav import __version__
-    from socialnav.models import evaluation, train
+    from socialnav.models import evaluation
     from socialnav.models.checkpoints import restore
     from socialnav.models.inference import SocialCostModel
 
@@ -792,7 +793,7 @@ def _export(args) -> int:
         "baselines": meta["baselines"],
         **checks,
         **_source(args.run),
-        "trained_on": train.hosts_of(meta["history"]),
+        "trained_on": hosts_of(meta["history"]),
         "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "socialnav_version": __version__,
         "jax_version": jax.__version__,
