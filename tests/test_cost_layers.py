@@ -49,6 +49,9 @@ def test_inflation_layer_follows_nav2s_formula():
     assert layer[30, 45] == pytest.approx(252 * math.exp(-10 * (0.5 - 0.2)), rel=1e-5)
     assert layer[30, 46] == costmap.FREE  # 0.6 m: past the 0.55 m radius
     assert np.all(np.diff(layer[30, 40:50]) <= 0)
+    # Compiled as one program, the same bits as its operations run one by one.
+    eager = costmap.obstacle_layer.__wrapped__(occupancy, SPEC, inscribed_radius_m=0.2)
+    np.testing.assert_array_equal(layer, np.asarray(eager))
 
 
 def test_combine_max_and_uint8_conversion():

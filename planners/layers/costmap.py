@@ -18,6 +18,7 @@ grows with y); :class:`GridSpec` holds the static part (shape, resolution, origi
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import jax
@@ -149,6 +150,10 @@ def obstacle_distance_m(occupied, resolution_m: float, max_distance_m: float):
     return jnp.sqrt(d2) * resolution_m
 
 
+@functools.partial(
+    jax.jit,
+    static_argnames=("spec", "inscribed_radius_m", "inflation_radius_m", "cost_scaling_factor", "occupied_above"),
+)
 def obstacle_layer(
     occupancy,
     spec: GridSpec,
@@ -166,6 +171,10 @@ def obstacle_layer(
     Args:
       occupancy: (H, W) occupancy in [0, 1] (or bool); cells above ``occupied_above`` are obstacles.
       spec: the grid (its resolution sets the distances). The radii are static floats.
+
+    Compiled as one program per grid shape and radii: called outside a trace (a scene's set-up),
+    its eager form compiled a program for each of its dozens of operations. Inside a traced
+    program it is inlined.
     """
     occupied = jnp.asarray(occupancy, jnp.float32) > occupied_above
     reach = max(inflation_radius_m, inscribed_radius_m)
