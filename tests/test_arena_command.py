@@ -2,6 +2,7 @@
 settings refused."""
 
 import dataclasses
+import json
 
 import pandas as pd
 import pytest
@@ -58,6 +59,9 @@ def test_the_table_made_from_python_is_the_one_the_command_makes_and_resumes(tmp
     assert (out / "trajectories" / "casn_static_person.parquet").exists()
     stamp = (out / "episodes" / "casn_static_person.parquet").stat().st_mtime_ns
     summary = (out / "summary.csv").read_text()
+    from socialnav.common.machine import compiler_host
+
+    assert json.loads((out / "run.json").read_text())["host"] == compiler_host()  # noted: GSCL rounds per ISA
     args = ["arena", "--out", str(out), "--scenes", "casn_static_person", "--methods", "navfn", "--variants", "2"]
     assert cli.main([*args, "--no-progress"]) == 0
     assert (out / "episodes" / "casn_static_person.parquet").stat().st_mtime_ns == stamp

@@ -250,3 +250,11 @@ def test_every_other_table_on_the_results_page_follows_the_command_that_made_it(
                 missing.append(f"docs/arena-results.md:{number}: {line.strip()[:60]}")
         previous = line
     assert not missing, "tables without the command that made them:\n" + "\n".join(missing)
+
+
+def test_a_source_line_names_the_hosts_instruction_set_where_the_run_recorded_it():
+    info = {"source_commit": "ab" * 20, "socialnav_version": "1", "metrics_version": "m", "gscl_model": None}
+    info |= {"human_model": "social_force", "variants": 4, "seed": 0}
+    assert markdown.source_line(info, "x").endswith(", 4 variants, seed 0.")  # a run from before hosts were noted
+    said = markdown.source_line({**info, "host": {"isa": "AVX2", "cpu": "a"}}, "x")
+    assert said.endswith(", 4 variants, seed 0, AVX2.")

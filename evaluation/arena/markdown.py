@@ -48,8 +48,8 @@ PAIRS_FILE = "pairs.csv"
 def source_line(info: dict, where: str, lead: str = "From") -> str:
     """One line naming the run a table came from: its folder (``where``), the command, the source
     commit, the GSCL model's digest, the human model, variants and seed (``run.json``'s fields;
-    a field the run did not record is said to be missing, never guessed). ``lead`` opens it
-    ("And from" for a table's second run)."""
+    a field the run did not record is said to be missing, never guessed; the host's instruction
+    set where the run recorded it). ``lead`` opens it ("And from" for a table's second run)."""
     commit = info.get("source_commit")
     if commit:
         commit_text = f"commit {commit[:12]}" + (" with uncommitted changes" if info.get("source_dirty") else "")
@@ -62,7 +62,9 @@ def source_line(info: dict, where: str, lead: str = "From") -> str:
         + f": {commit_text}, socialnav {info.get('socialnav_version')}, {info.get('metrics_version')}, "
         f"GSCL model {info.get('gscl_model')}"
         + (f" averaged over {info['gscl_rotations']} rotations" if info.get("gscl_rotations", 1) != 1 else "")
-        + f", human model {info.get('human_model')}, {info.get('variants')} variants, seed {info.get('seed')}."
+        + f", human model {info.get('human_model')}, {info.get('variants')} variants, seed {info.get('seed')}"
+        + (f", {info['host']['isa']}" if isinstance(info.get("host"), dict) and info["host"].get("isa") else "")
+        + "."
     )
 
 

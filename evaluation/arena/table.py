@@ -532,12 +532,16 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
 def start(out: pathlib.Path, chosen: dict, recorded: dict | None = None) -> None:
     """Make ``out`` and write its ``run.json`` (``chosen`` and ``recorded``: what is noted but not
     compared, such as the backend; and the source commit, :func:`socialnav.common.provenance.source`,
-    noted too: a run resumed at a later commit records that one, and its digests say which
-    episodes it could reuse)."""
+    and the host, :func:`socialnav.common.machine.compiler_host`, noted too: a run resumed at a
+    later commit or on another machine records that one, and its digests say which episodes it
+    could reuse)."""
     from socialnav.common import provenance
     from socialnav.common.atomic import write_text_atomic
+    from socialnav.common.machine import compiler_host
 
     out.mkdir(parents=True, exist_ok=True)
-    noted = {**provenance.source(), **(recorded or {})}
+    # The host: a learned layer's convolutions round as the processor's vector instructions do, so
+    # the same command gives a GSCL row other bits on another instruction set.
+    noted = {**provenance.source(), "host": compiler_host(), **(recorded or {})}
     write_text_atomic(out / "run.json", json.dumps({**chosen, **noted}, indent=1) + "\n")
     runfolder.record(out, JOB, ["run.json", "shards/"])
