@@ -540,8 +540,9 @@ def start(out: pathlib.Path, chosen: dict, recorded: dict | None = None) -> None
     from socialnav.common.machine import compiler_host
 
     out.mkdir(parents=True, exist_ok=True)
-    # The host: a learned layer's convolutions round as the processor's vector instructions do, so
-    # the same command gives a GSCL row other bits on another instruction set.
+    # The host: XLA compiles for the processor (its model, not only its instruction set) and a
+    # learned layer's convolutions round as that code does, so the same command can give a GSCL
+    # row other bits on another machine.
     noted = {**provenance.source(), "host": compiler_host(), **(recorded or {})}
     write_text_atomic(out / "run.json", json.dumps({**chosen, **noted}, indent=1) + "\n")
     runfolder.record(out, JOB, ["run.json", "shards/"])
