@@ -40,8 +40,9 @@ def cpu_isa(cpuinfo: str | None = None) -> str:
 
 def compiler_host() -> dict:
     """What a result's rounding depends on beyond its seed and settings: XLA compiles for the host
-    CPU's instruction set, so the same program rounds differently on another processor (or under
-    another ``--xla_cpu_max_isa``) and with other jax/jaxlib versions. ``{"jax", "jaxlib", "cpu",
+    CPU (its model as well as its instruction set), so the same program can round differently on
+    another processor, even one of the same instruction set (or under another
+    ``--xla_cpu_max_isa``), and with other jax/jaxlib versions. ``{"jax", "jaxlib", "cpu",
     "isa", "machine", "xla_flags"}``, for a run's records (``run.json``, a training's history)."""
     import jax
     import jaxlib
