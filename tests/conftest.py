@@ -78,6 +78,29 @@ jax.monitoring.register_event_duration_secs_listener(_count_compile_seconds)
 jax.monitoring.register_event_listener(_count_cache_hits)
 
 
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config, items):
+    """The test files in the order of ``tests/file_seconds.json`` (each file's seconds in a full
+    run, longest first; ``scripts/test_files.py JUNIT --write tests/file_seconds.json`` makes it),
+    files it does not name after them in pytest's order, each file's tests in their own order.
+
+    A file runs whole on one worker (``--dist loadfile``, and ``--no-loadscope-reorder`` so that
+    pytest-xdist keeps this order instead of putting the files with the most tests first), so
+    starting the longest first leaves the short ones to even out the workers' ends: a file of one
+    two-minute test started last would otherwise run alone on one core while the other idles."""
+    import json
+    import pathlib
+
+    seconds_file = pathlib.Path(__file__).with_name("file_seconds.json")
+    if not seconds_file.is_file():
+        return
+    rank = {name: k for k, name in enumerate(json.loads(seconds_file.read_text()))}
+    first_seen = {}
+    for item in items:
+        first_seen.setdefault(item.nodeid.split("::")[0], len(first_seen))
+    items.sort(key=lambda item: (rank.get(name := item.nodeid.split("::")[0], len(rank)), first_seen[name]))
+
+
 @pytest.fixture(autouse=True)
 def _record_compile_seconds(record_property):
     """Each test's seconds spent making programs, as JUnit properties (CI sums them per file beside
