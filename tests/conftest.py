@@ -80,9 +80,10 @@ jax.monitoring.register_event_listener(_count_cache_hits)
 
 @pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(config, items):
-    """The test files in the order of ``tests/file_seconds.json`` (each file's seconds in a full
-    run, longest first; ``scripts/test_files.py JUNIT --write tests/file_seconds.json`` makes it),
-    files it does not name after them in pytest's order, each file's tests in their own order.
+    """The test files in :func:`suite_order.file_order`'s order (longest first by
+    ``tests/file_seconds.json``, which ``scripts/test_files.py JUNIT --write tests/file_seconds.json``
+    writes from a full run's report; the files marked ``runs_jobs_elsewhere`` later), each file's
+    tests in their own order.
 
     A file runs whole on one worker (``--dist loadfile``, and ``--no-loadscope-reorder`` so that
     pytest-xdist keeps this order instead of putting the files with the most tests first), so
@@ -91,14 +92,18 @@ def pytest_collection_modifyitems(config, items):
     import json
     import pathlib
 
+    from suite_order import file_order
+
     seconds_file = pathlib.Path(__file__).with_name("file_seconds.json")
-    if not seconds_file.is_file():
-        return
-    rank = {name: k for k, name in enumerate(json.loads(seconds_file.read_text()))}
-    first_seen = {}
+    seconds = json.loads(seconds_file.read_text()) if seconds_file.is_file() else {}
+    files, late = {}, set()
     for item in items:
-        first_seen.setdefault(item.nodeid.split("::")[0], len(first_seen))
-    items.sort(key=lambda item: (rank.get(name := item.nodeid.split("::")[0], len(rank)), first_seen[name]))
+        name = item.nodeid.split("::")[0]
+        files.setdefault(name, len(files))
+        if item.get_closest_marker("runs_jobs_elsewhere"):
+            late.add(name)
+    position = {name: k for k, name in enumerate(file_order(list(files), seconds, late))}
+    items.sort(key=lambda item: position[item.nodeid.split("::")[0]])
 
 
 @pytest.fixture(autouse=True)

@@ -17,6 +17,10 @@ import pytest
 
 from socialnav import backend, cli
 
+# Ray's workers run simulate, GSCL and the arena in processes of their own, reading back the
+# programs other files compiled: the file starts after those (tests/suite_order.py).
+pytestmark = pytest.mark.runs_jobs_elsewhere
+
 
 def _write_number(shard, result) -> None:
     from socialnav.common.atomic import write_text_atomic
