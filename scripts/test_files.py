@@ -4,12 +4,13 @@
     python scripts/test_files.py JUNIT --write tests/file_seconds.json   # the order the suite runs its files in
 
 A test file runs whole on one worker (``--dist loadfile``), so the file that starts last sets how
-long the suite takes; ``tests/conftest.py`` starts the longest files first, in the order of
+long the suite takes; ``tests/conftest.py`` starts the longest files first by
 ``tests/file_seconds.json`` (each file's seconds in a full run, written here from a report of
-``pytest -m "slow or not slow" --junitxml=JUNIT``). The figures beside each file are the JUnit
-properties ``tests/conftest.py`` records per test: seconds spent tracing and lowering (paid again
-in every process) and in XLA's compile or a read from the compilation cache, and how many programs
-went to XLA and how many of them the cache gave back.
+``pytest -m "slow or not slow" --junitxml=JUNIT``; the order itself: ``tests/suite_order.py``).
+The figures beside each file are the JUnit properties ``tests/conftest.py`` records per test:
+seconds spent tracing and lowering (paid again in every process) and in XLA's compile or a read
+from the compilation cache, and how many programs went to XLA and how many of them the cache gave
+back.
 """
 
 from __future__ import annotations
