@@ -96,13 +96,9 @@ def pytest_collection_modifyitems(config, items):
 
     seconds_file = pathlib.Path(__file__).with_name("file_seconds.json")
     seconds = json.loads(seconds_file.read_text()) if seconds_file.is_file() else {}
-    files, late = {}, set()
-    for item in items:
-        name = item.nodeid.split("::")[0]
-        files.setdefault(name, len(files))
-        if item.get_closest_marker("runs_jobs_elsewhere"):
-            late.add(name)
-    position = {name: k for k, name in enumerate(file_order(list(files), seconds, late))}
+    files = list(dict.fromkeys(item.nodeid.split("::")[0] for item in items))
+    late = {item.nodeid.split("::")[0] for item in items if item.get_closest_marker("runs_jobs_elsewhere")}
+    position = {name: k for k, name in enumerate(file_order(files, seconds, late))}
     items.sort(key=lambda item: position[item.nodeid.split("::")[0]])
 
 
