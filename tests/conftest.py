@@ -22,10 +22,15 @@ def _session_folder(variable: str, prefix: str) -> None:
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
 
 
-# JAX's compilation cache in a folder of the session's own, never the user's home: a program one
-# test (or worker, or command it runs) compiled is read back by the next that needs it.
-# SOCIALNAV_JAX_CACHE=off runs every test cold.
-_session_folder("SOCIALNAV_JAX_CACHE", "socialnav-xla-")
+# JAX's compilation cache in a folder the test sessions keep on this processor (never the user's
+# own: tests/xla_cache.py), unless SOCIALNAV_JAX_CACHE names another: a program one test (or
+# worker, or command it runs) compiled is read back by the next that needs it, in this session and
+# the next. SOCIALNAV_JAX_CACHE=off runs every test cold; an empty folder, as a new machine would.
+if "SOCIALNAV_JAX_CACHE" not in os.environ:
+    import xla_cache
+
+    os.environ["SOCIALNAV_JAX_CACHE"] = str(xla_cache.kept_folder())
+    xla_cache.prune(xla_cache.kept_folder())
 # Every program, not only those that took a second to compile (JAX's default): a test session
 # compiles thousands of small ones, each again in every command a test starts.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")

@@ -1,0 +1,84 @@
+"""The folder the test sessions keep JAX's compiled programs in, from one session to the next.
+
+A test session compiles thousands of programs; most are the same as the last session's (XLA's
+compiling is about half of the suite's test-seconds on a 2-core machine: docs/testing.md). JAX's
+persistent cache keys an entry by the program, the jax and jaxlib versions, the platform and
+``XLA_FLAGS``, but not by the processor, whose instruction set and model XLA compiles for
+(:func:`socialnav.common.machine.compiler_host`); so the folder is one per processor:
+``$XDG_CACHE_HOME`` (else ``~/.cache``) ``/socialnav-jax/tests/<processor>``, never the folder the
+user's own commands use (``~/.cache/socialnav-jax/xla``). An entry cut short (a process killed
+while writing it) is compressed, so JAX finds it damaged, warns and compiles the program again.
+
+:func:`prune` keeps the folder under :data:`MAX_BYTES`. Run as a script (stdlib only, so that CI can
+call it with the system's Python before anything is installed), it prunes the folder and prints
+its path.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import pathlib
+import platform
+import re
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+# Past this size the oldest entries go until half of it is left (a full suite writes about a
+# hundred megabytes; each change to a program adds its new entries beside the old).
+MAX_BYTES = 2 * 1024**3
+
+
+def _machine():
+    """``common/machine.py`` loaded from the source tree by its path (stdlib only), so that the
+    folder can be named before the package is installed."""
+    spec = importlib.util.spec_from_file_location("_socialnav_machine", ROOT / "common" / "machine.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def processor() -> str:
+    """A folder name for this processor: its model, widest vector instructions and architecture."""
+    machine = _machine()
+    name = f"{machine.cpu_model()}-{machine.cpu_isa()}-{platform.machine()}"
+    return re.sub(r"[^A-Za-z0-9.]+", "-", name).strip("-").lower()
+
+
+def kept_folder() -> pathlib.Path:
+    """The test sessions' compilation cache on this processor (see the module docstring)."""
+    cache = os.environ.get("XDG_CACHE_HOME") or str(pathlib.Path.home() / ".cache")
+    return pathlib.Path(cache) / "socialnav-jax" / "tests" / processor()
+
+
+def prune(folder: pathlib.Path, max_bytes: int = MAX_BYTES) -> int:
+    """Remove the oldest files of ``folder`` (by modification time, which is when JAX wrote them)
+    until half of ``max_bytes`` is left, if it holds more than ``max_bytes``; how many it removed.
+    A file another process removes first is skipped."""
+    entries = []
+    for entry in os.scandir(folder) if folder.is_dir() else ():
+        try:
+            if entry.is_file():
+                stat = entry.stat()
+                entries.append((stat.st_mtime, stat.st_size, entry.path))
+        except FileNotFoundError:
+            continue
+    total = sum(size for _, size, _ in entries)
+    if total <= max_bytes:
+        return 0
+    removed = 0
+    for _, size, path in sorted(entries):
+        if total <= max_bytes // 2:
+            break
+        try:
+            os.unlink(path)
+            removed += 1
+        except FileNotFoundError:
+            pass
+        total -= size
+    return removed
+
+
+if __name__ == "__main__":
+    folder = kept_folder()
+    prune(folder)
+    print(folder)
