@@ -1,9 +1,11 @@
-"""The suite's own bookkeeping: the per-file table CI prints (``scripts/test_files.py``) and the
-order the files start in (``tests/file_seconds.json``, read by ``tests/conftest.py``)."""
+"""The suite's own bookkeeping: the per-file table CI prints (``scripts/test_files.py``), the
+order the files start in (``tests/file_seconds.json``, read by ``tests/conftest.py``) and the
+compilation cache the sessions keep (``tests/xla_cache.py``)."""
 
 from __future__ import annotations
 
 import json
+import os
 import pathlib
 
 from script_loader import load
@@ -76,3 +78,25 @@ def test_the_conftest_starts_the_files_in_that_order(request):
     seconds = json.loads((TESTS / "file_seconds.json").read_text())
     late = {item.nodeid.split("::")[0] for item in items if item.get_closest_marker("runs_jobs_elsewhere")}
     assert names == file_order(names, seconds, late)
+
+
+def test_the_kept_cache_is_one_folder_per_processor_and_is_pruned_oldest_first(tmp_path, monkeypatch):
+    import xla_cache
+
+    from socialnav.common import machine
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    folder = xla_cache.kept_folder()
+    assert folder.parent == tmp_path / "cache" / "socialnav-jax" / "tests"
+    assert machine.cpu_isa().lower().replace("-", "") in folder.name.replace("-", "")
+    assert "/" not in folder.name and folder.name == folder.name.lower()
+    # Six 100-byte entries written one after another: under the cap nothing goes; over it the
+    # oldest go until half the cap is left.
+    folder.mkdir(parents=True)
+    for k in range(6):
+        (folder / f"entry{k}-cache").write_bytes(b"x" * 100)
+        os.utime(folder / f"entry{k}-cache", (1000 + k, 1000 + k))
+    assert xla_cache.prune(folder, max_bytes=600) == 0 and len(list(folder.iterdir())) == 6
+    assert xla_cache.prune(folder, max_bytes=500) == 4
+    assert sorted(p.name for p in folder.iterdir()) == ["entry4-cache", "entry5-cache"]
+    assert xla_cache.prune(tmp_path / "nowhere") == 0
