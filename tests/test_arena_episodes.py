@@ -87,7 +87,7 @@ def test_methods_spread_over_two_host_devices_give_the_same_table_as_one_after_t
     import subprocess
     import sys
 
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2", SOCIALNAV_JAX_CACHE="off")
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2")  # the session's cache, inherited
     root = DATA_DIR.parent
     out = subprocess.run([sys.executable, "-c", _SPREAD], cwd=root, env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-2000:]

@@ -115,8 +115,8 @@ def _run(
     env = dict(os.environ, KILL_AT=str(kill_at), COUNT_FILE=str(count_file), PYTHONPATH=str(ROOT))
     env["SKIP_STAGED"] = "1" if skip_staged else "0"
     env["SNAPSHOTS"] = str(snapshots or "")
-    # Compiled programs shared between the runs of a test (its own folder, not the user's cache).
-    env["SOCIALNAV_JAX_CACHE"] = str(count_file.parent / "xla-cache")
+    # The jobs read and write the test session's compilation cache (JAX_COMPILATION_CACHE_DIR,
+    # inherited from tests/conftest.py), never the user's.
     return subprocess.run([sys.executable, "-c", KILLER + code, str(folder)], env=env, cwd=ROOT).returncode
 
 
