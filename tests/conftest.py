@@ -29,8 +29,10 @@ def _session_folder(variable: str, prefix: str) -> None:
 if "SOCIALNAV_JAX_CACHE" not in os.environ:
     import xla_cache
 
-    os.environ["SOCIALNAV_JAX_CACHE"] = str(xla_cache.kept_folder())
-    xla_cache.prune(xla_cache.kept_folder())
+    try:
+        os.environ["SOCIALNAV_JAX_CACHE"] = str(xla_cache.made_folder())
+    except OSError:  # no writable cache folder in the home: one of the session's own, removed at its end
+        _session_folder("SOCIALNAV_JAX_CACHE", "socialnav-xla-")
 # Every program, not only those that took a second to compile (JAX's default): a test session
 # compiles thousands of small ones, each again in every command a test starts.
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0")

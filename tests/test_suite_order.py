@@ -8,6 +8,7 @@ import json
 import os
 import pathlib
 
+import pytest
 from script_loader import load
 
 TESTS = pathlib.Path(__file__).resolve().parent
@@ -100,3 +101,8 @@ def test_the_kept_cache_is_one_folder_per_processor_and_is_pruned_oldest_first(t
     assert xla_cache.prune(folder, max_bytes=500) == 4
     assert sorted(p.name for p in folder.iterdir()) == ["entry4-cache", "entry5-cache"]
     assert xla_cache.prune(tmp_path / "nowhere") == 0
+    assert xla_cache.made_folder() == folder  # there already: kept
+    (tmp_path / "file").write_text("not a folder")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "file"))
+    with pytest.raises(OSError):  # the conftest then uses a folder of the session's own
+        xla_cache.made_folder()

@@ -10,8 +10,8 @@ user's own commands use (``~/.cache/socialnav-jax/xla``). An entry cut short (a 
 while writing it) is compressed, so JAX finds it damaged, warns and compiles the program again.
 
 :func:`prune` keeps the folder under :data:`MAX_BYTES`. Run as a script (stdlib only, so that CI can
-call it with the system's Python before anything is installed), it prunes the folder and prints
-its path.
+call it with the system's Python before anything is installed), it makes the folder if missing,
+prunes it and prints its path; it fails where the folder cannot be made.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import os
 import pathlib
 import platform
 import re
+import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 # Past this size the oldest entries go until half of it is left (a full suite writes about a
@@ -78,7 +79,17 @@ def prune(folder: pathlib.Path, max_bytes: int = MAX_BYTES) -> int:
     return removed
 
 
-if __name__ == "__main__":
+def made_folder() -> pathlib.Path:
+    """:func:`kept_folder`, made if missing and pruned (:func:`prune`); OSError if it cannot be
+    made (a read-only home)."""
     folder = kept_folder()
+    folder.mkdir(parents=True, exist_ok=True)
     prune(folder)
-    print(folder)
+    return folder
+
+
+if __name__ == "__main__":
+    try:
+        print(made_folder())
+    except OSError as error:
+        sys.exit(f"tests/xla_cache.py: no kept compilation cache ({error})")
