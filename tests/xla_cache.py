@@ -2,12 +2,13 @@
 
 A test session compiles thousands of programs; most are the same as the last session's (XLA's
 compiling is about half of the suite's test-seconds on a 2-core machine: docs/testing.md). JAX's
-persistent cache keys an entry by the program, the jax and jaxlib versions, the platform and
-``XLA_FLAGS``, but not by the processor, whose instruction set and model XLA compiles for
-(:func:`socialnav.common.machine.compiler_host`); so the folder is one per processor:
+persistent cache keys an entry by the program, the jax and jaxlib versions, the platform, the
+devices and ``XLA_FLAGS``; its key names no processor model or instruction set, which XLA compiles
+for (:func:`socialnav.common.machine.compiler_host`), so the folder is one per processor:
 ``$XDG_CACHE_HOME`` (else ``~/.cache``) ``/socialnav-jax/tests/<processor>``, never the folder the
 user's own commands use (``~/.cache/socialnav-jax/xla``). An entry cut short (a process killed
-while writing it) is compressed, so JAX finds it damaged, warns and compiles the program again.
+while writing it) is compressed, so JAX finds it damaged, warns and compiles the program again;
+the damaged file stays until the folder is removed.
 
 :func:`prune` keeps the folder under :data:`MAX_BYTES`. Run as a script (stdlib only, so that CI can
 call it with the system's Python before anything is installed), it makes the folder if missing,
