@@ -56,14 +56,17 @@ def prune(folder: pathlib.Path, max_bytes: int = MAX_BYTES) -> int:
     """Remove the oldest files of ``folder`` (by modification time, which is when JAX wrote them)
     until half of ``max_bytes`` is left, if it holds more than ``max_bytes``; how many it removed.
     A file another process removes first is skipped."""
+    if not folder.is_dir():
+        return 0
     entries = []
-    for entry in os.scandir(folder) if folder.is_dir() else ():
-        try:
-            if entry.is_file():
-                stat = entry.stat()
-                entries.append((stat.st_mtime, stat.st_size, entry.path))
-        except FileNotFoundError:
-            continue
+    with os.scandir(folder) as listing:
+        for entry in listing:
+            try:
+                if entry.is_file():
+                    stat = entry.stat()
+                    entries.append((stat.st_mtime, stat.st_size, entry.path))
+            except FileNotFoundError:  # removed by another process meanwhile
+                continue
     total = sum(size for _, size, _ in entries)
     if total <= max_bytes:
         return 0
