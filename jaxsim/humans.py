@@ -10,7 +10,10 @@ The models (``docs/humans.md`` measures each against the Jülich corridors and E
 - ``collision_free_speed`` and ``anticipation``: first-order velocity models with bodies
   (:mod:`jaxsim.speed_model`), and their ``_calibrated`` fits to the Jülich training runs;
 - ``steering_speed``: the collision-free speed model with Moussaïd et al. 2011's choice of
-  heading, so that people overtake (:func:`jaxsim.speed_model.step_speed_model`'s ``headings``).
+  heading, so that people overtake (:func:`jaxsim.speed_model.step_speed_model`'s ``headings``);
+- ``power_law``: Karamouzas, Skinner & Guy 2014's anticipatory time-to-collision law with
+  Helbing, Farkas & Vicsek 2000's contact forces (:func:`jaxsim.power_law.step_power_law`), and
+  its ``_calibrated`` fit to the Jülich training runs.
 
 Every model takes the same arrays and returns ``(x, y, vx, vy)``; ``model`` is static (a
 change recompiles), the constants in :class:`HumanParams` are traced. People who walk together
@@ -23,7 +26,7 @@ from __future__ import annotations
 import jax
 from flax import struct
 
-from socialnav.jaxsim import crowd, groups, orca, speed_model
+from socialnav.jaxsim import crowd, groups, orca, power_law, speed_model
 from socialnav.jaxsim.params import SimParams
 
 HUMAN_MODELS = (
@@ -35,6 +38,8 @@ HUMAN_MODELS = (
     "collision_free_speed_calibrated",
     "anticipation_calibrated",
     "steering_speed_calibrated",
+    "power_law",
+    "power_law_calibrated",
 )
 
 
@@ -45,33 +50,44 @@ def check_model(model: str) -> str:
     return model
 
 
+def kind_of(model: str) -> str:
+    """The model a human model's name runs: a ``_calibrated`` name its base model's."""
+    return model.removesuffix("_calibrated")
+
+
 @struct.dataclass
 class HumanParams:
     """The traced constants of the human models: ``crowd`` (the social force's
     :class:`~jaxsim.params.SimParams`, whose static ``dt_s`` is every model's step), ``orca``
     (:class:`~jaxsim.orca.ORCAParams`), ``speed`` and ``anticipation`` (the velocity models'),
-    ``group`` (the walking groups' terms, :class:`~jaxsim.groups.GroupParams`)."""
+    ``group`` (the walking groups' terms, :class:`~jaxsim.groups.GroupParams`), ``power_law``
+    (:class:`~jaxsim.power_law.PowerLawParams`)."""
 
     crowd: SimParams
     orca: orca.ORCAParams
     speed: speed_model.SpeedModelParams
     anticipation: speed_model.AnticipationParams
     group: groups.GroupParams = groups.GroupParams()
+    power_law: power_law.PowerLawParams = power_law.PowerLawParams()
 
 
 def human_params(model: str, crowd_params: SimParams, orca_params: orca.ORCAParams | None = None,
                  velocity=None, group: groups.GroupParams | None = None) -> HumanParams:  # fmt: skip
     """The constants ``model`` runs with: ORCA's defaults unless ``orca_params``; a velocity
-    model's ``velocity`` parameters, else its name's own (:func:`jaxsim.speed_model.params_of`:
-    a ``_calibrated`` name its fit); the walking groups' ``group`` terms, Moussaïd's unless
-    given."""
-    kind = speed_model.kind_of(check_model(model))
+    model's (or the power law's) ``velocity`` parameters, else its name's own
+    (:func:`jaxsim.speed_model.params_of`: a ``_calibrated`` name its fit); the walking groups'
+    ``group`` terms, Moussaïd's unless given."""
+    kind = kind_of(check_model(model))
     speed, anticipation = speed_model.SpeedModelParams(), speed_model.AnticipationParams()
     if kind in speed_model.VELOCITY_MODELS:
         chosen = speed_model.params_of(model) if velocity is None else velocity
         speed, anticipation = (chosen, anticipation) if speed_model.uses_speed_params(kind) else (speed, chosen)
+    power = power_law.PowerLawParams()
+    if kind == "power_law":
+        power = power_law.params_of(model) if velocity is None else velocity
     chosen_orca = orca.ORCAParams() if orca_params is None else orca_params
-    return HumanParams(crowd_params, chosen_orca, speed, anticipation, groups.GroupParams() if group is None else group)
+    chosen_group = groups.GroupParams() if group is None else group
+    return HumanParams(crowd_params, chosen_orca, speed, anticipation, chosen_group, power)
 
 
 def step_humans(
@@ -111,7 +127,7 @@ def step_humans(
         aims and speeds get the group terms (:func:`jaxsim.groups.group_aim`). ``None``: no
         groups, and nothing computed for them.
     """
-    kind = speed_model.kind_of(check_model(model))
+    kind = kind_of(check_model(model))
     dt = params.crowd.dt_s
     if group_id is not None:
         aim_dx, aim_dy, speed_mps = groups.group_aim(
@@ -127,6 +143,11 @@ def step_humans(
         return speed_model.step_anticipation(
             params.anticipation, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, present, moving, robot_xyv,
             robot_radius_m, u1, u2, ignores_robot=ignores_robot,
+        )  # fmt: skip
+    if kind == "power_law":
+        return power_law.step_power_law(
+            params.power_law, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, max_speed_mps, present, moving,
+            robot_xyv, robot_radius_m, ignores_robot=ignores_robot,
         )  # fmt: skip
     if kind == "orca":
         return orca.step_orca(

@@ -112,11 +112,15 @@ def test_a_pair_walking_together_stays_within_1_m_where_alone_they_drift_apart(m
     """Moussaïd's attraction starts where a pair is more than (2 - 1) / 2 m from its centre, so a
     pair holds about 1 m apart (the social force's own repulsion keeps it at that edge); the
     walker coming through between them parts them for a moment, by less than its body's width,
-    and they close up again."""
+    and they close up again. (For the walker to pass, the two centres must be four body radii
+    apart: more than 1 m for the bodies of 0.295 m that ``power_law_calibrated`` fitted.)"""
+    from socialnav.evaluation.humans import calibration as hc
+
     together = np.asarray(_walk(model, True, 200))
     alone = np.asarray(_walk(model, False, 200))
     gap = np.linalg.norm(together[:, 0] - together[:, 1], axis=-1)[20:]  # after 2 s
-    assert np.percentile(gap, 95) <= 1.05, np.percentile(gap, 95)
+    passing = 4 * hc.named_model(model).radius_m + 0.05
+    assert np.percentile(gap, 95) <= max(1.05, passing), np.percentile(gap, 95)
     assert gap.max() <= 1.5 and gap[-1] <= 1.05, (gap.max(), gap[-1])
     assert np.linalg.norm(alone[-1, 0] - alone[-1, 1]) > 3.0  # 0.3 m/s apart for 20 s
     assert together[-1, :2, 0].min() > 12.0  # and the pair got past the walker

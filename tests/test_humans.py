@@ -15,7 +15,7 @@ import pytest
 from socialnav.data import recorded
 from socialnav.evaluation.humans import measures
 from socialnav.evaluation.humans import validation as hv
-from socialnav.jaxsim import speed_model
+from socialnav.jaxsim import power_law, speed_model
 from socialnav.jaxsim.world import Grid
 
 # ---------------------------------------------------------------- the data
@@ -206,6 +206,10 @@ STEPS = {
         speed_model.SpeedModelParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
         s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, headings=speed_model.STEERING_HEADINGS,
     ),
+    "power_law": lambda xy, v, to, s, u: power_law.step_power_law(
+        power_law.PowerLawParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
+        s, s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3,
+    ),
 }  # fmt: skip
 
 
@@ -276,7 +280,9 @@ def test_the_steering_model_passes_on_the_side_away_from_a_wall():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["collision_free_speed", "anticipation", "steering_speed", "social_force"])
+@pytest.mark.parametrize(
+    "name", ["collision_free_speed", "anticipation", "steering_speed", "social_force", "power_law"]
+)
 def test_speed_falls_with_density_in_the_corridor(name):
     model = hv.HumanModel(name)
     speeds = []
@@ -286,6 +292,69 @@ def test_speed_falls_with_density_in_the_corridor(name):
         dx = late.groupby("person")["x_m"].diff().to_numpy()
         speeds.append(np.nanmean(np.where(np.abs(dx) < 1.0, dx, np.nan)) / model.dt_s)
     assert speeds[0] > speeds[1] > speeds[2] > 0.0, speeds
+
+
+def _energy(params, xi, xj, vi, vj, reach):
+    """Karamouzas et al.'s E(tau) = k / tau^2 exp(-tau / tau0), tau found from its definition: the
+    first time |(x_i - x_j) + (v_i - v_j) t| = R, by the quadratic's smaller root."""
+    d, v = xi - xj, vi - vj
+    a, b, c = v @ v, d @ v, d @ d - reach**2
+    tau = (-b - jnp.sqrt(b * b - a * c)) / a
+    return params.strength_m2ps2 / tau**2 * jnp.exp(-tau / params.horizon_s)
+
+
+@pytest.mark.parametrize(
+    "xj, vi, vj",
+    [
+        ((3.0, 0.2), (1.3, 0.0), (-1.1, 0.1)),
+        ((1.2, -0.5), (0.9, 0.3), (0.2, 0.4)),
+        ((-2.0, 1.0), (0.0, 0.0), (1.0, -0.6)),
+    ],
+)
+def test_the_power_laws_force_is_minus_the_gradient_of_its_energy(xj, vi, vj):
+    """Known answer: the paper's closed-form force on i equals -dE/dx_i, E(tau) differentiated by
+    JAX from the definition of the time to collision (three approaches: head-on, overtaking, a
+    standing person met by a walker)."""
+    params = power_law.PowerLawParams()
+    xi, xj, vi, vj = (jnp.asarray(a, jnp.float32) for a in ((0.0, 0.0), xj, vi, vj))
+    expected = -jax.grad(_energy, argnums=1)(params, xi, xj, vi, vj, 0.4)
+    w, v = (xj - xi)[None, None, :], (vi - vj)[None, None, :]
+    (lx, ly), (cx, cy) = power_law.pair_forces(params, w[..., 0], w[..., 1], v[..., 0], v[..., 1],
+                                               jnp.full((1, 1), 0.4), jnp.ones((1, 1), bool))  # fmt: skip
+    np.testing.assert_allclose([float(lx[0]), float(ly[0])], np.asarray(expected), rtol=2e-3, atol=1e-6)
+    assert float(cx[0]) == 0.0 and float(cy[0]) == 0.0  # apart: no contact force
+    # the same two walking apart, or side by side at one velocity: no collision ahead, no force
+    (lx, ly), _ = power_law.pair_forces(params, w[..., 0], w[..., 1], -v[..., 0], -v[..., 1],
+                                        jnp.full((1, 1), 0.4), jnp.ones((1, 1), bool))  # fmt: skip
+    assert float(lx[0]) == 0.0 and float(ly[0]) == 0.0
+
+
+def test_the_power_laws_wall_force_is_minus_the_gradient_of_its_energy():
+    """Known answer: walking at 1.2 m/s straight at a wall 1 m away, a body of 0.2 m meets it in
+    tau = 0.8 / 1.2 s; the force is -dE/dd along the wall's normal, E(tau(d)) differentiated by JAX."""
+    params = power_law.PowerLawParams()
+    energy = lambda d: params.strength_m2ps2 / ((d - 0.2) / 1.2) ** 2 * jnp.exp(-(d - 0.2) / 1.2 / params.horizon_s)
+    one = jnp.ones(1)
+    (lx, ly), (cx, cy) = power_law.wall_forces(params, one, one, 0 * one, -1.2 * one, 0 * one)
+    np.testing.assert_allclose(float(lx[0]), -float(jax.grad(energy)(1.0)), rtol=1e-4)
+    assert float(ly[0]) == 0.0 and float(cx[0]) == 0.0  # and no contact 1 m from it
+    (lx, _), _ = power_law.wall_forces(params, one, one, 0 * one, 0 * one, 1.2 * one)  # along the wall
+    assert float(lx[0]) == 0.0
+
+
+def test_bodies_in_contact_push_apart_by_helbings_stiffness_and_rub_by_his_friction():
+    """Known answer (Helbing, Farkas & Vicsek 2000 per unit mass): two bodies 0.05 m into each
+    other, at rest, push i away from j with 1500 x 0.05 = 75 m/s^2; sliding past each other at 1
+    m/s, i is also pulled along j's motion with 3000 x 0.05 x 1 = 150 m/s^2."""
+    params = power_law.PowerLawParams()
+    ones = jnp.ones((1, 1), bool)
+    reach = jnp.full((1, 1), 0.4)
+    w = jnp.full((1, 1), 0.35)  # j 0.35 m to the right of i: 0.05 m overlap
+    zero = jnp.zeros((1, 1))
+    _, (cx, cy) = power_law.pair_forces(params, w, zero, zero, zero, reach, ones)
+    np.testing.assert_allclose([float(cx[0]), float(cy[0])], [-75.0, 0.0], atol=1e-3)
+    _, (cx, cy) = power_law.pair_forces(params, w, zero, zero, jnp.full((1, 1), -1.0), reach, ones)  # j moves +y
+    np.testing.assert_allclose([float(cx[0]), float(cy[0])], [-75.0, 150.0], atol=1e-2)
 
 
 # ---------------------------------------------------------------- the protocols' known figures
@@ -403,10 +472,13 @@ def test_orcas_parameters_are_fitted_by_a_forward_gradient_through_its_fallback_
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["collision_free_speed", "anticipation", "collision_free_speed_calibrated"])
+@pytest.mark.parametrize(
+    "name", ["collision_free_speed", "anticipation", "collision_free_speed_calibrated", "power_law"]
+)
 def test_a_velocity_model_moves_the_arenas_people_around_a_standing_robot(name):
-    """``--human-model``: the arena's env steps its people by the velocity model; the walker
-    passes the robot without entering its body (a disc of the robot's radius to them)."""
+    """``--human-model``: the arena's env steps its people by the velocity model (or the power
+    law); the walker passes the robot without entering its body (a disc of the robot's radius to
+    them)."""
     from socialnav.data import SCENES_DIR
     from socialnav.evaluation.arena import episodes as arena
     from socialnav.jaxsim.scenes import env as env_lib
@@ -416,7 +488,7 @@ def test_a_velocity_model_moves_the_arenas_people_around_a_standing_robot(name):
     spec = load_scene(SCENES_DIR / "snape_walking.json")
     setup = arena.setup_scene(spec)
     env = env_lib.make_env(spec, env_lib.EnvConfig(human_model=name, max_steps=300))
-    assert env.velocity is not None
+    assert (env.velocity is None) == (name == "power_law")  # the power law's constants go by its name
     variant = jax.tree.map(jnp.asarray, sample_variant(spec, 0, 0, n_slots=setup.n_slots))
     state, _ = jax.jit(env.reset)(jax.random.key(0), variant)
     step = jax.jit(env.step)
@@ -427,6 +499,6 @@ def test_a_velocity_model_moves_the_arenas_people_around_a_standing_robot(name):
         nearest = min(nearest, float(ts.info.nearest_person_m))
     moved = np.linalg.norm(np.asarray(state.people.xy) - start, axis=-1)[np.asarray(variant.valid)]
     assert moved.max() > 2.0 and np.isfinite(np.asarray(state.people.xy)).all()
-    radius = float(env.velocity.radius_m)
+    radius = float(power_law.params_of(name).radius_m if env.velocity is None else env.velocity.radius_m)
     # nearest_person_m is measured with the arena's 0.25 m bodies; the model's own are smaller
     assert nearest > -(0.25 - radius) - 1e-3, nearest
