@@ -16,7 +16,7 @@ Jülich fit). The loss is taken over one fixed sample of training windows (256 b
 once), minimised by Adam (optax, the gradient clipped to a global norm of 1) and by Nelder-Mead
 (scipy) from the same start: one function for both, so their curves compare. The fields are
 named ``"<part>.<field>"`` of :class:`evaluation.humans.validation.HumanModel` (``speed``,
-``anticipation``, ``orca``, ``group``).
+``anticipation``, ``orca``, ``power_law``, ``group``).
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ FITTED = {
     "orca": ("orca.time_horizon_s", *_GROUP),
     "steering_speed": ("speed.time_gap_s", "speed.neighbor_strength", "speed.neighbor_range_m",
                        "speed.steering_max_rad", *_GROUP),
+    "power_law": ("power_law.strength_m2ps2", "power_law.horizon_s", "power_law.relaxation_s", *_GROUP),
 }  # fmt: skip
 # ORCA's fallback is a while_loop: its gradient is taken forward (evaluation.humans.minimise.value_and_grad).
 FORWARD_MODE = ("orca",)

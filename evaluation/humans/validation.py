@@ -41,12 +41,12 @@ from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR, recorded
 from socialnav.evaluation.humans import datacache, measures
-from socialnav.jaxsim import geometry, groups, humans, orca, speed_model
+from socialnav.jaxsim import geometry, groups, humans, orca, power_law, speed_model
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.world import Grid
 
-HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation", "steering_speed")
+HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation", "steering_speed", "power_law")
 FAR_M = 1.0e4  # where the robot is: no robot in these protocols
 # The ETH/UCY protocol counts samples: 8 observed, 12 predicted (3.2 s and 4.8 s at 2.5 Hz). A
 # window's sample interval is its run's (PredictionWindows.frame_s): biwi_eth's samples are 0.67 s
@@ -68,7 +68,8 @@ class HumanModel:
     """A human model and its parameters: ``name`` (:data:`HUMAN_MODELS`), the social force's
     :class:`~jaxsim.params.SimParams` (the warehouse's by default; its ``dt_s`` is the step)
     and ORCA's :class:`~jaxsim.orca.ORCAParams`, the velocity models', and the walking groups'
-    :class:`~jaxsim.groups.GroupParams` (felt where a protocol has groups: ETH/UCY's)."""
+    :class:`~jaxsim.groups.GroupParams` (felt where a protocol has groups: ETH/UCY's), and the
+    power law's :class:`~jaxsim.power_law.PowerLawParams`."""
 
     name: str = "social_force"
     crowd: SimParams | None = None
@@ -76,6 +77,7 @@ class HumanModel:
     speed: speed_model.SpeedModelParams = speed_model.SpeedModelParams()
     anticipation: speed_model.AnticipationParams = speed_model.AnticipationParams()
     group: groups.GroupParams = groups.GroupParams()
+    power_law: power_law.PowerLawParams = power_law.PowerLawParams()
 
     def __post_init__(self):
         if self.name not in HUMAN_MODELS:
@@ -97,12 +99,14 @@ class HumanModel:
             return float(self.speed.radius_m)
         if self.name == "anticipation":
             return float(self.anticipation.radius_m)
+        if self.name == "power_law":
+            return float(self.power_law.radius_m)
         return float(self.crowd.worker_radius_m)
 
     @property
     def params(self) -> humans.HumanParams:
         """The traced part (pass it through ``jit`` as an argument)."""
-        return humans.HumanParams(self.crowd, self.orca, self.speed, self.anticipation, self.group)
+        return humans.HumanParams(self.crowd, self.orca, self.speed, self.anticipation, self.group, self.power_law)
 
 
 def model_step(name: str, params, field: Grid, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, u1, u2,

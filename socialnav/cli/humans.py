@@ -30,8 +30,9 @@ from socialnav.common import runfolder
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 
 JOB = "socialnav humans validate"
-CALIBRATABLE = ("collision_free_speed", "anticipation", "orca", "steering_speed", "collision_free_speed_calibrated",
-                "anticipation_calibrated", "steering_speed_calibrated")  # fmt: skip
+CALIBRATABLE = ("collision_free_speed", "anticipation", "orca", "steering_speed", "power_law",
+                "collision_free_speed_calibrated", "anticipation_calibrated", "steering_speed_calibrated",
+                "power_law_calibrated")  # fmt: skip
 RESULTS = ("summary.json", "fundamental_diagram.csv", "prediction.csv", "counterflow.csv", "bodies.csv", "pictures")
 
 
