@@ -38,6 +38,7 @@ MODELS = (
     "anticipation_calibrated",
     "steering_speed_calibrated",
     "orca",
+    "power_law",
 )
 
 
