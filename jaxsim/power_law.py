@@ -38,7 +38,7 @@ velocity models'; KSG's example programs use 0.3-0.5 m), fitted by ``socialnav h
 --model power_law``; the step ``dt`` is split into :data:`SUBSTEPS` explicit (symplectic Euler) steps, since the contact
 force's stiffness needs a step under 2 / sqrt(1500) = 0.05 s; KSG's cap on the acceleration
 bounds what a person does (the driving force and the law), not the contact force, which is
-physical (capped too, bodies pressed by a crowd sank 0.18 m into each other); the speed is
+physical (capped too, a pressed crowd's bodies sink into each other); the speed is
 capped at ``max_speed_mps`` as the social force's is. No random force: the model is
 deterministic.
 
@@ -224,8 +224,8 @@ def step_power_law(
         ), None
 
     # Differentiated, each substep is computed again on the way back instead of keeping its (N, N + 1)
-    # intermediates (a calibration's 500 substeps of six corridors would hold 25 GB); a forward
-    # run is the same program either way.
+    # intermediates (a calibration's hundreds of substeps of six corridors run out of memory); a
+    # forward run is the same program either way.
     carry = (x, y, vx, vy)
     (new_x, new_y, new_vx, new_vy), _ = jax.lax.scan(jax.checkpoint(substep), carry, None, length=SUBSTEPS)
     zero = jnp.zeros_like(new_vx)
@@ -235,7 +235,7 @@ def step_power_law(
 # Fitted parameters shipped as named human models (``--human-model <name>``): the fit of
 # ``socialnav humans calibrate --model power_law`` on the Jülich training runs (seed 0; the values
 # its fit.json holds), scored on held-out data in docs/humans.md. The search's (Nelder-Mead) fit
-# ships, chosen by its lower *training* loss (5.88 against the truncated gradient's 71.1).
+# ships, chosen by its lower *training* loss than the truncated gradient's.
 CALIBRATED: dict[str, PowerLawParams] = {
     "power_law_calibrated": PowerLawParams(
         strength_m2ps2=1.3991, horizon_s=4.1402, relaxation_s=0.4731, radius_m=0.2949

@@ -206,10 +206,10 @@ STEPS = {
         speed_model.SpeedModelParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
         s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, headings=speed_model.STEERING_HEADINGS,
     ),
-    "power_law": lambda xy, v, to, s, u: power_law.step_power_law(
+    "power_law": jax.jit(lambda xy, v, to, s, u: power_law.step_power_law(
         power_law.PowerLawParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
         s, s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3,
-    ),
+    )),  # its ten substeps a step: one program, not each operation dispatched in turn
 }  # fmt: skip
 
 

@@ -50,10 +50,10 @@ _FIELD = {"collision_free_speed": "speed", "anticipation": "anticipation", "orca
           "power_law": "power_law"}  # fmt: skip
 # Models whose gradient through the crowd explodes over the measured steps: the power law's time to
 # collision is not differentiable where two paths just touch, and a crowd always holds pairs near
-# that, so its reverse-mode gradient grows about tenfold a step (the log radius's: 4e4 after 5
-# steps, 4e24 after 20, overflowing by 50 in a 1 /m² corridor). Their gradient is truncated to one
-# step: each measured step's speed differentiated through that step alone, the state it starts
-# from taken as given (truncated backpropagation through time, averaged over the measured steps).
+# that, so its reverse-mode gradient grows by orders of magnitude a few steps and overflows within
+# the measured steps (docs/humans.md). Their gradient is truncated to one step: each measured
+# step's speed differentiated through that step alone, the state it starts from taken as given
+# (truncated backpropagation through time, averaged over the measured steps).
 TRUNCATED = ("power_law",)
 # Models whose step holds a loop of unknown length (ORCA's fallback, :func:`jaxsim.orca._fallback`,
 # a ``while_loop``): reverse mode cannot run through it, so their gradient is taken forward
