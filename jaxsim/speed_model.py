@@ -367,19 +367,11 @@ VELOCITY_MODELS = ("collision_free_speed", "anticipation", "steering_speed")
 STEERING_HEADINGS = 9
 
 
-def kind_of(name: str) -> str:
-    """The model a human model's name runs (a calibrated one's base model; others their own)."""
-    for kind in VELOCITY_MODELS:
-        if name == f"{kind}_calibrated":
-            return kind
-    return name
-
-
 def params_of(name: str):
     """The parameters a velocity model's name starts from: its calibrated preset, or the defaults."""
     if name in CALIBRATED:
         return CALIBRATED[name]
-    kind = kind_of(name)
+    kind = name.removesuffix("_calibrated")  # the model it runs (jaxsim.humans.kind_of)
     return AnticipationParams() if kind == "anticipation" else SpeedModelParams()
 
 

@@ -35,7 +35,7 @@ import optax
 
 from socialnav.evaluation.humans import measures, minimise
 from socialnav.evaluation.humans import validation as hv
-from socialnav.jaxsim import power_law, speed_model
+from socialnav.jaxsim import humans, power_law, speed_model
 
 TRAIN_RUNS, TEST_RUNS = hv.FD_TRAIN_RUNS, hv.FD_TEST_RUNS
 # The fitted fields of each model's parameters (fitted as logarithms).
@@ -121,6 +121,7 @@ def mean_speeds(model: hv.HumanModel, corridors: Corridors, theta, key, stop_war
     ``stop_warmup``, a model in :data:`TRUNCATED` differentiated one step at a time)."""
     field = hv.corridor_field(corridors.width_m, corridors.length_m)
     m = with_theta(model, theta, fields)
+    truncate = stop_warmup and model.name in TRUNCATED
     speeds = []
     for k, (xy0, direction, speed) in enumerate(corridors.starts):
         step = hv.periodic_step(m.name, m.params, field, direction, speed, corridors.length_m)
@@ -130,9 +131,7 @@ def mean_speeds(model: hv.HumanModel, corridors: Corridors, theta, key, stop_war
         if stop_warmup:
             carry = jax.lax.stop_gradient(carry)
 
-        truncate = stop_warmup and model.name in TRUNCATED
-
-        def measured(c, q, step=step, truncate=truncate):
+        def measured(c, q, step=step):
             new = step(jax.lax.stop_gradient(c) if truncate else c, q)
             return new, new[1][:, 0]
 
@@ -186,11 +185,11 @@ def fitted_values(model: hv.HumanModel) -> dict:
 def named_model(name: str) -> hv.HumanModel:
     """A human model by name, the calibrated ones (:data:`jaxsim.speed_model.CALIBRATED`,
     :data:`jaxsim.power_law.CALIBRATED`) included."""
-    kind = speed_model.kind_of(name)
+    kind = humans.kind_of(name)
     if kind in speed_model.VELOCITY_MODELS:
         return hv.HumanModel(kind, **{_FIELD[kind]: speed_model.params_of(name)})
-    if name in power_law.CALIBRATED:
-        return hv.HumanModel("power_law", power_law=power_law.params_of(name))
+    if kind == "power_law":
+        return hv.HumanModel(kind, power_law=power_law.params_of(name))
     return hv.HumanModel(name)
 
 

@@ -39,7 +39,7 @@ import numpy as np
 from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR
-from socialnav.jaxsim import speed_model
+from socialnav.jaxsim import humans, speed_model
 from socialnav.jaxsim.orca import ORCAParams
 from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
@@ -463,7 +463,7 @@ def make_env(
     half = occupancy_resolution_m / 2
     grid = Grid(jnp.asarray(occ), origin_x_m=x0 + half, origin_y_m=y0 + half, resolution_m=occupancy_resolution_m)
     velocity = None
-    if speed_model.kind_of(config.human_model) in speed_model.VELOCITY_MODELS:
+    if humans.kind_of(config.human_model) in speed_model.VELOCITY_MODELS:
         velocity = speed_model.params_of(config.human_model)
     return Env(
         world=world,
