@@ -5,6 +5,7 @@ figures (constant velocity on ETH/UCY, the Jülich diagram)."""
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import jax
 import jax.numpy as jnp
@@ -98,6 +99,58 @@ def test_overlaps_count_pairs_and_depth():
     assert got["share_people"] == pytest.approx(2 / 3) and got["share_deeper_0_1_m"] == 0.0
     assert measures.overlaps(_frame([[0, 0], [1, 0]]), 0.2)["pair_frames"] == 0
     assert measures.overlaps(_frame([[0, 0], [0.25, 0]]), 0.2)["share_deeper_0_1_m"] == 1.0  # 0.15 m deep
+
+
+def _runs_at(speeds: dict, spread: float = 0.1, frames: int = 120) -> pd.DataFrame:
+    """``run, density, speed`` points: each run's frames at the bins it covers, ``run -> {bin:
+    mean speed}``, the speeds spread evenly ``+-spread`` about the mean."""
+    wobble = np.linspace(-spread, spread, frames)
+    rows = [pd.DataFrame({"run": run, "density": rho, "speed": v + wobble})
+            for run, bins in speeds.items() for rho, v in bins.items()]  # fmt: skip
+    return pd.concat(rows, ignore_index=True)
+
+
+@pytest.mark.parametrize(("radius_m", "n"), [(0.2, 126), (0.25, 108)])  # 3.5 and 3 /m² in 1.8 m x 20 m
+def test_a_dense_crowd_starts_packed_without_rows_and_each_draw_elsewhere(radius_m, n):
+    width, length, gap = 1.8, 20.0, 2 * radius_m + 0.05  # random placement cannot fit them
+    assert hv._starts(n, width, length, radius_m, np.random.default_rng(0), lattice=False) is None
+    draws = [hv.packed_starts(n, width, length, radius_m, np.random.default_rng(seed)) for seed in (0, 1)]
+    lattice = hv._starts(n, width, length, radius_m, np.random.default_rng(0))
+    for xy in draws:
+        d = xy[:, None] - xy[None]
+        d[..., 0] = (d[..., 0] + length / 2) % length - length / 2
+        distance = np.hypot(d[..., 0], d[..., 1]) + np.eye(n) * 99
+        assert distance.min() >= gap - 1e-3  # no two bodies closer than the placement's gap
+        assert xy[:, 1].min() >= radius_m + 0.05 - 1e-9 and xy[:, 1].max() <= width - radius_m - 0.05 + 1e-9
+        assert np.all((xy[:, 0] >= 0) & (xy[:, 0] < length))
+        # in no rows: the lattice's people sit at a few heights (its jitter aside), the packing's at many
+        assert len(np.unique(np.round(xy[:, 1], 2))) > 3 * len(np.unique(np.round(lattice[:, 1], 1)))
+    assert not np.allclose(draws[0], draws[1])
+
+
+def test_the_diagrams_band_check_counts_bins_within_one_standard_deviation():
+    data = measures.binned(_runs_at({"a": {1.0: 1.2, 2.0: 0.6}}))
+    sd = float(data["speed_sd"].iloc[0])
+    model = pd.DataFrame({"density_bin": [1.0, 2.0, 3.0], "speed_mean": [1.2 + 0.9 * sd, 0.6 - 1.5 * sd, 0.3]})
+    got = measures.against_band(model, data)
+    assert list(got["density_bin"]) == [1.0, 2.0]  # a bin the data lacks is not scored
+    np.testing.assert_allclose(got["z"], [0.9, -1.5])
+    assert list(got["inside"]) == [True, False]
+
+
+def test_the_data_scored_against_itself_finds_runs_that_disagree():
+    # Three training and two test runs; one training run walks its 2 /m² bin 0.4 m/s fast, one test
+    # run holds a bin of too few frames to count.
+    agree = {1.0: 1.2, 2.0: 0.6}
+    points = _runs_at({"t1": agree, "t2": agree, "t3": {2.0: 1.0}, "h1": agree, "h2": agree})
+    points = pd.concat([points, _runs_at({"h2": {3.0: 0.3}}, frames=20)], ignore_index=True)
+    got = hv.data_agreement(points, train_runs=("t1", "t2", "t3"), test_runs=("h1", "h2"))
+    # Pooled, the training runs' 2 /m² bin is 0.733 m/s with the test band 0.6 +- 0.058: outside.
+    assert (got["training_runs"]["inside"], got["training_runs"]["of"]) == (1, 2)
+    # Each run against the others: t3's one bin is out (0.6 +- 0.058 without it); every other run's
+    # 2 /m² bin is in, its band (t3 among the others) 0.7 +- 0.18; h2's 20-frame bin is not counted.
+    assert got["each_run"]["runs"]["t3"] == "0 of 1" and got["each_run"]["runs"]["h2"] == "2 of 2"
+    assert got["each_run"]["of"] == 9 and got["each_run"]["inside"] == 8
 
 
 def test_a_window_of_frames_is_measured_as_from_every_frame():
@@ -410,9 +463,15 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
     from socialnav import cli
 
     out = tmp_path / "humans"
-    assert cli.main(["humans", "validate", "--quick", "--out", str(out), "--no-progress"]) == 0
+    argv = ["humans", "validate", "--quick", "--start-draws", "1", "--out", str(out), "--no-progress"]
+    assert cli.main(argv) == 0
     said = capsys.readouterr().out
     assert "social_force: speed inside the data's" in said and (out / "pictures" / "fundamental_diagram.png").is_file()
+    assert "data against its own diagram check" in said and "from 1 disordered starts" in said
+    summary = json.loads((out / "summary.json").read_text())
+    assert len(summary["models"]["social_force"]["fd_start_draws"]["bins_inside"]) == 1
+    assert summary["data"]["fd_agreement"]["each_run"]["of"] >= 9  # every run counts a bin at least
+    assert set(pd.read_csv(out / "fundamental_diagram.csv")["draw"]) == {0, 1}
     assert pd.read_csv(out / "prediction.csv")["model"].nunique() == 2
     # The data's measures were kept on disk (evaluation.humans.datacache) and read back bit for bit.
     from_disk, computed = hv._run_fundamental_diagram.__wrapped__, hv._run_fundamental_diagram.__wrapped__.__wrapped__

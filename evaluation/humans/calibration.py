@@ -22,6 +22,13 @@ overtake a walker ahead, had not yet closed up behind the slowest, and a fit the
 too slow at low density in the validation's. The density of a simulated corridor is its global
 density (people over area); PedPy's Voronoi density of the validation is what scores the
 result, on the held-out runs.
+
+The corridors' people are drawn once (common random numbers across evaluations), placed for the
+body radius of the model the fit starts from; a dense crowd starts on a lattice whose rows follow
+from that radius (:func:`evaluation.humans.validation._starts`). A model whose people keep the
+lanes they start in (the power law) is then fitted to that draw's arrangement as well as to its
+law, and the validation, which draws for the fitted radius, may start it in other rows
+(docs/humans.md, "The start of a dense corridor").
 """
 
 from __future__ import annotations
@@ -97,7 +104,7 @@ def training_corridors(model: hv.HumanModel, seed: int = 0, runs=TRAIN_RUNS, **s
     """The corridors of :func:`fd_loss` for the bins the training ``runs`` cover (with at least
     100 frames), against the runs' mean speed and standard deviation there."""
     bins = measures.binned(hv.data_fundamental_diagram(runs))
-    bins = bins[bins["n"] >= 100]
+    bins = bins[bins["n"] >= measures.MIN_BIN_FRAMES]
     return corridors_at(model, bins["density_bin"], bins["speed_mean"], bins["speed_sd"], seed, **size)
 
 

@@ -31,6 +31,8 @@ WEIDMANN_GAMMA = 1.913
 WEIDMANN_JAM_PER_M2 = 5.4
 # The density bins of the fundamental diagram's comparison: 0.5-wide, centred at 0.5 ... 3.5 /m².
 DENSITY_BINS = tuple(0.5 * k for k in range(1, 8))
+# The frames a density bin of one run (or of a calibration's training runs) needs to be counted.
+MIN_BIN_FRAMES = 100
 
 
 def weidmann_speed(density_per_m2) -> np.ndarray:
@@ -128,6 +130,20 @@ def binned(points: pd.DataFrame, bins: Sequence[float] = DENSITY_BINS, half_widt
                 }
             )
     return pd.DataFrame(rows, columns=["density_bin", "n", "speed_mean", "speed_sd"])
+
+
+def against_band(bins: pd.DataFrame, data_bins: pd.DataFrame) -> pd.DataFrame:
+    """The diagram's check bin by bin: ``density_bin, speed_mean, speed_mean_data, speed_sd_data,
+    z, inside`` for the bins both :func:`binned` tables hold, ``z`` the speed's distance from the
+    data's mean in the data's standard deviations and ``inside`` whether ``|z| <= 1``."""
+    data_side = data_bins[["density_bin", "speed_mean", "speed_sd"]].rename(
+        columns={"speed_mean": "speed_mean_data", "speed_sd": "speed_sd_data"}
+    )
+    both = data_side.merge(bins[["density_bin", "speed_mean"]], on="density_bin")
+    z = (both["speed_mean"] - both["speed_mean_data"]) / both["speed_sd_data"].clip(lower=1e-9)
+    return both.assign(z=z, inside=z.abs() <= 1.0)[
+        ["density_bin", "speed_mean", "speed_mean_data", "speed_sd_data", "z", "inside"]
+    ]
 
 
 def lane_order(

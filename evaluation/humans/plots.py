@@ -13,12 +13,19 @@ COLOURS = ("tab:orange", "tab:green", "tab:purple", "tab:red", "tab:brown")
 
 
 def fundamental_diagram(data: dict, results: dict, path: pathlib.Path) -> pathlib.Path:
-    """Speed against density: the Jülich runs' frames (grey dots), their mean +- 1 s.d. per bin,
-    Weidmann's curve, each model's bins."""
+    """Speed against density: the Jülich runs' frames (grey dots), each run's mean per bin (grey
+    bars: how far the runs agree with each other), their pooled mean +- 1 s.d. per bin (the
+    check's band), Weidmann's curve, each model's bins (thin: from its disordered starts, where the
+    validation drew them)."""
     fig = figures.figure(figsize=(6.4, 4.4), layout="constrained")
     ax = fig.add_subplot()
     points = data["fd_points"]
     ax.plot(points["density"], points["speed"], ".", color="0.75", ms=2, label="Jülich uo runs (frames)")
+    for k, (_, run) in enumerate(points.groupby("run")):
+        own = measures.binned(run)
+        own = own[own["n"] >= measures.MIN_BIN_FRAMES]
+        ax.plot(own["density_bin"], own["speed_mean"], "_", color="0.45", ms=12, mew=1.5,
+                label="one run's mean (bins of 100+ frames)" if k == 0 else None)  # fmt: skip
     bins = data["fd_bins"]
     ax.errorbar(
         bins["density_bin"], bins["speed_mean"], bins["speed_sd"], fmt="ks", capsize=3, label="data: mean ± s.d."
@@ -28,6 +35,9 @@ def fundamental_diagram(data: dict, results: dict, path: pathlib.Path) -> pathli
     for colour, (name, r) in zip(COLOURS, results.items(), strict=False):
         fd = r["fd_bins"]
         ax.plot(fd["density_bin"], fd["speed_mean"], "o-", color=colour, label=name)
+        for k, (_, drawn) in enumerate(r["fd_draws"].groupby("draw")):
+            ax.plot(drawn["density_bin"], drawn["speed_mean"], "-", color=colour, lw=0.8, alpha=0.5,
+                    label=f"{name}, from disordered starts" if k == 0 else None)  # fmt: skip
     ax.set_xlabel("density (persons/m²), PedPy Voronoi")
     ax.set_ylabel("speed (m/s)")
     ax.set_xlim(0, 4.2)

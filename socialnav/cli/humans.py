@@ -54,6 +54,10 @@ def add_parser(top) -> None:
     )
     v.add_argument("--quick", action="store_true", help="10 m corridors, 30 s: a first look in about a minute a model")
     v.add_argument("--seed", type=seed_int, default=0)
+    v.add_argument("--start-draws", type=non_negative_int, default=0,
+                   help="measure the diagram that many times more, each from another draw of the corridors' people, "
+                        "dense crowds in a disordered packing instead of a lattice: how much the verdict owes to "
+                        "the start (default 0)")  # fmt: skip
     v.add_argument("--overwrite", action="store_true", help="replace the run in --out whole once the new one is done")
     v.add_argument("--no-progress", action="store_true", help="print the headline only")
     v.set_defaults(handler=validate)
@@ -290,7 +294,8 @@ def validate(args) -> int:
         else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
     )
     data = hv.reference(say)
-    results = {name: hv.validate(hc.named_model(name), data, args.quick, args.seed, say, name) for name in args.models}
+    results = {name: hv.validate(hc.named_model(name), data, args.quick, args.seed, say, name, args.start_draws)
+               for name in args.models}  # fmt: skip
     try:
         with runfolder.staged(args.out, "summary.json", args.overwrite, job=JOB) as stage:
             _write(stage, data, results, quick=args.quick, seed=args.seed)
@@ -307,8 +312,9 @@ def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: in
 
     from socialnav.evaluation.humans import plots as human_plots
 
-    fd = [data["fd_bins"].assign(source="data: Jülich uo runs")]
-    fd += [r["fd_bins"].assign(source=name) for name, r in results.items()]
+    fd = [data["fd_bins"].assign(source="data: Jülich uo runs", draw=0)]
+    fd += [r["fd_bins"].assign(source=name, draw=0) for name, r in results.items()]
+    fd += [r["fd_draws"].assign(source=name) for name, r in results.items() if len(r["fd_draws"])]
     pd.concat(fd, ignore_index=True).to_csv(stage / "fundamental_diagram.csv", index=False)
     prediction = [data["constant_velocity"].assign(model="constant velocity", aim="velocity")]
     prediction += [r["prediction"].assign(model=name) for name, r in results.items()]
@@ -326,7 +332,7 @@ def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: in
         "models": {name: r["checks"] for name, r in results.items()},
         "quick": bool(quick),
         "seed": seed,
-        "data": {"counterflow": data["counterflow"]},
+        "data": {"counterflow": data["counterflow"], "fd_agreement": data["fd_agreement"]},
     }
     (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
 
@@ -336,6 +342,11 @@ def _headline(data: dict, results: dict) -> None:
     c = data["counterflow"]
     print(f"data: counterflow {c['speed_mps']:.2f} m/s, lane order {c['lane_order']:.2f} at {c['density']:.2f} /m²; "
           f"constant velocity ADE/FDE {cv['ade_m'].mean():.2f} / {cv['fde_m'].mean():.2f} m")  # fmt: skip
+    a = data["fd_agreement"]
+    t, e = a["training_runs"], a["each_run"]
+    print(f"data against its own diagram check: the training runs, scored as a model, inside the test runs' ±1 s.d. "
+          f"in {t['inside']} of {t['of']} bins (mean z² {t['z2_mean']:.2f}); each run against the others in "
+          f"{e['inside']} of {e['of']} (mean z² {e['z2_mean']:.2f})")  # fmt: skip
     for name, r in results.items():
         k = r["checks"]
         verdict = lambda ok: "pass" if ok else "FAIL"
@@ -343,7 +354,7 @@ def _headline(data: dict, results: dict) -> None:
         grouped = r["prediction"][r["prediction"]["aim"] == "velocity_groups"]
         print(
             f"{name}: speed inside the data's ±1 s.d. in {k['fd_bins_inside_1sd']} density bins "
-            f"({verdict(k['fd_pass'])}); "
+            f"(mean z² {k['fd_z2_mean']:.2f}; {verdict(k['fd_pass'])}); "
             f"deepest overlap {k['overlap_max_m']:.2f} m ({verdict(k['overlap_pass'])}); ETH/UCY ADE/FDE {ade:.2f} / "
             f"{fde:.2f} m, ahead in {k['eth_ucy_scenes_ahead']} of 5 scenes ({verdict(k['eth_ucy_pass'])}; in walking "
             f"groups {grouped['ade_m'].mean():.2f} / {grouped['fde_m'].mean():.2f} m); with the "
@@ -351,3 +362,8 @@ def _headline(data: dict, results: dict) -> None:
             f"x{k['counterflow_speed_ratio']:.2f}, lane order {k['counterflow_lane_order']:.2f} "
             f"({verdict(k['counterflow_pass'])})"
         )
+        if "fd_start_draws" in k:
+            d = k["fd_start_draws"]
+            print(f"  {name}, the diagram from {len(d['bins_inside'])} disordered starts: bins inside "
+                  f"{', '.join(map(str, d['bins_inside']))}; mean z² {', '.join(f'{z:.2f}' for z in d['z2_mean'])}; "
+                  f"deepest overlap {max(d['overlap_max_m']):.2f} m")  # fmt: skip
