@@ -219,6 +219,29 @@ def test_ade_fde_of_a_known_offset():
     np.testing.assert_allclose(ade, [0.5, (11 * 0.5 + np.hypot(3.3, 4.4)) / 12])
 
 
+def test_the_difference_from_constant_velocity_is_bootstrapped_in_blocks_of_overlapping_windows():
+    rng = np.random.default_rng(3)
+    baseline = rng.uniform(0.2, 1.0, 400)
+    # a model 0.1 m better for everyone: no spread at all
+    assert measures.paired_difference(baseline - 0.1, baseline, np.arange(400)) == pytest.approx((-0.1, -0.1, -0.1))
+    # one difference a person, seen once: the interval holds the mean, about +- 2 standard errors
+    diff = rng.normal(-0.02, 0.1, 400)
+    mean, low, high = measures.paired_difference(baseline + diff, baseline, np.arange(400), block_windows=1)
+    assert mean == pytest.approx(diff.mean()) and low < mean < high
+    assert high - low == pytest.approx(2 * 1.96 * diff.std(ddof=1) / 20, rel=0.2)
+    # the same people each seen in 20 consecutive windows: blocks of 20 windows keep the width a
+    # person-level sample has; windows taken as independent would shrink it by sqrt(20)
+    repeated, window = np.repeat(diff, 20), np.arange(400 * 20)
+    _, block_low, block_high = measures.paired_difference(
+        np.repeat(baseline, 20) + repeated, np.repeat(baseline, 20), window
+    )
+    _, naive_low, naive_high = measures.paired_difference(
+        np.repeat(baseline, 20) + repeated, np.repeat(baseline, 20), window, block_windows=1
+    )
+    assert block_high - block_low == pytest.approx(high - low, rel=0.2)
+    assert naive_high - naive_low < 0.4 * (high - low)
+
+
 # ---------------------------------------------------------------- the velocity models
 
 

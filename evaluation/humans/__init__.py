@@ -3,7 +3,8 @@
 - :mod:`~socialnav.evaluation.humans.validation`: each test (the Jülich fundamental diagram,
   counterflow and lanes, ETH/UCY prediction, body overlaps) for a human model, and the report;
 - :mod:`~socialnav.evaluation.humans.measures`: what is measured on data and model alike
-  (PedPy's Voronoi density and speed, Weidmann's curve, lane order, overlaps, ADE/FDE, groups);
+  (PedPy's Voronoi density and speed, Weidmann's curve, the diagram's band check, lane order,
+  overlaps, ADE/FDE and a model's difference from a baseline with its interval, groups);
 - :mod:`~socialnav.evaluation.humans.calibration`: the fundamental diagram's fit, by gradient
   through the crowd step and by Nelder-Mead;
 - :mod:`~socialnav.evaluation.humans.trajectory_calibration`: the fit to ETH/UCY trajectories,

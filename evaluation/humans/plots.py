@@ -50,7 +50,8 @@ def fundamental_diagram(data: dict, results: dict, path: pathlib.Path) -> pathli
 def prediction(data: dict, results: dict, path: pathlib.Path) -> pathlib.Path:
     """ADE and FDE per ETH/UCY scene: constant velocity and each model (aimed along its velocity;
     dotted: its people walking on in the groups they walked in; hatched: given the true
-    destination)."""
+    destination); a third panel each model's ADE minus constant velocity's (aimed along its
+    velocity) with its 95 % interval, below 0 where the model is ahead."""
     scenes = list(data["constant_velocity"]["scene"])
     series = [("constant velocity", data["constant_velocity"], "0.5", "")]
     for colour, (name, r) in zip(COLOURS, results.items(), strict=False):
@@ -59,10 +60,10 @@ def prediction(data: dict, results: dict, path: pathlib.Path) -> pathlib.Path:
         if (p["aim"] == "velocity_groups").any():
             series.append((f"{name}, in walking groups", p[p["aim"] == "velocity_groups"], colour, ".."))
         series.append((f"{name}, true destination", p[p["aim"] == "destination"], colour, "//"))
-    fig = figures.figure(figsize=(9.0, 3.6 + 0.18 * (len(series) // 4 + 1)), layout="constrained")
+    fig = figures.figure(figsize=(13.0, 3.6 + 0.18 * (len(series) // 4 + 1)), layout="constrained")
     width = 0.8 / len(series)
     for k, metric in enumerate(("ade_m", "fde_m")):
-        ax = fig.add_subplot(1, 2, k + 1)
+        ax = fig.add_subplot(1, 3, k + 1)
         x = np.arange(len(scenes) + 1)
         for j, (label, frame, colour, hatch) in enumerate(series):
             values = frame.set_index("scene").loc[scenes, metric].to_numpy()
@@ -72,6 +73,17 @@ def prediction(data: dict, results: dict, path: pathlib.Path) -> pathlib.Path:
         ax.set_xticks(x, [*scenes, "mean"], fontsize=8)
         ax.set_ylabel(metric.split("_")[0].upper() + " (m)")
     handles, labels = fig.axes[0].get_legend_handles_labels()
+    ax = fig.add_subplot(1, 3, 3)
+    shift = 0.8 / max(1, len(results))
+    for j, (colour, (_, r)) in enumerate(zip(COLOURS, results.items(), strict=False)):
+        along = r["prediction"][r["prediction"]["aim"] == "velocity"].set_index("scene").loc[scenes]
+        d = along["ade_vs_cv_m"].to_numpy()
+        error = [d - along["ade_vs_cv_low_m"].to_numpy(), along["ade_vs_cv_high_m"].to_numpy() - d]
+        x = np.arange(len(scenes)) + (j - len(results) / 2 + 0.5) * shift
+        ax.errorbar(x, d, error, fmt="o", color=colour, capsize=3, ms=4)
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_xticks(np.arange(len(scenes)), scenes, fontsize=8)
+    ax.set_ylabel("ADE minus constant velocity's (m), 95 %")
     fig.legend(handles, labels, loc="outside lower center", ncol=min(4, len(series)), fontsize=7)
     fig.suptitle("ETH/UCY test splits: 8 frames observed, 12 predicted", fontsize=10)
     return figures.save(fig, path)

@@ -601,7 +601,9 @@ def eth_ucy_prediction(
     ``groups``, the people who walked together over the observed frames
     (:func:`evaluation.humans.measures.walking_groups` within ``reach_m``) walk on as groups
     (:mod:`jaxsim.groups`). Returns ``ade_m``, ``fde_m``, ``samples``, ``grouped`` (the share of
-    scored people in a group)."""
+    scored people in a group); for a model also ``ade_vs_cv_m`` and ``fde_vs_cv_m``, its error
+    minus constant velocity's on the same people, with a 95 % interval ``..._low_m``,
+    ``..._high_m`` (:func:`evaluation.humans.measures.paired_difference`)."""
     w = prediction_windows(scene, split, reach_m)
     if model is None:
         predicted = w.constant_velocity
@@ -609,8 +611,15 @@ def eth_ucy_prediction(
         predict = window_predictor(model.name, model.dt_s, aim, groups)
         predicted = np.asarray(predict(model.params, w, jax.random.key(seed)))
     ade, fde = measures.ade_fde(predicted[w.complete], w.future[w.complete])
-    return {"ade_m": float(ade.mean()), "fde_m": float(fde.mean()), "samples": int(w.complete.sum()),
-            "grouped": float((w.group_id[w.complete] >= 0).mean())}  # fmt: skip
+    out = {"ade_m": float(ade.mean()), "fde_m": float(fde.mean()), "samples": int(w.complete.sum()),
+           "grouped": float((w.group_id[w.complete] >= 0).mean())}  # fmt: skip
+    if model is not None:
+        ade_cv, fde_cv = measures.ade_fde(w.constant_velocity[w.complete], w.future[w.complete])
+        window = np.nonzero(w.complete)[0]  # the window of each scored person, in the order above
+        for name, error, baseline in (("ade", ade, ade_cv), ("fde", fde, fde_cv)):
+            d, low, high = measures.paired_difference(error, baseline, window, seed=seed)
+            out.update({f"{name}_vs_cv_m": d, f"{name}_vs_cv_low_m": low, f"{name}_vs_cv_high_m": high})
+    return out
 
 
 # ------------------------------------------------------------------ the report
@@ -748,6 +757,9 @@ def checks(fd: pd.DataFrame, bodies: pd.DataFrame, prediction: pd.DataFrame, cou
     towards = prediction[prediction["aim"] == "destination"].set_index("scene")
     grouped = prediction[prediction["aim"] == "velocity_groups"]
     ahead = (along["ade_m"] < cv["ade_m"]) & (along["fde_m"] < cv["fde_m"])
+    # a scene where both intervals of the difference from constant velocity lie below 0 (above 0)
+    clearly_ahead = (along["ade_vs_cv_high_m"] < 0) & (along["fde_vs_cv_high_m"] < 0)
+    clearly_behind = (along["ade_vs_cv_low_m"] > 0) | (along["fde_vs_cv_low_m"] > 0)
     speed_ratio = counter["speed_mps"] / data["counterflow"]["speed_mps"]
     return {
         "fd_bins_inside_1sd": f"{int(inside.sum())} of {len(both)}",
@@ -763,6 +775,15 @@ def checks(fd: pd.DataFrame, bodies: pd.DataFrame, prediction: pd.DataFrame, cou
         "constant_velocity_ade_fde": [float(cv["ade_m"].mean()), float(cv["fde_m"].mean())],
         "eth_ucy_groups_ade_fde": [float(grouped["ade_m"].mean()), float(grouped["fde_m"].mean())],
         "eth_ucy_scenes_ahead": int(ahead.sum()),
+        "eth_ucy_scenes_clearly_ahead": int(clearly_ahead.sum()),
+        "eth_ucy_scenes_clearly_behind": int(clearly_behind.sum()),
+        "eth_ucy_vs_cv_by_scene": {
+            scene: {
+                f"{e}_m": [round(float(row[f"{e}_vs_cv{part}_m"]), 4) for part in ("", "_low", "_high")]
+                for e in ("ade", "fde")
+            }
+            for scene, row in along.iterrows()
+        },  # each: the model's error minus constant velocity's, and its 95 % interval
         "eth_ucy_pass": bool(
             along["ade_m"].mean() < cv["ade_m"].mean()
             and along["fde_m"].mean() < cv["fde_m"].mean()
