@@ -506,6 +506,22 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
 # ---------------------------------------------------------------- calibration
 
 
+def test_adam_stops_where_the_gradient_is_not_finite_and_keeps_the_best_so_far():
+    import optax
+
+    from socialnav.evaluation.humans import minimise
+
+    said = []
+    smooth = minimise.value_and_grad(lambda th: jnp.sum((th - 2.0) ** 2))
+    best, history = minimise.adam(smooth, jnp.zeros(2), 30, optax.adam(0.2), log=said.append)
+    assert len(history) == 30 and float(jnp.abs(best - 2.0).max()) < 0.5
+    # sqrt(theta^2) at 0: a finite loss whose gradient is NaN (0 x inf)
+    broken = minimise.value_and_grad(lambda th: jnp.sum(jnp.sqrt(th**2)) + 1.0)
+    best, history = minimise.adam(broken, jnp.zeros(2), 30, optax.adam(0.2), log=said.append)
+    assert len(history) == 1 and np.all(np.asarray(best) == 0.0)
+    assert any("not finite" in line for line in said)
+
+
 def _walked_by(truth: hv.HumanModel, fields):
     """Short corridors at 1.5, 2.5 and 3.5 /m² whose "data" is the speed ``truth`` walks there
     (s.d. 0.05 m/s): a calibration's known answer."""

@@ -30,7 +30,9 @@ def value_and_grad(loss: Callable, forward: bool = False) -> Callable:
 def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTransformation, args=(),
          log=print, what: str = "loss {:.3f}"):  # fmt: skip
     """``steps`` updates of ``optimizer`` from ``theta`` on ``loss_and_grad(theta, *args)``:
-    ``(best theta, history)``; ``what`` formats the loss in the progress lines."""
+    ``(best theta, history)``; ``what`` formats the loss in the progress lines. A gradient that is
+    not finite (NaN or infinite: a rollout whose derivative breaks, as the power law's can) stops
+    the descent there, said in the log; the best ``theta`` so far is returned."""
     state = optimizer.init(theta)
     history, t0 = [], time.perf_counter()
     best = (np.inf, theta)
@@ -42,6 +44,9 @@ def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTr
         history.append((k, value, time.perf_counter() - t0))
         if k % 10 == 0 or k == steps - 1:
             log(f"  gradient step {k}: {what.format(value)} ({time.perf_counter() - t0:.0f} s)")
+        if not all(bool(jnp.all(jnp.isfinite(g))) for g in jax.tree.leaves(grad)):
+            log(f"  gradient step {k}: the gradient is not finite; the descent stops here")
+            break
         updates, state = optimizer.update(grad, state)
         theta = optax.apply_updates(theta, updates)
     return best[1], history
