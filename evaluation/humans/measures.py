@@ -147,6 +147,12 @@ def against_band(bins: pd.DataFrame, data_bins: pd.DataFrame) -> pd.DataFrame:
     ]
 
 
+def band_score(band: pd.DataFrame) -> dict:
+    """An :func:`against_band` table in three numbers: ``inside`` and ``of`` (bins), ``z2_mean``
+    (the mean squared distance from the band's mean, in standard deviations)."""
+    return {"inside": int(band["inside"].sum()), "of": len(band), "z2_mean": float(np.mean(band["z"] ** 2))}
+
+
 def lane_order(
     rows: pd.DataFrame,
     direction_of: dict,

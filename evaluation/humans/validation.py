@@ -657,16 +657,16 @@ def data_agreement(points: pd.DataFrame, train_runs=FD_TRAIN_RUNS, test_runs=FD_
         b = band(runs)
         return b[b["n"] >= min_frames]
 
-    def score(b: pd.DataFrame) -> dict:
-        return {"inside": int(b["inside"].sum()), "of": len(b), "z2_mean": float(np.mean(b["z"] ** 2))}
-
     training = measures.against_band(bins_of(train_runs), band(test_runs))
     runs = list(train_runs) + list(test_runs)
     each = {r: measures.against_band(bins_of([r]), band([o for o in runs if o != r])) for r in runs}
     every = pd.concat(each.values(), ignore_index=True)
     return {
-        "training_runs": score(training),
-        "each_run": {**score(every), "runs": {r: f"{int(b['inside'].sum())} of {len(b)}" for r, b in each.items()}},
+        "training_runs": measures.band_score(training),
+        "each_run": {
+            **measures.band_score(every),
+            "runs": {r: f"{int(b['inside'].sum())} of {len(b)}" for r, b in each.items()},
+        },
     }
 
 
@@ -728,11 +728,9 @@ def validate(
         progress(f"{label}: the fundamental diagram from disordered start {draw} of {start_draws}")
         drawn, drawn_bodies = model_fundamental_diagram(model, seed=seed + 100 * draw, packed=True, **size)
         bins = measures.binned(drawn)
-        band = measures.against_band(bins, data["fd_bins"])
+        score = measures.band_score(measures.against_band(bins, data["fd_bins"]))
         draws.append(bins.assign(draw=draw))
-        scores.append(
-            (int(band["inside"].sum()), float(np.mean(band["z"] ** 2)), float(drawn_bodies["max_depth_m"].max()))
-        )
+        scores.append((score["inside"], score["z2_mean"], float(drawn_bodies["max_depth_m"].max())))
     if start_draws:
         inside, z2, depth = zip(*scores, strict=True)
         verdicts["fd_start_draws"] = {"bins_inside": list(inside), "z2_mean": list(z2), "overlap_max_m": list(depth)}
@@ -767,7 +765,7 @@ def checks(fd: pd.DataFrame, bodies: pd.DataFrame, prediction: pd.DataFrame, cou
             f"{b:g}": round(r, 2)
             for b, r in zip(both["density_bin"], both["speed_mean"] / both["speed_mean_data"], strict=True)
         },
-        "fd_z2_mean": float(np.mean(both["z"] ** 2)),
+        "fd_z2_mean": measures.band_score(both)["z2_mean"],
         "fd_pass": bool(inside.all() and len(both) == len(measures.DENSITY_BINS)),
         "overlap_max_m": float(bodies["max_depth_m"].max()),
         "overlap_pass": bool(bodies["max_depth_m"].max() <= MAX_OVERLAP_M),
