@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import jax
 import jax.numpy as jnp
@@ -486,16 +487,23 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
     from socialnav import cli
 
     out = tmp_path / "humans"
-    argv = ["humans", "validate", "--quick", "--start-draws", "1", "--out", str(out), "--no-progress"]
+    fit = tmp_path / "my-fit" / "fit.json"  # a calibration's own fit scored beside a named model
+    fit.parent.mkdir()
+    values = {"time_gap_s": 0.75, "neighbor_strength": 10.0, "neighbor_range_m": 0.11, "radius_m": 0.16}
+    fit.write_text(json.dumps({"model": "collision_free_speed", "nelder_mead": {"values": values}}))
+    argv = ["humans", "validate", "--quick", "--start-draws", "1", "--out", str(out), "--no-progress",
+            "--models", "social_force", "--fit", str(fit), "--fit-method", "nelder_mead"]  # fmt: skip
     assert cli.main(argv) == 0
     said = capsys.readouterr().out
     assert "social_force: speed inside the data's" in said and (out / "pictures" / "fundamental_diagram.png").is_file()
+    assert "my-fit:nelder_mead: speed inside the data's" in said
     assert "data against its own diagram check" in said and "from 1 disordered starts" in said
     summary = json.loads((out / "summary.json").read_text())
     assert len(summary["models"]["social_force"]["fd_start_draws"]["bins_inside"]) == 1
     assert summary["data"]["fd_agreement"]["each_run"]["of"] >= 9  # every run counts a bin at least
     assert set(pd.read_csv(out / "fundamental_diagram.csv")["draw"]) == {0, 1}
-    assert pd.read_csv(out / "prediction.csv")["model"].nunique() == 2
+    assert pd.read_csv(out / "prediction.csv")["model"].nunique() == 3
+    assert summary["fits"]["my-fit:nelder_mead"] == {"fit_json": str(fit), "values": values}
     # The data's measures were kept on disk (evaluation.humans.datacache) and read back bit for bit.
     from_disk, computed = hv._run_fundamental_diagram.__wrapped__, hv._run_fundamental_diagram.__wrapped__.__wrapped__
     pd.testing.assert_frame_equal(from_disk("uo-060-180-180"), computed("uo-060-180-180"), check_exact=True)
@@ -532,6 +540,73 @@ def _walked_by(truth: hv.HumanModel, fields):
     key = jax.random.key(0)
     measured = np.asarray(hc.mean_speeds(truth, corridors, hc.theta_of(truth, fields), key, fields=fields))
     return dataclasses.replace(corridors, speed_data=measured)
+
+
+def test_the_calibrations_start_draws_add_disordered_corridors_and_the_loss_averages_each_draws():
+    """``start_draws``: draw 0 is the single draw's corridor, bit for bit; the others are other
+    packings of the same number of people; the loss is each draw's loss averaged over the draws."""
+    from socialnav.evaluation.humans import calibration as hc
+
+    model = hv.HumanModel("collision_free_speed")
+    size = dict(length_m=6.0, warmup_steps=30, measured_steps=10)
+    one = hc.corridors_at(model, (1.0, 3.0), np.array([1.1, 0.4]), np.array([0.1, 0.1]), **size)
+    three = hc.corridors_at(model, (1.0, 3.0), np.array([1.1, 0.4]), np.array([0.1, 0.1]), start_draws=2, **size)
+    gap = 2 * model.radius_m + 0.05
+    for (xy1, _, speed1), (xy3, direction3, speed3) in zip(one.starts, three.starts, strict=True):
+        assert xy3.shape[0] == speed3.shape[0] == direction3.shape[0] == 3 and xy3.shape[1:] == xy1.shape[1:]
+        np.testing.assert_array_equal(xy3[0], xy1[0])
+        np.testing.assert_array_equal(speed3[0], speed1[0])
+        for xy in np.asarray(xy3[1:]):  # (a lattice's rows may sit closer than the gap)
+            d = xy[:, None] - xy[None]
+            d[..., 0] = (d[..., 0] + 3.0) % 6.0 - 3.0
+            assert (np.hypot(d[..., 0], d[..., 1]) + np.eye(len(xy)) * 99).min() >= gap - 1e-3
+        assert not np.allclose(xy3[1], xy3[2]) and not np.allclose(xy3[0], xy3[1])
+    key, theta = jax.random.key(0), hc.theta_of(model)
+    speeds = np.asarray(hc.draw_speeds(model, three, theta, key))
+    assert speeds.shape == (2, 3) and np.all(speeds[1] < speeds[0].min())  # the dense corridor walks slower
+    np.testing.assert_allclose(speeds[:, 0], np.asarray(hc.mean_speeds(model, one, theta, key)), rtol=1e-5)
+    each = ((speeds - three.speed_data[:, None]) / three.sd_data[:, None]) ** 2
+    assert float(hc.fd_loss(model, three, theta, key)) == pytest.approx(float(each.mean()), rel=1e-5)
+    np.testing.assert_allclose(np.asarray(hc.mean_speeds(model, three, theta, key)), speeds.mean(axis=1), rtol=1e-6)
+
+
+def test_a_fit_json_is_read_back_as_its_models_and_a_bad_one_is_refused_naming_the_field(tmp_path):
+    from socialnav import cli
+    from socialnav.evaluation.humans import calibration as hc
+
+    values = {"time_gap_s": 0.8, "neighbor_strength": 8.5, "neighbor_range_m": 0.12, "radius_m": 0.18,
+              "steering_max_rad": 1.5}  # fmt: skip
+    fit = {"model": "steering_speed", "gradient": {"values": {**values, "radius_m": 0.19}},
+           "nelder_mead": {"values": values}}  # fmt: skip
+    path = tmp_path / "run-a" / "fit.json"
+    path.parent.mkdir()
+    path.write_text(json.dumps(fit))
+    models = hc.fitted_models(path)
+    assert list(models) == ["run-a:gradient", "run-a:nelder_mead"]
+    assert hc.fitted_values(models["run-a:nelder_mead"]) == values
+    assert float(models["run-a:gradient"].radius_m) == pytest.approx(0.19)
+    assert models["run-a:nelder_mead"].name == "steering_speed"
+    assert list(hc.fitted_models(path, ("nelder_mead",))) == ["run-a:nelder_mead"]
+    bad = {
+        "not json": ("{", "not a readable fit.json"),
+        "eth_ucy": (json.dumps({**fit, "data": "eth_ucy"}), "data:"),
+        "model": (json.dumps({**fit, "model": "ghosts"}), "model:"),
+        "missing": (json.dumps({"model": "steering_speed"}), "gradient.values: missing"),
+        "fields": (json.dumps({**fit, "gradient": {"values": {"time_gap_s": 1.0}}}), "gradient.values: expected"),
+        "negative": (json.dumps({**fit, "nelder_mead": {"values": {**values, "radius_m": -0.2}}}),
+                     "nelder_mead.values.radius_m"),
+    }  # fmt: skip
+    for name, (text, field) in bad.items():
+        wrong = tmp_path / name / "fit.json"
+        wrong.parent.mkdir()
+        wrong.write_text(text)
+        with pytest.raises(ValueError, match=re.escape(field)) as e:
+            hc.fitted_models(wrong)
+        assert str(wrong) in str(e.value)
+    out = tmp_path / "report"
+    assert cli.main(["humans", "validate", "--fit", str(tmp_path / "fields" / "fit.json"), "--out", str(out)]) == 2
+    assert cli.main(["humans", "validate", "--fit", str(path), "--fit", str(path), "--out", str(out)]) == 2
+    assert not out.exists()
 
 
 @pytest.mark.slow

@@ -78,6 +78,7 @@ def test_each_weights_fit_is_at_least_as_good_as_its_start_and_is_the_model_it_r
         ["--data", "joint", "--scenes", "hotel"],
         ["--data", "joint", "--evaluations", "0"],
         ["--data", "joint", "--steps", "10"],  # Nelder-Mead alone
+        ["--data", "eth_ucy", "--start-draws", "2"],  # no corridors there
     ],
 )
 def test_the_joint_commands_bad_input_is_refused_before_anything_is_written(tmp_path, extra):

@@ -28,7 +28,16 @@ body radius of the model the fit starts from; a dense crowd starts on a lattice 
 from that radius (:func:`evaluation.humans.validation._starts`). A model whose people keep the
 lanes they start in (the power law) is then fitted to that draw's arrangement as well as to its
 law, and the validation, which draws for the fitted radius, may start it in other rows
-(docs/humans.md, "The start of a dense corridor").
+(docs/humans.md, "The start of a dense corridor"). With ``start_draws`` (:func:`corridors_at`)
+each bin is walked from that many more draws of its people as well, dense crowds in a disordered
+packing (:func:`evaluation.humans.validation.packed_starts`: no rows to keep), and the loss is the
+mean over bins and draws::
+
+    loss(theta) = mean over bins b and draws d of ((v_model(rho_b; theta, d) - v_data(rho_b)) / sd_data(rho_b))^2
+
+which is each draw's loss averaged: the mean of what the validation's check scores on one start,
+over starts, so a fit that walks at the data's speed from one arrangement only is not rewarded for
+it. The draws are simulated side by side (``vmap``): one program a bin whatever their number.
 """
 
 from __future__ import annotations
@@ -70,8 +79,12 @@ FORWARD_MODE = ("orca",)
 
 @dataclasses.dataclass(frozen=True)
 class Corridors:
-    """What the loss simulates: one periodic corridor per density bin (people, desired speeds,
-    their starts, fixed across evaluations: common random numbers) and the data's bins."""
+    """What the loss simulates: periodic corridors per density bin (people, desired speeds,
+    their starts, fixed across evaluations: common random numbers) and the data's bins.
+
+    ``starts``: one ``(xy0 (D, N, 2), direction (D, N), speed (D, N))`` a bin, D draws of its N
+    people (the first placed as :func:`evaluation.humans.validation._starts` places them, the
+    others in a disordered packing)."""
 
     densities: tuple[float, ...]
     speed_data: np.ndarray
@@ -83,29 +96,39 @@ class Corridors:
     measured_steps: int = 50
 
 
-def corridors_at(model: hv.HumanModel, densities, speed_data, sd_data, seed: int = 0, **size) -> Corridors:
+def corridors_at(model: hv.HumanModel, densities, speed_data, sd_data, seed: int = 0, start_draws: int = 0,
+                 **size) -> Corridors:  # fmt: skip
     """Corridors at ``densities`` (persons/m²) against ``speed_data`` +- ``sd_data``, people
-    drawn once under ``seed`` (``size``: ``width_m``, ``length_m``, ``warmup_steps``,
+    drawn once under ``seed``, and ``start_draws`` more times in a disordered packing
+    (:func:`evaluation.humans.validation.packed_starts`; draw d from its own stream ``(seed, d)``,
+    none of them the validation's) (``size``: ``width_m``, ``length_m``, ``warmup_steps``,
     ``measured_steps``)."""
     width, length = size.get("width_m", 1.8), size.get("length_m", 20.0)
     rng = np.random.default_rng(seed)
+    draw_rngs = [np.random.default_rng([seed, d]) for d in range(1, start_draws + 1)]
     starts = []
     for rho in densities:
         n = max(2, int(round(rho * width * length)))
-        xy0 = hv._starts(n, width, length, model.radius_m, rng)
-        speed = hv.desired_speeds(model.crowd, n, rng)
-        starts.append((jnp.asarray(xy0, jnp.float32), jnp.ones(n, jnp.float32), jnp.asarray(speed, jnp.float32)))
+        xy0 = [hv._starts(n, width, length, model.radius_m, rng)]
+        speed = [hv.desired_speeds(model.crowd, n, rng)]
+        for draw_rng in draw_rngs:
+            xy0.append(hv.packed_starts(n, width, length, model.radius_m, draw_rng))
+            speed.append(hv.desired_speeds(model.crowd, n, draw_rng))
+        starts.append((jnp.asarray(np.stack(xy0), jnp.float32), jnp.ones((len(xy0), n), jnp.float32),
+                       jnp.asarray(np.stack(speed), jnp.float32)))  # fmt: skip
     steps = {k: v for k, v in size.items() if k in ("warmup_steps", "measured_steps")}
     return Corridors(tuple(float(r) for r in densities), np.asarray(speed_data, float),
                      np.maximum(np.asarray(sd_data, float), 0.02), tuple(starts), width, length, **steps)  # fmt: skip
 
 
-def training_corridors(model: hv.HumanModel, seed: int = 0, runs=TRAIN_RUNS, **size) -> Corridors:
+def training_corridors(model: hv.HumanModel, seed: int = 0, runs=TRAIN_RUNS, start_draws: int = 0,
+                       **size) -> Corridors:  # fmt: skip
     """The corridors of :func:`fd_loss` for the bins the training ``runs`` cover (with at least
-    100 frames), against the runs' mean speed and standard deviation there."""
+    100 frames), against the runs' mean speed and standard deviation there (``start_draws``:
+    :func:`corridors_at`'s)."""
     bins = measures.binned(hv.data_fundamental_diagram(runs))
     bins = bins[bins["n"] >= measures.MIN_BIN_FRAMES]
-    return corridors_at(model, bins["density_bin"], bins["speed_mean"], bins["speed_sd"], seed, **size)
+    return corridors_at(model, bins["density_bin"], bins["speed_mean"], bins["speed_sd"], seed, start_draws, **size)
 
 
 def with_theta(model: hv.HumanModel, theta, fields=None) -> hv.HumanModel:
@@ -123,34 +146,54 @@ def theta_of(model: hv.HumanModel, fields=None) -> jnp.ndarray:
     return jnp.log(jnp.asarray([float(getattr(params, f)) for f in fields], jnp.float32))
 
 
-def mean_speeds(model: hv.HumanModel, corridors: Corridors, theta, key, stop_warmup: bool = True, fields=None):
-    """(bins,) the model's mean speed along each corridor over its measured steps (with
-    ``stop_warmup``, a model in :data:`TRUNCATED` differentiated one step at a time)."""
+def draw_speeds(model: hv.HumanModel, corridors: Corridors, theta, key, stop_warmup: bool = True, fields=None):
+    """(bins, D) the model's mean speed along each corridor of each draw over its measured steps
+    (with ``stop_warmup``, a model in :data:`TRUNCATED` differentiated one step at a time). Draw 0
+    walks on the keys of ``fold_in(key, bin)``, draw d > 0 on those of ``fold_in(fold_in(key,
+    bin), d)``; a single draw is walked outside ``vmap``."""
     field = hv.corridor_field(corridors.width_m, corridors.length_m)
     m = with_theta(model, theta, fields)
     truncate = stop_warmup and model.name in TRUNCATED
-    speeds = []
-    for k, (xy0, direction, speed) in enumerate(corridors.starts):
+    n_steps = corridors.warmup_steps + corridors.measured_steps
+
+    def walk(xy0, direction, speed, keys):
         step = hv.periodic_step(m.name, m.params, field, direction, speed, corridors.length_m)
-        keys = jax.random.split(jax.random.fold_in(key, k), corridors.warmup_steps + corridors.measured_steps)
-        carry, _ = jax.lax.scan(lambda c, q, step=step: (step(c, q), None), hv.periodic_start(direction, speed, xy0),
+        carry, _ = jax.lax.scan(lambda c, q: (step(c, q), None), hv.periodic_start(direction, speed, xy0),
                                 keys[: corridors.warmup_steps])  # fmt: skip
         if stop_warmup:
             carry = jax.lax.stop_gradient(carry)
 
-        def measured(c, q, step=step):
+        def measured(c, q):
             new = step(jax.lax.stop_gradient(c) if truncate else c, q)
             return new, new[1][:, 0]
 
         _, vx = jax.lax.scan(measured, carry, keys[corridors.warmup_steps :])
-        speeds.append(jnp.mean(vx))
+        return jnp.mean(vx)
+
+    speeds = []
+    for k, (xy0, direction, speed) in enumerate(corridors.starts):
+        base = jax.random.fold_in(key, k)
+        draw_keys = [base] + [jax.random.fold_in(base, d) for d in range(1, xy0.shape[0])]
+        keys = jnp.stack([jax.random.split(q, n_steps) for q in draw_keys])
+        # One draw walked as itself: a batch of one is another program, whose last bits a chaotic
+        # crowd (the power law's) carries into another loss.
+        walked = walk(xy0[0], direction[0], speed[0], keys[0])[None] if len(draw_keys) == 1 else jax.vmap(walk)(
+            xy0, direction, speed, keys)  # fmt: skip
+        speeds.append(walked)
     return jnp.stack(speeds)
 
 
+def mean_speeds(model: hv.HumanModel, corridors: Corridors, theta, key, stop_warmup: bool = True, fields=None):
+    """(bins,) the model's mean speed along each corridor, averaged over the draws
+    (:func:`draw_speeds`)."""
+    return jnp.mean(draw_speeds(model, corridors, theta, key, stop_warmup, fields), axis=1)
+
+
 def fd_loss(model: hv.HumanModel, corridors: Corridors, theta, key, stop_warmup: bool = True, fields=None):
-    """The loss of the module's docstring (``theta``: the logarithms of ``fields``)."""
-    v = mean_speeds(model, corridors, theta, key, stop_warmup, fields)
-    return jnp.mean(((v - corridors.speed_data) / corridors.sd_data) ** 2)
+    """The loss of the module's docstring (``theta``: the logarithms of ``fields``): each draw's
+    loss, averaged over the draws."""
+    v = draw_speeds(model, corridors, theta, key, stop_warmup, fields)
+    return jnp.mean(((v - corridors.speed_data[:, None]) / corridors.sd_data[:, None]) ** 2)
 
 
 def fit_gradient(
@@ -189,6 +232,52 @@ def fitted_values(model: hv.HumanModel) -> dict:
     return {f: round(float(getattr(params, f)), 4) for f in FITTED[model.name]}
 
 
+FIT_METHODS = ("gradient", "nelder_mead")
+
+
+def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
+    """The models a Jülich fit (``socialnav humans calibrate``'s ``fit.json`` at ``path``) found,
+    one a method of ``methods``, labelled ``<folder>:<method>``: its model with the fitted values.
+    Raises ``ValueError`` naming the file and the field where the file is not such a fit."""
+    import json
+    import pathlib
+
+    path = pathlib.Path(path)
+    try:
+        fit = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ValueError(f"{path}: not a readable fit.json ({e})") from None
+    if not isinstance(fit, dict):
+        raise ValueError(f"{path}: not a fit (expected a JSON object)")
+    if fit.get("data", "juelich") != "juelich":
+        raise ValueError(f"{path}: data: a {fit['data']!r} fit holds one fit a scene or a weight; only a Jülich "
+                         "fit (--data juelich) is one model")  # fmt: skip
+    name = fit.get("model")
+    if name not in FITTED:
+        raise ValueError(f"{path}: model: {name!r} is not a model the calibration fits ({', '.join(FITTED)})")
+    models = {}
+    for method in methods:
+        values = fit.get(method, {}).get("values") if isinstance(fit.get(method), dict) else None
+        if not isinstance(values, dict):
+            raise ValueError(f"{path}: {method}.values: missing")
+        wrong = sorted(set(values) ^ set(FITTED[name]))
+        if wrong:
+            raise ValueError(f"{path}: {method}.values: expected the fields {', '.join(FITTED[name])}, got "
+                             f"{', '.join(values)}")  # fmt: skip
+        bad = [f for f, v in values.items() if not (isinstance(v, int | float) and np.isfinite(v) and v > 0)]
+        if bad:
+            raise ValueError(f"{path}: {method}.values.{bad[0]}: {values[bad[0]]!r} is not a positive number")
+        models[f"{path.parent.name}:{method}"] = with_values(named_model(name), values)
+    return models
+
+
+def with_values(model: hv.HumanModel, values: dict) -> hv.HumanModel:
+    """``model`` with the fitted fields in ``values`` (field -> value) set."""
+    field = _FIELD[model.name]
+    params = getattr(model, field).replace(**{f: float(v) for f, v in values.items()})
+    return dataclasses.replace(model, **{field: params})
+
+
 def named_model(name: str) -> hv.HumanModel:
     """A human model by name, the calibrated ones (:data:`jaxsim.speed_model.CALIBRATED`,
     :data:`jaxsim.power_law.CALIBRATED`) included."""
@@ -200,5 +289,5 @@ def named_model(name: str) -> hv.HumanModel:
     return hv.HumanModel(name)
 
 
-__all__ = ["FITTED", "TEST_RUNS", "TRAIN_RUNS", "fd_loss", "fit_gradient", "fit_nelder_mead",
-           "named_model", "speed_model", "training_corridors"]  # fmt: skip
+__all__ = ["FITTED", "FIT_METHODS", "TEST_RUNS", "TRAIN_RUNS", "fd_loss", "fit_gradient", "fit_nelder_mead",
+           "fitted_models", "named_model", "speed_model", "training_corridors", "with_values"]  # fmt: skip

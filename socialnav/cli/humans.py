@@ -2,6 +2,7 @@
 
     socialnav humans validate --out runs/humans                       # the social force
     socialnav humans validate --models social_force,orca --quick --out runs/humans-quick
+    socialnav humans validate --fit runs/calibration/fit.json --out runs/humans-fit   # a fit of one's own
     socialnav humans calibrate --model collision_free_speed --out runs/calibration
     socialnav humans calibrate --data joint --model steering_speed_calibrated --out runs/joint
 
@@ -48,7 +49,13 @@ def add_parser(top) -> None:
         "(test splits: 8 frames observed, 12 predicted), and body overlaps. Writes a run folder and prints the "
         "checks against the bar of issue 61.",
     )
-    v.add_argument("--models", type=comma_names, default=["social_force"], help="human models (default social_force)")
+    v.add_argument("--models", type=comma_names, default=None,
+                   help="human models (default social_force, none with --fit)")  # fmt: skip
+    v.add_argument("--fit", type=pathlib.Path, action="append", default=[], metavar="FIT_JSON",
+                   help="a Jülich fit (socialnav humans calibrate's fit.json) scored as a model, labelled "
+                        "<its folder>:<method>; may be given more than once")  # fmt: skip
+    v.add_argument("--fit-method", choices=("both", "gradient", "nelder_mead"), default="both",
+                   help="with --fit: the fit's values from which method (default both)")  # fmt: skip
     v.add_argument(
         "--out", type=output_folder, default=pathlib.Path("runs/humans"), help="folder (default runs/humans)"
     )
@@ -91,6 +98,10 @@ def add_parser(top) -> None:
     c.add_argument("--sample", type=positive_int, default=256,
                    help="eth_ucy: training windows the loss is taken over, drawn once (256)")  # fmt: skip
     c.add_argument("--seed", type=seed_int, default=0)
+    c.add_argument("--start-draws", type=non_negative_int, default=0,
+                   help="with --data juelich or joint: each density's corridor walked from this many more draws of "
+                        "its people, dense crowds in a disordered packing, the loss averaged over the draws (default "
+                        "0: one draw, a dense crowd on a lattice)")  # fmt: skip
     c.add_argument("--overwrite", action="store_true", help="replace the run in --out whole once the new one is done")
     c.set_defaults(handler=calibrate)
 
@@ -115,6 +126,11 @@ def calibrate(args) -> int:
     if args.data != "joint" and args.weights is not None:
         print("socialnav humans calibrate: --weights goes with --data joint", file=sys.stderr)
         return 2
+    if args.data == "eth_ucy" and args.start_draws:
+        print(
+            "socialnav humans calibrate: --start-draws goes with --data juelich or joint (corridors)", file=sys.stderr
+        )
+        return 2
     if args.data == "eth_ucy":
         return _calibrate_trajectories(args)
     if args.data == "joint":
@@ -133,9 +149,10 @@ def calibrate(args) -> int:
         return 2
     t0 = time.perf_counter()
     model = hv.HumanModel(args.model)
-    corridors = hc.training_corridors(model, args.seed)
+    corridors = hc.training_corridors(model, args.seed, start_draws=args.start_draws)
     print(f"{args.model}: fitting {', '.join(hc.FITTED[args.model])} to the runs {', '.join(hc.TRAIN_RUNS)} "
-          f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m²)", flush=True)  # fmt: skip
+          f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m², {1 + args.start_draws} "
+          f"draw{'s' if args.start_draws else ''} of each corridor's people)", flush=True)  # fmt: skip
     start = float(hc.fd_loss(model, corridors, hc.theta_of(model), jax.random.key(args.seed)))
     by_gradient, gradient_history = hc.fit_gradient(model, corridors, args.steps, args.learning_rate, args.seed)
     by_search, search_history = hc.fit_nelder_mead(model, corridors, args.evaluations, args.seed)
@@ -150,6 +167,7 @@ def calibrate(args) -> int:
         "nelder_mead": {"values": hc.fitted_values(by_search), "loss": min(h[1] for h in search_history),
                         "evaluations": len(search_history), "seconds": search_history[-1][2]},
         "seed": args.seed,
+        "start_draws": args.start_draws,
     }  # fmt: skip
     try:
         with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
@@ -242,7 +260,7 @@ def _calibrate_joint(args) -> int:
     say = lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True)
     model = hc.named_model(args.model)
     weights = args.weights or list(jc.WEIGHTS)
-    data = jc.joint_data(model, args.seed)
+    data = jc.joint_data(model, args.seed, start_draws=args.start_draws)
     say(f"{args.model}: fitting {', '.join(hc.FITTED[model.name])} to the runs {', '.join(hc.TRAIN_RUNS)} and "
         f"{len(data.windows.start)} ETH/UCY windows of {', '.join(jc.TRAIN_RECORDINGS)} (constant velocity's ADE "
         f"{data.constant_velocity_ade_m:.3f} m), weights {', '.join(f'{w:g}' for w in weights)}")  # fmt: skip
@@ -255,7 +273,7 @@ def _calibrate_joint(args) -> int:
     fit = {"model": args.model, "data": "joint", "fields": list(hc.FITTED[model.name]),
            "train_runs": list(hc.TRAIN_RUNS), "train_recordings": list(jc.TRAIN_RECORDINGS),
            "train_windows": len(data.windows.start), "constant_velocity_ade_m": data.constant_velocity_ade_m,
-           "start": hc.fitted_values(model), "weights": rows, "seed": args.seed,
+           "start": hc.fitted_values(model), "weights": rows, "seed": args.seed, "start_draws": args.start_draws,
            "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
     try:
         with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
@@ -276,11 +294,28 @@ def validate(args) -> int:
     from socialnav.evaluation.humans import validation as hv
 
     known = list(HUMAN_MODELS)
-    unknown = [m for m in args.models if m not in known]
+    names = args.models if args.models is not None else ([] if args.fit else ["social_force"])
+    unknown = [m for m in names if m not in known]
     if unknown:
         print(f"socialnav humans validate: --models: unknown {', '.join(unknown)} (known: {', '.join(known)})",
               file=sys.stderr)  # fmt: skip
         return 2
+    models = {name: hc.named_model(name) for name in names}
+    fits = {}  # label -> where its values came from
+    methods = hc.FIT_METHODS if args.fit_method == "both" else (args.fit_method,)
+    for path in args.fit:
+        try:
+            fitted = hc.fitted_models(path, methods)
+        except ValueError as e:
+            print(f"socialnav humans validate: --fit {e}", file=sys.stderr)
+            return 2
+        twice = sorted(set(fitted) & set(models))
+        if twice:
+            print(f"socialnav humans validate: --fit {path}: a second model labelled {twice[0]} (fits in folders of "
+                  "one name)", file=sys.stderr)  # fmt: skip
+            return 2
+        models.update(fitted)
+        fits.update({label: {"fit_json": str(path), "values": hc.fitted_values(m)} for label, m in fitted.items()})
     try:
         runfolder.prepare(args.out, RESULTS, args.overwrite, marker="summary.json", job=JOB)
         runfolder.check_writable(args.out)
@@ -294,11 +329,11 @@ def validate(args) -> int:
         else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
     )
     data = hv.reference(say)
-    results = {name: hv.validate(hc.named_model(name), data, args.quick, args.seed, say, name, args.start_draws)
-               for name in args.models}  # fmt: skip
+    results = {name: hv.validate(model, data, args.quick, args.seed, say, name, args.start_draws)
+               for name, model in models.items()}  # fmt: skip
     try:
         with runfolder.staged(args.out, "summary.json", args.overwrite, job=JOB) as stage:
-            _write(stage, data, results, quick=args.quick, seed=args.seed)
+            _write(stage, data, results, quick=args.quick, seed=args.seed, fits=fits)
     except runfolder.RunFolderError as e:
         print(f"socialnav humans validate: --out {e}", file=sys.stderr)
         return 2
@@ -307,7 +342,7 @@ def validate(args) -> int:
     return 0
 
 
-def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: int) -> None:
+def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: int, fits=None) -> None:
     import pandas as pd
 
     from socialnav.evaluation.humans import plots as human_plots
@@ -333,6 +368,7 @@ def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: in
         "quick": bool(quick),
         "seed": seed,
         "data": {"counterflow": data["counterflow"], "fd_agreement": data["fd_agreement"]},
+        "fits": fits or {},
     }
     (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
 
