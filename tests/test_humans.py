@@ -243,6 +243,24 @@ def test_the_difference_from_constant_velocity_is_bootstrapped_in_blocks_of_over
     assert naive_high - naive_low < 0.4 * (high - low)
 
 
+def test_the_five_scene_averages_interval_weighs_every_scene_alike_and_resamples_each_apart():
+    rng = np.random.default_rng(4)
+    big, small = rng.normal(-0.1, 0.05, 1000), rng.normal(0.3, 0.05, 50)  # 1,000 people and 50
+    scenes = [(d, np.zeros_like(d), np.arange(len(d))) for d in (big, small)]
+    mean, low, high = measures.mean_paired_difference(scenes, block_windows=1)
+    assert mean == pytest.approx((big.mean() + small.mean()) / 2)  # not the pooled mean (about -0.08)
+    assert low < mean < high and low < 0.1 < high
+    # the spread is the two means' standard errors over two scenes: sqrt(se1² + se2²) / 2
+    se = np.sqrt(big.var(ddof=1) / 1000 + small.var(ddof=1) / 50) / 2
+    assert high - low == pytest.approx(2 * 1.96 * se, rel=0.25)
+    # one scene: the scene's own difference and an interval as wide as paired_difference's
+    one = measures.mean_paired_difference(scenes[:1], block_windows=1)
+    alone = measures.paired_difference(*scenes[0], block_windows=1)
+    assert one[0] == pytest.approx(alone[0]) and one[2] - one[1] == pytest.approx(alone[2] - alone[1], rel=0.15)
+    # a scene of one block has no interval
+    assert np.isnan(measures.mean_paired_difference([(big[:5], np.zeros(5), np.zeros(5, int))])[1])
+
+
 # ---------------------------------------------------------------- the velocity models
 
 
@@ -504,6 +522,10 @@ def test_the_juelich_diagram_falls_as_weidmanns_does_and_the_command_writes_its_
     assert set(pd.read_csv(out / "fundamental_diagram.csv")["draw"]) == {0, 1}
     assert pd.read_csv(out / "prediction.csv")["model"].nunique() == 3
     assert summary["fits"]["my-fit:nelder_mead"] == {"fit_json": str(fit), "values": values}
+    difference, low, high = summary["models"]["social_force"]["eth_ucy_average_vs_cv"]["ade_m"]
+    ade, cv = summary["models"]["social_force"]["eth_ucy_ade_fde"][0], summary["models"]["social_force"][
+        "constant_velocity_ade_fde"][0]  # fmt: skip
+    assert difference == pytest.approx(ade - cv, abs=1e-3) and low <= difference <= high
     # The data's measures were kept on disk (evaluation.humans.datacache) and read back bit for bit.
     from_disk, computed = hv._run_fundamental_diagram.__wrapped__, hv._run_fundamental_diagram.__wrapped__.__wrapped__
     pd.testing.assert_frame_equal(from_disk("uo-060-180-180"), computed("uo-060-180-180"), check_exact=True)

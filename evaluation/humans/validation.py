@@ -592,7 +592,7 @@ def window_predictor(name: str, dt_s: float, aim: str = "velocity", groups: bool
 
 def eth_ucy_prediction(
     model: HumanModel | None, scene: str, aim: str = "velocity", seed: int = 0, groups: bool = False,
-    reach_m: float = 1.0, split: str = "test",
+    reach_m: float = 1.0, split: str = "test", per_person: bool = False,
 ) -> dict:  # fmt: skip
     """ADE and FDE (m) of one scene's ``split`` (the test split unless asked): ``model`` None is
     constant velocity (the last observed displacement carried on); else the model from the last
@@ -603,7 +603,9 @@ def eth_ucy_prediction(
     (:mod:`jaxsim.groups`). Returns ``ade_m``, ``fde_m``, ``samples``, ``grouped`` (the share of
     scored people in a group); for a model also ``ade_vs_cv_m`` and ``fde_vs_cv_m``, its error
     minus constant velocity's on the same people, with a 95 % interval ``..._low_m``,
-    ``..._high_m`` (:func:`evaluation.humans.measures.paired_difference`)."""
+    ``..._high_m`` (:func:`evaluation.humans.measures.paired_difference`); with ``per_person``
+    also ``per_person``: ``{"ade": (model's, constant velocity's, window), "fde": ...}``, each
+    scored person's errors and window, what the interval is drawn from."""
     w = prediction_windows(scene, split, reach_m)
     if model is None:
         predicted = w.constant_velocity
@@ -619,6 +621,8 @@ def eth_ucy_prediction(
         for name, error, baseline in (("ade", ade, ade_cv), ("fde", fde, fde_cv)):
             d, low, high = measures.paired_difference(error, baseline, window, seed=seed)
             out.update({f"{name}_vs_cv_m": d, f"{name}_vs_cv_low_m": low, f"{name}_vs_cv_high_m": high})
+        if per_person:
+            out["per_person"] = {"ade": (ade, ade_cv, window), "fde": (fde, fde_cv, window)}
     return out
 
 
@@ -705,9 +709,12 @@ def validate(
     in walks as fast as its lattice's rows let it). The checks stay those of the first diagram.
     Returns ``fd_points``, ``fd_bins``, ``bodies``, ``prediction`` (scene, aim, ade_m, fde_m; aim
     ``velocity``, ``velocity_groups`` or ``destination``), ``counterflow``, ``checks`` (a dict of
-    the bar's numbers and whether each passes; with ``start_draws``, ``fd_start_draws``: each
-    draw's bins inside, mean z² and deepest overlap) and ``fd_draws`` (the draws' bins, a
-    ``draw`` column; empty without)."""
+    the bar's numbers and whether each passes; ``eth_ucy_average_vs_cv``: the five-scene
+    average's difference from constant velocity with its 95 % interval, ADE and FDE in m
+    (:func:`evaluation.humans.measures.mean_paired_difference`), ``eth_ucy_average_clearly_ahead``
+    whether both intervals lie below 0; with ``start_draws``, ``fd_start_draws``: each draw's bins
+    inside, mean z² and deepest overlap) and ``fd_draws`` (the draws' bins, a ``draw`` column;
+    empty without)."""
     size = dict(length_m=10.0, seconds=30.0, warmup_s=10.0) if quick else {}
     label = label or model.name
     progress(f"{label}: the fundamental diagram")
@@ -715,14 +722,22 @@ def validate(
     progress(f"{label}: counterflow")
     counter = model_counterflow(model, data["counterflow"]["density"], seed=seed, **size)
     progress(f"{label}: ETH/UCY prediction")
-    rows = []
+    rows, along = [], []
     for aim, grouped in (("velocity", False), ("velocity", True), ("destination", False)):
         for scene in recorded.ETH_UCY_SCENES:
             aim_label = f"{aim}_groups" if grouped else aim
-            rows.append({"scene": scene, "aim": aim_label, **eth_ucy_prediction(model, scene, aim, seed, grouped)})
+            result = eth_ucy_prediction(model, scene, aim, seed, grouped, per_person=True)
+            if aim_label == "velocity":
+                along.append(result["per_person"])
+            rows.append({"scene": scene, "aim": aim_label, **{k: v for k, v in result.items() if k != "per_person"}})
     prediction = pd.DataFrame(rows)
     fd = measures.binned(points)
     verdicts = checks(fd, bodies, prediction, counter, data)
+    # the five-scene average's difference from constant velocity, with a 95 % interval
+    average = {f"{e}_m": [round(x, 4) for x in measures.mean_paired_difference([a[e] for a in along], seed=seed)]
+               for e in ("ade", "fde")}  # fmt: skip
+    verdicts["eth_ucy_average_vs_cv"] = average
+    verdicts["eth_ucy_average_clearly_ahead"] = bool(average["ade_m"][2] < 0 and average["fde_m"][2] < 0)
     draws, scores = [], []
     for draw in range(1, start_draws + 1):
         progress(f"{label}: the fundamental diagram from disordered start {draw} of {start_draws}")

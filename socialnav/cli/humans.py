@@ -373,6 +373,12 @@ def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: in
     (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
 
 
+def _interval(difference) -> str:
+    """``[d, low, high]`` as ``+0.012 [+0.004, +0.020]``."""
+    d, low, high = difference
+    return f"{d:+.3f} [{low:+.3f}, {high:+.3f}]"
+
+
 def _headline(data: dict, results: dict) -> None:
     cv = data["constant_velocity"]
     c = data["counterflow"]
@@ -393,7 +399,9 @@ def _headline(data: dict, results: dict) -> None:
             f"(mean z² {k['fd_z2_mean']:.2f}; {verdict(k['fd_pass'])}); "
             f"deepest overlap {k['overlap_max_m']:.2f} m ({verdict(k['overlap_pass'])}); ETH/UCY ADE/FDE {ade:.2f} / "
             f"{fde:.2f} m, ahead in {k['eth_ucy_scenes_ahead']} of 5 scenes (beyond the 95 % interval: ahead in "
-            f"{k['eth_ucy_scenes_clearly_ahead']}, behind in {k['eth_ucy_scenes_clearly_behind']}; "
+            f"{k['eth_ucy_scenes_clearly_ahead']}, behind in {k['eth_ucy_scenes_clearly_behind']}; the average "
+            f"minus constant velocity's, 95 % interval: ADE {_interval(k['eth_ucy_average_vs_cv']['ade_m'])}, FDE "
+            f"{_interval(k['eth_ucy_average_vs_cv']['fde_m'])} m; "
             f"{verdict(k['eth_ucy_pass'])}; in walking "
             f"groups {grouped['ade_m'].mean():.2f} / {grouped['fde_m'].mean():.2f} m); with the "
             f"destination ADE {k['destination_ade_m']:.2f} m ({verdict(k['destination_pass'])}); counterflow speed "
