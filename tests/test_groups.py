@@ -211,6 +211,15 @@ def test_the_eth_ucy_calibration_command_fits_on_training_windows_and_scores_the
     assert row["sample_loss"]["nelder_mead"] <= row["sample_loss"]["start"] + 1e-4  # its first point is the start
     assert 0.2 < row["constant_velocity"][0] < 0.5 and all(np.isfinite(row["nelder_mead"]))  # hotel: 0.32 m
     assert (out / "curve.png").is_file() and "Nelder-Mead: test ADE/FDE" in capsys.readouterr().out
+    # the average's difference from constant velocity (here one scene's) is the fit's as the row scored it,
+    # but for the values' rounding to four figures in fit.json (which the average is predicted again from)
+    for method in ("gradient", "nelder_mead"):
+        average = fit["average_vs_cv"][method]
+        for k, e in enumerate(("ade_m", "fde_m")):
+            difference, low, high = average[e]
+            assert difference == pytest.approx(row[method][k] - row["constant_velocity"][k], abs=1e-3)
+            assert low <= difference <= high
+        assert average["scenes"] == ["hotel"]
     assert cli.main(argv) == 2  # the run is there: no --overwrite
     bad = ["humans", "calibrate", "--out", str(tmp_path / "x")]
     assert cli.main([*bad, "--data", "eth_ucy", "--scenes", "atlantis"]) == 2

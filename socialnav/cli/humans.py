@@ -214,8 +214,11 @@ def _calibrate_trajectories(args) -> int:
         model, fields, scenes, args.steps or 60, args.learning_rate or 0.2,
         60 if args.evaluations is None else args.evaluations, args.sample, seed=args.seed,
     )  # fmt: skip
+    # each method's fits against constant velocity on the average over the held-out scenes, with its interval
+    average = {m: tc.average_vs_cv(model, rows, m, fields) for m in ("gradient", "nelder_mead") if m in rows[0]}
     fit = {"model": args.model, "data": "eth_ucy", "fields": list(fields), "start": tc.values_of(model, fields),
-           "scenes": rows, "seed": args.seed, "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
+           "scenes": rows, "average_vs_cv": average, "seed": args.seed,
+           "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
     try:
         with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
             human_plots.trajectory_fit(rows, f"{args.model} on ETH/UCY, leave one scene out", stage / "curve.png")
@@ -228,8 +231,12 @@ def _calibrate_trajectories(args) -> int:
                        ("nelder_mead", "Nelder-Mead")):  # fmt: skip
         if key in rows[0]:
             ahead = sum(r[key][0] < r["constant_velocity"][0] and r[key][1] < r["constant_velocity"][1] for r in rows)
+            interval = (f"; the average minus constant velocity's, 95 % interval: ADE "
+                        f"{_interval(average[key]['ade_m'])}, FDE {_interval(average[key]['fde_m'])} m"
+                        if key in average else "")  # fmt: skip
             print(f"{label}: test ADE/FDE {mean(key, 0):.3f} / {mean(key, 1):.3f} m over {len(rows)} held-out scenes"
-                  + ("" if key == "constant_velocity" else f", ahead of constant velocity in {ahead}"))  # fmt: skip
+                  + ("" if key == "constant_velocity" else f", ahead of constant velocity in {ahead}")
+                  + interval)  # fmt: skip
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
