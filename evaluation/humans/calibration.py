@@ -267,11 +267,11 @@ def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
         bad = [f for f, v in values.items() if not (isinstance(v, int | float) and np.isfinite(v) and v > 0)]
         if bad:
             raise ValueError(f"{path}: {method}.values.{bad[0]}: {values[bad[0]]!r} is not a positive number")
-        models[f"{path.parent.name}:{method}"] = with_values(named_model(name), values)
+        models[f"{path.parent.name}:{method}"] = with_fitted(named_model(name), values)
     return models
 
 
-def with_values(model: hv.HumanModel, values: dict) -> hv.HumanModel:
+def with_fitted(model: hv.HumanModel, values: dict) -> hv.HumanModel:
     """``model`` with the fitted fields in ``values`` (field -> value) set."""
     field = _FIELD[model.name]
     params = getattr(model, field).replace(**{f: float(v) for f, v in values.items()})
@@ -290,4 +290,4 @@ def named_model(name: str) -> hv.HumanModel:
 
 
 __all__ = ["FITTED", "FIT_METHODS", "TEST_RUNS", "TRAIN_RUNS", "fd_loss", "fit_gradient", "fit_nelder_mead",
-           "fitted_models", "named_model", "speed_model", "training_corridors", "with_values"]  # fmt: skip
+           "fitted_models", "named_model", "speed_model", "training_corridors", "with_fitted"]  # fmt: skip

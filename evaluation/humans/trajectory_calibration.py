@@ -126,12 +126,13 @@ def scored(model: hv.HumanModel | None, w: hv.PredictionWindows, groups: bool = 
 
 def average_vs_cv(model: hv.HumanModel, rows: list[dict], method: str = "nelder_mead", fields=None,
                   groups: bool = True, seed: int = 0) -> dict:  # fmt: skip
-    """How far ``method``'s fits (``"gradient"`` or ``"nelder_mead"``; ``rows`` of
-    :func:`leave_one_scene_out`, each scene's fit predicted again on its test split as the row
-    scored it, from the row's values, which are rounded to four figures: the average may differ
-    from the rows' by a few tenths of a millimetre) lie from constant velocity on the average over the rows' scenes: ``{"ade_m": [d,
-    low, high], "fde_m": [...], "scenes": [...]}``, the average of the scenes' differences (m; below
-    0: ahead) and its 95 % interval (:func:`evaluation.humans.measures.mean_paired_difference`)."""
+    """How far ``method``'s fits (``"gradient"`` or ``"nelder_mead"``) in ``rows`` (of
+    :func:`leave_one_scene_out`) lie from constant velocity on the average over the rows' scenes:
+    ``{"ade_m": [d, low, high], "fde_m": [...], "scenes": [...]}``, the average of the scenes'
+    differences (m; below 0: ahead) and its 95 % interval
+    (:func:`evaluation.humans.measures.mean_paired_difference`). Each scene's fit is predicted
+    again on its test split as the row scored it, from the row's values, which are rounded to four
+    figures: the average may differ from the rows' by a few tenths of a millimetre."""
     fields = FITTED[model.name] if fields is None else fields
     paired = {"ade": [], "fde": []}
     for row in rows:
