@@ -220,6 +220,7 @@ def test_the_eth_ucy_calibration_command_fits_on_training_windows_and_scores_the
             assert difference == pytest.approx(row[method][k] - row["constant_velocity"][k], abs=1e-3)
             assert low <= difference <= high
         assert average["scenes"] == ["hotel"]
+        assert average["by_scene"]["hotel"]["ade_m"][0] == pytest.approx(average["ade_m"][0], abs=1e-4)  # one scene
     assert cli.main(argv) == 2  # the run is there: no --overwrite
     bad = ["humans", "calibrate", "--out", str(tmp_path / "x")]
     assert cli.main([*bad, "--data", "eth_ucy", "--scenes", "atlantis"]) == 2

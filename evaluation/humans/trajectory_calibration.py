@@ -128,9 +128,10 @@ def average_vs_cv(model: hv.HumanModel, rows: list[dict], method: str = "nelder_
                   groups: bool = True, seed: int = 0) -> dict:  # fmt: skip
     """How far ``method``'s fits (``"gradient"`` or ``"nelder_mead"``) in ``rows`` (of
     :func:`leave_one_scene_out`) lie from constant velocity on the average over the rows' scenes:
-    ``{"ade_m": [d, low, high], "fde_m": [...], "scenes": [...]}``, the average of the scenes'
-    differences (m; below 0: ahead) and its 95 % interval
-    (:func:`evaluation.humans.measures.mean_paired_difference`). Each scene's fit is predicted
+    ``{"ade_m": [d, low, high], "fde_m": [...], "scenes": [...], "by_scene": {scene: {"ade_m": [d,
+    low, high], "fde_m": [...]}}}``, the average of the scenes' differences (m; below 0: ahead) and
+    its 95 % interval (:func:`evaluation.humans.measures.mean_paired_difference`), and each
+    scene's (:func:`evaluation.humans.measures.paired_difference`). Each scene's fit is predicted
     again on its test split as the row scored it, from the row's values, which are rounded to four
     figures: the average may differ from the rows' by a few tenths of a millimetre."""
     fields = FITTED[model.name] if fields is None else fields
@@ -142,9 +143,11 @@ def average_vs_cv(model: hv.HumanModel, rows: list[dict], method: str = "nelder_
         ade_cv, fde_cv, _ = errors(None, w)
         paired["ade"].append((ade, ade_cv, window))
         paired["fde"].append((fde, fde_cv, window))
-    average = {f"{e}_m": [round(x, 4) for x in measures.mean_paired_difference(paired[e], seed=seed)]
-               for e in ("ade", "fde")}  # fmt: skip
-    return {**average, "scenes": [row["scene"] for row in rows]}
+    rounded = lambda interval: [round(x, 4) for x in interval]
+    average = {f"{e}_m": rounded(measures.mean_paired_difference(paired[e], seed=seed)) for e in ("ade", "fde")}
+    by_scene = {row["scene"]: {f"{e}_m": rounded(measures.paired_difference(*paired[e][k], seed=seed))
+                               for e in ("ade", "fde")} for k, row in enumerate(rows)}  # fmt: skip
+    return {**average, "scenes": [row["scene"] for row in rows], "by_scene": by_scene}
 
 
 def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_UCY_SCENES, steps: int = 60,

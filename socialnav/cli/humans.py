@@ -231,9 +231,11 @@ def _calibrate_trajectories(args) -> int:
                        ("nelder_mead", "Nelder-Mead")):  # fmt: skip
         if key in rows[0]:
             ahead = sum(r[key][0] < r["constant_velocity"][0] and r[key][1] < r["constant_velocity"][1] for r in rows)
+            clearly = sum(v["ade_m"][2] < 0 and v["fde_m"][2] < 0 for v in average[key]["by_scene"].values()
+                          ) if key in average else 0  # fmt: skip
             interval = (f"; the average minus constant velocity's, 95 % interval: ADE "
-                        f"{_interval(average[key]['ade_m'])}, FDE {_interval(average[key]['fde_m'])} m"
-                        if key in average else "")  # fmt: skip
+                        f"{_interval(average[key]['ade_m'])}, FDE {_interval(average[key]['fde_m'])} m; clearly "
+                        f"ahead (both intervals below 0) in {clearly} scenes" if key in average else "")  # fmt: skip
             print(f"{label}: test ADE/FDE {mean(key, 0):.3f} / {mean(key, 1):.3f} m over {len(rows)} held-out scenes"
                   + ("" if key == "constant_velocity" else f", ahead of constant velocity in {ahead}")
                   + interval)  # fmt: skip
