@@ -133,10 +133,8 @@ def training_corridors(model: hv.HumanModel, seed: int = 0, runs=TRAIN_RUNS, sta
 
 def with_theta(model: hv.HumanModel, theta, fields=None) -> hv.HumanModel:
     """``model`` with its fitted ``fields`` (default :data:`FITTED`'s) set to ``exp(theta)``."""
-    field = _FIELD[model.name]
     fields = FITTED[model.name] if fields is None else fields
-    params = getattr(model, field).replace(**dict(zip(fields, jnp.exp(theta), strict=True)))
-    return dataclasses.replace(model, **{field: params})
+    return with_fitted(model, dict(zip(fields, jnp.exp(theta), strict=True)))
 
 
 def theta_of(model: hv.HumanModel, fields=None) -> jnp.ndarray:
@@ -257,7 +255,8 @@ def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
         raise ValueError(f"{path}: model: {name!r} is not a model the calibration fits ({', '.join(FITTED)})")
     models = {}
     for method in methods:
-        values = fit.get(method, {}).get("values") if isinstance(fit.get(method), dict) else None
+        entry = fit.get(method)
+        values = entry.get("values") if isinstance(entry, dict) else None
         if not isinstance(values, dict):
             raise ValueError(f"{path}: {method}.values: missing")
         wrong = sorted(set(values) ^ set(FITTED[name]))
@@ -267,15 +266,16 @@ def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
         bad = [f for f, v in values.items() if not (isinstance(v, int | float) and np.isfinite(v) and v > 0)]
         if bad:
             raise ValueError(f"{path}: {method}.values.{bad[0]}: {values[bad[0]]!r} is not a positive number")
-        models[f"{path.parent.name}:{method}"] = with_fitted(named_model(name), values)
+        models[f"{path.parent.name}:{method}"] = with_fitted(
+            named_model(name), {f: float(v) for f, v in values.items()}
+        )
     return models
 
 
 def with_fitted(model: hv.HumanModel, values: dict) -> hv.HumanModel:
     """``model`` with the fitted fields in ``values`` (field -> value) set."""
     field = _FIELD[model.name]
-    params = getattr(model, field).replace(**{f: float(v) for f, v in values.items()})
-    return dataclasses.replace(model, **{field: params})
+    return dataclasses.replace(model, **{field: getattr(model, field).replace(**values)})
 
 
 def named_model(name: str) -> hv.HumanModel:

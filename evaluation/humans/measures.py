@@ -268,6 +268,12 @@ def mean_paired_difference(groups, block_windows: int = 20, confidence: float = 
     return point, float(result.confidence_interval.low), float(result.confidence_interval.high)
 
 
+def clearly_ahead(ade_high_m, fde_high_m):
+    """Whether a model is clearly ahead of its baseline: both the ADE's and the FDE's interval of
+    the difference (their ``high`` ends, scalars or arrays) lie below 0."""
+    return (np.asarray(ade_high_m) < 0) & (np.asarray(fde_high_m) < 0)
+
+
 def _block_sums(error_m, baseline_error_m, window, block_windows: int):
     """Each block's summed ``error_m - baseline_error_m`` and its number of people: ``(sums,
     counts)``, the blocks ``block_windows`` consecutive windows (the empty ones dropped)."""

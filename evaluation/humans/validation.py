@@ -737,7 +737,7 @@ def validate(
     average = {f"{e}_m": [round(x, 4) for x in measures.mean_paired_difference([a[e] for a in along], seed=seed)]
                for e in ("ade", "fde")}  # fmt: skip
     verdicts["eth_ucy_average_vs_cv"] = average
-    verdicts["eth_ucy_average_clearly_ahead"] = bool(average["ade_m"][2] < 0 and average["fde_m"][2] < 0)
+    verdicts["eth_ucy_average_clearly_ahead"] = bool(measures.clearly_ahead(average["ade_m"][2], average["fde_m"][2]))
     draws, scores = [], []
     for draw in range(1, start_draws + 1):
         progress(f"{label}: the fundamental diagram from disordered start {draw} of {start_draws}")
@@ -771,7 +771,7 @@ def checks(fd: pd.DataFrame, bodies: pd.DataFrame, prediction: pd.DataFrame, cou
     grouped = prediction[prediction["aim"] == "velocity_groups"]
     ahead = (along["ade_m"] < cv["ade_m"]) & (along["fde_m"] < cv["fde_m"])
     # a scene where both intervals of the difference from constant velocity lie below 0 (above 0)
-    clearly_ahead = (along["ade_vs_cv_high_m"] < 0) & (along["fde_vs_cv_high_m"] < 0)
+    clearly_ahead = measures.clearly_ahead(along["ade_vs_cv_high_m"], along["fde_vs_cv_high_m"])
     clearly_behind = (along["ade_vs_cv_low_m"] > 0) | (along["fde_vs_cv_low_m"] > 0)
     speed_ratio = counter["speed_mps"] / data["counterflow"]["speed_mps"]
     return {

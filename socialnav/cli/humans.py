@@ -196,6 +196,7 @@ def _calibrate_trajectories(args) -> int:
     """``--data eth_ucy``: :func:`evaluation.humans.trajectory_calibration.leave_one_scene_out`."""
     from socialnav.data import recorded
     from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import measures
     from socialnav.evaluation.humans import plots as human_plots
     from socialnav.evaluation.humans import trajectory_calibration as tc
 
@@ -231,8 +232,8 @@ def _calibrate_trajectories(args) -> int:
                        ("nelder_mead", "Nelder-Mead")):  # fmt: skip
         if key in rows[0]:
             ahead = sum(r[key][0] < r["constant_velocity"][0] and r[key][1] < r["constant_velocity"][1] for r in rows)
-            clearly = sum(v["ade_m"][2] < 0 and v["fde_m"][2] < 0 for v in average[key]["by_scene"].values()
-                          ) if key in average else 0  # fmt: skip
+            scenes = average[key]["by_scene"].values() if key in average else []
+            clearly = int(sum(measures.clearly_ahead(v["ade_m"][2], v["fde_m"][2]) for v in scenes))
             interval = (f"; the average minus constant velocity's, 95 % interval: ADE "
                         f"{_interval(average[key]['ade_m'])}, FDE {_interval(average[key]['fde_m'])} m; clearly "
                         f"ahead (both intervals below 0) in {clearly} scenes" if key in average else "")  # fmt: skip
