@@ -207,6 +207,7 @@ def test_the_eth_ucy_calibration_command_fits_on_training_windows_and_scores_the
     assert cli.main(argv) == 0
     fit = json.loads((out / "fit.json").read_text())
     (row,) = fit["scenes"]
+    assert fit["model"] == "collision_free_speed_calibrated"  # the preset it started from, not only its kind
     assert row["scene"] == "hotel" and row["sample_windows"] == 8 and len(row["gradient_history"]) == 2
     assert row["sample_loss"]["nelder_mead"] <= row["sample_loss"]["start"] + 1e-4  # its first point is the start
     assert 0.2 < row["constant_velocity"][0] < 0.5 and all(np.isfinite(row["nelder_mead"]))  # hotel: 0.32 m

@@ -592,6 +592,27 @@ def test_the_calibrations_start_draws_add_disordered_corridors_and_the_loss_aver
     np.testing.assert_allclose(np.asarray(hc.mean_speeds(model, three, theta, key)), speeds.mean(axis=1), rtol=1e-6)
 
 
+def test_the_eth_ucy_fits_summary_counts_the_scenes_ahead_and_clearly_ahead_of_constant_velocity():
+    """A hand-made leave-one-scene-out record of two scenes: the fit is ahead on both errors at a
+    (clearly: both intervals below 0) and behind on the FDE at b; the start is ahead nowhere."""
+    from socialnav.evaluation.humans import report
+
+    rows = [
+        {"scene": "a", "constant_velocity": (0.5, 1.0), "start": (0.6, 1.2), "nelder_mead": (0.4, 0.9)},
+        {"scene": "b", "constant_velocity": (0.3, 0.6), "start": (0.3, 0.6), "nelder_mead": (0.2, 0.7)},
+    ]
+    by_scene = {"a": {"ade_m": [-0.1, -0.15, -0.05], "fde_m": [-0.1, -0.2, -0.01]},
+                "b": {"ade_m": [-0.1, -0.2, -0.02], "fde_m": [0.1, 0.05, 0.2]}}  # fmt: skip
+    average = {"nelder_mead": {"ade_m": [-0.1, -0.14, -0.06], "fde_m": [0.0, -0.05, 0.05], "by_scene": by_scene}}
+    lines = report.trajectory_fit_lines({"scenes": rows, "average_vs_cv": average})
+    assert lines[0] == "constant velocity: test ADE/FDE 0.400 / 0.800 m over 2 held-out scenes"
+    assert lines[1] == "as given: test ADE/FDE 0.450 / 0.900 m over 2 held-out scenes, ahead of constant velocity in 0"
+    assert lines[2].startswith("Nelder-Mead: test ADE/FDE 0.300 / 0.800 m over 2 held-out scenes, ahead of constant "
+                               "velocity in 1; the average minus constant velocity's, 95 % interval: ADE -0.100 "
+                               "[-0.140, -0.060], FDE +0.000 [-0.050, +0.050] m")  # fmt: skip
+    assert lines[2].endswith("clearly ahead (both intervals below 0) in 1 scenes") and len(lines) == 3
+
+
 def test_a_fit_json_is_read_back_as_its_models_and_a_bad_one_is_refused_naming_the_field(tmp_path):
     from socialnav import cli
     from socialnav.evaluation.humans import calibration as hc
@@ -632,9 +653,10 @@ def test_a_fit_json_is_read_back_as_its_models_and_a_bad_one_is_refused_naming_t
 
 
 @pytest.mark.slow
-def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search():
+def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search(tmp_path):
     """Known answer: the fundamental diagram of the speed model with a time gap of 0.6 s, fitted
-    from 1.0 s by gradient through the crowd step and by Nelder-Mead, gives back 0.6 s."""
+    from 1.0 s by gradient through the crowd step and by Nelder-Mead, gives back 0.6 s; the fit's
+    record (``calibrate``'s, the command's fit.json) reads back as the two fitted models."""
     from socialnav.evaluation.humans import calibration as hc
 
     truth = hv.HumanModel("collision_free_speed", speed=speed_model.SpeedModelParams(time_gap_s=0.6))
@@ -642,12 +664,17 @@ def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search():
     corridors = _walked_by(truth, fields)
     assert np.all(np.diff(corridors.speed_data) < 0)  # speed falls with density
     start = hv.HumanModel("collision_free_speed")
-    quiet = lambda *_: None
-    by_gradient, history = hc.fit_gradient(start, corridors, 60, 0.05, log=quiet, fields=fields)
-    assert history[-1][1] < 0.05 * history[0][1]
-    assert float(by_gradient.speed.time_gap_s) == pytest.approx(0.6, rel=0.05)
-    by_search, _ = hc.fit_nelder_mead(start, corridors, 40, log=quiet, fields=fields)
-    assert float(by_search.speed.time_gap_s) == pytest.approx(0.6, rel=0.05)
+    fit, histories = hc.calibrate(start, corridors, 60, 0.05, 40, log=lambda *_: None, fields=fields)
+    history = histories["gradient"]
+    assert history[-1][1] < 0.05 * history[0][1] and fit["start"]["loss"] == pytest.approx(history[0][1], rel=1e-5)
+    assert fit["nelder_mead"]["evaluations"] == len(histories["nelder_mead"]) <= 40 and fit["start_draws"] == 0
+    assert fit["gradient"]["loss"] == min(h[1] for h in history) and fit["densities"] == [1.5, 2.5, 3.5]
+    path = tmp_path / "known-gap" / "fit.json"
+    path.parent.mkdir()
+    path.write_text(json.dumps(fit))
+    for label, model in hc.fitted_models(path).items():
+        assert float(model.speed.time_gap_s) == pytest.approx(0.6, rel=0.05), label
+        assert float(model.speed.neighbor_strength) == pytest.approx(float(start.speed.neighbor_strength), rel=1e-4)
 
 
 @pytest.mark.slow

@@ -225,6 +225,46 @@ def fit_nelder_mead(
     return with_theta(model, jnp.asarray(x, jnp.float32), fields), history
 
 
+def calibrate(
+    model: hv.HumanModel,
+    corridors: Corridors,
+    steps: int = 80,
+    learning_rate: float = 0.02,
+    evaluations: int = 250,
+    seed: int = 0,
+    log=print,
+    fields=None,
+) -> tuple[dict, dict]:
+    """Both fits of ``model`` to ``corridors`` (:func:`training_corridors`): Adam through the crowd
+    step (:func:`fit_gradient`) and Nelder-Mead on the same loss (:func:`fit_nelder_mead`), from
+    the model's own parameters (``fields``: those fitted, default :data:`FITTED`'s; the record
+    holds every field of :data:`FITTED`, those not fitted as given).
+
+    Returns:
+      ``(fit, histories)``: ``fit`` the record ``socialnav humans calibrate`` writes as ``fit.json``
+      (the model, the runs, the densities, the loss and values at the start and of each method,
+      the seed and the number of start draws; :func:`fitted_models` reads it back), ``histories``
+      each method's ``[(step, loss, seconds), ...]`` (``"gradient"``, ``"nelder_mead"``).
+    """
+    start = float(fd_loss(model, corridors, theta_of(model, fields), jax.random.key(seed), fields=fields))
+    by_gradient, gradient_history = fit_gradient(model, corridors, steps, learning_rate, seed, log, fields)
+    by_search, search_history = fit_nelder_mead(model, corridors, evaluations, seed, log, fields)
+    fit = {
+        "model": model.name,
+        "train_runs": list(TRAIN_RUNS),
+        "test_runs": list(TEST_RUNS),
+        "densities": list(corridors.densities),
+        "start": {"values": fitted_values(model), "loss": start},
+        "gradient": {"values": fitted_values(by_gradient), "loss": min(h[1] for h in gradient_history),
+                     "steps": steps, "seconds": gradient_history[-1][2]},
+        "nelder_mead": {"values": fitted_values(by_search), "loss": min(h[1] for h in search_history),
+                        "evaluations": len(search_history), "seconds": search_history[-1][2]},
+        "seed": seed,
+        "start_draws": int(corridors.starts[0][0].shape[0]) - 1,
+    }  # fmt: skip
+    return fit, {"gradient": gradient_history, "nelder_mead": search_history}
+
+
 def fitted_values(model: hv.HumanModel) -> dict:
     params = getattr(model, _FIELD[model.name])
     return {f: round(float(getattr(params, f)), 4) for f in FITTED[model.name]}
@@ -289,5 +329,6 @@ def named_model(name: str) -> hv.HumanModel:
     return hv.HumanModel(name)
 
 
-__all__ = ["FITTED", "FIT_METHODS", "TEST_RUNS", "TRAIN_RUNS", "fd_loss", "fit_gradient", "fit_nelder_mead",
-           "fitted_models", "named_model", "speed_model", "training_corridors", "with_fitted"]  # fmt: skip
+__all__ = ["FITTED", "FIT_METHODS", "TEST_RUNS", "TRAIN_RUNS", "calibrate", "fd_loss", "fit_gradient",
+           "fit_nelder_mead", "fitted_models", "named_model", "speed_model", "training_corridors",
+           "with_fitted"]  # fmt: skip

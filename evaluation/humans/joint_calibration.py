@@ -32,6 +32,7 @@ search's 1.17, :mod:`evaluation.humans.calibration`).
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import jax
 import jax.numpy as jnp
@@ -133,5 +134,36 @@ def sweep(model: hv.HumanModel, data: JointData, weights=WEIGHTS, evaluations: i
     return rows
 
 
-__all__ = ["TRAIN_RECORDINGS", "WEIGHTS", "JointData", "compiled_loss", "fit", "joint_data", "joint_loss",
-           "joint_terms", "prediction_ade", "sweep", "training_windows"]  # fmt: skip
+def calibrate(model: hv.HumanModel, weights=WEIGHTS, evaluations: int = 150, seed: int = 0, start_draws: int = 0,
+              log=print, name: str | None = None) -> tuple[dict, dict, dict]:  # fmt: skip
+    """:func:`sweep` of ``model`` over ``weights`` on its :func:`joint_data`, every fit scored by the
+    validation (:func:`evaluation.humans.validation.validate`) on held-out data.
+
+    Returns:
+      ``(fit, reference, results)``: ``fit`` the record ``socialnav humans calibrate --data joint``
+      writes as ``fit.json`` (the model, ``name``, default its kind; the training data; a row a
+      weight with its held-out checks as ``"held_out"``; the seed, the start draws, the seconds),
+      ``reference`` the validation's measures of the recorded data and ``results`` ``"w=<weight>"``
+      -> the validation's result (:func:`evaluation.humans.report.write_validation` writes both).
+    """
+    t0 = time.perf_counter()
+    data = joint_data(model, seed, start_draws=start_draws)
+    log(f"{name or model.name}: fitting {', '.join(hc.FITTED[model.name])} to the runs {', '.join(hc.TRAIN_RUNS)} "
+        f"and {len(data.windows.start)} ETH/UCY windows of {', '.join(TRAIN_RECORDINGS)} (constant velocity's ADE "
+        f"{data.constant_velocity_ade_m:.3f} m), weights {', '.join(f'{w:g}' for w in weights)}")  # fmt: skip
+    rows = sweep(model, data, weights, evaluations, seed, log)
+    reference = hv.reference(log)
+    results = {f"w={r['weight']:g}": hv.validate(r.pop("model"), reference, seed=seed, progress=log,
+                                                 label=f"w={r['weight']:g}") for r in rows}  # fmt: skip
+    for row, result in zip(rows, results.values(), strict=True):
+        row["held_out"] = result["checks"]
+    fit = {"model": name or model.name, "data": "joint", "fields": list(hc.FITTED[model.name]),
+           "train_runs": list(hc.TRAIN_RUNS), "train_recordings": list(TRAIN_RECORDINGS),
+           "train_windows": len(data.windows.start), "constant_velocity_ade_m": data.constant_velocity_ade_m,
+           "start": hc.fitted_values(model), "weights": rows, "seed": seed, "start_draws": start_draws,
+           "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
+    return fit, reference, results
+
+
+__all__ = ["TRAIN_RECORDINGS", "WEIGHTS", "JointData", "calibrate", "compiled_loss", "fit", "joint_data",
+           "joint_loss", "joint_terms", "prediction_ade", "sweep", "training_windows"]  # fmt: skip

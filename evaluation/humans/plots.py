@@ -114,6 +114,22 @@ def counterflow_and_bodies(data: dict, results: dict, path: pathlib.Path) -> pat
     return figures.save(fig, path)
 
 
+def calibration_curve(histories: dict, title: str, path: pathlib.Path) -> pathlib.Path:
+    """A Jülich fit's loss, best so far, against seconds (log scale), one line a method
+    (:func:`evaluation.humans.calibration.calibrate`'s histories)."""
+    fig = figures.figure(figsize=(6.0, 3.6), layout="constrained")
+    ax = fig.add_subplot()
+    for key, label in (("gradient", "gradient (Adam)"), ("nelder_mead", "Nelder-Mead")):
+        history = histories[key]
+        ax.plot([h[2] for h in history], np.fmin.accumulate([h[1] for h in history]), label=label)
+    ax.set_xlabel("seconds")
+    ax.set_ylabel("loss (best so far)")
+    ax.set_yscale("log")
+    ax.legend()
+    ax.set_title(title, fontsize=10)
+    return figures.save(fig, path)
+
+
 def trajectory_fit(rows: list[dict], title: str, path: pathlib.Path) -> pathlib.Path:
     """The ETH/UCY fits' loss on their training sample, best so far, against loss evaluations
     (:func:`evaluation.humans.trajectory_calibration.leave_one_scene_out`'s rows): the gradient solid,

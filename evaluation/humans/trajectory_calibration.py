@@ -22,6 +22,7 @@ named ``"<part>.<field>"`` of :class:`evaluation.humans.validation.HumanModel` (
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import jax
 import jax.numpy as jnp
@@ -190,3 +191,23 @@ def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_U
         )
         rows.append(row)
     return rows
+
+
+def calibrate(model: hv.HumanModel, scenes=recorded.ETH_UCY_SCENES, steps: int = 60, learning_rate: float = 0.2,
+              evaluations: int = 60, sample: int = 256, seed: int = 0, log=print, name: str | None = None,
+              ) -> dict:  # fmt: skip
+    """:func:`leave_one_scene_out` of ``model``'s :data:`FITTED` fields, with each method's fits
+    against constant velocity on the average over the held-out scenes (:func:`average_vs_cv`).
+
+    Returns the record ``socialnav humans calibrate --data eth_ucy`` writes as ``fit.json``: the
+    model (``name``, default the model's kind: a preset's name says which values it started
+    from), the fields, their values at the start, a row a scene (``"scenes"``), ``"average_vs_cv"``
+    (a method -> its average and by-scene intervals), the seed and the seconds taken.
+    """
+    t0 = time.perf_counter()
+    fields = FITTED[model.name]
+    rows = leave_one_scene_out(model, fields, scenes, steps, learning_rate, evaluations, sample, seed=seed, log=log)
+    average = {m: average_vs_cv(model, rows, m, fields) for m in ("gradient", "nelder_mead") if m in rows[0]}
+    return {"model": name or model.name, "data": "eth_ucy", "fields": list(fields), "start": values_of(model, fields),
+            "scenes": rows, "average_vs_cv": average, "seed": seed,
+            "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip

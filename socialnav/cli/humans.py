@@ -34,7 +34,6 @@ JOB = "socialnav humans validate"
 CALIBRATABLE = ("collision_free_speed", "anticipation", "orca", "steering_speed", "power_law",
                 "collision_free_speed_calibrated", "anticipation_calibrated", "steering_speed_calibrated",
                 "power_law_calibrated")  # fmt: skip
-RESULTS = ("summary.json", "fundamental_diagram.csv", "prediction.csv", "counterflow.csv", "bodies.csv", "pictures")
 
 
 def add_parser(top) -> None:
@@ -111,10 +110,8 @@ CALIBRATE_RESULTS = ("fit.json", "curve.png", "held_out")
 
 
 def calibrate(args) -> int:
-    import jax
-
-    from socialnav.common import figures
     from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import plots as human_plots
     from socialnav.evaluation.humans import validation as hv
 
     try:
@@ -153,51 +150,26 @@ def calibrate(args) -> int:
     print(f"{args.model}: fitting {', '.join(hc.FITTED[args.model])} to the runs {', '.join(hc.TRAIN_RUNS)} "
           f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m², {1 + args.start_draws} "
           f"draw{'s' if args.start_draws else ''} of each corridor's people)", flush=True)  # fmt: skip
-    start = float(hc.fd_loss(model, corridors, hc.theta_of(model), jax.random.key(args.seed)))
-    by_gradient, gradient_history = hc.fit_gradient(model, corridors, args.steps, args.learning_rate, args.seed)
-    by_search, search_history = hc.fit_nelder_mead(model, corridors, args.evaluations, args.seed)
-    fit = {
-        "model": args.model,
-        "train_runs": list(hc.TRAIN_RUNS),
-        "test_runs": list(hc.TEST_RUNS),
-        "densities": list(corridors.densities),
-        "start": {"values": hc.fitted_values(model), "loss": start},
-        "gradient": {"values": hc.fitted_values(by_gradient), "loss": min(h[1] for h in gradient_history),
-                     "steps": args.steps, "seconds": gradient_history[-1][2]},
-        "nelder_mead": {"values": hc.fitted_values(by_search), "loss": min(h[1] for h in search_history),
-                        "evaluations": len(search_history), "seconds": search_history[-1][2]},
-        "seed": args.seed,
-        "start_draws": args.start_draws,
-    }  # fmt: skip
+    fit, histories = hc.calibrate(model, corridors, args.steps, args.learning_rate, args.evaluations, args.seed)
     try:
         with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
-            fig = figures.figure(figsize=(6.0, 3.6), layout="constrained")
-            ax = fig.add_subplot()
-            for label, history in (("gradient (Adam)", gradient_history), ("Nelder-Mead", search_history)):
-                seconds = [h[2] for h in history]
-                ax.plot(seconds, [min(h[1] for h in history[: k + 1]) for k in range(len(history))], label=label)
-            ax.set_xlabel("seconds")
-            ax.set_ylabel("loss (best so far)")
-            ax.set_yscale("log")
-            ax.legend()
-            ax.set_title(f"{args.model} on the Jülich training runs", fontsize=10)
-            figures.save(fig, stage / "curve.png")
+            human_plots.calibration_curve(histories, f"{args.model} on the Jülich training runs", stage / "curve.png")
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
         return 2
     for label in ("gradient", "nelder_mead"):
-        print(f"{label}: loss {start:.2f} -> {fit[label]['loss']:.2f}, {fit[label]['values']}")
+        print(f"{label}: loss {fit['start']['loss']:.2f} -> {fit[label]['loss']:.2f}, {fit[label]['values']}")
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
 
 def _calibrate_trajectories(args) -> int:
-    """``--data eth_ucy``: :func:`evaluation.humans.trajectory_calibration.leave_one_scene_out`."""
+    """``--data eth_ucy``: :func:`evaluation.humans.trajectory_calibration.calibrate`."""
     from socialnav.data import recorded
     from socialnav.evaluation.humans import calibration as hc
-    from socialnav.evaluation.humans import measures
     from socialnav.evaluation.humans import plots as human_plots
+    from socialnav.evaluation.humans import report
     from socialnav.evaluation.humans import trajectory_calibration as tc
 
     scenes = args.scenes or list(recorded.ETH_UCY_SCENES)
@@ -208,49 +180,31 @@ def _calibrate_trajectories(args) -> int:
         return 2
     t0 = time.perf_counter()
     model = hc.named_model(args.model)
-    fields = tc.FITTED[model.name]
-    print(f"{args.model}: fitting {', '.join(fields)} to ETH/UCY, one fit a held-out scene "
+    print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to ETH/UCY, one fit a held-out scene "
           f"({', '.join(scenes)}), on its training split", flush=True)  # fmt: skip
-    rows = tc.leave_one_scene_out(
-        model, fields, scenes, args.steps or 60, args.learning_rate or 0.2,
-        60 if args.evaluations is None else args.evaluations, args.sample, seed=args.seed,
-    )  # fmt: skip
-    # each method's fits against constant velocity on the average over the held-out scenes, with its interval
-    average = {m: tc.average_vs_cv(model, rows, m, fields) for m in ("gradient", "nelder_mead") if m in rows[0]}
-    fit = {"model": args.model, "data": "eth_ucy", "fields": list(fields), "start": tc.values_of(model, fields),
-           "scenes": rows, "average_vs_cv": average, "seed": args.seed,
-           "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
+    evaluations = 60 if args.evaluations is None else args.evaluations
+    fit = tc.calibrate(model, scenes, args.steps or 60, args.learning_rate or 0.2, evaluations, args.sample,
+                       seed=args.seed, name=args.model)  # fmt: skip
     try:
         with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
-            human_plots.trajectory_fit(rows, f"{args.model} on ETH/UCY, leave one scene out", stage / "curve.png")
+            human_plots.trajectory_fit(fit["scenes"], f"{args.model} on ETH/UCY, leave one scene out",
+                                       stage / "curve.png")  # fmt: skip
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
         return 2
-    mean = lambda key, k: sum(r[key][k] for r in rows) / len(rows)
-    for key, label in (("constant_velocity", "constant velocity"), ("start", "as given"), ("gradient", "fitted"),
-                       ("nelder_mead", "Nelder-Mead")):  # fmt: skip
-        if key in rows[0]:
-            ahead = sum(r[key][0] < r["constant_velocity"][0] and r[key][1] < r["constant_velocity"][1] for r in rows)
-            scenes = average[key]["by_scene"].values() if key in average else []
-            clearly = int(sum(measures.clearly_ahead(v["ade_m"][2], v["fde_m"][2]) for v in scenes))
-            interval = (f"; the average minus constant velocity's, 95 % interval: ADE "
-                        f"{_interval(average[key]['ade_m'])}, FDE {_interval(average[key]['fde_m'])} m; clearly "
-                        f"ahead (both intervals below 0) in {clearly} scenes" if key in average else "")  # fmt: skip
-            print(f"{label}: test ADE/FDE {mean(key, 0):.3f} / {mean(key, 1):.3f} m over {len(rows)} held-out scenes"
-                  + ("" if key == "constant_velocity" else f", ahead of constant velocity in {ahead}")
-                  + interval)  # fmt: skip
+    print("\n".join(report.trajectory_fit_lines(fit)))
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
 
 def _calibrate_joint(args) -> int:
-    """``--data joint``: :func:`evaluation.humans.joint_calibration.sweep`, each fit scored by the
+    """``--data joint``: :func:`evaluation.humans.joint_calibration.calibrate`, each fit scored by the
     validation (:func:`evaluation.humans.validation.validate`) on held-out data."""
     from socialnav.evaluation.humans import calibration as hc
     from socialnav.evaluation.humans import joint_calibration as jc
     from socialnav.evaluation.humans import plots as human_plots
-    from socialnav.evaluation.humans import validation as hv
+    from socialnav.evaluation.humans import report
 
     if args.scenes is not None:
         print("socialnav humans calibrate: --scenes goes with --data eth_ucy", file=sys.stderr)
@@ -268,39 +222,27 @@ def _calibrate_joint(args) -> int:
         return 2
     t0 = time.perf_counter()
     say = lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True)
-    model = hc.named_model(args.model)
-    weights = args.weights or list(jc.WEIGHTS)
-    data = jc.joint_data(model, args.seed, start_draws=args.start_draws)
-    say(f"{args.model}: fitting {', '.join(hc.FITTED[model.name])} to the runs {', '.join(hc.TRAIN_RUNS)} and "
-        f"{len(data.windows.start)} ETH/UCY windows of {', '.join(jc.TRAIN_RECORDINGS)} (constant velocity's ADE "
-        f"{data.constant_velocity_ade_m:.3f} m), weights {', '.join(f'{w:g}' for w in weights)}")  # fmt: skip
-    rows = jc.sweep(model, data, weights, args.evaluations or 150, args.seed, say)
-    reference = hv.reference(say)
-    results = {f"w={r['weight']:g}": hv.validate(r.pop("model"), reference, seed=args.seed, progress=say,
-                                                 label=f"w={r['weight']:g}") for r in rows}  # fmt: skip
-    for row, result in zip(rows, results.values(), strict=True):
-        row["held_out"] = result["checks"]
-    fit = {"model": args.model, "data": "joint", "fields": list(hc.FITTED[model.name]),
-           "train_runs": list(hc.TRAIN_RUNS), "train_recordings": list(jc.TRAIN_RECORDINGS),
-           "train_windows": len(data.windows.start), "constant_velocity_ade_m": data.constant_velocity_ade_m,
-           "start": hc.fitted_values(model), "weights": rows, "seed": args.seed, "start_draws": args.start_draws,
-           "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
+    model, weights = hc.named_model(args.model), args.weights or jc.WEIGHTS
+    fit, reference, results = jc.calibrate(model, weights, args.evaluations or 150, args.seed, args.start_draws, say,
+                                           name=args.model)  # fmt: skip
     try:
         with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
-            human_plots.joint_tradeoff(rows, reference, f"{args.model}: one fit, both data", stage / "curve.png")
+            human_plots.joint_tradeoff(fit["weights"], reference, f"{args.model}: one fit, both data",
+                                       stage / "curve.png")  # fmt: skip
             (stage / "held_out").mkdir()
-            _write(stage / "held_out", reference, results, quick=False, seed=args.seed)
+            report.write_validation(stage / "held_out", reference, results, quick=False, seed=args.seed)
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
         return 2
-    _headline(reference, results)
+    print("\n".join(report.headline(reference, results)))
     print(f"wrote {args.out}/{{fit.json, curve.png, held_out}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
 
 def validate(args) -> int:
     from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import report
     from socialnav.evaluation.humans import validation as hv
 
     known = list(HUMAN_MODELS)
@@ -327,7 +269,7 @@ def validate(args) -> int:
         models.update(fitted)
         fits.update({label: {"fit_json": str(path), "values": hc.fitted_values(m)} for label, m in fitted.items()})
     try:
-        runfolder.prepare(args.out, RESULTS, args.overwrite, marker="summary.json", job=JOB)
+        runfolder.prepare(args.out, report.VALIDATION_FILES, args.overwrite, marker="summary.json", job=JOB)
         runfolder.check_writable(args.out)
     except runfolder.RunFolderError as e:
         print(f"socialnav humans validate: --out {e}", file=sys.stderr)
@@ -343,83 +285,10 @@ def validate(args) -> int:
                for name, model in models.items()}  # fmt: skip
     try:
         with runfolder.staged(args.out, "summary.json", args.overwrite, job=JOB) as stage:
-            _write(stage, data, results, quick=args.quick, seed=args.seed, fits=fits)
+            report.write_validation(stage, data, results, quick=args.quick, seed=args.seed, fits=fits)
     except runfolder.RunFolderError as e:
         print(f"socialnav humans validate: --out {e}", file=sys.stderr)
         return 2
-    _headline(data, results)
-    print(f"wrote {args.out}/{{{', '.join(RESULTS)}}} in {time.perf_counter() - t0:.0f} s")
+    print("\n".join(report.headline(data, results)))
+    print(f"wrote {args.out}/{{{', '.join(report.VALIDATION_FILES)}}} in {time.perf_counter() - t0:.0f} s")
     return 0
-
-
-def _write(stage: pathlib.Path, data: dict, results: dict, quick: bool, seed: int, fits=None) -> None:
-    import pandas as pd
-
-    from socialnav.evaluation.humans import plots as human_plots
-
-    fd = [data["fd_bins"].assign(source="data: Jülich uo runs", draw=0)]
-    fd += [r["fd_bins"].assign(source=name, draw=0) for name, r in results.items()]
-    fd += [r["fd_draws"].assign(source=name) for name, r in results.items() if len(r["fd_draws"])]
-    pd.concat(fd, ignore_index=True).to_csv(stage / "fundamental_diagram.csv", index=False)
-    prediction = [data["constant_velocity"].assign(model="constant velocity", aim="velocity")]
-    prediction += [r["prediction"].assign(model=name) for name, r in results.items()]
-    pd.concat(prediction, ignore_index=True).to_csv(stage / "prediction.csv", index=False)
-    counter = [{"source": "data: bi_corr_400_b_03", **data["counterflow"]}]
-    counter += [{"source": name, **r["counterflow"]} for name, r in results.items()]
-    pd.DataFrame(counter).to_csv(stage / "counterflow.csv", index=False)
-    bodies = pd.concat([r["bodies"].assign(model=name) for name, r in results.items()], ignore_index=True)
-    bodies.to_csv(stage / "bodies.csv", index=False)
-    (stage / "pictures").mkdir()
-    human_plots.fundamental_diagram(data, results, stage / "pictures" / "fundamental_diagram.png")
-    human_plots.prediction(data, results, stage / "pictures" / "prediction.png")
-    human_plots.counterflow_and_bodies(data, results, stage / "pictures" / "counterflow_bodies.png")
-    summary = {
-        "models": {name: r["checks"] for name, r in results.items()},
-        "quick": bool(quick),
-        "seed": seed,
-        "data": {"counterflow": data["counterflow"], "fd_agreement": data["fd_agreement"]},
-        "fits": fits or {},
-    }
-    (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
-
-
-def _interval(difference) -> str:
-    """``[d, low, high]`` as ``+0.012 [+0.004, +0.020]``."""
-    d, low, high = difference
-    return f"{d:+.3f} [{low:+.3f}, {high:+.3f}]"
-
-
-def _headline(data: dict, results: dict) -> None:
-    cv = data["constant_velocity"]
-    c = data["counterflow"]
-    print(f"data: counterflow {c['speed_mps']:.2f} m/s, lane order {c['lane_order']:.2f} at {c['density']:.2f} /m²; "
-          f"constant velocity ADE/FDE {cv['ade_m'].mean():.2f} / {cv['fde_m'].mean():.2f} m")  # fmt: skip
-    a = data["fd_agreement"]
-    t, e = a["training_runs"], a["each_run"]
-    print(f"data against its own diagram check: the training runs, scored as a model, inside the test runs' ±1 s.d. "
-          f"in {t['inside']} of {t['of']} bins (mean z² {t['z2_mean']:.2f}); each run against the others in "
-          f"{e['inside']} of {e['of']} (mean z² {e['z2_mean']:.2f})")  # fmt: skip
-    for name, r in results.items():
-        k = r["checks"]
-        verdict = lambda ok: "pass" if ok else "FAIL"
-        ade, fde = k["eth_ucy_ade_fde"]
-        grouped = r["prediction"][r["prediction"]["aim"] == "velocity_groups"]
-        print(
-            f"{name}: speed inside the data's ±1 s.d. in {k['fd_bins_inside_1sd']} density bins "
-            f"(mean z² {k['fd_z2_mean']:.2f}; {verdict(k['fd_pass'])}); "
-            f"deepest overlap {k['overlap_max_m']:.2f} m ({verdict(k['overlap_pass'])}); ETH/UCY ADE/FDE {ade:.2f} / "
-            f"{fde:.2f} m, ahead in {k['eth_ucy_scenes_ahead']} of 5 scenes (beyond the 95 % interval: ahead in "
-            f"{k['eth_ucy_scenes_clearly_ahead']}, behind in {k['eth_ucy_scenes_clearly_behind']}; the average "
-            f"minus constant velocity's, 95 % interval: ADE {_interval(k['eth_ucy_average_vs_cv']['ade_m'])}, FDE "
-            f"{_interval(k['eth_ucy_average_vs_cv']['fde_m'])} m; "
-            f"{verdict(k['eth_ucy_pass'])}; in walking "
-            f"groups {grouped['ade_m'].mean():.2f} / {grouped['fde_m'].mean():.2f} m); with the "
-            f"destination ADE {k['destination_ade_m']:.2f} m ({verdict(k['destination_pass'])}); counterflow speed "
-            f"x{k['counterflow_speed_ratio']:.2f}, lane order {k['counterflow_lane_order']:.2f} "
-            f"({verdict(k['counterflow_pass'])})"
-        )
-        if "fd_start_draws" in k:
-            d = k["fd_start_draws"]
-            print(f"  {name}, the diagram from {len(d['bins_inside'])} disordered starts: bins inside "
-                  f"{', '.join(map(str, d['bins_inside']))}; mean z² {', '.join(f'{z:.2f}' for z in d['z2_mean'])}; "
-                  f"deepest overlap {max(d['overlap_max_m']):.2f} m")  # fmt: skip
