@@ -206,10 +206,15 @@ def test_sampled_graph_has_same_time_feedback_counted_once_and_what_jpcmci_can_f
 
 
 def test_the_referees_edge_table_counts_runs_per_edge():
-    from socialnav.cli.referee import _edge_table
+    from socialnav.causal.discover import Discovery, Link
+    from socialnav.referee_study import edge_table, found_edges
+
+    links = [Link("V", "L", 0, 0.5, 0.01), Link("C", "C", 1, 0.9, 0.0), Link("V", "D", 0, 0.2, 0.03, oriented=False)]
+    found = found_edges(Discovery(links, "parcorr", 0.05, 1, 100, 1.0))
+    assert found == {("V", "L", 0), ("C", "C", 1), ("~DV", "", 0)}  # an unoriented pair by its sorted names
 
     runs = [{("V", "L", 0), ("D", "V", 0)}, {("D", "V", 0), ("~LV", "", 0)}]
-    table = _edge_table(runs, {("V", "L", 0)}, {("V", "L", 0), ("D", "V", 0)}).set_index("edge")
+    table = edge_table(runs, {("V", "L", 0)}, {("V", "L", 0), ("D", "V", 0)}).set_index("edge")
     assert table.loc["D->V", "found_oriented"] == 2 and not table.loc["D->V", "fig8"] and table.loc["D->V", "simulator"]
     assert table.loc["V->L", "found_oriented"] == 1 and table.loc["V->L", "found_unoriented"] == 1
     assert set(table["runs"]) == {2}
@@ -248,7 +253,7 @@ def test_referee_command_scores_discovery_against_both_graphs_and_resumes(tmp_pa
 
 @pytest.mark.slow
 def test_a_forced_speed_is_the_speed_whatever_the_crowd_or_the_obstacle(worlds):
-    from socialnav.cli.referee import forced_speed_driver
+    from socialnav.referee_study import forced_speed_driver
 
     params, world, driver, state, seeds = worlds
     state = _with_obstacle(params, state)  # every task leg in an obstacle (speed factor 0.5)
