@@ -14,7 +14,7 @@ Both come from the same discretised network O -> V, O -> L, V -> L (the structur
 recovers on these data, reported), learned by MLE with pyAgrum.
 
 This module estimates from given series (:func:`run` takes :class:`Series`); the simulation that
-makes them is the composition root's (``socialnav.cli.pipelines.ablation_series``: every
+makes them is the composition root's (``socialnav.ablation_study.ablation_series``: every
 probability and seed in one batched rollout), so the causal code needs no simulator.
 """
 

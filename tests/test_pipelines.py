@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from socialnav.ablation_study import ablation_series
 from socialnav.causal import ablation
-from socialnav.cli.pipelines import ablation_series
 from socialnav.jaxsim import rollout
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
