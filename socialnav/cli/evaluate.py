@@ -8,6 +8,7 @@ import pathlib
 import sys
 
 from socialnav import backend as backend_lib
+from socialnav import evaluate_shards
 from socialnav.backend import add_backend_options
 from socialnav.cli.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
 from socialnav.common import runfolder
@@ -17,8 +18,6 @@ from socialnav.evaluation.protocol import ProtocolConfig
 from socialnav.jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
 from socialnav.locking import locks_folder
 from socialnav.planners.warehouse.tables import TABLES_FILE, CausalTables, TablesError
-
-STAGING = ".shards"
 
 
 def add_parser(sub) -> None:
@@ -172,7 +171,7 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
                 progress=not args.no_progress,
             )
         else:
-            result = _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size)
+            result = evaluate_shards.run_sharded(scenario, tables, tables_file, out, args, slots, settings, size)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -185,7 +184,7 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     except runfolder.RunFolderError as e:
         print(f"socialnav evaluate: {e}", file=sys.stderr)
         return 2
-    backend_lib.remove_staging(out / STAGING)  # the shards live until the report is written
+    backend_lib.remove_staging(out / evaluate_shards.STAGING)  # the shards live until the report is written
     summary = json.loads((out / "summary.json").read_text())
     print(
         f"\n{args.replicas} replica(s) x {len(result.config['slots'])} slot(s), both methods; wall time "
@@ -196,72 +195,6 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     for f in files:
         print(f"wrote {f}")
     return 0
-
-
-def compute_shard(scenario_dir, tables_file, first, n, slots, seed, settings) -> warehouse.EvaluationResult:
-    """Replicas ``first .. first + n - 1`` of the protocol (here or in a Ray worker); the routes
-    (``plans``) stay behind: the driver rebuilds them."""
-    import dataclasses
-
-    scenario = load_scenario(scenario_dir or WAREHOUSE_DIR)
-    result = warehouse.run_evaluation(
-        scenario,
-        CausalTables.load(tables_file),
-        replicas=n,
-        slots=slots,
-        seed=seed,
-        cfg=ProtocolConfig.for_params(scenario.params, **settings),
-        progress=False,
-        first_replica=first,
-    )
-    return dataclasses.replace(result, plans={})
-
-
-def _save_shard(shard, result) -> None:
-    import pickle
-
-    from socialnav.common.atomic import write_bytes_atomic
-
-    write_bytes_atomic(shard.output, lambda handle: pickle.dump(result, handle))
-
-
-def _run_sharded(scenario, tables, tables_file, out, args, slots, settings, size) -> warehouse.EvaluationResult:
-    """The replicas cut into shards of ``size``, run by the chosen backend, kept under
-    ``<out>/.shards/`` until all are done (a rerun with the same settings computes only the
-    missing ones), then merged."""
-    import dataclasses
-    import pickle
-
-    staging = out / STAGING
-    layout = {
-        "scenario": None if args.scenario is None else str(args.scenario),
-        "tables": str(pathlib.Path(tables_file).resolve()),
-        "replicas": args.replicas,
-        "shard_replicas": size,
-        "slots": slots,
-        "seed": args.seed,
-        "settings": settings,
-    }
-    backend_lib.staging_folder(staging, layout)
-    scenario_dir = None if args.scenario is None else str(pathlib.Path(args.scenario).resolve())
-    shards = [
-        backend_lib.Shard(
-            name=f"replicas {first}-{first + min(size, args.replicas - first) - 1}",
-            output=staging / f"replicas-{first:06d}.pkl",
-            args=(scenario_dir, layout["tables"], first, min(size, args.replicas - first), slots, args.seed, settings),
-            work=min(size, args.replicas - first),
-        )
-        for first in range(0, args.replicas, size)
-    ]
-    backend_lib.run_with_args(compute_shard, _save_shard, shards, args, desc="evaluate", unit="replicas")
-    parts = [pickle.loads(s.output.read_bytes()) for s in shards]
-    result = warehouse.merge(parts)
-    result = dataclasses.replace(
-        result,
-        plans={name: plan for name, (plan, _) in warehouse.method_plans(scenario, tables).items()},
-        config={**result.config, "shard_replicas": size, **backend_lib.describe(args)},
-    )
-    return result
 
 
 def _out_folder(args) -> pathlib.Path:

@@ -17,6 +17,7 @@ import pathlib
 import time
 
 from socialnav import backend as backend_lib
+from socialnav import gscl_shards
 from socialnav.backend import BackendError, add_backend_options
 from socialnav.cli.argtypes import (
     non_negative_float,
@@ -387,7 +388,7 @@ def _generate(args) -> int:
         data = dataset.generate(args.seed, counts)
     else:
         try:
-            data = _generate_sharded(args, counts)
+            data = gscl_shards.generate_sharded(args, counts)
         except (BackendError, RunFolderError) as e:
             raise SystemExit(f"socialnav gscl generate: {e}") from None
     dt = time.perf_counter() - t0
@@ -403,7 +404,7 @@ def _generate(args) -> int:
         "wall_s": dt,
     }
     write_text_atomic(args.out.with_suffix(".json"), json.dumps(provenance, indent=1) + "\n")
-    backend_lib.remove_staging(_staging(args.out))  # the shards live until the dataset is written
+    backend_lib.remove_staging(gscl_shards.staging(args.out))  # the shards live until the dataset is written
     print(f"{len(data['family'])} pairs in {dt:.1f} s (compilation included) -> {args.out} (+ .json: how it was made)")
     for i, name in enumerate(data["names"]):
         print(f"  {name:<18}{int((data['family'] == i).sum()):>7}")
@@ -448,61 +449,6 @@ def _check_dataset_target(out: pathlib.Path, overwrite: bool) -> None:
         check_writable(out.parent)
     except RunFolderError as e:
         raise SystemExit(f"socialnav gscl generate: --out {out}: {e}") from None
-
-
-def _staging(out: pathlib.Path) -> pathlib.Path:
-    return out.with_name(f".{out.name}.shards")
-
-
-def generate_shard(seed: int, name: str, start: int, stop: int):
-    """Samples ``start .. stop - 1`` of one family (here or in a Ray worker)."""
-    from socialnav.models import dataset
-
-    return dataset.generate_range(seed, name, start, stop)
-
-
-def _save_shard(shard, result) -> None:
-    import numpy as np
-
-    from socialnav.common.atomic import write_bytes_atomic
-
-    x, y = result
-    write_bytes_atomic(shard.output, lambda handle: np.savez(handle, inputs=x, targets=y))
-
-
-def _generate_sharded(args, counts: dict[str, int]):
-    """The dataset cut into shards of samples of one family (aligned to the generator's 1024-sample
-    chunks, so the same bits as one call), run by the chosen backend, kept beside ``--out`` until
-    the dataset is written; a rerun with the same settings computes only the missing ones."""
-
-    import numpy as np
-
-    from socialnav.models import dataset
-
-    chunk = dataset.CHUNK
-    size = max(chunk, -(-(args.shard_samples or max(counts.values(), default=chunk)) // chunk) * chunk)
-    staging = _staging(args.out)
-    layout = {"seed": args.seed, "counts": counts, "shard_samples": size}
-    backend_lib.staging_folder(staging, layout)
-    names = [f for f in dataset.FAMILIES if counts.get(f, 0) > 0]
-    shards = [
-        backend_lib.Shard(
-            name=f"{name}[{start}:{min(start + size, counts[name])}]",
-            output=staging / f"{k:02d}-{name}-{start:07d}.npz",
-            args=(args.seed, name, start, min(start + size, counts[name])),
-            work=min(start + size, counts[name]) - start,
-        )
-        for k, name in enumerate(names)
-        for start in range(0, counts[name], size)
-    ]
-    backend_lib.run_with_args(generate_shard, _save_shard, shards, args, desc="gscl generate", unit="samples")
-    inputs, targets, family = [], [], []
-    for shard in shards:
-        with np.load(shard.output) as part:
-            inputs.append(part["inputs"])
-            targets.append(part["targets"])
-        family.append(np.full(len(inputs[-1]), names.index(shard.args[1]), np.int8))
-    return dataset.assemble(names, inputs, targets, family)
 
 
 def _train_config(args):
