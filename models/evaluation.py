@@ -1,6 +1,7 @@
 """Evaluation of a trained GSCL U-Net: on its run's held-out test set, MSE per family beside the
 two trivial predictors and a PNG of input / target / prediction for every family
-(:func:`evaluate_run`); on the held-out rule suite, pass shares per check (:func:`rules_run`)."""
+(:func:`evaluate_run`); on the held-out rule suite, pass shares per check (:func:`rules_run`);
+both as a model's card when the run's model is exported alone (:func:`exported_model`)."""
 
 from __future__ import annotations
 
@@ -134,3 +135,58 @@ def check_model(model, baselines: dict, scenes_per_kind: int = 100, seed: int | 
         "rules_scenes_per_kind": scenes_per_kind,
         "rules_seed": seed,
     }
+
+
+def exported_model(run, step: int | None = None, scenes_per_kind: int = 100, seed: int | None = None,
+                   log=print) -> tuple:  # fmt: skip
+    """A run's model (the latest checkpoint by default) with its card, ready for
+    :meth:`models.inference.SocialCostModel.export` (``model.export(folder, card)``): the card says
+    how it was made (the step, the parameters, the model it started from where it was warm-started:
+    the run's :data:`models.warm_start.SOURCE_FILE`, the hosts it trained on) and what it reaches
+    (:func:`check_model`, ``scenes_per_kind`` and ``seed`` its rule suite's).
+
+    Returns:
+      ``(model, card)``: the :class:`models.inference.SocialCostModel` and the card (a dict).
+
+    Raises:
+      FileNotFoundError, ValueError: no run, no checkpoint, none restorable, or the run's source
+        record is not JSON (the file named).
+    """
+    import datetime
+
+    import jax
+
+    from socialnav.common import __version__
+    from socialnav.common.machine import hosts_of
+    from socialnav.models import steps, unet
+    from socialnav.models.inference import SocialCostModel
+    from socialnav.models.warm_start import SOURCE_FILE
+
+    run = pathlib.Path(run)
+    config, graphdef, state, meta = restore(run, step)
+    source = {}
+    if (run / SOURCE_FILE).is_file():
+        try:
+            source = {"init_from": json.loads((run / SOURCE_FILE).read_text(encoding="utf-8"))}
+        except (UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise ValueError(f"{run / SOURCE_FILE}: not valid JSON ({e})") from None
+    model = SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
+    log(f"checking step {int(meta['step'])} against the quality bar and the rule suite ...")
+    checks = check_model(model, meta["baselines"], scenes_per_kind=scenes_per_kind, seed=seed)
+    card = {
+        "made_by": "socialnav gscl train --out RUN (the recipe in config.json"
+        + (", started from the model in init_from" if config.init_from else "")
+        + "), then socialnav gscl export --run RUN",
+        "run": run.name,
+        "step": int(meta["step"]),
+        "epoch": int(meta["step"]) // config.steps_per_epoch,
+        "parameters": unet.parameter_count(steps.abstract_model(config)),  # shapes only: nothing drawn
+        "baselines": meta["baselines"],
+        **checks,
+        **source,
+        "trained_on": hosts_of(meta["history"]),
+        "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "socialnav_version": __version__,
+        "jax_version": jax.__version__,
+    }
+    return model, card

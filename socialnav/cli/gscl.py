@@ -31,7 +31,6 @@ from socialnav.cli.argtypes import (
 )
 from socialnav.common import runfolder
 from socialnav.common.atomic import write_text_atomic
-from socialnav.common.machine import hosts_of
 from socialnav.common.memory import available_bytes
 from socialnav.common.runfolder import RunFolderError
 from socialnav.locking import locks_folder
@@ -692,67 +691,29 @@ def _fit_tracks(args) -> int:
     return 0
 
 
-def _source(run) -> dict:
-    """``{"init_from": ...}``, the model a warm-started run started from (its ``init_from.json``,
-    :func:`models.warm_start.source_record`), or nothing."""
-    from socialnav.models.warm_start import SOURCE_FILE
-
-    path = pathlib.Path(run) / SOURCE_FILE
-    if not path.is_file():
-        return {}
-    try:
-        return {"init_from": json.loads(path.read_text(encoding="utf-8"))}
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise SystemExit(f"socialnav gscl export: {path}: not valid JSON ({e})") from None
-
-
 def _export(args) -> int:
-    """The run's model alone, with a card of how it was made and what it reaches."""
-    import datetime
-
-    import jax
-
-    from socialnav import __version__
+    """The run's model alone, with a card of how it was made and what it reaches
+    (:func:`models.evaluation.exported_model`)."""
     from socialnav.models import evaluation
-    from socialnav.models.checkpoints import restore
-    from socialnav.models.inference import SocialCostModel
 
     try:
         runfolder.prepare(args.out, EXPORT_FILES, args.overwrite, marker="model.json", job=EXPORT_JOB)
         runfolder.check_writable(args.out)
-        config, graphdef, state, meta = restore(args.run, args.step)
+        say = lambda what: print(what, flush=True)
+        model, card = evaluation.exported_model(args.run, args.step, args.scenes, args.seed, log=say)
     except runfolder.RunFolderError as err:
         raise SystemExit(f"socialnav gscl export: --out {err}") from None
     except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl export: {err}") from None
-    model = SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
-    print(f"checking step {int(meta['step'])} against the quality bar and the rule suite ...", flush=True)
-    checks = evaluation.check_model(model, meta["baselines"], scenes_per_kind=args.scenes, seed=args.seed)
-    card = {
-        "made_by": "socialnav gscl train --out RUN (the recipe in config.json"
-        + (", started from the model in init_from" if config.init_from else "")
-        + "), then socialnav gscl export --run RUN",
-        "run": args.run.name,
-        "step": int(meta["step"]),
-        "epoch": int(meta["step"]) // config.steps_per_epoch,
-        "parameters": _parameters(config),
-        "baselines": meta["baselines"],
-        **checks,
-        **_source(args.run),
-        "trained_on": hosts_of(meta["history"]),
-        "exported": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "socialnav_version": __version__,
-        "jax_version": jax.__version__,
-    }
     try:
         with runfolder.staged(args.out, "model.json", args.overwrite, job=EXPORT_JOB) as stage:
             model.export(stage, card)
     except runfolder.RunFolderError as err:
         raise SystemExit(f"socialnav gscl export: --out {err}") from None
-    worst = min(checks["rules_pass_by_check"].items(), key=lambda kv: kv[1])
+    worst = min(card["rules_pass_by_check"].items(), key=lambda kv: kv[1])
     print(
-        f"test MSE {checks['test_mse']:.5f}: {'meets' if checks['meets_quality'] else 'does not meet'} the quality "
-        f"bar; rule suite: {'every' if checks['meets_rules'] else 'not every'} check on >= 95 % of its scenes "
+        f"test MSE {card['test_mse']:.5f}: {'meets' if card['meets_quality'] else 'does not meet'} the quality "
+        f"bar; rule suite: {'every' if card['meets_rules'] else 'not every'} check on >= 95 % of its scenes "
         f"(the lowest: {worst[0]} {100 * worst[1]:.0f} %); wrote {args.out}/{{{', '.join(EXPORT_FILES)}}}"
     )
     return 0
