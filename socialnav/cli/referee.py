@@ -40,8 +40,6 @@ import sys
 from socialnav.cli.argtypes import comma_ints, non_negative_int, output_folder, positive_float, positive_int
 from socialnav.locking import locks_folder
 
-JOB = "socialnav referee"
-
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
