@@ -382,6 +382,7 @@ def test_the_gymnasium_adapters_stop_on_a_nan_action_and_refuse_a_wrong_shape():
         assert env.observation_space.contains(obs)
     obs, *_, info = env.step(env.action_space.high)
     assert not info["invalid_action"] and env.observation_space.contains(obs)
+    assert isinstance(info["person_contact"], bool) and isinstance(info["rule_kept"], bool)
     for bad in (np.zeros(1), np.zeros(3), 0.5, np.zeros((1, 2)), "fast"):
         with pytest.raises(ValueError, match=r"SocialNavEnv.step: actions must"):
             env.step(bad)
@@ -389,6 +390,9 @@ def test_the_gymnasium_adapters_stop_on_a_nan_action_and_refuse_a_wrong_shape():
     venv.reset(seed=0)
     obs, *_, info = venv.step(np.array([[np.inf, 0.0], [0.3, 0.0]], np.float32))
     assert list(info["invalid_action"]) == [True, False] and venv.observation_space.contains(obs)
+    # The step's contact and the scene's rule so far (jaxsim.scenes.wrappers.RuleMonitor), per episode.
+    assert set(info) == {"invalid_action", "person_contact", "rule_kept"}
+    assert all(v.shape == (2,) and v.dtype == bool for v in info.values())
     with pytest.raises(ValueError, match=r"shape \(2, 2\).*got shape \(2,\)"):
         venv.step(np.zeros(2))
 
@@ -537,3 +541,71 @@ def test_reset_where_restarts_only_the_episodes_asked_and_runs_no_reset_when_non
     assert int(new_state.step[0]) == 0 and int(new_state.step[1]) == 1
     for got, expected in zip(_leaves(restart(jnp.zeros(4, bool))), _leaves((state, ts)), strict=True):
         np.testing.assert_array_equal(got, expected)
+
+
+def _to_goal_actor(speed_mps: float = 0.6) -> Actor:
+    """Drives at ``speed_mps`` and turns towards the goal (a robot that meets whoever is on its line)."""
+
+    def act(params, state, obs, key):
+        to_goal = obs.goal_xy_m - obs.robot_xy_m
+        error = jnp.arctan2(to_goal[1], to_goal[0]) - obs.robot_yaw_rad
+        return jnp.stack([jnp.float32(speed_mps), 2.0 * jnp.arctan2(jnp.sin(error), jnp.cos(error))]), state
+
+    return Actor(init=lambda key, obs: jnp.int32(0), act=act, name="to_goal")
+
+
+def test_wrappers_keep_the_pool_index_the_shaped_reward_the_rule_and_the_episodes_statistics(setup):
+    """jaxsim.scenes.wrappers stacked as the PPO trainer stacks them, against the bare env on the
+    same draws: the same motion; the reward plus 0.1 per metre gained on a straight-line potential
+    (clipped, none once the goal was reached); the return, length and contact as the steps add
+    them; the rule's verdict equal to the arena's check of the whole trajectory; and a restart
+    through reset_where sets every episode's extras back to their start."""
+    from socialnav.evaluation.arena import nav_metrics
+    from socialnav.jaxsim.scenes import wrappers
+
+    env = setup.env
+    rule = {"type": "visit", "box": [-4.5, 4.5, 0.05, 1.0]}  # kept by some of these draws, not all
+    pool = wrappers.VariantPool(_variants(setup, 5, seed=4))
+    distance_to_goal_m = lambda s, _: jnp.linalg.norm(s.robot.xy - s.variant.goal_xy)
+    shaped = wrappers.PotentialShaping(wrappers.FromPool(env, pool), distance_to_goal_m, weight=0.1, clip_m=0.5)
+    wrapped = wrappers.EpisodeStatistics(wrappers.RuleMonitor.of(shaped, rule))
+    assert wrapped.config is env.config and wrapped.unwrapped is env and wrapped.robot is env.robot
+
+    def record(seen, action, actor_state, ts):
+        return ts.reward, ts.info.person_contact, ts.observation.robot_xy_m, ts.info.reached, ts.info.people_xy_m
+
+    index, key, steps = jnp.array([4, 0, 2, 2]), jax.random.key(5), 200
+    run = lambda e, v: rollout(e, _to_goal_actor(), e.robot, v, key, n_steps=steps, record=record)
+    (final, _), (reward, contact, xy, reached, people_xy) = jax.jit(jax.vmap(lambda i: run(wrapped, i)))(index)
+    (bare_final, _), (bare_reward, *_) = jax.jit(jax.vmap(lambda v: run(env, v)))(pool.take(index))
+
+    np.testing.assert_array_equal(np.asarray(final.robot.xy), np.asarray(bare_final.robot.xy))
+    np.testing.assert_array_equal(np.asarray(final.extras["pool_index"]), np.asarray(index))
+    variants = pool.take(index)
+    start = np.asarray(variants.robot_xy)[:, None]
+    path = np.concatenate([start, np.asarray(xy)], axis=1)
+    to_go = np.linalg.norm(path - np.asarray(variants.goal_xy)[:, None], axis=-1)
+    was_reached = np.concatenate([np.zeros((4, 1), bool), np.asarray(reached)[:, :-1]], axis=1)
+    gained = np.where(was_reached, 0.0, np.clip(to_go[:, :-1] - to_go[:, 1:], -0.5, 0.5))
+    np.testing.assert_allclose(np.asarray(reward) - np.asarray(bare_reward), 0.1 * gained, atol=1e-5)
+    assert np.asarray(reached).any() and not np.asarray(reached).all()  # the mask is exercised
+
+    e = final.extras
+    np.testing.assert_allclose(np.asarray(e["episode_return"]), np.asarray(reward).sum(axis=1), rtol=1e-5)
+    assert (np.asarray(e["episode_steps"]) == steps).all()
+    np.testing.assert_array_equal(np.asarray(e["episode_person_contact"]), np.asarray(contact).any(axis=1))
+    check = lambda *a: nav_metrics.rule_satisfied(rule, *a)
+    arena_verdict = jax.vmap(check)(
+        xy, reached, people_xy, variants.start_xy, variants.end_xy, jnp.ones(people_xy.shape[:-1], bool), variants.group
+    )
+    np.testing.assert_array_equal(np.asarray(e["rule_kept"]), np.asarray(arena_verdict))
+    assert 0 < int(np.asarray(arena_verdict).sum()) < 4
+
+    keys = jax.random.split(jax.random.key(6), 4)
+    mask = jnp.array([True, False, False, True])
+    fresh, ts = jax.vmap(wrapped.reset)(keys, index)
+    restarted, _ = jax.jit(lambda m: wrappers.reset_where(wrapped, m, keys, index, final, ts))(mask)
+    assert list(np.asarray(restarted.extras["episode_steps"])) == [0, steps, steps, 0]
+    for got, start, end in zip(*(_leaves(t.extras) for t in (restarted, fresh, final)), strict=True):
+        np.testing.assert_array_equal(got[[0, 3]], start[[0, 3]])
+        np.testing.assert_array_equal(got[[1, 2]], end[[1, 2]])

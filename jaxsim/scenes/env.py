@@ -174,7 +174,9 @@ class TimeStep:
 @struct.dataclass
 class EnvState:
     """variant (the episode's draw), people, robot, tracks (the perception's window), step ()
-    int32, reached () bool, key (the env's own stream; unused by the default sensors)."""
+    int32, reached () bool, key (the env's own stream; unused by the default sensors), extras
+    (what wrappers keep per episode, by name, as brax's ``State.info``; empty for the bare env:
+    :mod:`jaxsim.scenes.wrappers`)."""
 
     variant: Variant
     people: people_lib.PeopleState
@@ -183,6 +185,7 @@ class EnvState:
     step: jax.Array
     reached: jax.Array
     key: jax.Array
+    extras: dict = struct.field(default_factory=dict)
 
 
 @struct.dataclass

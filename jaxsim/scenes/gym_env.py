@@ -10,7 +10,10 @@ Observations are a ``Dict`` of float32 boxes, one per :class:`~jaxsim.scenes.env
 field (``people_visible`` as 0/1); the action is ``Box([0, -w_max], [v_max, w_max])``. An action
 of another shape is refused with a ``ValueError`` naming it; one with a NaN or infinite entry
 stops the robot for that step, as the JAX environment does, and ``info["invalid_action"]`` says
-so (the observation stays finite and inside its space). Each
+so (the observation stays finite and inside its space). ``info["person_contact"]`` says the robot
+touched a person on the step and ``info["rule_kept"]`` that the scene's social rule has been kept
+so far (:class:`jaxsim.scenes.wrappers.RuleMonitor`): on a ``terminated`` step (the goal), the
+arena's social success. Each
 reset draws a variant of the scene from a pool drawn once (``pool`` variants under ``seed``,
 the scene's training draws, never the held-out ones); ``reset(seed=s)`` reseeds the choice.
 """
@@ -87,6 +90,7 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
         n_slots = padded_slots(spec.n_people_slots)
         variants = sample_variants(spec, seed, pool, 0, False, n_slots)
         self._pool = wrappers.VariantPool(jax.tree_util.tree_map(jnp.asarray, variants))
+        env = wrappers.RuleMonitor.of(wrappers.FromPool(self.env, self._pool), spec.rule)
         self.num_envs = num_envs
         self.single_observation_space = observation_space(self.env, n_slots)
         self.single_action_space = action_space(self.env)
@@ -95,26 +99,25 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
         self._rng = np.random.default_rng(seed)
         self._state = None
         self._needs_reset = np.zeros(num_envs, bool)
-        env = self.env
         self._reset = jax.jit(jax.vmap(env.reset))
 
-        def step(states, actions, reset_mask, keys, variants):
+        def step(states, actions, reset_mask, keys, index):
             stepped, ts = jax.vmap(env.step)(states, actions)
             # Gymnasium's next-step autoreset: those that ended on the last step start afresh now.
-            return wrappers.reset_where(env, reset_mask, keys, variants, stepped, ts)
+            return wrappers.reset_where(env, reset_mask, keys, index, stepped, ts)
 
         self._step = jax.jit(step)
 
     def _draw(self, n: int):
         keys = jax.random.split(jax.random.key(int(self._rng.integers(2**31))), n)
-        return keys, self._pool.take(jnp.asarray(self._rng.integers(0, self._pool.size, n)))
+        return keys, jnp.asarray(self._rng.integers(0, self._pool.size, n))
 
     def reset(self, *, seed: int | None = None, options=None):
         super().reset(seed=seed)
         if seed is not None:
             self._rng = np.random.default_rng(seed)
-        keys, variants = self._draw(self.num_envs)
-        self._state, ts = self._reset(keys, variants)
+        keys, index = self._draw(self.num_envs)
+        self._state, ts = self._reset(keys, index)
         self._needs_reset[:] = False
         return _numpy(ts.observation), {}
 
@@ -122,15 +125,19 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
         if self._state is None:
             raise RuntimeError("SocialNavVectorEnv.step before reset")
         actions = _as_actions(actions, (self.num_envs, 2), "SocialNavVectorEnv.step")
-        keys, variants = self._draw(self.num_envs)
+        keys, index = self._draw(self.num_envs)
         mask = jnp.asarray(self._needs_reset)
-        self._state, ts = self._step(self._state, actions, mask, keys, variants)
+        self._state, ts = self._step(self._state, actions, mask, keys, index)
         terminated = np.asarray(ts.terminated) & ~self._needs_reset
         truncated = np.asarray(ts.truncated) & ~self._needs_reset
         reward = np.where(self._needs_reset, 0.0, np.asarray(ts.reward)).astype(np.float32)
         self._needs_reset = terminated | truncated
-        invalid = np.asarray(ts.info.invalid_action)
-        return _numpy(ts.observation), reward, terminated, truncated, {"invalid_action": invalid}
+        info = {
+            "invalid_action": np.asarray(ts.info.invalid_action),
+            "person_contact": np.asarray(ts.info.person_contact),
+            "rule_kept": np.asarray(self._state.extras["rule_kept"]),
+        }
+        return _numpy(ts.observation), reward, terminated, truncated, info
 
 
 class SocialNavEnv(gym.Env):
@@ -156,7 +163,7 @@ class SocialNavEnv(gym.Env):
             float(reward[0]),
             bool(terminated[0]),
             bool(truncated[0]),
-            {"invalid_action": bool(info["invalid_action"][0])},
+            {k: bool(v[0]) for k, v in info.items()},
         )
 
 

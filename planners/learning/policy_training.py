@@ -20,7 +20,9 @@ One update:
    unlike the straight-line distance, does not reward driving into the inner wall of a corner);
    a time-limit truncation is treated as an end (purejaxrl's choice);
    each episode's scene rule is checked as it runs (:mod:`jaxsim.scenes.rule_monitor`), so
-   the ended episodes' social success (the arena's: goal and rule) is known at every update;
+   the ended episodes' social success (the arena's: goal and rule) is known at every update.
+   The pool, the shaping, the rule and the episode's statistics are the env's wrappers
+   (:func:`training_env`, :mod:`jaxsim.scenes.wrappers`);
 3. advantages by GAE per scene, then ``epochs`` passes of ``minibatches`` shuffled minibatches
    over all scenes' transitions together.
 
@@ -42,7 +44,7 @@ from flax import struct
 
 from socialnav.common import pytree
 from socialnav.jaxsim.scenes import env as env_lib
-from socialnav.jaxsim.scenes import rule_monitor, wrappers
+from socialnav.jaxsim.scenes import wrappers
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
@@ -152,19 +154,13 @@ class Scene:
 
 @struct.dataclass
 class Runner:
-    """One scene's running episodes (B of them): ``env_state``, ``observation``, the pool index
-    of each one's variant (B,), and the episode's return (B,), length (B,), whether it has
-    touched a person (B,) so far, its scene rule's running check ``rule_state``
-    (:func:`jaxsim.scenes.rule_monitor.monitor`, batched) and its social channel's state
+    """One scene's running episodes (B of them): ``env_state``, the state of :func:`training_env`
+    (its extras: the pool index of each one's variant, the episode's return, length, person
+    contact and rule so far, leaves (B, ...)), ``observation``, and the social channel's state
     ``social`` (:class:`planners.learning.policy_social.SocialState`, batched)."""
 
     env_state: env_lib.EnvState
     observation: env_lib.Observation
-    pool_index: jax.Array
-    episode_return: jax.Array
-    episode_steps: jax.Array
-    episode_contact: jax.Array
-    rule_state: rule_monitor.MonitorState
     social: policy_social.SocialState
 
 
@@ -209,18 +205,22 @@ def _optimizer(config: PPOConfig):
     return optax.chain(optax.clip_by_global_norm(config.max_grad_norm), optax.adam(config.learning_rate, eps=1e-5))
 
 
-def _reset(scene: Scene, key, index):
-    keys = jax.random.split(key, index.shape[0])
-    state, ts = jax.vmap(scene.env.reset)(keys, scene.pool.take(index))
-    return state, ts.observation
+def training_env(scene: Scene, config: PPOConfig, grid: costmap.GridSpec, rule: dict) -> wrappers.Wrapper:
+    """``scene.env`` as the trainer steps it (:mod:`jaxsim.scenes.wrappers`): reset by an index of
+    the training pool, its reward shaped by ``config.progress_weight`` per metre gained along the
+    variant's guidance field, the scene's ``rule`` (:attr:`jaxsim.scenes.spec.SceneSpec.rule`)
+    monitored, and the episode's return, length and person contact kept."""
+
+    def distance_to_go_m(state, fields):  # the episode's own field, read at the robot
+        return policy_lib.field_at(policy_lib.PoolField(fields, state.extras["pool_index"]), state.robot.xy, grid)
+
+    pool = wrappers.FromPool(scene.env, scene.pool)
+    shaped = wrappers.PotentialShaping(pool, distance_to_go_m, scene.fields, config.progress_weight)
+    return wrappers.EpisodeStatistics(wrappers.RuleMonitor.of(shaped, rule))
 
 
 def _batched(tree, n: int):
     return jax.tree_util.tree_map(lambda a: jnp.broadcast_to(a, (n,) + a.shape), tree)
-
-
-def _fresh_rules(rule: dict, n: int) -> rule_monitor.MonitorState:
-    return _batched(rule_monitor.monitor(rule)[0](), n)
 
 
 def _fresh_social(obs, n: int) -> policy_social.SocialState:
@@ -232,26 +232,17 @@ def init_runner(scene: Scene, config: PPOConfig, key, rule: dict) -> Runner:
     scene's social rule, :attr:`jaxsim.scenes.spec.SceneSpec.rule`)."""
     k_pick, k_reset = jax.random.split(key)
     index = scene.pool.draw(k_pick, config.envs_per_scene)
-    state, obs = _reset(scene, k_reset, index)
-    zeros = jnp.zeros(config.envs_per_scene, jnp.float32)
-    return Runner(
-        state,
-        obs,
-        index,
-        zeros,
-        jnp.zeros(config.envs_per_scene, jnp.int32),
-        zeros.astype(bool),
-        _fresh_rules(rule, config.envs_per_scene),
-        _fresh_social(obs, config.envs_per_scene),
-    )
+    env = training_env(scene, config, policy_lib.scene_grid(scene.env), rule)
+    state, ts = jax.vmap(env.reset)(jax.random.split(k_reset, index.shape[0]), index)
+    return Runner(state, ts.observation, _fresh_social(ts.observation, config.envs_per_scene))
 
 
-def _observe(config: PPOConfig, scene: Scene, grid, obs, index, social):
+def _observe(config: PPOConfig, scene: Scene, grid, runner: Runner, social):
     def one(o, i, s):
         field = policy_lib.PoolField(scene.fields, i)
         return policy_lib.observe(config.policy, o, field, grid, scene.env.robot, s)
 
-    return jax.vmap(one)(obs, index, social)
+    return jax.vmap(one)(runner.observation, runner.env_state.extras["pool_index"], social)
 
 
 def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict, gscl_model=None) -> Callable:
@@ -264,16 +255,14 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
     (:mod:`jaxsim.scenes.rule_monitor`). ``gscl_model``: the GSCL channel's network
     (``gscl_model.apply(weights, maps)``, its weights ``scene.gscl_weights``, traced), run for
     every episode at once on the rollout's steps ``0, k, 2k, ...`` (``k = gscl_every_steps``)."""
-    _, rule_update, rule_verdict = rule_monitor.monitor(rule)
     gscl = config.policy.social_layer == "gscl"
     if gscl and gscl_model is None:
         raise ValueError("make_collect: the gscl channel needs the trained network (gscl_model)")
     network = gscl_model.apply if gscl else None
 
     def collect(scene: Scene, weights, runner: Runner, key):
-        env = scene.env
-
-        occupancy = jnp.asarray(env.occupancy.values, jnp.float32)
+        env = training_env(scene, config, grid, rule)
+        occupancy = jnp.asarray(scene.env.occupancy.values, jnp.float32)
 
         def refresh(social, obs, t):
             if not gscl:
@@ -287,57 +276,29 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
             step_key, t = xs
             k_act, k_pick, k_reset = jax.random.split(step_key, 3)
             social = refresh(runner.social, runner.observation, t)
-            x, social = _observe(config, scene, grid, runner.observation, runner.pool_index, social)
+            x, social = _observe(config, scene, grid, runner, social)
             mean, log_std, value = policy_net.apply(graphdef, weights, x)
             u = policy_net.sample(k_act, mean, log_std)
             log_prob = policy_net.gaussian_log_prob(u, mean, log_std)
-            action = policy_lib.command(u, env.robot)
+            action = policy_lib.command(u, scene.env.robot)
             state, ts = jax.vmap(env.step)(runner.env_state, action)
-
-            def field_here(i, xy):  # the episode's own field, read at xy
-                return policy_lib.field_at(policy_lib.PoolField(scene.fields, i), xy, grid)
-
-            before = jax.vmap(field_here)(runner.pool_index, runner.env_state.robot.xy)
-            after = jax.vmap(field_here)(runner.pool_index, state.robot.xy)
-            progress = jnp.where(jnp.isfinite(before) & jnp.isfinite(after), jnp.clip(before - after, -0.5, 0.5), 0.0)
-            reward = ts.reward + config.progress_weight * progress
-            done = ts.done
-            ep_return = runner.episode_return + reward
-            ep_steps = runner.episode_steps + 1
-            ep_contact = runner.episode_contact | ts.info.person_contact
-            variant = scene.pool.take(runner.pool_index)
-            rule_state = jax.vmap(rule_update)(
-                runner.rule_state,
-                rule_monitor.Step(state.robot.xy, ts.info.reached, ts.info.people_xy_m, ts.info.people_present),
-                rule_monitor.Episode(variant.start_xy, variant.end_xy, variant.group),
-            )
-            social_success = ts.terminated & jax.vmap(rule_verdict)(rule_state)
+            reward, done, ended = ts.reward, ts.done, state.extras
+            social_success = ts.terminated & ended["rule_kept"]
             stats = (
                 stats[0] + done.sum(),
-                stats[1] + jnp.where(done, ep_return, 0.0).sum(),
+                stats[1] + jnp.where(done, ended["episode_return"], 0.0).sum(),
                 stats[2] + (done & ts.terminated).sum(),
-                stats[3] + (done & ep_contact).sum(),
-                stats[4] + jnp.where(done, ep_steps, 0).sum(),
+                stats[3] + (done & ended["episode_person_contact"]).sum(),
+                stats[4] + jnp.where(done, ended["episode_steps"], 0).sum(),
                 stats[5] + (done & social_success).sum(),
             )
 
             # The episodes that ended restart now, from fresh draws of the pool (the others go on).
             drawn = scene.pool.draw(k_pick, done.shape[0])
             reset_keys = jax.random.split(k_reset, done.shape[0])
-            state, ts = wrappers.reset_where(env, done, reset_keys, scene.pool.take(drawn), state, ts)
-            index = jnp.where(done, drawn, runner.pool_index)
-            keep = ~done
-            fresh_rules = _fresh_rules(rule, done.shape[0])
-            fresh_social = _fresh_social(ts.observation, done.shape[0])
-            new_runner = Runner(
-                state,
-                ts.observation,
-                index,
-                jnp.where(keep, ep_return, 0.0),
-                jnp.where(keep, ep_steps, 0),
-                keep & ep_contact,
-                *pytree.select_rows(keep, (rule_state, social), (fresh_rules, fresh_social)),
-            )
+            state, ts = wrappers.reset_where(env, done, reset_keys, drawn, state, ts)
+            social = pytree.select_rows(~done, social, _fresh_social(ts.observation, done.shape[0]))
+            new_runner = Runner(state, ts.observation, social)
             return (new_runner, stats), (x, u, log_prob, value, reward, done)
 
         zero_stats = (jnp.int32(0), jnp.float32(0.0), jnp.int32(0), jnp.int32(0), jnp.int32(0), jnp.int32(0))
@@ -346,7 +307,7 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
         (runner, stats), (x, u, log_prob, value, reward, done) = jax.lax.scan(
             one_step, (runner, zero_stats), (keys, steps)
         )
-        last_x, _ = _observe(config, scene, grid, runner.observation, runner.pool_index, runner.social)
+        last_x, _ = _observe(config, scene, grid, runner, runner.social)
         _, _, last_value = policy_net.apply(graphdef, weights, last_x)
         advantage = gae(value, reward, done, last_value, config.gamma, config.gae_lambda)
         flat = lambda a: a.reshape((-1,) + a.shape[2:])
@@ -498,39 +459,26 @@ class Trainer:
         return TrainState(weights, opt_state, tuple(runners), jnp.int32(u + 1)), metrics
 
 
-def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int = 7) -> float:
-    """Mean return of the deterministic (mean-action) policy over ``n_variants`` training-pool
-    variants of each scene, one episode each (the training's reward)."""
-    config = trainer.config
-    totals = []
-    for scene, grid in zip(trainer.scenes, trainer.grids, strict=True):
-        actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid, gscl_model=trainer.gscl_model)
-        params = policy_lib.policy_params(scene.env, weights, trainer.gscl_model)
-        index = jnp.arange(n_variants) % config.pool_per_scene
-        variants = scene.pool.take(index)
-        fields = scene.fields[index]
-        keys = jax.random.split(jax.random.PRNGKey(seed), n_variants)
-        totals.append(_episode_returns(scene.env, actor, params, variants, fields, keys, grid, config.progress_weight))
-    return float(np.mean(np.concatenate(totals)))
-
-
-def _episode_returns(env, actor, params, variants, fields, keys, grid, progress_weight):
+def _episode_return(env, actor, params, index, key):
     from socialnav.jaxsim.scenes.actor import rollout
 
-    @jax.jit
-    def run(variants, fields, keys):
-        def one(variant, field, key):
-            (_, _), rec = rollout(env, actor, params, variant, key)
-            xy = jnp.concatenate([variant.robot_xy[None], rec.robot_xy_m])
-            phi = policy_lib.field_at(field, xy, grid)
-            ok = jnp.isfinite(phi[:-1]) & jnp.isfinite(phi[1:])
-            progress = jnp.where(ok, jnp.clip(phi[:-1] - phi[1:], -0.5, 0.5), 0.0)
-            was_reached = jnp.concatenate([jnp.zeros(1, bool), rec.reached[:-1]])
-            return jnp.sum(rec.reward + jnp.where(was_reached, 0.0, progress_weight * progress))
+    return jnp.sum(rollout(env, actor, params, index, key)[1].reward)
 
-        return jax.vmap(one)(variants, fields, keys)
 
-    return np.asarray(run(variants, fields, keys))
+def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int = 7) -> float:
+    """Mean return of the deterministic (mean-action) policy over ``n_variants`` training-pool
+    variants of each scene, one episode each (the training's reward: :func:`training_env`)."""
+    config = trainer.config
+    totals = []
+    for scene, grid, spec in zip(trainer.scenes, trainer.grids, trainer.specs, strict=True):
+        actor = policy_lib.policy_actor(config.policy, trainer.graphdef, grid, gscl_model=trainer.gscl_model)
+        params = policy_lib.policy_params(scene.env, weights, trainer.gscl_model)
+        env = training_env(scene, config, grid, spec.rule)
+        index = jnp.arange(n_variants) % config.pool_per_scene
+        keys = jax.random.split(jax.random.PRNGKey(seed), n_variants)
+        returns = jax.jit(jax.vmap(_episode_return, in_axes=(None, None, None, 0, 0)), static_argnums=1)
+        totals.append(np.asarray(returns(env, actor, params, index, keys)))
+    return float(np.mean(np.concatenate(totals)))
 
 
 __all__ = [
@@ -546,4 +494,5 @@ __all__ = [
     "make_update",
     "reward_params",
     "scene_env",
+    "training_env",
 ]
