@@ -664,7 +664,9 @@ def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search(tmp_pat
     corridors = _walked_by(truth, fields)
     assert np.all(np.diff(corridors.speed_data) < 0)  # speed falls with density
     start = hv.HumanModel("collision_free_speed")
-    fit, histories = hc.calibrate(start, corridors, 60, 0.05, 40, log=lambda *_: None, fields=fields)
+    saved = []  # the records a stopped fit would have left, in order
+    fit, histories = hc.calibrate(start, corridors, 60, 0.05, 40, log=lambda *_: None, fields=fields,
+                                  progress=saved.append)  # fmt: skip
     history = histories["gradient"]
     assert history[-1][1] < 0.05 * history[0][1] and fit["start"]["loss"] == pytest.approx(history[0][1], rel=1e-5)
     assert fit["nelder_mead"]["evaluations"] == len(histories["nelder_mead"]) <= 40 and fit["start_draws"] == 0
@@ -675,6 +677,51 @@ def test_calibration_recovers_a_known_time_gap_by_gradient_and_by_search(tmp_pat
     for label, model in hc.fitted_models(path).items():
         assert float(model.speed.time_gap_s) == pytest.approx(0.6, rel=0.05), label
         assert float(model.speed.neighbor_strength) == pytest.approx(float(start.speed.neighbor_strength), rel=1e-4)
+    # As it went: each method's best so far, its loss falling; the last record is the fit's points.
+    assert fit["complete"] and not any(r["complete"] for r in saved)
+    for method in hc.FIT_METHODS:
+        losses = [r[method]["loss"] for r in saved if method in r]
+        assert losses and all(b <= a for a, b in zip(losses, losses[1:], strict=False))
+        assert saved[-1][method]["values"] == fit[method]["values"] and losses[-1] == fit[method]["loss"]
+    early = tmp_path / "stopped" / "progress.json"  # stopped during the gradient's descent
+    early.parent.mkdir()
+    early.write_text(json.dumps(saved[0]))
+    assert list(hc.fitted_models(early)) == ["stopped:gradient"]
+    with pytest.raises(ValueError, match="no point yet of nelder_mead"):
+        hc.fitted_models(early, ("nelder_mead",))
+
+
+@pytest.mark.slow
+def test_a_calibration_killed_mid_fit_leaves_its_best_points_and_the_next_one_says_so(tmp_path):
+    """``humans calibrate`` killed during its descent: progress.json holds the best point so far,
+    which validate reads as a model; the next calibration into the folder is refused with one line
+    that names the file, and with --overwrite it ends with fit.json alone (progress.json gone)."""
+    import subprocess
+    import sys
+    import time
+
+    from socialnav import cli
+    from socialnav.common import runfolder
+    from socialnav.evaluation.humans import calibration as hc
+
+    out = tmp_path / "cal"
+    argv = ["humans", "calibrate", "--model", "collision_free_speed", "--evaluations", "2", "--out", str(out)]
+    run = subprocess.Popen([sys.executable, "-m", "socialnav", *argv, "--steps", "500"], stdout=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 240
+        while not (out / "progress.json").exists() and run.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.5)
+    finally:
+        run.kill()
+        run.wait()
+    record = json.loads((out / "progress.json").read_text())
+    assert not record["complete"] and "nelder_mead" not in record and record["gradient"]["steps"] >= 1
+    (label, model), *_ = hc.fitted_models(out / "progress.json").items()
+    assert label == "cal:gradient" and hc.fitted_values(model) == record["gradient"]["values"]
+    assert cli.main([*argv, "--steps", "2"]) == 2
+    assert cli.main([*argv, "--steps", "2", "--overwrite"]) == 0
+    assert not (out / "progress.json").exists() and json.loads((out / "fit.json").read_text())["complete"]
+    assert sorted(runfolder.read_manifest(out).files) == ["curve.png", "fit.json"]
 
 
 @pytest.mark.slow

@@ -202,26 +202,33 @@ def fit_gradient(
     seed: int = 0,
     log=print,
     fields=None,
+    on_best=None,
 ):
     """Adam on :func:`fd_loss` from ``model``'s parameters (``fields``, default :data:`FITTED`'s):
     ``(fitted model, history)``, the model at the lowest loss seen, ``history`` a list of
-    ``(step, loss, seconds)``."""
+    ``(step, loss, seconds)``; ``on_best`` as :func:`evaluation.humans.minimise.adam`'s."""
     loss_and_grad = minimise.value_and_grad(
         lambda th, key: fd_loss(model, corridors, th, key, fields=fields), forward=model.name in FORWARD_MODE
     )
     best, history = minimise.adam(loss_and_grad, theta_of(model, fields), steps, optax.adam(learning_rate),
-                                  (jax.random.key(seed),), log)  # fmt: skip
+                                  (jax.random.key(seed),), log, on_best=on_best)  # fmt: skip
     return with_theta(model, best, fields), history
 
 
 def fit_nelder_mead(
-    model: hv.HumanModel, corridors: Corridors, max_evaluations: int = 250, seed: int = 0, log=print, fields=None
+    model: hv.HumanModel,
+    corridors: Corridors,
+    max_evaluations: int = 250,
+    seed: int = 0,
+    log=print,
+    fields=None,
+    on_best=None,
 ):
     """Nelder-Mead (scipy) on :func:`fd_loss` with the warm-up's gradient not stopped (no
     gradient is taken): ``(fitted model, history)`` as :func:`fit_gradient`."""
     loss = jax.jit(lambda th, key: fd_loss(model, corridors, th, key, stop_warmup=False, fields=fields))
     x, history = minimise.nelder_mead(loss, theta_of(model, fields), max_evaluations, 1e-3,
-                                      (jax.random.key(seed),), log)  # fmt: skip
+                                      (jax.random.key(seed),), log, on_best=on_best)  # fmt: skip
     return with_theta(model, jnp.asarray(x, jnp.float32), fields), history
 
 
@@ -234,33 +241,60 @@ def calibrate(
     seed: int = 0,
     log=print,
     fields=None,
+    progress=None,
 ) -> tuple[dict, dict]:
     """Both fits of ``model`` to ``corridors`` (:func:`training_corridors`): Adam through the crowd
     step (:func:`fit_gradient`) and Nelder-Mead on the same loss (:func:`fit_nelder_mead`), from
     the model's own parameters (``fields``: those fitted, default :data:`FITTED`'s; the record
     holds every field of :data:`FITTED`, those not fitted as given).
 
+    Args:
+      progress: called with the record so far (``"complete": false``, each method that has a
+        point with its best point yet, its loss, the steps or evaluations done and the seconds)
+        at each new best, so a fit stopped before its end keeps what it found
+        (``socialnav humans calibrate`` writes it as ``progress.json``; :func:`fitted_models`
+        reads it as it reads a finished fit).
+
     Returns:
       ``(fit, histories)``: ``fit`` the record ``socialnav humans calibrate`` writes as ``fit.json``
       (the model, the runs, the densities, the loss and values at the start and of each method,
-      the seed and the number of start draws; :func:`fitted_models` reads it back), ``histories``
-      each method's ``[(step, loss, seconds), ...]`` (``"gradient"``, ``"nelder_mead"``).
+      the seed and the number of start draws, ``"complete": true``; :func:`fitted_models` reads it
+      back), ``histories`` each method's ``[(step, loss, seconds), ...]`` (``"gradient"``,
+      ``"nelder_mead"``).
     """
     start = float(fd_loss(model, corridors, theta_of(model, fields), jax.random.key(seed), fields=fields))
-    by_gradient, gradient_history = fit_gradient(model, corridors, steps, learning_rate, seed, log, fields)
-    by_search, search_history = fit_nelder_mead(model, corridors, evaluations, seed, log, fields)
-    fit = {
+    head = {
         "model": model.name,
         "train_runs": list(TRAIN_RUNS),
         "test_runs": list(TEST_RUNS),
         "densities": list(corridors.densities),
         "start": {"values": fitted_values(model), "loss": start},
+    }
+    tail = {"seed": seed, "start_draws": int(corridors.starts[0][0].shape[0]) - 1}
+    found = {}  # method -> its best point so far
+
+    def saver(method: str, count: str):
+        def on_best(theta, loss, done, seconds):
+            values = fitted_values(with_theta(model, theta, fields))
+            found[method] = {"values": values, "loss": float(loss), count: done, "seconds": seconds}
+            progress({**head, **found, **tail, "complete": False})
+
+        return None if progress is None else on_best
+
+    by_gradient, gradient_history = fit_gradient(
+        model, corridors, steps, learning_rate, seed, log, fields, saver("gradient", "steps")
+    )
+    by_search, search_history = fit_nelder_mead(
+        model, corridors, evaluations, seed, log, fields, saver("nelder_mead", "evaluations")
+    )
+    fit = {
+        **head,
         "gradient": {"values": fitted_values(by_gradient), "loss": min(h[1] for h in gradient_history),
                      "steps": steps, "seconds": gradient_history[-1][2]},
         "nelder_mead": {"values": fitted_values(by_search), "loss": min(h[1] for h in search_history),
                         "evaluations": len(search_history), "seconds": search_history[-1][2]},
-        "seed": seed,
-        "start_draws": int(corridors.starts[0][0].shape[0]) - 1,
+        **tail,
+        "complete": True,
     }  # fmt: skip
     return fit, {"gradient": gradient_history, "nelder_mead": search_history}
 
@@ -276,7 +310,9 @@ FIT_METHODS = ("gradient", "nelder_mead")
 def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
     """The models a Jülich fit (``socialnav humans calibrate``'s ``fit.json`` at ``path``) found,
     one a method of ``methods``, labelled ``<folder>:<method>``: its model with the fitted values.
-    Raises ``ValueError`` naming the file and the field where the file is not such a fit."""
+    An unfinished fit (its ``progress.json``, ``"complete": false``) gives the best point of each
+    method that has one. Raises ``ValueError`` naming the file and the field where the file is not
+    such a fit."""
     import json
     import pathlib
 
@@ -293,9 +329,14 @@ def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
     name = fit.get("model")
     if name not in FITTED:
         raise ValueError(f"{path}: model: {name!r} is not a model the calibration fits ({', '.join(FITTED)})")
+    complete = fit.get("complete", True)  # a fit.json written before the field was: finished
+    if not isinstance(complete, bool):
+        raise ValueError(f"{path}: complete: {complete!r} is not true or false")
     models = {}
     for method in methods:
         entry = fit.get(method)
+        if entry is None and not complete:
+            continue  # the fit stopped before this method found a point
         values = entry.get("values") if isinstance(entry, dict) else None
         if not isinstance(values, dict):
             raise ValueError(f"{path}: {method}.values: missing")
@@ -309,6 +350,8 @@ def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
         models[f"{path.parent.name}:{method}"] = with_fitted(
             named_model(name), {f: float(v) for f, v in values.items()}
         )
+    if not models:
+        raise ValueError(f"{path}: an unfinished fit with no point yet of {', '.join(methods)}")
     return models
 
 

@@ -28,20 +28,23 @@ def value_and_grad(loss: Callable, forward: bool = False) -> Callable:
 
 
 def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTransformation, args=(),
-         log=print, what: str = "loss {:.3f}"):  # fmt: skip
+         log=print, what: str = "loss {:.3f}", on_best: Callable | None = None):  # fmt: skip
     """``steps`` updates of ``optimizer`` from ``theta`` on ``loss_and_grad(theta, *args)``:
     ``(best theta, history)``; ``what`` formats the loss in the progress lines. A gradient that is
     not finite (NaN or infinite: a rollout whose derivative breaks, as the power law's can) stops
-    the descent there, said in the log; the best ``theta`` so far is returned."""
+    the descent there, said in the log; the best ``theta`` so far is returned. ``on_best(theta,
+    loss, steps done, seconds)`` is called at each new best (to save it as the fit goes)."""
     state = optimizer.init(theta)
     history, t0 = [], time.perf_counter()
     best = (np.inf, theta)
     for k in range(steps):
         value, grad = loss_and_grad(theta, *args)
         value = float(value)
+        history.append((k, value, time.perf_counter() - t0))
         if value < best[0]:
             best = (value, theta)
-        history.append((k, value, time.perf_counter() - t0))
+            if on_best is not None:
+                on_best(theta, value, k + 1, history[-1][2])
         if k % 10 == 0 or k == steps - 1:
             log(f"  gradient step {k}: {what.format(value)} ({time.perf_counter() - t0:.0f} s)")
         if not all(bool(jnp.all(jnp.isfinite(g))) for g in jax.tree.leaves(grad)):
@@ -53,17 +56,22 @@ def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTr
 
 
 def nelder_mead(loss: Callable, theta, max_evaluations: int, fatol: float, args=(), log=print,
-                what: str = "loss {:.3f}"):  # fmt: skip
+                what: str = "loss {:.3f}", on_best: Callable | None = None):  # fmt: skip
     """Nelder-Mead on ``loss(theta, *args)`` from ``theta``: ``(theta found, history)``. The first
     simplex lies 30 % away in each log-parameter (scipy's default step is 5 % of a value, and
-    0.00025 of a zero: a log-parameter of 1 would start on a point)."""
+    0.00025 of a zero: a log-parameter of 1 would start on a point). ``on_best`` as
+    :func:`adam`'s, with the evaluations done."""
     from scipy.optimize import minimize
 
     history, t0 = [], time.perf_counter()
 
     def f(x):
-        value = float(loss(jnp.asarray(x, jnp.float32), *args))
+        theta = jnp.asarray(x, jnp.float32)
+        value = float(loss(theta, *args))
+        best = min((h[1] for h in history), default=np.inf)
         history.append((len(history), value, time.perf_counter() - t0))
+        if on_best is not None and value < best:
+            on_best(theta, value, len(history), history[-1][2])
         if len(history) % 20 == 0:
             log(f"  Nelder-Mead evaluation {len(history)}: {what.format(min(h[1] for h in history))}")
         return value

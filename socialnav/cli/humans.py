@@ -28,6 +28,7 @@ from socialnav.cli.argtypes import (
     seed_int,
 )
 from socialnav.common import runfolder
+from socialnav.common.atomic import write_text_atomic
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 
 JOB = "socialnav humans validate"
@@ -51,8 +52,9 @@ def add_parser(top) -> None:
     v.add_argument("--models", type=comma_names, default=None,
                    help="human models (default social_force, none with --fit)")  # fmt: skip
     v.add_argument("--fit", type=pathlib.Path, action="append", default=[], metavar="FIT_JSON",
-                   help="a Jülich fit (socialnav humans calibrate's fit.json) scored as a model, labelled "
-                        "<its folder>:<method>; may be given more than once")  # fmt: skip
+                   help="a Jülich fit (socialnav humans calibrate's fit.json, or the progress.json of one stopped "
+                        "before its end) scored as a model, labelled <its folder>:<method>; may be given more "
+                        "than once")  # fmt: skip
     v.add_argument("--fit-method", choices=("both", "gradient", "nelder_mead"), default="both",
                    help="with --fit: the fit's values from which method (default both)")  # fmt: skip
     v.add_argument(
@@ -75,7 +77,9 @@ def add_parser(top) -> None:
         "anticipation time too) or ORCA's (time horizon, body radius) to the fundamental diagram of the Jülich "
         "training runs (the test runs are never read) by Adam through the crowd step, and by Nelder-Mead on the "
         "same loss as the check. Writes fit.json and curve.png and prints the fitted values; socialnav humans "
-        "validate --models <model>_calibrated scores the shipped fit on held-out data.",
+        "validate --models <model>_calibrated scores the shipped fit on held-out data. With --data juelich, "
+        "progress.json holds each method's best point so far while the fit runs (a fit stopped before its end "
+        "keeps it: socialnav humans validate --fit <out>/progress.json scores it).",
     )
     c.add_argument("--model", choices=CALIBRATABLE, default="collision_free_speed",
                    help="the model to fit, from its parameters (a _calibrated one: from the Jülich fit)")  # fmt: skip
@@ -106,7 +110,8 @@ def add_parser(top) -> None:
 
 
 CALIBRATE_JOB = "socialnav humans calibrate"
-CALIBRATE_RESULTS = ("fit.json", "curve.png", "held_out")
+CALIBRATE_RESULTS = ("fit.json", "curve.png", "held_out", "progress.json")
+PROGRESS = "progress.json"  # a Jülich fit's best points so far, replaced by fit.json at its end
 
 
 def calibrate(args) -> int:
@@ -117,6 +122,14 @@ def calibrate(args) -> int:
     try:
         runfolder.prepare(args.out, CALIBRATE_RESULTS, args.overwrite, marker="fit.json", job=CALIBRATE_JOB)
         runfolder.check_writable(args.out)
+    except runfolder.PreviousRun as e:
+        message = str(e)
+        if (args.out / PROGRESS).exists() and not (args.out / "fit.json").exists():
+            message = (f"{args.out} holds a fit stopped before its end ({PROGRESS}, its best points so far: socialnav "
+                 f"humans validate --fit {args.out / PROGRESS} scores them); pass --overwrite to start again, or "
+                 "choose another --out")  # fmt: skip
+        print(f"socialnav humans calibrate: --out {message}", file=sys.stderr)
+        return 2
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
         return 2
@@ -150,9 +163,20 @@ def calibrate(args) -> int:
     print(f"{args.model}: fitting {', '.join(hc.FITTED[args.model])} to the runs {', '.join(hc.TRAIN_RUNS)} "
           f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m², {1 + args.start_draws} "
           f"draw{'s' if args.start_draws else ''} of each corridor's people)", flush=True)  # fmt: skip
-    fit, histories = hc.calibrate(model, corridors, args.steps, args.learning_rate, args.evaluations, args.seed)
+    saved = []
+
+    def save_progress(record: dict) -> None:
+        write_text_atomic(args.out / PROGRESS, json.dumps(record, indent=1) + "\n")
+        if not saved:  # listed as this run's, so that the commit below replaces it with fit.json
+            runfolder.record(args.out, CALIBRATE_JOB, [PROGRESS], marker="fit.json")
+            saved.append(PROGRESS)
+
+    fit, histories = hc.calibrate(
+        model, corridors, args.steps, args.learning_rate, args.evaluations, args.seed, progress=save_progress
+    )
     try:
-        with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
+        # --overwrite or not, the run's own progress.json goes as fit.json arrives.
+        with runfolder.staged(args.out, "fit.json", args.overwrite or bool(saved), job=CALIBRATE_JOB) as stage:
             human_plots.calibration_curve(histories, f"{args.model} on the Jülich training runs", stage / "curve.png")
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
     except runfolder.RunFolderError as e:
