@@ -15,6 +15,7 @@ from socialnav import cli
 from socialnav.data import DATA_DIR
 from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes import specs
 from socialnav.jaxsim.scenes.actor import Actor, rollout
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant, sample_variants
@@ -55,11 +56,19 @@ def test_reset_and_step_are_deterministic_and_follow_the_specs(setup):
     for a, b in zip(_leaves((s1, t1)), _leaves((s2, t2)), strict=True):
         np.testing.assert_array_equal(a, b)
     n = variant.valid.shape[0]
-    for name, (shape, dtype) in env.observation_spec(n).items():
-        value = getattr(t1.observation, name)
-        assert value.shape == shape and value.dtype == dtype, name
-    spec = env.action_spec()
-    assert spec["shape"] == (2,) and spec["high"][0] == pytest.approx(float(env.robot.max_speed_mps))
+    spec = env.observation_spec(n)
+    for field, value in zip(jax.tree.leaves(spec), jax.tree.leaves(t1.observation), strict=True):
+        assert value.shape == field.shape and value.dtype == field.dtype, field.name
+    assert specs.problems(spec, t1.observation) == []
+    assert jax.tree.structure(jax.tree.map(lambda s: s.zeros(), spec)) == jax.tree.structure(t1.observation)
+    wrong = t1.observation.replace(people_xy_m=jnp.zeros((n + 1, 2)), people_visible=jnp.zeros(n))
+    assert specs.problems(spec, wrong) == [
+        f"people_xy_m: shape ({n + 1}, 2), expected ({n}, 2)",
+        "people_visible: dtype float32, expected bool",
+    ]
+    action = env.action_spec()
+    assert action.shape == (2,) and action.maximum[0] == pytest.approx(float(env.robot.max_speed_mps))
+    assert action.problem(jnp.zeros(3)) == "action: shape (3,), expected (2,)" and action.problem(jnp.zeros(2)) is None
     assert float(t1.observation.time_s) == pytest.approx(0.5)
 
 

@@ -6,7 +6,8 @@ people (:mod:`~socialnav.jaxsim.scenes.people`; recorded crowds,
 :mod:`~socialnav.jaxsim.scenes.recording`), perception
 (:mod:`~socialnav.jaxsim.scenes.perception`), the robot base (:mod:`~socialnav.jaxsim.scenes.robot`),
 the environment (:mod:`~socialnav.jaxsim.scenes.env`) and the rollout of an actor in it
-(:mod:`~socialnav.jaxsim.scenes.actor`), its wrappers (:mod:`~socialnav.jaxsim.scenes.wrappers`: a
+(:mod:`~socialnav.jaxsim.scenes.actor`), the typed specs of its observation and action
+(:mod:`~socialnav.jaxsim.scenes.specs`), its wrappers (:mod:`~socialnav.jaxsim.scenes.wrappers`: a
 pool of variants, reward shaping, the rule monitor, episode statistics). The Gymnasium adapters
 (:mod:`~socialnav.jaxsim.scenes.gym_env`) need the ``gym`` extra and are not imported here.
 """

@@ -36,8 +36,7 @@ def check_actor(env: Env, actor: Actor, params: Params, n_people: int) -> None:
       ValueError: the action is not of shape (2,) = (v m/s, omega rad/s), named with the actor.
       Exception: whatever the actor's own code raises when traced.
     """
-    spec = env.observation_spec(n_people)
-    observation = Observation(**{k: jax.ShapeDtypeStruct(shape, dtype) for k, (shape, dtype) in spec.items()})
+    observation = jax.tree.map(lambda spec: spec.shape_dtype(), env.observation_spec(n_people))
     key = jax.random.key(0)
     state = jax.eval_shape(actor.init, key, observation)
     action, _ = jax.eval_shape(actor.act, params, state, observation, key)

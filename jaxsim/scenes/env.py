@@ -44,7 +44,7 @@ from socialnav.jaxsim.orca import ORCAParams
 from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.scenes import people as people_lib
-from socialnav.jaxsim.scenes import perception
+from socialnav.jaxsim.scenes import perception, specs
 from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.variant import Variant
@@ -297,32 +297,36 @@ class Env:
 
     # ------------------------------------------------------------------ specs
 
-    def observation_spec(self, n_people: int) -> dict[str, tuple[tuple[int, ...], Any]]:
-        """``{field: (shape, dtype)}`` of one observation with ``n_people`` slots."""
+    def observation_spec(self, n_people: int) -> Observation:
+        """One observation with ``n_people`` slots as an :class:`Observation` of
+        :class:`~jaxsim.scenes.specs.Array` specs (``jax.tree.map`` walks it beside an observation)."""
         c = self.config.window_cells
-        return {
-            "robot_xy_m": ((2,), jnp.float32),
-            "robot_yaw_rad": ((), jnp.float32),
-            "robot_speed_mps": ((), jnp.float32),
-            "robot_turn_rate_rps": ((), jnp.float32),
-            "goal_xy_m": ((2,), jnp.float32),
-            "people_xy_m": ((n_people, 2), jnp.float32),
-            "people_heading_rad": ((n_people,), jnp.float32),
-            "people_velocity_mps": ((n_people, 2), jnp.float32),
-            "people_visible": ((n_people,), jnp.bool_),
-            "occupancy": ((c, c), jnp.float32),
-            "time_s": ((), jnp.float32),
+        f32, n = jnp.float32, n_people
+        shapes = {
+            "robot_xy_m": ((2,), f32),
+            "robot_yaw_rad": ((), f32),
+            "robot_speed_mps": ((), f32),
+            "robot_turn_rate_rps": ((), f32),
+            "goal_xy_m": ((2,), f32),
+            "people_xy_m": ((n, 2), f32),
+            "people_heading_rad": ((n,), f32),
+            "people_velocity_mps": ((n, 2), f32),
+            "people_visible": ((n,), jnp.bool_),
+            "occupancy": ((c, c), f32),
+            "time_s": ((), f32),
         }
+        return Observation(**{name: specs.Array(shape, dtype, name) for name, (shape, dtype) in shapes.items()})
 
-    def action_spec(self) -> dict[str, Any]:
-        """The action (2,) float32 (v m/s, omega rad/s) and the bounds the base clips it to."""
+    def action_spec(self) -> specs.BoundedArray:
+        """The action (2,) float32 ``(v m/s, omega rad/s)`` with the bounds the base clips it to."""
         r = self.robot
-        return {
-            "shape": (2,),
-            "dtype": jnp.float32,
-            "low": (0.0, -float(r.max_turn_rate_rps)),
-            "high": (float(r.max_speed_mps), float(r.max_turn_rate_rps)),
-        }
+        return specs.BoundedArray(
+            (2,),
+            jnp.float32,
+            "action",
+            minimum=(0.0, -float(r.max_turn_rate_rps)),
+            maximum=(float(r.max_speed_mps), float(r.max_turn_rate_rps)),
+        )
 
     # ------------------------------------------------------------------ parts
 

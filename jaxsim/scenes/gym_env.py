@@ -44,18 +44,18 @@ _BOUND = {
 def observation_space(env: env_lib.Env, n_people: int) -> spaces.Dict:
     """The gymnasium space of one observation."""
     fields = {}
-    for name, (shape, dtype) in env.observation_spec(n_people).items():
-        if dtype == jnp.bool_ or name == "occupancy":
+    for spec in jax.tree.leaves(env.observation_spec(n_people)):
+        if spec.dtype == jnp.bool_ or spec.name == "occupancy":
             lo, hi = 0.0, 1.0
         else:
-            lo, hi = _BOUND.get(name, (-1e4, 1e4))
-        fields[name] = spaces.Box(lo, hi, shape, np.float32)
+            lo, hi = _BOUND.get(spec.name, (-1e4, 1e4))
+        fields[spec.name] = spaces.Box(lo, hi, spec.shape, np.float32)
     return spaces.Dict(fields)
 
 
 def action_space(env: env_lib.Env) -> spaces.Box:
     spec = env.action_spec()
-    return spaces.Box(np.array(spec["low"], np.float32), np.array(spec["high"], np.float32), dtype=np.float32)
+    return spaces.Box(np.array(spec.minimum, np.float32), np.array(spec.maximum, np.float32), dtype=np.float32)
 
 
 def _numpy(observation: env_lib.Observation) -> dict[str, np.ndarray]:
