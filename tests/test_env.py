@@ -1,5 +1,5 @@
 """The environment (reset/step), actors and the rollout: determinism, batching, specs, reward,
-and a user's own actor from Python and from the command line."""
+the wrappers, and a user's own actor from Python and from the command line."""
 
 from __future__ import annotations
 
