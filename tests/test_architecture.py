@@ -185,3 +185,32 @@ def test_the_planner_folder_check_catches_a_climb(tmp_path):
         "planners/layers/bad.py:1 imports top",
         "planners/layers/bad.py:2 imports reactive",
     ]
+
+
+def test_the_scene_route_is_counted_as_it_runs():
+    """scripts/scene_route.py: the counts of a hand-made route (a return to a module left counted
+    once per return, consecutive calls in one module one entry)."""
+    import script_loader
+
+    script = script_loader.load("scene_route")
+    made = [("a", "f"), ("b", "g"), ("b", "h"), ("a", "f"), ("c", "k"), ("a", "m")]
+    assert script.counts(made) == {
+        "functions": 5,
+        "modules": 3,
+        "module entries": 5,
+        "returns to a module left": 2,
+    }
+
+
+@pytest.mark.slow
+def test_the_scene_route_of_an_arena_run_reaches_the_metrics(tmp_path):
+    """The route of a real ``socialnav arena`` run: the scene file read, then the episodes built
+    from it (the environment, the variants) and their metrics, in that order."""
+    import script_loader
+
+    stops = script_loader.load("scene_route").route(tmp_path / "arena")
+    order = [f"{module}:{function}" for module, function in stops]
+    wanted = ["jaxsim.scenes.spec:load_scene", "jaxsim.scenes.env:make_env", "jaxsim.scenes.variant:sample_variants",
+              "evaluation.arena.run:metrics_function"]  # fmt: skip
+    where = [order.index(w) for w in wanted]  # ValueError names a stop the route missed
+    assert where == sorted(where)
