@@ -212,6 +212,19 @@ def test_the_eth_ucy_calibration_command_fits_on_training_windows_and_scores_the
     assert row["sample_loss"]["nelder_mead"] <= row["sample_loss"]["start"] + 1e-4  # its first point is the start
     assert 0.2 < row["constant_velocity"][0] < 0.5 and all(np.isfinite(row["nelder_mead"]))  # hotel: 0.32 m
     assert (out / "curve.png").is_file() and "Nelder-Mead: test ADE/FDE" in capsys.readouterr().out
+    # the scene's row was kept in progress.json as it ended; the finished fit replaced it
+    from socialnav.common import runfolder
+
+    assert fit["complete"] and not (out / "progress.json").exists()
+    assert sorted(runfolder.read_manifest(out).files) == ["curve.png", "fit.json"]
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import trajectory_calibration as tc
+
+    saved = []
+    model = hc.named_model("collision_free_speed_calibrated")
+    again = tc.calibrate(model, ["hotel"], 2, 0.2, 3, 8, log=lambda *_: None, progress=saved.append)
+    (record,) = saved
+    assert not record["complete"] and record["scenes"] == again["scenes"] and record["start"] == again["start"]
     # the average's difference from constant velocity (here one scene's) is the fit's as the row scored it,
     # but for the values' rounding to four figures in fit.json (which the average is predicted again from)
     for method in ("gradient", "nelder_mead"):

@@ -153,11 +153,12 @@ def average_vs_cv(model: hv.HumanModel, rows: list[dict], method: str = "nelder_
 
 def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_UCY_SCENES, steps: int = 60,
                         learning_rate: float = 0.2, evaluations: int = 60, sample: int = 256, seed: int = 0,
-                        log=print) -> list[dict]:  # fmt: skip
+                        log=print, on_scene=None) -> list[dict]:  # fmt: skip
     """One fit a scene on ``sample`` windows drawn from its training split (by gradient; by
     Nelder-Mead too when ``evaluations`` > 0), scored on its test split: a row a scene with the
     test ADE/FDE of constant velocity, of ``model`` as given and as fitted, the fitted values,
-    the loss curves on the training sample."""
+    the loss curves on the training sample. ``on_scene(rows so far)`` is called as each scene's
+    row is done."""
     fields = FITTED[model.name] if fields is None else fields
     rows = []
     for scene in scenes:
@@ -190,24 +191,33 @@ def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_U
             + (f", by Nelder-Mead {row['nelder_mead'][0]:.3f}/{row['nelder_mead'][1]:.3f}" if evaluations else "")
         )
         rows.append(row)
+        if on_scene is not None:
+            on_scene(list(rows))
     return rows
 
 
 def calibrate(model: hv.HumanModel, scenes=recorded.ETH_UCY_SCENES, steps: int = 60, learning_rate: float = 0.2,
               evaluations: int = 60, sample: int = 256, seed: int = 0, log=print, name: str | None = None,
-              ) -> dict:  # fmt: skip
+              progress=None) -> dict:  # fmt: skip
     """:func:`leave_one_scene_out` of ``model``'s :data:`FITTED` fields, with each method's fits
     against constant velocity on the average over the held-out scenes (:func:`average_vs_cv`).
 
     Returns the record ``socialnav humans calibrate --data eth_ucy`` writes as ``fit.json``: the
     model (``name``, default the model's kind: a preset's name says which values it started
     from), the fields, their values at the start, a row a scene (``"scenes"``), ``"average_vs_cv"``
-    (a method -> its average and by-scene intervals), the seed and the seconds taken.
+    (a method -> its average and by-scene intervals), the seed and the seconds taken,
+    ``"complete": true``. ``progress``: called with the record so far (the scenes done,
+    ``"complete": false``) as each scene's fit ends, so a run stopped before its end keeps them.
     """
     t0 = time.perf_counter()
     fields = FITTED[model.name]
-    rows = leave_one_scene_out(model, fields, scenes, steps, learning_rate, evaluations, sample, seed=seed, log=log)
+    head = {"model": name or model.name, "data": "eth_ucy", "fields": list(fields), "start": values_of(model, fields)}
+
+    def scenes_done(rows):
+        progress({**head, "scenes": rows, "seed": seed, "complete": False})
+
+    rows = leave_one_scene_out(model, fields, scenes, steps, learning_rate, evaluations, sample, seed=seed, log=log,
+                               on_scene=None if progress is None else scenes_done)  # fmt: skip
     average = {m: average_vs_cv(model, rows, m, fields) for m in ("gradient", "nelder_mead") if m in rows[0]}
-    return {"model": name or model.name, "data": "eth_ucy", "fields": list(fields), "start": values_of(model, fields),
-            "scenes": rows, "average_vs_cv": average, "seed": seed,
-            "seconds": round(time.perf_counter() - t0, 1)}  # fmt: skip
+    return {**head, "scenes": rows, "average_vs_cv": average, "seed": seed,
+            "seconds": round(time.perf_counter() - t0, 1), "complete": True}  # fmt: skip

@@ -77,9 +77,9 @@ def add_parser(top) -> None:
         "anticipation time too) or ORCA's (time horizon, body radius) to the fundamental diagram of the Jülich "
         "training runs (the test runs are never read) by Adam through the crowd step, and by Nelder-Mead on the "
         "same loss as the check. Writes fit.json and curve.png and prints the fitted values; socialnav humans "
-        "validate --models <model>_calibrated scores the shipped fit on held-out data. With --data juelich, "
-        "progress.json holds each method's best point so far while the fit runs (a fit stopped before its end "
-        "keeps it: socialnav humans validate --fit <out>/progress.json scores it).",
+        "validate --models <model>_calibrated scores the shipped fit on held-out data. While a fit runs, "
+        "progress.json holds what it has found so far (juelich: each method's best point, which socialnav humans "
+        "validate --fit <out>/progress.json scores; eth_ucy: the scenes done), replaced by fit.json at the end.",
     )
     c.add_argument("--model", choices=CALIBRATABLE, default="collision_free_speed",
                    help="the model to fit, from its parameters (a _calibrated one: from the Jülich fit)")  # fmt: skip
@@ -125,9 +125,9 @@ def calibrate(args) -> int:
     except runfolder.PreviousRun as e:
         message = str(e)
         if (args.out / PROGRESS).exists() and not (args.out / "fit.json").exists():
-            message = (f"{args.out} holds a fit stopped before its end ({PROGRESS}, its best points so far: socialnav "
-                 f"humans validate --fit {args.out / PROGRESS} scores them); pass --overwrite to start again, or "
-                 "choose another --out")  # fmt: skip
+            message = (f"{args.out} holds a fit stopped before its end ({PROGRESS}: what it had found; a Jülich fit's "
+                       f"best points are scored by socialnav humans validate --fit {args.out / PROGRESS}); pass "
+                       "--overwrite to start again, or choose another --out")  # fmt: skip
         print(f"socialnav humans calibrate: --out {message}", file=sys.stderr)
         return 2
     except runfolder.RunFolderError as e:
@@ -163,14 +163,7 @@ def calibrate(args) -> int:
     print(f"{args.model}: fitting {', '.join(hc.FITTED[args.model])} to the runs {', '.join(hc.TRAIN_RUNS)} "
           f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m², {1 + args.start_draws} "
           f"draw{'s' if args.start_draws else ''} of each corridor's people)", flush=True)  # fmt: skip
-    saved = []
-
-    def save_progress(record: dict) -> None:
-        write_text_atomic(args.out / PROGRESS, json.dumps(record, indent=1) + "\n")
-        if not saved:  # listed as this run's, so that the commit below replaces it with fit.json
-            runfolder.record(args.out, CALIBRATE_JOB, [PROGRESS], marker="fit.json")
-            saved.append(PROGRESS)
-
+    save_progress, saved = _progress_saver(args.out)
     fit, histories = hc.calibrate(
         model, corridors, args.steps, args.learning_rate, args.evaluations, args.seed, progress=save_progress
     )
@@ -186,6 +179,21 @@ def calibrate(args) -> int:
         print(f"{label}: loss {fit['start']['loss']:.2f} -> {fit[label]['loss']:.2f}, {fit[label]['values']}")
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
+
+
+def _progress_saver(out: pathlib.Path):
+    """``(save(record), saved)``: ``save`` writes ``record`` as ``out/progress.json`` (atomically)
+    and lists it in the folder's manifest the first time (``saved`` then holds its name), so that
+    the commit of ``fit.json`` replaces it as the run's own file."""
+    saved = []
+
+    def save(record: dict) -> None:
+        write_text_atomic(out / PROGRESS, json.dumps(record, indent=1) + "\n")
+        if not saved:
+            runfolder.record(out, CALIBRATE_JOB, [PROGRESS], marker="fit.json")
+            saved.append(PROGRESS)
+
+    return save, saved
 
 
 def _calibrate_trajectories(args) -> int:
@@ -207,10 +215,11 @@ def _calibrate_trajectories(args) -> int:
     print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to ETH/UCY, one fit a held-out scene "
           f"({', '.join(scenes)}), on its training split", flush=True)  # fmt: skip
     evaluations = 60 if args.evaluations is None else args.evaluations
+    save_progress, saved = _progress_saver(args.out)
     fit = tc.calibrate(model, scenes, args.steps or 60, args.learning_rate or 0.2, evaluations, args.sample,
-                       seed=args.seed, name=args.model)  # fmt: skip
+                       seed=args.seed, name=args.model, progress=save_progress)  # fmt: skip
     try:
-        with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
+        with runfolder.staged(args.out, "fit.json", args.overwrite or bool(saved), job=CALIBRATE_JOB) as stage:
             human_plots.trajectory_fit(fit["scenes"], f"{args.model} on ETH/UCY, leave one scene out",
                                        stage / "curve.png")  # fmt: skip
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
