@@ -64,16 +64,18 @@ def nelder_mead(loss: Callable, theta, max_evaluations: int, fatol: float, args=
     from scipy.optimize import minimize
 
     history, t0 = [], time.perf_counter()
+    best = [np.inf]  # the lowest loss so far
 
     def f(x):
         theta = jnp.asarray(x, jnp.float32)
         value = float(loss(theta, *args))
-        best = min((h[1] for h in history), default=np.inf)
         history.append((len(history), value, time.perf_counter() - t0))
-        if on_best is not None and value < best:
-            on_best(theta, value, len(history), history[-1][2])
+        if value < best[0]:
+            best[0] = value
+            if on_best is not None:
+                on_best(theta, value, len(history), history[-1][2])
         if len(history) % 20 == 0:
-            log(f"  Nelder-Mead evaluation {len(history)}: {what.format(min(h[1] for h in history))}")
+            log(f"  Nelder-Mead evaluation {len(history)}: {what.format(best[0])}")
         return value
 
     x0 = np.asarray(theta, float)

@@ -465,6 +465,10 @@ def _episode_return(env, actor, params, index, key):
     return jnp.sum(rollout(env, actor, params, index, key)[1].reward)
 
 
+# The episodes of a batch of pool indices and keys, one program per env structure and actor.
+_episode_returns = jax.jit(jax.vmap(_episode_return, in_axes=(None, None, None, 0, 0)), static_argnums=1)
+
+
 def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int = 7) -> float:
     """Mean return of the deterministic (mean-action) policy over ``n_variants`` training-pool
     variants of each scene, one episode each (the training's reward: :func:`training_env`)."""
@@ -476,8 +480,7 @@ def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int =
         env = training_env(scene, config, grid, spec.rule)
         index = jnp.arange(n_variants) % config.pool_per_scene
         keys = jax.random.split(jax.random.PRNGKey(seed), n_variants)
-        returns = jax.jit(jax.vmap(_episode_return, in_axes=(None, None, None, 0, 0)), static_argnums=1)
-        totals.append(np.asarray(returns(env, actor, params, index, keys)))
+        totals.append(np.asarray(_episode_returns(env, actor, params, index, keys)))
     return float(np.mean(np.concatenate(totals)))
 
 

@@ -110,8 +110,8 @@ def add_parser(top) -> None:
 
 
 CALIBRATE_JOB = "socialnav humans calibrate"
-CALIBRATE_RESULTS = ("fit.json", "curve.png", "held_out", "progress.json")
-PROGRESS = "progress.json"  # a Jülich fit's best points so far, replaced by fit.json at its end
+PROGRESS = "progress.json"  # what a running fit has found so far, replaced by fit.json at its end
+CALIBRATE_RESULTS = ("fit.json", "curve.png", "held_out", PROGRESS)
 
 
 def calibrate(args) -> int:
@@ -163,13 +163,14 @@ def calibrate(args) -> int:
     print(f"{args.model}: fitting {', '.join(hc.FITTED[args.model])} to the runs {', '.join(hc.TRAIN_RUNS)} "
           f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m², {1 + args.start_draws} "
           f"draw{'s' if args.start_draws else ''} of each corridor's people)", flush=True)  # fmt: skip
-    save_progress, saved = _progress_saver(args.out)
+    save_progress = _progress_saver(args.out)
     fit, histories = hc.calibrate(
         model, corridors, args.steps, args.learning_rate, args.evaluations, args.seed, progress=save_progress
     )
     try:
-        # --overwrite or not, the run's own progress.json goes as fit.json arrives.
-        with runfolder.staged(args.out, "fit.json", args.overwrite or bool(saved), job=CALIBRATE_JOB) as stage:
+        # --overwrite or not, the run's own progress.json (prepare refused any other) goes as fit.json arrives.
+        replace = args.overwrite or (args.out / PROGRESS).exists()
+        with runfolder.staged(args.out, "fit.json", replace, job=CALIBRATE_JOB) as stage:
             human_plots.calibration_curve(histories, f"{args.model} on the Jülich training runs", stage / "curve.png")
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
     except runfolder.RunFolderError as e:
@@ -182,18 +183,17 @@ def calibrate(args) -> int:
 
 
 def _progress_saver(out: pathlib.Path):
-    """``(save(record), saved)``: ``save`` writes ``record`` as ``out/progress.json`` (atomically)
-    and lists it in the folder's manifest the first time (``saved`` then holds its name), so that
-    the commit of ``fit.json`` replaces it as the run's own file."""
-    saved = []
+    """``save(record)``: writes ``record`` as ``out/progress.json`` (atomically) and lists it in the
+    folder's manifest when it first appears, so that the commit of ``fit.json`` replaces it as the
+    run's own file."""
 
     def save(record: dict) -> None:
+        first = not (out / PROGRESS).exists()
         write_text_atomic(out / PROGRESS, json.dumps(record, indent=1) + "\n")
-        if not saved:
+        if first:
             runfolder.record(out, CALIBRATE_JOB, [PROGRESS], marker="fit.json")
-            saved.append(PROGRESS)
 
-    return save, saved
+    return save
 
 
 def _calibrate_trajectories(args) -> int:
@@ -215,11 +215,11 @@ def _calibrate_trajectories(args) -> int:
     print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to ETH/UCY, one fit a held-out scene "
           f"({', '.join(scenes)}), on its training split", flush=True)  # fmt: skip
     evaluations = 60 if args.evaluations is None else args.evaluations
-    save_progress, saved = _progress_saver(args.out)
     fit = tc.calibrate(model, scenes, args.steps or 60, args.learning_rate or 0.2, evaluations, args.sample,
-                       seed=args.seed, name=args.model, progress=save_progress)  # fmt: skip
+                       seed=args.seed, name=args.model, progress=_progress_saver(args.out))  # fmt: skip
     try:
-        with runfolder.staged(args.out, "fit.json", args.overwrite or bool(saved), job=CALIBRATE_JOB) as stage:
+        replace = args.overwrite or (args.out / PROGRESS).exists()
+        with runfolder.staged(args.out, "fit.json", replace, job=CALIBRATE_JOB) as stage:
             human_plots.trajectory_fit(fit["scenes"], f"{args.model} on ETH/UCY, leave one scene out",
                                        stage / "curve.png")  # fmt: skip
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
