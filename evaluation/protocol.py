@@ -6,7 +6,9 @@ with :func:`jaxsim.robot.drive` under the command of the method's actor (a
 :class:`jaxsim.actor.Driver`, as the day simulation takes: the route follower of a plan, the
 causal planner of :mod:`planners.warehouse.actors` with its Eq. 10 refusal, or a user's own);
 this module adds only the protocol (tasks, deadlines, battery resets, honouring a refusal) and
-its measurements.
+its measurements. An experiment runs in the control loop the day and the arena run
+(:func:`jaxsim.control.control_loop`): :func:`experiment_step` is its world's step, the method's
+actor is given a :class:`ProtocolObservation` and wrapped by :func:`while_running`.
 
 One *experiment* is one time slot played with its context frozen: the workers draw their
 destinations from that slot's probabilities for as long as it takes, and the robot runs the
@@ -68,13 +70,13 @@ from socialnav.common import xla
 from socialnav.common.pytree import select
 from socialnav.evaluation.metrics import collision_encounters
 from socialnav.evaluation.outcomes import BATTERY, CONGESTION, NOT_RUN, SUCCESS
+from socialnav.jaxsim import control, rollout
 from socialnav.jaxsim import robot as robot_lib
-from socialnav.jaxsim import rollout
-from socialnav.jaxsim.actor import Driver
+from socialnav.jaxsim.actor import Actor, Driver
 from socialnav.jaxsim.params import TIAGO_RADIUS_M, SimParams
 from socialnav.jaxsim.rng import hash_uniform16, step_uniforms, world_seed_u32
 from socialnav.jaxsim.state import SimState
-from socialnav.jaxsim.step import actor_key, crowd_step, init_state
+from socialnav.jaxsim.step import actor_keys, crowd_step, init_state
 from socialnav.jaxsim.world import World
 from socialnav.planners.warehouse.waypoint import MIN_BATTERY_PCT
 
@@ -170,6 +172,8 @@ class ExperimentState:
       slot: () int32 the frozen time slot.
       task: () int32 the current task (== n_tasks when done); n_tasks: () int32.
       leg_open: () bool, the current task's leg has begun.
+      leg_begun: () bool, it began at this step (:func:`begin_due_task`, before the step's
+        command: a refusal counts on the task's first step).
       hop_elapsed_s: time since the robot last reached a new aim point short of the goal (a
         route waypoint), or began the task; hop_x_m, hop_y_m: that point (NaN: none yet).
       leg_stalled_s, leg_battery_used_pct, leg_collisions: accumulators of the current task.
@@ -185,6 +189,7 @@ class ExperimentState:
     task: jax.Array
     n_tasks: jax.Array
     leg_open: jax.Array
+    leg_begun: jax.Array
     hop_elapsed_s: jax.Array
     hop_x_m: jax.Array
     hop_y_m: jax.Array
@@ -201,10 +206,44 @@ class ExperimentState:
         return self.task >= self.n_tasks
 
 
+@struct.dataclass
+class ProtocolObservation:
+    """What the method's actor is given at a step: ``seen``, the warehouse's observation
+    (:class:`jaxsim.robot.WarehouseObservation`, the slot frozen), and ``running`` () bool, the
+    experiment is past its warm-up with tasks left (the actor's state moves only then:
+    :func:`while_running`)."""
+
+    seen: robot_lib.WarehouseObservation
+    running: jax.Array
+
+
+@struct.dataclass
+class ProtocolTimeStep:
+    """What :func:`experiment_step` returns beside the state: the actor's next observation."""
+
+    observation: ProtocolObservation
+
+
+def while_running(actor: Actor) -> Actor:
+    """``actor`` given the warehouse's observation of a :class:`ProtocolObservation`, its state
+    kept as it was on the steps its experiment is not running (the warm-up, after the last task)."""
+
+    def init(key, observation: ProtocolObservation):
+        return actor.init(key, observation.seen)
+
+    def act(params, state, observation: ProtocolObservation, key):
+        command, new = actor.act(params, state, observation.seen, key)
+        return command, select(observation.running, new, state)
+
+    return Actor(init=init, act=act, name=actor.name)
+
+
 def init_experiment(
     params: SimParams, cfg: ProtocolConfig, world: World, driver: Driver, slot: jax.Array, key: jax.Array
 ) -> ExperimentState:
-    """An experiment of ``slot`` before its warm-up: workers about to arrive, battery full."""
+    """An experiment of ``slot`` before its warm-up: workers about to arrive, battery full (the
+    first task begun already where there is no warm-up, as every step leaves the next one:
+    :func:`begin_due_task`)."""
     sim = init_state(params, world, driver, jax.random.fold_in(key, rollout.INIT_FOLD))
     w = sim.workers
     w = w.replace(
@@ -226,12 +265,13 @@ def init_experiment(
         goal_wp=i,
     )
     slot = jnp.asarray(slot, jnp.int32)
-    return ExperimentState(
+    xs = ExperimentState(
         sim=sim.replace(workers=w, robot=r),
         slot=slot,
         task=jnp.int32(0),
         n_tasks=world.robot_goal_count[slot],
         leg_open=jnp.bool_(False),
+        leg_begun=jnp.bool_(False),
         hop_elapsed_s=jnp.float32(0.0),
         hop_x_m=jnp.float32(jnp.nan),
         hop_y_m=jnp.float32(jnp.nan),
@@ -243,6 +283,7 @@ def init_experiment(
         distance_hist=jnp.zeros(cfg.distance_bins, jnp.int32),
         end_step=jnp.int32(-1),
     )
+    return begin_due_task(params, cfg, world, xs, world_seed_u32(key))
 
 
 def task_endpoints(world: World, slot: jax.Array, k: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -274,24 +315,46 @@ def _begin_task(params: SimParams, world: World, xs: ExperimentState, seed_u32) 
     )
 
 
-def experiment_step(
-    params: SimParams, cfg: ProtocolConfig, world: World, driver: Driver, xs: ExperimentState, seed_u32: jax.Array
+def _running(params: SimParams, cfg: ProtocolConfig, xs: ExperimentState) -> jax.Array:
+    """() bool: past the warm-up, with tasks left."""
+    return (xs.sim.step >= cfg.warmup_steps(params)) & ~xs.done
+
+
+def begin_due_task(
+    params: SimParams, cfg: ProtocolConfig, world: World, xs: ExperimentState, seed_u32: jax.Array
 ) -> ExperimentState:
-    """Advance one experiment by one step: the simulator's crowd step with the slot frozen, the
-    robot driven by the method's actor on the current task, then the protocol's bookkeeping."""
+    """The state as its step starts: the next task begun if it is due (past the warm-up, tasks
+    left, no leg open), which ``leg_begun`` records for the step."""
+    begin = _running(params, cfg, xs) & ~xs.leg_open
+    return select(begin, _begin_task(params, world, xs, seed_u32), xs).replace(leg_begun=begin)
+
+
+def observe(params: SimParams, cfg: ProtocolConfig, xs: ExperimentState) -> ProtocolObservation:
+    """What the actor sees at the step ``xs`` starts (the task begun: :func:`begin_due_task`)."""
+    w = xs.sim.workers
+    seen = robot_lib.observe(xs.sim.robot, xs.slot, w.x_m, w.y_m, w.present)
+    return ProtocolObservation(seen=seen, running=_running(params, cfg, xs))
+
+
+def experiment_step(
+    params: SimParams,
+    cfg: ProtocolConfig,
+    world: World,
+    xs: ExperimentState,
+    command: robot_lib.RobotCommand,
+    seed_u32: jax.Array,
+) -> tuple[ExperimentState, ProtocolTimeStep]:
+    """Advance one experiment by one step under the method's ``command``: the simulator's crowd
+    step with the slot frozen, the robot driven on the current task, the protocol's bookkeeping,
+    then the next task begun if due. ``xs.sim.actor`` is carried through untouched (the control
+    loop keeps the actor's state: :func:`jaxsim.control.control_loop`). Returns the state and
+    the next step's observation."""
     sim = xs.sim
     time_s = sim.step.astype(jnp.float32) * params.dt_s
-    started = sim.step >= cfg.warmup_steps(params)
-    begin = started & ~xs.done & ~xs.leg_open
-    xs = select(begin, _begin_task(params, world, xs, seed_u32), xs)
-    running = started & ~xs.done
-
+    begin, running = xs.leg_begun, _running(params, cfg, xs)
     u_workers, _ = step_uniforms(seed_u32, sim.step, params.n_workers)
-    w, r = sim.workers, xs.sim.robot
+    w, r = sim.workers, sim.robot
     present = w.present
-    seen = robot_lib.observe(r, xs.slot, w.x_m, w.y_m, present)
-    command, actor_state = driver.actor.act(driver.params, sim.actor, seen, actor_key(seed_u32, sim.step))
-    actor_state = select(running, actor_state, sim.actor)
     # A refusal (Eq. 10) counts on the task's first step: the battery is reset before it drives.
     refuse = begin & command.recharge
     r = r.replace(battery_pct=jnp.where(refuse, jnp.float32(cfg.reset_battery_pct), r.battery_pct))
@@ -356,8 +419,8 @@ def experiment_step(
     )
     task = xs.task + ended.astype(jnp.int32)
     end_step = jnp.where(ended & (task >= xs.n_tasks), sim.step + 1, xs.end_step)
-    return xs.replace(
-        sim=SimState(workers=w, robot=r, step=sim.step + 1, actor=actor_state),
+    xs = xs.replace(
+        sim=sim.replace(workers=w, robot=r, step=sim.step + 1),
         task=task,
         leg_open=xs.leg_open & ~ended,
         hop_elapsed_s=jnp.where(running, hop_elapsed, xs.hop_elapsed_s),
@@ -371,15 +434,19 @@ def experiment_step(
         distance_hist=hist,
         end_step=end_step,
     )
+    xs = begin_due_task(params, cfg, world, xs, seed_u32)
+    return xs, ProtocolTimeStep(observation=observe(params, cfg, xs))
 
 
 def _advance_one(params, cfg, world, driver, xs, key, n_steps):
+    """``n_steps`` steps of one experiment: the control loop both worlds run, the actor's state
+    kept apart from the experiment's and put back after."""
     seed = world_seed_u32(key)
-
-    def body(s, _):
-        return experiment_step(params, cfg, world, driver, s, seed), None
-
-    return jax.lax.scan(body, xs, None, length=n_steps)[0]
+    world_step = lambda s, command: experiment_step(params, cfg, world, s, command, seed)
+    start = (xs.replace(sim=xs.sim.replace(actor=())), observe(params, cfg, xs), xs.sim.actor)
+    keys = actor_keys(seed, xs.sim.step, n_steps)
+    (xs, _, actor_state), _ = control.control_loop(world_step, while_running(driver.actor), driver.params, *start, keys)
+    return xs.replace(sim=xs.sim.replace(actor=actor_state))
 
 
 @functools.lru_cache(maxsize=8)

@@ -3,7 +3,8 @@ and the social-navigation scenes (:mod:`socialnav.jaxsim.scenes`).
 
 :mod:`~socialnav.jaxsim.scenario` (the scenario files, loaded and validated),
 :mod:`~socialnav.jaxsim.world` (its static arrays), :mod:`~socialnav.jaxsim.step` (the crowd step,
-the day step with the robot's actor passed in, the measurement), :mod:`~socialnav.jaxsim.robot`
+the day's transition under the robot's command, the measurement), :mod:`~socialnav.jaxsim.control`
+(the control loop both worlds run: the actor acts, the world steps), :mod:`~socialnav.jaxsim.robot`
 (the robot's body and day), :mod:`~socialnav.jaxsim.rollout` (scan, vmap, sharding) and
 :mod:`~socialnav.jaxsim.logs` (Parquet logs). Imports none of the toolkit's other parts.
 

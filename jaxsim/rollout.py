@@ -7,7 +7,7 @@ Layout of the compiled program for a batch of ``B`` worlds and ``n_samples`` sam
       lax.map over chunks of ``world_chunk`` worlds      (bounded live memory per chunk)
         vmap over the chunk's worlds
           scan over samples -> measure()                  (one Record per sample)
-            scan over steps_per_sample -> step()
+            control_loop over steps_per_sample steps      (jaxsim.control: act, env_step)
 
 The robot's driver (an actor and its params, :class:`jaxsim.actor.Driver`, e.g.
 :func:`jaxsim.route_follower.route_follower`) and the dynamic parameters are ordinary inputs of
@@ -38,11 +38,12 @@ import numpy as np
 from socialnav.common import xla
 from socialnav.common.pytree import put, take
 from socialnav.common.pytree import to_numpy as _to_numpy
+from socialnav.jaxsim import control
+from socialnav.jaxsim import step as step_lib
 from socialnav.jaxsim.actor import Driver
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.rng import world_seed_u32
 from socialnav.jaxsim.state import Record, SimState
-from socialnav.jaxsim.step import init_state, measure, step
 from socialnav.jaxsim.world import World
 
 DEFAULT_WORLD_CHUNK = 64
@@ -62,7 +63,7 @@ def world_keys(seed: int, n_worlds: int, first_world: int = 0) -> jax.Array:
 @functools.lru_cache(maxsize=4)
 def _init_fn(params_batched: bool):
     def init(params, world, driver, key):
-        return init_state(params, world, driver, jax.random.fold_in(key, INIT_FOLD))
+        return step_lib.init_state(params, world, driver, jax.random.fold_in(key, INIT_FOLD))
 
     # Run once per batch and mostly random draws: compiled for speed of compiling (common.xla).
     return jax.jit(
@@ -87,15 +88,18 @@ def _run_one(
     steps_per_sample: int,
 ) -> tuple[SimState, Record]:
     seed = world_seed_u32(key)
+    world_step = lambda s, command: step_lib.env_step(params, world, s, command, seed)
 
-    def inner(s, _):
-        return step(params, world, driver, s, seed), None
+    def sample(carry, _):
+        s = carry[0]
+        keys = step_lib.actor_keys(seed, s.step, steps_per_sample)
+        carry, _ = control.control_loop(world_step, driver.actor, driver.params, *carry, keys)
+        return carry, step_lib.measure(params, world, carry[0])
 
-    def outer(s, _):
-        s, _ = jax.lax.scan(inner, s, None, length=steps_per_sample)
-        return s, measure(params, world, s)
-
-    return jax.lax.scan(outer, state, None, length=n_samples)
+    # The loop keeps the actor's state apart from the world's; it goes back into the state after.
+    start = (state.replace(actor=()), step_lib.observe(params, world, state), state.actor)
+    (state, _, actor_state), records = jax.lax.scan(sample, start, None, length=n_samples)
+    return state.replace(actor=actor_state), records
 
 
 def map_worlds(run_one: Callable, batched: tuple, world_chunk: int):

@@ -2,11 +2,13 @@
 
 * :func:`crowd_step` moves the workers one step given the robot's previous pose: the one crowd
   step the day simulation and every protocol (``evaluation.protocol``) call.
-* :func:`step` is the day simulation's step: the crowd step, then the robot driven by its
-  actor (a :class:`jaxsim.actor.Driver` passed in, as waymax passes its actor:
-  :func:`jaxsim.route_follower.route_follower` follows a plan). The actor sees the robot and the
-  workers' previous positions (:class:`jaxsim.robot.WarehouseObservation`) and answers a
-  :class:`jaxsim.robot.RobotCommand`; workers and robot see each other's previous pose.
+* :func:`env_step` is the day's transition under a command: the crowd step, then the robot
+  driven by the command (:class:`jaxsim.robot.RobotCommand`); workers and robot see each other's
+  previous pose. It returns the next :func:`observe` (:class:`jaxsim.robot.WarehouseObservation`,
+  the robot and the workers' positions), so the day runs in the control loop both worlds share
+  (:func:`jaxsim.control.control_loop`, with the robot's actor passed in as waymax passes its
+  actor: :func:`jaxsim.route_follower.route_follower` follows a plan). :func:`step` is one such
+  step with the actor, for code that steps a world by hand.
 * :func:`measure` computes what is logged; the rollout (:mod:`jaxsim.rollout`) calls it only at
   sampling instants, so the per-step cost is the dynamics alone.
 
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+from flax import struct
 
 from socialnav.jaxsim import rng
 from socialnav.jaxsim import robot as robot_lib
@@ -36,6 +39,18 @@ def actor_key(seed_u32: jax.Array, step: jax.Array) -> jax.Array:
     return jax.random.fold_in(jax.random.fold_in(jax.random.key(seed_u32), ACTOR_STREAM), step)
 
 
+def actor_keys(seed_u32: jax.Array, first_step: jax.Array, n_steps: int) -> jax.Array:
+    """(n_steps,) the actor's keys at steps ``first_step ..`` (:func:`actor_key` of each)."""
+    return jax.vmap(lambda i: actor_key(seed_u32, first_step + i))(jnp.arange(n_steps, dtype=jnp.int32))
+
+
+@struct.dataclass
+class WarehouseTimeStep:
+    """What :func:`env_step` returns beside the state: the actor's next observation."""
+
+    observation: robot_lib.WarehouseObservation
+
+
 def current_slot(params: SimParams, world: World, step: jax.Array) -> jax.Array:
     """Slot index of ``step`` (the last slot goes on after the day's end)."""
     return jnp.minimum(step // params.steps_per_slot, world.n_slots - 1).astype(jnp.int32)
@@ -47,9 +62,16 @@ def init_state(params: SimParams, world: World, driver: Driver, key: jax.Array) 
     kw, kr = jax.random.split(key)
     workers = workers_lib.init_workers(params, world, jax.random.uniform(kw, (5, params.n_workers)))
     robot = robot_lib.init_robot(params, world, jax.random.uniform(kr, (3,)))
-    seen = robot_lib.observe(robot, jnp.int32(0), workers.x_m, workers.y_m, workers.present)
-    actor_state = driver.actor.init(jax.random.fold_in(key, ACTOR_STREAM), seen)
-    return SimState(workers=workers, robot=robot, step=jnp.int32(0), actor=actor_state)
+    state = SimState(workers=workers, robot=robot, step=jnp.int32(0))
+    actor_state = driver.actor.init(jax.random.fold_in(key, ACTOR_STREAM), observe(params, world, state))
+    return state.replace(actor=actor_state)
+
+
+def observe(params: SimParams, world: World, state: SimState) -> robot_lib.WarehouseObservation:
+    """What the actor sees before the step ``state.step``: the robot, the slot, the workers'
+    positions (those the robot's physics uses in that step)."""
+    w = state.workers
+    return robot_lib.observe(state.robot, current_slot(params, world, state.step), w.x_m, w.y_m, w.present)
 
 
 def crowd_step(
@@ -84,21 +106,33 @@ def crowd_step(
     )
 
 
-def step(params: SimParams, world: World, driver: Driver, state: SimState, seed_u32: jax.Array) -> SimState:
-    """Advance one world by one step (the crowd, then the robot under its actor's command).
+def env_step(
+    params: SimParams, world: World, state: SimState, command: robot_lib.RobotCommand, seed_u32: jax.Array
+) -> tuple[SimState, WarehouseTimeStep]:
+    """Advance one world by one step under the robot's ``command`` (the crowd, then the robot).
 
     ``seed_u32``: the world's uint32 seed (:func:`jaxsim.rng.world_seed_u32`); the step's random
-    draws are hashed from it and the step counter.
+    draws are hashed from it and the step counter. ``state.actor`` is carried through untouched
+    (the control loop keeps the actor's state apart). Returns the state after the step and its
+    observation.
     """
     time_s = state.step.astype(jnp.float32) * params.dt_s
     slot = current_slot(params, world, state.step)
     u_workers, u_robot = rng.step_uniforms(seed_u32, state.step, params.n_workers)
     w, r = state.workers, state.robot
     workers = crowd_step(params, world, w, r, time_s, slot, u_workers)
-    seen = robot_lib.observe(r, slot, w.x_m, w.y_m, w.present)
-    command, actor_state = driver.actor.act(driver.params, state.actor, seen, actor_key(seed_u32, state.step))
     robot = robot_lib.update_robot(params, world, r, command, slot, w.x_m, w.y_m, w.present, u_robot)
-    return SimState(workers=workers, robot=robot, step=state.step + 1, actor=actor_state)
+    new = state.replace(workers=workers, robot=robot, step=state.step + 1)
+    return new, WarehouseTimeStep(observation=observe(params, world, new))
+
+
+def step(params: SimParams, world: World, driver: Driver, state: SimState, seed_u32: jax.Array) -> SimState:
+    """One step of the day by hand: the actor's command on :func:`observe`, then :func:`env_step`
+    (what one turn of :func:`jaxsim.control.control_loop` in the rollout does)."""
+    seen = observe(params, world, state)
+    command, actor_state = driver.actor.act(driver.params, state.actor, seen, actor_key(seed_u32, state.step))
+    new, _ = env_step(params, world, state, command, seed_u32)
+    return new.replace(actor=actor_state)
 
 
 def measure(params: SimParams, world: World, state: SimState) -> Record:

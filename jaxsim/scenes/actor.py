@@ -9,8 +9,8 @@ with the arena's observation (:class:`jaxsim.scenes.env.Observation`) and action
 ``params`` is any pytree (weights, layer parameters, the map the actor was given); its leaves
 are traced, so a new checkpoint or a parameter sweep does not recompile. ``actor_state`` is any
 pytree of fixed shapes (a path, a recurrent state, a filter). A stack that plans at a slower
-rate is wrapped by :func:`jaxsim.actor.replanning`; :func:`rollout` is one ``lax.scan`` over
-control steps whatever the actor.
+rate is wrapped by :func:`jaxsim.actor.replanning`; :func:`rollout` is the control loop both
+worlds run (:func:`jaxsim.control.control_loop`) over an episode, whatever the actor.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
+from socialnav.jaxsim import control
 from socialnav.jaxsim.actor import Actor, ActorState, Params, replanning
 from socialnav.jaxsim.scenes.env import Env, EnvState, Observation, TimeStep, action_problem
 
@@ -112,14 +113,8 @@ def rollout(
     key_reset, key_init, key_run = jax.random.split(key, 3)
     state, timestep = env.reset(key_reset, variant)
     actor_state = actor.init(key_init, timestep.observation)
-
-    def control(carry, step_key):
-        state, timestep, actor_state = carry
-        observation = timestep.observation
-        action, actor_state = actor.act(params, actor_state, observation, step_key)
-        state, timestep = env.step(state, action)
-        return (state, timestep, actor_state), record(observation, action, actor_state, timestep)
-
     keys = jax.random.split(key_run, n_steps)
-    (state, _, actor_state), records = jax.lax.scan(control, (state, timestep, actor_state), keys)
+    (state, _, actor_state), records = control.control_loop(
+        env.step, actor, params, state, timestep.observation, actor_state, keys, record
+    )
     return (state, actor_state), records

@@ -1,0 +1,67 @@
+"""The control loop of both worlds: act on the observation, step the world, record; one ``lax.scan``.
+
+The warehouse day (:func:`jaxsim.rollout.run_samples`), seed 000's protocol
+(:mod:`evaluation.protocol`) and the arena's episode (:func:`jaxsim.scenes.actor.rollout`) drive
+their robot through :func:`control_loop`; only the world's step differs::
+
+    for key in keys:
+        action, actor_state = actor.act(params, actor_state, observation, key)
+        state, timestep = step(state, action)
+        records.append(record(observation, action, actor_state, timestep))
+        observation = timestep.observation
+
+``step(state, action) -> (state, timestep)`` is a world's transition with its static parts bound
+(the arena's :meth:`jaxsim.scenes.env.Env.step`; the warehouse's
+:func:`jaxsim.step.env_step`, bound to its world and seed); ``timestep`` is any pytree with an
+``observation`` field (the arena's :class:`~jaxsim.scenes.env.TimeStep` also carries the reward
+and what the metrics read). The loop knows nothing of planning (a stack that plans at a slower
+rate is an actor wrapped by :func:`jaxsim.actor.replanning`), of resets or of batches (``vmap``
+it over episodes or worlds).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import jax
+
+from socialnav.jaxsim.actor import Actor, ActorState, Observation, Params
+
+Step = Callable[[Any, Any], tuple[Any, Any]]
+Record = Callable[[Observation, Any, ActorState, Any], Any]
+
+
+def control_loop(
+    step: Step,
+    actor: Actor,
+    params: Params,
+    state,
+    observation: Observation,
+    actor_state: ActorState,
+    keys: jax.Array,
+    record: Record | None = None,
+) -> tuple[tuple[Any, Observation, ActorState], Any]:
+    """``len(keys)`` control steps of ``actor`` (with ``params``) in the world ``step`` moves.
+
+    Args:
+      step: ``(state, action) -> (state, timestep)``; ``timestep.observation`` is what the actor
+        sees next.
+      state, observation, actor_state: where the loop starts (the observation of ``state``).
+      keys: (T,) the actor's key at each step.
+      record: ``(observation acted on, action, actor state after it, timestep) -> pytree``, kept
+        for every step; None keeps nothing (the warehouse measures between loops instead).
+
+    Returns:
+      ``((state, observation, actor_state) after T steps, records)``: the records stacked over
+      the T steps (None without ``record``).
+    """
+
+    def control(carry, key):
+        state, observation, actor_state = carry
+        action, actor_state = actor.act(params, actor_state, observation, key)
+        state, timestep = step(state, action)
+        kept = None if record is None else record(observation, action, actor_state, timestep)
+        return (state, timestep.observation, actor_state), kept
+
+    return jax.lax.scan(control, (state, observation, actor_state), keys)
