@@ -329,7 +329,7 @@ def begin_due_task(
     return select(begin, _begin_task(params, world, xs, seed_u32), xs).replace(leg_begun=begin)
 
 
-def observe(params: SimParams, cfg: ProtocolConfig, xs: ExperimentState) -> ProtocolObservation:
+def protocol_observation(params: SimParams, cfg: ProtocolConfig, xs: ExperimentState) -> ProtocolObservation:
     """What the actor sees at the step ``xs`` starts (the task begun: :func:`begin_due_task`)."""
     w = xs.sim.workers
     seen = robot_lib.observe(xs.sim.robot, xs.slot, w.x_m, w.y_m, w.present)
@@ -348,7 +348,7 @@ def experiment_step(
     step with the slot frozen, the robot driven on the current task, the protocol's bookkeeping,
     then the next task begun if due. ``xs.sim.actor`` is carried through untouched (the control
     loop keeps the actor's state: :func:`jaxsim.control.control_loop`). Returns the state and
-    the next step's observation."""
+    the next step's observation (:func:`protocol_observation`)."""
     sim = xs.sim
     time_s = sim.step.astype(jnp.float32) * params.dt_s
     begin, running = xs.leg_begun, _running(params, cfg, xs)
@@ -435,7 +435,7 @@ def experiment_step(
         end_step=end_step,
     )
     xs = begin_due_task(params, cfg, world, xs, seed_u32)
-    return xs, ProtocolTimeStep(observation=observe(params, cfg, xs))
+    return xs, ProtocolTimeStep(observation=protocol_observation(params, cfg, xs))
 
 
 def _advance_one(params, cfg, world, driver, xs, key, n_steps):
@@ -443,9 +443,13 @@ def _advance_one(params, cfg, world, driver, xs, key, n_steps):
     kept apart from the experiment's and put back after."""
     seed = world_seed_u32(key)
     world_step = lambda s, command: experiment_step(params, cfg, world, s, command, seed)
-    start = (xs.replace(sim=xs.sim.replace(actor=())), observe(params, cfg, xs), xs.sim.actor)
+    observe = lambda s: protocol_observation(params, cfg, s)
     keys = actor_keys(seed, xs.sim.step, n_steps)
-    (xs, _, actor_state), _ = control.control_loop(world_step, while_running(driver.actor), driver.params, *start, keys)
+    actor = while_running(driver.actor)
+    start = xs.replace(sim=xs.sim.replace(actor=()))
+    (xs, _, actor_state), _ = control.control_loop(
+        world_step, actor, driver.params, start, None, xs.sim.actor, keys, observe=observe
+    )
     return xs.replace(sim=xs.sim.replace(actor=actor_state))
 
 

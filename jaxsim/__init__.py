@@ -14,6 +14,7 @@ them from their modules).
 """
 
 from socialnav.jaxsim.actor import Actor, Driver, replanning
+from socialnav.jaxsim.control import control_loop
 from socialnav.jaxsim.logs import record_table, simulate_to_parquet
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.rollout import to_numpy
@@ -28,6 +29,7 @@ __all__ = [
     "SimParams",
     "World",
     "build_world",
+    "control_loop",
     "load_scenario",
     "record_table",
     "replanning",

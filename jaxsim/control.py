@@ -14,7 +14,14 @@ their robot through :func:`control_loop`; only the world's step differs::
 (the arena's :meth:`jaxsim.scenes.env.Env.step`; the warehouse's
 :func:`jaxsim.step.env_step`, bound to its world and seed); ``timestep`` is any pytree with an
 ``observation`` field (the arena's :class:`~jaxsim.scenes.env.TimeStep` also carries the reward
-and what the metrics read). The loop knows nothing of planning (a stack that plans at a slower
+and what the metrics read). Where the observation is a function of the state alone (the
+warehouse's and the protocol's: the robot and the workers' positions), the caller passes that
+function as ``observe`` and the loop computes it at each step instead of carrying it from the
+step before: a carried observation is a second copy of arrays the state holds, which cost the
+warehouse's compiled step ten buffer copies a step (measured on its optimised HLO; with
+``observe`` it is the program the day ran before it had a shared loop, op for op). The arena's
+observation is made by its step (the perception's tracks), so it is carried. The loop knows
+nothing of planning (a stack that plans at a slower
 rate is an actor wrapped by :func:`jaxsim.actor.replanning`), of resets or of batches (``vmap``
 it over episodes or worlds).
 """
@@ -37,10 +44,11 @@ def control_loop(
     actor: Actor,
     params: Params,
     state,
-    observation: Observation,
+    observation: Observation | None,
     actor_state: ActorState,
     keys: jax.Array,
     record: Record | None = None,
+    observe: Callable[[Any], Observation] | None = None,
 ) -> tuple[tuple[Any, Observation, ActorState], Any]:
     """``len(keys)`` control steps of ``actor`` (with ``params``) in the world ``step`` moves.
 
@@ -51,6 +59,10 @@ def control_loop(
       keys: (T,) the actor's key at each step.
       record: ``(observation acted on, action, actor state after it, timestep) -> pytree``, kept
         for every step; None keeps nothing (the warehouse measures between loops instead).
+      observe: ``state -> observation`` where the observation is a function of the state alone:
+        then computed at each step instead of carried (``observation`` and
+        ``timestep.observation`` are not read, XLA drops what computed the latter, and the
+        observation returned is None).
 
     Returns:
       ``((state, observation, actor_state) after T steps, records)``: the records stacked over
@@ -59,9 +71,11 @@ def control_loop(
 
     def control(carry, key):
         state, observation, actor_state = carry
+        if observe is not None:
+            observation = observe(state)
         action, actor_state = actor.act(params, actor_state, observation, key)
         state, timestep = step(state, action)
         kept = None if record is None else record(observation, action, actor_state, timestep)
-        return (state, timestep.observation, actor_state), kept
+        return (state, None if observe is not None else timestep.observation, actor_state), kept
 
-    return jax.lax.scan(control, (state, observation, actor_state), keys)
+    return jax.lax.scan(control, (state, None if observe is not None else observation, actor_state), keys)

@@ -89,16 +89,18 @@ def _run_one(
 ) -> tuple[SimState, Record]:
     seed = world_seed_u32(key)
     world_step = lambda s, command: step_lib.env_step(params, world, s, command, seed)
+    observe = lambda s: step_lib.observe(params, world, s)
 
     def sample(carry, _):
-        s = carry[0]
+        s, actor_state = carry
         keys = step_lib.actor_keys(seed, s.step, steps_per_sample)
-        carry, _ = control.control_loop(world_step, driver.actor, driver.params, *carry, keys)
-        return carry, step_lib.measure(params, world, carry[0])
+        (s, _, actor_state), _ = control.control_loop(
+            world_step, driver.actor, driver.params, s, None, actor_state, keys, observe=observe
+        )
+        return (s, actor_state), step_lib.measure(params, world, s)
 
     # The loop keeps the actor's state apart from the world's; it goes back into the state after.
-    start = (state.replace(actor=()), step_lib.observe(params, world, state), state.actor)
-    (state, _, actor_state), records = jax.lax.scan(sample, start, None, length=n_samples)
+    (state, actor_state), records = jax.lax.scan(sample, (state.replace(actor=()), state.actor), None, length=n_samples)
     return state.replace(actor=actor_state), records
 
 

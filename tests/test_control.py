@@ -57,6 +57,22 @@ def test_the_loop_acts_on_each_observation_then_steps_the_world():
     start = (jnp.float32(0.0), jnp.float32(0.0), (jnp.int32(0), jnp.float32(0.0)))
     _, nothing = control.control_loop(world_step, _toward(1.0), jnp.float32(2.5), *start, keys)
     assert nothing is None  # without a record nothing is kept
+    # An observation that is the state itself, computed each step instead of carried: the same run.
+    blind_step = lambda x, action: (x + action, Seen(observation=None))
+    (x2, unread, _), kept2 = control.control_loop(
+        blind_step,
+        _toward(1.0),
+        jnp.float32(2.5),
+        jnp.float32(0.0),
+        None,
+        (jnp.int32(0), jnp.float32(0.0)),
+        keys,
+        record=lambda observation, action, actor_state, timestep: (observation, action),
+        observe=lambda x: x,
+    )
+    assert unread is None and float(x2) == 2.5
+    np.testing.assert_array_equal(np.asarray(kept2[0]), acted_on)
+    np.testing.assert_array_equal(np.asarray(kept2[1]), actions)
 
 
 def test_the_warehouse_the_protocol_and_the_arena_run_one_control_loop(monkeypatch, short_day):
