@@ -143,6 +143,14 @@ def parse_graph(res: dict, names) -> list[Link]:
     return links
 
 
+def _truth_label(edge: tuple[str, str, int], truth) -> str:
+    """``C->E``, ``C(t-k)->E``, or ``A<->B`` for a same-time pair that ``truth`` has both ways."""
+    c, e, lag = edge
+    if lag:
+        return f"{c}(t-{lag})->{e}"
+    return f"{min(c, e)}<->{max(c, e)}" if (e, c, 0) in truth else f"{c}->{e}"
+
+
 def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
     """Precision, recall and structural Hamming distance against the known graph.
 
@@ -150,10 +158,14 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
     one per missing adjacency, one per extra adjacency and one per adjacency with the wrong or
     no orientation. Recall is over ``truth``'s adjacencies: a same-time pair that causes itself
     both ways (feedback within a sampling period, :func:`causal.simulator_graph.pipeline_truth`)
-    is one adjacency, found right in either orientation.
+    is one adjacency, found right in either orientation, and named ``A<->B`` when missing. The
+    result does not depend on the order ``truth`` is iterated in (a set's changes with Python's
+    hash seed from one process to the next).
     """
     adj = lambda a, b, lag: (frozenset((a, b)), lag) if lag == 0 else ((a, b), lag)
-    truth_adj = {adj(*t): t for t in truth}
+    truth_adj = {}
+    for t in sorted(truth):  # sorted: a set's order changes from one process to the next
+        truth_adj.setdefault(adj(*t), t)
     found_adj = {}
     for k in links:
         found_adj[adj(k.cause, k.effect, k.lag)] = k
@@ -167,7 +179,7 @@ def score(links: list[Link], truth=GROUND_TRUTH) -> dict[str, float]:
         "precision": right / max(len(links), 1),
         "recall": right / max(len(truth_adj), 1),
         "shd": len(missing) + len(extra) + len(misoriented),
-        "missing": [f"{c}(t-{lag})->{e}" if lag else f"{c}->{e}" for c, e, lag in sorted(missing)],
+        "missing": [_truth_label(t, truth) for t in sorted(missing)],
         "extra": [k.label for k in extra],
         "misoriented": [k.label for k in misoriented],
     }
