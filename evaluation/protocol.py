@@ -217,13 +217,6 @@ class ProtocolObservation:
     running: jax.Array
 
 
-@struct.dataclass
-class ProtocolTimeStep:
-    """What :func:`experiment_step` returns beside the state: the actor's next observation."""
-
-    observation: ProtocolObservation
-
-
 def while_running(actor: Actor) -> Actor:
     """``actor`` given the warehouse's observation of a :class:`ProtocolObservation`, its state
     kept as it was on the steps its experiment is not running (the warm-up, after the last task)."""
@@ -343,7 +336,7 @@ def experiment_step(
     xs: ExperimentState,
     command: robot_lib.RobotCommand,
     seed_u32: jax.Array,
-) -> tuple[ExperimentState, ProtocolTimeStep]:
+) -> tuple[ExperimentState, control.Observed]:
     """Advance one experiment by one step under the method's ``command``: the simulator's crowd
     step with the slot frozen, the robot driven on the current task, the protocol's bookkeeping,
     then the next task begun if due. ``xs.sim.actor`` is carried through untouched (the control
@@ -435,7 +428,7 @@ def experiment_step(
         end_step=end_step,
     )
     xs = begin_due_task(params, cfg, world, xs, seed_u32)
-    return xs, ProtocolTimeStep(observation=protocol_observation(params, cfg, xs))
+    return xs, control.Observed(observation=protocol_observation(params, cfg, xs))
 
 
 def _advance_one(params, cfg, world, driver, xs, key, n_steps):

@@ -32,10 +32,22 @@ from collections.abc import Callable
 from typing import Any
 
 import jax
+from flax import struct
 
 from socialnav.jaxsim.actor import Actor, ActorState, Observation, Params
 
 Step = Callable[[Any, Any], tuple[Any, Any]]
+
+
+@struct.dataclass
+class Observed:
+    """A timestep that carries the actor's next observation and nothing else (the warehouse's
+    and the protocol's steps return it; the arena's :class:`~jaxsim.scenes.env.TimeStep` carries
+    more)."""
+
+    observation: Observation
+
+
 Record = Callable[[Observation, Any, ActorState, Any], Any]
 
 

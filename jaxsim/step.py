@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-from flax import struct
 
 from socialnav.jaxsim import rng
 from socialnav.jaxsim import robot as robot_lib
 from socialnav.jaxsim import workers as workers_lib
 from socialnav.jaxsim.actor import Driver
+from socialnav.jaxsim.control import Observed
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.state import Record, RobotState, SimState, WorkerState
 from socialnav.jaxsim.world import World
@@ -42,13 +42,6 @@ def actor_key(seed_u32: jax.Array, step: jax.Array) -> jax.Array:
 def actor_keys(seed_u32: jax.Array, first_step: jax.Array, n_steps: int) -> jax.Array:
     """(n_steps,) the actor's keys at steps ``first_step ..`` (:func:`actor_key` of each)."""
     return jax.vmap(lambda i: actor_key(seed_u32, first_step + i))(jnp.arange(n_steps, dtype=jnp.int32))
-
-
-@struct.dataclass
-class WarehouseTimeStep:
-    """What :func:`env_step` returns beside the state: the actor's next observation."""
-
-    observation: robot_lib.WarehouseObservation
 
 
 def current_slot(params: SimParams, world: World, step: jax.Array) -> jax.Array:
@@ -108,7 +101,7 @@ def crowd_step(
 
 def env_step(
     params: SimParams, world: World, state: SimState, command: robot_lib.RobotCommand, seed_u32: jax.Array
-) -> tuple[SimState, WarehouseTimeStep]:
+) -> tuple[SimState, Observed]:
     """Advance one world by one step under the robot's ``command`` (the crowd, then the robot).
 
     ``seed_u32``: the world's uint32 seed (:func:`jaxsim.rng.world_seed_u32`); the step's random
@@ -123,7 +116,7 @@ def env_step(
     workers = crowd_step(params, world, w, r, time_s, slot, u_workers)
     robot = robot_lib.update_robot(params, world, r, command, slot, w.x_m, w.y_m, w.present, u_robot)
     new = state.replace(workers=workers, robot=robot, step=state.step + 1)
-    return new, WarehouseTimeStep(observation=observe(params, world, new))
+    return new, Observed(observation=observe(params, world, new))
 
 
 def step(params: SimParams, world: World, driver: Driver, state: SimState, seed_u32: jax.Array) -> SimState:
