@@ -2,8 +2,9 @@
 and the social-navigation scenes (:mod:`socialnav.jaxsim.scenes`).
 
 :mod:`~socialnav.jaxsim.scenario` (the scenario files, loaded and validated),
-:mod:`~socialnav.jaxsim.world` (its static arrays), :mod:`~socialnav.jaxsim.step` (the crowd step,
-the day's transition under the robot's command, the measurement), :mod:`~socialnav.jaxsim.control`
+:mod:`~socialnav.jaxsim.world` (its static arrays), :mod:`~socialnav.jaxsim.grid` (the one grid
+type of every map: walls, waypoints, occupancy, costs), :mod:`~socialnav.jaxsim.step` (the crowd
+step, the day's transition under the robot's command, the measurement), :mod:`~socialnav.jaxsim.control`
 (the control loop both worlds run: the actor acts, the world steps), :mod:`~socialnav.jaxsim.robot`
 (the robot's body and day), :mod:`~socialnav.jaxsim.rollout` (scan, vmap, sharding) and
 :mod:`~socialnav.jaxsim.logs` (Parquet logs). Imports none of the toolkit's other parts.

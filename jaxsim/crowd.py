@@ -25,8 +25,8 @@ import jax
 import jax.numpy as jnp
 
 from socialnav.jaxsim import social_force as sf
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import SimParams
-from socialnav.jaxsim.world import Grid
 
 # Minimum clearance kept from wall surfaces by the hard wall constraint (m).
 WALL_CLEARANCE_M = 0.1

@@ -30,8 +30,8 @@ import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import PERSON_RADIUS_M
-from socialnav.jaxsim.world import Grid
 
 _EPS = 1e-5
 MAX_NEIGHBORS = 10  # RVO2's default maxNeighbors

@@ -55,7 +55,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
-from socialnav.jaxsim.world import Grid
+from socialnav.jaxsim.grid import Grid
 
 _EPS = 1e-6
 EXPONENT = 2.0  # the power of the law, KSG's fit to the data (tau^-2)

@@ -180,8 +180,9 @@ def keep_body_clear(params: SimParams, world: World, x_m: jax.Array, y_m: jax.Ar
     field = world.wall_field
     row, col = field.index(x_m, y_m)
     d, nx, ny = field.values[row, col, 0], field.values[row, col, 1], field.values[row, col, 2]
-    gx = field.origin_x_m + col.astype(x_m.dtype) * field.resolution_m
-    gy = field.origin_y_m + row.astype(y_m.dtype) * field.resolution_m
+    x0, y0 = field.first_centre_m
+    gx = x0 + col.astype(x_m.dtype) * field.spec.resolution_m
+    gy = y0 + row.astype(y_m.dtype) * field.spec.resolution_m
     d = d + nx * (x_m - gx) + ny * (y_m - gy)
     push = jnp.maximum(params.robot_radius_m - d, 0.0)
     return x_m + push * nx, y_m + push * ny

@@ -38,7 +38,7 @@ import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
-from socialnav.jaxsim.world import Grid
+from socialnav.jaxsim.grid import Grid
 
 _EPS = 1e-6
 FREE_SPACING_M = 1000.0  # the spacing of someone with nobody ahead

@@ -16,33 +16,13 @@ import numpy as np
 from flax import struct
 
 from socialnav.jaxsim import geometry, graph
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.scenario import Scenario
 
 # Area simulated around the walls: the building plus the open parking lot north of its door.
 MARGIN_M = 1.0
 WALL_FIELD_RESOLUTION_M = 0.05
 WAYPOINT_GRID_RESOLUTION_M = 0.25
-
-
-@struct.dataclass
-class Grid:
-    """A value grid over the world: cell (row, col) has its centre at origin + (col, row) * res."""
-
-    values: jax.Array  # (H, W, ...)
-    origin_x_m: float = struct.field(pytree_node=False)
-    origin_y_m: float = struct.field(pytree_node=False)
-    resolution_m: float = struct.field(pytree_node=False)
-
-    def index(self, x, y):
-        """Nearest cell (row, col) of points ``x, y`` (any shape), clamped to the grid."""
-        h, w = self.values.shape[:2]
-        col = jnp.clip(jnp.round((x - self.origin_x_m) / self.resolution_m), 0, w - 1).astype(jnp.int32)
-        row = jnp.clip(jnp.round((y - self.origin_y_m) / self.resolution_m), 0, h - 1).astype(jnp.int32)
-        return row, col
-
-    def lookup(self, x, y):
-        row, col = self.index(x, y)
-        return self.values[row, col]
 
 
 @struct.dataclass
@@ -165,7 +145,7 @@ def build_world(scenario: Scenario, human_model: str = "social_force") -> World:
     goals = np.stack([np.resize(g, max_goals) for g in scenario.robot_goals]).astype(np.int32)
 
     def grid(values, g):
-        return Grid(jnp.asarray(values), float(g.origin_m[0]), float(g.origin_m[1]), float(g.resolution_m))
+        return Grid.of_samples(jnp.asarray(values), float(g.origin_m[0]), float(g.origin_m[1]), float(g.resolution_m))
 
     park = scenario.waypoint_xy_m[scenario.parking]
     return World(

@@ -11,8 +11,8 @@ import jax.numpy as jnp
 from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.orca import _det, orca_line
-from socialnav.jaxsim.world import Grid
 
 _EPS = 1e-5
 

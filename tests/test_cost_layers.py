@@ -63,20 +63,26 @@ def test_combine_max_and_uint8_conversion():
     np.testing.assert_allclose(t, [50.0, 50 + 0.8 * 252, np.inf, np.inf])
 
 
-def test_a_simulators_grid_and_its_grid_spec_name_the_same_cells():
-    """jaxsim.world.Grid keeps cell (0, 0)'s centre, GridSpec its corner: GridSpec.of_grid puts
-    every cell's centre where the Grid has it, and both find the same cell for a point."""
-    from socialnav.jaxsim.world import Grid
+def test_a_sampled_field_is_the_grid_centred_on_its_samples_and_finds_the_cell_a_point_is_in():
+    """Grid.of_samples puts every cell's centre on a sample (its origin half a cell below and to
+    the left of the first), and a lookup finds the same cell as GridSpec.cell_of, the planners'."""
+    from socialnav.jaxsim.grid import Grid
 
-    grid = Grid(jnp.zeros((5, 7)), origin_x_m=-1.3, origin_y_m=2.1, resolution_m=0.25)
-    spec = costmap.GridSpec.of_grid(grid)
+    grid = Grid.of_samples(jnp.arange(35.0).reshape(5, 7), -1.3, 2.1, 0.25)
+    spec = grid.spec
     assert spec.shape == (5, 7) and spec.resolution_m == 0.25
+    assert (spec.origin_x_m, spec.origin_y_m) == pytest.approx((-1.425, 1.975))
+    assert grid.first_centre_m == pytest.approx((-1.3, 2.1))
     x, y = spec.cell_centres()
     np.testing.assert_allclose(x[0], -1.3 + 0.25 * np.arange(7), atol=1e-6)
     np.testing.assert_allclose(y[:, 0], 2.1 + 0.25 * np.arange(5), atol=1e-6)
     points = np.array([[-1.3, 2.1], [-1.2, 2.2], [0.2, 3.05], [-0.45, 2.62]], np.float32)
     row, col = grid.index(points[:, 0], points[:, 1])
     np.testing.assert_array_equal(np.asarray(spec.cell_of(points)), np.stack([row, col], axis=-1))
+    np.testing.assert_array_equal(np.asarray(grid.lookup(points[:, 0], points[:, 1])), [0.0, 0.0, 34.0, 17.0])
+    # Off the grid: the lookup clamps to the border cell, nearest_cell says how far off it is.
+    assert np.asarray(grid.index(np.float32(-9.0), np.float32(9.0))).tolist() == [4, 0]
+    assert np.asarray(grid.nearest_cell(np.float32(-9.0), np.float32(9.0))).tolist() == [28.0, -31.0]
 
 
 @pytest.mark.parametrize(

@@ -10,14 +10,14 @@ import pytest
 from socialnav.data import DATA_DIR
 from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim import crowd, orca, rng
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.scenes import people as people_lib
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
-from socialnav.jaxsim.world import Grid
 
 # No walls within reach: a distance field 100 m from everything.
-OPEN = Grid(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), origin_x_m=-50.0, origin_y_m=-50.0, resolution_m=30.0)
+OPEN = Grid.of_samples(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), -50.0, -50.0, 30.0)
 FAR_ROBOT = (jnp.float32(100.0), jnp.float32(100.0), jnp.float32(0.0), jnp.float32(0.0))
 
 
@@ -90,7 +90,7 @@ def test_a_person_walking_into_a_wall_stops_at_the_clearance_without_velocity_in
     field = np.zeros((3, len(xs), 3), np.float32)
     field[..., 0] = xs[None, :]
     field[..., 1] = 1.0
-    wall = Grid(jnp.asarray(field), origin_x_m=-1.0, origin_y_m=-0.05, resolution_m=0.05)
+    wall = Grid.of_samples(jnp.asarray(field), -1.0, -0.05, 0.05)
     x, y = jnp.array([1.0]), jnp.array([0.0])
     vx, vy = jnp.array([-1.5]), jnp.array([0.0])
     one = jnp.ones(1, bool)

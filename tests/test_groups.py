@@ -17,8 +17,8 @@ from socialnav.evaluation.humans import measures
 from socialnav.evaluation.humans import trajectory_calibration as tc
 from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import groups, humans
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.scenario.loader import load_scenario
-from socialnav.jaxsim.world import Grid
 
 P = groups.GroupParams()
 FAR = (jnp.float32(1e4), jnp.float32(1e4), jnp.float32(0.0), jnp.float32(0.0))
@@ -78,7 +78,7 @@ def _open_field():
     values = np.zeros((2, 2, 3), np.float32)
     values[..., 0] = 1e4
     values[..., 1] = 1.0
-    return Grid(jnp.asarray(values), -1e4, -1e4, 2e4)
+    return Grid.of_samples(jnp.asarray(values), -1e4, -1e4, 2e4)
 
 
 @functools.partial(jax.jit, static_argnames=("model", "grouped", "n_steps"))

@@ -18,7 +18,7 @@ from socialnav.data import recorded
 from socialnav.evaluation.humans import measures
 from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import power_law, speed_model
-from socialnav.jaxsim.world import Grid
+from socialnav.jaxsim.grid import Grid
 
 # ---------------------------------------------------------------- the data
 
@@ -268,7 +268,7 @@ def _open_field():
     values = np.zeros((2, 2, 3), np.float32)
     values[..., 0] = 1e4
     values[..., 1] = 1.0
-    return Grid(jnp.asarray(values), -1e4, -1e4, 2e4)
+    return Grid.of_samples(jnp.asarray(values), -1e4, -1e4, 2e4)
 
 
 FAR = (jnp.float32(1e4), jnp.float32(1e4), jnp.float32(0.0), jnp.float32(0.0))

@@ -12,15 +12,15 @@ import pytest
 from socialnav.data import DATA_DIR
 from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim import orca
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenes import people as people_lib
 from socialnav.jaxsim.scenes.env import EnvConfig
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
-from socialnav.jaxsim.world import Grid
 from tests import orca_reference as reference
 
-OPEN = Grid(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), origin_x_m=-50.0, origin_y_m=-50.0, resolution_m=30.0)
+OPEN = Grid.of_samples(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), -50.0, -50.0, 30.0)
 ROBOT = (jnp.float32(0.3), jnp.float32(0.1), jnp.float32(0.2), jnp.float32(0.0))
 DT = 0.1
 # Both steps compiled, also where a test runs them once: run eagerly, every JAX operation inside

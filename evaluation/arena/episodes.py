@@ -163,7 +163,7 @@ def setup_scene(
     crowd = crowd_params() if crowd is None else crowd
     env = env_lib.make_env(spec, env_config, robot, crowd, reward, config.grid_resolution_m)
     occ = np.asarray(env.occupancy.values)
-    grid = costmap.GridSpec.of_grid(env.occupancy)
+    grid = env.occupancy.spec
     obstacles = np.asarray(costmap.obstacle_layer(occ, grid, float(robot.radius_m)))
     return SceneSetup(
         spec=spec,

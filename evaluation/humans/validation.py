@@ -42,9 +42,9 @@ from flax import struct
 from socialnav.data import WAREHOUSE_DIR, recorded
 from socialnav.evaluation.humans import datacache, measures
 from socialnav.jaxsim import geometry, groups, humans, orca, power_law, speed_model
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
-from socialnav.jaxsim.world import Grid
 
 HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation", "steering_speed", "power_law")
 FAR_M = 1.0e4  # where the robot is: no robot in these protocols
@@ -137,7 +137,7 @@ def corridor_field(width_m: float, length_m: float) -> Grid:
     )
     field = geometry.build_distance_field(walls, (-length_m - 2, 2 * length_m + 2, -1.5, width_m + 1.5), 0.05)
     values = np.stack([field.sdf_m, field.normal_x, field.normal_y], axis=-1)
-    return Grid(jnp.asarray(values), float(field.origin_m[0]), float(field.origin_m[1]), 0.05)
+    return Grid.of_samples(jnp.asarray(values), float(field.origin_m[0]), float(field.origin_m[1]), 0.05)
 
 
 def _starts(n: int, width_m: float, length_m: float, radius_m: float, rng: np.random.Generator,
@@ -487,7 +487,7 @@ def _open_field() -> Grid:
     values = np.zeros((2, 2, 3), np.float32)
     values[..., 0] = FAR_M
     values[..., 1] = 1.0
-    return Grid(jnp.asarray(values), -FAR_M, -FAR_M, 2 * FAR_M)
+    return Grid.of_samples(jnp.asarray(values), -FAR_M, -FAR_M, 2 * FAR_M)
 
 
 @struct.dataclass

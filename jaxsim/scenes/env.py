@@ -40,6 +40,7 @@ from flax import struct
 
 from socialnav.data import WAREHOUSE_DIR
 from socialnav.jaxsim import humans, speed_model
+from socialnav.jaxsim.grid import Grid, GridSpec
 from socialnav.jaxsim.orca import ORCAParams
 from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
@@ -49,7 +50,6 @@ from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.variant import Variant
 from socialnav.jaxsim.scenes.world import SceneWorld
-from socialnav.jaxsim.world import Grid
 
 
 @dataclasses.dataclass(frozen=True)
@@ -194,7 +194,7 @@ class Env:
 
     Attributes:
       world: the scene's walls (boxes and distance field).
-      occupancy: the planner-resolution occupancy as a :class:`~jaxsim.world.Grid` (H, W).
+      occupancy: the planner-resolution occupancy as a :class:`~jaxsim.grid.Grid` (H, W).
       crowd: the social force's constants (``dt_s`` is the env's).
       robot: the base's limits.
       reward: the reward's weights.
@@ -362,9 +362,8 @@ class Env:
         x = xy[0] + cos * fwd - sin * left
         y = xy[1] + sin * fwd + cos * left
         grid = self.occupancy
-        h, w = grid.values.shape
-        col = jnp.round((x - grid.origin_x_m) / grid.resolution_m)
-        row = jnp.round((y - grid.origin_y_m) / grid.resolution_m)
+        h, w = grid.spec.shape
+        row, col = grid.nearest_cell(x, y)
         inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
         value = grid.values[jnp.clip(row, 0, h - 1).astype(jnp.int32), jnp.clip(col, 0, w - 1).astype(jnp.int32)]
         return jnp.where(inside, value, 1.0)
@@ -467,8 +466,7 @@ def make_env(
     world = world_lib.build_scene_world(spec)
     world = world.replace(walls_m=jnp.asarray(pad_walls(world.walls_m)))
     occ, (x0, y0) = world_lib.occupancy(spec, occupancy_resolution_m)
-    half = occupancy_resolution_m / 2
-    grid = Grid(jnp.asarray(occ), origin_x_m=x0 + half, origin_y_m=y0 + half, resolution_m=occupancy_resolution_m)
+    grid = Grid(jnp.asarray(occ), GridSpec(*occ.shape, occupancy_resolution_m, x0, y0))
     velocity = None
     if humans.kind_of(config.human_model) in speed_model.VELOCITY_MODELS:
         velocity = speed_model.params_of(config.human_model)

@@ -11,9 +11,9 @@ import numpy as np
 from flax import struct
 
 from socialnav.jaxsim import geometry
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.scenes import spec as spec_lib
 from socialnav.jaxsim.scenes.spec import SceneSpec
-from socialnav.jaxsim.world import Grid
 
 FIELD_RESOLUTION_M = 0.05
 
@@ -21,7 +21,7 @@ FIELD_RESOLUTION_M = 0.05
 @struct.dataclass
 class SceneWorld:
     """Attributes: walls_m (K, 4) boxes (at least one, padded far away); wall_field: (H, W, 3)
-    signed distance and outward normal (:class:`jaxsim.world.Grid`)."""
+    signed distance and outward normal (:class:`jaxsim.grid.Grid`)."""
 
     walls_m: jnp.ndarray
     wall_field: Grid
@@ -39,12 +39,7 @@ def build_scene_world(spec: SceneSpec) -> SceneWorld:
     boxes = _boxes(spec)
     field = geometry.build_distance_field(boxes, spec.bounds_m, FIELD_RESOLUTION_M)
     values = np.stack([field.sdf_m, field.normal_x, field.normal_y], axis=-1)
-    grid = Grid(
-        jnp.asarray(values),
-        origin_x_m=float(field.origin_m[0]),
-        origin_y_m=float(field.origin_m[1]),
-        resolution_m=FIELD_RESOLUTION_M,
-    )
+    grid = Grid.of_samples(jnp.asarray(values), float(field.origin_m[0]), float(field.origin_m[1]), FIELD_RESOLUTION_M)
     return SceneWorld(walls_m=jnp.asarray(boxes), wall_field=grid)
 
 

@@ -12,18 +12,20 @@ so that layers stay differentiable and exact:
 
 Grid layout: the ROS ``OccupancyGrid``'s. Cell ``(i, j)`` covers
 ``x in origin_x + [j, j + 1) * resolution``, ``y in origin_y + [i, i + 1) * resolution`` (row index
-grows with y); :class:`GridSpec` holds the static part (shape, resolution, origin).
+grows with y); :class:`~jaxsim.grid.GridSpec` (the toolkit's one grid geometry, re-exported here)
+holds the static part (shape, resolution, origin).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+
+from socialnav.jaxsim.grid import GridSpec
 
 FREE = 0.0
 MAX_GRADED = 252.0
@@ -35,72 +37,6 @@ OCCUPIED_ABOVE = 0.6  # occupancy above which a cell is an obstacle (the GSCL pa
 # Nav2 inflation layer defaults (docs.nav2.org, costmap-plugins/inflation).
 INFLATION_RADIUS_M = 0.55
 COST_SCALING_FACTOR = 10.0
-
-
-@dataclasses.dataclass(frozen=True)
-class GridSpec:
-    """The static geometry of a cost grid (hashable: pass it as a static argument under ``jit``).
-
-    Attributes:
-      height, width: cells along y (rows) and x (columns).
-      resolution_m: cell size in metres.
-      origin_x_m, origin_y_m: world position of cell (0, 0)'s lower-left corner.
-    """
-
-    height: int
-    width: int
-    resolution_m: float
-    origin_x_m: float = 0.0
-    origin_y_m: float = 0.0
-
-    def __post_init__(self):
-        if int(self.height) != self.height or int(self.width) != self.width or self.height < 2 or self.width < 2:
-            raise ValueError(f"GridSpec: height and width must be integers >= 2, got {self.height} x {self.width}")
-        if not (math.isfinite(self.resolution_m) and self.resolution_m > 0):
-            raise ValueError(f"GridSpec: resolution_m must be a positive number, got {self.resolution_m}")
-        if not (math.isfinite(self.origin_x_m) and math.isfinite(self.origin_y_m)):
-            raise ValueError(f"GridSpec: origin must be finite, got ({self.origin_x_m}, {self.origin_y_m})")
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return (int(self.height), int(self.width))
-
-    @classmethod
-    def of_grid(cls, grid) -> GridSpec:
-        """The geometry of a simulator's value grid (:class:`jaxsim.world.Grid`, values (H, W, ...)).
-
-        The one place where the two origin conventions meet: a ``Grid``'s origin is cell (0, 0)'s
-        centre (its lookups round to the nearest centre), a ``GridSpec``'s that cell's lower-left
-        corner (Nav2's ``costmap_2d``), half a cell lower and to the left."""
-        h, w = grid.values.shape[:2]
-        half = grid.resolution_m / 2
-        return cls(h, w, grid.resolution_m, grid.origin_x_m - half, grid.origin_y_m - half)
-
-    def cell_centres(self) -> tuple[np.ndarray, np.ndarray]:
-        """(x_m, y_m), each (H, W) float32: the world position of every cell's centre."""
-        xs = self.origin_x_m + (np.arange(self.width) + 0.5) * self.resolution_m
-        ys = self.origin_y_m + (np.arange(self.height) + 0.5) * self.resolution_m
-        x, y = np.meshgrid(xs.astype(np.float32), ys.astype(np.float32))
-        return x, y
-
-    def cell_of(self, xy_m):
-        """(..., 2) int32 (row, col) of the cell holding each point (may lie off the grid)."""
-        xy_m = jnp.asarray(xy_m, jnp.float32)
-        col = jnp.floor((xy_m[..., 0] - self.origin_x_m) / self.resolution_m).astype(jnp.int32)
-        row = jnp.floor((xy_m[..., 1] - self.origin_y_m) / self.resolution_m).astype(jnp.int32)
-        return jnp.stack([row, col], axis=-1)
-
-    def centre_of(self, ij):
-        """(..., 2) float32 world (x, y) of the centre of cells (row, col)."""
-        ij = jnp.asarray(ij)
-        x = self.origin_x_m + (ij[..., 1] + 0.5) * self.resolution_m
-        y = self.origin_y_m + (ij[..., 0] + 0.5) * self.resolution_m
-        return jnp.stack([x, y], axis=-1).astype(jnp.float32)
-
-    def contains(self, ij):
-        """(...,) bool: the cells lie on the grid."""
-        ij = jnp.asarray(ij)
-        return (ij[..., 0] >= 0) & (ij[..., 0] < self.height) & (ij[..., 1] >= 0) & (ij[..., 1] < self.width)
 
 
 def combine_max(*layers):

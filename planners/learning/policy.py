@@ -121,9 +121,8 @@ class PolicyState:
 
 
 def scene_grid(env: Env) -> costmap.GridSpec:
-    """The :class:`~planners.layers.costmap.GridSpec` of ``env``'s occupancy grid (its origin is cell
-    (0, 0)'s corner; the env's :class:`~jaxsim.world.Grid` keeps its centre)."""
-    return costmap.GridSpec.of_grid(env.occupancy)
+    """The :class:`~jaxsim.grid.GridSpec` of ``env``'s occupancy grid."""
+    return env.occupancy.spec
 
 
 def traversal(env: Env) -> jax.Array:
