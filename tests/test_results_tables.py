@@ -233,10 +233,12 @@ def test_a_block_that_cannot_be_made_is_named_in_one_line(tmp_path, spec, messag
 COMMAND = re.compile(r"socialnav (arena|gscl|humans|policy|run|simulate|layers)\b|python scripts/|benchmarks/")
 
 
-def test_every_other_table_on_the_results_page_follows_the_command_that_made_it():
-    """docs/arena-results.md: a table not made by the script (a measurement of its time: an
-    earlier model, scene or definition) has the command that made it earlier in its section."""
-    lines = (tables.ROOT / "docs" / "arena-results.md").read_text().splitlines()
+@pytest.mark.parametrize("page", ["arena-results.md", "arena-history.md"])
+def test_every_other_table_on_the_results_pages_follows_the_command_that_made_it(page):
+    """docs/arena-results.md and its history: a table not made by the script (a measurement of its
+    time: an earlier model, scene or definition) has the command that made it earlier in its
+    section."""
+    lines = (tables.ROOT / "docs" / page).read_text().splitlines()
     generated, section_start, missing, previous = False, 0, [], ""
     for number, line in enumerate(lines, 1):
         if line.startswith("<!-- results:"):
@@ -247,7 +249,7 @@ def test_every_other_table_on_the_results_page_follows_the_command_that_made_it(
             section_start = number
         elif line.lstrip().startswith("|") and not previous.lstrip().startswith("|") and not generated:
             if not any(COMMAND.search(text) for text in lines[section_start : number - 1]):
-                missing.append(f"docs/arena-results.md:{number}: {line.strip()[:60]}")
+                missing.append(f"docs/{page}:{number}: {line.strip()[:60]}")
         previous = line
     assert not missing, "tables without the command that made them:\n" + "\n".join(missing)
 
