@@ -94,14 +94,15 @@ class StackState:
     speed_gain: jax.Array
 
 
-def stack_map(spec, grid: costmap.GridSpec, occupancy, walls_m) -> StackMap:
-    """The map of a scene: occupancy on ``grid``, the (padded) walls, its interaction spaces
+def stack_map(objects, grid: costmap.GridSpec, occupancy, walls_m) -> StackMap:
+    """The map of a scene: occupancy on ``grid``, the (padded) walls, and its interaction spaces
+    (``objects``: ``(name, polygon, cost)`` each, :attr:`jaxsim.scenes.spec.SceneSpec.objects`)
     padded to a multiple of 4."""
-    m = max(4, -(-len(spec.objects) // 4) * 4)
+    m = max(4, -(-len(objects) // 4) * 4)
     verts = np.zeros((m, 8, 2), np.float32)
     cost = np.zeros(m, np.float32)
     valid = np.zeros(m, bool)
-    for k, (_, poly, c) in enumerate(spec.objects):
+    for k, (_, poly, c) in enumerate(objects):
         verts[k, : len(poly)] = poly
         verts[k, len(poly) :] = poly[-1]
         cost[k], valid[k] = c, True

@@ -169,7 +169,7 @@ def setup_scene(
         spec=spec,
         grid=grid,
         env=env,
-        map=actors.stack_map(spec, grid, occ, env.world.walls_m),
+        map=actors.stack_map(spec.objects, grid, occ, env.world.walls_m),
         obstacle_costs=obstacles,
         n_periods=n_periods,
         n_slots=padded_slots(spec.n_people_slots),
@@ -392,7 +392,7 @@ def episode_function(
     setup: SceneSetup,
     method: stack.StackConfig,
     crowd: SimParams | None = None,
-    robot_params: robot_lib.RobotParams = robot_lib.RobotParams(),
+    robot_params: robot_lib.RobotParams | None = None,
     config: ArenaConfig = ArenaConfig(),
     gscl_model=None,
     layers: stack.LayerParams | None = None,
@@ -401,8 +401,11 @@ def episode_function(
     (:func:`planners.layers.gscl`: a :class:`~socialnav.models.inference.SocialCostModel`, whose
     weights enter the program traced, so another checkpoint reuses it; or a function of the maps,
     closing over its weights). ``layers``: the layers' and local planners' parameters (default:
-    the method's, :func:`planners.stack.layer_params`), traced: a sweep reuses the program."""
-    env = setup.env.replace(robot=robot_params)
+    the method's, :func:`planners.stack.layer_params`), traced: a sweep reuses the program.
+    ``crowd`` and ``robot_params``: the people's constants and the robot's limits (default: the
+    scene's env's, :func:`setup_scene`)."""
+    env = setup.env if robot_params is None else setup.env.replace(robot=robot_params)
+    robot_params = env.robot
     if crowd is not None:
         env = env.replace(crowd=crowd)
     layer = stack.cost_layer(method, layers, gscl_model)  # both default to the method's layers
@@ -483,13 +486,15 @@ def baseline_function(
     setup: SceneSetup,
     name: str,
     crowd: SimParams | None = None,
-    robot_params: robot_lib.RobotParams = robot_lib.RobotParams(),
+    robot_params: robot_lib.RobotParams | None = None,
     config: ArenaConfig = ArenaConfig(),
     rule_params=None,
 ):
     """``variants -> Trajectory`` of a reactive baseline (``orca``, ``social_force``, ``dwa``);
-    ``rule_params`` (default: the baseline's) are traced."""
-    env = setup.env.replace(robot=robot_params)
+    ``rule_params`` (default: the baseline's) are traced. ``crowd`` and ``robot_params``: the
+    people's constants and the robot's limits (default: the scene's env's, :func:`setup_scene`)."""
+    env = setup.env if robot_params is None else setup.env.replace(robot=robot_params)
+    robot_params = env.robot
     if crowd is not None:
         env = env.replace(crowd=crowd)
     actor = baseline_actor(name, setup.grid, float(robot_params.radius_m), config)

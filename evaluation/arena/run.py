@@ -33,15 +33,17 @@ def _velocities(people_xy, present, dt_s):
     return jnp.where(present[..., None], v, 0.0)
 
 
-def metrics_function(setup: arena.SceneSetup, config: arena.ArenaConfig, robot_radius_m: float):
+def metrics_function(rule: dict, n_periods: int, config: arena.ArenaConfig, robot_radius_m: float):
     """``(trajectories, variants, trajectories without the robot) -> dict of metric arrays``, jitted
-    and vmapped over episodes (the third from :func:`evaluation.arena.episodes.counterfactual_function`).
+    and vmapped over episodes (the third from :func:`evaluation.arena.episodes.counterfactual_function`),
+    for a scene's social ``rule`` (:attr:`jaxsim.scenes.spec.SceneSpec.rule`) and episodes of
+    ``n_periods`` replanning periods (:attr:`evaluation.arena.episodes.SceneSetup.n_periods`).
 
-    The scene's rule enters as arguments (:func:`evaluation.arena.nav_metrics.split_rule`), so a scene
+    The rule enters as arguments (:func:`evaluation.arena.nav_metrics.split_rule`), so a scene
     and its held-out mirror, or two scenes with rules of the same kinds, share one compiled program
     (compiling it took 1.6 s a scene row)."""
-    structure, numbers = nav_metrics.split_rule(setup.spec.rule)
-    program = _metrics_program(structure, setup.n_periods, config, float(robot_radius_m))
+    structure, numbers = nav_metrics.split_rule(rule)
+    program = _metrics_program(structure, n_periods, config, float(robot_radius_m))
     return lambda tr, variants, without: program(tr, variants, without, numbers)
 
 
@@ -87,10 +89,10 @@ HELD_OUT = "@held_out"
 TURNED = "@turned"
 
 
-def row_name(spec: SceneSpec, held_out: bool = False) -> str:
+def row_name(scene: str, held_out: bool = False, turned: bool = False) -> str:
     """A scene row's name: ``<scene>``, ``<scene>@held_out`` (mirrored, its ranges exceeded) or
     ``<scene>@turned`` (a quarter turn, :func:`jaxsim.scenes.spec.turn`)."""
-    return spec.name + (HELD_OUT if held_out else "") + (TURNED if spec.turned_from is not None else "")
+    return scene + (HELD_OUT if held_out else "") + (TURNED if turned else "")
 
 
 def run_scene(
@@ -120,40 +122,32 @@ def run_scene(
     weights traced, so another checkpoint of the same network reuses the compiled program; or a
     function of the maps). ``n_devices``: host devices the methods run
     on at the same time (:func:`evaluation.arena.episodes.run_spread`; default: every local one)."""
-    name = row_name(spec, held_out)
+    name = row_name(spec.name, held_out, spec.turned_from is not None)
     if held_out:
         spec = mirror(spec)
-    setup = arena.setup_scene(spec, config)
-    arena.release_programs_if_crowded(caches=(_metrics_program,), key=arena.program_key(setup))
-    crowd = arena.crowd_params()
-    variants = jax.tree_util.tree_map(
-        jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out, setup.n_slots)
-    )
     params = ArenaParams() if params is None else params
     robot = params.robot
-    measure = metrics_function(setup, config, float(robot.radius_m))
+    setup = arena.setup_scene(spec, config, robot, arena.crowd_params())  # its env has the run's people and robot
+    arena.release_programs_if_crowded(caches=(_metrics_program,), key=arena.program_key(setup))
+    measure = metrics_function(spec.rule, setup.n_periods, config, float(robot.radius_m))
     episodes, trajectories = [], []
     user_actors = user_actors or {}
-    runs = [arena.counterfactual_function(setup, crowd)]  # the people without the robot
+    runs = [arena.counterfactual_function(setup)]  # the people without the robot
     for method in methods:
         if method in user_actors:
-            env = setup.env.replace(crowd=crowd, robot=robot)
-            actor, actor_params = user_actor(user_actors[method], env, setup.n_slots)
-            runs.append(arena.actor_function(setup, actor, actor_params, env))
+            actor, actor_params = user_actor(user_actors[method], setup.env, setup.n_slots)
+            runs.append(arena.actor_function(setup, actor, actor_params))
         elif method in BASELINES:
-            runs.append(arena.baseline_function(setup, method, crowd, robot, config))
+            runs.append(arena.baseline_function(setup, method, config=config))
         else:
             runs.append(
                 arena.episode_function(
-                    setup,
-                    METHODS[method],
-                    crowd,
-                    robot,
-                    config,
-                    gscl_model,
-                    layers=params.layers_for(method),
+                    setup, METHODS[method], config=config, gscl_model=gscl_model, layers=params.layers_for(method)
                 )
             )
+    variants = jax.tree_util.tree_map(
+        jnp.asarray, sample_variants(spec, seed, n_variants, first, held_out, setup.n_slots)
+    )
     results = arena.run_spread(runs, variants, n_devices)
     without = next(results)
     for method, tr in zip(methods, results):

@@ -138,7 +138,7 @@ class TableRequest:
     def names(self) -> list[str]:
         """Every scene row's name (``<scene>``, ``<scene>@held_out``, ``<scene>@turned``), as
         :attr:`runs`."""
-        return [row_name(spec, held_out) for spec, held_out in self.runs]
+        return [row_name(spec.name, held_out, spec.turned_from is not None) for spec, held_out in self.runs]
 
 
 def estimate_s(specs, n_methods: int, variants: int, held_out: bool, turned: bool = False) -> tuple[float, float]:

@@ -442,12 +442,13 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         return _fail(str(e))
     episodes = table.join_scenes(out, request, digests)
     tables = table.write_tables(out, episodes)
-    _print_tables(tables, request.specs)
+    _print_tables(tables, [spec.recording["playback"] for spec in request.specs if spec.recording is not None])
     return 0
 
 
-def _print_tables(tables: dict, specs) -> None:
-    """The summary's main columns, the warnings it calls for, and the papers' tables the run wrote."""
+def _print_tables(tables: dict, playbacks: list[str]) -> None:
+    """The summary's main columns, the warnings it calls for, and the papers' tables the run wrote
+    (``playbacks``: each recorded scene's, ``"replayed"`` or ``"reactive"``)."""
     import pandas as pd
 
     summary = tables["summary.csv"]
@@ -462,12 +463,11 @@ def _print_tables(tables: dict, specs) -> None:
         "d_min_m",
         "time_s",
     ]
-    recorded_specs = [spec for spec in specs if spec.recording is not None]
-    if recorded_specs:  # among recorded crowds: who caused the collisions, the near misses, the effect on people
+    if playbacks:  # among recorded crowds: who caused the collisions, the near misses, the effect on people
         shown[5:6] = ["collisions", "collisions_robot", "collisions_person", "near_misses", "people_deviation_m"]
     with pd.option_context("display.width", 250, "display.max_rows", 500):
         print(summary[shown].round(2).to_string(index=False))
-    if any(spec.recording["playback"] == "replayed" for spec in recorded_specs):
+    if "replayed" in playbacks:
         print(
             "replayed scenes: the people move as recorded and ignore the robot, so every collision there is the "
             "robot's to avoid (collisions_person counts a recorded person walking into it) and the effect on people "
