@@ -26,7 +26,7 @@ from flax import struct
 
 @dataclasses.dataclass(frozen=True)
 class GridSpec:
-    """The static geometry of a cost grid (hashable: pass it as a static argument under ``jit``).
+    """The static geometry of a grid (hashable: pass it as a static argument under ``jit``).
 
     Attributes:
       height, width: cells along y (rows) and x (columns).
@@ -119,6 +119,7 @@ class Grid:
         return jnp.clip(row, 0, h - 1).astype(jnp.int32), jnp.clip(col, 0, w - 1).astype(jnp.int32)
 
     def lookup(self, x, y):
-        """The values of the cells holding points ``x, y`` (clamped to the grid): (..., ...)."""
+        """The values of the cells holding points ``x, y`` (clamped to the grid): the points' shape, then
+        the values' trailing axes."""
         row, col = self.index(x, y)
         return self.values[row, col]
