@@ -203,14 +203,16 @@ def test_the_scene_route_is_counted_as_it_runs():
 
 
 @pytest.mark.slow
-def test_the_scene_route_of_an_arena_run_reaches_the_metrics(tmp_path):
+def test_the_scene_route_of_an_arena_run_reaches_the_scenes_table(tmp_path):
     """The route of a real ``socialnav arena`` run: the scene file read, then the episodes built
-    from it (the environment, the variants) and their metrics, in that order."""
+    from it (the environment, the method's episode function, the variants), then the scene's
+    episodes joined in the run folder, in that order."""
     import script_loader
 
     stops = script_loader.load("scene_route").route(tmp_path / "arena")
     order = [f"{module}:{function}" for module, function in stops]
-    wanted = ["jaxsim.scenes.spec:load_scene", "jaxsim.scenes.env:make_env", "jaxsim.scenes.variant:sample_variants",
-              "evaluation.arena.run:metrics_function"]  # fmt: skip
+    wanted = ["jaxsim.scenes.spec:load_scene", "jaxsim.scenes.env:make_env",
+              "evaluation.arena.episodes:episode_function", "jaxsim.scenes.variant:sample_variants",
+              "evaluation.arena.table:finish_scene"]  # fmt: skip
     where = [order.index(w) for w in wanted]  # ValueError names a stop the route missed
     assert where == sorted(where)
