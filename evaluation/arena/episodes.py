@@ -377,6 +377,18 @@ def _method_actor(method, grid, robot_radius_m, config, layer) -> Actor:
     )
 
 
+def scene_env(
+    setup: SceneSetup, crowd: SimParams | None = None, robot_params: robot_lib.RobotParams | None = None
+) -> env_lib.Env:
+    """The scene's env with other people's constants or robot limits (None: the setup's own)."""
+    env = setup.env
+    if robot_params is not None:
+        env = env.replace(robot=robot_params)
+    if crowd is not None:
+        env = env.replace(crowd=crowd)
+    return env
+
+
 def actor_function(setup: SceneSetup, actor: Actor, params, env: env_lib.Env | None = None):
     """``variants (batched Variant, padded to ``setup.n_slots``) -> Trajectory (batched)`` for
     any actor with its ``params``. In a scene with ``stop_and_go_m`` (the queue) the actor runs
@@ -404,10 +416,8 @@ def episode_function(
     the method's, :func:`planners.stack.layer_params`), traced: a sweep reuses the program.
     ``crowd`` and ``robot_params``: the people's constants and the robot's limits (default: the
     scene's env's, :func:`setup_scene`)."""
-    env = setup.env if robot_params is None else setup.env.replace(robot=robot_params)
+    env = scene_env(setup, crowd, robot_params)
     robot_params = env.robot
-    if crowd is not None:
-        env = env.replace(crowd=crowd)
     layer = stack.cost_layer(method, layers, gscl_model)  # both default to the method's layers
     actor = method_actor(stack.program_config(method), setup.grid, float(robot_params.radius_m), config, layer)
     params = actors.stack_params(
@@ -493,10 +503,8 @@ def baseline_function(
     """``variants -> Trajectory`` of a reactive baseline (``orca``, ``social_force``, ``dwa``);
     ``rule_params`` (default: the baseline's) are traced. ``crowd`` and ``robot_params``: the
     people's constants and the robot's limits (default: the scene's env's, :func:`setup_scene`)."""
-    env = setup.env if robot_params is None else setup.env.replace(robot=robot_params)
+    env = scene_env(setup, crowd, robot_params)
     robot_params = env.robot
-    if crowd is not None:
-        env = env.replace(crowd=crowd)
     actor = baseline_actor(name, setup.grid, float(robot_params.radius_m), config)
     params = baselines.baseline_params(
         name, env, setup.map, rule_params, config.safety_margin_m, setup.spec.people_in_global_plan
@@ -535,6 +543,5 @@ def without_robot(variants: Variant) -> Variant:
 
 def counterfactual_function(setup: SceneSetup, crowd: SimParams | None = None):
     """``variants -> Trajectory`` of the people without the robot (:func:`without_robot`)."""
-    env = setup.env if crowd is None else setup.env.replace(crowd=crowd)
-    run = actor_function(setup, STAND_STILL, (), env)
+    run = actor_function(setup, STAND_STILL, (), scene_env(setup, crowd))
     return lambda variants: run(without_robot(variants))

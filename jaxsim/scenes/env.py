@@ -365,8 +365,7 @@ class Env:
         h, w = grid.spec.shape
         row, col = grid.nearest_cell(x, y)
         inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
-        value = grid.values[jnp.clip(row, 0, h - 1).astype(jnp.int32), jnp.clip(col, 0, w - 1).astype(jnp.int32)]
-        return jnp.where(inside, value, 1.0)
+        return jnp.where(inside, grid.lookup(x, y), 1.0)
 
     def _info(self, state: EnvState, wall_contact, invalid_action) -> StepInfo:
         people, robot = state.people, state.robot
