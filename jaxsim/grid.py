@@ -73,6 +73,12 @@ class GridSpec:
         y = self.origin_y_m + (ij[..., 0] + 0.5) * self.resolution_m
         return jnp.stack([x, y], axis=-1).astype(jnp.float32)
 
+    def clamp(self, ij):
+        """(..., 2) int32 cells (row, col) moved onto the grid: the nearest edge cell for one off it."""
+        ij = jnp.asarray(ij)
+        top = jnp.array([self.height - 1, self.width - 1], jnp.int32)
+        return jnp.clip(ij, 0, top).astype(jnp.int32)
+
     def contains(self, ij):
         """(...,) bool: the cells lie on the grid."""
         ij = jnp.asarray(ij)

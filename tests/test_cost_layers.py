@@ -83,6 +83,10 @@ def test_a_sampled_field_is_the_grid_centred_on_its_samples_and_finds_the_cell_a
     # Off the grid: the lookup clamps to the border cell, nearest_cell says how far off it is.
     assert np.asarray(grid.index(np.float32(-9.0), np.float32(9.0))).tolist() == [4, 0]
     assert np.asarray(grid.nearest_cell(np.float32(-9.0), np.float32(9.0))).tolist() == [28.0, -31.0]
+    # The spec's clamp moves cells off the grid to the nearest border cell and keeps the rest.
+    cells = spec.cell_of(np.array([[-9.0, 9.0], [0.2, 3.05], [9.0, -9.0]], np.float32))
+    assert np.asarray(spec.clamp(cells)).tolist() == [[4, 0], [4, 6], [0, 6]]
+    assert np.asarray(spec.contains(cells)).tolist() == [False, True, False]
 
 
 @pytest.mark.parametrize(

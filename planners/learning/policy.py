@@ -137,9 +137,7 @@ def traversal(env: Env) -> jax.Array:
 def guidance_field(traversal_per_m, goal_xy_m, grid: costmap.GridSpec):
     """(H, W) cost-to-goal of every cell (metres of free space; ``inf`` unreachable): the exact
     potential of :func:`planners.global_planners.grid_planner.potential` from the goal's cell."""
-    row = jnp.floor((goal_xy_m[1] - grid.origin_y_m) / grid.resolution_m)
-    col = jnp.floor((goal_xy_m[0] - grid.origin_x_m) / grid.resolution_m)
-    goal_ij = jnp.stack([jnp.clip(row, 0, grid.height - 1), jnp.clip(col, 0, grid.width - 1)]).astype(jnp.int32)
+    goal_ij = grid.clamp(grid.cell_of(goal_xy_m))
     return grid_planner.potential(traversal_per_m, goal_ij, grid.resolution_m)
 
 
@@ -156,7 +154,11 @@ class PoolField:
 
 
 def field_at(field, xy_m, grid: costmap.GridSpec):
-    """The field at points ``xy_m`` (..., 2) (nearest cell; off the grid: ``inf``)."""
+    """The field at points ``xy_m`` (..., 2) (nearest cell; off the grid: ``inf``).
+
+    The cell is found in floats, not by :meth:`~jaxsim.grid.GridSpec.cell_of`: a NaN or huge
+    coordinate is then off the grid (``inf``), where a conversion to int32 first would saturate it
+    (NaN to 0) onto a cell."""
     col = jnp.floor((xy_m[..., 0] - grid.origin_x_m) / grid.resolution_m)
     row = jnp.floor((xy_m[..., 1] - grid.origin_y_m) / grid.resolution_m)
     inside = (row >= 0) & (row < grid.height) & (col >= 0) & (col < grid.width)
