@@ -122,7 +122,7 @@ def run_scene(
     weights traced, so another checkpoint of the same network reuses the compiled program; or a
     function of the maps). ``n_devices``: host devices the methods run
     on at the same time (:func:`evaluation.arena.episodes.run_spread`; default: every local one)."""
-    name = row_name(spec.name, held_out, spec.is_turned)
+    name = row_name(spec.name, held_out, spec.turned_from is not None)
     if held_out:
         spec = mirror(spec)
     params = ArenaParams() if params is None else params

@@ -138,7 +138,7 @@ class TableRequest:
     def names(self) -> list[str]:
         """Every scene row's name (``<scene>``, ``<scene>@held_out``, ``<scene>@turned``), as
         :attr:`runs`."""
-        return [row_name(spec.name, held_out, spec.is_turned) for spec, held_out in self.runs]
+        return [row_name(spec.name, held_out, spec.turned_from is not None) for spec, held_out in self.runs]
 
 
 def estimate_s(specs, n_methods: int, variants: int, held_out: bool, turned: bool = False) -> tuple[float, float]:
@@ -205,7 +205,7 @@ def settings(request: TableRequest) -> dict:
         "socialnav_version": __version__,
     }
     chosen["scene_digests"] = {
-        name: scene_digest(spec.file, held_out, chosen, turned=spec.is_turned)
+        name: scene_digest(spec.file, held_out, chosen, turned=spec.turned_from is not None)
         for (spec, held_out), name in zip(request.runs, request.names, strict=True)
     }
     chosen["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in request.specs}
@@ -289,7 +289,9 @@ def plan_shards(out: pathlib.Path, request: TableRequest, digests: dict) -> list
     (:func:`socialnav.evaluation.arena.episodes.release_programs_if_crowded`)."""
     runs, names = request.runs, request.names
     position = {spec.name: k for k, spec in enumerate(request.specs)}
-    order = sorted(range(len(runs)), key=lambda i: (position[runs[i][0].name], runs[i][0].is_turned, runs[i][1]))
+    order = sorted(
+        range(len(runs)), key=lambda i: (position[runs[i][0].name], runs[i][0].turned_from is not None, runs[i][1])
+    )
     shards = []
     for (spec, held_out), name in ((runs[i], names[i]) for i in order):
         if finished(out, name, digests[name]):

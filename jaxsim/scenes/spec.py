@@ -146,11 +146,6 @@ class SceneSpec:
     variants_of: str | None = None  # the name whose stream draws the variants (None: ``name``)
     turned_from: SceneSpec | None = None  # the scene this one is a quarter turn of (:func:`turn`); None: as in its file
 
-    @property
-    def is_turned(self) -> bool:
-        """The scene is a quarter turn of another (:func:`turn`), not as in its file."""
-        return self.turned_from is not None
-
 
 # ------------------------------------------------------------------ typed reads
 
@@ -707,7 +702,7 @@ def mirror(spec: SceneSpec) -> SceneSpec:
     gives one (mirrored the same way), and the original rule becomes the mirror's held-out rule, so
     that mirroring twice gives the scene back. Used for held-out variants: a method that learnt a
     layout's handedness rather than its rule shows it here."""
-    if spec.is_turned:
+    if spec.turned_from is not None:
         raise ValueError(f"{spec.file}: a turned scene is not mirrored; mirror the file's scene")
     c = spec.bounds_m[2] + spec.bounds_m[3]
 
@@ -791,7 +786,7 @@ def turn(spec: SceneSpec) -> SceneSpec:
     on the grid's orientation (a point on a cell boundary falls in the cell on the other side once
     turned). A recorded crowd is turned with its variants. Raises ``ValueError`` for a scene
     already turned."""
-    if spec.is_turned:
+    if spec.turned_from is not None:
         raise ValueError(f"{spec.file}: the scene is already turned; turn the file's scene")
     bounds = turn_bounds_m(spec.bounds_m)
 

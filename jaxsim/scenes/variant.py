@@ -155,7 +155,7 @@ def sample_variant(
     from, turned (:func:`turn_variant`): the same draw, paired with the scene's own variant ``k``."""
     if held_out and training:
         raise ValueError("a variant is drawn held out or for training, not both")
-    if spec.is_turned:
+    if spec.turned_from is not None:
         drawn = sample_variant(spec.turned_from, seed, k, held_out, n_slots, training)
         return turn_variant(drawn, turn_bounds_m(spec.turned_from.bounds_m))
     # A recorded scene draws by its run's name: its replayed and reactive scenes play the same

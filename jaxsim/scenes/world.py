@@ -53,7 +53,7 @@ def occupancy(spec: SceneSpec, resolution_m: float) -> tuple[np.ndarray, tuple[f
     such cells at 0.2 m in gscl_group), so rasterised afresh the turned walls would differ by a
     cell here and there. Exact at the cells :data:`~jaxsim.scenes.spec.TURN_CELL_M` divides
     into whole numbers (0.2, 0.1, 0.05 m)."""
-    if spec.is_turned and _whole(spec_lib.TURN_CELL_M / resolution_m):
+    if spec.turned_from is not None and _whole(spec_lib.TURN_CELL_M / resolution_m):
         original = dataclasses.replace(spec.turned_from, bounds_m=spec_lib.turn_bounds_m(spec.turned_from.bounds_m))
         grid, _ = occupancy(original, resolution_m)
         return np.ascontiguousarray(np.rot90(grid, -1)), (spec.bounds_m[0], spec.bounds_m[2])
