@@ -74,28 +74,50 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
 def rules_run(
     run, step: int | None = None, out=None, scenes_per_kind: int = 100, seed: int | None = None, rotations: int = 1
 ) -> dict:
-    """Score a run's checkpoint (the latest by default) on the held-out rule suite
-    (:mod:`models.rules`, ``scenes_per_kind`` scenes of each kind, drawn from ``seed``: the
-    suite's own, :data:`models.rules.SUITE_SEED`, by default; training evaluates that one after
-    every epoch, so another seed gives scenes no run was ever stopped or chosen on);
-    ``rotations=4`` scores the model averaged over the four quarter turns of its input
-    (:func:`models.inference.rotation_averaged`).
+    """Score a model on the held-out rule suite (:mod:`models.rules`, ``scenes_per_kind`` scenes
+    of each kind, drawn from ``seed``: the suite's own, :data:`models.rules.SUITE_SEED`, by
+    default; training evaluates that one after every epoch, so another seed gives scenes no run
+    was ever stopped or chosen on); ``rotations=4`` scores the model averaged over the four
+    quarter turns of its input (:func:`models.inference.rotation_averaged`).
+
+    ``run`` is a training run's folder (its latest checkpoint, or ``step``'s) or an exported
+    model's (``socialnav gscl export``; the shipped model's :data:`models.inference.DEFAULT_MODEL`
+    too; ``step`` must then be None). The model predicts as the cost layer and the export's card
+    read it (:meth:`models.inference.SocialCostModel.function`).
 
     Writes ``rules.json`` (pass share and mean contrasts per check and per rule, the MSE against
     the expected maps, the verdict) and ``rules.png`` to ``out`` (default ``run/evaluation``) and
-    returns the same dictionary plus ``table`` (text) and ``out``.
+    returns the same dictionary plus ``table`` (text) and ``out``. ``step`` in it is the
+    checkpoint's, or an exported model's card's (None without one).
+
+    Raises:
+      FileNotFoundError, ValueError: no run, no checkpoint, none restorable; an exported model
+        with a ``step``, or whose weights do not load (the file named).
     """
+    from socialnav.models.inference import CARD_FILE, WEIGHTS_FILE, SocialCostModel
+
     run = pathlib.Path(run)
-    config, _, state, meta = restore(run, step)
-    predict = compiled(config)[3]
+    if (run / WEIGHTS_FILE).is_file():
+        if step is not None:
+            raise ValueError(f"{run}: an exported model has no checkpoints to choose a step from")
+        model = SocialCostModel.load(run)
+        card = {}
+        if (run / CARD_FILE).is_file():
+            try:
+                card = json.loads((run / CARD_FILE).read_text(encoding="utf-8"))
+            except (UnicodeDecodeError, json.JSONDecodeError) as e:
+                raise ValueError(f"{run / CARD_FILE}: not valid JSON ({e})") from None
+        step = card.get("step") if isinstance(card, dict) else None
+    else:
+        config, graphdef, state, meta = restore(run, step)
+        model = SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
+        step = int(meta["step"])
     seed = rules.SUITE_SEED if seed is None else seed
     cases = rules.build_suite(scenes_per_kind, seed=seed)
-    suite = rules.evaluate(
-        rotation_averaged(lambda maps: predict(state["params"], state["batch_stats"], maps), rotations), cases
-    )
+    suite = rules.evaluate(rotation_averaged(model.function, rotations), cases)
     report = {
         "run": str(run),
-        "step": int(meta["step"]),
+        "step": step,
         "scenes_per_kind": scenes_per_kind,
         "seed": seed,
         "rotations": rotations,

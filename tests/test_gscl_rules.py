@@ -313,3 +313,15 @@ def test_the_rules_command_writes_its_report_and_names_a_missing_run(tmp_path, c
     assert again["cases"] == len(rules.build_suite(3, seed=4))
     with pytest.raises(SystemExit, match="socialnav gscl rules: .*nowhere"):
         cli.main(["gscl", "rules", "--run", str(tmp_path / "nowhere")])
+    # An exported model's folder scores as its run does, and is never written into.
+    from socialnav.models.inference import SocialCostModel
+
+    exported = SocialCostModel.load(tmp_path / "run").export(tmp_path / "model", {"step": report["step"]})
+    assert cli.main(["gscl", "rules", "--run", str(exported), "--scenes", "3", "--out", str(tmp_path / "m")]) == 0
+    from_model = json.loads((tmp_path / "m" / "rules.json").read_text())
+    assert from_model["by_check"] == report["by_check"] and from_model["step"] == report["step"]
+    with pytest.raises(SystemExit, match="--out: .*model.* exported model"):
+        cli.main(["gscl", "rules", "--run", str(exported), "--scenes", "3"])
+    with pytest.raises(SystemExit, match="no checkpoints to choose a step from"):
+        cli.main(["gscl", "rules", "--run", str(exported), "--step", "1", "--out", str(tmp_path / "n")])
+    assert not (exported / "evaluation").exists()

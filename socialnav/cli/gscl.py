@@ -251,7 +251,11 @@ def add_parser(top) -> None:
         help="the held-out rule suite: each family's rule checked on scenes no generator drew (models.rules)",
     )
     ru.add_argument(
-        "--run", type=pathlib.Path, default=pathlib.Path("runs/gscl"), help="run folder (default runs/gscl)"
+        "--run",
+        type=pathlib.Path,
+        default=pathlib.Path("runs/gscl"),
+        help="run folder, or an exported model's (socialnav gscl export; the shipped one: data/gscl/default, "
+        "with --out) (default runs/gscl)",
     )
     ru.add_argument("--step", type=int, default=None, help="checkpoint step (default: the latest)")
     ru.add_argument("--scenes", type=positive_int, default=100, help="scenes of each kind (default 100)")
@@ -572,8 +576,14 @@ def _evaluate(args) -> int:
 
 def _rules(args) -> int:
     from socialnav.models import evaluation, rules
+    from socialnav.models.inference import WEIGHTS_FILE
 
     names = ("rules.json", "rules.png")
+    if args.out is None and (args.run / WEIGHTS_FILE).is_file():
+        raise SystemExit(
+            f"socialnav gscl rules: --out: {args.run} is an exported model, whose folder is not written into; "
+            "name an output folder"
+        )
     out = _evaluation_folder(args, names)
     try:
         report = evaluation.rules_run(
@@ -588,8 +598,9 @@ def _rules(args) -> int:
         raise SystemExit(f"socialnav gscl rules: {err}") from None
     runfolder.record(out, EVALUATION_JOB, names)
     print(report["table"])
+    which = "the model" if report["step"] is None else f"step {report['step']}"
     print(
-        f"step {report['step']}: {'every' if report['meets_rules'] else 'not every'} check passes on "
+        f"{which}: {'every' if report['meets_rules'] else 'not every'} check passes on "
         f">= {100 * rules.RULES_BAR:.0f} % of its scenes; -> {report['out']}"
     )
     return 0
