@@ -83,10 +83,9 @@ def rules_run(
     ``run`` is a training run's folder (its latest checkpoint, or ``step``'s) or an exported
     model's (``socialnav gscl export``; the shipped model's :data:`models.inference.DEFAULT_MODEL`
     too; ``step`` must then be None). The model predicts as the cost layer and the export's card
-    read it (:meth:`models.inference.SocialCostModel.function`): a model without the forbidden head
-    (graded targets, the paths objective) scaled into the graded range by
-    :func:`models.inference.output_scale`, where training's check after every epoch scores the
-    network's raw output (the same for every model with the head, the default).
+    read it (:meth:`models.inference.SocialCostModel.function`), as training's check after every
+    epoch does: a model without the forbidden head (graded targets, the paths objective) scaled
+    into the graded range by :func:`models.inference.output_scale`.
 
     Writes ``rules.json`` (pass share and mean contrasts per check and per rule, the MSE against
     the expected maps, the verdict) and ``rules.png`` to ``out`` (default ``run/evaluation``) and

@@ -42,6 +42,7 @@ from socialnav.models.checkpoints import (
     write_metrics,
 )
 from socialnav.models.config import TARGETS, TrainConfig, learning_rate_schedule
+from socialnav.models.inference import output_scale
 from socialnav.models.quality import by_family, meets_quality, trivial_baselines
 from socialnav.models.steps import batch_sharding, compiled, initial_state, per_sample_mse
 from socialnav.models.streams import demonstration_key, epoch_data, test_data
@@ -240,8 +241,12 @@ def _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule)
     }
     line["meets_quality"] = meets_quality(line["test_mse"], test_by_family, meta["baselines"])
     t0 = time.perf_counter()
+    scale = output_scale(config)  # the costs as the layer reads them (1 for a model with the forbidden head)
     suite = rules.evaluate(
-        lambda maps: predict(state["params"], state["batch_stats"], maps), rules.build_suite(RULE_SCENES)
+        (lambda maps: predict(state["params"], state["batch_stats"], maps))
+        if scale == 1.0
+        else (lambda maps: scale * predict(state["params"], state["batch_stats"], maps)),
+        rules.build_suite(RULE_SCENES),
     )
     line["rules_pass_by_check"] = {k: v["pass_share"] for k, v in suite["by_check"].items()}
     line["rules_pass_min"] = min(line["rules_pass_by_check"].values())
