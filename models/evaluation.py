@@ -96,20 +96,14 @@ def rules_run(
       FileNotFoundError, ValueError: no run, no checkpoint, none restorable; an exported model
         with a ``step``, or whose weights do not load (the file named).
     """
-    from socialnav.models.inference import CARD_FILE, WEIGHTS_FILE, SocialCostModel
+    from socialnav.models.inference import WEIGHTS_FILE, SocialCostModel, read_card
 
     run = pathlib.Path(run)
     if (run / WEIGHTS_FILE).is_file():
         if step is not None:
             raise ValueError(f"{run}: an exported model has no checkpoints to choose a step from")
         model = SocialCostModel.load(run)
-        card = {}
-        if (run / CARD_FILE).is_file():
-            try:
-                card = json.loads((run / CARD_FILE).read_text(encoding="utf-8"))
-            except (UnicodeDecodeError, json.JSONDecodeError) as e:
-                raise ValueError(f"{run / CARD_FILE}: not valid JSON ({e})") from None
-        step = card.get("step") if isinstance(card, dict) else None
+        step = read_card(run).get("step")
     else:
         config, graphdef, state, meta = restore(run, step)
         model = SocialCostModel(graphdef, state["params"], state["batch_stats"], config)

@@ -219,6 +219,27 @@ def output_scale(config) -> float:
 
 WEIGHTS_FILE = "weights.msgpack"
 CARD_FILE = "model.json"
+
+
+def read_card(folder) -> dict:
+    """An exported model's card (:data:`CARD_FILE`: how it was made and what it reached; ``{}``
+    for a folder without one).
+
+    Raises:
+      ValueError: the card is not a JSON object (the file named).
+    """
+    path = pathlib.Path(folder) / CARD_FILE
+    if not path.is_file():
+        return {}
+    try:
+        card = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ValueError(f"{path}: not valid JSON ({e})") from None
+    if not isinstance(card, dict):
+        raise ValueError(f"{path}: not a JSON object")
+    return card
+
+
 # The model shipped with the package (made by the recipe in its model.json; socialnav gscl export).
 DEFAULT_MODEL = DATA_DIR / "gscl" / "default"
 

@@ -242,12 +242,12 @@ def _end_epoch(config, meta, state, predict, test, names, epoch, step, schedule)
     line["meets_quality"] = meets_quality(line["test_mse"], test_by_family, meta["baselines"])
     t0 = time.perf_counter()
     scale = output_scale(config)  # the costs as the layer reads them (1 for a model with the forbidden head)
-    suite = rules.evaluate(
-        (lambda maps: predict(state["params"], state["batch_stats"], maps))
-        if scale == 1.0
-        else (lambda maps: scale * predict(state["params"], state["batch_stats"], maps)),
-        rules.build_suite(RULE_SCENES),
-    )
+
+    def layer_costs(maps):
+        costs = predict(state["params"], state["batch_stats"], maps)
+        return costs if scale == 1.0 else scale * costs
+
+    suite = rules.evaluate(layer_costs, rules.build_suite(RULE_SCENES))
     line["rules_pass_by_check"] = {k: v["pass_share"] for k, v in suite["by_check"].items()}
     line["rules_pass_min"] = min(line["rules_pass_by_check"].values())
     line["meets_rules"] = rules.passes(suite)

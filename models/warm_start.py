@@ -85,15 +85,12 @@ def source_record(path) -> dict:
     card; a run writes it as :data:`SOURCE_FILE` when it starts, and ``socialnav gscl export``
     copies it into the exported model's card, so that the source is known after its folder
     changes (the shipped model is replaced by the models fine-tuned from it)."""
-    import json
-
-    from socialnav.models.inference import CARD_FILE, model_identity
+    from socialnav.models.inference import model_identity, read_card
 
     path = pathlib.Path(path)
+    card = read_card(path)
     record = {"path": str(path), "identity": model_identity(path)}
-    if (path / CARD_FILE).is_file():
-        card = json.loads((path / CARD_FILE).read_text(encoding="utf-8"))
-        record.update({k: card[k] for k in ("made_by", "run", "step") if k in card})
+    record.update({k: card[k] for k in ("made_by", "run", "step") if k in card})
     return record
 
 
