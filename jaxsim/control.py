@@ -1,8 +1,10 @@
 """The control loop of both worlds: act on the observation, step the world, record; one ``lax.scan``.
 
 The warehouse day (:func:`jaxsim.rollout.run_samples`), seed 000's protocol
-(:mod:`evaluation.protocol`) and the arena's episode (:func:`jaxsim.scenes.actor.rollout`) drive
-their robot through :func:`control_loop`; only the world's step differs::
+(:mod:`evaluation.protocol`), the arena's episode (:func:`jaxsim.scenes.actor.rollout`) and PPO's
+rollouts (:func:`planners.learning.policy_training.make_collect`: a batch of episodes that restart
+as they end, as one world) drive their robot through :func:`control_loop`; only the world's step
+differs::
 
     for key in keys:
         action, actor_state = actor.act(params, actor_state, observation, key)

@@ -1,6 +1,7 @@
 """The learned policy (planners/learning/policy.py) and its PPO training (planners/learning/policy_training.py,
 planners/learning/policy_run.py): features on hand-made observations, GAE on a known answer, training that
-improves the return, a resumed run equal to an uninterrupted one, the arena's --policy-run."""
+improves the return, a resumed run equal to an uninterrupted one, the collector's batch restarting
+the episodes that end (and their social channel), the arena's --policy-run."""
 
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
+from socialnav.models import policy_net
 from socialnav.models.social_costs import GRADED_TOP
 from socialnav.planners.layers import costmap
 from socialnav.planners.learning import policy as policy_lib
@@ -210,6 +212,53 @@ def test_training_episodes_end_where_the_arenas_do():
         assert trainer_env.dt_s == config.env.dt_s
         periods = math.ceil(spec.timeout_s / (config.env.dt_s * config.replan_every_steps))
         assert trainer_env.max_steps == periods * config.replan_every_steps
+
+
+@pytest.mark.slow
+def test_the_trainers_batch_restarts_the_episodes_that_end_and_their_social_channel():
+    """The collector's world (``batch_step``) and actor (``sampling_actor``), as the control loop
+    runs them: an episode at its time limit ends, is counted and restarts at time 0 on a pool
+    variant while the others go on; the actor gives a restarted episode a fresh social channel
+    whatever it carried, and keeps the others'."""
+    spec = load_scene(SCENES_DIR / f"{EASY}.json")
+    config = dataclasses.replace(
+        _tiny(1), envs_per_scene=4, pool_per_scene=8, policy=policy_lib.PolicyConfig(hidden=(8,), social_layer="casn")
+    )
+    scene = policy_training.make_scene(spec, config)
+    runner = policy_training.init_runner(scene, config, jax.random.key(0), spec.rule)
+    last = scene.env.config.max_steps - 1
+    world = policy_training.BatchWorld(runner.env_state.replace(step=jnp.array([last, 0, 0, 0])), jnp.int32(0))
+    grid = policy_lib.scene_grid(scene.env)
+    env = policy_training.training_env(scene, config, grid, spec.rule)
+    stand = jnp.zeros((4, 2))
+    action = policy_training.Sampled(stand, jnp.zeros((4, 1)), stand, jnp.zeros(4), jnp.zeros(4))
+    step = jax.jit(policy_training.batch_step(env, scene.pool, jax.random.split(jax.random.key(1), 3)))
+    world, out = step(world, action)
+    assert np.asarray(out.done).tolist() == [True, False, False, False] and int(world.steps) == 1
+    assert int(out.ended[0]) == 1 and int(out.ended[2]) == 0  # one episode ended, by its time limit
+    np.testing.assert_allclose(np.asarray(out.observation.observation.time_s), [0.0, 0.1, 0.1, 0.1], atol=1e-6)
+    assert np.asarray(world.env_state.step).tolist() == [0, 1, 1, 1]
+    assert 0 <= int(out.observation.pool_index[0]) < config.pool_per_scene
+
+    graphdef, weights = policy_net.init_weights(config.policy.n_features(16), (8,), 0, -0.5)
+    actor = policy_training.sampling_actor(config, graphdef, grid)
+    params = policy_training.SamplerParams(weights, scene.fields, scene.env.robot, jnp.zeros((grid.height, grid.width)))
+    fresh = actor.init(None, out.observation)
+    casn = fresh.social.casn
+    carried = fresh.replace(
+        social=fresh.social.replace(casn=casn.replace(frozen=~casn.frozen, frozen_xy_m=casn.frozen_xy_m + 3.0))
+    )
+    # only the restarted episode gets a fresh channel
+    started = policy_training._started(carried.social, out.observation.observation)
+    assert not bool(started.casn.frozen[0].any()) and bool(started.casn.frozen[1:].all())
+    act = jax.jit(lambda state: actor.act(params, state, out.observation, jax.random.key(2)))
+    (a_fresh, s_fresh), (a_carried, s_carried) = act(fresh), act(carried)
+    np.testing.assert_array_equal(np.asarray(a_fresh.features[0]), np.asarray(a_carried.features[0]))
+    for leaf_fresh, leaf_carried in zip(
+        jax.tree.leaves(s_fresh.social), jax.tree.leaves(s_carried.social), strict=True
+    ):
+        np.testing.assert_array_equal(np.asarray(leaf_fresh[0]), np.asarray(leaf_carried[0]))
+    assert int(s_carried.steps) == 1 and a_fresh.command.shape == (4, 2)
 
 
 def test_config_round_trips_and_refuses_bad_values():

@@ -13,7 +13,10 @@ One update:
 1. every scene's ``envs_per_scene`` episodes run ``rollout_steps`` steps under the current
    policy (sampled actions), each ended episode restarting at once on a variant drawn from the
    scene's *training* pool (:func:`jaxsim.scenes.variant.sample_variants` with ``training=True``:
-   a stream no evaluation draws from);
+   a stream no evaluation draws from); the rollout is the toolkit's one control loop
+   (:func:`jaxsim.control.control_loop`, as the arena's episodes and the warehouse day), the
+   policy an actor on the batch (:func:`sampling_actor`) and the batch with its restarts a world
+   (:func:`batch_step`);
 2. the reward is the env's (CrowdNav's: goal, collision, discomfort, wall contact) with its
    Euclidean progress term replaced by progress along the guidance field (metres of free-space
    path gained; potential-based shaping, Ng et al. 1999, which keeps the optimal policy and,
@@ -43,7 +46,10 @@ import optax
 from flax import struct
 
 from socialnav.common import pytree
+from socialnav.jaxsim.actor import Actor
+from socialnav.jaxsim.control import control_loop
 from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import wrappers
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
 from socialnav.jaxsim.scenes.spec import SceneSpec
@@ -237,82 +243,204 @@ def init_runner(scene: Scene, config: PPOConfig, key, rule: dict) -> Runner:
     return Runner(state, ts.observation, _fresh_social(ts.observation, config.envs_per_scene))
 
 
-def _observe(config: PPOConfig, scene: Scene, grid, runner: Runner, social):
-    def one(o, i, s):
-        field = policy_lib.PoolField(scene.fields, i)
-        return policy_lib.observe(config.policy, o, field, grid, scene.env.robot, s)
+@struct.dataclass
+class SamplerParams:
+    """The training actor's params (one scene): the network's ``weights``, the pool's guidance
+    ``fields`` (N, H, W), the base's limits ``robot``, the map's ``occupancy`` (H, W) (the GSCL
+    network's walls) and the GSCL network's ``gscl_weights`` (None without that channel)."""
 
-    return jax.vmap(one)(runner.observation, runner.env_state.extras["pool_index"], social)
+    weights: object
+    fields: jax.Array
+    robot: robot_lib.RobotParams
+    occupancy: jax.Array
+    gscl_weights: object = None
+
+
+@struct.dataclass
+class SamplerState:
+    """The training actor's state: ``social`` the social channel's state of the B episodes
+    (:class:`planners.learning.policy_social.SocialState`, leaves (B, ...)) and ``steps`` () int32,
+    the steps taken in this rollout (the GSCL window is refreshed on its steps 0, k, 2k, ...)."""
+
+    social: policy_social.SocialState
+    steps: jax.Array
+
+
+@struct.dataclass
+class PoolObservation:
+    """What the training actor sees of B episodes: the env's ``observation`` (leaves (B, ...))
+    and ``pool_index`` (B,), the pool variant each episode runs (its guidance field)."""
+
+    observation: env_lib.Observation
+    pool_index: jax.Array
+
+
+@struct.dataclass
+class Sampled:
+    """The training actor's action on B episodes: ``command`` (B, 2) the base's ``(v, omega)``,
+    and what PPO keeps of it: the ``features`` (B, F), the sampled normalised action ``u`` (B, 2),
+    its ``log_prob`` and the critic's ``value`` (B,)."""
+
+    command: jax.Array
+    features: jax.Array
+    u: jax.Array
+    log_prob: jax.Array
+    value: jax.Array
+
+
+@struct.dataclass
+class BatchStep:
+    """One step of the trainer's batch (:func:`batch_step`): ``observation`` (the episodes that
+    ended already restarted), the step's ``reward`` and ``done`` (B,) (of the episodes as they
+    ended, before the restart), and ``ended``: the episodes that ended at this step, summed
+    (count, return, reached, touched a person, length in steps, socially successful)."""
+
+    observation: PoolObservation
+    reward: jax.Array
+    done: jax.Array
+    ended: tuple
+
+
+@struct.dataclass
+class BatchWorld:
+    """The trainer's B episodes of one scene as one world: ``env_state`` (leaves (B, ...)) and
+    ``steps`` () int32, the steps taken in this rollout (each step's restart keys by index)."""
+
+    env_state: env_lib.EnvState
+    steps: jax.Array
+
+
+def _started(social, obs: env_lib.Observation):
+    """``social`` with the episodes at their first observation (time 0: restarted at the step
+    before, or never stepped) set back to the channel's initial state."""
+    first = obs.time_s == 0.0
+    return pytree.select_rows(first, _fresh_social(obs, first.shape[0]), social)
+
+
+def sampler_features(config: PPOConfig, grid: costmap.GridSpec, params: SamplerParams, social, pooled: PoolObservation):
+    """``(features (B, F), next social state)`` of B episodes (:func:`planners.learning.policy.observe`
+    with each episode's own pool field)."""
+
+    def one(o, i, s):
+        return policy_lib.observe(config.policy, o, policy_lib.PoolField(params.fields, i), grid, params.robot, s)
+
+    return jax.vmap(one)(pooled.observation, pooled.pool_index, social)
+
+
+def sampling_actor(config: PPOConfig, graphdef, grid: costmap.GridSpec, gscl_model=None) -> Actor:
+    """The policy as the trainer runs it: an :class:`~jaxsim.actor.Actor` on a batch of B
+    episodes (:class:`PoolObservation`) with :class:`SamplerParams`, its action :class:`Sampled`
+    from the network's Gaussian (exploration), where the benchmark's
+    (:func:`planners.learning.policy.policy_actor`) takes the mean on one episode.
+
+    Each step: the episodes at their first observation get a fresh social channel; on every
+    ``gscl_every_steps``-th step of the rollout the GSCL channel's network runs for every episode
+    at once (``gscl_model.apply(weights, maps)``, its weights ``params.gscl_weights``, traced);
+    then the features, the network and a sample. The step's key is split in three, the first
+    drawing the action (the other two are the restart's: :func:`batch_step`)."""
+    gscl = config.policy.social_layer == "gscl"
+    if gscl and gscl_model is None:
+        raise ValueError("sampling_actor: the gscl channel needs the trained network (gscl_model)")
+    network = gscl_model.apply if gscl else None
+
+    def init(key, pooled: PoolObservation) -> SamplerState:
+        del key
+        return SamplerState(_fresh_social(pooled.observation, pooled.pool_index.shape[0]), jnp.int32(0))
+
+    def refresh(params: SamplerParams, social, obs, steps):
+        if not gscl:
+            return social
+        predict = lambda maps: network(params.gscl_weights, maps)
+        renew = jax.vmap(lambda o, s: policy_social.gscl_refresh(predict, params.occupancy, grid, o, s))
+        return jax.lax.cond(steps % config.policy.gscl_every_steps == 0, renew, lambda o, s: s, obs, social)
+
+    def act(params: SamplerParams, state: SamplerState, pooled: PoolObservation, key):
+        k_act = jax.random.split(key, 3)[0]
+        social = _started(state.social, pooled.observation)
+        social = refresh(params, social, pooled.observation, state.steps)
+        x, social = sampler_features(config, grid, params, social, pooled)
+        mean, log_std, value = policy_net.apply(graphdef, params.weights, x)
+        u = policy_net.sample(k_act, mean, log_std)
+        log_prob = policy_net.gaussian_log_prob(u, mean, log_std)
+        action = Sampled(policy_lib.command(u, params.robot), x, u, log_prob, value)
+        return action, SamplerState(social, state.steps + 1)
+
+    return Actor(init=init, act=act, name="ppo_sampler")
+
+
+def batch_step(env: wrappers.Wrapper, pool: wrappers.VariantPool, keys: jax.Array):
+    """``step(world, action) -> (world, BatchStep)`` of a :class:`BatchWorld` (B episodes of
+    ``env``, :func:`training_env`) under a :class:`Sampled` action: every episode steps, the
+    ended ones are counted, then restart at once on fresh draws of ``pool`` (the others go on).
+    ``keys`` (T, ...): the keys of the rollout's T steps, each split in three (the action's, the
+    pool draw's, the restart's), as the actor splits its own."""
+
+    def step(world: BatchWorld, action: Sampled):
+        state, ts = jax.vmap(env.step)(world.env_state, action.command)
+        done, ended = ts.done, state.extras
+        social_success = ts.terminated & ended["rule_kept"]
+        counts = (
+            done.sum(),
+            jnp.where(done, ended["episode_return"], 0.0).sum(),
+            (done & ts.terminated).sum(),
+            (done & ended["episode_person_contact"]).sum(),
+            jnp.where(done, ended["episode_steps"], 0).sum(),
+            (done & social_success).sum(),
+        )
+        _, k_pick, k_reset = jax.random.split(keys[world.steps], 3)
+        drawn = pool.draw(k_pick, done.shape[0])
+        reset_keys = jax.random.split(k_reset, done.shape[0])
+        restarted, after = wrappers.reset_where(env, done, reset_keys, drawn, state, ts)
+        pooled = PoolObservation(after.observation, restarted.extras["pool_index"])
+        return BatchWorld(restarted, world.steps + 1), BatchStep(pooled, ts.reward, done, counts)
+
+    return step
+
+
+def _summed(counts: tuple) -> tuple:
+    """The rollout's totals of :attr:`BatchStep.ended` (T,) each, added step after step."""
+    zero = (jnp.int32(0), jnp.float32(0.0), jnp.int32(0), jnp.int32(0), jnp.int32(0), jnp.int32(0))
+    add = lambda total, now: (tuple(a + b for a, b in zip(total, now, strict=True)), None)
+    return jax.lax.scan(add, zero, counts)[0]
 
 
 def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict, gscl_model=None) -> Callable:
     """``collect(scene, weights, runner, key) -> (runner, batch, stats)``: ``rollout_steps``
     steps of the runner's episodes and their GAE, jitted (one program per scene shape and rule).
 
-    ``stats``: the episodes that ended, ``(count, sum of returns, reached, touched a person,
-    sum of lengths, socially successful)``; socially successful is the arena's
-    ``social_success``: the goal reached and the scene's ``rule`` kept
+    The rollout is the toolkit's one control loop (:func:`jaxsim.control.control_loop`):
+    :func:`sampling_actor` drives the batch world of :func:`batch_step`, whose ended episodes
+    restart on the scene's training pool. ``stats``: the episodes that ended, ``(count, sum of
+    returns, reached, touched a person, sum of lengths, socially successful)``; socially
+    successful is the arena's ``social_success``: the goal reached and the scene's ``rule`` kept
     (:mod:`jaxsim.scenes.rule_monitor`). ``gscl_model``: the GSCL channel's network
     (``gscl_model.apply(weights, maps)``, its weights ``scene.gscl_weights``, traced), run for
     every episode at once on the rollout's steps ``0, k, 2k, ...`` (``k = gscl_every_steps``)."""
-    gscl = config.policy.social_layer == "gscl"
-    if gscl and gscl_model is None:
+    if config.policy.social_layer == "gscl" and gscl_model is None:
         raise ValueError("make_collect: the gscl channel needs the trained network (gscl_model)")
-    network = gscl_model.apply if gscl else None
+    actor = sampling_actor(config, graphdef, grid, gscl_model)
+
+    def keep(pooled, action: Sampled, actor_state, step: BatchStep):
+        return action.features, action.u, action.log_prob, action.value, step.reward, step.done, step.ended
 
     def collect(scene: Scene, weights, runner: Runner, key):
         env = training_env(scene, config, grid, rule)
         occupancy = jnp.asarray(scene.env.occupancy.values, jnp.float32)
-
-        def refresh(social, obs, t):
-            if not gscl:
-                return social
-            predict = lambda maps: network(scene.gscl_weights, maps)
-            renew = jax.vmap(lambda o, s: policy_social.gscl_refresh(predict, occupancy, grid, o, s))
-            return jax.lax.cond(t % config.policy.gscl_every_steps == 0, renew, lambda o, s: s, obs, social)
-
-        def one_step(carry, xs):
-            runner, stats = carry
-            step_key, t = xs
-            k_act, k_pick, k_reset = jax.random.split(step_key, 3)
-            social = refresh(runner.social, runner.observation, t)
-            x, social = _observe(config, scene, grid, runner, social)
-            mean, log_std, value = policy_net.apply(graphdef, weights, x)
-            u = policy_net.sample(k_act, mean, log_std)
-            log_prob = policy_net.gaussian_log_prob(u, mean, log_std)
-            action = policy_lib.command(u, scene.env.robot)
-            state, ts = jax.vmap(env.step)(runner.env_state, action)
-            reward, done, ended = ts.reward, ts.done, state.extras
-            social_success = ts.terminated & ended["rule_kept"]
-            stats = (
-                stats[0] + done.sum(),
-                stats[1] + jnp.where(done, ended["episode_return"], 0.0).sum(),
-                stats[2] + (done & ts.terminated).sum(),
-                stats[3] + (done & ended["episode_person_contact"]).sum(),
-                stats[4] + jnp.where(done, ended["episode_steps"], 0).sum(),
-                stats[5] + (done & social_success).sum(),
-            )
-
-            # The episodes that ended restart now, from fresh draws of the pool (the others go on).
-            drawn = scene.pool.draw(k_pick, done.shape[0])
-            reset_keys = jax.random.split(k_reset, done.shape[0])
-            state, ts = wrappers.reset_where(env, done, reset_keys, drawn, state, ts)
-            social = pytree.select_rows(~done, social, _fresh_social(ts.observation, done.shape[0]))
-            new_runner = Runner(state, ts.observation, social)
-            return (new_runner, stats), (x, u, log_prob, value, reward, done)
-
-        zero_stats = (jnp.int32(0), jnp.float32(0.0), jnp.int32(0), jnp.int32(0), jnp.int32(0), jnp.int32(0))
+        params = SamplerParams(weights, scene.fields, scene.env.robot, occupancy, scene.gscl_weights)
         keys = jax.random.split(key, config.rollout_steps)
-        steps = jnp.arange(config.rollout_steps)
-        (runner, stats), (x, u, log_prob, value, reward, done) = jax.lax.scan(
-            one_step, (runner, zero_stats), (keys, steps)
-        )
-        last_x, _ = _observe(config, scene, grid, runner, runner.social)
+        pooled = PoolObservation(runner.observation, runner.env_state.extras["pool_index"])
+        start = BatchWorld(runner.env_state, jnp.int32(0))
+        (world, pooled, sampler), (x, u, log_prob, value, reward, done, counts) = control_loop(
+            batch_step(env, scene.pool, keys), actor, params, start, pooled,
+            SamplerState(runner.social, jnp.int32(0)), keys, record=keep,
+        )  # fmt: skip
+        social = _started(sampler.social, pooled.observation)
+        last_x, _ = sampler_features(config, grid, params, social, pooled)
         _, _, last_value = policy_net.apply(graphdef, weights, last_x)
         advantage = gae(value, reward, done, last_value, config.gamma, config.gae_lambda)
         flat = lambda a: a.reshape((-1,) + a.shape[2:])
         batch = Batch(flat(x), flat(u), flat(log_prob), flat(value), flat(advantage), flat(advantage + value))
-        return runner, batch, stats
+        return Runner(world.env_state, pooled.observation, social), batch, _summed(counts)
 
     return jax.jit(collect)
 
@@ -486,16 +614,25 @@ def evaluate_return(trainer: Trainer, weights, n_variants: int = 16, seed: int =
 
 __all__ = [
     "Batch",
+    "BatchStep",
+    "BatchWorld",
     "PPOConfig",
+    "PoolObservation",
     "Runner",
+    "Sampled",
+    "SamplerParams",
+    "SamplerState",
     "Scene",
     "TrainState",
     "Trainer",
+    "batch_step",
     "evaluate_return",
     "gae",
     "make_collect",
     "make_update",
     "reward_params",
+    "sampler_features",
+    "sampling_actor",
     "scene_env",
     "training_env",
 ]
