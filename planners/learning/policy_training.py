@@ -416,9 +416,7 @@ def make_collect(config: PPOConfig, graphdef, grid: costmap.GridSpec, rule: dict
     (:mod:`jaxsim.scenes.rule_monitor`). ``gscl_model``: the GSCL channel's network
     (``gscl_model.apply(weights, maps)``, its weights ``scene.gscl_weights``, traced), run for
     every episode at once on the rollout's steps ``0, k, 2k, ...`` (``k = gscl_every_steps``)."""
-    if config.policy.social_layer == "gscl" and gscl_model is None:
-        raise ValueError("make_collect: the gscl channel needs the trained network (gscl_model)")
-    actor = sampling_actor(config, graphdef, grid, gscl_model)
+    actor = sampling_actor(config, graphdef, grid, gscl_model)  # refuses the gscl channel without its network
 
     def keep(pooled, action: Sampled, actor_state, step: BatchStep):
         return action.features, action.u, action.log_prob, action.value, step.reward, step.done, step.ended
