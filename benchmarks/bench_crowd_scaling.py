@@ -31,6 +31,7 @@ from benchmarks.bench_human_models import _timed  # noqa: E402
 from benchmarks.bench_simulator import machine  # noqa: E402
 from socialnav.evaluation.humans import calibration as hc  # noqa: E402
 from socialnav.evaluation.humans import validation as hv  # noqa: E402
+from socialnav.jaxsim.walkers import Aims, Walkers  # noqa: E402
 
 MODELS = (
     "social_force",
@@ -67,9 +68,11 @@ def program(model: hv.HumanModel, n: int, worlds: int, steps: int):
             xy, v = carry
             u = jax.random.uniform(k, (2, n), minval=1e-6, maxval=1.0)
             aim = goal - xy
-            x, y, vx, vy = hv.model_step(model.name, params, field, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], aim[:, 0],
-                                         aim[:, 1], speed, present, present, u[0], u[1])  # fmt: skip
-            return (jnp.stack([x, y], -1), jnp.stack([vx, vy], -1)), None
+            people = Walkers.of(xy, v, present, present)
+            after = hv.model_step(
+                model.name, params, field, people, Aims(aim[:, 0], aim[:, 1], speed, speed), (u[0], u[1])
+            )
+            return (after.xy_m, after.velocity_mps), None
 
         (xy, _), _ = jax.lax.scan(step, (xy, jnp.zeros_like(xy)), jax.random.split(key, steps))
         return xy

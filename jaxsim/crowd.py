@@ -27,6 +27,7 @@ import jax.numpy as jnp
 from socialnav.jaxsim import social_force as sf
 from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 # Minimum clearance kept from wall surfaces by the hard wall constraint (m).
 WALL_CLEARANCE_M = 0.1
@@ -35,41 +36,27 @@ WALL_CLEARANCE_M = 0.1
 def step_crowd(
     params: SimParams,
     wall_field: Grid,
-    x: jax.Array,
-    y: jax.Array,
-    vx: jax.Array,
-    vy: jax.Array,
-    aim_dx: jax.Array,
-    aim_dy: jax.Array,
-    desired_speed_mps: jax.Array,
-    max_speed_mps: jax.Array,
-    present: jax.Array,
-    moving: jax.Array,
-    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
-    u1: jax.Array,
-    u2: jax.Array,
-    ignores_robot: jax.Array | None = None,
-) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
-    """One step of ``params.dt_s`` for N people.
+    dt: float,
+    people: Walkers,
+    aims: Aims,
+    robot: RobotDisc,
+    uniforms: tuple[jax.Array, jax.Array],
+) -> Walkers:
+    """One step of ``dt`` (s) for N people (the human models' signature, :mod:`jaxsim.walkers`).
 
-    Args:
-      x, y, vx, vy: (N,) positions (m) and velocities (m/s).
-      aim_dx, aim_dy: (N,) from each person to where they are going now (m).
-      desired_speed_mps: (N,) the desired force's speed (a person settling on a spot slows down).
-      max_speed_mps: (N,) the cap on the speed after the step (pedsim's: the desired speed).
-      present: (N,) bool: in the scene (a source of social force).
-      moving: (N,) bool: moved by the forces; the others keep their place with velocity 0.
-      robot_xyv: () each, the robot's position and velocity: an agent everyone avoids, its
-        force scaled by ``worker_robot_force_factor`` (it is not moved here).
-      u1, u2: (N,) uniforms in (0, 1] for the random force.
-      ignores_robot: (N,) bool, people who do not feel the robot (``None``: nobody).
-
-    Returns:
-      (x, y, vx, vy) after the step.
+    ``people`` are pushed by the desired force towards ``aims`` (``aims.speed_mps`` the desired
+    force's speed, ``aims.max_speed_mps`` the cap on the speed after the step, pedsim's: the
+    desired speed), the social force of the present others and of the robot (an agent everyone but
+    ``people.ignores_robot`` avoids, its force scaled by ``worker_robot_force_factor``; its radius
+    is not used), the walls and a random force from ``uniforms`` (two (N,) draws in (0, 1]). Who
+    is not ``people.moving`` keeps their place with velocity 0. Returns the people after the step.
     """
-    dt = params.dt_s
+    x, y, vx, vy = people.x_m, people.y_m, people.vx_mps, people.vy_mps
+    present, moving, ignores_robot = people.present, people.moving, people.ignores_robot
+    aim_dx, aim_dy, desired_speed_mps, max_speed_mps = aims.dx_m, aims.dy_m, aims.speed_mps, aims.max_speed_mps
+    u1, u2 = uniforms
     ax, ay = sf.desired_force(params, aim_dx, aim_dy, vx, vy, desired_speed_mps)
-    rx, ry, rvx, rvy = robot_xyv
+    rx, ry, rvx, rvy = robot.x_m, robot.y_m, robot.vx_mps, robot.vy_mps
     xs = jnp.concatenate([x, rx[None]])
     ys = jnp.concatenate([y, ry[None]])
     vxs = jnp.concatenate([vx, rvx[None]])
@@ -105,7 +92,7 @@ def step_crowd(
 
     new_x, new_y, new_vx, new_vy = wall_constraint(wall, nx, ny, new_x, new_y, new_vx, new_vy, dt)
     zero = jnp.zeros_like(new_vx)
-    return (
+    return people.moved(
         jnp.where(moving, new_x, x),
         jnp.where(moving, new_y, y),
         jnp.where(moving, new_vx, zero),

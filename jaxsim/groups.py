@@ -43,6 +43,8 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
+from socialnav.jaxsim.walkers import Aims, Walkers
+
 _EPS = 1e-6
 ALONE = -1
 
@@ -111,21 +113,14 @@ def group_terms(
     return keep * turn_rad, keep * ax, keep * ay, in_group
 
 
-def group_aim(
-    params: GroupParams,
-    x: jax.Array,
-    y: jax.Array,
-    aim_dx: jax.Array,
-    aim_dy: jax.Array,
-    speed_mps: jax.Array,
-    max_speed_mps: jax.Array,
-    group_id: jax.Array,
-    present: jax.Array,
-) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """``(aim_dx, aim_dy, speed_mps)`` (N,) each: the group terms folded into each member's
-    desired velocity ``w_i`` (see the module); unchanged for someone alone. The new aim keeps the
-    old aim's length (a target's distance, for the models that slow down near it; at least 1 m);
-    the speed is capped at ``max_speed_mps``."""
+def group_aim(params: GroupParams, people: Walkers, aims: Aims, group_id: jax.Array) -> Aims:
+    """``aims`` with the group terms folded into each member's desired velocity ``w_i`` (see the
+    module); unchanged for someone alone. ``group_id`` (N,) int32: people walking together share a
+    non-negative id (-1: alone); only ``people.present`` mates count. The new aim keeps the old
+    aim's length (a target's distance, for the models that slow down near it; at least 1 m); the
+    speed is capped at ``aims.max_speed_mps``."""
+    x, y, present = people.x_m, people.y_m, people.present
+    aim_dx, aim_dy, speed_mps, max_speed_mps = aims.dx_m, aims.dy_m, aims.speed_mps, aims.max_speed_mps
     turn, ax, ay, in_group = group_terms(params, x, y, aim_dx, aim_dy, group_id, present)
     aim_norm = jnp.sqrt(aim_dx * aim_dx + aim_dy * aim_dy + _EPS * _EPS)
     ex, ey = aim_dx / (aim_norm + _EPS), aim_dy / (aim_norm + _EPS)
@@ -137,4 +132,4 @@ def group_aim(
     new_dx = jnp.where(in_group, wx * scale, aim_dx)
     new_dy = jnp.where(in_group, wy * scale, aim_dy)
     new_speed = jnp.where(in_group, jnp.minimum(w_norm, max_speed_mps), speed_mps)
-    return new_dx, new_dy, new_speed
+    return aims.replace(dx_m=new_dx, dy_m=new_dy, speed_mps=new_speed)

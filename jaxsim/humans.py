@@ -15,7 +15,8 @@ The models (``docs/humans.md`` measures each against the Jülich corridors and E
   Helbing, Farkas & Vicsek 2000's contact forces (:func:`jaxsim.power_law.step_power_law`), and
   its ``_calibrated`` fit to the Jülich training runs.
 
-Every model takes the same arrays and returns ``(x, y, vx, vy)``; ``model`` is static (a
+Every model's step has one signature (:mod:`jaxsim.walkers`: the people, their aims and the
+robot as pytrees in, the people after the step out; :data:`STEPS`); ``model`` is static (a
 change recompiles), the constants in :class:`HumanParams` are traced. People who walk together
 (``group_id``) get Moussaïd et al. 2010's group terms on top of any model
 (:mod:`jaxsim.groups`).
@@ -23,11 +24,15 @@ change recompiles), the constants in :class:`HumanParams` are traced. People who
 
 from __future__ import annotations
 
+import functools
+
 import jax
 from flax import struct
 
 from socialnav.jaxsim import crowd, groups, orca, power_law, speed_model
+from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.walkers import Aims, HumanStep, RobotDisc, Walkers
 
 HUMAN_MODELS = (
     "social_force",
@@ -90,71 +95,56 @@ def human_params(model: str, crowd_params: SimParams, orca_params: orca.ORCAPara
     return HumanParams(crowd_params, chosen_orca, speed, anticipation, chosen_group, power)
 
 
+# Each model's step (the one signature of :mod:`jaxsim.walkers`) and the field of
+# :class:`HumanParams` that holds its constants.
+STEPS: dict[str, HumanStep] = {
+    "social_force": crowd.step_crowd,
+    "orca": orca.step_orca,
+    "collision_free_speed": speed_model.step_speed_model,
+    "steering_speed": speed_model.step_speed_model,
+    "anticipation": speed_model.step_anticipation,
+    "power_law": power_law.step_power_law,
+}
+PARAMS_OF: dict[str, str] = {
+    "social_force": "crowd",
+    "orca": "orca",
+    "collision_free_speed": "speed",
+    "steering_speed": "speed",
+    "anticipation": "anticipation",
+    "power_law": "power_law",
+}
+
+
 def step_humans(
     model: str,
     params: HumanParams,
-    wall_field,
-    x: jax.Array,
-    y: jax.Array,
-    vx: jax.Array,
-    vy: jax.Array,
-    aim_dx: jax.Array,
-    aim_dy: jax.Array,
-    speed_mps: jax.Array,
-    max_speed_mps: jax.Array,
-    present: jax.Array,
-    moving: jax.Array,
-    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
-    robot_radius_m,
-    u1: jax.Array,
-    u2: jax.Array,
-    ignores_robot: jax.Array | None = None,
+    wall_field: Grid,
+    people: Walkers,
+    aims: Aims,
+    robot: RobotDisc,
+    uniforms: tuple[jax.Array, jax.Array],
     group_id: jax.Array | None = None,
-):
-    """One step of ``params.crowd.dt_s`` of N people by human ``model``: ``(x, y, vx, vy)``, (N,) each.
+) -> Walkers:
+    """One step of ``params.crowd.dt_s`` of N people by human ``model``: the people after it.
 
     Args:
-      x, y, vx, vy: (N,) positions (m) and velocities (m/s).
-      aim_dx, aim_dy: (N,) towards each person's target (m).
-      speed_mps: (N,) desired speeds; max_speed_mps: (N,) the social force's speed cap (the
-        velocity models and ORCA walk at most ``speed_mps``).
-      present, moving: (N,) bool: in the world (felt by the others); stepped (the others stay).
-      robot_xyv: the robot's x, y, vx, vy, an agent the people avoid unless ``ignores_robot``
-        (N,) bool; ``robot_radius_m`` its body (the social force's pair force has no radius).
-      u1, u2: (N,) uniforms in (0, 1]: the social force's random force, the anticipation
-        model's reaction noise.
+      model: static, one of :data:`HUMAN_MODELS`.
+      people: (N,) positions, velocities, who is present (felt by the others), who is moving
+        (stepped; the others stay) and who ignores the robot (:class:`~jaxsim.walkers.Walkers`).
+      aims: (N,) towards each person's target, the desired speed and the social force's and
+        power law's speed cap (:class:`~jaxsim.walkers.Aims`).
+      robot: the disc everyone avoids but those who ignore it (:class:`~jaxsim.walkers.RobotDisc`;
+        the social force's pair force has no radius).
+      uniforms: two (N,) draws in (0, 1]: the social force's random force, the anticipation
+        model's tie-break and creep.
       group_id: (N,) int32, people walking together share a non-negative id (-1 alone): their
         aims and speeds get the group terms (:func:`jaxsim.groups.group_aim`). ``None``: no
         groups, and nothing computed for them.
     """
     kind = kind_of(check_model(model))
-    dt = params.crowd.dt_s
     if group_id is not None:
-        aim_dx, aim_dy, speed_mps = groups.group_aim(
-            params.group, x, y, aim_dx, aim_dy, speed_mps, max_speed_mps, group_id, present
-        )
-    if speed_model.uses_speed_params(kind):
-        headings = speed_model.STEERING_HEADINGS if kind == "steering_speed" else 1
-        return speed_model.step_speed_model(
-            params.speed, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, present, moving, robot_xyv,
-            robot_radius_m, ignores_robot=ignores_robot, headings=headings,
-        )  # fmt: skip
-    if kind == "anticipation":
-        return speed_model.step_anticipation(
-            params.anticipation, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, present, moving, robot_xyv,
-            robot_radius_m, u1, u2, ignores_robot=ignores_robot,
-        )  # fmt: skip
-    if kind == "power_law":
-        return power_law.step_power_law(
-            params.power_law, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, max_speed_mps, present, moving,
-            robot_xyv, robot_radius_m, ignores_robot=ignores_robot,
-        )  # fmt: skip
-    if kind == "orca":
-        return orca.step_orca(
-            params.orca, wall_field, dt, x, y, vx, vy, aim_dx, aim_dy, speed_mps, present, moving, robot_xyv,
-            robot_radius_m, ignores_robot=ignores_robot,
-        )  # fmt: skip
-    return crowd.step_crowd(
-        params.crowd, wall_field, x, y, vx, vy, aim_dx, aim_dy, speed_mps, max_speed_mps, present, moving, robot_xyv,
-        u1, u2, ignores_robot=ignores_robot,
-    )  # fmt: skip
+        aims = groups.group_aim(params.group, people, aims, group_id)
+    step, constants = STEPS[kind], getattr(params, PARAMS_OF[kind])
+    if kind == "steering_speed":
+        step = functools.partial(step, headings=speed_model.STEERING_HEADINGS)
+    return step(constants, wall_field, params.crowd.dt_s, people, aims, robot, uniforms)

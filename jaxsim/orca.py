@@ -32,6 +32,7 @@ from flax import struct
 from socialnav.jaxsim.crowd import wall_constraint
 from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import PERSON_RADIUS_M
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 _EPS = 1e-5
 MAX_NEIGHBORS = 10  # RVO2's default maxNeighbors
@@ -253,21 +254,15 @@ def step_orca(
     params: ORCAParams,
     wall_field: Grid,
     dt: float,
-    x: jax.Array,
-    y: jax.Array,
-    vx: jax.Array,
-    vy: jax.Array,
-    aim_dx: jax.Array,
-    aim_dy: jax.Array,
-    desired_speed_mps: jax.Array,
-    present: jax.Array,
-    moving: jax.Array,
-    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
-    robot_radius_m: float,
-    ignores_robot: jax.Array | None = None,
-):
-    """One ORCA step of N people (the arguments of :func:`jaxsim.crowd.step_crowd`; standing
-    people are static obstacles to the others). Returns (x, y, vx, vy), each (N,).
+    people: Walkers,
+    aims: Aims,
+    robot: RobotDisc,
+    uniforms: tuple[jax.Array, jax.Array] | None = None,
+) -> Walkers:
+    """One ORCA step of ``dt`` (s) for N people (the human models' signature,
+    :mod:`jaxsim.walkers`; ``aims.max_speed_mps`` and ``uniforms`` are not used): each walks at
+    most ``aims.speed_mps``; standing people (not ``people.moving``) are static obstacles to the
+    others. Returns the people after the step.
 
     Each person's lines, in order: the nearest wall point (hard), its ``params.max_neighbors``
     nearest people within ``params.neighbor_dist_m`` (by index), the robot (always, within the
@@ -275,6 +270,9 @@ def step_orca(
     sight of a robot). The second program runs for everyone, the third only for those whose
     second failed (:func:`_fallback`). Cost per world: O(N^2) for the neighbours plus O(N K^2)
     and O(F K^3) for the programs (K neighbours, F failing people)."""
+    x, y, vx, vy = people.x_m, people.y_m, people.vx_mps, people.vy_mps
+    present, moving, ignores_robot = people.present, people.moving, people.ignores_robot
+    aim_dx, aim_dy, desired_speed_mps = aims.dx_m, aims.dy_m, aims.speed_mps
     n = x.shape[0]
     k = min(params.max_neighbors, n)
     xy = jnp.stack([x, y], -1)
@@ -282,7 +280,7 @@ def step_orca(
     dist = jnp.sqrt(aim_dx * aim_dx + aim_dy * aim_dy)
     speed = jnp.minimum(desired_speed_mps, dist / dt)  # do not overshoot the target
     pref = jnp.stack([aim_dx, aim_dy], -1) * (speed / jnp.maximum(dist, 1e-9))[:, None]
-    rx, ry, rvx, rvy = robot_xyv
+    rx, ry, rvx, rvy, robot_radius_m = robot.x_m, robot.y_m, robot.vx_mps, robot.vy_mps, robot.radius_m
     ignores = jnp.zeros(n, bool) if ignores_robot is None else ignores_robot
     field = wall_field.lookup(x, y)
     wall_d, nx, ny = field[..., 0], field[..., 1], field[..., 2]
@@ -316,7 +314,7 @@ def step_orca(
     new_vx, new_vy = _fallback(line, valid, hard, failed, desired_speed_mps, new_vx, new_vy, chunk)
     nx_, ny_, nvx, nvy = wall_constraint(wall_d, nx, ny, x + dt * new_vx, y + dt * new_vy, new_vx, new_vy, dt)
     zero = jnp.zeros_like(nvx)
-    return (
+    return people.moved(
         jnp.where(moving, nx_, x),
         jnp.where(moving, ny_, y),
         jnp.where(moving, nvx, zero),

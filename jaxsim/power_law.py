@@ -56,6 +56,7 @@ from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
 from socialnav.jaxsim.grid import Grid
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 _EPS = 1e-6
 EXPONENT = 2.0  # the power of the law, KSG's fit to the data (tau^-2)
@@ -152,34 +153,24 @@ def step_power_law(
     params: PowerLawParams,
     wall_field: Grid,
     dt: float,
-    x: jax.Array,
-    y: jax.Array,
-    vx: jax.Array,
-    vy: jax.Array,
-    aim_dx: jax.Array,
-    aim_dy: jax.Array,
-    desired_speed_mps: jax.Array,
-    max_speed_mps: jax.Array,
-    present: jax.Array,
-    moving: jax.Array,
-    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
-    robot_radius_m: float,
-    ignores_robot: jax.Array | None = None,
-):
-    """One step ``dt`` of N people, :data:`SUBSTEPS` explicit steps of the forces of the module's
-    docstring: ``(x, y, vx, vy)`` (N,) each, the velocity 0 for who does not move.
-
-    Args:
-      x, y, vx, vy: (N,) positions (m) and velocities (m/s).
-      aim_dx, aim_dy: (N,) towards each person's target (m); desired_speed_mps (N,) their speeds;
-        max_speed_mps (N,) the cap on the speed.
-      present, moving: (N,) bool: felt by the others; stepped (the others keep their place and
-        are felt at their velocity).
-      robot_xyv: the robot's x, y, vx, vy, a body of ``robot_radius_m`` the people avoid unless
-        ``ignores_robot`` (N,) bool; it keeps its place during the step.
+    people: Walkers,
+    aims: Aims,
+    robot: RobotDisc,
+    uniforms: tuple[jax.Array, jax.Array] | None = None,
+) -> Walkers:
+    """One step ``dt`` (s) of N people, :data:`SUBSTEPS` explicit steps of the forces of the
+    module's docstring (the human models' signature, :mod:`jaxsim.walkers`; ``uniforms`` is not
+    used): the people after the step, the velocity 0 for who does not move. ``aims.max_speed_mps``
+    caps the speed; who is not ``people.moving`` keeps their place and is felt at their velocity;
+    the robot, a body of ``robot.radius_m`` the people avoid unless ``people.ignores_robot``, keeps
+    its place during the step.
     """
+    x, y, vx, vy = people.x_m, people.y_m, people.vx_mps, people.vy_mps
+    present, moving, ignores_robot = people.present, people.moving, people.ignores_robot
+    aim_dx, aim_dy, desired_speed_mps, max_speed_mps = aims.dx_m, aims.dy_m, aims.speed_mps, aims.max_speed_mps
+    robot_radius_m = robot.radius_m
     n = x.shape[0]
-    rx, ry, rvx, rvy = robot_xyv
+    rx, ry, rvx, rvy = robot.x_m, robot.y_m, robot.vx_mps, robot.vy_mps
     feels_robot = jnp.ones(n, bool) if ignores_robot is None else ~ignores_robot
     radius = jnp.concatenate([jnp.full(n, params.radius_m), jnp.full(1, robot_radius_m)])
     reach = radius[None, :] + params.radius_m
@@ -229,7 +220,7 @@ def step_power_law(
     carry = (x, y, vx, vy)
     (new_x, new_y, new_vx, new_vy), _ = jax.lax.scan(jax.checkpoint(substep), carry, None, length=SUBSTEPS)
     zero = jnp.zeros_like(new_vx)
-    return new_x, new_y, jnp.where(moving, new_vx, zero), jnp.where(moving, new_vy, zero)
+    return people.moved(new_x, new_y, jnp.where(moving, new_vx, zero), jnp.where(moving, new_vy, zero))
 
 
 # Fitted parameters shipped as named human models (``--human-model <name>``): the fit of

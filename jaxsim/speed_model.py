@@ -39,6 +39,7 @@ from flax import struct
 
 from socialnav.jaxsim.crowd import wall_constraint
 from socialnav.jaxsim.grid import Grid
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 _EPS = 1e-6
 FREE_SPACING_M = 1000.0  # the spacing of someone with nobody ahead
@@ -65,12 +66,13 @@ class SpeedModelParams:
     steering_horizon_m: float = 10.0  # their d_max: how far ahead a collision counts
 
 
-def _move(x, y, vx, vy, wall, nx, ny, moving, dt: float):
-    """Move by ``(vx, vy)`` for ``dt``, walls kept by the crowd's hard constraint
-    (:func:`jaxsim.crowd.wall_constraint`); who is not ``moving`` stays, with velocity 0."""
+def _move(people: Walkers, vx, vy, wall, nx, ny, dt: float) -> Walkers:
+    """``people`` moved by ``(vx, vy)`` for ``dt``, walls kept by the crowd's hard constraint
+    (:func:`jaxsim.crowd.wall_constraint`); who is not ``people.moving`` stays, with velocity 0."""
+    x, y, moving = people.x_m, people.y_m, people.moving
     new_x, new_y, new_vx, new_vy = wall_constraint(wall, nx, ny, x + dt * vx, y + dt * vy, vx, vy, dt)
     zero = jnp.zeros_like(new_vx)
-    return (
+    return people.moved(
         jnp.where(moving, new_x, x),
         jnp.where(moving, new_y, y),
         jnp.where(moving, new_vx, zero),
@@ -157,27 +159,24 @@ def step_speed_model(
     params: SpeedModelParams,
     wall_field: Grid,
     dt: float,
-    x: jax.Array,
-    y: jax.Array,
-    vx: jax.Array,
-    vy: jax.Array,
-    aim_dx: jax.Array,
-    aim_dy: jax.Array,
-    desired_speed_mps: jax.Array,
-    present: jax.Array,
-    moving: jax.Array,
-    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
-    robot_radius_m: float,
-    ignores_robot: jax.Array | None = None,
+    people: Walkers,
+    aims: Aims,
+    robot: RobotDisc,
+    uniforms: tuple[jax.Array, jax.Array] | None = None,
     headings: int = 1,
-):
-    """One step of N people (the arguments of :func:`jaxsim.orca.step_orca`). Returns
-    ``(x, y, vx, vy)``; ``vx, vy`` is the velocity taken this step (0 for who does not move).
+) -> Walkers:
+    """One step of ``dt`` (s) for N people (the human models' signature, :mod:`jaxsim.walkers`;
+    ``aims.max_speed_mps`` and ``uniforms`` are not used): the people after the step, their
+    velocity the one taken this step (0 for who does not move).
 
     ``headings`` (static, odd): 1 is the model as published; more lets a person steer
     (:func:`_steer`)."""
+    x, y, vx, vy = people.x_m, people.y_m, people.vx_mps, people.vy_mps
+    present, ignores_robot = people.present, people.ignores_robot
+    aim_dx, aim_dy, desired_speed_mps = aims.dx_m, aims.dy_m, aims.speed_mps
+    robot_radius_m = robot.radius_m
     n = x.shape[0]
-    rx, ry, _, _ = robot_xyv
+    rx, ry = robot.x_m, robot.y_m
     feels_robot = jnp.ones(n, bool) if ignores_robot is None else ~ignores_robot
     # Everyone and the robot as one set of bodies: (N + 1,)
     xs = jnp.concatenate([x, rx[None]])
@@ -204,7 +203,7 @@ def step_speed_model(
     ex, ey = ex / jnp.maximum(norm, _EPS), ey / jnp.maximum(norm, _EPS)
 
     if headings > 1:
-        vxs, vys = jnp.concatenate([vx, robot_xyv[2][None]]), jnp.concatenate([vy, robot_xyv[3][None]])
+        vxs, vys = jnp.concatenate([vx, robot.vx_mps[None]]), jnp.concatenate([vy, robot.vy_mps[None]])
         ex, ey, spacing = _steer(params, headings, ex, ey, dx, dy, dist, reach, others, vxs, vys, wall, nx, ny,
                                  desired_speed_mps)  # fmt: skip
     else:
@@ -212,7 +211,7 @@ def step_speed_model(
     speed = jnp.minimum(jnp.maximum(spacing / params.time_gap_s, 0.0), desired_speed_mps)
     speed = jnp.minimum(speed, aim / dt)  # do not overshoot a target that is close
     new_vx, new_vy = speed * ex, speed * ey
-    return _move(x, y, new_vx, new_vy, wall, nx, ny, moving, dt)
+    return _move(people, new_vx, new_vy, wall, nx, ny, dt)
 
 
 @struct.dataclass
@@ -248,21 +247,11 @@ def step_anticipation(
     params: AnticipationParams,
     wall_field: Grid,
     dt: float,
-    x: jax.Array,
-    y: jax.Array,
-    vx: jax.Array,
-    vy: jax.Array,
-    aim_dx: jax.Array,
-    aim_dy: jax.Array,
-    desired_speed_mps: jax.Array,
-    present: jax.Array,
-    moving: jax.Array,
-    robot_xyv: tuple[jax.Array, jax.Array, jax.Array, jax.Array],
-    robot_radius_m: float,
-    u1: jax.Array,
-    u2: jax.Array,
-    ignores_robot: jax.Array | None = None,
-):
+    people: Walkers,
+    aims: Aims,
+    robot: RobotDisc,
+    uniforms: tuple[jax.Array, jax.Array],
+) -> Walkers:
     """One step of the anticipation velocity model (Xu, Chraibi & Seyfried 2021, "Anticipation
     in a velocity-based model for pedestrian dynamics", Transportation Research C 133, 103464;
     JuPedSim's ``AnticipationVelocityModel``): the collision-free speed model's headway speed,
@@ -276,11 +265,16 @@ def step_anticipation(
     isotropic repulsion of :func:`step_speed_model` does not do.
 
     The heading is the velocity's direction (the desired one when standing still), so a blocked
-    person creeps forward or stands (``u2``), never back as JuPedSim's may (its heading is a state
-    of its own); ``u1`` breaks a tie between the two sides (JuPedSim draws both from its random
-    generator). Arguments and returns as :func:`step_speed_model`."""
+    person creeps forward or stands (``uniforms[1]``), never back as JuPedSim's may (its heading is
+    a state of its own); ``uniforms[0]`` breaks a tie between the two sides (JuPedSim draws both
+    from its random generator). Arguments and returns as :func:`step_speed_model`."""
+    x, y, vx, vy = people.x_m, people.y_m, people.vx_mps, people.vy_mps
+    present, ignores_robot = people.present, people.ignores_robot
+    aim_dx, aim_dy, desired_speed_mps = aims.dx_m, aims.dy_m, aims.speed_mps
+    u1, u2 = uniforms
+    robot_radius_m = robot.radius_m
     n = x.shape[0]
-    rx, ry, rvx, rvy = robot_xyv
+    rx, ry, rvx, rvy = robot.x_m, robot.y_m, robot.vx_mps, robot.vy_mps
     feels_robot = jnp.ones(n, bool) if ignores_robot is None else ~ignores_robot
     dxi, dyi, aim = _unit(aim_dx, aim_dy)  # d_i, the desired direction
     hx, hy, speed_now = _unit(vx, vy)
@@ -336,7 +330,7 @@ def step_anticipation(
     new_hx, new_hy = jnp.where(near_wall, wx, new_hx), jnp.where(near_wall, wy, new_hy)
 
     new_vx, new_vy = speed * new_hx, speed * new_hy
-    return _move(x, y, new_vx, new_vy, wall, nx, ny, moving, dt)
+    return _move(people, new_vx, new_vy, wall, nx, ny, dt)
 
 
 # Fitted parameters shipped as named human models (``--human-model <name>``): fits of

@@ -28,6 +28,7 @@ from socialnav.jaxsim import humans, orca
 from socialnav.jaxsim import social_force as sf
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING, WorkerState
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 from socialnav.jaxsim.world import World
 
 # Share of the destination disc's radius within which a worker's activity spot is drawn.
@@ -180,15 +181,14 @@ def move(
     dx, dy = aim_x - w.x_m, aim_y - w.y_m
     settle = jnp.minimum(1.0, jnp.sqrt(dx * dx + dy * dy) / SETTLE_DISTANCE_M)
     speed = jnp.where(w.status == ACTIVITY, w.desired_speed_mps * settle, w.desired_speed_mps)
-    robot = (robot_x, robot_y, robot_vx, robot_vy)
+    people = Walkers(w.x_m, w.y_m, w.vx_mps, w.vy_mps, present, present)
+    aims = Aims(dx, dy, speed, w.desired_speed_mps)
+    robot = RobotDisc(robot_x, robot_y, robot_vx, robot_vy, params.robot_radius_m)
     model = world.human_model
     # ORCA's people are the warehouse's workers' bodies; a velocity model keeps its own (fitted) radius.
     bundle = humans.human_params(model, params, orca.ORCAParams(radius_m=params.worker_radius_m))
-    x, y, vx, vy = humans.step_humans(
-        model, bundle, world.wall_field, w.x_m, w.y_m, w.vx_mps, w.vy_mps, dx, dy, speed, w.desired_speed_mps,
-        present, present, robot, params.robot_radius_m, u1, u2,
-    )  # fmt: skip
-    return w.replace(x_m=x, y_m=y, vx_mps=vx, vy_mps=vy)
+    people = humans.step_humans(model, bundle, world.wall_field, people, aims, robot, (u1, u2))
+    return w.replace(x_m=people.x_m, y_m=people.y_m, vx_mps=people.vx_mps, vy_mps=people.vy_mps)
 
 
 def init_workers(params: SimParams, world: World, u: jax.Array) -> WorkerState:

@@ -15,10 +15,11 @@ from socialnav.jaxsim.scenario import load_scenario
 from socialnav.jaxsim.scenes import people as people_lib
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 # No walls within reach: a distance field 100 m from everything.
 OPEN = Grid.of_samples(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), -50.0, -50.0, 30.0)
-FAR_ROBOT = (jnp.float32(100.0), jnp.float32(100.0), jnp.float32(0.0), jnp.float32(0.0))
+FAR_ROBOT = RobotDisc(jnp.float32(100.0), jnp.float32(100.0), jnp.float32(0.0), jnp.float32(0.0), 0.3)
 
 
 @pytest.fixture(scope="module")
@@ -28,16 +29,17 @@ def params():
 
 @pytest.mark.slow
 def test_the_warehouse_and_the_arena_move_people_with_one_function(monkeypatch, short_day, params):
+    from socialnav.jaxsim import humans
     from socialnav.jaxsim import step as step_lib
 
     calls = []
     original = crowd.step_crowd
 
-    def counted(*args, **kwargs):
-        calls.append(kwargs.get("ignores_robot") is not None)
-        return original(*args, **kwargs)
+    def counted(params, wall_field, dt, people, *args):
+        calls.append(people.ignores_robot is not None)
+        return original(params, wall_field, dt, people, *args)
 
-    monkeypatch.setattr(crowd, "step_crowd", counted)
+    monkeypatch.setitem(humans.STEPS, "social_force", counted)
     scenario, world, controller = short_day
     state = step_lib.init_state(scenario.params, world, controller, jax.random.key(0))
     workers, robot = state.workers, state.robot
@@ -84,6 +86,38 @@ def test_the_warehouse_and_the_arena_move_people_by_the_chosen_human_model(monke
         build_world(scenario, "helbing")
 
 
+@pytest.mark.parametrize(
+    "model",
+    ["social_force", "collision_free_speed"]
+    + [pytest.param(m, marks=pytest.mark.slow) for m in ("orca", "steering_speed", "anticipation", "power_law")],
+)
+def test_every_human_model_steps_the_one_signature_and_keeps_who_does_not_move(params, model):
+    from socialnav.jaxsim import humans
+
+    assert set(humans.STEPS) == {humans.kind_of(m) for m in humans.HUMAN_MODELS} == set(humans.PARAMS_OF)
+    n = 5
+    people = Walkers(
+        jnp.array([0.0, 1.0, 2.0, 0.5, 4.0]), jnp.array([0.0, 0.6, -0.4, 1.5, 0.0]), jnp.full(n, 0.8), jnp.zeros(n),
+        present=jnp.array([True, True, True, True, False]), moving=jnp.array([True, False, True, False, False]),
+        ignores_robot=jnp.array([False, False, True, False, False]),
+    )  # fmt: skip
+    aims = Aims(jnp.full(n, 6.0), jnp.zeros(n), jnp.full(n, 1.2), jnp.full(n, 1.2))
+    robot = RobotDisc(jnp.float32(2.5), jnp.float32(0.0), jnp.float32(-0.5), jnp.float32(0.0), 0.3)
+    bundle = humans.human_params(model, params)
+    step = jax.jit(
+        lambda p: humans.step_humans(model, bundle, OPEN, p, aims, robot, (jnp.full(n, 0.3), jnp.full(n, 0.7)))
+    )
+    after = step(people)
+    assert isinstance(after, Walkers) and after.x_m.shape == (n,)
+    for flag in ("present", "moving", "ignores_robot"):
+        np.testing.assert_array_equal(np.asarray(getattr(after, flag)), np.asarray(getattr(people, flag)))
+    still = ~np.asarray(people.moving)  # who does not move keeps their place, at velocity 0
+    np.testing.assert_array_equal(np.asarray(after.xy_m)[still], np.asarray(people.xy_m)[still])
+    np.testing.assert_array_equal(np.asarray(after.velocity_mps)[still], 0.0)
+    walked = np.asarray(after.x_m - people.x_m)[[0, 2]]
+    assert np.all(walked > 0.0) and np.all(walked <= 1.2 * params.dt_s + 1e-6)  # towards the aim, within its speed
+
+
 def test_a_person_walking_into_a_wall_stops_at_the_clearance_without_velocity_into_it(params):
     # A wall whose surface is the line x = 0, the free side x > 0: distance x, normal +x.
     xs = np.arange(-1.0, 3.01, 0.05, dtype=np.float32)
@@ -91,40 +125,38 @@ def test_a_person_walking_into_a_wall_stops_at_the_clearance_without_velocity_in
     field[..., 0] = xs[None, :]
     field[..., 1] = 1.0
     wall = Grid.of_samples(jnp.asarray(field), -1.0, -0.05, 0.05)
-    x, y = jnp.array([1.0]), jnp.array([0.0])
-    vx, vy = jnp.array([-1.5]), jnp.array([0.0])
     one = jnp.ones(1, bool)
+    person = Walkers(jnp.array([1.0]), jnp.array([0.0]), jnp.array([-1.5]), jnp.array([0.0]), one, one)
+    uniforms = (jnp.array([0.5]), jnp.array([0.25]))
+    aims = Aims(jnp.array([-5.0]), jnp.array([0.0]), jnp.array([1.5]), jnp.array([1.5]))  # into the wall
     for _ in range(40):
-        x, y, vx, vy = crowd.step_crowd(
-            params, wall, x, y, vx, vy, jnp.array([-5.0]), jnp.array([0.0]), jnp.array([1.5]), jnp.array([1.5]),
-            one, one, FAR_ROBOT, jnp.array([0.5]), jnp.array([0.25]),
-        )  # fmt: skip
-        assert float(x[0]) >= crowd.WALL_CLEARANCE_M - 1e-6
+        person = crowd.step_crowd(params, wall, params.dt_s, person, aims, FAR_ROBOT, uniforms)
+        assert float(person.x_m[0]) >= crowd.WALL_CLEARANCE_M - 1e-6
     # One step that would cross the clearance (no wall force to slow it): pushed back onto the
     # clearance, the velocity into the wall removed.
-    x, y, vx, vy = crowd.step_crowd(
-        params.replace(worker_obstacle_force_factor=0.0), wall, jnp.array([0.15]), y, jnp.array([-1.5]), vy,
-        jnp.array([-5.0]), jnp.array([0.0]),
-        jnp.array([1.5]), jnp.array([1.5]), one, one, FAR_ROBOT, jnp.array([0.5]), jnp.array([0.25]),
-    )  # fmt: skip
-    assert float(x[0]) == pytest.approx(crowd.WALL_CLEARANCE_M, abs=1e-6) and float(vx[0]) == pytest.approx(
-        0.0, abs=1e-6
-    )
+    person = person.moved(jnp.array([0.15]), person.y_m, jnp.array([-1.5]), person.vy_mps)
+    no_wall_force = params.replace(worker_obstacle_force_factor=0.0)
+    person = crowd.step_crowd(no_wall_force, wall, params.dt_s, person, aims, FAR_ROBOT, uniforms)
+    assert float(person.x_m[0]) == pytest.approx(crowd.WALL_CLEARANCE_M, abs=1e-6)
+    assert float(person.vx_mps[0]) == pytest.approx(0.0, abs=1e-6)
 
 
 @pytest.mark.slow
 def test_a_person_who_ignores_the_robot_moves_as_if_it_were_not_there(params):
-    x, y = jnp.array([0.0, 3.0]), jnp.array([0.0, 0.0])
-    vx, vy = jnp.array([0.8, 0.0]), jnp.array([0.0, 0.0])
-    args = (jnp.array([5.0, 0.0]), jnp.array([0.0, 0.0]), jnp.full(2, 1.2), jnp.full(2, 1.2), jnp.ones(2, bool))
-    moving = jnp.array([True, False])
+    people = Walkers(
+        jnp.array([0.0, 3.0]), jnp.array([0.0, 0.0]), jnp.array([0.8, 0.0]), jnp.array([0.0, 0.0]),
+        present=jnp.ones(2, bool), moving=jnp.array([True, False]),
+    )  # fmt: skip
+    aims = Aims(jnp.array([5.0, 0.0]), jnp.array([0.0, 0.0]), jnp.full(2, 1.2), jnp.full(2, 1.2))
     u = rng.hash_uniform16(jnp.uint32(7), jnp.int32(3), (2, 2))
-    near = (jnp.float32(1.0), jnp.float32(0.2), jnp.float32(-0.5), jnp.float32(0.0))
-    felt = crowd.step_crowd(params, OPEN, x, y, vx, vy, *args, moving, near, u[0], u[1])
-    ignored = crowd.step_crowd(params, OPEN, x, y, vx, vy, *args, moving, near, u[0], u[1], jnp.ones(2, bool))
-    absent = crowd.step_crowd(params, OPEN, x, y, vx, vy, *args, moving, FAR_ROBOT, u[0], u[1])
-    assert abs(float(felt[2][0] - absent[2][0])) > 1e-3  # the robot 1 m ahead pushes
-    np.testing.assert_allclose(np.asarray(ignored), np.asarray(absent), atol=1e-6)
+    near = RobotDisc(jnp.float32(1.0), jnp.float32(0.2), jnp.float32(-0.5), jnp.float32(0.0), 0.3)
+    felt = crowd.step_crowd(params, OPEN, params.dt_s, people, aims, near, (u[0], u[1]))
+    blind = people.replace(ignores_robot=jnp.ones(2, bool))
+    ignored = crowd.step_crowd(params, OPEN, params.dt_s, blind, aims, near, (u[0], u[1]))
+    absent = crowd.step_crowd(params, OPEN, params.dt_s, people, aims, FAR_ROBOT, (u[0], u[1]))
+    assert abs(float(felt.vx_mps[0] - absent.vx_mps[0])) > 1e-3  # the robot 1 m ahead pushes
+    np.testing.assert_allclose(np.asarray(ignored.velocity_mps), np.asarray(absent.velocity_mps), atol=1e-6)
+    np.testing.assert_allclose(np.asarray(ignored.xy_m), np.asarray(absent.xy_m), atol=1e-6)
 
 
 def _orca_run(x, y, aim_x, aim_y, moving, steps):
@@ -132,17 +164,16 @@ def _orca_run(x, y, aim_x, aim_y, moving, steps):
     n = x.shape[0]
 
     @jax.jit
-    def step(x, y, vx, vy):
-        return orca.step_orca(
-            p, OPEN, 0.1, x, y, vx, vy, aim_x - x, aim_y - y, jnp.ones(n), jnp.ones(n, bool), moving, FAR_ROBOT, 0.3
-        )
+    def step(people):
+        aims = Aims(aim_x - people.x_m, aim_y - people.y_m, jnp.ones(n), jnp.ones(n))
+        return orca.step_orca(p, OPEN, 0.1, people, aims, FAR_ROBOT)
 
-    vx = vy = jnp.zeros(n)
+    people = Walkers(x, y, jnp.zeros(n), jnp.zeros(n), jnp.ones(n, bool), moving)
     gaps = []
     for _ in range(steps):
-        x, y, vx, vy = step(x, y, vx, vy)
-        gaps.append(float(jnp.hypot(x[0] - x[1], y[0] - y[1])))
-    return x, y, vx, vy, np.array(gaps)
+        people = step(people)
+        gaps.append(float(jnp.hypot(people.x_m[0] - people.x_m[1], people.y_m[0] - people.y_m[1])))
+    return people.x_m, people.y_m, people.vx_mps, people.vy_mps, np.array(gaps)
 
 
 @pytest.mark.slow

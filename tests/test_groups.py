@@ -19,20 +19,20 @@ from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import groups, humans
 from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.scenario.loader import load_scenario
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 P = groups.GroupParams()
-FAR = (jnp.float32(1e4), jnp.float32(1e4), jnp.float32(0.0), jnp.float32(0.0))
+FAR = RobotDisc(jnp.float32(1e4), jnp.float32(1e4), jnp.float32(0.0), jnp.float32(0.0), 0.0)
 
 
 def _aim(xy, aim, speed, group_id, max_speed=2.0):
     xy, aim = np.asarray(xy, np.float32), np.asarray(aim, np.float32)
     n = len(xy)
-    out = groups.group_aim(
-        P, jnp.asarray(xy[:, 0]), jnp.asarray(xy[:, 1]), jnp.asarray(aim[:, 0]), jnp.asarray(aim[:, 1]),
-        jnp.asarray(speed, jnp.float32), jnp.full(n, max_speed, jnp.float32), jnp.asarray(group_id, jnp.int32),
-        jnp.ones(n, bool),
-    )  # fmt: skip
-    return [np.asarray(a) for a in out]
+    people = Walkers.of(jnp.asarray(xy), jnp.zeros((n, 2)), jnp.ones(n, bool), jnp.ones(n, bool))
+    aims = Aims(jnp.asarray(aim[:, 0]), jnp.asarray(aim[:, 1]), jnp.asarray(speed, jnp.float32),
+                jnp.full(n, max_speed, jnp.float32))  # fmt: skip
+    out = groups.group_aim(P, people, aims, jnp.asarray(group_id, jnp.int32))
+    return [np.asarray(a) for a in (out.dx_m, out.dy_m, out.speed_mps)]
 
 
 def test_a_pair_side_by_side_within_reach_keeps_its_aims():
@@ -66,12 +66,11 @@ def test_mates_closer_than_the_repulsion_distance_push_apart_and_no_one_alone_is
 
 def test_a_mate_who_is_not_present_leaves_the_other_alone():
     xy, aim = np.array([[0, 0], [5, 0]], np.float32), np.array([[10, 0], [10, 0]], np.float32)
-    out = groups.group_aim(
-        P, jnp.asarray(xy[:, 0]), jnp.asarray(xy[:, 1]), jnp.asarray(aim[:, 0]), jnp.asarray(aim[:, 1]),
-        jnp.ones(2), jnp.ones(2) * 2, jnp.zeros(2, jnp.int32), jnp.array([True, False]),
-    )  # fmt: skip
-    np.testing.assert_array_equal(np.asarray(out[2])[0], 1.0)
-    np.testing.assert_array_equal(np.asarray(out[0])[0], 10.0)
+    people = Walkers.of(jnp.asarray(xy), jnp.zeros((2, 2)), jnp.array([True, False]), jnp.ones(2, bool))
+    aims = Aims(jnp.asarray(aim[:, 0]), jnp.asarray(aim[:, 1]), jnp.ones(2), jnp.ones(2) * 2)
+    out = groups.group_aim(P, people, aims, jnp.zeros(2, jnp.int32))
+    np.testing.assert_array_equal(np.asarray(out.speed_mps)[0], 1.0)
+    np.testing.assert_array_equal(np.asarray(out.dx_m)[0], 10.0)
 
 
 def _open_field():
@@ -95,12 +94,11 @@ def _walk(model: str, grouped: bool, n_steps: int):
     def step(carry, k):
         xy, v = carry
         u = jax.random.uniform(k, (2, 3), minval=1e-6, maxval=1.0)
-        x, y, vx, vy = humans.step_humans(
-            model, params, _open_field(), xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], direction * 10.0, jnp.zeros(3),
-            speed, speed, here, here, FAR, 0.0, u[0], u[1], group_id=group_id,
+        people = humans.step_humans(
+            model, params, _open_field(), Walkers.of(xy, v, here, here), Aims(direction * 10.0, jnp.zeros(3), speed,
+            speed), FAR, (u[0], u[1]), group_id,
         )  # fmt: skip
-        xy = jnp.stack([x, y], -1)
-        return (xy, jnp.stack([vx, vy], -1)), xy
+        return (people.xy_m, people.velocity_mps), people.xy_m
 
     _, path = jax.lax.scan(step, (xy, jnp.zeros_like(xy)), jax.random.split(jax.random.key(0), n_steps))
     return path
@@ -129,12 +127,13 @@ def test_a_pair_walking_together_stays_within_1_m_where_alone_they_drift_apart(m
 @pytest.mark.slow
 def test_no_groups_and_everyone_alone_step_alike():
     params = humans.human_params("social_force", load_scenario(WAREHOUSE_DIR).params)
-    x, y = jnp.array([0.0, 0.5, 3.0]), jnp.array([0.0, 0.2, 0.1])
-    args = (x, y, jnp.zeros(3), jnp.zeros(3), jnp.ones(3) * 10, jnp.zeros(3), jnp.ones(3), jnp.ones(3) * 1.5,
-            jnp.ones(3, bool), jnp.ones(3, bool), FAR, 0.0, jnp.full(3, 0.5), jnp.full(3, 0.5))  # fmt: skip
+    people = Walkers(jnp.array([0.0, 0.5, 3.0]), jnp.array([0.0, 0.2, 0.1]), jnp.zeros(3), jnp.zeros(3),
+                     jnp.ones(3, bool), jnp.ones(3, bool))  # fmt: skip
+    aims = Aims(jnp.ones(3) * 10, jnp.zeros(3), jnp.ones(3), jnp.ones(3) * 1.5)
+    args = (people, aims, FAR, (jnp.full(3, 0.5), jnp.full(3, 0.5)))
     plain = humans.step_humans("social_force", params, _open_field(), *args)
     alone = humans.step_humans("social_force", params, _open_field(), *args, group_id=jnp.full(3, -1, jnp.int32))
-    for a, b in zip(plain, alone, strict=True):
+    for a, b in zip(jax.tree.leaves(plain), jax.tree.leaves(alone), strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 

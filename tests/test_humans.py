@@ -19,6 +19,7 @@ from socialnav.evaluation.humans import measures
 from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import power_law, speed_model
 from socialnav.jaxsim.grid import Grid
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 # ---------------------------------------------------------------- the data
 
@@ -271,40 +272,42 @@ def _open_field():
     return Grid.of_samples(jnp.asarray(values), -1e4, -1e4, 2e4)
 
 
-FAR = (jnp.float32(1e4), jnp.float32(1e4), jnp.float32(0.0), jnp.float32(0.0))
+FAR = RobotDisc(jnp.float32(1e4), jnp.float32(1e4), jnp.float32(0.0), jnp.float32(0.0), 0.3)
 
 
 def _walk(step, xy, aim, speed, n_steps, dt=0.1):
-    """Positions (T, N, 2) of people stepped by ``step`` towards fixed aims."""
+    """Positions (T, N, 2) of people stepped by ``step`` (:func:`_in_the_open`) towards fixed aims."""
     xy = jnp.asarray(xy, jnp.float32)
     v = jnp.zeros_like(xy)
     path = []
     for k in range(n_steps):
         u = jnp.full(xy.shape[0], 0.25 + 0.5 * (k % 2), jnp.float32)
         to = jnp.asarray(aim, jnp.float32) - xy
-        x, y, vx, vy = step(xy, v, to, jnp.asarray(speed, jnp.float32), u)
-        xy, v = jnp.stack([x, y], -1), jnp.stack([vx, vy], -1)
+        people = step(xy, v, to, jnp.asarray(speed, jnp.float32), u)
+        xy, v = people.xy_m, people.velocity_mps
         path.append(np.asarray(xy))
     return np.stack(path)
 
 
+def _in_the_open(model_step, params, field=None, **static):
+    """``(xy, v, to, speed, u) -> Walkers``: a model's step of 0.1 s in ``field`` (default: no
+    walls), everyone present and moving, the robot far away, ``u`` both uniforms."""
+
+    def step(xy, v, to, s, u):
+        everyone = jnp.ones(len(s), bool)
+        people, aims = Walkers.of(xy, v, everyone, everyone), Aims(to[:, 0], to[:, 1], s, s)
+        return model_step(params, _open_field() if field is None else field, 0.1, people, aims, FAR, (u, u), **static)
+
+    return step
+
+
 STEPS = {
-    "collision_free_speed": lambda xy, v, to, s, u: speed_model.step_speed_model(
-        speed_model.SpeedModelParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
-        s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3,
-    ),
-    "anticipation": lambda xy, v, to, s, u: speed_model.step_anticipation(
-        speed_model.AnticipationParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0],
-        to[:, 1], s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, u, u,
-    ),
-    "steering_speed": lambda xy, v, to, s, u: speed_model.step_speed_model(
-        speed_model.SpeedModelParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
-        s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, headings=speed_model.STEERING_HEADINGS,
-    ),
-    "power_law": jax.jit(lambda xy, v, to, s, u: power_law.step_power_law(
-        power_law.PowerLawParams(), _open_field(), 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
-        s, s, jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3,
-    )),  # its ten substeps a step: one program, not each operation dispatched in turn
+    "collision_free_speed": _in_the_open(speed_model.step_speed_model, speed_model.SpeedModelParams()),
+    "anticipation": _in_the_open(speed_model.step_anticipation, speed_model.AnticipationParams()),
+    "steering_speed": _in_the_open(speed_model.step_speed_model, speed_model.SpeedModelParams(),
+                                   headings=speed_model.STEERING_HEADINGS),
+    # its ten substeps a step: one program, not each operation dispatched in turn
+    "power_law": jax.jit(_in_the_open(power_law.step_power_law, power_law.PowerLawParams())),
 }  # fmt: skip
 
 
@@ -365,10 +368,7 @@ def test_the_steering_model_passes_on_the_side_away_from_a_wall():
     would walk into the wall, so the faster one passes on the left and stays inside the corridor."""
     model = hv.HumanModel("steering_speed")
     field = hv.corridor_field(1.8, 40.0)
-    step = lambda xy, v, to, s, u: speed_model.step_speed_model(
-        model.speed, field, 0.1, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1], s,
-        jnp.ones(len(s), bool), jnp.ones(len(s), bool), FAR, 0.3, headings=speed_model.STEERING_HEADINGS,
-    )  # fmt: skip
+    step = _in_the_open(speed_model.step_speed_model, model.speed, field, headings=speed_model.STEERING_HEADINGS)
     path = _walk(step, [[0.0, 0.3], [2.0, 0.3]], [[100.0, 0.3], [100.0, 0.3]], [1.4, 0.5], 200)
     assert path[-1, 0, 0] > path[-1, 1, 0] + 3.0
     assert path[:, 0, 1].max() > 0.6 and path[:, 0, 1].min() >= model.speed.radius_m - 1e-3

@@ -18,14 +18,26 @@ from socialnav.jaxsim.scenes import people as people_lib
 from socialnav.jaxsim.scenes.env import EnvConfig
 from socialnav.jaxsim.scenes.spec import load_scene
 from socialnav.jaxsim.scenes.variant import sample_variant
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 from tests import orca_reference as reference
 
 OPEN = Grid.of_samples(jnp.tile(jnp.array([100.0, 1.0, 0.0]), (4, 4, 1)), -50.0, -50.0, 30.0)
 ROBOT = (jnp.float32(0.3), jnp.float32(0.1), jnp.float32(0.2), jnp.float32(0.0))
 DT = 0.1
+
+
+def _new_step(p, field, dt, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, robot_xyv, robot_radius_m,
+              ignores_robot=None):  # fmt: skip
+    """The step under test called with the reference's arguments: ``(x, y, vx, vy)``."""
+    people = Walkers(x, y, vx, vy, present, moving, ignores_robot)
+    robot = RobotDisc(*robot_xyv, robot_radius_m)
+    after = orca.step_orca(p, field, dt, people, Aims(aim_dx, aim_dy, speed, speed), robot)
+    return after.x_m, after.y_m, after.vx_mps, after.vy_mps
+
+
 # Both steps compiled, also where a test runs them once: run eagerly, every JAX operation inside
 # is compiled on its own (hundreds of small programs a call, most of this file's time).
-step = jax.jit(orca.step_orca)
+step = jax.jit(_new_step)
 reference_step = jax.jit(reference.step_orca)
 
 
@@ -110,10 +122,10 @@ def test_equal_to_the_step_that_solved_everything_for_everyone(n):
 def test_batched_over_worlds_equals_one_world_at_a_time():
     p = orca.ORCAParams()
     crowds = [_crowd(24, seed, density=2.0) for seed in range(3)]
-    batched = jax.vmap(lambda *c: orca.step_orca(p, OPEN, DT, *c, ROBOT, 0.3))(
+    batched = jax.vmap(lambda *c: _new_step(p, OPEN, DT, *c, ROBOT, 0.3))(
         *(jnp.stack(a) for a in zip(*crowds)))  # fmt: skip
     for w, crowd in enumerate(crowds):
-        alone = orca.step_orca(p, OPEN, DT, *crowd, ROBOT, 0.3)  # both eager, as they were written
+        alone = _new_step(p, OPEN, DT, *crowd, ROBOT, 0.3)  # both eager, as they were written
         for got, want in zip(batched, alone):
             np.testing.assert_allclose(np.asarray(got[w]), np.asarray(want), atol=1e-6)
 
@@ -167,7 +179,7 @@ def test_equal_to_the_old_step_on_the_arena_scenes(scene):
         target, speed, mobile = people_lib.targets(v, s, step.astype(jnp.float32) * dt)
         args = (field, dt, s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1], target[:, 0] - s.xy[:, 0],
                 target[:, 1] - s.xy[:, 1], speed, s.present, mobile, robot, env.robot.radius_m)  # fmt: skip
-        new = orca.step_orca(p, *args, ignores_robot=v.ignore_robot)
+        new = _new_step(p, *args, ignores_robot=v.ignore_robot)
         old = reference.step_orca(_reference_params(p), *args, ignores_robot=v.ignore_robot)
         nxt = people_lib.step_people(env.crowd, env.world, v, s, robot_xy, robot_v, step, "orca", p,
                                      env.robot.radius_m)  # fmt: skip
@@ -189,7 +201,7 @@ def test_the_radius_is_the_toolkits_person_and_traced():
 
     def final_x(radius):
         p = orca.ORCAParams(radius_m=radius)
-        return jnp.sum(orca.step_orca(p, OPEN, DT, *crowd, ROBOT, 0.3)[0])
+        return jnp.sum(_new_step(p, OPEN, DT, *crowd, ROBOT, 0.3)[0])
 
     # Traced: one compiled program for every radius, and a forward-mode derivative through it.
     _, slope = jax.jit(lambda r, t: jax.jvp(final_x, (r,), (t,)))(jnp.float32(0.25), jnp.float32(1.0))

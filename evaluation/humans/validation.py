@@ -45,6 +45,7 @@ from socialnav.jaxsim import geometry, groups, humans, orca, power_law, speed_mo
 from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 HUMAN_MODELS = ("social_force", "orca", "collision_free_speed", "anticipation", "steering_speed", "power_law")
 FAR_M = 1.0e4  # where the robot is: no robot in these protocols
@@ -109,14 +110,13 @@ class HumanModel:
         return humans.HumanParams(self.crowd, self.orca, self.speed, self.anticipation, self.group, self.power_law)
 
 
-def model_step(name: str, params, field: Grid, x, y, vx, vy, aim_dx, aim_dy, speed, present, moving, u1, u2,
-               group_id=None):  # fmt: skip
+def model_step(name: str, params, field: Grid, people: Walkers, aims: Aims, uniforms, group_id=None) -> Walkers:
     """One step of N people by human model ``name`` (:func:`jaxsim.humans.step_humans`, the one
-    crowd function) with ``params`` (:class:`~jaxsim.humans.HumanParams`): no robot; the social
-    force's cap is the desired speed; ``group_id`` (N,) the walking groups (None: none)."""
-    robot = (jnp.float32(FAR_M), jnp.float32(FAR_M), jnp.float32(0.0), jnp.float32(0.0))
-    return humans.step_humans(name, params, field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, present, moving, robot,
-                              0.0, u1, u2, group_id=group_id)  # fmt: skip
+    crowd function) with ``params`` (:class:`~jaxsim.humans.HumanParams`), no robot: the people
+    after it. ``uniforms``: two (N,) draws in (0, 1]; ``group_id`` (N,) the walking groups (None:
+    none)."""
+    robot = RobotDisc(jnp.float32(FAR_M), jnp.float32(FAR_M), jnp.float32(0.0), jnp.float32(0.0), 0.0)
+    return humans.step_humans(name, params, field, people, aims, robot, uniforms, group_id)
 
 
 def desired_speeds(params: SimParams, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -217,10 +217,11 @@ def periodic_step(name: str, params, field, direction, speed, length_m: float, g
         all_v = jnp.concatenate([v, v, v])
         aim = jnp.tile(direction, 3) * 10.0
         u = jax.random.uniform(key, (2, 3 * n), minval=1e-6, maxval=1.0)
-        x, y, vx, vy = model_step(name, params, field, all_xy[:, 0], all_xy[:, 1], all_v[:, 0], all_v[:, 1], aim,
-                                  jnp.zeros(3 * n), jnp.tile(speed, 3), present, moving, u[0], u[1],
-                                  groups_all)  # fmt: skip
-        x, y, vx, vy = x[:n], y[:n], vx[:n], vy[:n]
+        everyone = Walkers.of(all_xy, all_v, present, moving)
+        speeds = jnp.tile(speed, 3)
+        aims = Aims(aim, jnp.zeros(3 * n), speeds, speeds)  # the social force's cap: the desired speed
+        after = model_step(name, params, field, everyone, aims, (u[0], u[1]), groups_all)
+        x, y, vx, vy = after.x_m[:n], after.y_m[:n], after.vx_mps[:n], after.vy_mps[:n]
         wrap = jnp.floor(x / length_m)
         laps = laps + jnp.abs(wrap).astype(jnp.int32)
         return (jnp.stack([x - wrap * length_m, y], -1), jnp.stack([vx, vy], -1), laps)
@@ -470,9 +471,9 @@ def _predict(name: str, params, field, xy, v, aim, speed, present, key, frame_s:
         xy, v = carry
         u = jax.random.uniform(k, (2, xy.shape[0]), minval=1e-6, maxval=1.0)
         to = aim(xy)
-        x, y, vx, vy = model_step(name, params, field, xy[:, 0], xy[:, 1], v[:, 0], v[:, 1], to[:, 0], to[:, 1],
-                                  speed, present, present & (speed > 0.0), u[0], u[1], group_id)  # fmt: skip
-        return (jnp.stack([x, y], -1), jnp.stack([vx, vy], -1)), jnp.stack([x, y], -1)
+        people = Walkers.of(xy, v, present, present & (speed > 0.0))
+        after = model_step(name, params, field, people, Aims(to[:, 0], to[:, 1], speed, speed), (u[0], u[1]), group_id)
+        return (after.xy_m, after.velocity_mps), after.xy_m
 
     steps, lo, frac = _sample_steps(frame_s, dt_s)
     _, path = jax.lax.scan(step, (xy, v), jax.random.split(key, steps))

@@ -29,6 +29,7 @@ from socialnav.jaxsim.scenes.recording import LOOKAHEAD_SAMPLES, RECORD_DT_S
 from socialnav.jaxsim.scenes.spec import KIND
 from socialnav.jaxsim.scenes.variant import Variant
 from socialnav.jaxsim.scenes.world import SceneWorld
+from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 ARRIVED_M = 0.3  # a walker within this distance of its target has arrived
 STOP_RAMP_M = 0.5  # a queue member slows down over the last half metre to its place
@@ -195,17 +196,13 @@ def step_people(
         return jax.tree_util.tree_map(lambda a, b: jnp.where(v.reactive, a, b), reactive, replayed)
     target, speed, mobile = targets(v, s, time_s)
     u = _uniforms(v, step, s.xy.shape[0], model)
-    robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
-    x, y, vx, vy = s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1]
-    aim_dx, aim_dy = target[:, 0] - x, target[:, 1] - y
-    bundle = humans.human_params(model, params, orca_params, velocity_params)
+    walkers = Walkers.of(s.xy, s.velocity, s.present, mobile, v.ignore_robot)
     # pedsim's cap is the desired speed (a queue member's slows down to its place)
-    x, y, vx, vy = humans.step_humans(
-        model, bundle, world.wall_field, x, y, vx, vy, aim_dx, aim_dy, speed, speed, s.present, mobile, robot,
-        robot_radius_m, u[0], u[1], ignores_robot=v.ignore_robot, group_id=group_id,
-    )  # fmt: skip
-    xy = jnp.stack([x, y], axis=-1)
-    new_v = jnp.stack([vx, vy], axis=-1)
+    aims = Aims(target[:, 0] - walkers.x_m, target[:, 1] - walkers.y_m, speed, speed)
+    robot = RobotDisc.of(robot_xy, robot_velocity, robot_radius_m)
+    bundle = humans.human_params(model, params, orca_params, velocity_params)
+    walkers = humans.step_humans(model, bundle, world.wall_field, walkers, aims, robot, (u[0], u[1]), group_id)
+    xy, new_v = walkers.xy_m, walkers.velocity_mps
     # People waiting in line step straight up to their place (the human model's repulsion between
     # people a body apart would spread the line sideways by up to half a metre, and a robot
     # coming up behind would push them out of line); once served they walk to the exit by the
@@ -246,23 +243,21 @@ def _reactive(
     aim = recorded_ahead(v, time_s) - s.xy
     speed = jnp.minimum(jnp.linalg.norm(aim, axis=-1) / lookahead_s, REACTIVE_MAX_SPEED_MPS)
     u = _uniforms(v, step, s.xy.shape[0], model)
-    robot = (robot_xy[0], robot_xy[1], robot_velocity[0], robot_velocity[1])
+    walkers = Walkers.of(s.xy, s.velocity, s.present, s.present, v.ignore_robot)
+    aims = Aims(aim[:, 0], aim[:, 1], speed, speed)
+    robot = RobotDisc.of(robot_xy, robot_velocity, robot_radius_m)
     bundle = humans.human_params(model, params, orca_params, velocity_params)
-    x, y, vx, vy = humans.step_humans(
-        model, bundle, world.wall_field, s.xy[:, 0], s.xy[:, 1], s.velocity[:, 0], s.velocity[:, 1], aim[:, 0],
-        aim[:, 1], speed, speed, s.present, s.present, robot, robot_radius_m, u[0], u[1],
-        ignores_robot=v.ignore_robot, group_id=group_id,
-    )  # fmt: skip
+    walkers = humans.step_humans(model, bundle, world.wall_field, walkers, aims, robot, (u[0], u[1]), group_id)
     entry_xy, entry_velocity, present = after
     entering = present & ~s.present  # appears where the recording has them appear
-    xy = jnp.where(entering[:, None], entry_xy, jnp.stack([x, y], axis=-1))
-    velocity = jnp.where(entering[:, None], entry_velocity, jnp.stack([vx, vy], axis=-1))
+    xy = jnp.where(entering[:, None], entry_xy, walkers.xy_m)
+    velocity = jnp.where(entering[:, None], entry_velocity, walkers.velocity_mps)
     return _moved(s, xy, velocity, present)
 
 
 def _uniforms(v: Variant, step, n: int, model: str):
-    """(2, n) the step's uniforms of the human model (:func:`jaxsim.humans.step_humans`'s ``u1``,
-    ``u2``). The social force's ``u2`` is its random push's angle in turns, and gets the variant's
+    """(2, n) the step's uniforms of the human model (:func:`jaxsim.humans.step_humans`'s ``uniforms``).
+    The social force's second draw is its random push's angle in turns, and gets the variant's
     ``noise_turns`` (a turned scene's pushes turned with it; ``+ 0`` changes no bit); the other
     models' draws are not directions and stay as drawn."""
     u = rng.hash_uniform16(v.seed_u32, step, (2, n))
