@@ -9,7 +9,10 @@ the scene: its file's path, its :class:`~jaxsim.scenes.spec.SceneSpec`, the aren
 :class:`~evaluation.arena.episodes.SceneSetup` or the :class:`~jaxsim.scenes.env.Env` made from it
 (a list or tuple of them too). It prints the functions in the order first entered, then the
 counts: functions (stops), modules, module entries (a module entered again after another counts
-again) and returns to a module already left. Constructors count as the stops they are.
+again), returns to a module already left, and climbs back up: calls into a module from another
+module that the first one called, directly or not (a callback: the caller's module below the
+callee's on the call stack), where a return is also a module's own function going on after a call
+it made. Constructors count as the stops they are.
 
 This counts what runs, not what the code's text could reach: a call through a variable, a
 ``jax.jit`` or a backend's shard is followed because it runs. ``--tree`` imports the toolkit from
@@ -58,8 +61,9 @@ def scene_types() -> tuple[type, ...]:
     return SceneSpec, SceneSetup, Env
 
 
-def route(out: pathlib.Path) -> list[tuple[str, str]]:
-    """``(module, function)`` of each call that received the scene, consecutive repeats merged."""
+def route(out: pathlib.Path) -> tuple[list[tuple[str, str]], list[tuple[str, str]]]:
+    """``(module, function)`` of each call that received the scene, consecutive repeats merged,
+    and the calls among them that climb back up (:func:`main`'s docstring)."""
     from socialnav.cli import main
 
     types = scene_types()
@@ -74,6 +78,7 @@ def route(out: pathlib.Path) -> list[tuple[str, str]]:
         return False
 
     stops: list[tuple[str, str]] = []
+    climbs: list[tuple[str, str]] = []
 
     def note(frame, event, arg):
         if event != "call":
@@ -87,6 +92,8 @@ def route(out: pathlib.Path) -> list[tuple[str, str]]:
             stop = (module.removeprefix("socialnav."), code.co_name)
             if not stops or stops[-1] != stop:
                 stops.append(stop)
+            if climbs_back_up(module, toolkit_callers(frame)) and stop not in climbs:
+                climbs.append(stop)
 
     argv = ["arena", "--scenes", SCENE, "--methods", "navfn", "--variants", "2", "--out", str(out), "--no-progress"]
     sys.setprofile(note)
@@ -96,7 +103,25 @@ def route(out: pathlib.Path) -> list[tuple[str, str]]:
         sys.setprofile(None)
     if code != 0:
         raise SystemExit(f"socialnav {' '.join(argv)} failed ({code})")
-    return stops
+    return stops, climbs
+
+
+def climbs_back_up(module: str, callers: list[str]) -> bool:
+    """Whether a call into ``module`` from ``callers`` (the modules on the stack, innermost first)
+    climbs back up: called from another module that ``module`` itself called, directly or not."""
+    return bool(callers) and callers[0] != module and module in callers[1:]
+
+
+def toolkit_callers(frame) -> list[str]:
+    """The toolkit modules on ``frame``'s call stack, innermost caller first."""
+    modules = []
+    frame = frame.f_back
+    while frame is not None:
+        module = frame.f_globals.get("__name__", "")
+        if module.startswith("socialnav."):
+            modules.append(module)
+        frame = frame.f_back
+    return modules
 
 
 def counts(stops: list[tuple[str, str]]) -> dict:
@@ -122,10 +147,11 @@ def main() -> None:
     if args.tree is not None:
         import_from(args.tree.resolve())
     with tempfile.TemporaryDirectory() as folder:
-        stops = route(pathlib.Path(folder) / "arena")
+        stops, climbs = route(pathlib.Path(folder) / "arena")
     for module, function in dict.fromkeys(stops):
-        print(f"  {module}:{function}")
-    print(", ".join(f"{value} {name}" for name, value in counts(stops).items()))
+        climb = "  (climbs back up)" if (module, function) in climbs else ""
+        print(f"  {module}:{function}{climb}")
+    print(", ".join(f"{value} {name}" for name, value in {**counts(stops), "climbs back up": len(climbs)}.items()))
 
 
 if __name__ == "__main__":

@@ -200,16 +200,21 @@ def test_the_scene_route_is_counted_as_it_runs():
         "module entries": 5,
         "returns to a module left": 2,
     }
+    # a callback (c calls b, b calls back into c) climbs back up; c going on after b returned does not
+    assert script.climbs_back_up("c", ["b", "c", "a"])
+    assert not script.climbs_back_up("c", ["c", "b", "a"])
+    assert not script.climbs_back_up("c", ["b", "a"])
 
 
 @pytest.mark.slow
 def test_the_scene_route_of_an_arena_run_reaches_the_scenes_table(tmp_path):
     """The route of a real ``socialnav arena`` run: the scene file read, then the episodes built
     from it (the environment, the method's episode function, the variants), then the scene's
-    episodes joined in the run folder, in that order."""
+    episodes joined in the run folder, in that order, and no climb back up."""
     import script_loader
 
-    stops = script_loader.load("scene_route").route(tmp_path / "arena")
+    stops, climbs = script_loader.load("scene_route").route(tmp_path / "arena")
+    assert climbs == []  # no call climbs back up into a module that called down (issue 64)
     order = [f"{module}:{function}" for module, function in stops]
     wanted = ["jaxsim.scenes.spec:load_scene", "jaxsim.scenes.env:make_env",
               "evaluation.arena.episodes:episode_function", "jaxsim.scenes.variant:sample_variants",
