@@ -48,7 +48,9 @@ def test_the_warehouse_and_the_arena_move_people_with_one_function(monkeypatch, 
     setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"))
     variant = jax.tree_util.tree_map(jnp.asarray, sample_variant(setup.spec, 0, 0))
     people = people_lib.init_people(variant)
-    people_lib.step_people(params, setup.env.world, variant, people, jnp.zeros(2), jnp.zeros(2), jnp.int32(0))
+    robot_at_rest = RobotDisc.of(jnp.zeros(2), jnp.zeros(2), 0.3)
+    constants = humans.human_params("social_force", params)
+    people_lib.step_people("social_force", constants, setup.env.world, variant, people, robot_at_rest, jnp.int32(0))
     assert calls == [False, True]  # the warehouse's workers all feel the robot; the arena's may not
 
 
@@ -79,8 +81,10 @@ def test_the_warehouse_and_the_arena_move_people_by_the_chosen_human_model(monke
     assert not np.allclose(np.asarray(chosen.x_m[:2]), np.asarray(social.x_m[:2]), atol=1e-4)
     setup = arena.setup_scene(load_scene(DATA_DIR / "scenes" / "casn_head_on.json"), arena.ArenaConfig.of(model))
     variant = jax.tree_util.tree_map(jnp.asarray, sample_variant(setup.spec, 0, 0))
-    jax.jit(lambda v: people_lib.step_people(params, setup.env.world, v, people_lib.init_people(v), jnp.zeros(2),
-                                             jnp.zeros(2), jnp.int32(0), model, setup.env.orca))(variant)  # fmt: skip
+    constants = humans.human_params(model, params, setup.env.orca)
+    robot_at_rest = RobotDisc.of(jnp.zeros(2), jnp.zeros(2), 0.3)
+    jax.jit(lambda v: people_lib.step_people(model, constants, setup.env.world, v, people_lib.init_people(v),
+                                             robot_at_rest, jnp.int32(0)))(variant)  # fmt: skip
     assert calls == [model, "social_force", model]
     with pytest.raises(ValueError, match="human model must be one of"):
         build_world(scenario, "helbing")

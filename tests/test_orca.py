@@ -11,7 +11,7 @@ import pytest
 
 from socialnav.data import DATA_DIR
 from socialnav.evaluation.arena import episodes as arena
-from socialnav.jaxsim import orca
+from socialnav.jaxsim import humans, orca
 from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenes import people as people_lib
@@ -181,8 +181,9 @@ def test_equal_to_the_old_step_on_the_arena_scenes(scene):
                 target[:, 1] - s.xy[:, 1], speed, s.present, mobile, robot, env.robot.radius_m)  # fmt: skip
         new = _new_step(p, *args, ignores_robot=v.ignore_robot)
         old = reference.step_orca(_reference_params(p), *args, ignores_robot=v.ignore_robot)
-        nxt = people_lib.step_people(env.crowd, env.world, v, s, robot_xy, robot_v, step, "orca", p,
-                                     env.robot.radius_m)  # fmt: skip
+        constants = humans.human_params("orca", env.crowd, p)
+        disc = RobotDisc.of(robot_xy, robot_v, env.robot.radius_m)
+        nxt = people_lib.step_people("orca", constants, env.world, v, s, disc, step)
         return new, old, nxt
 
     s = people_lib.init_people(v)

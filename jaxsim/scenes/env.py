@@ -50,6 +50,7 @@ from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.variant import Variant
 from socialnav.jaxsim.scenes.world import SceneWorld
+from socialnav.jaxsim.walkers import RobotDisc
 
 
 @dataclasses.dataclass(frozen=True)
@@ -222,6 +223,12 @@ class Env:
 
     # ------------------------------------------------------------------ API
 
+    def human_params(self) -> humans.HumanParams:
+        """The constants the people's model runs with (:func:`jaxsim.humans.human_params`): the
+        social force's with the env's step, ORCA's and the velocity model's (or the power law's)."""
+        crowd = self.crowd.replace(dt_s=self.config.dt_s)
+        return humans.human_params(self.config.human_model, crowd, self.orca, self.velocity)
+
     def robot_radius_felt_m(self):
         """The robot's radius as the people's model feels it. A velocity model's people keep their
         own fitted body (0.16-0.18 m), narrower than the person the env counts contacts with
@@ -266,19 +273,14 @@ class Env:
         stop = state.reached | invalid
         v = jnp.where(stop, 0.0, action[0])
         w = jnp.where(stop, 0.0, action[1])
-        crowd = self.crowd.replace(dt_s=cfg.dt_s)
         people = people_lib.step_people(
-            crowd,
+            cfg.human_model,
+            self.human_params(),
             self.world,
             state.variant,
             state.people,
-            state.robot.xy,
-            state.robot.velocity,
+            RobotDisc.of(state.robot.xy, state.robot.velocity, self.robot_radius_felt_m()),
             state.step,
-            cfg.human_model,
-            self.orca,
-            self.robot_radius_felt_m(),
-            self.velocity,
             state.variant.walking_group if self.walking_groups else None,
             self.recorded,
         )

@@ -23,8 +23,7 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim import humans, orca, rng
-from socialnav.jaxsim.params import TIAGO_RADIUS_M, SimParams
+from socialnav.jaxsim import humans, rng
 from socialnav.jaxsim.scenes.recording import LOOKAHEAD_SAMPLES, RECORD_DT_S
 from socialnav.jaxsim.scenes.spec import KIND
 from socialnav.jaxsim.scenes.variant import Variant
@@ -155,30 +154,27 @@ def _moved(s: PeopleState, xy, velocity, present) -> PeopleState:
 
 
 def step_people(
-    params: SimParams,
+    model: str,
+    constants: humans.HumanParams,
     world: SceneWorld,
     v: Variant,
     s: PeopleState,
-    robot_xy,
-    robot_velocity,
+    robot: RobotDisc,
     step,
-    model: str = "social_force",
-    orca_params: orca.ORCAParams | None = None,
-    robot_radius_m: float = TIAGO_RADIUS_M,
-    velocity_params=None,
     group_id=None,
     recorded: bool = False,
 ) -> PeopleState:
-    """One step of ``params.dt_s``: behaviours, then the human model on the mobile people.
+    """One step of ``constants.crowd.dt_s``: behaviours, then the human model on the mobile people.
 
     Args:
-      robot_xy, robot_velocity: (2,) the robot's previous position and velocity.
+      model: static, :data:`jaxsim.humans.HUMAN_MODELS`: ``social_force``
+        (:func:`jaxsim.crowd.step_crowd`, the warehouse's), ``orca`` (:func:`jaxsim.orca.step_orca`),
+        a velocity model with bodies (:mod:`jaxsim.speed_model`) or the power law
+        (:mod:`jaxsim.power_law`), and their ``_calibrated`` fits.
+      constants: the human models' constants (:func:`jaxsim.humans.human_params`).
+      robot: the robot's previous position and velocity, a disc the people avoid (its radius not
+        used by the social force).
       step: () int32 step counter (time and the random force's stream).
-      model: :data:`HUMAN_MODELS`: ``social_force`` (:func:`jaxsim.crowd.step_crowd`, the
-        warehouse's), ``orca`` (:func:`jaxsim.orca.step_orca` with ``orca_params``), or a velocity
-        model with bodies (:mod:`jaxsim.speed_model`: ``collision_free_speed``, ``anticipation``
-        and their ``_calibrated`` fits, with ``velocity_params``, default the name's own); the
-        robot a disc of ``robot_radius_m`` for all but the social force.
       group_id: (P,) int32 the walking groups (``Variant.walking_group``; None: nobody walks
         with anyone, and the group terms are not computed).
       recorded: static, the people are a recorded crowd (every one of them), played back as
@@ -186,22 +182,19 @@ def step_people(
         reactive scenes share one compiled program.
     """
     humans.check_model(model)
-    dt = params.dt_s
+    dt = constants.crowd.dt_s
     time_s = step.astype(jnp.float32) * dt
     if recorded:
         after = recorded_at(v, time_s + dt)  # where the recording has everyone at the step's end
         replayed = _moved(s, *after)
-        reactive = _reactive(params, world, v, s, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
-                             velocity_params, group_id, after)  # fmt: skip
+        reactive = _reactive(model, constants, world, v, s, robot, step, group_id, after)
         return jax.tree_util.tree_map(lambda a, b: jnp.where(v.reactive, a, b), reactive, replayed)
     target, speed, mobile = targets(v, s, time_s)
     u = _uniforms(v, step, s.xy.shape[0], model)
     walkers = Walkers.of(s.xy, s.velocity, s.present, mobile, v.ignore_robot)
     # pedsim's cap is the desired speed (a queue member's slows down to its place)
     aims = Aims(target[:, 0] - walkers.x_m, target[:, 1] - walkers.y_m, speed, speed)
-    robot = RobotDisc.of(robot_xy, robot_velocity, robot_radius_m)
-    bundle = humans.human_params(model, params, orca_params, velocity_params)
-    walkers = humans.step_humans(model, bundle, world.wall_field, walkers, aims, robot, (u[0], u[1]), group_id)
+    walkers = humans.step_humans(model, constants, world.wall_field, walkers, aims, robot, (u[0], u[1]), group_id)
     xy, new_v = walkers.xy_m, walkers.velocity_mps
     # People waiting in line step straight up to their place (the human model's repulsion between
     # people a body apart would spread the line sideways by up to half a metre, and a robot
@@ -233,21 +226,19 @@ def step_people(
 
 
 def _reactive(
-    params, world, v: Variant, s: PeopleState, robot_xy, robot_velocity, step, model, orca_params, robot_radius_m,
-    velocity_params, group_id, after,
+    model: str, constants: humans.HumanParams, world: SceneWorld, v: Variant, s: PeopleState, robot: RobotDisc, step,
+    group_id, after,
 ) -> PeopleState:  # fmt: skip
-    """One step of a reactive recorded crowd (see the module's docstring); ``after``: the
-    recording at the step's end (:func:`recorded_at`)."""
-    time_s = step.astype(jnp.float32) * params.dt_s
+    """One step of a reactive recorded crowd (see the module's docstring; the arguments of
+    :func:`step_people`); ``after``: the recording at the step's end (:func:`recorded_at`)."""
+    time_s = step.astype(jnp.float32) * constants.crowd.dt_s
     lookahead_s = LOOKAHEAD_SAMPLES * RECORD_DT_S
     aim = recorded_ahead(v, time_s) - s.xy
     speed = jnp.minimum(jnp.linalg.norm(aim, axis=-1) / lookahead_s, REACTIVE_MAX_SPEED_MPS)
     u = _uniforms(v, step, s.xy.shape[0], model)
     walkers = Walkers.of(s.xy, s.velocity, s.present, s.present, v.ignore_robot)
     aims = Aims(aim[:, 0], aim[:, 1], speed, speed)
-    robot = RobotDisc.of(robot_xy, robot_velocity, robot_radius_m)
-    bundle = humans.human_params(model, params, orca_params, velocity_params)
-    walkers = humans.step_humans(model, bundle, world.wall_field, walkers, aims, robot, (u[0], u[1]), group_id)
+    walkers = humans.step_humans(model, constants, world.wall_field, walkers, aims, robot, (u[0], u[1]), group_id)
     entry_xy, entry_velocity, present = after
     entering = present & ~s.present  # appears where the recording has them appear
     xy = jnp.where(entering[:, None], entry_xy, walkers.xy_m)

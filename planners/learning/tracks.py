@@ -396,21 +396,25 @@ def simulated_tracks(spec, seed: int = 0, variants: int = 20, seconds: float | N
       frame (each demonstration's map shows only its own variant's people).
     """
     from socialnav.data import WAREHOUSE_DIR
+    from socialnav.jaxsim import humans
+    from socialnav.jaxsim.params import TIAGO_RADIUS_M
     from socialnav.jaxsim.scenario.loader import load_scenario
     from socialnav.jaxsim.scenes import people as people_lib
     from socialnav.jaxsim.scenes.variant import sample_variants
     from socialnav.jaxsim.scenes.world import build_scene_world, occupancy
+    from socialnav.jaxsim.walkers import RobotDisc
 
     params = load_scenario(WAREHOUSE_DIR).params
     world = build_scene_world(spec)
     stacked = jax.tree.map(jnp.asarray, sample_variants(spec, seed, variants))
     every = max(1, round(TRACK_PERIOD_S / float(params.dt_s)))
     frames = int((spec.timeout_s if seconds is None else seconds) / (every * float(params.dt_s)))
-    away = jnp.full(2, ROBOT_AWAY_M, jnp.float32)
+    away = RobotDisc.of(jnp.full(2, ROBOT_AWAY_M, jnp.float32), jnp.zeros(2), TIAGO_RADIUS_M)
+    constants = humans.human_params("social_force", params)
 
     def walk(v):
         def tick(people, step):
-            people = people_lib.step_people(params, world, v, people, away, jnp.zeros(2), step)
+            people = people_lib.step_people("social_force", constants, world, v, people, away, step)
             return people, None
 
         def frame(people, f):
