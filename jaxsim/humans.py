@@ -101,7 +101,7 @@ STEPS: dict[str, HumanStep] = {
     "social_force": crowd.step_crowd,
     "orca": orca.step_orca,
     "collision_free_speed": speed_model.step_speed_model,
-    "steering_speed": speed_model.step_speed_model,
+    "steering_speed": functools.partial(speed_model.step_speed_model, headings=speed_model.STEERING_HEADINGS),
     "anticipation": speed_model.step_anticipation,
     "power_law": power_law.step_power_law,
 }
@@ -144,7 +144,4 @@ def step_humans(
     kind = kind_of(check_model(model))
     if group_id is not None:
         aims = groups.group_aim(params.group, people, aims, group_id)
-    step, constants = STEPS[kind], getattr(params, PARAMS_OF[kind])
-    if kind == "steering_speed":
-        step = functools.partial(step, headings=speed_model.STEERING_HEADINGS)
-    return step(constants, wall_field, params.crowd.dt_s, people, aims, robot, uniforms)
+    return STEPS[kind](getattr(params, PARAMS_OF[kind]), wall_field, params.crowd.dt_s, people, aims, robot, uniforms)
