@@ -2,7 +2,8 @@
 
 One home each for what several parts need and none owns: atomic file writes
 (:mod:`~socialnav.common.atomic`), progress reporting (:mod:`~socialnav.common.progress`), pytree helpers
-(:mod:`~socialnav.common.pytree`) and the simulator log's file contract (:mod:`~socialnav.common.logschema`), which
+(:mod:`~socialnav.common.pytree`), JSON read as people write it (:mod:`~socialnav.common.strict_json`: a key
+given twice is an error) and the simulator log's file contract (:mod:`~socialnav.common.logschema`), which
 the simulator writes and the causal pipeline reads without importing each other.
 """
 

@@ -17,6 +17,7 @@ The values live in ``data/<scenario>/params.json`` in four sections (``sim``, ``
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import json
 import math
 import pathlib
@@ -24,6 +25,7 @@ from collections.abc import Sequence
 
 from flax import struct
 
+from socialnav.common import strict_json
 from socialnav.common.pytree import stack
 
 SECTION_PREFIX = {"sim": "", "workers": "worker_", "robot": "robot_", "battery": "battery_"}
@@ -203,7 +205,9 @@ class SimParams:
         if not file.is_file():
             raise error(file, "<file>", "file is missing")
         try:
-            raw = json.loads(file.read_text(encoding="utf-8"))
+            raw = strict_json.loads(file.read_text(encoding="utf-8"))
+        except strict_json.DuplicateKeyError as e:
+            raise error(file, e.key, "given twice in one object: which one was meant?") from None
         except UnicodeDecodeError as e:
             raise error(file, "<file>", f"not UTF-8 text ({e.reason} at byte {e.start})") from None
         except json.JSONDecodeError as e:
@@ -212,6 +216,11 @@ class SimParams:
             raise error(file, "<file>", f"cannot be read ({e.strerror or e})") from None
         if not isinstance(raw, dict):
             raise error(file, "<file>", f"top level must be a JSON object, got {type(raw).__name__}")
+        for section in raw:  # a key starting with "_" is a note ("_source"), never read
+            if section not in SECTION_PREFIX and not str(section).startswith("_"):
+                close = difflib.get_close_matches(str(section), list(SECTION_PREFIX), n=1)
+                hint = f"did you mean {close[0]!r}? " if close else ""
+                raise error(file, str(section), f"unknown section ({hint}the sections: {', '.join(SECTION_PREFIX)})")
         types = {f.name: f.type for f in dataclasses.fields(cls)}
         values = {}
         for section, prefix in SECTION_PREFIX.items():

@@ -277,6 +277,16 @@ def arena_scene(
     return make
 
 
+def _scene_key_twice(tmp: pathlib.Path) -> list[str]:
+    """``socialnav arena`` on seed 001's static person with a second ``timeout_s`` above the first
+    (``json.loads`` keeps the last one)."""
+    text = (ROOT / "data" / "scenes" / "casn_static_person.json").read_text()
+    first = text.index('"timeout_s"')
+    (tmp / "scene.json").write_text(text[:first] + '"timeout_s": 5,\n' + text[first:])
+    options = ["--scenes", str(tmp / "scene.json"), "--methods", "navfn", "--variants", "2", "--no-progress"]
+    return [*SOCIALNAV, "arena", "--out", str(tmp / "a"), *options]
+
+
 def command(*argv: str) -> Callable[[pathlib.Path], list[str]]:
     """A command line; ``{tmp}`` is the case's scratch folder, ``{tables}`` the fixture's tables."""
 
@@ -1403,6 +1413,44 @@ CASES: list[Case] = [
     ),
     Case("r3 wrong: Unicode waypoint ids (accepted before)", _unicode_simulate, check=_same_day),
     Case("r3 wrong: the arena's time estimate", _timed_arena, check=_estimate_holds, timeout_s=600),
+    # Round four: a field nothing reads (misspelt, or meaningless where it stands) ran with the
+    # default in its place and said nothing.
+    Case(
+        "r4 silent: a scene's misspelt optional field",
+        arena_scene(lambda o: o["people"][1].update(start_S=[2.0, 3.0]), "gscl_group"),
+        ("scene.json", "people[1].start_S", "start_s"),
+    ),
+    Case(
+        "r4 silent: a scene's walker field on a group",
+        arena_scene(lambda o: o["people"][0].update(walks_with=1), "gscl_group"),
+        ("scene.json", "people[0].walks_with", "unknown"),
+    ),
+    Case(
+        "r4 silent: a scene's rule field of another rule",
+        arena_scene(lambda o: o["rule"].update(distance_m=2.0), "gscl_group"),
+        ("scene.json", "rule.distance_m", "unknown"),
+    ),
+    Case(
+        "r4 silent: a recorded scene's made-up field",
+        arena_scene(lambda o: o["recording"].update(speed=2.0), "recorded/hotel_reactive"),
+        ("scene.json", "recording.speed", "unknown"),
+    ),
+    Case("r4 silent: a scene's key given twice", _scene_key_twice, ("scene.json", "timeout_s", "twice")),
+    Case(
+        "r4 silent: a waypoint's made-up speed",
+        simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
+        ("waypoints.json", "waypoints[2].speed_mps", "unknown"),
+    ),
+    Case(
+        "r4 silent: params.json's misspelt section",
+        simulate_with("params.json", lambda o: o.update(batery={"initial_pct": 50})),
+        ("params.json", "batery", "battery"),
+    ),
+    Case(
+        "r4 silent: graph.json's misspelt exclusion",
+        simulate_with("graph.json", lambda o: o.update(robots_exclude=[])),
+        ("graph.json", "robots_exclude", "robot_exclude"),
+    ),
 ]
 
 

@@ -104,6 +104,45 @@ def test_missing_or_bad_parameter(scenario_copy):
     _expect(scenario_copy, "params.json", "robot.max_speed_mps")
 
 
+@pytest.mark.parametrize(
+    "file, mutate, field, hint",
+    [
+        ("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5), "waypoints[2].speed_mps", None),
+        ("walls.json", lambda o: o["boxes"][0].update(xmax=2.0), "boxes[0].xmax", "xmax_m"),
+        ("schedule.json", lambda o: o["slots"][1].update(workin=False), "slots[1].workin", "working"),
+        ("tasks.json", lambda o: o.update(charging=o["charging_station"]), "charging", "charging_station"),
+        ("graph.json", lambda o: o.update(robots_exclude=[]), "robots_exclude", "robot_exclude"),
+        ("params.json", lambda o: o.update(batery={"initial_pct": 50}), "batery", "battery"),
+    ],
+)
+def test_a_field_nothing_reads_is_refused(scenario_copy, file, mutate, field, hint):
+    """A made-up or misspelt field would change nothing and say nothing; an ``_`` note is fine."""
+    _edit(scenario_copy, file, mutate)
+    err = _expect(scenario_copy, file, field)
+    assert err.field == field and "unknown" in str(err)
+    assert (f"did you mean {hint!r}" in str(err)) == (hint is not None)
+
+
+@pytest.mark.parametrize(
+    "file, key, value", [("params.json", "max_speed_mps", "1.2"), ("tasks.json", "robot_start", '"parking"')]
+)
+def test_a_key_given_twice_is_refused(scenario_copy, file, key, value):
+    text = (scenario_copy / file).read_text()
+    first = text.index(f'"{key}"')
+    (scenario_copy / file).write_text(text[:first] + f'"{key}": {value},\n' + text[first:])
+    err = _expect(scenario_copy, file, key)
+    assert "given twice" in str(err)
+
+
+def test_a_note_in_an_underscore_field_is_not_read(scenario_copy, warehouse):
+    for file in ("waypoints.json", "walls.json", "schedule.json", "tasks.json", "graph.json", "params.json"):
+        _edit(scenario_copy, file, lambda o: o.update(_note="edited for a test"))
+    _edit(scenario_copy, "waypoints.json", lambda o: o["waypoints"][0].update(_why="the lot"))
+    noted = load_scenario(scenario_copy)
+    np.testing.assert_array_equal(noted.waypoint_xy_m, warehouse.waypoint_xy_m)
+    assert noted.params == warehouse.params and noted.slot_names == warehouse.slot_names
+
+
 def test_robot_goal_must_be_known(scenario_copy):
     _edit(scenario_copy, "tasks.json", lambda o: o["slots"][0]["goals"].__setitem__(3, "parking"))
     _expect(scenario_copy, "tasks.json", "slots[0].goals[3]")

@@ -89,6 +89,50 @@ def test_a_bad_scene_file_gives_one_error_naming_file_and_field(tmp_path, mutate
     assert e.value.field == field and str(path) in str(e.value)
 
 
+@pytest.mark.parametrize(
+    "mutate, field, hint",
+    [
+        (lambda o: o["people"][1].update(back_and_fourth=True), "people[1].back_and_fourth", "back_and_forth"),
+        (lambda o: o["people"][0].update(walks_with=1), "people[0].walks_with", None),  # a group's, not a walker's
+        (lambda o: o["robot"].update(yaw=90), "robot.yaw", "yaw_deg"),
+        (lambda o: o["rule"].update(distance_m=1.2), "rule.distance_m", None),  # not an avoid_group rule's
+        (lambda o: o.update(stop_and_go=0.9), "stop_and_go", "stop_and_go_m"),
+        (lambda o: o.update(recording=None, held_out=None), "held_out", None),
+    ],
+)
+def test_a_field_nothing_reads_is_refused_not_dropped_for_its_default(tmp_path, mutate, field, hint):
+    """A misspelt optional field, or one that means nothing where it stands, would otherwise run
+    the scene with the default in its place and say nothing."""
+    path = _mutated(tmp_path, mutate)
+    with pytest.raises(ScenarioError, match="unknown field") as e:
+        load_scene(path)
+    assert e.value.field == field and str(path) in str(e.value)
+    assert (f"did you mean {hint!r}" in str(e.value)) == (hint is not None)
+
+
+@pytest.mark.parametrize("key", ["timeout_s", "speed_mps"])  # the file's top level; its walker
+def test_a_key_given_twice_is_refused_not_the_last_one_kept(tmp_path, key):
+    """``json.loads`` would keep the second value and drop the first without a word."""
+    text = (DATA_DIR / "scenes" / "gscl_group.json").read_text()
+    first = text.index(f'"{key}"')
+    path = tmp_path / "scene.json"
+    path.write_text(text[:first] + f'"{key}": 1.0,\n' + text[first:])
+    with pytest.raises(ScenarioError, match="given twice") as e:
+        load_scene(path)
+    assert e.value.field == key and str(path) in str(e.value)
+
+
+def test_a_note_in_an_underscore_field_is_not_read(tmp_path):
+    def annotate(o):
+        o["_comment"] = "the lab scene of seed 002"
+        o["people"][1]["_why"] = "a walker passing the group"
+
+    annotated = load_scene(_mutated(tmp_path, annotate))
+    plain = load_scene(DATA_DIR / "scenes" / "gscl_group.json")
+    assert annotated.people == plain.people and annotated.rule == plain.rule
+    np.testing.assert_array_equal(sample_variant(annotated, 0, 3).xy0, sample_variant(plain, 0, 3).xy0)
+
+
 def test_a_person_standing_on_the_robots_start_is_refused_with_both_radii(tmp_path):
     from socialnav.jaxsim.params import PERSON_RADIUS_M
     from socialnav.jaxsim.scenes.robot import RobotParams

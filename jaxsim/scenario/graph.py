@@ -8,7 +8,7 @@ import pathlib
 import numpy as np
 
 from socialnav.jaxsim.scenario.errors import ScenarioError
-from socialnav.jaxsim.scenario.jsonio import list_field, read_json
+from socialnav.jaxsim.scenario.jsonio import list_field, only_fields, read_json
 
 FILE = "graph.json"
 
@@ -26,6 +26,7 @@ def load_graph(folder: pathlib.Path, index: dict[str, int]) -> tuple[np.ndarray,
     """(E, 2) int32 edges, (W,) human_allowed, (W,) robot_allowed."""
     file = folder / FILE
     graph = read_json(file)
+    only_fields(graph, file, "", ("edges", "humans_exclude", "robot_exclude"))
     edges = []
     for i, e in enumerate(list_field(graph, file, "edges")):
         if not (isinstance(e, list) and len(e) == 2):

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import difflib
 import json
 import pathlib
 from typing import Any
 
 import numpy as np
 
+from socialnav.common import strict_json
 from socialnav.jaxsim.scenario.errors import ScenarioError
 
 
@@ -16,7 +18,9 @@ def read_json(file: pathlib.Path) -> dict:
     if not file.is_file():
         raise ScenarioError(file, "<file>", "file is missing")
     try:
-        obj = json.loads(file.read_text(encoding="utf-8"))
+        obj = strict_json.loads(file.read_text(encoding="utf-8"))
+    except strict_json.DuplicateKeyError as e:
+        raise ScenarioError(file, e.key, "given twice in one object: which one was meant?") from None
     except UnicodeDecodeError as e:
         raise ScenarioError(file, "<file>", f"not UTF-8 text ({e.reason} at byte {e.start})") from None
     except json.JSONDecodeError as e:
@@ -59,6 +63,21 @@ def number(obj: Any, file: pathlib.Path, where: str, key: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
         raise ScenarioError(file, f"{where}.{key}", f"expected a finite number, got {value!r}")
     return float(value)
+
+
+def only_fields(obj: Any, file: pathlib.Path, where: str, known: tuple[str, ...]) -> None:
+    """Refuse a key of the object ``obj`` that is not one of ``known`` (a misspelt or made-up field
+    would be read by nothing and say nothing); a key starting with ``_`` is a note for people
+    (the shipped files' ``"_source"``) and is never read."""
+    if not isinstance(obj, dict):
+        return  # not an object: the field reads that follow refuse it, saying what belongs there
+    for key in obj:
+        if key not in known and not str(key).startswith("_"):
+            close = difflib.get_close_matches(str(key), known, n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise ScenarioError(
+                file, f"{where}.{key}" if where else str(key), f"unknown field ({hint}the fields: {', '.join(known)})"
+            )
 
 
 def list_field(obj: dict, file: pathlib.Path, key: str) -> list:

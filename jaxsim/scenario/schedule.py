@@ -1,4 +1,5 @@
-"""``schedule.json``: ordered ``slots`` ``{name, clock, working, destinations: {waypoint: p}}``."""
+"""``schedule.json``: ordered ``slots`` ``{name, clock, working, destinations: {waypoint: p}}``
+(and ``pedsim_name``, the slot's name in PeopleFlow's own files, which nothing reads)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import pathlib
 import numpy as np
 
 from socialnav.jaxsim.scenario.errors import ScenarioError
-from socialnav.jaxsim.scenario.jsonio import field, list_field, read_json
+from socialnav.jaxsim.scenario.jsonio import field, list_field, only_fields, read_json
 
 FILE = "schedule.json"
 PROBABILITY_TOLERANCE = 1e-6
@@ -26,12 +27,15 @@ class Schedule:
 
 def load_schedule(folder: pathlib.Path, index: dict[str, int], human_allowed: np.ndarray) -> Schedule:
     file = folder / FILE
-    slots = list_field(read_json(file), file, "slots")
+    top = read_json(file)
+    only_fields(top, file, "", ("slots",))
+    slots = list_field(top, file, "slots")
     if not slots:
         raise ScenarioError(file, "slots", "no slots")
     names, clock, working, dest_p = [], [], [], []
     for s, slot in enumerate(slots):
         where = f"slots[{s}]"
+        only_fields(slot, file, where, ("name", "pedsim_name", "clock", "working", "destinations"))
         names.append(field(slot, file, where, "name", str))
         clock.append(field(slot, file, where, "clock", str))
         working.append(field(slot, file, where, "working", bool))

@@ -9,7 +9,7 @@ import pathlib
 import numpy as np
 
 from socialnav.jaxsim.scenario.errors import ScenarioError
-from socialnav.jaxsim.scenario.jsonio import field, list_field, read_json, waypoint_field
+from socialnav.jaxsim.scenario.jsonio import field, list_field, only_fields, read_json, waypoint_field
 
 FILE = "tasks.json"
 
@@ -28,8 +28,10 @@ def load_tasks(
 ) -> Tasks:
     file = folder / FILE
     tasks = read_json(file)
+    only_fields(tasks, file, "", ("slots", "robot_start", "charging_station"))
     task_slots = list_field(tasks, file, "slots")
     for s, t in enumerate(task_slots):
+        only_fields(t, file, f"slots[{s}]", ("name", "goals"))
         field(t, file, f"slots[{s}]", "name", str)
     if [t.get("name") if isinstance(t, dict) else None for t in task_slots] != list(slot_names):
         raise ScenarioError(file, "slots", f"slot names must match schedule.json: {list(slot_names)}")

@@ -7,7 +7,7 @@ import pathlib
 import numpy as np
 
 from socialnav.jaxsim.scenario.errors import ScenarioError
-from socialnav.jaxsim.scenario.jsonio import field, list_field, number, read_json
+from socialnav.jaxsim.scenario.jsonio import field, list_field, number, only_fields, read_json
 from socialnav.jaxsim.scenario.waypoints import FILE as WAYPOINTS_FILE
 from socialnav.jaxsim.scenario.waypoints import Waypoints
 
@@ -17,12 +17,15 @@ FILE = "walls.json"
 def load_walls(folder: pathlib.Path, waypoints: Waypoints) -> tuple[np.ndarray, tuple[str, ...]]:
     """(B, 4) boxes as ``xmin, xmax, ymin, ymax`` and their kinds; no waypoint may lie inside one."""
     file = folder / FILE
-    raw = list_field(read_json(file), file, "boxes")
+    top = read_json(file)
+    only_fields(top, file, "", ("boxes",))
+    raw = list_field(top, file, "boxes")
     if not raw:
         raise ScenarioError(file, "boxes", "is empty: the map needs its walls (at least its outline) as boxes")
     boxes, kinds = [], []
     for i, b in enumerate(raw):
         where = f"boxes[{i}]"
+        only_fields(b, file, where, ("kind", "name", "xmin_m", "xmax_m", "ymin_m", "ymax_m"))
         box = [number(b, file, where, k) for k in ("xmin_m", "xmax_m", "ymin_m", "ymax_m")]
         if box[0] >= box[1] or box[2] >= box[3]:
             raise ScenarioError(file, where, f"empty box {box} (need xmin < xmax, ymin < ymax)")

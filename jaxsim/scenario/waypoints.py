@@ -9,7 +9,7 @@ import numpy as np
 
 from socialnav.common.names import SAFE_NAME_RULE, is_safe_name, name_problem
 from socialnav.jaxsim.scenario.errors import ScenarioError
-from socialnav.jaxsim.scenario.jsonio import field, list_field, number, read_json
+from socialnav.jaxsim.scenario.jsonio import field, list_field, number, only_fields, read_json
 
 FILE = "waypoints.json"
 
@@ -33,8 +33,11 @@ def load_waypoints(folder: pathlib.Path) -> Waypoints:
     file = folder / FILE
     ids: list[str] = []
     xy, radius, kinds, human_dest = [], [], [], []
-    for i, wp in enumerate(list_field(read_json(file), file, "waypoints")):
+    top = read_json(file)
+    only_fields(top, file, "", ("waypoints",))
+    for i, wp in enumerate(list_field(top, file, "waypoints")):
         where = f"waypoints[{i}]"
+        only_fields(wp, file, where, ("id", "x_m", "y_m", "radius_m", "kind", "human_destination"))
         name = field(wp, file, where, "id", str)
         if not is_safe_name(name):  # it names a log column, density_<id>, and the pictures' labels
             raise ScenarioError(

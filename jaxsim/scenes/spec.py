@@ -32,6 +32,10 @@ Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[
      "recording": {"run": "biwi_hotel", "playback": "replayed" | "reactive",
                    "window_within_s": [0, 480]}}                # optional, see below
 
+Every key of the file is one of these, where it stands (a ``walks_with`` on a stream, or a
+misspelt ``start_S``, is an error naming the field, not a default used in silence); a key that
+starts with ``_`` is a note for people (``"_comment": "..."``) and is not read.
+
 Behaviours: a **standing** person stays put; a **walker** goes from ``from`` to ``to`` at
 ``speed_mps`` from ``start_s`` on (back and forth if asked), by the social force; a **group** is
 ``size`` (2-6) standing people on a circle facing its centre (``in``) or away (``out``), turning
@@ -105,6 +109,7 @@ window) until nobody recorded stands within 0.775 m of it when the episode begin
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import json
 import math
 import pathlib
@@ -112,6 +117,7 @@ from typing import Any
 
 import numpy as np
 
+from socialnav.common import strict_json
 from socialnav.common.names import SAFE_NAME_RULE, is_safe_name, name_problem
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenario.errors import ScenarioError
@@ -151,8 +157,18 @@ class SceneSpec:
 
 
 class _Reader:
+    """Typed reads of one file's JSON, each failure a :class:`ScenarioError` naming the field.
+
+    Every object's keys that were asked for are noted, so :meth:`check_every_field_read` can
+    refuse a key nothing reads: a misspelt optional field (``"start_S"``, ``"distanse_m"``) or one
+    that means nothing where it stands (``"walks_with"`` on a stream) would otherwise be dropped
+    without a word and its default used. A key starting with ``_`` is a note for the reader of
+    the file (``"_comment"``, as the warehouse's files' ``"_source"``) and is never read.
+    """
+
     def __init__(self, file: pathlib.Path):
         self.file = file
+        self.asked: dict[int, tuple[dict, str, set[str]]] = {}  # id(object) -> (object, where, keys asked)
 
     def fail(self, where: str, message: str):
         raise ScenarioError(self.file, where, message)
@@ -160,6 +176,7 @@ class _Reader:
     def get(self, obj: dict, where: str, key: str, default: Any = ...):
         if not isinstance(obj, dict):
             self.fail(where, f"expected an object, got {type(obj).__name__}")
+        self.asked.setdefault(id(obj), (obj, where, set()))[2].add(key)
         if key not in obj:
             if default is ...:
                 self.fail(f"{where}.{key}" if where else key, "missing field")
@@ -199,6 +216,17 @@ class _Reader:
         if b[0] >= b[1] or b[2] >= b[3]:
             self.fail(where, f"expected xmin < xmax and ymin < ymax, got {value!r}")
         return b
+
+    def check_every_field_read(self) -> None:
+        """Refuse a key that no read asked for, of any object read so far (the first such key of the
+        first object read that has one)."""
+        for obj, where, asked in self.asked.values():
+            for key in obj:
+                if key not in asked and not str(key).startswith("_"):
+                    field = f"{where}.{key}" if where else str(key)
+                    close = difflib.get_close_matches(str(key), sorted(asked), n=1)
+                    hint = f"did you mean {close[0]!r}? " if close else ""
+                    self.fail(field, f"unknown field ({hint}the fields here: {', '.join(sorted(asked))})")
 
     def flag(self, obj: dict, where: str, key: str, default: bool) -> bool:
         value = self.get(obj, where, key, default)
@@ -562,7 +590,9 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     if not file.is_file():
         r.fail("<file>", "file is missing")
     try:
-        obj = json.loads(file.read_text())
+        obj = strict_json.loads(file.read_text())
+    except strict_json.DuplicateKeyError as e:
+        r.fail(e.key, "given twice in one object: which one was meant?")
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
         r.fail("<file>", f"invalid JSON: {e}")
     if not isinstance(obj, dict):
@@ -638,10 +668,12 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     _check_placements(r, robot, people)
     recording_obj = r.get(obj, "", "recording", None)
     recording = None if recording_obj is None else _recording(r, recording_obj, timeout, people)
+    source = str(r.get(obj, "", "source", ""))
+    r.check_every_field_read()
     return SceneSpec(
         file=file,
         name=name,
-        source=str(r.get(obj, "", "source", "")),
+        source=source,
         bounds_m=bounds,
         walls_m=walls_m.astype(np.float32),
         objects=tuple(objects),

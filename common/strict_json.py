@@ -1,0 +1,35 @@
+"""JSON as a person writes it: a key given twice in one object is an error, not the last one kept.
+
+``json.loads`` keeps the last of two equal keys without a word, so a scene file edited by adding
+``"timeout_s": 60`` below an existing ``"timeout_s": 40`` runs with one of them and says nothing
+of the other. The input files people write (scene files, the warehouse's scenario folder) are
+read through :func:`loads`; files the toolkit writes itself are not.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+
+class DuplicateKeyError(ValueError):
+    """One object of the text holds ``key`` twice."""
+
+    def __init__(self, key: str):
+        super().__init__(f"{key!r} is given twice in one object")
+        self.key = key
+
+
+def _unique(pairs: list[tuple[str, Any]]) -> dict:
+    obj: dict = {}
+    for key, value in pairs:
+        if key in obj:
+            raise DuplicateKeyError(key)
+        obj[key] = value
+    return obj
+
+
+def loads(text: str | bytes) -> Any:
+    """``json.loads(text)``, refusing a key given twice in one object (:class:`DuplicateKeyError`);
+    bad JSON raises ``json.JSONDecodeError`` as ``json.loads`` does."""
+    return json.loads(text, object_pairs_hook=_unique)
