@@ -1437,6 +1437,16 @@ CASES: list[Case] = [
     ),
     Case("r4 silent: a scene's key given twice", _scene_key_twice, ("scene.json", "timeout_s", "twice")),
     Case(
+        "r4 impossible: a scene's goal walled off",
+        arena_scene(lambda o: o["walls"].append([2.0, 2.2, -3.0, 3.0])),
+        ("scene.json", "robot.goal", "cannot be reached"),
+    ),
+    Case(
+        "r4 impossible: a way 0.4 m wide for a 0.55 m robot",
+        arena_scene(lambda o: o["walls"].append([2.0, 2.2, -3.0, 2.45])),
+        ("scene.json", "robot.goal", "0.275 m"),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),

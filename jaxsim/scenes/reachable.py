@@ -1,0 +1,80 @@
+"""Whether a scene's goal can be reached at all: a way from the start wide enough for the robot.
+
+A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to
+the end and scores every method 0 % goal success: a table of an impossible task that reads like
+one of bad methods. :func:`goal_problem` finds such a scene before any episode runs, from the
+walls alone (people move, so they can block a way only for a while; they are not counted).
+
+How: the robot's centre can be where the exact distance to every wall box and to the scene's
+bounds (the planners' edge of the world) is at least its radius. Those cells of a grid of
+:data:`RESOLUTION_M` form connected regions (8 neighbours, :func:`scipy.ndimage.label`); the goal
+is reachable when a cell within the goal tolerance of it lies in a region the robot's start
+reaches, for the middle and every corner of the start's and the goal's ranges. The grid errs
+towards "reachable": a cell counts as free when its clearance is up to one cell short of the
+radius, so a way the robot fits through is never refused (whatever the grid's offset or the
+way's angle), one narrower than the robot by up to two cells (10 cm) may pass, and one narrower
+by more is refused: the check refuses what is clearly impossible, not what is tight.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import scipy.ndimage
+
+from socialnav.jaxsim import geometry
+from socialnav.jaxsim.scenes.spec import SceneSpec
+
+RESOLUTION_M = 0.05
+
+
+def _corners_and_middle(point) -> list[tuple[float, float]]:
+    """A point's range ``((x0, x1), (y0, y1))`` as its middle and its four corners."""
+    (x0, x1), (y0, y1) = point
+    return [((x0 + x1) / 2, (y0 + y1) / 2), *itertools.product((x0, x1), (y0, y1))]
+
+
+def free_regions(spec: SceneSpec, robot_radius_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(labels, xs, ys)``: (H, W) int, 0 where the robot's centre cannot be, else the number
+    of the connected region the cell belongs to; the cells' centres (W,) and (H,) in metres."""
+    xmin, xmax, ymin, ymax = spec.bounds_m
+    xs = xmin + (np.arange(int(np.ceil((xmax - xmin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
+    ys = ymin + (np.arange(int(np.ceil((ymax - ymin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
+    gx, gy = np.meshgrid(xs, ys)
+    clearance = np.minimum.reduce([gx - xmin, xmax - gx, gy - ymin, ymax - gy])
+    if len(spec.walls_m):
+        clearance = np.minimum(clearance, geometry.box_signed_distance(gx, gy, spec.walls_m)[0])
+    labels, _ = scipy.ndimage.label(clearance >= robot_radius_m - RESOLUTION_M, structure=np.ones((3, 3)))
+    return labels, xs, ys
+
+
+def _regions_near(labels, xs, ys, xy, within_m: float) -> set[int]:
+    """The regions with a cell whose centre is within ``within_m`` of ``xy``."""
+    near = (xs[None, :] - xy[0]) ** 2 + (ys[:, None] - xy[1]) ** 2 <= within_m**2
+    return set(np.unique(labels[near]).tolist()) - {0}
+
+
+def goal_problem(spec: SceneSpec, robot_radius_m: float, goal_tolerance_m: float) -> tuple[str, str] | None:
+    """``(field, why)`` when a robot of radius ``robot_radius_m`` cannot come within
+    ``goal_tolerance_m`` of the scene's goal from its start, past the walls (``field`` is
+    ``robot.start`` where the body has no room at the start at all, else ``robot.goal``);
+    None when it can."""
+    labels, xs, ys = free_regions(spec, robot_radius_m)
+    width = f"a robot of radius {robot_radius_m:g} m (a way {2 * robot_radius_m:g} m wide)"
+    starts = []
+    for x, y in _corners_and_middle(spec.robot["start"]):
+        regions = _regions_near(labels, xs, ys, (x, y), robot_radius_m)
+        if not regions:
+            return "robot.start", f"({x:g}, {y:g}) leaves no room for {width} between the walls"
+        starts.append(((x, y), regions))
+    for gx, gy in _corners_and_middle(spec.robot["goal"]):
+        goal = _regions_near(labels, xs, ys, (gx, gy), goal_tolerance_m)
+        for (sx, sy), regions in starts:
+            if not regions & goal:
+                return (
+                    "robot.goal",
+                    f"({gx:g}, {gy:g}) cannot be reached from robot.start ({sx:g}, {sy:g}) by {width}: "
+                    "the walls close the way or leave it narrower",
+                )
+    return None

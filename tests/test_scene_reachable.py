@@ -1,0 +1,87 @@
+"""A scene's goal reachable from its start past the walls, by a robot of the run's radius: known
+answers on hand-made walls, every shipped scene, and the arena's one-line refusal."""
+
+import json
+
+import pytest
+
+from socialnav.cli import main
+from socialnav.data import DATA_DIR
+from socialnav.jaxsim.params import TIAGO_RADIUS_M
+from socialnav.jaxsim.scenes.reachable import goal_problem
+from socialnav.jaxsim.scenes.spec import load_scene
+
+SCENES = sorted((DATA_DIR / "scenes").rglob("*.json"))
+TOLERANCE_M = 0.3
+
+
+def _with_walls(tmp_path, walls, robot_start=None):
+    """Seed 001's static person (a 10 x 6 m room, start (-4, 0), goal (4, 0)) with more walls."""
+    obj = json.loads((DATA_DIR / "scenes" / "casn_static_person.json").read_text())
+    obj["walls"] += walls
+    if robot_start is not None:
+        obj["robot"]["start"] = robot_start
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(obj))
+    return load_scene(path)
+
+
+@pytest.mark.parametrize("file", SCENES, ids=[f.stem for f in SCENES])
+def test_every_shipped_scene_can_be_finished(file):
+    assert goal_problem(load_scene(file), TIAGO_RADIUS_M, TOLERANCE_M) is None
+
+
+def test_a_wall_across_the_room_closes_the_way(tmp_path):
+    spec = _with_walls(tmp_path, [[2.0, 2.2, -3.0, 3.0]])
+    field, why = goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M)
+    assert field == "robot.goal" and "(4, 0)" in why and "(-4, 0)" in why and "0.275" in why
+
+
+@pytest.mark.parametrize("offset_m", [0.0, 0.013, 0.025, 0.037])
+def test_a_gap_is_passable_by_the_robots_width_not_by_the_grids_offset(tmp_path, offset_m):
+    """A gap 0.4 m wide at the room's top: a 0.275 m robot cannot pass, a 0.15 m one can; a gap
+    just wider than the TIAGo (0.56 m) is never refused, wherever it lies on the grid."""
+    low = 0.3 + offset_m
+    narrow = _with_walls(tmp_path, [[2.0, 2.2, -3.0, low], [2.0, 2.2, low + 0.4, 3.0]])
+    assert goal_problem(narrow, TIAGO_RADIUS_M, TOLERANCE_M)[0] == "robot.goal"
+    assert goal_problem(narrow, 0.15, TOLERANCE_M) is None
+    wide = _with_walls(tmp_path, [[2.0, 2.2, -3.0, low], [2.0, 2.2, low + 0.56, 3.0]])
+    assert goal_problem(wide, TIAGO_RADIUS_M, TOLERANCE_M) is None
+
+
+def test_a_way_round_the_wall_is_found(tmp_path):
+    """A wall across most of the room, then a second one: the way winds round both."""
+    spec = _with_walls(tmp_path, [[-1.0, -0.8, -3.0, 2.0], [1.0, 1.2, -2.0, 3.0]])
+    assert goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M) is None
+
+
+def test_a_start_with_no_room_for_the_body_is_named(tmp_path):
+    """The start in a slot 0.3 m wide: the body fits nowhere within its radius of it."""
+    spec = _with_walls(tmp_path, [[-4.85, -3.0, -3.0, -0.15], [-4.85, -3.0, 0.15, 3.0]], robot_start=[-4.0, 0.0])
+    field, why = goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M)
+    assert field == "robot.start" and "no room" in why
+
+
+def _gap_argv(tmp_path):
+    spec = _with_walls(tmp_path, [[2.0, 2.2, -3.0, 2.45]])  # a 0.4 m gap at the top
+    return spec, ["arena", "--scenes", str(spec.file), "--methods", "navfn", "--variants", "2", "--no-progress"]
+
+
+def test_the_arena_refuses_an_unreachable_goal_in_one_line(tmp_path, capsys):
+    spec, argv = _gap_argv(tmp_path)
+    assert main([*argv, "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(spec.file) in err and "'robot.goal'" in err
+    assert not (tmp_path / "a").exists()
+
+
+@pytest.mark.slow
+def test_the_arena_runs_the_same_scene_for_a_robot_that_fits_and_it_arrives(tmp_path):
+    """The check reads the robot of the run (``--params``' radius): a 0.15 m robot passes the gap."""
+    import pandas as pd
+
+    _, argv = _gap_argv(tmp_path)
+    (tmp_path / "small.toml").write_text("[robot]\nradius_m = 0.15\n")
+    assert main([*argv, "--params", str(tmp_path / "small.toml"), "--out", str(tmp_path / "a")]) == 0
+    summary = pd.read_csv(tmp_path / "a" / "summary.csv")
+    assert summary["goal_success_pct"].tolist() == [100.0]
