@@ -1447,6 +1447,11 @@ CASES: list[Case] = [
         ("scene.json", "robot.goal", "0.275 m"),
     ),
     Case(
+        "r4 impossible: 8 m to go in a 4 s timeout at 0.5 m/s",
+        arena_scene(lambda o: o.update(timeout_s=4)),
+        ("scene.json", "timeout_s", "top speed"),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),

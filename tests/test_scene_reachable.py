@@ -1,26 +1,31 @@
-"""A scene's goal reachable from its start past the walls, by a robot of the run's radius: known
-answers on hand-made walls, every shipped scene, and the arena's one-line refusal."""
+"""A scene's goal reachable from its start past the walls, by a robot of the run's radius, within
+its timeout: known answers on hand-made walls and timeouts, every shipped scene, and the arena's
+one-line refusal."""
 
 import json
+import re
 
 import pytest
 
 from socialnav.cli import main
 from socialnav.data import DATA_DIR
 from socialnav.jaxsim.params import TIAGO_RADIUS_M
-from socialnav.jaxsim.scenes.reachable import goal_problem
+from socialnav.jaxsim.scenes.reachable import goal_problem, time_problem
 from socialnav.jaxsim.scenes.spec import load_scene
 
 SCENES = sorted((DATA_DIR / "scenes").rglob("*.json"))
 TOLERANCE_M = 0.3
 
 
-def _with_walls(tmp_path, walls, robot_start=None):
-    """Seed 001's static person (a 10 x 6 m room, start (-4, 0), goal (4, 0)) with more walls."""
+def _with_walls(tmp_path, walls, robot_start=None, timeout_s=None):
+    """Seed 001's static person (a 10 x 6 m room, start (-4, [-0.2, 0.2]), goal (4, 0)) with more
+    walls."""
     obj = json.loads((DATA_DIR / "scenes" / "casn_static_person.json").read_text())
     obj["walls"] += walls
     if robot_start is not None:
         obj["robot"]["start"] = robot_start
+    if timeout_s is not None:
+        obj["timeout_s"] = timeout_s
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(obj))
     return load_scene(path)
@@ -28,7 +33,19 @@ def _with_walls(tmp_path, walls, robot_start=None):
 
 @pytest.mark.parametrize("file", SCENES, ids=[f.stem for f in SCENES])
 def test_every_shipped_scene_can_be_finished(file):
-    assert goal_problem(load_scene(file), TIAGO_RADIUS_M, TOLERANCE_M) is None
+    spec = load_scene(file)
+    assert goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M) is None
+    assert time_problem(spec, 0.5, TOLERANCE_M) is None
+
+
+def test_a_timeout_shorter_than_the_straight_line_at_top_speed_is_named(tmp_path):
+    """The farthest draw: from (-4, +-0.2) to within 0.3 m of (4, 0), 8.0025 - 0.3 = 7.70 m,
+    15.4 s at 0.5 m/s."""
+    field, why = time_problem(_with_walls(tmp_path, [], timeout_s=15), 0.5, TOLERANCE_M)
+    assert field == "timeout_s" and "15.4 s" in why and "7.70 m" in why
+    assert re.search(r"robot\.start \(-4, -?0\.2\)", why)
+    assert time_problem(_with_walls(tmp_path, [], timeout_s=16), 0.5, TOLERANCE_M) is None
+    assert time_problem(_with_walls(tmp_path, [], timeout_s=15), 1.0, TOLERANCE_M) is None
 
 
 def test_a_wall_across_the_room_closes_the_way(tmp_path):

@@ -1,9 +1,12 @@
-"""Whether a scene's goal can be reached at all: a way from the start wide enough for the robot.
+"""Whether a scene's goal can be reached at all: a way from the start wide enough for the robot,
+and time enough to go it.
 
 A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to
 the end and scores every method 0 % goal success: a table of an impossible task that reads like
 one of bad methods. :func:`goal_problem` finds such a scene before any episode runs, from the
-walls alone (people move, so they can block a way only for a while; they are not counted).
+walls alone (people move, so they can block a way only for a while; they are not counted), and
+:func:`time_problem` one whose timeout is shorter than the straight line from start to goal takes
+at the robot's top speed (a bound no way round a wall or a person can beat).
 
 How: the robot's centre can be where the exact distance to every wall box and to the scene's
 bounds (the planners' edge of the world) is at least its radius. Those cells of a grid of
@@ -78,3 +81,23 @@ def goal_problem(spec: SceneSpec, robot_radius_m: float, goal_tolerance_m: float
                     "the walls close the way or leave it narrower",
                 )
     return None
+
+
+def time_problem(spec: SceneSpec, max_speed_mps: float, goal_tolerance_m: float) -> tuple[str, str] | None:
+    """``("timeout_s", why)`` when, for some start and goal the scene's ranges draw (their corners
+    and middles), the straight line to within ``goal_tolerance_m`` of the goal takes longer at
+    ``max_speed_mps`` than ``timeout_s``; None when every draw has time enough."""
+    (sx, sy), (gx, gy) = max(
+        itertools.product(_corners_and_middle(spec.robot["start"]), _corners_and_middle(spec.robot["goal"])),
+        key=lambda pair: np.hypot(pair[1][0] - pair[0][0], pair[1][1] - pair[0][1]),
+    )
+    distance_m = max(float(np.hypot(gx - sx, gy - sy)) - goal_tolerance_m, 0.0)
+    needed_s = distance_m / max_speed_mps
+    if needed_s <= spec.timeout_s:
+        return None
+    return (
+        "timeout_s",
+        f"{spec.timeout_s:g} s is shorter than the {needed_s:.1f} s the robot needs at its top speed "
+        f"({max_speed_mps:g} m/s) for the {distance_m:.2f} m from robot.start ({sx:g}, {sy:g}) to within "
+        f"{goal_tolerance_m:g} m of robot.goal ({gx:g}, {gy:g}) in a straight line",
+    )
