@@ -1,4 +1,5 @@
-"""JSON as a person writes it: a key given twice in one object is an error, not the last one kept.
+"""JSON as a person writes it: a key given twice in one object is an error, not the last one
+kept; a key no reader knows is named with the one that was likely meant.
 
 ``json.loads`` keeps the last of two equal keys without a word, so a scene file edited by adding
 ``"timeout_s": 60`` below an existing ``"timeout_s": 40`` runs with one of them and says nothing
@@ -8,6 +9,7 @@ read through :func:`loads`; files the toolkit writes itself are not.
 
 from __future__ import annotations
 
+import difflib
 import json
 from typing import Any
 
@@ -27,6 +29,13 @@ def _unique(pairs: list[tuple[str, Any]]) -> dict:
             raise DuplicateKeyError(key)
         obj[key] = value
     return obj
+
+
+def did_you_mean(key: str, known) -> str:
+    """``"did you mean 'x'? "`` for the one of ``known`` closest to a key no reader knows (a
+    misspelling), or "" when none is close (:func:`difflib.get_close_matches`)."""
+    close = difflib.get_close_matches(str(key), list(known), n=1)
+    return f"did you mean {close[0]!r}? " if close else ""
 
 
 def loads(text: str | bytes) -> Any:

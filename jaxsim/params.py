@@ -17,7 +17,6 @@ The values live in ``data/<scenario>/params.json`` in four sections (``sim``, ``
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import json
 import math
 import pathlib
@@ -218,8 +217,7 @@ class SimParams:
             raise error(file, "<file>", f"top level must be a JSON object, got {type(raw).__name__}")
         for section in raw:  # a key starting with "_" is a note ("_source"), never read
             if section not in SECTION_PREFIX and not str(section).startswith("_"):
-                close = difflib.get_close_matches(str(section), list(SECTION_PREFIX), n=1)
-                hint = f"did you mean {close[0]!r}? " if close else ""
+                hint = strict_json.did_you_mean(section, SECTION_PREFIX)
                 raise error(file, str(section), f"unknown section ({hint}the sections: {', '.join(SECTION_PREFIX)})")
         types = {f.name: f.type for f in dataclasses.fields(cls)}
         values = {}

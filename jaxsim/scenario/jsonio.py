@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 import json
 import pathlib
 from typing import Any
@@ -73,8 +72,7 @@ def only_fields(obj: Any, file: pathlib.Path, where: str, known: tuple[str, ...]
         return  # not an object: the field reads that follow refuse it, saying what belongs there
     for key in obj:
         if key not in known and not str(key).startswith("_"):
-            close = difflib.get_close_matches(str(key), known, n=1)
-            hint = f"did you mean {close[0]!r}? " if close else ""
+            hint = strict_json.did_you_mean(key, known)
             raise ScenarioError(
                 file, f"{where}.{key}" if where else str(key), f"unknown field ({hint}the fields: {', '.join(known)})"
             )

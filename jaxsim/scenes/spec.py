@@ -109,7 +109,6 @@ window) until nobody recorded stands within 0.775 m of it when the episode begin
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import json
 import math
 import pathlib
@@ -224,8 +223,7 @@ class _Reader:
             for key in obj:
                 if key not in asked and not str(key).startswith("_"):
                     field = f"{where}.{key}" if where else str(key)
-                    close = difflib.get_close_matches(str(key), sorted(asked), n=1)
-                    hint = f"did you mean {close[0]!r}? " if close else ""
+                    hint = strict_json.did_you_mean(key, sorted(asked))
                     self.fail(field, f"unknown field ({hint}the fields here: {', '.join(sorted(asked))})")
 
     def flag(self, obj: dict, where: str, key: str, default: bool) -> bool:
