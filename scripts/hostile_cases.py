@@ -1452,6 +1452,11 @@ CASES: list[Case] = [
         ("scene.json", "timeout_s", "top speed"),
     ),
     Case(
+        "r4 impossible: a visit box inside a wall",
+        arena_scene(lambda o: o.update(rule={"type": "visit", "box": [0.0, 1.0, -3.0, -2.9]})),
+        ("scene.json", "rule.box", "reach"),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),

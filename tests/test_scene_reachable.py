@@ -10,14 +10,14 @@ import pytest
 from socialnav.cli import main
 from socialnav.data import DATA_DIR
 from socialnav.jaxsim.params import TIAGO_RADIUS_M
-from socialnav.jaxsim.scenes.reachable import goal_problem, time_problem
+from socialnav.jaxsim.scenes.reachable import goal_problem, rule_problem, time_problem
 from socialnav.jaxsim.scenes.spec import load_scene
 
 SCENES = sorted((DATA_DIR / "scenes").rglob("*.json"))
 TOLERANCE_M = 0.3
 
 
-def _with_walls(tmp_path, walls, robot_start=None, timeout_s=None):
+def _with_walls(tmp_path, walls, robot_start=None, timeout_s=None, rule=None):
     """Seed 001's static person (a 10 x 6 m room, start (-4, [-0.2, 0.2]), goal (4, 0)) with more
     walls."""
     obj = json.loads((DATA_DIR / "scenes" / "casn_static_person.json").read_text())
@@ -26,6 +26,8 @@ def _with_walls(tmp_path, walls, robot_start=None, timeout_s=None):
         obj["robot"]["start"] = robot_start
     if timeout_s is not None:
         obj["timeout_s"] = timeout_s
+    if rule is not None:
+        obj["rule"] = rule
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(obj))
     return load_scene(path)
@@ -36,6 +38,7 @@ def test_every_shipped_scene_can_be_finished(file):
     spec = load_scene(file)
     assert goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M) is None
     assert time_problem(spec, 0.5, TOLERANCE_M) is None
+    assert rule_problem(spec, TIAGO_RADIUS_M) is None
 
 
 def test_a_timeout_shorter_than_the_straight_line_at_top_speed_is_named(tmp_path):
@@ -77,6 +80,21 @@ def test_a_start_with_no_room_for_the_body_is_named(tmp_path):
     spec = _with_walls(tmp_path, [[-4.85, -3.0, -3.0, -0.15], [-4.85, -3.0, 0.15, 3.0]], robot_start=[-4.0, 0.0])
     field, why = goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M)
     assert field == "robot.start" and "no room" in why
+
+
+def test_a_rule_box_the_robot_cannot_enter_is_named_with_its_place_in_the_rule(tmp_path):
+    """A ``visit`` box inside the room's bottom wall, and a ``keep_right`` box in a part of the
+    room walled off from the start: no method could keep the first, every method keeps the
+    second by never entering it. A box reaching into the open room is fine."""
+    in_wall = {"type": "visit", "box": [0.0, 1.0, -3.0, -2.9]}
+    assert rule_problem(_with_walls(tmp_path, [], rule=in_wall), TIAGO_RADIUS_M)[0] == "rule.box"
+    walled_off = {"type": "keep_right", "box": [3.0, 4.5, -1.0, 1.0], "direction_deg": 0}
+    rule = {"type": "all", "rules": [{"type": "min_distance", "distance_m": 0.5}, walled_off]}
+    field, why = rule_problem(_with_walls(tmp_path, [[2.0, 2.2, -3.0, 3.0]], rule=rule), TIAGO_RADIUS_M)
+    assert field == "rule.rules[1].box" and "0.275 m" in why
+    assert rule_problem(_with_walls(tmp_path, [], rule=rule), TIAGO_RADIUS_M) is None
+    reaching_in = {"type": "visit", "box": [0.0, 1.0, -3.0, -1.0]}
+    assert rule_problem(_with_walls(tmp_path, [], rule=reaching_in), TIAGO_RADIUS_M) is None
 
 
 def _gap_argv(tmp_path):

@@ -1,22 +1,25 @@
-"""Whether a scene's goal can be reached at all: a way from the start wide enough for the robot,
-and time enough to go it.
+"""Whether a scene can be finished and judged at all: a way from the start to the goal wide
+enough for the robot, time enough to go it, and rule boxes the robot can enter.
 
 A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to
 the end and scores every method 0 % goal success: a table of an impossible task that reads like
 one of bad methods. :func:`goal_problem` finds such a scene before any episode runs, from the
-walls alone (people move, so they can block a way only for a while; they are not counted), and
+walls alone (people move, so they can block a way only for a while; they are not counted),
 :func:`time_problem` one whose timeout is shorter than the straight line from start to goal takes
-at the robot's top speed (a bound no way round a wall or a person can beat).
+at the robot's top speed (a bound no way round a wall or a person can beat), and
+:func:`rule_problem` a rule's box (``visit``, ``keep_right``) the robot cannot enter: a ``visit``
+no method can keep, or a ``keep_right`` every method keeps by never being inside it.
 
 How: the robot's centre can be where the exact distance to every wall box and to the scene's
 bounds (the planners' edge of the world) is at least its radius. Those cells of a grid of
 :data:`RESOLUTION_M` form connected regions (8 neighbours, :func:`scipy.ndimage.label`); the goal
 is reachable when a cell within the goal tolerance of it lies in a region the robot's start
-reaches, for the middle and every corner of the start's and the goal's ranges. The grid errs
-towards "reachable": a cell counts as free when its clearance is up to one cell short of the
-radius, so a way the robot fits through is never refused (whatever the grid's offset or the
-way's angle), one narrower than the robot by up to two cells (10 cm) may pass, and one narrower
-by more is refused: the check refuses what is clearly impossible, not what is tight.
+reaches, for the middle and every corner of the start's and the goal's ranges; a rule's box can
+be entered when a cell inside it does. The grid errs towards "reachable": a cell counts as free
+when its clearance is up to one cell short of the radius, so a way the robot fits through is never
+refused (whatever the grid's offset or the way's angle), one narrower than the robot by up to two
+cells (10 cm) may pass, and one narrower by more is refused: the check refuses what is clearly
+impossible, not what is tight.
 """
 
 from __future__ import annotations
@@ -56,6 +59,21 @@ def _regions_near(labels, xs, ys, xy, within_m: float) -> set[int]:
     """The regions with a cell whose centre is within ``within_m`` of ``xy``."""
     near = (xs[None, :] - xy[0]) ** 2 + (ys[:, None] - xy[1]) ** 2 <= within_m**2
     return set(np.unique(labels[near]).tolist()) - {0}
+
+
+def _start_regions(spec: SceneSpec, labels, xs, ys, robot_radius_m: float) -> set[int]:
+    """The regions a robot starting anywhere in the scene's start range can be in."""
+    return set().union(
+        *(_regions_near(labels, xs, ys, xy, robot_radius_m) for xy in _corners_and_middle(spec.robot["start"]))
+    )
+
+
+def _boxes_of(rule: dict, where: str):
+    """``(where, box)`` of every box rule in ``rule`` (the rules of an ``all`` included)."""
+    if rule["type"] in ("visit", "keep_right"):
+        yield f"{where}.box", rule["box"]
+    for i, sub in enumerate(rule.get("rules", ())):
+        yield from _boxes_of(sub, f"{where}.rules[{i}]")
 
 
 def goal_problem(spec: SceneSpec, robot_radius_m: float, goal_tolerance_m: float) -> tuple[str, str] | None:
@@ -101,3 +119,21 @@ def time_problem(spec: SceneSpec, max_speed_mps: float, goal_tolerance_m: float)
         f"({max_speed_mps:g} m/s) for the {distance_m:.2f} m from robot.start ({sx:g}, {sy:g}) to within "
         f"{goal_tolerance_m:g} m of robot.goal ({gx:g}, {gy:g}) in a straight line",
     )
+
+
+def rule_problem(spec: SceneSpec, robot_radius_m: float) -> tuple[str, str] | None:
+    """``(field, why)`` for the first box of the scene's rule or held-out rule (both in this file's
+    frame) with no cell the robot's centre can reach from its start; None when every box has one."""
+    labels, xs, ys = free_regions(spec, robot_radius_m)
+    reached = _start_regions(spec, labels, xs, ys, robot_radius_m)
+    rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
+    for where, box in (pair for name, rule in rules for pair in _boxes_of(rule, name)):
+        x0, x1, y0, y1 = (float(v) for v in box)
+        inside = labels[np.ix_((ys >= y0) & (ys <= y1), (xs >= x0) & (xs <= x1))]
+        if not reached & set(np.unique(inside).tolist()):
+            return (
+                where,
+                f"{[x0, x1, y0, y1]} holds no place a robot of radius {robot_radius_m:g} m can reach from "
+                "robot.start: the rule would be kept or broken by every method alike",
+            )
+    return None

@@ -275,7 +275,7 @@ def _request(args, shown_as: pathlib.Path):
     from socialnav.evaluation.arena.run import HELD_OUT, TURNED
     from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
     from socialnav.jaxsim.scenario.errors import ScenarioError
-    from socialnav.jaxsim.scenes.reachable import goal_problem, time_problem
+    from socialnav.jaxsim.scenes.reachable import goal_problem, rule_problem, time_problem
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners.reactive.baselines import BASELINES
     from socialnav.planners.stack import METHODS
@@ -337,8 +337,10 @@ def _request(args, shown_as: pathlib.Path):
         specs = [load_scene(f) for f in files]
         tolerance_m = ArenaConfig().env.goal_tolerance_m
         for spec in specs:  # a goal no robot of this run can reach would score every method 0 %
-            problem = goal_problem(spec, params.robot.radius_m, tolerance_m) or time_problem(
-                spec, params.robot.max_speed_mps, tolerance_m
+            problem = (
+                goal_problem(spec, params.robot.radius_m, tolerance_m)
+                or time_problem(spec, params.robot.max_speed_mps, tolerance_m)
+                or rule_problem(spec, params.robot.radius_m)
             )
             if problem is not None:
                 raise ScenarioError(spec.file, *problem)
