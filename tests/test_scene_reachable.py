@@ -10,11 +10,16 @@ import pytest
 from socialnav.cli import main
 from socialnav.data import DATA_DIR
 from socialnav.jaxsim.params import TIAGO_RADIUS_M
-from socialnav.jaxsim.scenes.reachable import goal_problem, rule_problem, time_problem
+from socialnav.jaxsim.scenes.reachable import scene_problem
 from socialnav.jaxsim.scenes.spec import load_scene
 
 SCENES = sorted((DATA_DIR / "scenes").rglob("*.json"))
 TOLERANCE_M = 0.3
+SPEED_MPS = 0.5  # the arena's robot (jaxsim.scenes.robot.RobotParams)
+
+
+def _problem(spec, radius_m=TIAGO_RADIUS_M, speed_mps=SPEED_MPS):
+    return scene_problem(spec, radius_m, speed_mps, TOLERANCE_M)
 
 
 def _with_walls(tmp_path, walls, robot_start=None, timeout_s=None, rule=None):
@@ -35,25 +40,22 @@ def _with_walls(tmp_path, walls, robot_start=None, timeout_s=None, rule=None):
 
 @pytest.mark.parametrize("file", SCENES, ids=[f.stem for f in SCENES])
 def test_every_shipped_scene_can_be_finished(file):
-    spec = load_scene(file)
-    assert goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M) is None
-    assert time_problem(spec, 0.5, TOLERANCE_M) is None
-    assert rule_problem(spec, TIAGO_RADIUS_M) is None
+    assert _problem(load_scene(file)) is None
 
 
 def test_a_timeout_shorter_than_the_straight_line_at_top_speed_is_named(tmp_path):
     """The farthest draw: from (-4, +-0.2) to within 0.3 m of (4, 0), 8.0025 - 0.3 = 7.70 m,
     15.4 s at 0.5 m/s."""
-    field, why = time_problem(_with_walls(tmp_path, [], timeout_s=15), 0.5, TOLERANCE_M)
+    field, why = _problem(_with_walls(tmp_path, [], timeout_s=15))
     assert field == "timeout_s" and "15.4 s" in why and "7.70 m" in why
     assert re.search(r"robot\.start \(-4, -?0\.2\)", why)
-    assert time_problem(_with_walls(tmp_path, [], timeout_s=16), 0.5, TOLERANCE_M) is None
-    assert time_problem(_with_walls(tmp_path, [], timeout_s=15), 1.0, TOLERANCE_M) is None
+    assert _problem(_with_walls(tmp_path, [], timeout_s=16)) is None
+    assert _problem(_with_walls(tmp_path, [], timeout_s=15), speed_mps=1.0) is None
 
 
 def test_a_wall_across_the_room_closes_the_way(tmp_path):
     spec = _with_walls(tmp_path, [[2.0, 2.2, -3.0, 3.0]])
-    field, why = goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M)
+    field, why = _problem(spec)
     assert field == "robot.goal" and "(4, 0)" in why and "(-4, 0)" in why and "0.275" in why
 
 
@@ -63,38 +65,40 @@ def test_a_gap_is_passable_by_the_robots_width_not_by_the_grids_offset(tmp_path,
     just wider than the TIAGo (0.56 m) is never refused, wherever it lies on the grid."""
     low = 0.3 + offset_m
     narrow = _with_walls(tmp_path, [[2.0, 2.2, -3.0, low], [2.0, 2.2, low + 0.4, 3.0]])
-    assert goal_problem(narrow, TIAGO_RADIUS_M, TOLERANCE_M)[0] == "robot.goal"
-    assert goal_problem(narrow, 0.15, TOLERANCE_M) is None
+    assert _problem(narrow)[0] == "robot.goal"
+    assert _problem(narrow, radius_m=0.15) is None
     wide = _with_walls(tmp_path, [[2.0, 2.2, -3.0, low], [2.0, 2.2, low + 0.56, 3.0]])
-    assert goal_problem(wide, TIAGO_RADIUS_M, TOLERANCE_M) is None
+    assert _problem(wide) is None
 
 
 def test_a_way_round_the_wall_is_found(tmp_path):
     """A wall across most of the room, then a second one: the way winds round both."""
     spec = _with_walls(tmp_path, [[-1.0, -0.8, -3.0, 2.0], [1.0, 1.2, -2.0, 3.0]])
-    assert goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M) is None
+    assert _problem(spec) is None
 
 
 def test_a_start_with_no_room_for_the_body_is_named(tmp_path):
     """The start in a slot 0.3 m wide: the body fits nowhere within its radius of it."""
     spec = _with_walls(tmp_path, [[-4.85, -3.0, -3.0, -0.15], [-4.85, -3.0, 0.15, 3.0]], robot_start=[-4.0, 0.0])
-    field, why = goal_problem(spec, TIAGO_RADIUS_M, TOLERANCE_M)
+    field, why = _problem(spec)
     assert field == "robot.start" and "no room" in why
 
 
 def test_a_rule_box_the_robot_cannot_enter_is_named_with_its_place_in_the_rule(tmp_path):
-    """A ``visit`` box inside the room's bottom wall, and a ``keep_right`` box in a part of the
+    """A ``visit`` box inside the room's bottom wall, and a ``keep_right`` box in a pocket of the
     room walled off from the start: no method could keep the first, every method keeps the
     second by never entering it. A box reaching into the open room is fine."""
     in_wall = {"type": "visit", "box": [0.0, 1.0, -3.0, -2.9]}
-    assert rule_problem(_with_walls(tmp_path, [], rule=in_wall), TIAGO_RADIUS_M)[0] == "rule.box"
-    walled_off = {"type": "keep_right", "box": [3.0, 4.5, -1.0, 1.0], "direction_deg": 0}
+    assert _problem(_with_walls(tmp_path, [], rule=in_wall))[0] == "rule.box"
+    walled_off = {"type": "keep_right", "box": [-1.9, -1.1, 1.6, 2.7], "direction_deg": 0}
     rule = {"type": "all", "rules": [{"type": "min_distance", "distance_m": 0.5}, walled_off]}
-    field, why = rule_problem(_with_walls(tmp_path, [[2.0, 2.2, -3.0, 3.0]], rule=rule), TIAGO_RADIUS_M)
+    # a pocket 1 m x 1.35 m: three walls, the room's own above
+    pocket = [[-2.2, -2.0, 1.3, 2.85], [-1.0, -0.8, 1.3, 2.85], [-2.2, -0.8, 1.3, 1.5]]
+    field, why = _problem(_with_walls(tmp_path, pocket, rule=rule))
     assert field == "rule.rules[1].box" and "0.275 m" in why
-    assert rule_problem(_with_walls(tmp_path, [], rule=rule), TIAGO_RADIUS_M) is None
+    assert _problem(_with_walls(tmp_path, [], rule=rule)) is None
     reaching_in = {"type": "visit", "box": [0.0, 1.0, -3.0, -1.0]}
-    assert rule_problem(_with_walls(tmp_path, [], rule=reaching_in), TIAGO_RADIUS_M) is None
+    assert _problem(_with_walls(tmp_path, [], rule=reaching_in)) is None
 
 
 def _gap_argv(tmp_path):

@@ -3,12 +3,13 @@ enough for the robot, time enough to go it, and rule boxes the robot can enter.
 
 A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to
 the end and scores every method 0 % goal success: a table of an impossible task that reads like
-one of bad methods. :func:`goal_problem` finds such a scene before any episode runs, from the
-walls alone (people move, so they can block a way only for a while; they are not counted),
-:func:`time_problem` one whose timeout is shorter than the straight line from start to goal takes
-at the robot's top speed (a bound no way round a wall or a person can beat), and
-:func:`rule_problem` a rule's box (``visit``, ``keep_right``) the robot cannot enter: a ``visit``
-no method can keep, or a ``keep_right`` every method keeps by never being inside it.
+one of bad methods. :func:`scene_problem` finds such a scene before any episode runs, from the
+walls alone (people move, so they can block a way only for a while; they are not counted): a
+goal past the walls (:func:`goal_problem`), a timeout shorter than the straight line from start to
+goal takes at the robot's top speed (:func:`time_problem`: a bound no way round a wall or a person
+can beat), and a rule's box (``visit``, ``keep_right``) the robot cannot enter
+(:func:`rule_problem`): a ``visit`` no method can keep, or a ``keep_right`` every method keeps by
+never being inside it.
 
 How: the robot's centre can be where the exact distance to every wall box and to the scene's
 bounds (the planners' edge of the world) is at least its radius. Those cells of a grid of
@@ -25,6 +26,7 @@ impossible, not what is tight.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterable, Iterator
 
 import numpy as np
 import scipy.ndimage
@@ -34,65 +36,53 @@ from socialnav.jaxsim.scenes.spec import SceneSpec
 
 RESOLUTION_M = 0.05
 
+Range = tuple[tuple[float, float], tuple[float, float]]  # a scene's point: ((x0, x1), (y0, y1)) in metres
+Problem = tuple[str, str]  # (the scene file's field, why)
 
-def _corners_and_middle(point) -> list[tuple[float, float]]:
-    """A point's range ``((x0, x1), (y0, y1))`` as its middle and its four corners."""
+
+def _corners_and_middle(point: Range) -> list[tuple[float, float]]:
+    """A point's range as its middle and its four corners."""
     (x0, x1), (y0, y1) = point
     return [((x0 + x1) / 2, (y0 + y1) / 2), *itertools.product((x0, x1), (y0, y1))]
 
 
-def free_regions(spec: SceneSpec, robot_radius_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(labels, xs, ys)``: (H, W) int, 0 where the robot's centre cannot be, else the number
-    of the connected region the cell belongs to; the cells' centres (W,) and (H,) in metres."""
-    xmin, xmax, ymin, ymax = spec.bounds_m
+def free_regions(bounds_m, walls_m: np.ndarray, robot_radius_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(labels, xs, ys)``: (H, W) int over ``bounds_m``, 0 where the robot's centre cannot be
+    (closer than its radius, less one cell, to a wall box (K, 4) or the bounds), else the number of
+    the connected region the cell belongs to; the cells' centres (W,) and (H,) in metres."""
+    xmin, xmax, ymin, ymax = bounds_m
     xs = xmin + (np.arange(int(np.ceil((xmax - xmin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
     ys = ymin + (np.arange(int(np.ceil((ymax - ymin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
     gx, gy = np.meshgrid(xs, ys)
     clearance = np.minimum.reduce([gx - xmin, xmax - gx, gy - ymin, ymax - gy])
-    if len(spec.walls_m):
-        clearance = np.minimum(clearance, geometry.box_signed_distance(gx, gy, spec.walls_m)[0])
+    if len(walls_m):
+        clearance = np.minimum(clearance, geometry.box_signed_distance(gx, gy, walls_m)[0])
     labels, _ = scipy.ndimage.label(clearance >= robot_radius_m - RESOLUTION_M, structure=np.ones((3, 3)))
     return labels, xs, ys
 
 
-def _regions_near(labels, xs, ys, xy, within_m: float) -> set[int]:
+def _regions_near(regions, xy, within_m: float) -> set[int]:
     """The regions with a cell whose centre is within ``within_m`` of ``xy``."""
+    labels, xs, ys = regions
     near = (xs[None, :] - xy[0]) ** 2 + (ys[:, None] - xy[1]) ** 2 <= within_m**2
     return set(np.unique(labels[near]).tolist()) - {0}
 
 
-def _start_regions(spec: SceneSpec, labels, xs, ys, robot_radius_m: float) -> set[int]:
-    """The regions a robot starting anywhere in the scene's start range can be in."""
-    return set().union(
-        *(_regions_near(labels, xs, ys, xy, robot_radius_m) for xy in _corners_and_middle(spec.robot["start"]))
-    )
-
-
-def _boxes_of(rule: dict, where: str):
-    """``(where, box)`` of every box rule in ``rule`` (the rules of an ``all`` included)."""
-    if rule["type"] in ("visit", "keep_right"):
-        yield f"{where}.box", rule["box"]
-    for i, sub in enumerate(rule.get("rules", ())):
-        yield from _boxes_of(sub, f"{where}.rules[{i}]")
-
-
-def goal_problem(spec: SceneSpec, robot_radius_m: float, goal_tolerance_m: float) -> tuple[str, str] | None:
-    """``(field, why)`` when a robot of radius ``robot_radius_m`` cannot come within
-    ``goal_tolerance_m`` of the scene's goal from its start, past the walls (``field`` is
-    ``robot.start`` where the body has no room at the start at all, else ``robot.goal``);
-    None when it can."""
-    labels, xs, ys = free_regions(spec, robot_radius_m)
+def goal_problem(regions, start: Range, goal: Range, robot_radius_m: float, goal_tolerance_m: float) -> Problem | None:
+    """``robot.goal`` when the robot cannot come within ``goal_tolerance_m`` of ``goal`` from
+    ``start`` in :func:`free_regions`' ``regions`` (``robot.start`` where its body has no room at
+    the start at all); None when it can, for the middle and every corner of both ranges."""
     width = f"a robot of radius {robot_radius_m:g} m (a way {2 * robot_radius_m:g} m wide)"
     starts = []
-    for x, y in _corners_and_middle(spec.robot["start"]):
-        regions = _regions_near(labels, xs, ys, (x, y), robot_radius_m)
-        if not regions:
+    for x, y in _corners_and_middle(start):
+        near = _regions_near(regions, (x, y), robot_radius_m)
+        if not near:
             return "robot.start", f"({x:g}, {y:g}) leaves no room for {width} between the walls"
-        starts.append(((x, y), regions))
-    for gx, gy in _corners_and_middle(spec.robot["goal"]):
-        goal = _regions_near(labels, xs, ys, (gx, gy), goal_tolerance_m)
-        for (sx, sy), regions in starts:
-            if not regions & goal:
+        starts.append(((x, y), near))
+    for gx, gy in _corners_and_middle(goal):
+        goal_regions = _regions_near(regions, (gx, gy), goal_tolerance_m)
+        for (sx, sy), near in starts:
+            if not near & goal_regions:
                 return (
                     "robot.goal",
                     f"({gx:g}, {gy:g}) cannot be reached from robot.start ({sx:g}, {sy:g}) by {width}: "
@@ -101,32 +91,41 @@ def goal_problem(spec: SceneSpec, robot_radius_m: float, goal_tolerance_m: float
     return None
 
 
-def time_problem(spec: SceneSpec, max_speed_mps: float, goal_tolerance_m: float) -> tuple[str, str] | None:
-    """``("timeout_s", why)`` when, for some start and goal the scene's ranges draw (their corners
-    and middles), the straight line to within ``goal_tolerance_m`` of the goal takes longer at
-    ``max_speed_mps`` than ``timeout_s``; None when every draw has time enough."""
+def time_problem(
+    start: Range, goal: Range, timeout_s: float, max_speed_mps: float, goal_tolerance_m: float
+) -> Problem | None:
+    """``timeout_s`` when, for some start and goal the ranges draw (their corners and middles),
+    the straight line to within ``goal_tolerance_m`` of the goal takes longer at ``max_speed_mps``
+    than ``timeout_s``; None when every draw has time enough."""
     (sx, sy), (gx, gy) = max(
-        itertools.product(_corners_and_middle(spec.robot["start"]), _corners_and_middle(spec.robot["goal"])),
+        itertools.product(_corners_and_middle(start), _corners_and_middle(goal)),
         key=lambda pair: np.hypot(pair[1][0] - pair[0][0], pair[1][1] - pair[0][1]),
     )
     distance_m = max(float(np.hypot(gx - sx, gy - sy)) - goal_tolerance_m, 0.0)
     needed_s = distance_m / max_speed_mps
-    if needed_s <= spec.timeout_s:
+    if needed_s <= timeout_s:
         return None
     return (
         "timeout_s",
-        f"{spec.timeout_s:g} s is shorter than the {needed_s:.1f} s the robot needs at its top speed "
+        f"{timeout_s:g} s is shorter than the {needed_s:.1f} s the robot needs at its top speed "
         f"({max_speed_mps:g} m/s) for the {distance_m:.2f} m from robot.start ({sx:g}, {sy:g}) to within "
         f"{goal_tolerance_m:g} m of robot.goal ({gx:g}, {gy:g}) in a straight line",
     )
 
 
-def rule_problem(spec: SceneSpec, robot_radius_m: float) -> tuple[str, str] | None:
-    """``(field, why)`` for the first box of the scene's rule or held-out rule (both in this file's
-    frame) with no cell the robot's centre can reach from its start; None when every box has one."""
-    labels, xs, ys = free_regions(spec, robot_radius_m)
-    reached = _start_regions(spec, labels, xs, ys, robot_radius_m)
-    rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
+def _boxes_of(rule: dict, where: str) -> Iterator[tuple[str, np.ndarray]]:
+    """``(where, box)`` of every box rule in ``rule`` (the rules of an ``all`` included)."""
+    if rule["type"] in ("visit", "keep_right"):
+        yield f"{where}.box", rule["box"]
+    for i, sub in enumerate(rule.get("rules", ())):
+        yield from _boxes_of(sub, f"{where}.rules[{i}]")
+
+
+def rule_problem(regions, start: Range, rules: Iterable[tuple[str, dict]], robot_radius_m: float) -> Problem | None:
+    """The first box of ``rules`` (``(field, rule)`` pairs) with no cell of ``regions`` the robot
+    can reach from ``start``; None when every box has one."""
+    reached = set().union(*(_regions_near(regions, xy, robot_radius_m) for xy in _corners_and_middle(start)))
+    labels, xs, ys = regions
     for where, box in (pair for name, rule in rules for pair in _boxes_of(rule, name)):
         x0, x1, y0, y1 = (float(v) for v in box)
         inside = labels[np.ix_((ys >= y0) & (ys <= y1), (xs >= x0) & (xs <= x1))]
@@ -137,3 +136,19 @@ def rule_problem(spec: SceneSpec, robot_radius_m: float) -> tuple[str, str] | No
                 "robot.start: the rule would be kept or broken by every method alike",
             )
     return None
+
+
+def scene_problem(
+    spec: SceneSpec, robot_radius_m: float, max_speed_mps: float, goal_tolerance_m: float
+) -> Problem | None:
+    """``(field, why)`` of the first reason no method can finish the scene, or be told apart by
+    its rule, with this robot (the goal, the timeout, then the rule and held-out rule's boxes,
+    both written in the file's frame); None when there is none."""
+    regions = free_regions(spec.bounds_m, spec.walls_m, robot_radius_m)
+    start, goal = spec.robot["start"], spec.robot["goal"]
+    rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
+    return (
+        goal_problem(regions, start, goal, robot_radius_m, goal_tolerance_m)
+        or time_problem(start, goal, spec.timeout_s, max_speed_mps, goal_tolerance_m)
+        or rule_problem(regions, start, rules, robot_radius_m)
+    )

@@ -275,7 +275,7 @@ def _request(args, shown_as: pathlib.Path):
     from socialnav.evaluation.arena.run import HELD_OUT, TURNED
     from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
     from socialnav.jaxsim.scenario.errors import ScenarioError
-    from socialnav.jaxsim.scenes.reachable import goal_problem, rule_problem, time_problem
+    from socialnav.jaxsim.scenes.reachable import scene_problem
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners.reactive.baselines import BASELINES
     from socialnav.planners.stack import METHODS
@@ -335,13 +335,9 @@ def _request(args, shown_as: pathlib.Path):
     try:
         runfolder.check_inputs(shown_as, [*files, gscl_run, args.params, args.policy_run])
         specs = [load_scene(f) for f in files]
-        tolerance_m = ArenaConfig().env.goal_tolerance_m
+        robot, tolerance_m = params.robot, ArenaConfig().env.goal_tolerance_m
         for spec in specs:  # a goal no robot of this run can reach would score every method 0 %
-            problem = (
-                goal_problem(spec, params.robot.radius_m, tolerance_m)
-                or time_problem(spec, params.robot.max_speed_mps, tolerance_m)
-                or rule_problem(spec, params.robot.radius_m)
-            )
+            problem = scene_problem(spec, robot.radius_m, robot.max_speed_mps, tolerance_m)
             if problem is not None:
                 raise ScenarioError(spec.file, *problem)
     except (ScenarioError, runfolder.NotOurs) as e:
