@@ -336,7 +336,7 @@ def _request(args, shown_as: pathlib.Path):
         runfolder.check_inputs(shown_as, [*files, gscl_run, args.params, args.policy_run])
         specs = [load_scene(f) for f in files]
         robot, tolerance_m = params.robot, ArenaConfig().env.goal_tolerance_m
-        for spec in specs:  # a goal no robot of this run can reach would score every method 0 %
+        for spec in specs:  # a scene no method can finish (or break its rule) with this robot: refused
             problem = scene_problem(spec, robot.radius_m, robot.max_speed_mps, tolerance_m)
             if problem is not None:
                 raise ScenarioError(spec.file, *problem)
