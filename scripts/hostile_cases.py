@@ -616,6 +616,20 @@ def _env_nan_stays_finite(tmp, proc):
     return proc.returncode == 0 and "FINITE MARKED" in proc.stdout and "NOT" not in proc.stdout
 
 
+ENV_STEP_0 = (
+    "import jax\n"
+    "import numpy as np\n"
+    "from socialnav.data import SCENES_DIR\n"
+    "from socialnav.jaxsim.scenes import env as env_lib\n"
+    "from socialnav.jaxsim.scenes.gym_env import SocialNavEnv\n"
+    "from socialnav.jaxsim.scenes.spec import load_scene\n"
+    "env = SocialNavEnv(load_scene(SCENES_DIR / 'snape_walking.json'), pool=4, config=env_lib.EnvConfig(dt_s=0.0))\n"
+    "obs, _ = env.reset(seed=0)\n"
+    "after, *_ = env.step(np.array([0.5, 0.0], np.float32))\n"
+    "same = all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(obs), jax.tree.leaves(after)))\n"
+    "print('nothing moved' if same else 'it moved')\n"
+)
+
 GYM_NAN = (
     "import numpy as np\n"
     "from socialnav.data import SCENES_DIR\n"
@@ -1456,6 +1470,7 @@ CASES: list[Case] = [
         arena_scene(lambda o: o.update(rule={"type": "visit", "box": [0.0, 1.0, -3.0, -2.9]})),
         ("scene.json", "rule.box", "reach"),
     ),
+    Case("r4 silent: an env with a step of 0 s", python_case(ENV_STEP_0), ("dt_s", "> 0"), api=True),
     Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),

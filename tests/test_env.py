@@ -618,3 +618,33 @@ def test_wrappers_keep_the_pool_index_the_shaped_reward_the_rule_and_the_episode
     for got, start, end in zip(*(_leaves(t.extras) for t in (restarted, fresh, final)), strict=True):
         np.testing.assert_array_equal(got[[0, 3]], start[[0, 3]])
         np.testing.assert_array_equal(got[[1, 2]], end[[1, 2]])
+
+
+@pytest.mark.parametrize(
+    "setting",
+    [
+        {"dt_s": 0.0},  # nothing would move
+        {"dt_s": -0.1},
+        {"dt_s": float("nan")},  # every position NaN
+        {"goal_tolerance_m": -1.0},  # never reached
+        {"person_radius_m": 0.0},
+        {"window_resolution_m": 0.0},
+        {"sensor_range_m": -1.0},
+        {"sensor_range_m": float("nan")},
+        {"max_steps": 0},
+        {"max_steps": 2.5},
+        {"window_cells": -2},
+        {"human_model": "zombies"},
+    ],
+)
+def test_an_env_setting_no_episode_can_run_with_is_refused_naming_the_field(setting):
+    """Each ran before (a step of 0 moved nothing, a NaN one made every position NaN)."""
+    ((name, _),) = setting.items()
+    with pytest.raises(ValueError, match=rf"^EnvConfig\.{name} must be"):
+        env_lib.EnvConfig(**setting)
+
+
+def test_the_env_settings_at_their_edges_are_accepted():
+    """No sensor limit, no occupancy window, a numpy step count (the arena computes some)."""
+    config = env_lib.EnvConfig(sensor_range_m=float("inf"), window_cells=0, max_steps=np.int64(5))
+    assert config.max_steps == 5 and env_lib.config_problem(config) is None

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from typing import Any
 
 import jax
@@ -83,10 +84,35 @@ class EnvConfig:
     human_model: str = "social_force"
 
     def __post_init__(self):
-        if self.human_model not in people_lib.HUMAN_MODELS:
-            raise ValueError(
-                f"human_model must be one of {', '.join(people_lib.HUMAN_MODELS)}, got {self.human_model!r}"
-            )
+        """Refuse a setting no episode can run with, naming the field (:func:`config_problem`)."""
+        problem = config_problem(self)
+        if problem is not None:
+            raise ValueError(problem)
+
+
+def config_problem(config: EnvConfig) -> str | None:
+    """Why no episode can run with ``config`` (the field, what it must be and what it is), or None:
+    an unknown human model; a step, goal tolerance, body radius or window cell that is not a finite
+    number > 0 (a step of 0 moves nothing, a NaN one makes every position NaN, a negative
+    tolerance is never reached); a sensor range below 0 or NaN (``inf``: everyone is seen); a time
+    limit below one step; a negative window."""
+    if config.human_model not in people_lib.HUMAN_MODELS:
+        return f"EnvConfig.human_model must be one of {', '.join(people_lib.HUMAN_MODELS)}, got {config.human_model!r}"
+
+    def number(value) -> bool:
+        return isinstance(value, numbers.Real) and not isinstance(value, bool) and not math.isnan(value)
+
+    for name in ("dt_s", "goal_tolerance_m", "person_radius_m", "window_resolution_m"):
+        value = getattr(config, name)
+        if not (number(value) and math.isfinite(value) and value > 0):
+            return f"EnvConfig.{name} must be a finite number > 0, got {value!r}"
+    if not (number(config.sensor_range_m) and config.sensor_range_m >= 0):
+        return f"EnvConfig.sensor_range_m must be a number >= 0 (inf: no limit), got {config.sensor_range_m!r}"
+    for name, least in (("max_steps", 1), ("window_cells", 0)):
+        value = getattr(config, name)
+        if not (isinstance(value, numbers.Integral) and not isinstance(value, bool) and value >= least):
+            return f"EnvConfig.{name} must be a whole number >= {least}, got {value!r}"
+    return None
 
 
 @struct.dataclass
