@@ -29,6 +29,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import shutil
 import subprocess
 import sys
@@ -628,6 +629,20 @@ ENV_STEP_0 = (
     "after, *_ = env.step(np.array([0.5, 0.0], np.float32))\n"
     "same = all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(obs), jax.tree.leaves(after)))\n"
     "print('nothing moved' if same else 'it moved')\n"
+)
+
+GYM_WALLED_OFF = (
+    "import json, pathlib\n"
+    "from socialnav.data import SCENES_DIR\n"
+    "from socialnav.jaxsim.scenes.gym_env import SocialNavEnv\n"
+    "from socialnav.jaxsim.scenes.spec import load_scene\n"
+    "obj = json.loads((SCENES_DIR / 'casn_static_person.json').read_text())\n"
+    "obj['walls'].append([2.0, 2.2, -3.0, 3.0])\n"
+    "path = pathlib.Path(SCENE_PATH)\n"
+    "path.write_text(json.dumps(obj))\n"
+    "env = SocialNavEnv(load_scene(path), pool=4)\n"
+    "env.reset(seed=0)\n"
+    "print('made and reset: every episode would run to its timeout')\n"
 )
 
 GYM_NAN = (
@@ -1472,6 +1487,12 @@ CASES: list[Case] = [
     ),
     Case("r4 silent: an env with a step of 0 s", python_case(ENV_STEP_0), ("dt_s", "> 0"), api=True),
     Case(
+        "r5 impossible: a walled-off scene in the Gymnasium adapter",
+        lambda tmp: [PY, "-c", GYM_WALLED_OFF.replace("SCENE_PATH", repr(str(tmp / "scene.json")))],
+        ("scene.json", "robot.goal", "cannot be reached"),
+        api=True,
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),
@@ -1487,6 +1508,9 @@ CASES: list[Case] = [
         ("graph.json", "robots_exclude", "robot_exclude"),
     ),
 ]
+
+
+API_ERROR = re.compile(r"^(ValueError|socialnav\.jaxsim\.scenario\.errors\.ScenarioError): ")
 
 
 def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
@@ -1518,8 +1542,9 @@ def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
             return "correct", last
         return case.fail_label, last
     # The API's documented exception, naming what is wrong (JAX appends a note on its filtered
-    # frames after an exception raised while tracing: the ValueError line is the one read).
-    raised = next((line for line in reversed(text.splitlines()) if line.startswith("ValueError:")), "")
+    # frames after an exception raised while tracing: the ValueError line is the one read; a
+    # file's fault is a ScenarioError, a ValueError naming the file and field).
+    raised = next((line for line in reversed(text.splitlines()) if API_ERROR.match(line)), "")
     if case.api and raised and all(w.lower() in raised.lower() for w in case.expect_words):
         return "clean error", raised
     if "Traceback" in text:

@@ -124,3 +124,32 @@ def test_the_arena_runs_the_same_scene_for_a_robot_that_fits_and_it_arrives(tmp_
     assert main([*argv, "--params", str(tmp_path / "small.toml"), "--out", str(tmp_path / "a")]) == 0
     summary = pd.read_csv(tmp_path / "a" / "summary.csv")
     assert summary["goal_success_pct"].tolist() == [100.0]
+
+
+def test_the_python_entries_refuse_it_too_naming_the_file_and_field(tmp_path):
+    """The Gymnasium adapter, the arena's table and a scene's setup refuse what the command
+    refuses, before anything is written; a horizon the caller sets (``EnvConfig.max_steps``) is
+    truncation, not the scene's timeout, so only the walls are checked then."""
+    from socialnav.evaluation.arena import episodes, table
+    from socialnav.jaxsim.scenario.errors import ScenarioError
+    from socialnav.jaxsim.scenes import env as env_lib
+    from socialnav.jaxsim.scenes.gym_env import SocialNavEnv
+
+    (tmp_path / "gap").mkdir()
+    walled_off, _ = _gap_argv(tmp_path / "gap")
+    for make in (
+        lambda: SocialNavEnv(walled_off, pool=2),
+        lambda: SocialNavEnv(walled_off, pool=2, config=env_lib.EnvConfig(max_steps=5)),
+        lambda: episodes.setup_scene(walled_off),
+        lambda: table.run_table(tmp_path / "out", table.TableRequest(specs=(walled_off,), methods=("navfn",))),
+    ):
+        with pytest.raises(ScenarioError, match=r"field 'robot\.goal'") as refused:
+            make()
+        assert refused.value.file == walled_off.file
+    assert not (tmp_path / "out").exists()
+
+    hurried = _with_walls(tmp_path, [], timeout_s=15)
+    with pytest.raises(ScenarioError, match=r"field 'timeout_s': 15 s is shorter"):
+        SocialNavEnv(hurried, pool=2)
+    short_horizon = SocialNavEnv(hurried, pool=2, config=env_lib.EnvConfig(max_steps=5))
+    assert short_horizon.action_space.shape == (2,)

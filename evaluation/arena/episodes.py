@@ -41,6 +41,7 @@ from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.actor import Actor, rollout
+from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import Variant, padded_slots
 from socialnav.planners import actors, stack
@@ -157,6 +158,10 @@ def setup_scene(
     crowd: SimParams | None = None,
     reward: env_lib.RewardParams = env_lib.RewardParams(),
 ) -> SceneSetup:
+    """Everything a scene's episodes share, with ``robot``. Raises
+    :class:`~jaxsim.scenario.errors.ScenarioError` for a scene no method can finish with that
+    robot (:func:`jaxsim.scenes.reachable.scene_problem`)."""
+    refuse_unfinishable(spec, float(robot.radius_m), float(robot.max_speed_mps), config.env.goal_tolerance_m)
     period_s = config.env.dt_s * config.replan_every_steps
     n_periods = int(math.ceil(spec.timeout_s / period_s))
     env_config = dataclasses.replace(config.env, max_steps=n_periods * config.replan_every_steps)

@@ -505,6 +505,20 @@ class _Shard:
     work: float
 
 
+def refuse_unfinishable_scenes(request: TableRequest) -> None:
+    """Raise :class:`~jaxsim.scenario.errors.ScenarioError` for the first scene of ``request`` that
+    no method can finish with the run's robot (``params_text``'s, or the seeds'), naming the scene
+    file and field (:func:`jaxsim.scenes.reachable.scene_problem`)."""
+    from socialnav.evaluation.arena import params as arena_params
+    from socialnav.evaluation.arena.episodes import ArenaConfig
+    from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
+
+    params = arena_params.parse(request.params_text, "--params") if request.params_text else arena_params.ArenaParams()
+    robot, tolerance_m = params.robot, ArenaConfig.of(request.human_model).env.goal_tolerance_m
+    for spec in request.specs:
+        refuse_unfinishable(spec, float(robot.radius_m), float(robot.max_speed_mps), tolerance_m)
+
+
 def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     """The whole table into the run folder ``out`` (made if missing; a run with the same settings
     is resumed): its episodes as one frame and the tables :func:`write_tables` wrote.
@@ -513,9 +527,12 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     ``args``, ``work``); default: one after the other in this process (the command line passes
     :func:`socialnav.backend.run_shards` for a progress bar and Ray). Raises ``ValueError`` where
     ``out`` holds a run with other settings, :class:`socialnav.common.runfolder.NotOurs` where it
-    holds another job's files. Unlike the command it takes no lock on ``out``: one run a folder.
+    holds another job's files, :class:`~jaxsim.scenario.errors.ScenarioError` where no method can
+    finish a scene with the run's robot (before anything is written). Unlike the command it takes
+    no lock on ``out``: one run a folder.
     """
     out = pathlib.Path(out)
+    refuse_unfinishable_scenes(request)
     runfolder.claim(out, JOB, RESULTS)  # never writes over files no arena run wrote
     chosen = settings(request)
     conflict = settings_conflict(out, chosen)

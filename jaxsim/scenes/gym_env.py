@@ -13,7 +13,11 @@ stops the robot for that step, as the JAX environment does, and ``info["invalid_
 so (the observation stays finite and inside its space). ``info["person_contact"]`` says the robot
 touched a person on the step and ``info["rule_kept"]`` that the scene's social rule has been kept
 so far (:class:`jaxsim.scenes.wrappers.RuleMonitor`): on a ``terminated`` step (the goal), the
-arena's social success. Each
+arena's social success. A scene no method can finish with the env's robot (its goal walled off,
+a rule box the robot cannot enter, a ``timeout_s`` shorter than the straight line at top speed
+where no ``config`` sets the episodes' length: :func:`jaxsim.scenes.reachable.scene_problem`) is
+refused when the adapter is made, with a :class:`~jaxsim.scenario.errors.ScenarioError` naming
+the file and field, as ``socialnav arena`` refuses it. Each
 reset draws a variant of the scene from a pool drawn once (``pool`` variants under ``seed``,
 the scene's training draws, never the held-out ones); ``reset(seed=s)`` reseeds the choice.
 """
@@ -29,6 +33,7 @@ from gymnasium.vector.utils import batch_space
 
 from socialnav.jaxsim.scenes import env as env_lib
 from socialnav.jaxsim.scenes import wrappers
+from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
 from socialnav.jaxsim.scenes.spec import SceneSpec
 from socialnav.jaxsim.scenes.variant import padded_slots, sample_variants
 
@@ -84,9 +89,13 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
     ):
         if num_envs < 1 or pool < 1:
             raise ValueError(f"num_envs and pool must be >= 1, got {num_envs} and {pool}")
+        own_time_limit = config is not None
         config = config or env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, env_lib.EnvConfig.dt_s))
         kwargs = {} if robot is None else {"robot": robot}
         self.env = env_lib.make_env(spec, config, reward=reward, **kwargs)
+        robot_radius_m, max_speed_mps = float(self.env.robot.radius_m), float(self.env.robot.max_speed_mps)
+        # a config's own max_steps is a horizon the caller chose (truncation), not the scene's timeout
+        refuse_unfinishable(spec, robot_radius_m, max_speed_mps, config.goal_tolerance_m, not own_time_limit)
         n_slots = padded_slots(spec.n_people_slots)
         variants = sample_variants(spec, seed, pool, 0, False, n_slots)
         self._pool = wrappers.VariantPool(jax.tree_util.tree_map(jnp.asarray, variants))

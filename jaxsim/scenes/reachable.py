@@ -32,6 +32,7 @@ import numpy as np
 import scipy.ndimage
 
 from socialnav.jaxsim import geometry
+from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenes.spec import SceneSpec
 
 RESOLUTION_M = 0.05
@@ -138,17 +139,36 @@ def rule_problem(regions, start: Range, rules: Iterable[tuple[str, dict]], robot
     return None
 
 
+def refuse_unfinishable(
+    spec: SceneSpec,
+    robot_radius_m: float,
+    max_speed_mps: float,
+    goal_tolerance_m: float,
+    check_timeout: bool = True,
+) -> None:
+    """:func:`scene_problem` as an error: a :class:`~jaxsim.scenario.errors.ScenarioError`
+    naming the scene file and its field, or nothing."""
+    problem = scene_problem(spec, robot_radius_m, max_speed_mps, goal_tolerance_m, check_timeout)
+    if problem is not None:
+        raise ScenarioError(spec.file, *problem)
+
+
 def scene_problem(
-    spec: SceneSpec, robot_radius_m: float, max_speed_mps: float, goal_tolerance_m: float
+    spec: SceneSpec,
+    robot_radius_m: float,
+    max_speed_mps: float,
+    goal_tolerance_m: float,
+    check_timeout: bool = True,
 ) -> Problem | None:
     """``(field, why)`` of the first reason no method can finish the scene, or be told apart by
     its rule, with this robot (the goal, the timeout, then the rule and held-out rule's boxes,
-    both written in the file's frame); None when there is none."""
+    both written in the file's frame); None when there is none. ``check_timeout=False`` leaves
+    the scene's ``timeout_s`` out, where something else sets an episode's length."""
     regions = free_regions(spec.bounds_m, spec.walls_m, robot_radius_m)
     start, goal = spec.robot["start"], spec.robot["goal"]
     rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
     return (
         goal_problem(regions, start, goal, robot_radius_m, goal_tolerance_m)
-        or time_problem(start, goal, spec.timeout_s, max_speed_mps, goal_tolerance_m)
+        or (time_problem(start, goal, spec.timeout_s, max_speed_mps, goal_tolerance_m) if check_timeout else None)
         or rule_problem(regions, start, rules, robot_radius_m)
     )

@@ -275,7 +275,7 @@ def _request(args, shown_as: pathlib.Path):
     from socialnav.evaluation.arena.run import HELD_OUT, TURNED
     from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
     from socialnav.jaxsim.scenario.errors import ScenarioError
-    from socialnav.jaxsim.scenes.reachable import scene_problem
+    from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners.reactive.baselines import BASELINES
     from socialnav.planners.stack import METHODS
@@ -337,9 +337,7 @@ def _request(args, shown_as: pathlib.Path):
         specs = [load_scene(f) for f in files]
         robot, tolerance_m = params.robot, ArenaConfig().env.goal_tolerance_m
         for spec in specs:  # a scene no method can finish (or break its rule) with this robot: refused
-            problem = scene_problem(spec, robot.radius_m, robot.max_speed_mps, tolerance_m)
-            if problem is not None:
-                raise ScenarioError(spec.file, *problem)
+            refuse_unfinishable(spec, float(robot.radius_m), float(robot.max_speed_mps), tolerance_m)
     except (ScenarioError, runfolder.NotOurs) as e:
         return _fail(str(e))
     if actor_specs:  # each factory called once here: a bad one fails before any work
