@@ -1,13 +1,17 @@
-"""The documentation's Python examples as a reader copies them: every block of the README and of
-``docs/*.md`` compiles and imports only names the package has (fast); the blocks no other test
-runs are run as written, each in a fresh interpreter outside the source tree (slow)."""
+"""The documentation's examples as a reader copies them: every Python block of the README and of
+``docs/*.md`` compiles and imports only names the package has, and every ``socialnav`` command
+line in their shell blocks parses (fast); the Python blocks no other test runs are run as
+written, each in a fresh interpreter outside the source tree (slow)."""
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import importlib
+import io
 import pathlib
 import re
+import shlex
 import subprocess
 import sys
 
@@ -104,3 +108,37 @@ def test_the_example_runs_as_written(block, tmp_path, request):
 def test_the_import_check_names_what_is_missing():
     code = "from socialnav.jaxsim import rollout, no_such_name\nimport socialnav.no_such_module\nimport numpy"
     assert _missing_names(code) == ["socialnav.jaxsim.no_such_name", "socialnav.no_such_module"]
+
+
+def socialnav_commands(page: pathlib.Path) -> list[str]:
+    """The ``socialnav ...`` command lines of the page's shell blocks (a line's ``&&``/``;``/``|``
+    parts apart, continuation lines joined), without the program's name."""
+    commands = []
+    for block in re.findall(r"```(?:bash|console|sh)\n(.*?)```", page.read_text(), re.S):
+        for line in block.replace("\\\n", " ").splitlines():
+            for part in re.split(r"&&|;|\|", line):
+                found = re.match(r"^(?:\S*/)?socialnav\s+(.*)$", part.strip())
+                if found:
+                    commands.append(found.group(1))
+    return commands
+
+
+COMMANDS = sorted({(str(page.relative_to(ROOT)), c) for page in PAGES for c in socialnav_commands(page)})
+
+
+def test_the_pages_show_the_commands():
+    assert len(COMMANDS) >= 50 and any(c.startswith("arena ") for _, c in COMMANDS)
+
+
+@pytest.mark.parametrize(("page", "command"), COMMANDS)
+def test_every_command_line_of_the_pages_parses(page, command):
+    """Options and subcommands as the command line has them (parsed, not run)."""
+    from socialnav.cli import _command, build_parser
+
+    argv = shlex.split(command, comments=True)
+    said = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(said), contextlib.redirect_stdout(io.StringIO()):
+            build_parser(_command(argv)).parse_args(argv)
+    except SystemExit as e:
+        assert e.code in (0, None), f"{page}: socialnav {command}: {said.getvalue().strip()}"
