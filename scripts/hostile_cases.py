@@ -278,6 +278,25 @@ def arena_scene(
     return make
 
 
+def _arena_fast_robot(tmp: pathlib.Path) -> list[str]:
+    """``socialnav arena`` with a 3 m/s robot (``--params``): 0.3 m a 0.1 s step, more than its
+    0.275 m radius, so the base could end a step past a thin wall."""
+    (tmp / "fast.toml").write_text("[robot]\nmax_speed_mps = 3.0\nmax_accel_mps2 = 30.0\n")
+    options = ["--scenes", "casn_static_person", "--methods", "navfn", "--variants", "2", "--no-progress"]
+    return [*SOCIALNAV, "arena", "--out", str(tmp / "a"), "--params", str(tmp / "fast.toml"), *options]
+
+
+ENV_LONG_STEP = (
+    "from socialnav.data import SCENES_DIR\n"
+    "from socialnav.jaxsim.scenes import env as env_lib\n"
+    "from socialnav.jaxsim.scenes.gym_env import SocialNavEnv\n"
+    "from socialnav.jaxsim.scenes.spec import load_scene\n"
+    "env = SocialNavEnv(load_scene(SCENES_DIR / 'gscl_l_hallway.json'), pool=4, config=env_lib.EnvConfig(dt_s=1.0))\n"
+    "env.reset(seed=0)\n"
+    "print('made and reset: 0.5 m a step for a 0.275 m body')\n"
+)
+
+
 def _scene_key_twice(tmp: pathlib.Path) -> list[str]:
     """``socialnav arena`` on seed 001's static person with a second ``timeout_s`` above the first
     (``json.loads`` keeps the last one)."""
@@ -1492,6 +1511,12 @@ CASES: list[Case] = [
         ("scene.json", "robot.goal", "cannot be reached"),
         api=True,
     ),
+    Case(
+        "r5 physics: a robot whose step is longer than its body",
+        _arena_fast_robot,
+        ("fast.toml", "max_speed_mps", "through a wall"),
+    ),
+    Case("r5 physics: an env step of 1 s", python_case(ENV_LONG_STEP), ("dt_s", "through a wall"), api=True),
     Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),

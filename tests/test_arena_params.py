@@ -61,6 +61,11 @@ personal_radius_m = 1.5
         ("[methods.teleport.snl]\namplitude = 1", r"\[methods\.teleport\]: unknown method"),
         ("[methods.casn.orca]\nx = 1", r"\[methods\.casn\.orca\]: unknown section"),
         ("[robot]\nmax_speed_mps = 0", r"\[robot\]: radius_m and max_speed_mps must be > 0"),
+        (
+            "[robot]\nmax_speed_mps = 3",
+            r"\[robot\]: RobotParams\.max_speed_mps 3 m/s .* 0\.3 m, not less than .* through a wall",
+        ),
+        ("[robot]\nradius_m = 0.04", r"\[robot\]: .* radius_m 0\.04 m: .* below 0\.4 m/s"),
         ("[robot\nmax_speed_mps = 1", r"not TOML"),
     ],
 )

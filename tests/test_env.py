@@ -15,6 +15,7 @@ from socialnav import cli
 from socialnav.data import DATA_DIR
 from socialnav.evaluation.arena import episodes as arena
 from socialnav.jaxsim.scenes import env as env_lib
+from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import specs
 from socialnav.jaxsim.scenes.actor import Actor, rollout
 from socialnav.jaxsim.scenes.spec import load_scene
@@ -642,6 +643,20 @@ def test_an_env_setting_no_episode_can_run_with_is_refused_naming_the_field(sett
     ((name, _),) = setting.items()
     with pytest.raises(ValueError, match=rf"^EnvConfig\.{name} must be"):
         env_lib.EnvConfig(**setting)
+
+
+@pytest.mark.parametrize(
+    ("config", "robot", "moved"),
+    [
+        (env_lib.EnvConfig(), robot_lib.RobotParams(max_speed_mps=3.0), "0.3 m"),
+        (env_lib.EnvConfig(dt_s=0.6), robot_lib.RobotParams(), "0.3 m"),  # the default 0.5 m/s robot
+    ],
+)
+def test_an_env_whose_step_could_carry_the_robot_through_a_wall_is_refused(setup, config, robot, moved):
+    """A step at top speed not shorter than the robot's radius (``jaxsim.scenes.robot``)."""
+    with pytest.raises(ValueError, match=rf"max_speed_mps .*dt_s .* moves {moved}, not less than the robot's radius"):
+        env_lib.make_env(setup.spec, config, robot)
+    assert env_lib.make_env(setup.spec, env_lib.EnvConfig(dt_s=0.5), robot_lib.RobotParams()).config.dt_s == 0.5
 
 
 def test_the_env_settings_at_their_edges_are_accepted():

@@ -71,3 +71,37 @@ def test_the_base_never_puts_its_body_into_a_wall():
         state = robot_lib.step_robot(params, world, state, 0.5, 0.0, 0.1)
         assert float(world_lib.wall_distance(state.xy, world.walls_m)[0]) >= params.radius_m - 1e-4
     assert int(state.wall_contacts) > 0
+
+
+def _crosses(step_radii: float, thickness_m: float, radius_m: float = 0.275) -> int:
+    """How many of 10 starts (one radius or more clear of a long wall at x = 1, headings 0-0.6
+    rad towards it) end past the wall's middle, the base driven at full speed for 3 m, a step of
+    ``step_radii`` radii."""
+    import jax
+
+    world = world_lib.SceneWorld(walls_m=jnp.array([[1.0, 1.0 + thickness_m, -100.0, 100.0]]), wall_field=None)
+    step_m = step_radii * radius_m
+    params = robot_lib.RobotParams(max_speed_mps=step_m / 0.1, max_accel_mps2=1e4, radius_m=radius_m)
+    starts = [(x, yaw) for x in np.linspace(-1.0, 1.0 - radius_m, 5) for yaw in (0.0, 0.6)]
+
+    def drive(x, yaw):
+        state = robot_lib.init_robot(jnp.array([x, 0.0]), yaw)
+        step = lambda s, _: (robot_lib.step_robot(params, world, s, 1e3, 0.0, 0.1), None)
+        return jax.lax.scan(step, state, None, length=int(3.0 / step_m) + 3)[0].xy[0]
+
+    ends = jax.jit(jax.vmap(drive))(*map(jnp.asarray, zip(*starts)))
+    return int(jnp.sum(ends > 1.0 + thickness_m / 2))
+
+
+@pytest.mark.parametrize("thickness_m", [0.0, 0.01, 0.2])
+def test_a_step_shorter_than_the_radius_never_crosses_a_wall_and_the_env_refuses_a_longer_one(thickness_m):
+    """The base checks where a move ends: below one radius a step cannot cross a wall of any
+    thickness; at 1.2 radii it crosses a thin one, at 3 a 0.2 m one (so the bound is needed)."""
+    for below in (0.9, 0.99):
+        assert _crosses(below, thickness_m) == 0
+    assert _crosses(3.0, thickness_m) > 0
+    if thickness_m < 0.05:
+        assert _crosses(1.2, thickness_m) > 0
+    assert robot_lib.step_length_problem(robot_lib.RobotParams(), 0.1) is None  # 0.05 m a step
+    too_far = robot_lib.step_length_problem(robot_lib.RobotParams(max_speed_mps=3.0), 0.1)
+    assert "0.3 m" in too_far and "0.275 m" in too_far and "below 2.75 m/s" in too_far

@@ -29,7 +29,8 @@ import math
 import pathlib
 import tomllib
 
-from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.jaxsim.scenes.env import EnvConfig
+from socialnav.jaxsim.scenes.robot import RobotParams, step_length_problem
 from socialnav.planners import stack
 
 # The layer sections: their names are LayerParams' fields.
@@ -119,6 +120,9 @@ def parse(text: str, source: str = "<params>") -> ArenaParams:
             raise ParamsFileError(f"{where}: unknown section (known: {', '.join(sections)})")
     if robot.radius_m <= 0 or robot.max_speed_mps <= 0:
         raise ParamsFileError(f"{source}: [robot]: radius_m and max_speed_mps must be > 0")
+    too_far = step_length_problem(robot, EnvConfig.dt_s)  # the arena steps at the env's default
+    if too_far is not None:
+        raise ParamsFileError(f"{source}: [robot]: {too_far}")
     return ArenaParams(robot=robot, layers=layers, methods=methods, text=text)
 
 

@@ -484,8 +484,13 @@ def make_env(
     ``crowd`` defaults to the warehouse's social force constants (the arena's people are the
     same walkers); ``orca`` to ORCA's defaults with ``config.person_radius_m`` as its people's
     radius (the body the env counts contacts with). ``config.max_steps`` is kept as given (see
-    :func:`episode_steps`).
+    :func:`episode_steps`). Raises ``ValueError`` where a step at the robot's top speed is not
+    shorter than its radius (:func:`jaxsim.scenes.robot.step_length_problem`: the body could pass
+    through a wall).
     """
+    problem = robot_lib.step_length_problem(robot, config.dt_s)
+    if problem is not None:
+        raise ValueError(problem)
     if orca is None:
         orca = ORCAParams(radius_m=config.person_radius_m)
     if crowd is None:
