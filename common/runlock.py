@@ -59,8 +59,14 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
     while True:
         try:
             folder.mkdir(parents=True, exist_ok=True)
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+            # O_NOFOLLOW: a .lock that is a symbolic link is refused, never opened: the lock's
+            # truncate and write would land in whatever file it points to, outside the folder.
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
         except OSError as e:
+            if path.is_symlink():
+                raise RunFolderError(
+                    f"{path} is a symbolic link (to {os.readlink(path)}): the lock is not taken through it; remove it"
+                ) from None
             raise RunFolderError(f"{folder}: cannot write there ({e.strerror or e})") from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

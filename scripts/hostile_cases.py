@@ -821,6 +821,19 @@ def _symlinked_manifest(tmp):
     return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY, "--seed", "5", "--overwrite"]
 
 
+def _symlinked_lock(tmp):
+    """A run folder whose ``.lock`` is a symbolic link to a user's file beside it."""
+    out = tmp / "out"
+    out.mkdir()
+    (tmp / "precious.txt").write_text("the user's")
+    (out / ".lock").symlink_to(tmp / "precious.txt")
+    return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY]
+
+
+def _lock_target_kept(tmp, proc):
+    return (tmp / "precious.txt").read_text() == "the user's" and proc.returncode != 0 and ".lock" in proc.stderr
+
+
 def _victim_kept(tmp, proc):
     return (tmp / "victim" / "precious.txt").is_file() and proc.returncode != 0 and "link/precious.txt" in proc.stderr
 
@@ -1515,6 +1528,12 @@ CASES: list[Case] = [
         "r5 physics: a robot whose step is longer than its body",
         _arena_fast_robot,
         ("fast.toml", "max_speed_mps", "through a wall"),
+    ),
+    Case(
+        "r5 lost: a run folder's lock file linked to a file outside",
+        _symlinked_lock,
+        check=_lock_target_kept,
+        fail_label="data lost",
     ),
     Case("r5 physics: an env step of 1 s", python_case(ENV_LONG_STEP), ("dt_s", "through a wall"), api=True),
     Case(

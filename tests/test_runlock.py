@@ -11,7 +11,7 @@ import textwrap
 import pytest
 
 from socialnav import cli
-from socialnav.common.runlock import LOCK_FILE, RunLocked, run_lock
+from socialnav.common.runlock import LOCK_FILE, RunFolderError, RunLocked, run_lock
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -80,3 +80,19 @@ def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys):
     assert file.read_text() == "mine"
     assert cli.main(["simulate", "--out", str(file / "below"), "--worlds", "1", "--hours", "0.01"]) == 2
     assert "cannot write there" in capsys.readouterr().err
+
+
+def test_a_lock_file_that_is_a_symbolic_link_is_refused_and_its_target_untouched(tmp_path, capsys):
+    """Opening it would truncate and write the file it points to, outside the run folder."""
+    precious = tmp_path / "precious.txt"
+    precious.write_text("mine")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / LOCK_FILE).symlink_to(precious)
+    with pytest.raises(RunFolderError, match=r"\.lock is a symbolic link \(to .*precious\.txt\)"):
+        with run_lock(out, "socialnav simulate"):
+            pass
+    assert cli.main(["simulate", "--out", str(out), "--worlds", "1", "--hours", "0.01"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("socialnav simulate: --out: ") and "symbolic link" in err and err.count("\n") == 1
+    assert precious.read_text() == "mine" and (out / LOCK_FILE).is_symlink()
