@@ -1535,6 +1535,12 @@ CASES: list[Case] = [
         check=_lock_target_kept,
         fail_label="data lost",
     ),
+    Case(
+        "r5 physics: people of 3 m radius",
+        python_case(ENV_LONG_STEP.replace("dt_s=1.0", "person_radius_m=3.0")),
+        ("person_radius_m", "body radius"),
+        api=True,
+    ),
     Case("r5 physics: an env step of 1 s", python_case(ENV_LONG_STEP), ("dt_s", "through a wall"), api=True),
     Case(
         "r4 silent: a waypoint's made-up speed",

@@ -629,6 +629,8 @@ def test_wrappers_keep_the_pool_index_the_shaped_reward_the_rule_and_the_episode
         {"dt_s": float("nan")},  # every position NaN
         {"goal_tolerance_m": -1.0},  # never reached
         {"person_radius_m": 0.0},
+        {"person_radius_m": 3.0},  # every pair of people in contact
+        {"person_radius_m": 0.05},
         {"window_resolution_m": 0.0},
         {"sensor_range_m": -1.0},
         {"sensor_range_m": float("nan")},

@@ -43,7 +43,7 @@ from socialnav.data import WAREHOUSE_DIR
 from socialnav.jaxsim import humans, speed_model
 from socialnav.jaxsim.grid import Grid, GridSpec
 from socialnav.jaxsim.orca import ORCAParams
-from socialnav.jaxsim.params import PERSON_RADIUS_M, SimParams
+from socialnav.jaxsim.params import BODY_RADIUS_M, BODY_RADIUS_SOURCE, PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.scenes import people as people_lib
 from socialnav.jaxsim.scenes import perception, specs
@@ -94,7 +94,8 @@ def config_problem(config: EnvConfig) -> str | None:
     """Why no episode can run with ``config`` (the field, what it must be and what it is), or None:
     an unknown human model; a step, goal tolerance, body radius or window cell that is not a finite
     number > 0 (a step of 0 moves nothing, a NaN one makes every position NaN, a negative
-    tolerance is never reached); a sensor range below 0 or NaN (``inf``: everyone is seen); a time
+    tolerance is never reached); a person's radius outside a body's range
+    (:data:`jaxsim.params.BODY_RADIUS_M`, as the warehouse's workers); a sensor range below 0 or NaN (``inf``: everyone is seen); a time
     limit below one step; a negative window."""
     if config.human_model not in people_lib.HUMAN_MODELS:
         return f"EnvConfig.human_model must be one of {', '.join(people_lib.HUMAN_MODELS)}, got {config.human_model!r}"
@@ -106,6 +107,12 @@ def config_problem(config: EnvConfig) -> str | None:
         value = getattr(config, name)
         if not (number(value) and math.isfinite(value) and value > 0):
             return f"EnvConfig.{name} must be a finite number > 0, got {value!r}"
+    low, high = BODY_RADIUS_M["worker_radius_m"]  # a person's body, as the warehouse's workers
+    if not low <= config.person_radius_m <= high:
+        return (
+            f"EnvConfig.person_radius_m must be a body radius in [{low}, {high}] m "
+            f"({BODY_RADIUS_SOURCE['worker_radius_m']}), got {config.person_radius_m!r}"
+        )
     if not (number(config.sensor_range_m) and config.sensor_range_m >= 0):
         return f"EnvConfig.sensor_range_m must be a number >= 0 (inf: no limit), got {config.sensor_range_m!r}"
     for name, least in (("max_steps", 1), ("window_cells", 0)):
