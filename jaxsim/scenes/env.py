@@ -95,8 +95,8 @@ def config_problem(config: EnvConfig) -> str | None:
     an unknown human model; a step, goal tolerance, body radius or window cell that is not a finite
     number > 0 (a step of 0 moves nothing, a NaN one makes every position NaN, a negative
     tolerance is never reached); a person's radius outside a body's range
-    (:data:`jaxsim.params.BODY_RADIUS_M`, as the warehouse's workers); a sensor range below 0 or NaN (``inf``: everyone is seen); a time
-    limit below one step; a negative window."""
+    (:data:`jaxsim.params.BODY_RADIUS_M`, as the warehouse's workers); a sensor range below 0 or
+    NaN (``inf``: everyone is seen); a time limit below one step; a negative window."""
     if config.human_model not in people_lib.HUMAN_MODELS:
         return f"EnvConfig.human_model must be one of {', '.join(people_lib.HUMAN_MODELS)}, got {config.human_model!r}"
 
