@@ -153,3 +153,16 @@ def test_the_python_entries_refuse_it_too_naming_the_file_and_field(tmp_path):
         SocialNavEnv(hurried, pool=2)
     short_horizon = SocialNavEnv(hurried, pool=2, config=env_lib.EnvConfig(max_steps=5))
     assert short_horizon.action_space.shape == (2,)
+
+
+def test_a_goal_tolerance_that_reaches_the_start_is_named():
+    """Seed 001's static person: start (-4, [-0.2, 0.2]), goal (4, 0), 8 m apart at the least."""
+    from socialnav.jaxsim.scenes import env as env_lib
+    from socialnav.jaxsim.scenes.gym_env import SocialNavEnv
+
+    spec = load_scene(DATA_DIR / "scenes" / "casn_static_person.json")
+    field, why = scene_problem(spec, TIAGO_RADIUS_M, SPEED_MPS, 8.5)
+    assert field == "robot.goal" and "8.00 m from robot.start" in why and "goal_tolerance_m" in why
+    assert scene_problem(spec, TIAGO_RADIUS_M, SPEED_MPS, 7.9, check_timeout=False) is None
+    with pytest.raises(ValueError, match=r"field 'robot\.goal': can be 8\.00 m .* end before the robot moves"):
+        SocialNavEnv(spec, pool=2, config=env_lib.EnvConfig(goal_tolerance_m=9.0))

@@ -5,7 +5,8 @@ A scene whose walls close the way to the goal, or leave a gap narrower than the 
 the end and scores every method 0 % goal success: a table of an impossible task that reads like
 one of bad methods. :func:`scene_problem` finds such a scene before any episode runs, from the
 walls alone (people move, so they can block a way only for a while; they are not counted): a
-goal past the walls (:func:`goal_problem`), a timeout shorter than the straight line from start to
+goal within the goal tolerance of a start (:func:`arrival_problem`), a goal past the walls
+(:func:`goal_problem`), a timeout shorter than the straight line from start to
 goal takes at the robot's top speed (:func:`time_problem`: a bound no way round a wall or a person
 can beat), and a rule's box (``visit``, ``keep_right``) the robot cannot enter
 (:func:`rule_problem`): a ``visit`` no method can keep, or a ``keep_right`` every method keeps by
@@ -33,7 +34,7 @@ import scipy.ndimage
 
 from socialnav.jaxsim import geometry
 from socialnav.jaxsim.scenario.errors import ScenarioError
-from socialnav.jaxsim.scenes.spec import SceneSpec
+from socialnav.jaxsim.scenes.spec import SceneSpec, range_gap_m
 
 RESOLUTION_M = 0.05
 
@@ -90,6 +91,20 @@ def goal_problem(regions, start: Range, goal: Range, robot_radius_m: float, goal
                     "the walls close the way or leave it narrower",
                 )
     return None
+
+
+def arrival_problem(start: Range, goal: Range, goal_tolerance_m: float) -> Problem | None:
+    """``robot.goal`` when some start and goal the ranges draw lie within ``goal_tolerance_m`` of
+    each other: that episode ends before the robot moves (the scene file keeps them
+    :data:`~jaxsim.scenes.spec.MIN_START_GOAL_M` apart, which a larger tolerance undoes)."""
+    gap_m = range_gap_m(start, goal)
+    if gap_m > goal_tolerance_m:
+        return None
+    return (
+        "robot.goal",
+        f"can be {gap_m:.2f} m from robot.start, within the goal tolerance of {goal_tolerance_m:g} m "
+        "(EnvConfig.goal_tolerance_m): an episode would end before the robot moves",
+    )
 
 
 def time_problem(
@@ -168,7 +183,8 @@ def scene_problem(
     start, goal = spec.robot["start"], spec.robot["goal"]
     rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
     return (
-        goal_problem(regions, start, goal, robot_radius_m, goal_tolerance_m)
+        arrival_problem(start, goal, goal_tolerance_m)
+        or goal_problem(regions, start, goal, robot_radius_m, goal_tolerance_m)
         or (time_problem(start, goal, spec.timeout_s, max_speed_mps, goal_tolerance_m) if check_timeout else None)
         or rule_problem(regions, start, rules, robot_radius_m)
     )

@@ -483,7 +483,7 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict], bounds, walls_m
 MIN_START_GOAL_M = 0.5
 
 
-def _range_gap_m(a, b) -> float:
+def range_gap_m(a, b) -> float:
     """The smallest distance between two points drawn from ranges ``((x0, x1), (y0, y1))``."""
     (ax0, ax1), (ay0, ay1) = a
     (bx0, bx1), (by0, by1) = b
@@ -511,7 +511,7 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
     from socialnav.jaxsim.scenes.robot import RobotParams
 
     robot_radius = RobotParams().radius_m
-    if _range_gap_m(robot["start"], robot["goal"]) < MIN_START_GOAL_M:
+    if range_gap_m(robot["start"], robot["goal"]) < MIN_START_GOAL_M:
         r.fail(
             "robot.goal",
             f"within {MIN_START_GOAL_M} m of robot.start: the goal would be reached before the robot moves",
@@ -519,7 +519,7 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
     placed = []
     for i, person in enumerate(people):
         for key, point in _placed_at_start(person):
-            if _range_gap_m(point, robot["start"]) < robot_radius + PERSON_RADIUS_M:
+            if range_gap_m(point, robot["start"]) < robot_radius + PERSON_RADIUS_M:
                 r.fail(
                     f"people[{i}].{key}",
                     f"can be within {robot_radius + PERSON_RADIUS_M:.3f} m of robot.start: the person would stand "
@@ -536,7 +536,7 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
     for a in range(len(placed)):
         for b in range(a + 1, len(placed)):
             (i, ki, pi), (j, kj, pj) = placed[a], placed[b]
-            if _range_gap_m(pi, pj) < 2 * PERSON_RADIUS_M:
+            if range_gap_m(pi, pj) < 2 * PERSON_RADIUS_M:
                 r.fail(
                     f"people[{j}].{kj}",
                     f"can be within {2 * PERSON_RADIUS_M} m of people[{i}].{ki}: two people in one place at the start",
