@@ -514,7 +514,7 @@ def refuse_unfinishable_scenes(request: TableRequest) -> None:
     from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
 
     params = arena_params.parse(request.params_text, "--params") if request.params_text else arena_params.ArenaParams()
-    robot, tolerance_m = params.robot, ArenaConfig.of(request.human_model).env.goal_tolerance_m
+    robot, tolerance_m = params.robot, ArenaConfig().env.goal_tolerance_m  # every run's, as the command's
     for spec in request.specs:
         refuse_unfinishable(spec, float(robot.radius_m), float(robot.max_speed_mps), tolerance_m)
 

@@ -176,8 +176,8 @@ def scene_problem(
     check_timeout: bool = True,
 ) -> Problem | None:
     """``(field, why)`` of the first reason no method can finish the scene, or be told apart by
-    its rule, with this robot (the goal, the timeout, then the rule and held-out rule's boxes,
-    both written in the file's frame); None when there is none. ``check_timeout=False`` leaves
+    its rule, with this robot (a start within the goal tolerance, the goal, the timeout, then the
+    rule and held-out rule's boxes, both written in the file's frame); None when there is none. ``check_timeout=False`` leaves
     the scene's ``timeout_s`` out, where something else sets an episode's length."""
     regions = free_regions(spec.bounds_m, spec.walls_m, robot_radius_m)
     start, goal = spec.robot["start"], spec.robot["goal"]
