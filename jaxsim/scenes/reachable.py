@@ -177,8 +177,9 @@ def scene_problem(
 ) -> Problem | None:
     """``(field, why)`` of the first reason no method can finish the scene, or be told apart by
     its rule, with this robot (a start within the goal tolerance, the goal, the timeout, then the
-    rule and held-out rule's boxes, both written in the file's frame); None when there is none. ``check_timeout=False`` leaves
-    the scene's ``timeout_s`` out, where something else sets an episode's length."""
+    rule and held-out rule's boxes, both written in the file's frame); None when there is none.
+    ``check_timeout=False`` leaves the scene's ``timeout_s`` out, where something else sets an
+    episode's length."""
     regions = free_regions(spec.bounds_m, spec.walls_m, robot_radius_m)
     start, goal = spec.robot["start"], spec.robot["goal"]
     rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
