@@ -1,4 +1,5 @@
-"""One writer per run folder: a second job is refused with the holder's name; no stale locks."""
+"""One writer per run folder: a second job is refused with the holder's name; no stale locks; a
+lock file that is a symbolic link is refused, never written through."""
 
 from __future__ import annotations
 

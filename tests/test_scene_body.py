@@ -1,5 +1,6 @@
 """What the robot senses and how its base moves in the arena's scenes: line of sight, velocities
-estimated from tracks, the exact wall distance, a body that never enters a wall."""
+estimated from tracks, the exact wall distance, a body that never enters a wall, and the step
+bound (shorter than the body's radius) that keeps it so."""
 
 import jax.numpy as jnp
 import numpy as np
