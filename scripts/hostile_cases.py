@@ -1541,6 +1541,11 @@ CASES: list[Case] = [
         ("person_radius_m", "body radius"),
         api=True,
     ),
+    Case(
+        "r5 physics: a warehouse step of 0.25 s (workers end steps in walls)",
+        simulate_with("params.json", lambda o: o["sim"].update(dt_s=0.25)),
+        ("params.json", "sim.dt_s", "walls"),
+    ),
     Case("r5 physics: an env step of 1 s", python_case(ENV_LONG_STEP), ("dt_s", "through a wall"), api=True),
     Case(
         "r4 silent: a waypoint's made-up speed",

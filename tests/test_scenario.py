@@ -146,3 +146,14 @@ def test_a_note_in_an_underscore_field_is_not_read(scenario_copy, warehouse):
 def test_robot_goal_must_be_known(scenario_copy):
     _edit(scenario_copy, "tasks.json", lambda o: o["slots"][0]["goals"].__setitem__(3, "parking"))
     _expect(scenario_copy, "tasks.json", "slots[0].goals[3]")
+
+
+def test_a_step_that_would_put_workers_in_walls_is_refused(scenario_copy):
+    """``sim.dt_s`` at the workers' top speed past ``WORKER_STEP_MAX_M`` (jaxsim.params: measured)."""
+    from socialnav.jaxsim.params import WORKER_STEP_MAX_M
+
+    _edit(scenario_copy, "params.json", lambda o: o["sim"].update(dt_s=0.15, slot_length_s=3600.0))
+    err = _expect(scenario_copy, "params.json", "sim.dt_s")
+    assert "0.225 m" in str(err) and "at most 0.133 s" in str(err)
+    assert load_scenario(dt_s=0.125, slot_length_s=3600.0).params.dt_s == 0.125  # 0.19 m a step
+    assert 1.5 * 0.125 <= WORKER_STEP_MAX_M < 1.5 * 0.15
