@@ -91,8 +91,9 @@ PERSON_RADIUS_M = 0.25
 # carried along the nearest wall's normal) keeps every worker's centre out of the walls. Measured on
 # the shipped warehouse, 4 worlds x 30 min sampled every second (1.5 m/s workers): no centre in a
 # wall at sim.dt_s 0.1 and 0.125 s (0.15 and 0.19 m a step); 7, 27, 21, 88 and 1,353 samples (of
-# 360,000-400,000) at 0.15, 0.2, 0.25, 0.5 and 1 s (0.225-1.5 m), up to 7.5 cm deep. The bound lies in that
-# bracket; checked by :meth:`SimParams.validate`.
+# 360,000-400,000) at 0.15, 0.2, 0.25, 0.5 and 1 s (0.225-1.5 m), up to 7.5 cm deep
+# (``scripts/walls_at_longer_steps.py``). The bound lies in that bracket; checked by
+# :meth:`SimParams.validate`.
 WORKER_STEP_MAX_M = 0.2
 
 # Physical ranges of the bodies' radii, checked by :meth:`SimParams.validate`.
