@@ -31,6 +31,12 @@ def _unique(pairs: list[tuple[str, Any]]) -> dict:
     return obj
 
 
+def unknown_key(obj: dict, known) -> str | None:
+    """The first key of ``obj`` that is not one of ``known``, or None; a key starting with ``_`` is
+    a note for people (``"_source"``, ``"_comment"``) and is never read, so never unknown."""
+    return next((str(k) for k in obj if k not in known and not str(k).startswith("_")), None)
+
+
 def did_you_mean(key: str, known) -> str:
     """``"did you mean 'x'? "`` for the one of ``known`` closest to a key no reader knows (a
     misspelling), or "" when none is close (:func:`difflib.get_close_matches`)."""

@@ -225,10 +225,10 @@ class SimParams:
             raise error(file, "<file>", f"cannot be read ({e.strerror or e})") from None
         if not isinstance(raw, dict):
             raise error(file, "<file>", f"top level must be a JSON object, got {type(raw).__name__}")
-        for section in raw:  # a key starting with "_" is a note ("_source"), never read
-            if section not in SECTION_PREFIX and not str(section).startswith("_"):
-                hint = strict_json.did_you_mean(section, SECTION_PREFIX)
-                raise error(file, str(section), f"unknown section ({hint}the sections: {', '.join(SECTION_PREFIX)})")
+        section = strict_json.unknown_key(raw, SECTION_PREFIX)
+        if section is not None:
+            hint = strict_json.did_you_mean(section, SECTION_PREFIX)
+            raise error(file, section, f"unknown section ({hint}the sections: {', '.join(SECTION_PREFIX)})")
         types = {f.name: f.type for f in dataclasses.fields(cls)}
         values = {}
         for section, prefix in SECTION_PREFIX.items():

@@ -161,7 +161,7 @@ def setup_scene(
     """Everything a scene's episodes share, with ``robot``. Raises
     :class:`~jaxsim.scenario.errors.ScenarioError` for a scene no method can finish with that
     robot (:func:`jaxsim.scenes.reachable.scene_problem`)."""
-    refuse_unfinishable(spec, float(robot.radius_m), float(robot.max_speed_mps), config.env.goal_tolerance_m)
+    refuse_unfinishable(spec, robot, config.env.goal_tolerance_m)
     period_s = config.env.dt_s * config.replan_every_steps
     n_periods = int(math.ceil(spec.timeout_s / period_s))
     env_config = dataclasses.replace(config.env, max_steps=n_periods * config.replan_every_steps)

@@ -505,18 +505,15 @@ class _Shard:
     work: float
 
 
-def refuse_unfinishable_scenes(request: TableRequest) -> None:
-    """Raise :class:`~jaxsim.scenario.errors.ScenarioError` for the first scene of ``request`` that
-    no method can finish with the run's robot (``params_text``'s, or the seeds'), naming the scene
-    file and field (:func:`jaxsim.scenes.reachable.scene_problem`)."""
-    from socialnav.evaluation.arena import params as arena_params
+def refuse_unfinishable_scenes(specs: Sequence[SceneSpec], robot) -> None:
+    """Raise :class:`~jaxsim.scenario.errors.ScenarioError` for the first of ``specs`` that no
+    method can finish with ``robot`` (:class:`~jaxsim.scenes.robot.RobotParams`) at the arena's
+    goal tolerance, naming the scene file and field (:func:`jaxsim.scenes.reachable.scene_problem`)."""
     from socialnav.evaluation.arena.episodes import ArenaConfig
     from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
 
-    params = arena_params.parse(request.params_text, "--params") if request.params_text else arena_params.ArenaParams()
-    robot, tolerance_m = params.robot, ArenaConfig().env.goal_tolerance_m  # every run's, as the command's
-    for spec in request.specs:
-        refuse_unfinishable(spec, float(robot.radius_m), float(robot.max_speed_mps), tolerance_m)
+    for spec in specs:
+        refuse_unfinishable(spec, robot, ArenaConfig().env.goal_tolerance_m)
 
 
 def run_table(out, request: TableRequest, run_shards: Callable | None = None):
@@ -531,8 +528,11 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     finish a scene with the run's robot (before anything is written). Unlike the command it takes
     no lock on ``out``: one run a folder.
     """
+    from socialnav.evaluation.arena import params as arena_params
+
     out = pathlib.Path(out)
-    refuse_unfinishable_scenes(request)
+    params = arena_params.parse(request.params_text, "--params") if request.params_text else arena_params.ArenaParams()
+    refuse_unfinishable_scenes(request.specs, params.robot)
     runfolder.claim(out, JOB, RESULTS)  # never writes over files no arena run wrote
     chosen = settings(request)
     conflict = settings_conflict(out, chosen)

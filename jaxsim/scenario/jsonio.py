@@ -70,12 +70,12 @@ def only_fields(obj: Any, file: pathlib.Path, where: str, known: tuple[str, ...]
     (the shipped files' ``"_source"``) and is never read."""
     if not isinstance(obj, dict):
         return  # not an object: the field reads that follow refuse it, saying what belongs there
-    for key in obj:
-        if key not in known and not str(key).startswith("_"):
-            hint = strict_json.did_you_mean(key, known)
-            raise ScenarioError(
-                file, f"{where}.{key}" if where else str(key), f"unknown field ({hint}the fields: {', '.join(known)})"
-            )
+    key = strict_json.unknown_key(obj, known)
+    if key is not None:
+        hint = strict_json.did_you_mean(key, known)
+        raise ScenarioError(
+            file, f"{where}.{key}" if where else key, f"unknown field ({hint}the fields: {', '.join(known)})"
+        )
 
 
 def list_field(obj: dict, file: pathlib.Path, key: str) -> list:

@@ -93,9 +93,8 @@ class SocialNavVectorEnv(gym.vector.VectorEnv):
         config = config or env_lib.EnvConfig(max_steps=env_lib.episode_steps(spec.timeout_s, env_lib.EnvConfig.dt_s))
         kwargs = {} if robot is None else {"robot": robot}
         self.env = env_lib.make_env(spec, config, reward=reward, **kwargs)
-        robot_radius_m, max_speed_mps = float(self.env.robot.radius_m), float(self.env.robot.max_speed_mps)
         # a config's own max_steps is a horizon the caller chose (truncation), not the scene's timeout
-        refuse_unfinishable(spec, robot_radius_m, max_speed_mps, config.goal_tolerance_m, not own_time_limit)
+        refuse_unfinishable(spec, self.env.robot, config.goal_tolerance_m, not own_time_limit)
         n_slots = padded_slots(spec.n_people_slots)
         variants = sample_variants(spec, seed, pool, 0, False, n_slots)
         self._pool = wrappers.VariantPool(jax.tree_util.tree_map(jnp.asarray, variants))

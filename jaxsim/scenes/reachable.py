@@ -34,6 +34,7 @@ import scipy.ndimage
 
 from socialnav.jaxsim import geometry
 from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import SceneSpec, range_gap_m
 
 RESOLUTION_M = 0.05
@@ -155,15 +156,12 @@ def rule_problem(regions, start: Range, rules: Iterable[tuple[str, dict]], robot
 
 
 def refuse_unfinishable(
-    spec: SceneSpec,
-    robot_radius_m: float,
-    max_speed_mps: float,
-    goal_tolerance_m: float,
-    check_timeout: bool = True,
+    spec: SceneSpec, robot: RobotParams, goal_tolerance_m: float, check_timeout: bool = True
 ) -> None:
-    """:func:`scene_problem` as an error: a :class:`~jaxsim.scenario.errors.ScenarioError`
-    naming the scene file and its field, or nothing."""
-    problem = scene_problem(spec, robot_radius_m, max_speed_mps, goal_tolerance_m, check_timeout)
+    """:func:`scene_problem` for ``robot`` as an error: a
+    :class:`~jaxsim.scenario.errors.ScenarioError` naming the scene file and its field, or nothing."""
+    radius_m, speed_mps = float(robot.radius_m), float(robot.max_speed_mps)
+    problem = scene_problem(spec, radius_m, speed_mps, goal_tolerance_m, check_timeout)
     if problem is not None:
         raise ScenarioError(spec.file, *problem)
 

@@ -220,11 +220,13 @@ class _Reader:
         """Refuse a key that no read asked for, of any object read so far (the first such key of the
         first object read that has one)."""
         for obj, where, asked in self.asked.values():
-            for key in obj:
-                if key not in asked and not str(key).startswith("_"):
-                    field = f"{where}.{key}" if where else str(key)
-                    hint = strict_json.did_you_mean(key, sorted(asked))
-                    self.fail(field, f"unknown field ({hint}the fields here: {', '.join(sorted(asked))})")
+            key = strict_json.unknown_key(obj, asked)
+            if key is not None:
+                hint = strict_json.did_you_mean(key, sorted(asked))
+                self.fail(
+                    f"{where}.{key}" if where else key,
+                    f"unknown field ({hint}the fields here: {', '.join(sorted(asked))})",
+                )
 
     def flag(self, obj: dict, where: str, key: str, default: bool) -> bool:
         value = self.get(obj, where, key, default)

@@ -271,11 +271,9 @@ def _request(args, shown_as: pathlib.Path):
     from socialnav.common import runfolder
     from socialnav.data import GEOMETRY_SCENES_DIR, RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.evaluation.arena import actor_spec
-    from socialnav.evaluation.arena.episodes import ArenaConfig
     from socialnav.evaluation.arena.run import HELD_OUT, TURNED
-    from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
+    from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model, refuse_unfinishable_scenes
     from socialnav.jaxsim.scenario.errors import ScenarioError
-    from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners.reactive.baselines import BASELINES
     from socialnav.planners.stack import METHODS
@@ -335,9 +333,7 @@ def _request(args, shown_as: pathlib.Path):
     try:
         runfolder.check_inputs(shown_as, [*files, gscl_run, args.params, args.policy_run])
         specs = [load_scene(f) for f in files]
-        robot, tolerance_m = params.robot, ArenaConfig().env.goal_tolerance_m
-        for spec in specs:  # a scene no method can finish (or break its rule) with this robot: refused
-            refuse_unfinishable(spec, float(robot.radius_m), float(robot.max_speed_mps), tolerance_m)
+        refuse_unfinishable_scenes(specs, params.robot)  # no method could finish (or break its rule)
     except (ScenarioError, runfolder.NotOurs) as e:
         return _fail(str(e))
     if actor_specs:  # each factory called once here: a bad one fails before any work
