@@ -17,7 +17,23 @@ def test_arena_command_refuses_bad_input(tmp_path, capsys):
     assert "neither a GSCL training run" in capsys.readouterr().err
     assert cli.main(["arena", "--out", str(tmp_path / "a"), "--scenes", "nowhere"]) == 2
     assert "nowhere.json" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # a method twice would be counted twice: n doubled, no new episode
+        cli.main(["arena", "--out", str(tmp_path / "a"), "--methods", "navfn,casn,navfn"])
+    assert "'navfn' is given twice" in capsys.readouterr().err
     assert not (tmp_path / "a").exists()
+
+
+def test_a_table_request_refuses_a_method_or_a_scene_named_twice():
+    from socialnav.data import SCENES_DIR
+    from socialnav.evaluation.arena import table
+    from socialnav.jaxsim.scenes.spec import load_scene
+
+    spec = load_scene(SCENES_DIR / "casn_static_person.json")
+    with pytest.raises(ValueError, match=r"TableRequest.methods: 'navfn' named twice"):
+        table.TableRequest(specs=(spec,), methods=("navfn", "casn", "navfn"))
+    with pytest.raises(ValueError, match=r"TableRequest.scenes: 'casn_static_person' named twice"):
+        table.TableRequest(specs=(spec, spec), methods=("navfn",))
+    assert table.TableRequest(specs=(spec,), methods=("navfn", "casn")).methods == ("navfn", "casn")
 
 
 @pytest.mark.slow

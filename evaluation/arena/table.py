@@ -122,6 +122,14 @@ class TableRequest:
     policy_digest: str | None = None
     animate: tuple[tuple[str, str], ...] = ()
 
+    def __post_init__(self):
+        """A method or a scene named twice would run twice and count twice under one row, its
+        ``n`` doubled and its interval narrowed with no new episode: refused."""
+        for what, names in (("methods", self.methods), ("scenes", [spec.name for spec in self.specs])):
+            twice = sorted({name for name in names if list(names).count(name) > 1})
+            if twice:
+                raise ValueError(f"TableRequest.{what}: {', '.join(map(repr, twice))} named twice; name each once")
+
     @property
     def per_shard(self) -> int:
         return self.variants if self.shard_variants is None else self.shard_variants

@@ -49,12 +49,26 @@ def probability(text: str) -> float:
     return value
 
 
+def _each_once(values: list, text: str) -> list:
+    """``values`` if none is repeated. A list option names things to run or count (methods, scenes,
+    seeds, world ids, models): one given twice would run it twice and count its results twice, which
+    narrows a table's intervals with no new data (``--methods navfn,navfn`` reported n = 2 x
+    ``--variants`` for NavFn)."""
+    seen = set()
+    for value in values:
+        if value in seen:
+            raise argparse.ArgumentTypeError(f"{value!r} is given twice in {text!r}: name each once")
+        seen.add(value)
+    return values
+
+
 def comma_ints(text: str) -> list[int]:
-    """Comma-separated integers, e.g. ``0,1,3``."""
+    """Comma-separated integers, each once, e.g. ``0,1,3``."""
     try:
-        return [int(v) for v in text.split(",")]
+        values = [int(v) for v in text.split(",")]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
+    return _each_once(values, text)
 
 
 def unet_widths(text: str) -> tuple[int, ...]:
@@ -69,27 +83,27 @@ def unet_widths(text: str) -> tuple[int, ...]:
 
 
 def comma_names(text: str) -> list[str]:
-    """Comma-separated names, e.g. ``S1,S6,S11``."""
+    """Comma-separated names, each once, e.g. ``S1,S6,S11``."""
     names = [v.strip() for v in text.split(",")]
     if not all(names):
         raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
-    return names
+    return _each_once(names, text)
 
 
 def comma_probabilities(text: str) -> list[float]:
-    """Comma-separated probabilities in (0, 1]."""
+    """Comma-separated probabilities in (0, 1], each once."""
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
     if any(not 0 < v <= 1 for v in values):
         raise argparse.ArgumentTypeError(f"probabilities must be in (0, 1], got {text}")
-    return values
+    return _each_once(values, text)
 
 
 def comma_positive_floats(text: str) -> list[float]:
-    """Comma-separated finite numbers > 0, e.g. ``0.1,0.3,1``."""
-    return [positive_float(v) for v in text.split(",")]
+    """Comma-separated finite numbers > 0, each once, e.g. ``0.1,0.3,1`` (a sweep's values)."""
+    return _each_once([positive_float(v) for v in text.split(",")], text)
 
 
 def non_negative_float(text: str) -> float:
