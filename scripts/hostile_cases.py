@@ -297,6 +297,18 @@ ENV_LONG_STEP = (
 )
 
 
+TABLE_TWICE = (
+    "import tempfile\n"
+    "from socialnav.data import SCENES_DIR\n"
+    "from socialnav.evaluation.arena import table\n"
+    "from socialnav.jaxsim.scenes.spec import load_scene\n"
+    "request = table.TableRequest(specs=(load_scene(SCENES_DIR / 'casn_head_on.json'),), methods=('navfn', 'navfn'),"
+    " variants=2)\n"
+    "episodes, _ = table.run_table(tempfile.mkdtemp(), request)\n"
+    "print('n for navfn:', int((episodes['method'] == 'navfn').sum()))\n"
+)
+
+
 def _scene_key_twice(tmp: pathlib.Path) -> list[str]:
     """``socialnav arena`` on seed 001's static person with a second ``timeout_s`` above the first
     (``json.loads`` keeps the last one)."""
@@ -1547,6 +1559,75 @@ CASES: list[Case] = [
         ("params.json", "sim.dt_s", "walls"),
     ),
     Case("r5 physics: an env step of 1 s", python_case(ENV_LONG_STEP), ("dt_s", "through a wall"), api=True),
+    # round six: a list option naming one thing twice (ran and counted it twice)
+    Case(
+        "r6 silent: arena --methods navfn,navfn (n doubled)",
+        command(
+            "arena",
+            "--out",
+            "{tmp}/a",
+            "--scenes",
+            "casn_head_on",
+            "--methods",
+            "navfn,navfn",
+            "--variants",
+            "2",
+            "--no-progress",
+        ),  # fmt: skip
+        ("--methods", "'navfn' is given twice"),
+    ),
+    Case(
+        "r6 silent: referee --seeds 0,0",
+        command("referee", "--out", "{tmp}/r", "--seeds", "0,0", "--worlds", "1"),
+        ("--seeds", "0 is given twice"),
+    ),
+    Case(
+        "r6 silent: humans validate --models social_force,social_force",
+        command("humans", "validate", "--out", "{tmp}/h", "--models", "social_force,social_force", "--quick"),
+        ("--models", "'social_force' is given twice"),
+    ),
+    # round six: sizes no machine holds (were: killed for memory, or a traceback)
+    Case(
+        "r6 crash: ablation --seeds 10^6",
+        command("ablation", "--out", "{tmp}/ab", "--seeds", "1000000", "--no-progress"),
+        ("--seeds", "GB at once", "seeds fit"),
+    ),
+    Case(
+        "r6 crash: policy train --envs-per-scene 10^6",
+        command("policy", "train", "--out", "{tmp}/p", "--envs-per-scene", "1000000", "--updates", "1"),
+        ("--envs-per-scene", "GB at once"),
+    ),
+    Case(
+        "r6 traceback: policy train --rollout-steps 10^7",
+        command("policy", "train", "--out", "{tmp}/p", "--rollout-steps", "10000000", "--updates", "1"),
+        ("--rollout-steps", "2^31"),
+    ),
+    Case(
+        "r6 traceback: humans calibrate --data eth_ucy --sample 10^8",
+        command(
+            "humans",
+            "calibrate",
+            "--data",
+            "eth_ucy",
+            "--scenes",
+            "hotel",
+            "--sample",
+            "100000000",
+            "--steps",
+            "1",
+            "--evaluations",
+            "0",
+            "--out",
+            "{tmp}/c",
+        ),  # fmt: skip
+        ("--sample", "hotel", "windows fit"),
+    ),
+    Case(
+        "r6 silent: a TableRequest naming a method twice",
+        python_case(TABLE_TWICE),
+        ("TableRequest.methods", "'navfn' named twice"),
+        api=True,
+    ),
     Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),

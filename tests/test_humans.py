@@ -552,6 +552,21 @@ def test_adam_stops_where_the_gradient_is_not_finite_and_keeps_the_best_so_far()
     assert any("not finite" in line for line in said)
 
 
+def test_a_trajectory_fit_past_the_machines_memory_is_refused_with_the_windows_that_fit():
+    """XLA's count of a compiled program's buffers against the memory available: a share of it
+    no program fits in is refused, naming the windows and how many would fit; a whole share is not."""
+    import types
+
+    from socialnav.evaluation.humans import trajectory_calibration as tc
+
+    x = jnp.zeros((1000, 1000), jnp.float32)
+    compiled = jax.jit(lambda a: (a @ a).sum()).lower(x).compile()
+    sample = types.SimpleNamespace(start=np.zeros((512, 75, 2)))  # the shape the message reads
+    with pytest.raises(tc.FitTooLarge, match=r"a fit over 512 windows of up to 75 people holds about .* GB at once"):
+        tc.refuse_past_memory(compiled, sample, share=1e-9)
+    tc.refuse_past_memory(compiled, sample, share=1.0)  # a few megabytes: fits
+
+
 def _walked_by(truth: hv.HumanModel, fields):
     """Short corridors at 1.5, 2.5 and 3.5 /m² whose "data" is the speed ``truth`` walks there
     (s.d. 0.05 m/s): a calibration's known answer."""

@@ -49,3 +49,18 @@ def test_ablation_causal_beats_bayesian_on_the_simulator():
         assert est.reference < est.causal < 0 and est.reference < est.bayesian < 0
         assert est.error_causal < est.error_bayesian
         assert est.bayesian > est.causal  # the Bayesian answer underestimates the consumption
+
+
+def test_an_ablation_too_large_for_the_machine_is_refused_before_anything_is_written(tmp_path, capsys):
+    """A billion seeds an hour each (was: the batch allocated until the machine killed it)."""
+    from socialnav import ablation_study, cli
+
+    out = tmp_path / "ablation"
+    assert cli.main(["ablation", "--seeds", "1000000000", "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "--seeds 1000000000" in err and "GB at once" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+    # the estimate: one batch of every probability and seed, linear in each
+    one = ablation_study.memory_bytes(5, 1) - ablation_study.memory_bytes(5, 0)
+    assert ablation_study.memory_bytes(5, 800) == pytest.approx(ablation_study.BASE_BYTES + 800 * one)
+    assert ablation_study.memory_bytes(5, 8, duration_s=1800.0) < ablation_study.memory_bytes(5, 8)

@@ -430,6 +430,31 @@ def test_bad_input_to_policy_train_and_arena_policy_run_is_one_line(tmp_path, ca
     assert code == 2 and "config.json" in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize(
+    ("size", "says"),
+    [
+        (["--envs-per-scene", "1000000"], "GB at once"),  # 5.8 TB: was an out-of-memory kill
+        (["--rollout-steps", "10000000"], "past the 2^31"),  # 9e9 transitions: was an OverflowError traceback
+    ],
+)
+def test_an_update_too_large_for_the_machine_is_refused_before_anything_is_written(tmp_path, capsys, size, says):
+    out = tmp_path / "r"
+    assert main(["policy", "train", "--out", str(out), *size, "--updates", "1", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert says in err and size[0] in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_the_memory_estimate_grows_with_every_transition_of_an_update():
+    from socialnav.planners.learning.policy_training import PPOConfig, memory_bytes, transitions_per_update
+
+    small, wide = PPOConfig(), PPOConfig(envs_per_scene=256)
+    assert transitions_per_update(14, small) == 14 * 64 * 64
+    assert memory_bytes(14, wide) - memory_bytes(14, small) == pytest.approx(
+        (transitions_per_update(14, wide) - transitions_per_update(14, small)) * 6.5e3
+    )
+
+
 @pytest.mark.slow
 def test_a_policy_with_the_gscl_channel_trains_and_runs_in_the_arena(tmp_path, capsys):
     from socialnav.models import train as gscl_train

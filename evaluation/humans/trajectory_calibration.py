@@ -81,6 +81,30 @@ def theta_of(model: hv.HumanModel, fields) -> jnp.ndarray:
                                jnp.float32))  # fmt: skip
 
 
+class FitTooLarge(ValueError):
+    """A fit's sample of windows needs more memory at once than the machine has available."""
+
+
+def refuse_past_memory(compiled, sample: hv.PredictionWindows, share: float = 0.8) -> None:
+    """Raise :class:`FitTooLarge` where the compiled loss and gradient over ``sample`` need more
+    than ``share`` of the memory available (XLA's own count of its buffers; nothing is checked where
+    the available memory is not known)."""
+    from socialnav.common.memory import available_bytes
+
+    stats = compiled.memory_analysis()
+    available = available_bytes()
+    if stats is None or available is None:
+        return
+    needed = stats.temp_size_in_bytes + stats.argument_size_in_bytes + stats.output_size_in_bytes
+    if needed > share * available:
+        windows, people = sample.start.shape[:2]
+        fits = int(windows * share * available / needed)
+        raise FitTooLarge(
+            f"a fit over {windows:,} windows of up to {people} people holds about {needed / 1e9:.1f} GB at once, "
+            f"this machine has {available / 1e9:.1f} GB available: about {fits:,} windows fit"
+        )
+
+
 def fit_gradient(model, fields, sample: hv.PredictionWindows, steps: int = 60, learning_rate: float = 0.2,
                  groups: bool = True, log=print):  # fmt: skip
     """Adam on :func:`ade_loss` over the fixed training windows ``sample`` (the loss Nelder-Mead
@@ -89,6 +113,10 @@ def fit_gradient(model, fields, sample: hv.PredictionWindows, steps: int = 60, l
     loss_and_grad = minimise.value_and_grad(
         lambda th, w: ade_loss(model, fields, th, w, jax.random.key(0), groups), forward=model.name in FORWARD_MODE
     )
+    # compiled here to ask XLA what it holds at once: a rollout of every window's people, kept for
+    # the gradient, is 22 MB a window of 75 people (5.7 GB at the default 256 windows)
+    loss_and_grad = loss_and_grad.lower(theta_of(model, fields), sample).compile()
+    refuse_past_memory(loss_and_grad, sample)
     # the rollout's gradient spikes where a neighbour enters or leaves a lane (the speed model's
     # min and lane test are piecewise): clipped to a global norm of 1 before Adam
     optimizer = optax.chain(optax.clip_by_global_norm(1.0), optax.adam(learning_rate))
@@ -162,12 +190,15 @@ def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_U
     fields = FITTED[model.name] if fields is None else fields
     rows = []
     for scene in scenes:
-        log(f"{scene}: fitting on {sample} windows of the other scenes (its training split)")
         train = hv.prediction_windows(scene, "train")
         test = hv.prediction_windows(scene, "test")
         pick = np.random.default_rng(seed).choice(len(train.start), size=min(sample, len(train.start)), replace=False)
+        log(f"{scene}: fitting on {len(pick)} windows of the other scenes (its training split)")
         fixed = train.take(np.sort(pick))
-        fitted, history = fit_gradient(model, fields, fixed, steps, learning_rate, log=log)
+        try:
+            fitted, history = fit_gradient(model, fields, fixed, steps, learning_rate, log=log)
+        except FitTooLarge as e:
+            raise FitTooLarge(f"{scene}: {e}") from None
         row = {
             "scene": scene,
             "train_windows": len(train.start),

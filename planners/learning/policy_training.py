@@ -128,6 +128,25 @@ class PPOConfig:
         return cls(**d)
 
 
+# What an update holds, measured with ``socialnav policy train --updates 1`` (peak resident): the 14
+# seed scenes at 64 x 64, 64 x 512 and 256 x 64 episodes x steps 2.01, 4.11 and 3.01 GB, the 14
+# recorded scenes (up to 64 people) at 64 x 64 and 64 x 256 2.89 and 3.93 GB: 5.2-6.0 kB a
+# transition (the rollout's buffers, the minibatches, the env states) over about 2 GB of programs;
+# 2,000 x 64 on the seed scenes 11.48 GB, 64 x 64 and 64 x 256 with the GSCL channel 2.26 and 3.39 GB.
+BYTES_PER_TRANSITION = 6.5e3
+BASE_BYTES = 2.5e9
+
+
+def transitions_per_update(n_scenes: int, config: PPOConfig) -> int:
+    """The transitions one update collects: every scene's episodes times the rollout's steps."""
+    return n_scenes * config.envs_per_scene * config.rollout_steps
+
+
+def memory_bytes(n_scenes: int, config: PPOConfig) -> float:
+    """What training holds at once (an upper estimate from the measurements above)."""
+    return BASE_BYTES + BYTES_PER_TRANSITION * transitions_per_update(n_scenes, config)
+
+
 def reward_params() -> env_lib.RewardParams:
     """The env's reward without its Euclidean progress (the guidance field's replaces it)."""
     return env_lib.RewardParams(progress_weight=0.0)

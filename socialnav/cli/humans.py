@@ -215,8 +215,12 @@ def _calibrate_trajectories(args) -> int:
     print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to ETH/UCY, one fit a held-out scene "
           f"({', '.join(scenes)}), on its training split", flush=True)  # fmt: skip
     evaluations = 60 if args.evaluations is None else args.evaluations
-    fit = tc.calibrate(model, scenes, args.steps or 60, args.learning_rate or 0.2, evaluations, args.sample,
-                       seed=args.seed, name=args.model, progress=_progress_saver(args.out))  # fmt: skip
+    try:
+        fit = tc.calibrate(model, scenes, args.steps or 60, args.learning_rate or 0.2, evaluations, args.sample,
+                           seed=args.seed, name=args.model, progress=_progress_saver(args.out))  # fmt: skip
+    except tc.FitTooLarge as e:
+        print(f"socialnav humans calibrate: --sample {args.sample}: {e}", file=sys.stderr)
+        return 2
     try:
         replace = args.overwrite or (args.out / PROGRESS).exists()
         with runfolder.staged(args.out, "fit.json", replace, job=CALIBRATE_JOB) as stage:
