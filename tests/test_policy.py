@@ -445,6 +445,20 @@ def test_an_update_too_large_for_the_machine_is_refused_before_anything_is_writt
     assert not out.exists()
 
 
+def test_the_python_entry_refuses_the_same_sizes_before_it_makes_the_folder(tmp_path):
+    from socialnav.data import SCENES_DIR
+    from socialnav.jaxsim.scenes.spec import load_scene
+    from socialnav.planners.learning import policy_run
+    from socialnav.planners.learning.policy_training import PPOConfig, size_problem
+
+    config = PPOConfig(rollout_steps=10_000_000)
+    with pytest.raises(policy_run.PolicyRunError, match=r"rollout_steps 10000000 .* past the 2\^31"):
+        policy_run.train([load_scene(SCENES_DIR / f"{EASY}.json")] * 4, config, tmp_path / "r")
+    assert not (tmp_path / "r").exists()
+    assert "GB at once" in size_problem(14, PPOConfig(), available_bytes=10**9)  # 2.9 GB against 1 GB free
+    assert size_problem(14, PPOConfig(), available_bytes=None) is None  # nothing known: no memory check
+
+
 def test_the_memory_estimate_grows_with_every_transition_of_an_update():
     from socialnav.planners.learning.policy_training import PPOConfig, memory_bytes, transitions_per_update
 

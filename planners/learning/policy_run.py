@@ -247,8 +247,12 @@ def train(
     import time
 
     from socialnav.common import progress as progress_lib
-    from socialnav.planners.learning.policy_training import Trainer
+    from socialnav.common.memory import available_bytes
+    from socialnav.planners.learning.policy_training import Trainer, size_problem
 
+    problem = size_problem(len(specs), config, available_bytes())
+    if problem:
+        raise PolicyRunError(problem)
     out = pathlib.Path(out)
     out.mkdir(parents=True, exist_ok=True)
     try:

@@ -147,6 +147,25 @@ def memory_bytes(n_scenes: int, config: PPOConfig) -> float:
     return BASE_BYTES + BYTES_PER_TRANSITION * transitions_per_update(n_scenes, config)
 
 
+def size_problem(n_scenes: int, config: PPOConfig, available_bytes: int | None) -> str | None:
+    """Why an update of this size cannot run on a machine with ``available_bytes`` free (None: it
+    can; no memory check where that is not known): its transitions are counted in 32-bit integers,
+    and held in memory at once (past 80 % of what is free is refused)."""
+    per_update = transitions_per_update(n_scenes, config)
+    size = f"envs_per_scene {config.envs_per_scene} (--envs-per-scene), rollout_steps {config.rollout_steps} "
+    shape = f"{n_scenes} scene(s) x {config.envs_per_scene:,} episodes x {config.rollout_steps:,} steps"
+    if per_update >= 2**31:
+        return (
+            f"{size}(--rollout-steps): {per_update:,} transitions an update ({shape}), past the 2^31 the trainer counts"
+        )
+    needed = memory_bytes(n_scenes, config)
+    if available_bytes is not None and needed > 0.8 * available_bytes:
+        return (f"{size}(--rollout-steps): about {needed / 1e9:.1f} GB at once ({per_update:,} transitions an update: "
+                f"{shape}), this machine has {available_bytes / 1e9:.1f} GB available; fewer episodes or steps, "
+                "or fewer scenes")  # fmt: skip
+    return None
+
+
 def reward_params() -> env_lib.RewardParams:
     """The env's reward without its Euclidean progress (the guidance field's replaces it)."""
     return env_lib.RewardParams(progress_weight=0.0)

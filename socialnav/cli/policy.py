@@ -126,25 +126,6 @@ def _shown(value) -> str:
     return ",".join(value) if isinstance(value, tuple) and all(isinstance(v, str) for v in value) else str(value)
 
 
-def _size_problem(n_scenes: int, config) -> str | None:
-    """Why an update of this size cannot run here (None: it can): its transitions are counted in
-    32-bit integers, and held in memory at once."""
-    from socialnav.common.memory import available_bytes
-    from socialnav.planners.learning.policy_training import memory_bytes, transitions_per_update
-
-    per_update = transitions_per_update(n_scenes, config)
-    shape = f"{n_scenes} scene(s) x {config.envs_per_scene:,} episodes x {config.rollout_steps:,} steps"
-    if per_update >= 2**31:
-        return (f"--envs-per-scene {config.envs_per_scene} --rollout-steps {config.rollout_steps}: {per_update:,} "
-                f"transitions an update ({shape}), past the 2^31 the trainer counts")  # fmt: skip
-    needed, available = memory_bytes(n_scenes, config), available_bytes()
-    if available is not None and needed > 0.8 * available:
-        return (f"--envs-per-scene {config.envs_per_scene} --rollout-steps {config.rollout_steps}: about "
-                f"{needed / 1e9:.1f} GB at once ({per_update:,} transitions an update: {shape}), this machine has "
-                f"{available / 1e9:.1f} GB available; fewer episodes or steps, or fewer --scenes")  # fmt: skip
-    return None
-
-
 @locks_folder(lambda args: args.out, "policy train")
 def _train(args) -> int:
     from socialnav.data import RECORDED_SCENES_DIR, SCENES_DIR
@@ -184,7 +165,10 @@ def _train(args) -> int:
     except ScenarioError as err:
         print(f"socialnav policy train: {err}", file=sys.stderr)
         return 2
-    problem = _size_problem(len(specs), config)
+    from socialnav.common.memory import available_bytes
+    from socialnav.planners.learning.policy_training import size_problem
+
+    problem = size_problem(len(specs), config, available_bytes())  # before the folder is claimed
     if problem:
         print(f"socialnav policy train: {problem}", file=sys.stderr)
         return 2
