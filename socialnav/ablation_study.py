@@ -51,7 +51,18 @@ def ablation_series(
 
     Returns:
       probability -> its (V, L, O) series, ``(n_seeds, samples)`` each.
+
+    Raises:
+      ValueError: the batch would hold more than 80 % of the memory available (:func:`memory_bytes`).
     """
+    from socialnav.common.memory import available_bytes
+
+    needed, available = memory_bytes(len(probabilities), n_seeds, duration_s, sample_interval_s), available_bytes()
+    if available is not None and needed > 0.8 * available:
+        raise ValueError(
+            f"ablation_series: {len(probabilities)} probabilities x {n_seeds:,} seeds in one batch hold about "
+            f"{needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB available"
+        )
     base = load_scenario(n_workers=0, robot_obstacle_length_m=obstacle_length_m)
     settings = [base.params.replace(robot_obstacle_probability=float(p)) for p in probabilities]
     params = SimParams.stack([s for s in settings for _ in range(n_seeds)])

@@ -7,6 +7,8 @@ import json
 import pandas as pd
 import pytest
 
+from socialnav.common.memory import available_bytes
+
 
 def test_arena_command_refuses_bad_input(tmp_path, capsys):
     from socialnav import cli
@@ -34,6 +36,19 @@ def test_a_table_request_refuses_a_method_or_a_scene_named_twice():
     with pytest.raises(ValueError, match=r"TableRequest.scenes: 'casn_static_person' named twice"):
         table.TableRequest(specs=(spec, spec), methods=("navfn",))
     assert table.TableRequest(specs=(spec,), methods=("navfn", "casn")).methods == ("navfn", "casn")
+
+
+@pytest.mark.skipif(available_bytes() is None, reason="no /proc/meminfo here: no memory check")
+def test_run_table_refuses_a_table_no_machine_holds_before_writing(tmp_path):
+    from socialnav.data import SCENES_DIR
+    from socialnav.evaluation.arena import table
+    from socialnav.jaxsim.scenes.spec import load_scene
+
+    request = table.TableRequest(specs=(load_scene(SCENES_DIR / "casn_static_person.json"),), methods=("navfn",),
+                                 variants=10**12)  # fmt: skip
+    with pytest.raises(ValueError, match=r"TableRequest.variants 1,000,000,000,000: about .* GB at once"):
+        table.run_table(tmp_path / "out", request)
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.slow

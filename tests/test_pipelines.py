@@ -66,3 +66,5 @@ def test_an_ablation_too_large_for_the_machine_is_refused_before_anything_is_wri
     one = ablation_study.memory_bytes(5, 1) - ablation_study.memory_bytes(5, 0)
     assert ablation_study.memory_bytes(5, 800) == pytest.approx(ablation_study.BASE_BYTES + 800 * one)
     assert ablation_study.memory_bytes(5, 8, duration_s=1800.0) < ablation_study.memory_bytes(5, 8)
+    with pytest.raises(ValueError, match=r"ablation_series: 5 probabilities x 1,000,000,000 seeds .* GB at once"):
+        ablation_series([0.1, 0.2, 0.3, 0.4, 0.5], 10**9)  # the Python entry refuses it too

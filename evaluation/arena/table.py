@@ -531,16 +531,24 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     ``run_shards(compute, save, shards)`` runs the shards (objects with ``name``, ``output``,
     ``args``, ``work``); default: one after the other in this process (the command line passes
     :func:`socialnav.backend.run_shards` for a progress bar and Ray). Raises ``ValueError`` where
-    ``out`` holds a run with other settings, :class:`socialnav.common.runfolder.NotOurs` where it
-    holds another job's files, :class:`~jaxsim.scenario.errors.ScenarioError` where no method can
-    finish a scene with the run's robot (before anything is written). Unlike the command it takes
+    ``out`` holds a run with other settings or the table would hold more than 80 % of the memory
+    available (:func:`memory_bytes`), :class:`socialnav.common.runfolder.NotOurs` where it holds
+    another job's files, :class:`~jaxsim.scenario.errors.ScenarioError` where no method can finish a
+    scene with the run's robot (before anything is written). Unlike the command it takes
     no lock on ``out``: one run a folder.
     """
+    from socialnav.common.memory import available_bytes
     from socialnav.evaluation.arena import params as arena_params
 
     out = pathlib.Path(out)
     params = arena_params.parse(request.params_text, "--params") if request.params_text else arena_params.ArenaParams()
     refuse_unfinishable_scenes(request.specs, params.robot)
+    needed, available = memory_bytes(request), available_bytes()
+    if available is not None and needed > 0.8 * available:
+        raise ValueError(
+            f"TableRequest.variants {request.variants:,}: about {needed / 1e9:.1f} GB at once, this machine has "
+            f"{available / 1e9:.1f} GB available; fewer variants, or shard_variants for the shards"
+        )
     runfolder.claim(out, JOB, RESULTS)  # never writes over files no arena run wrote
     chosen = settings(request)
     conflict = settings_conflict(out, chosen)
