@@ -14,3 +14,11 @@ def available_bytes() -> int | None:
     except (OSError, ValueError, IndexError):
         return None
     return None
+
+
+def shortfall(needed_bytes: float, share: float = 0.8) -> int | None:
+    """The bytes available where a job needing ``needed_bytes`` at once would take more than
+    ``share`` of them (it does not fit: the caller refuses it, naming both); None where it fits, or
+    where the available memory is not known."""
+    available = available_bytes()
+    return available if available is not None and needed_bytes > share * available else None

@@ -36,6 +36,28 @@ def memory_bytes(
     return BASE_BYTES + BYTES_PER_WORLD_SAMPLE * n_probabilities * n_seeds * samples
 
 
+def memory_problem(
+    n_probabilities: int, n_seeds: int, duration_s: float = 3600.0, sample_interval_s: float = 1.0
+) -> str | None:
+    """Why the batch cannot run here (None: it can): it would hold more than 80 % of the memory
+    available (:func:`memory_bytes`); the message says how many seeds would fit."""
+    from socialnav.common.memory import shortfall
+
+    needed = memory_bytes(n_probabilities, n_seeds, duration_s, sample_interval_s)
+    available = shortfall(needed)
+    if available is None:
+        return None
+    per_seed = memory_bytes(n_probabilities, 1, duration_s, sample_interval_s) - memory_bytes(
+        n_probabilities, 0, duration_s, sample_interval_s
+    )
+    fits = max(int((0.8 * available - BASE_BYTES) // per_seed), 0)
+    return (
+        f"{n_probabilities} probabilities x {n_seeds:,} seeds in one batch, {duration_s / 3600:g} h each, hold "
+        f"about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB available; about "
+        f"{fits:,} seeds fit"
+    )
+
+
 def ablation_series(
     probabilities,
     n_seeds: int,
@@ -55,14 +77,9 @@ def ablation_series(
     Raises:
       ValueError: the batch would hold more than 80 % of the memory available (:func:`memory_bytes`).
     """
-    from socialnav.common.memory import available_bytes
-
-    needed, available = memory_bytes(len(probabilities), n_seeds, duration_s, sample_interval_s), available_bytes()
-    if available is not None and needed > 0.8 * available:
-        raise ValueError(
-            f"ablation_series: {len(probabilities)} probabilities x {n_seeds:,} seeds in one batch hold about "
-            f"{needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB available"
-        )
+    problem = memory_problem(len(probabilities), n_seeds, duration_s, sample_interval_s)
+    if problem:
+        raise ValueError(f"ablation_series: {problem}")
     base = load_scenario(n_workers=0, robot_obstacle_length_m=obstacle_length_m)
     settings = [base.params.replace(robot_obstacle_probability=float(p)) for p in probabilities]
     params = SimParams.stack([s for s in settings for _ in range(n_seeds)])

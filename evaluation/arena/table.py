@@ -537,14 +537,15 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     scene with the run's robot (before anything is written). Unlike the command it takes
     no lock on ``out``: one run a folder.
     """
-    from socialnav.common.memory import available_bytes
+    from socialnav.common.memory import shortfall
     from socialnav.evaluation.arena import params as arena_params
 
     out = pathlib.Path(out)
     params = arena_params.parse(request.params_text, "--params") if request.params_text else arena_params.ArenaParams()
     refuse_unfinishable_scenes(request.specs, params.robot)
-    needed, available = memory_bytes(request), available_bytes()
-    if available is not None and needed > 0.8 * available:
+    needed = memory_bytes(request)
+    available = shortfall(needed)
+    if available is not None:
         raise ValueError(
             f"TableRequest.variants {request.variants:,}: about {needed / 1e9:.1f} GB at once, this machine has "
             f"{available / 1e9:.1f} GB available; fewer variants, or shard_variants for the shards"

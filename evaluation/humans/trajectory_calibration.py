@@ -89,14 +89,14 @@ def refuse_past_memory(compiled, sample: hv.PredictionWindows, share: float = 0.
     """Raise :class:`FitTooLarge` where the compiled loss and gradient over ``sample`` need more
     than ``share`` of the memory available (XLA's own count of its buffers; nothing is checked where
     the available memory is not known)."""
-    from socialnav.common.memory import available_bytes
+    from socialnav.common.memory import shortfall
 
     stats = compiled.memory_analysis()
-    available = available_bytes()
-    if stats is None or available is None:
+    if stats is None:
         return
     needed = stats.temp_size_in_bytes + stats.argument_size_in_bytes + stats.output_size_in_bytes
-    if needed > share * available:
+    available = shortfall(needed, share)
+    if available is not None:
         windows, people = sample.start.shape[:2]
         fits = int(windows * share * available / needed)
         raise FitTooLarge(

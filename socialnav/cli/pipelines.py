@@ -11,13 +11,11 @@ import json
 import pathlib
 import sys
 
-from socialnav import ablation_study
-from socialnav.ablation_study import ablation_series
+from socialnav.ablation_study import ablation_series, memory_problem
 from socialnav.causal import ablation as causal_ablation
 from socialnav.cli import arena, evaluate, learn, simulate
 from socialnav.cli.argtypes import comma_ints, comma_probabilities, output_folder, positive_int, seed_int
 from socialnav.common import runfolder
-from socialnav.common.memory import available_bytes
 from socialnav.jaxsim.scenario import load_scenario
 from socialnav.locking import locks_folder
 from socialnav.planners.warehouse.tables import TABLES_FILE
@@ -108,14 +106,9 @@ def run_pipeline(args: argparse.Namespace) -> int:
 @locks_folder(lambda args: args.out, "ablation")
 def run_ablation(args: argparse.Namespace) -> int:
     results = ("ablation.json", "ablation.csv", "ablation.png")
-    n_probabilities = len(args.probabilities)
-    needed, available = ablation_study.memory_bytes(n_probabilities, args.seeds), available_bytes()
-    if available is not None and needed > 0.8 * available:
-        per_seed = ablation_study.memory_bytes(n_probabilities, 1) - ablation_study.memory_bytes(n_probabilities, 0)
-        fits = max(int((0.8 * available - ablation_study.BASE_BYTES) // per_seed), 0)
-        print(f"socialnav ablation: --seeds {args.seeds}: about {needed / 1e9:.1f} GB at once ({n_probabilities} "
-              f"probabilities x {args.seeds:,} seeds in one batch, an hour each), this machine has "
-              f"{available / 1e9:.1f} GB available; about {fits:,} seeds fit", file=sys.stderr)  # fmt: skip
+    problem = memory_problem(len(args.probabilities), args.seeds)  # before the folder is touched
+    if problem:
+        print(f"socialnav ablation: --seeds {args.seeds}: {problem}", file=sys.stderr)
         return 2
     try:
         runfolder.prepare(args.out, results, args.overwrite, marker="ablation.json", job="socialnav ablation")

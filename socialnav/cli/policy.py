@@ -166,14 +166,14 @@ def _train(args) -> int:
         print(f"socialnav policy train: {err}", file=sys.stderr)
         return 2
     from socialnav.common.memory import available_bytes
-    from socialnav.planners.learning.policy_training import size_problem
+    from socialnav.planners.learning.policy_training import size_problem, transitions_per_update
 
     problem = size_problem(len(specs), config, available_bytes())  # before the folder is claimed
     if problem:
         print(f"socialnav policy train: {problem}", file=sys.stderr)
         return 2
     runfolder.record(args.out, TRAIN_JOB, ["config.json", "checkpoints/", "metrics.jsonl", "curve.png"])
-    per_update = len(specs) * config.envs_per_scene * config.rollout_steps
+    per_update = transitions_per_update(len(specs), config)
     print(
         f"PPO on {len(specs)} scene(s): {config.updates} updates of {per_update:,} env-steps "
         f"({config.envs_per_scene} episodes x {config.rollout_steps} steps per scene), people moved by "
