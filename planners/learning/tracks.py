@@ -12,11 +12,9 @@ as a file's.
   (integer), ``id`` (any label), ``x`` and ``y`` (metres, in the map's frame). Other columns are
   ignored; rows may come in any order. The frame rate does not matter (only the order of a
   person's positions is used).
-* The walls: a ROS ``map_server`` map, the format every ROS and Nav2 user has: a YAML file with
-  ``image`` (a PGM or PNG beside it), ``resolution`` (m per pixel), ``origin`` ([x, y, yaw] of the
-  image's lower-left pixel; yaw must be 0), and optionally ``negate`` (0), ``occupied_thresh``
-  (0.65). A pixel is occupied where ``(255 - value) / 255`` (``value / 255`` with ``negate``)
-  exceeds ``occupied_thresh``.
+* The walls: a ROS ``map_server`` map, the format every ROS and Nav2 user has (a YAML file and
+  its image), read by :func:`planners.learning.ros_map.read_ros_map` with Nav2's meaning of each
+  field and pixel.
 
 **What a track becomes** (:func:`track_demonstrations`): the GSCL network's view of the scene
 from where the person starts, as the robot sees it from the centre of its 16 m window
@@ -101,47 +99,6 @@ def read_tracks(path) -> dict[object, np.ndarray]:
         pid: g.sort_values("frame")[["frame", "x", "y"]].to_numpy(np.float64)
         for pid, g in table.groupby("id", sort=True)
     }
-
-
-def read_ros_map(path) -> tuple[np.ndarray, float, tuple[float, float]]:
-    """``(occupancy (H, W) float32 in {0, 1}, resolution_m, origin_xy_m)`` of a ROS map YAML, in
-    the OccupancyGrid layout (row 0 at the bottom, :func:`models.inference.input_map`).
-
-    Raises:
-      TrackFileError: a missing or malformed field, an unreadable image (naming the file and field).
-    """
-    import yaml
-    from PIL import Image
-
-    path = pathlib.Path(path)
-    try:
-        meta = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as e:
-        raise TrackFileError(f"{path}: cannot read ({type(e).__name__}: {e})") from None
-    if not isinstance(meta, dict):
-        raise TrackFileError(f"{path}: not a ROS map YAML (a mapping with image, resolution, origin)")
-    for field in ("image", "resolution", "origin"):
-        if field not in meta:
-            raise TrackFileError(f"{path}: field '{field}' is missing")
-    resolution = meta["resolution"]
-    if not isinstance(resolution, (int, float)) or not (math.isfinite(resolution) and resolution > 0):
-        raise TrackFileError(f"{path}: field 'resolution': must be a positive number of metres, got {resolution!r}")
-    origin = meta["origin"]
-    if not (isinstance(origin, list) and len(origin) in (2, 3) and all(isinstance(v, (int, float)) for v in origin)):
-        raise TrackFileError(f"{path}: field 'origin': must be [x, y, yaw], got {origin!r}")
-    if len(origin) == 3 and origin[2] != 0:
-        raise TrackFileError(f"{path}: field 'origin': a rotated map (yaw {origin[2]}) is not supported")
-    threshold = meta.get("occupied_thresh", 0.65)
-    if not isinstance(threshold, (int, float)) or not 0 <= threshold <= 1:
-        raise TrackFileError(f"{path}: field 'occupied_thresh': must be in [0, 1], got {threshold!r}")
-    image_path = path.parent / str(meta["image"])
-    try:
-        pixels = np.asarray(Image.open(image_path).convert("L"), np.float32)
-    except (OSError, ValueError) as e:
-        raise TrackFileError(f"{path}: field 'image': cannot read {image_path} ({e})") from None
-    p = pixels / 255.0 if meta.get("negate", 0) else (255.0 - pixels) / 255.0
-    occupancy = (p > threshold).astype(np.float32)[::-1]  # the image's top row is the map's last
-    return np.ascontiguousarray(occupancy), float(resolution), (float(origin[0]), float(origin[1]))
 
 
 # The least share of a file's positions that must lie on its map (inside the image's extent) for
@@ -249,8 +206,8 @@ def track_demonstrations(tracks: dict, occupancy, resolution_m: float, origin_xy
 
     Args:
       tracks: ``{id: (T, 3) [frame, x, y]}`` (:func:`read_tracks`).
-      occupancy, resolution_m, origin_xy_m: the walls (:func:`read_ros_map`, or any OccupancyGrid
-        layout array in [0, 1]).
+      occupancy, resolution_m, origin_xy_m: the walls (:func:`planners.learning.ros_map.read_ros_map`,
+        or any OccupancyGrid layout array in [0, 1]).
       min_cells: the fewest cells a track must cross inside its window.
 
     Returns:
@@ -276,21 +233,25 @@ def track_demonstrations(tracks: dict, occupancy, resolution_m: float, origin_xy
         last = len(t) if inside.all() else int(np.argmin(inside))
         others = [(q, i) for q, i in present_at[int(t[0, 0])] if q != pid]
         views.append((local[:last], others))
+    # Positions from the map's origin, taken in float64 before the float32 the windows are drawn in:
+    # a map in a world frame far from zero (UTM: y ~ 5e6 m, where float32 steps by 0.5 m) would
+    # otherwise put walls and people a cell or more from where they are.
+    origin64 = np.asarray(origin_xy_m, np.float64)
     p_max = max(1, max(len(others) for _, others in views))
     people = np.zeros((len(ids), p_max, 2), np.float32)
     headings = np.zeros((len(ids), p_max), np.float32)
     valid = np.zeros((len(ids), p_max), bool)
     for n, (_, others) in enumerate(views):
         for k, (q, i) in enumerate(others):
-            people[n, k], headings[n, k], valid[n, k] = tracks[q][i, 1:], heading[q][i], True
-    centres = np.stack([tracks[pid][0, 1:] for pid in ids])
-    goals = np.stack([tracks[pid][len(path) - 1, 1:] for pid, (path, _) in zip(ids, views, strict=True)])
+            people[n, k], headings[n, k], valid[n, k] = tracks[q][i, 1:] - origin64, heading[q][i], True
+    centres = np.stack([tracks[pid][0, 1:] for pid in ids]) - origin64
+    goals = np.stack([tracks[pid][len(path) - 1, 1:] for pid, (path, _) in zip(ids, views, strict=True)]) - origin64
     occupancy = jnp.asarray(occupancy, jnp.float32)
-    origin = jnp.asarray(origin_xy_m, jnp.float32)
+    at_zero = jnp.zeros(2, jnp.float32)
     images = np.asarray(
-        jax.jit(jax.vmap(lambda c, p, h, v, g: input_map(occupancy, resolution_m, origin, c, p, h, g, people_valid=v)))(
-            centres, people, headings, valid, goals
-        )
+        jax.jit(
+            jax.vmap(lambda c, p, h, v, g: input_map(occupancy, resolution_m, at_zero, c, p, h, g, people_valid=v))
+        )(centres.astype(np.float32), people, headings, valid, goals.astype(np.float32))
     )
 
     chains, used = [], []
@@ -348,7 +309,8 @@ def recorded_tracks(run: str, resolution_m: float = 0.1):
 
     Returns:
       ``(tracks, occupancy, resolution_m, origin_xy_m)`` as :func:`read_tracks` and
-      :func:`read_ros_map` give them, ids ``"<run>:<person>"``, frames the run's own numbers.
+      :func:`~planners.learning.ros_map.read_ros_map` give them, ids ``"<run>:<person>"``, frames the
+      run's own numbers.
 
     Raises:
       KeyError: no shipped run of that name (naming the ones shipped).
@@ -391,8 +353,8 @@ def simulated_tracks(spec, seed: int = 0, variants: int = 20, seconds: float | N
 
     Returns:
       ``(tracks, occupancy, resolution_m, origin_xy_m)`` as :func:`read_tracks` and
-      :func:`read_ros_map` give them: ids ``"variant:person"``, the frames of variant ``k``
-      offset by ``k`` times the frames per variant so that people of two variants never share a
+      :func:`~planners.learning.ros_map.read_ros_map` give them: ids ``"variant:person"``, the
+      frames of variant ``k`` offset by ``k`` times the frames per variant so that people of two variants never share a
       frame (each demonstration's map shows only its own variant's people).
     """
     from socialnav.data import WAREHOUSE_DIR

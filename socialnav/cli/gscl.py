@@ -632,7 +632,7 @@ def _fit_tracks(args) -> int:
     import datetime
 
     from socialnav.models.config import TrainConfig
-    from socialnav.planners.learning import tracks
+    from socialnav.planners.learning import ros_map, tracks
     from socialnav.planners.learning.irl_fit import demonstrations_figure, fit_demonstrations
 
     try:
@@ -653,7 +653,7 @@ def _fit_tracks(args) -> int:
                     f"--recording: no shipped run {unknown[0]!r} (shipped: {', '.join(recorded.run_names())})"
                 )
         else:
-            sources = [(tracks.read_tracks(args.tracks), *tracks.read_ros_map(args.map))]
+            sources = [(tracks.read_tracks(args.tracks), *ros_map.read_ros_map(args.map))]
             tracks.check_on_map(*sources[0], args.tracks, args.map, args.min_on_map)
         runfolder.prepare(args.out, FIT_TRACKS_FILES, args.overwrite, marker="model.json", job=FIT_TRACKS_JOB)
         runfolder.check_writable(args.out)
