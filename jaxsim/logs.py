@@ -31,7 +31,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from socialnav.common import logschema
+from socialnav.common import logschema, memory
 from socialnav.common import progress as progress_lib
 from socialnav.common.atomic import atomic_path, write_text_atomic
 from socialnav.common.logschema import LOG_FILE, META_FILE, density_column, distance_column, position_columns
@@ -100,6 +100,10 @@ def record_table(rec, world_ids: np.ndarray, scenario: Scenario, seed: int, log_
             cols[y] = pa.array(rec.worker_y_m[:, :, i].reshape(-1))
             cols[status] = pa.array(rec.worker_status[:, :, i].reshape(-1).astype(np.int8))
     return pa.table(cols)
+
+
+# The share of the available memory a run's estimate may take (the estimate is an upper one).
+MEMORY_SHARE = 0.9
 
 
 def estimate_memory_bytes(scenario: Scenario, n_worlds: int, log_positions: bool = False) -> int:
@@ -231,7 +235,8 @@ def simulate_to_parquet(
         ``run.json``).
 
     Raises:
-      ValueError: on inconsistent sizes, before anything is written.
+      ValueError: on inconsistent sizes, or a batch whose estimate (:func:`estimate_memory_bytes`)
+        is past :data:`MEMORY_SHARE` of the memory available, before anything is written.
     """
 
     from socialnav.jaxsim import rollout
@@ -250,6 +255,13 @@ def simulate_to_parquet(
             f"duration_s={duration_s} must be a positive multiple of sample_interval_s={sample_interval_s}"
         )
     n_samples = int(round(n_samples))
+    needed = estimate_memory_bytes(scenario, n_worlds, log_positions)
+    available = memory.shortfall(needed, MEMORY_SHARE)
+    if available is not None:
+        raise ValueError(
+            f"n_worlds={n_worlds}: about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB "
+            "available; simulate the worlds in shards (first_world, n_worlds) as socialnav simulate --shard-worlds does"
+        )
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
 

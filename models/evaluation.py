@@ -10,6 +10,7 @@ import pathlib
 
 import numpy as np
 
+from socialnav.common import memory
 from socialnav.common.atomic import write_text_atomic
 from socialnav.models import plots, rules
 from socialnav.models.checkpoints import restore
@@ -71,8 +72,46 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
     return report
 
 
+# What a rule-suite run holds at once, per case (its images, expected and rule-blind maps and
+# regions, then its predictions and the scoring's float64 copies), and its time. Measured with the
+# shipped model, 15 cases a scene of each kind: peak resident 1.05 GB at 3,000 cases (--scenes
+# 200), 2.30 GB at 12,000 (800), so 139 kB a case over 0.63 GB; the constants are taken above both.
+RULES_BYTES_PER_CASE = 160_000
+RULES_BASE_BYTES = 0.8e9
+RULES_START_S = 10.0  # loading the model and compiling its prediction
+RULES_CASES_PER_S = 60.0  # drawn, predicted and scored; measured below on a 2-core machine
+
+
+def rules_size(scenes_per_kind: int) -> tuple[int, float, float]:
+    """``(cases, bytes held at once, seconds)`` of a rule-suite run of ``scenes_per_kind`` scenes of
+    each kind: estimates from the measurements above."""
+    cases = scenes_per_kind * rules.cases_per_scene()
+    return cases, RULES_BASE_BYTES + RULES_BYTES_PER_CASE * cases, RULES_START_S + cases / RULES_CASES_PER_S
+
+
+def rules_size_problem(scenes_per_kind: int) -> str | None:
+    """Why a rule-suite run of ``scenes_per_kind`` scenes of each kind does not fit this machine's
+    memory (past 80 % of what is available), naming how many scenes fit; None where it fits or the
+    memory is not known."""
+    cases, needed, _ = rules_size(scenes_per_kind)
+    available = memory.shortfall(needed)
+    if available is None:
+        return None
+    fit = max(0, int((0.8 * available - RULES_BASE_BYTES) / (RULES_BYTES_PER_CASE * rules.cases_per_scene())))
+    return (
+        f"{cases:,} cases need about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB "
+        f"available; at most {fit:,} scenes of each kind fit"
+    )
+
+
 def rules_run(
-    run, step: int | None = None, out=None, scenes_per_kind: int = 100, seed: int | None = None, rotations: int = 1
+    run,
+    step: int | None = None,
+    out=None,
+    scenes_per_kind: int = 100,
+    seed: int | None = None,
+    rotations: int = 1,
+    report_scenes=None,
 ) -> dict:
     """Score a model on the held-out rule suite (:mod:`models.rules`, ``scenes_per_kind`` scenes
     of each kind, drawn from ``seed``: the suite's own, :data:`models.rules.SUITE_SEED`, by
@@ -92,12 +131,18 @@ def rules_run(
     returns the same dictionary plus ``table`` (text) and ``out``. ``step`` in it is the
     checkpoint's, or an exported model's card's (None without one).
 
+    ``report_scenes(done, total)``, if given, follows the drawing of the scenes (most of the time).
+
     Raises:
       FileNotFoundError, ValueError: no run, no checkpoint, none restorable; an exported model
-        with a ``step``, or whose weights do not load (the file named).
+        with a ``step``, or whose weights do not load (the file named); a suite past the memory
+        available (:func:`rules_size_problem`), before the model is loaded.
     """
     from socialnav.models.inference import WEIGHTS_FILE, SocialCostModel, read_card
 
+    problem = rules_size_problem(scenes_per_kind)
+    if problem:
+        raise ValueError(f"scenes_per_kind={scenes_per_kind}: {problem}")
     run = pathlib.Path(run)
     if (run / WEIGHTS_FILE).is_file():
         if step is not None:
@@ -109,7 +154,7 @@ def rules_run(
         model = SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
         step = int(meta["step"])
     seed = rules.SUITE_SEED if seed is None else seed
-    cases = rules.build_suite(scenes_per_kind, seed=seed)
+    cases = rules.build_suite(scenes_per_kind, seed=seed, report=report_scenes)
     suite = rules.evaluate(rotation_averaged(model.function, rotations), cases)
     report = {
         "run": str(run),

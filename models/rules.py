@@ -674,12 +674,13 @@ def _usable(case: Case) -> bool:
 
 @functools.lru_cache(maxsize=4)
 def build_suite(
-    scenes_per_kind: int = 100, seed: int = SUITE_SEED, kinds: tuple[str, ...] = SCENES
+    scenes_per_kind: int = 100, seed: int = SUITE_SEED, kinds: tuple[str, ...] = SCENES, report=None
 ) -> tuple[Case, ...]:
     """The suite's cases: ``scenes_per_kind`` scenes of each kind (a scene may check two rules),
     deterministic by ``seed``. A drawn scene whose regions hold fewer than
     :data:`MIN_REGION_CELLS` cells or whose expected contrast is below
-    :data:`MIN_EXPECTED_CONTRAST` is drawn again (so every case can tell a rule from its absence)."""
+    :data:`MIN_EXPECTED_CONTRAST` is drawn again (so every case can tell a rule from its absence).
+    ``report(done, total)``, if given, is called with the scenes drawn after each one."""
     unknown = sorted(set(kinds) - set(_BUILDERS))
     if unknown:
         raise ValueError(f"unknown scene kinds {unknown}; known: {list(_BUILDERS)}")
@@ -696,7 +697,14 @@ def build_suite(
                 continue
             cases.extend(drawn)
             made += 1
+            if report is not None:
+                report(k * scenes_per_kind + made, len(kinds) * scenes_per_kind)
     return tuple(cases)
+
+
+def cases_per_scene(kinds: tuple[str, ...] = SCENES) -> int:
+    """The cases one scene of each kind makes (a kind's scenes check the same rules every time)."""
+    return len(build_suite(1, kinds=kinds))
 
 
 def contrasts(costs, region_a, region_b) -> np.ndarray:

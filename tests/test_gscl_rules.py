@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from socialnav.common import memory
 from socialnav.models import dataset, families, grid, rules, steps, train
 from socialnav.models import social_costs as sc
 from socialnav.models.config import TrainConfig
@@ -325,3 +326,32 @@ def test_the_rules_command_writes_its_report_and_names_a_missing_run(tmp_path, c
     with pytest.raises(SystemExit, match="no checkpoints to choose a step from"):
         cli.main(["gscl", "rules", "--run", str(exported), "--step", "1", "--out", str(tmp_path / "n")])
     assert not (exported / "evaluation").exists()
+
+
+def test_the_suite_reports_its_scenes_and_makes_the_same_cases_for_every_scene():
+    seen = []
+    cases = rules.build_suite(4, seed=3, report=lambda done, total: seen.append((done, total)))
+    assert seen == [(n, 4 * len(rules.SCENES)) for n in range(1, 4 * len(rules.SCENES) + 1)]
+    assert len(cases) == 4 * rules.cases_per_scene() and rules.cases_per_scene() > len(rules.SCENES)
+
+
+@pytest.mark.skipif(memory.available_bytes() is None, reason="no /proc/meminfo here: no memory check")
+def test_a_suite_past_the_memory_is_refused_before_the_model_is_read(tmp_path, capsys):
+    """10^8 scenes of each kind (1.5 billion cases, hundreds of TB by the estimate) drew scenes for
+    hours before running out of memory; the command and the Python entry refuse them before
+    reading the model, naming how many scenes fit, and the estimate grows with the scenes."""
+    from socialnav import cli
+    from socialnav.models import evaluation
+
+    with pytest.raises(
+        SystemExit, match=r"--scenes 100000000: .* GB at once, .* at most [\d,]+ scenes of each kind fit"
+    ):
+        cli.main(
+            ["gscl", "rules", "--run", str(tmp_path / "nowhere"), "--scenes", "100000000", "--out", str(tmp_path / "r")]
+        )
+    assert not (tmp_path / "r").exists()
+    with pytest.raises(ValueError, match="scenes_per_kind=100000000: "):
+        evaluation.rules_run(tmp_path / "nowhere", scenes_per_kind=10**8)
+    small, large = evaluation.rules_size(100), evaluation.rules_size(1000)
+    assert small[0] * 10 == large[0] and small[1] < large[1] and small[2] < large[2]
+    assert evaluation.rules_size_problem(100) is None

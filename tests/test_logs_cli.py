@@ -10,6 +10,7 @@ import pytest
 from plans import scipy_shortest_plan
 
 from socialnav import cli
+from socialnav.common.memory import available_bytes
 from socialnav.jaxsim import logs
 from socialnav.jaxsim.route_follower import route_follower
 from socialnav.jaxsim.scenario import load_scenario
@@ -182,3 +183,14 @@ def test_cli_refuses_values_that_do_not_fit_the_run_before_any_work(tmp_path, ca
     err = capsys.readouterr().err
     assert words in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.skipif(available_bytes() is None, reason="no /proc/meminfo here: no memory check")
+def test_the_python_entry_refuses_a_batch_past_the_memory_as_the_command_does(tmp_path):
+    """``simulate_to_parquet`` refuses 10^8 worlds (hundreds of GB by its estimate) before it makes
+    its folder, as ``socialnav simulate --worlds 100000000`` does; it was killed for memory."""
+    scenario = load_scenario(slot_length_s=20.0, n_workers=5)
+    driver = route_follower(scipy_shortest_plan(scenario), build_world(scenario))
+    with pytest.raises(ValueError, match="n_worlds=100000000: about .* GB at once.*shards") as err:
+        logs.simulate_to_parquet(scenario, tmp_path / "o", driver, n_worlds=10**8, duration_s=20.0, progress=False)
+    assert "\n" not in str(err.value) and not (tmp_path / "o").exists()

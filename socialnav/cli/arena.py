@@ -402,7 +402,7 @@ def _command(args) -> dict:
 
 def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     from socialnav import backend as backend_lib
-    from socialnav.common.memory import available_bytes
+    from socialnav.common.memory import shortfall
     from socialnav.evaluation.arena import table
 
     request = _request(args, shown_as)
@@ -410,8 +410,8 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
         return request
     n_episodes = len(request.runs) * request.variants * len(request.methods)
     needed = table.memory_bytes(request)
-    available = available_bytes()
-    if available is not None and needed > 0.8 * available:
+    available = shortfall(needed)
+    if available is not None:
         return _fail(
             f"--variants {args.variants}: about {needed / 1e9:.1f} GB at once "
             f"({n_episodes:,} episodes' rows and a shard of {request.per_shard:,} variants in flight), this machine "

@@ -12,7 +12,7 @@ from socialnav import evaluate_shards
 from socialnav.backend import add_backend_options
 from socialnav.cli.argtypes import comma_names, output_folder, positive_float, positive_int, seed_int
 from socialnav.common import runfolder
-from socialnav.common.memory import available_bytes
+from socialnav.common.memory import shortfall
 from socialnav.evaluation import warehouse
 from socialnav.evaluation.protocol import ProtocolConfig
 from socialnav.jaxsim.scenario import WAREHOUSE_DIR, Scenario, ScenarioError, load_scenario
@@ -140,8 +140,8 @@ def evaluate_with(scenario: Scenario, tables_file: pathlib.Path, out: pathlib.Pa
     n_slots = len(slots) if slots is not None else scenario.n_slots
     in_flight = min(size, args.replicas) * n_slots * EXPERIMENT_BYTES
     held = args.replicas * n_slots * TASK_ROWS_BYTES
-    available = available_bytes()
-    if available is not None and in_flight + held > 0.8 * available:
+    available = shortfall(in_flight + held)
+    if available is not None:
         print(
             f"socialnav evaluate: --replicas {args.replicas}: about {(in_flight + held) / 1e9:.1f} GB at once "
             f"({min(size, args.replicas) * n_slots:,} experiments in one batch, and every task's row), this machine "

@@ -29,9 +29,10 @@ from socialnav.cli.argtypes import (
     seed_int,
     unet_widths,
 )
+from socialnav.common import progress as progress_lib
 from socialnav.common import runfolder
 from socialnav.common.atomic import write_text_atomic
-from socialnav.common.memory import available_bytes
+from socialnav.common.memory import shortfall
 from socialnav.common.runfolder import RunFolderError
 from socialnav.locking import locks_folder
 
@@ -273,6 +274,7 @@ def add_parser(top) -> None:
         help="score the model averaged over the 4 quarter turns of its input (default 1: the model alone)",
     )
     ru.add_argument("--out", type=output_folder, default=None, help="output folder (default RUN/evaluation)")
+    ru.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     ex = sub.add_parser(
         "export",
         help="a run's model alone (no optimiser state, ~2 MB), checked against the quality bar and the rule suite",
@@ -377,8 +379,9 @@ def _generate(args) -> int:
         )
     _check_dataset_target(args.out, args.overwrite)
     n = sum(counts.values())
-    needed, available = n * DATASET_BYTES_PER_SAMPLE, available_bytes()
-    if available is not None and needed > 0.8 * available:
+    needed = n * DATASET_BYTES_PER_SAMPLE
+    available = shortfall(needed)
+    if available is not None:
         raise SystemExit(
             f"socialnav gscl generate: --scale {args.scale:g}: {n:,} samples need about {needed / 1e9:.1f} GB at once "
             f"(the dataset is one array in memory before it is written), this machine has {available / 1e9:.1f} GB "
@@ -584,16 +587,27 @@ def _rules(args) -> int:
             f"socialnav gscl rules: --out: {args.run} is an exported model, whose folder is not written into; "
             "name an output folder"
         )
+    problem = evaluation.rules_size_problem(args.scenes)
+    if problem:
+        raise SystemExit(f"socialnav gscl rules: --scenes {args.scenes}: {problem}")
     out = _evaluation_folder(args, names)
+    cases, needed, seconds = evaluation.rules_size(args.scenes)
+    print(
+        f"gscl rules: {cases:,} cases ({args.scenes:,} scenes of each kind), about {seconds:.0f} s "
+        f"and {needed / 1e9:.1f} GB at once",
+        flush=True,
+    )
     try:
-        report = evaluation.rules_run(
-            args.run,
-            step=args.step,
-            out=out,
-            scenes_per_kind=args.scenes,
-            seed=args.seed,
-            rotations=args.rotations,
-        )
+        with progress_lib.bar("rule suite", unit="scene", enabled=not args.no_progress) as bar:
+            report = evaluation.rules_run(
+                args.run,
+                step=args.step,
+                out=out,
+                scenes_per_kind=args.scenes,
+                seed=args.seed,
+                rotations=args.rotations,
+                report_scenes=bar.update,
+            )
     except (FileNotFoundError, ValueError) as err:  # no run, no checkpoint, none restorable
         raise SystemExit(f"socialnav gscl rules: {err}") from None
     runfolder.record(out, EVALUATION_JOB, names)

@@ -17,7 +17,7 @@ from socialnav.cli.argtypes import (
 )
 from socialnav.common import runfolder
 from socialnav.common.logschema import LOG_FILE, META_FILE
-from socialnav.common.memory import available_bytes
+from socialnav.common.memory import shortfall
 from socialnav.jaxsim import logs, viz
 from socialnav.jaxsim.humans import HUMAN_MODELS
 from socialnav.jaxsim.route_follower import route_follower
@@ -128,8 +128,9 @@ def run(args: argparse.Namespace) -> int:
     if args.snapshot_time_s is not None and args.snapshot_time_s > duration_s:
         return _usage(f"--snapshot-time-s {args.snapshot_time_s:g}: after the run's end ({duration_s:g} s)")
     in_memory = min(args.worlds, args.shard_worlds or args.worlds)
-    needed, available = logs.estimate_memory_bytes(scenario, in_memory, args.log_positions), available_bytes()
-    if available is not None and needed > 0.9 * available:
+    needed = logs.estimate_memory_bytes(scenario, in_memory, args.log_positions)
+    available = shortfall(needed, logs.MEMORY_SHARE)
+    if available is not None:
         return _usage(
             f"--worlds {args.worlds}: about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB "
             "available; split the run with --shard-worlds (each shard in turn, or one per Ray task)"
