@@ -74,19 +74,25 @@ def evaluate_run(run, step: int | None = None, out=None, examples: int = 2) -> d
 
 # What a rule-suite run holds at once, per case (its images, expected and rule-blind maps and
 # regions, then its predictions and the scoring's float64 copies), and its time. Measured with the
-# shipped model, 15 cases a scene of each kind: peak resident 1.05 GB at 3,000 cases (--scenes
-# 200), 2.30 GB at 12,000 (800), so 139 kB a case over 0.63 GB; the constants are taken above both.
+# shipped model on a 2-core AMD EPYC (AVX-512), 15 cases a scene of each kind: peak resident 1.00
+# GB at 3,000 cases (--scenes 200), 2.32 GB at 12,000 (800), 1.04 GB at 3,000 with --rotations 4,
+# so about 147 kB a case over 0.56 GB; the memory constants are taken above every one. Whole runs
+# 30.8 s and 100.2 s, and 82.9 s at 3,000 cases with four rotations: about 1.8 ms a case to draw
+# and score it and 5.8 ms a case for each rotation's prediction, after about 8 s of loading and
+# compiling. A machine busy with other work took 2.6 times as long.
 RULES_BYTES_PER_CASE = 160_000
 RULES_BASE_BYTES = 0.8e9
-RULES_START_S = 10.0  # loading the model and compiling its prediction
-RULES_CASES_PER_S = 60.0  # drawn, predicted and scored; measured below on a 2-core machine
+RULES_START_S = 8.0
+RULES_DRAW_S_PER_CASE = 0.0018
+RULES_PREDICT_S_PER_CASE = 0.0058
 
 
-def rules_size(scenes_per_kind: int) -> tuple[int, float, float]:
+def rules_size(scenes_per_kind: int, rotations: int = 1) -> tuple[int, float, float]:
     """``(cases, bytes held at once, seconds)`` of a rule-suite run of ``scenes_per_kind`` scenes of
-    each kind: estimates from the measurements above."""
+    each kind, scored over ``rotations`` turns of the input: estimates from the measurements above."""
     cases = scenes_per_kind * rules.cases_per_scene()
-    return cases, RULES_BASE_BYTES + RULES_BYTES_PER_CASE * cases, RULES_START_S + cases / RULES_CASES_PER_S
+    seconds = RULES_START_S + cases * (RULES_DRAW_S_PER_CASE + rotations * RULES_PREDICT_S_PER_CASE)
+    return cases, RULES_BASE_BYTES + RULES_BYTES_PER_CASE * cases, seconds
 
 
 def rules_size_problem(scenes_per_kind: int) -> str | None:

@@ -309,6 +309,58 @@ TABLE_TWICE = (
 )
 
 
+# Reads a ROS map with whichever module has the reader (planners.learning.ros_map now; before,
+# planners.learning.tracks) and prints the walls of each image column, top row first.
+ROS_MAP_WALLS = (
+    "import numpy as np, pathlib\n"
+    "from PIL import Image\n"
+    "try:\n"
+    "    from socialnav.planners.learning.ros_map import read_ros_map\n"
+    "except ImportError:\n"
+    "    from socialnav.planners.learning.tracks import read_ros_map\n"
+    "pixels, extra = {pixels}, {extra!r}\n"
+    "path = pathlib.Path({image!r})\n"
+    "if path.suffix == '.pgm':\n"
+    "    path.write_bytes(b'P5\\n%d 1\\n65535\\n' % pixels.shape[1] + pixels.astype('>u2').tobytes())\n"
+    "else:\n"
+    "    Image.fromarray(pixels).save(path)\n"
+    "pathlib.Path('m.yaml').write_text(f'image: {{path}}\\nresolution: 0.1\\norigin: [0, 0, 0]\\n' + extra)\n"
+    "print('WALLS', read_ros_map('m.yaml')[0][0].astype(int).tolist())\n"
+)
+
+
+def _walls_are(expected: list[int]) -> Callable[[pathlib.Path, subprocess.CompletedProcess], bool]:
+    return lambda tmp, proc: proc.returncode == 0 and f"WALLS {expected}" in proc.stdout
+
+
+# The same six walkers and a wall, at zero and in a UTM-like frame (x + 5e5 m, y + 5e6 m), their
+# windows compared.
+TRACKS_FAR_FROM_ZERO = (
+    "import numpy as np\n"
+    "from socialnav.planners.learning import tracks\n"
+    "occ = np.zeros((300, 300), np.float32); occ[160:166, 120:180] = 1\n"
+    "near = {p: np.stack([np.arange(20), 12 + 0.3 * np.arange(20), 10 + 1.1 * p + 0.05 * np.arange(20)], 1)"
+    " for p in range(6)}\n"
+    "far = {p: t + [0, 5e5, 5e6] for p, t in near.items()}\n"
+    "a = tracks.track_demonstrations(near, occ, 0.1, (0.0, 0.0))[0]\n"
+    "b = tracks.track_demonstrations(far, occ, 0.1, (5e5, 5e6))[0]\n"
+    "print('SAME WINDOWS' if np.array_equal(a, b) else f'{int((a != b).sum())} of {a.size} window cells moved')\n"
+)
+
+
+SIMULATE_ENTRY_1E8 = (
+    "from socialnav.jaxsim import logs\n"
+    "from socialnav.jaxsim.route_follower import route_follower\n"
+    "from socialnav.jaxsim.scenario import load_scenario\n"
+    "from socialnav.jaxsim.world import build_world\n"
+    "from socialnav.planners.warehouse.routes import shortest_path_plan\n"
+    "s = load_scenario(slot_length_s=20.0, n_workers=5)\n"
+    "driver = route_follower(shortest_path_plan(s), build_world(s))\n"
+    "logs.simulate_to_parquet(s, 'o', driver, n_worlds=10**8, duration_s=20.0, progress=False)\n"
+    "print('simulated 10^8 worlds')\n"
+)
+
+
 def _scene_key_twice(tmp: pathlib.Path) -> list[str]:
     """``socialnav arena`` on seed 001's static person with a second ``timeout_s`` above the first
     (``json.loads`` keeps the last one)."""
@@ -733,21 +785,38 @@ def _nan_actor_marked(tmp, proc):
     return marked and "NaN or infinite action" in proc.stderr
 
 
-def _tracks_at(x_of_frame: Callable[[int], float]) -> Callable[[pathlib.Path], list[str]]:
-    """``gscl fit-tracks`` on six walkers at ``x_of_frame`` over a 30 m empty ROS map at the origin."""
+def _fit_tracks(
+    map_yaml: str, image: str, pixels: Callable, x_of_frame: Callable[[int], float], y_of_person: Callable[[int], float]
+) -> Callable[[pathlib.Path], list[str]]:
+    """``gscl fit-tracks`` on six walkers (20 frames at ``x_of_frame(f)``, ``y_of_person(p)``) and a
+    ROS map: ``map.yaml`` of ``map_yaml``, its image file ``image`` of ``pixels(numpy)``."""
 
     def make(tmp):
         import numpy as np
         from PIL import Image
 
-        Image.fromarray(np.full((300, 300), 254, np.uint8)).save(tmp / "map.pgm")
-        (tmp / "map.yaml").write_text("image: map.pgm\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\n")
-        rows = ["frame,id,x,y"] + [f"{f},{p},{x_of_frame(f)},{10.0 + p}" for p in range(6) for f in range(20)]
+        Image.fromarray(pixels(np)).save(tmp / image)
+        (tmp / "map.yaml").write_text(map_yaml)
+        rows = ["frame,id,x,y"] + [f"{f},{p},{x_of_frame(f)},{y_of_person(p)}" for p in range(6) for f in range(20)]
         (tmp / "t.csv").write_text("\n".join(rows) + "\n")
         argv = ["gscl", "fit-tracks", "--tracks", str(tmp / "t.csv"), "--map", str(tmp / "map.yaml")]
         return [*SOCIALNAV, *argv, "--out", str(tmp / "m"), "--steps", "2", "--no-progress"]
 
     return make
+
+
+def _tracks_at(x_of_frame: Callable[[int], float]) -> Callable[[pathlib.Path], list[str]]:
+    """``gscl fit-tracks`` on six walkers at ``x_of_frame`` over a 30 m empty ROS map at the origin."""
+    map_yaml = "image: map.pgm\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\n"
+    return _fit_tracks(map_yaml, "map.pgm", lambda np: np.full((300, 300), 254, np.uint8), x_of_frame, lambda p: 10 + p)
+
+
+def _ros_map_with(map_yaml: str) -> Callable[[pathlib.Path], list[str]]:
+    """``gscl fit-tracks`` on six walkers and a 3 m empty ROS map of ``map_yaml`` (its image
+    ``map.png``): a bad field is refused before any work."""
+    return _fit_tracks(
+        map_yaml, "map.png", lambda np: np.full((30, 30), 254, np.uint8), lambda f: 1 + 0.05 * f, lambda p: 1 + 0.2 * p
+    )
 
 
 GSCL_RESUME = (
@@ -1626,6 +1695,82 @@ CASES: list[Case] = [
         "r6 silent: a TableRequest naming a method twice",
         python_case(TABLE_TWICE),
         ("TableRequest.methods", "'navfn' named twice"),
+        api=True,
+    ),
+    # round seven: a ROS map read as Nav2 reads it (fields taken for what they are not, walls lost)
+    Case(
+        "r7 silent: a ROS map's resolution: true (read as 1 m a pixel)",
+        _ros_map_with("image: map.png\nresolution: true\norigin: [0.0, 0.0, 0.0]\n"),
+        ("map.yaml", "field 'resolution'"),
+        timeout_s=300,
+    ),
+    Case(
+        "r7 silent: a ROS map's origin [.nan, 0, 0]",
+        _ros_map_with("image: map.png\nresolution: 0.1\norigin: [.nan, 0.0, 0.0]\n"),
+        ("map.yaml", "field 'origin[0]'", "finite"),
+        timeout_s=300,
+    ),
+    Case(
+        "r7 silent: a ROS map's negate: '0' (quoted: read as negated)",
+        python_case(
+            ROS_MAP_WALLS.format(pixels="np.array([[0, 254]], np.uint8)", extra="negate: '0'\n", image="m.png")
+        ),
+        check=_walls_are([1, 0]),
+    ),
+    Case(
+        "r7 silent: a ROS map's free_thresh above occupied_thresh",
+        _ros_map_with("image: map.png\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\nfree_thresh: 0.9\n"),
+        ("map.yaml", "free_thresh", "occupied_thresh"),
+        timeout_s=300,
+    ),
+    Case(
+        "r7 silent: a ROS map's mode: grey (ignored)",
+        _ros_map_with("image: map.png\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\nmode: grey\n"),
+        ("map.yaml", "field 'mode'", "trinary"),
+        timeout_s=300,
+    ),
+    Case(
+        "r7 silent: a ROS map in raw mode (its walls, value 100, read as free)",
+        python_case(
+            ROS_MAP_WALLS.format(pixels="np.array([[99, 100, 101, 0]], np.uint8)", extra="mode: raw\n", image="m.png")
+        ),
+        check=_walls_are([0, 1, 0, 0]),
+    ),
+    Case(
+        "r7 silent: a 16-bit PGM map (mid-grey walls read as white)",
+        python_case(ROS_MAP_WALLS.format(pixels="np.array([[0, 20000, 40000, 65535]])", extra="", image="m.pgm")),
+        check=_walls_are([1, 1, 0, 0]),
+    ),
+    Case(
+        "r7 silent: a colour map's green wall (luma, not Nav2's channel mean)",
+        python_case(
+            ROS_MAP_WALLS.format(pixels="np.array([[[0, 255, 0], [255, 255, 255]]], np.uint8)", extra="", image="m.png")
+        ),
+        check=_walls_are([1, 0]),
+    ),
+    Case(
+        "r7 silent: tracks and map in a UTM frame (float32 windows off by cells)",
+        python_case(TRACKS_FAR_FROM_ZERO),
+        check=lambda tmp, proc: proc.returncode == 0 and "SAME WINDOWS" in proc.stdout,
+    ),
+    Case(
+        "r7 hang: gscl rules --scenes 10^8",
+        command(
+            "gscl",
+            "rules",
+            "--run",
+            str(ROOT / "data" / "gscl" / "default"),
+            "--scenes",
+            "100000000",
+            "--out",
+            "{tmp}/r",
+        ),  # fmt: skip
+        ("--scenes", "GB at once", "scenes of each kind fit"),
+    ),
+    Case(
+        "r7 crash: simulate_to_parquet of 10^8 worlds (Python)",
+        python_case(SIMULATE_ENTRY_1E8),
+        ("n_worlds=100000000", "GB at once"),
         api=True,
     ),
     Case(

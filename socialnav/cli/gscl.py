@@ -591,7 +591,7 @@ def _rules(args) -> int:
     if problem:
         raise SystemExit(f"socialnav gscl rules: --scenes {args.scenes}: {problem}")
     out = _evaluation_folder(args, names)
-    cases, needed, seconds = evaluation.rules_size(args.scenes)
+    cases, needed, seconds = evaluation.rules_size(args.scenes, args.rotations)
     print(
         f"gscl rules: {cases:,} cases ({args.scenes:,} scenes of each kind), about {seconds:.0f} s "
         f"and {needed / 1e9:.1f} GB at once",
