@@ -309,6 +309,20 @@ TABLE_TWICE = (
 )
 
 
+def _track_file(rows: Callable[[int, int], str], header: str = "frame,id,x,y") -> Callable[[pathlib.Path], list[str]]:
+    """``gscl fit-tracks`` on a 30 m empty map and a track file of six walkers, 20 frames each:
+    ``header``, then ``rows(frame, person)`` (one CSV line each, walking along x at y = 10-15 m)."""
+    fit = _tracks_at(lambda f: 1.0 + 0.5 * f)
+
+    def make(tmp):
+        argv = fit(tmp)
+        lines = [header] + [rows(f, p) for p in range(6) for f in range(20)]
+        (tmp / "t.csv").write_text("\n".join(lines) + "\n")
+        return argv
+
+    return make
+
+
 # Reads a ROS map with whichever module has the reader (planners.learning.ros_map now; before,
 # planners.learning.tracks) and prints the walls of each image column, top row first.
 ROS_MAP_WALLS = (
@@ -1752,6 +1766,24 @@ CASES: list[Case] = [
         "r7 silent: tracks and map in a UTM frame (float32 windows off by cells)",
         python_case(TRACKS_FAR_FROM_ZERO),
         check=lambda tmp, proc: proc.returncode == 0 and "SAME WINDOWS" in proc.stdout,
+    ),
+    Case(
+        "r7 silent: a track file's empty ids (their rows dropped)",
+        _track_file(lambda f, p: f"{f},{'' if p == 5 else p},{1.0 + 0.5 * f},{10.0 + p}"),
+        ("t.csv", "column 'id'", "empty"),
+        timeout_s=300,
+    ),
+    Case(
+        "r7 silent: a track file's frame 10^20 (wrapped to -9.2e18)",
+        _track_file(lambda f, p: f"{10**20 if f == 0 else f},{p},{1.0 + 0.5 * f},{10.0 + p}"),
+        ("t.csv", "column 'frame'", "2^53"),
+        timeout_s=300,
+    ),
+    Case(
+        "r7 silent: a track file with two x columns (the first read)",
+        _track_file(lambda f, p: f"{f},{p},{1.0 + 0.5 * f},{10.0 + p},{20.0 - 0.5 * f}", header="frame,id,x,y,x"),
+        ("t.csv", "column 'x'", "2 times"),
+        timeout_s=300,
     ),
     Case(
         "r7 hang: gscl rules --scenes 10^8",

@@ -107,6 +107,12 @@ def test_a_track_that_leaves_the_window_ends_where_it_leaves(tmp_path):
         ("frame,id,x,y\n0.5,a,1.0,2.0\n", "column 'frame', row 2"),
         ("frame,id,x,y\n0,a,1.0,2.0\n1,a,1,2\n0,a,3,3\n", "appears twice in frame 0"),
         ("frame,id,x,y\n", "no rows"),
+        # each of these was read without a word: rows dropped, a frame wrapped, a column chosen
+        ("frame,id,x,y\n0,a,1,2\n1,,1,3\n", "column 'id', row 3: empty"),
+        ("frame,id,x,y\n100000000000000000000,a,1,2\n1,a,1,3\n", "column 'frame', row 2: .*within"),
+        ("frame,id,x,y\nTrue,a,1,2\nFalse,a,1,3\n", "column 'frame': true/false"),
+        ("frame,id,x,y,x\n0,a,1,2,5\n1,a,1,3,6\n", "column 'x' is given 2 times"),
+        ("frame;id;x;y\n0;a;1;2\n", "found frame;id;x;y.*comma-separated"),
     ],
 )
 def test_bad_track_files_are_named_with_their_field(tmp_path, content, message):
@@ -115,6 +121,16 @@ def test_bad_track_files_are_named_with_their_field(tmp_path, content, message):
     with pytest.raises(tracks.TrackFileError, match=message) as err:
         tracks.read_tracks(file)
     assert str(file) in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_parquet_track_file_names_its_rows_from_one(tmp_path):
+    """A Parquet file has no header line: its first row is row 1 (a CSV's first row is line 2)."""
+    file = tmp_path / "t.parquet"
+    pd.DataFrame({"frame": [0, 1, 2], "id": ["a", "a", None], "x": [1.0, 1.0, 1.0], "y": [0.0, 0.1, 0.2]}).to_parquet(
+        file
+    )
+    with pytest.raises(tracks.TrackFileError, match="column 'id', row 3: empty"):
+        tracks.read_tracks(file)
 
 
 def test_a_track_file_of_another_suffix_is_refused(tmp_path):

@@ -6,7 +6,8 @@ drives the base; :mod:`~socialnav.planners.learning.policy_training`: PPO in the
 an actor; :mod:`~socialnav.planners.learning.policy_social`: its optional cost-map input), and
 costs learned from demonstrated paths (:mod:`~socialnav.planners.learning.irl`: maximum-entropy
 IRL through the soft planner; :mod:`~socialnav.planners.learning.irl_fit`,
-:mod:`~socialnav.planners.learning.tracks`: people's tracks as demonstrations).
+:mod:`~socialnav.planners.learning.tracks`: people's tracks as demonstrations, on the walls of a
+ROS map, :mod:`~socialnav.planners.learning.ros_map`).
 
 The GSCL network's own training (data to weights, no simulator) is :mod:`socialnav.models`.
 """
@@ -14,6 +15,7 @@ The GSCL network's own training (data to weights, no simulator) is :mod:`socialn
 from socialnav.planners.learning.irl import Demonstrations
 from socialnav.planners.learning.policy import PolicyConfig, PolicyParams, policy_actor
 from socialnav.planners.learning.policy_training import PPOConfig
+from socialnav.planners.learning.ros_map import read_ros_map
 from socialnav.planners.learning.tracks import read_tracks, recorded_tracks
 
 __all__ = [
@@ -22,6 +24,7 @@ __all__ = [
     "PolicyConfig",
     "PolicyParams",
     "policy_actor",
+    "read_ros_map",
     "read_tracks",
     "recorded_tracks",
 ]
