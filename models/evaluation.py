@@ -160,7 +160,10 @@ def rules_run(
         model = SocialCostModel(graphdef, state["params"], state["batch_stats"], config)
         step = int(meta["step"])
     seed = rules.SUITE_SEED if seed is None else seed
-    cases = rules.build_suite(scenes_per_kind, seed=seed, report=report_scenes)
+    if report_scenes is None:
+        cases = rules.build_suite(scenes_per_kind, seed=seed)
+    else:  # drawn afresh, reporting; not kept
+        cases = rules.draw_suite(scenes_per_kind, seed=seed, report=report_scenes)
     suite = rules.evaluate(rotation_averaged(model.function, rotations), cases)
     report = {
         "run": str(run),

@@ -672,15 +672,15 @@ def _usable(case: Case) -> bool:
     )
 
 
-@functools.lru_cache(maxsize=4)
-def build_suite(
+def draw_suite(
     scenes_per_kind: int = 100, seed: int = SUITE_SEED, kinds: tuple[str, ...] = SCENES, report=None
 ) -> tuple[Case, ...]:
     """The suite's cases: ``scenes_per_kind`` scenes of each kind (a scene may check two rules),
     deterministic by ``seed``. A drawn scene whose regions hold fewer than
     :data:`MIN_REGION_CELLS` cells or whose expected contrast is below
     :data:`MIN_EXPECTED_CONTRAST` is drawn again (so every case can tell a rule from its absence).
-    ``report(done, total)``, if given, is called with the scenes drawn after each one."""
+    ``report(done, total)``, if given, is called with the scenes drawn after each one.
+    :func:`build_suite` keeps the last few suites drawn."""
     unknown = sorted(set(kinds) - set(_BUILDERS))
     if unknown:
         raise ValueError(f"unknown scene kinds {unknown}; known: {list(_BUILDERS)}")
@@ -700,6 +700,15 @@ def build_suite(
             if report is not None:
                 report(k * scenes_per_kind + made, len(kinds) * scenes_per_kind)
     return tuple(cases)
+
+
+@functools.lru_cache(maxsize=4)
+def build_suite(
+    scenes_per_kind: int = 100, seed: int = SUITE_SEED, kinds: tuple[str, ...] = SCENES
+) -> tuple[Case, ...]:
+    """:func:`draw_suite`'s cases, kept for the same arguments (training scores the same suite
+    after every epoch)."""
+    return draw_suite(scenes_per_kind, seed, kinds)
 
 
 def cases_per_scene(kinds: tuple[str, ...] = SCENES) -> int:

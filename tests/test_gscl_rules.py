@@ -330,9 +330,10 @@ def test_the_rules_command_writes_its_report_and_names_a_missing_run(tmp_path, c
 
 def test_the_suite_reports_its_scenes_and_makes_the_same_cases_for_every_scene():
     seen = []
-    cases = rules.build_suite(4, seed=3, report=lambda done, total: seen.append((done, total)))
+    cases = rules.draw_suite(4, seed=3, report=lambda done, total: seen.append((done, total)))
     assert seen == [(n, 4 * len(rules.SCENES)) for n in range(1, 4 * len(rules.SCENES) + 1)]
     assert len(cases) == 4 * rules.cases_per_scene() and rules.cases_per_scene() > len(rules.SCENES)
+    assert [c.scene for c in cases] == [c.scene for c in rules.build_suite(4, seed=3)]  # the cached one: the same
 
 
 @pytest.mark.skipif(memory.available_bytes() is None, reason="no /proc/meminfo here: no memory check")
