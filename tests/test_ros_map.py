@@ -85,6 +85,7 @@ def test_the_image_top_row_is_the_map_last_and_numbers_may_be_text(tmp_path):
         (("resolution: 0.1", "resolution: -1"), "field 'resolution': must be a positive"),
         (("resolution: 0.1", "resolution: true"), "field 'resolution': must be a number, got True"),
         (("resolution: 0.1", "resolution: .nan"), "field 'resolution': must be a finite number"),
+        (("resolution: 0.1", "resolution: ~"), "field 'resolution': must be a number, got None"),
         (("image: m.png\n", ""), "field 'image' is missing"),
         (("image: m.png", "image: none.png"), "field 'image': cannot read"),
         (("image: m.png", "image: ''"), "field 'image': must be the image file's name"),

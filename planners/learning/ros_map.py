@@ -48,9 +48,9 @@ class MapFileError(ValueError):
 
 def _number(path, meta: dict, field: str, default=None) -> float:
     """``meta[field]`` as a finite float (a YAML number or a numeric string, never a bool)."""
-    value = meta.get(field, default)
-    if value is None:
+    if field not in meta and default is None:
         raise MapFileError(f"{path}: field '{field}' is missing")
+    value = meta.get(field, default)
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise MapFileError(f"{path}: field '{field}': must be a number, got {value!r}")
     try:
