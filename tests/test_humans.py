@@ -653,6 +653,8 @@ def test_a_fit_json_is_read_back_as_its_models_and_a_bad_one_is_refused_naming_t
         "fields": (json.dumps({**fit, "gradient": {"values": {"time_gap_s": 1.0}}}), "gradient.values: expected"),
         "negative": (json.dumps({**fit, "nelder_mead": {"values": {**values, "radius_m": -0.2}}}),
                      "nelder_mead.values.radius_m"),
+        "true": (json.dumps({**fit, "gradient": {"values": {**values, "time_gap_s": True}}}),  # was read as 1 s
+                 "gradient.values.time_gap_s: True is not a positive number"),
     }  # fmt: skip
     for name, (text, field) in bad.items():
         wrong = tmp_path / name / "fit.json"

@@ -344,7 +344,11 @@ def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
         if wrong:
             raise ValueError(f"{path}: {method}.values: expected the fields {', '.join(FITTED[name])}, got "
                              f"{', '.join(values)}")  # fmt: skip
-        bad = [f for f, v in values.items() if not (isinstance(v, int | float) and np.isfinite(v) and v > 0)]
+        bad = [
+            f
+            for f, v in values.items()
+            if isinstance(v, bool) or not (isinstance(v, int | float) and np.isfinite(v) and v > 0)
+        ]
         if bad:
             raise ValueError(f"{path}: {method}.values.{bad[0]}: {values[bad[0]]!r} is not a positive number")
         models[f"{path.parent.name}:{method}"] = with_fitted(
