@@ -22,3 +22,9 @@ def shortfall(needed_bytes: float, share: float = 0.8) -> int | None:
     where the available memory is not known."""
     available = available_bytes()
     return available if available is not None and needed_bytes > share * available else None
+
+
+def units_that_fit(available_bytes: float, base_bytes: float, bytes_per_unit: float, share: float = 0.8) -> int:
+    """How many units of ``bytes_per_unit`` fit beside ``base_bytes`` in ``share`` of
+    ``available_bytes`` (what a refusal by :func:`shortfall` names as the most that would run)."""
+    return max(0, int((share * available_bytes - base_bytes) // bytes_per_unit))

@@ -103,7 +103,7 @@ def rules_size_problem(scenes_per_kind: int) -> str | None:
     available = memory.shortfall(needed)
     if available is None:
         return None
-    fit = max(0, int((0.8 * available - RULES_BASE_BYTES) / (RULES_BYTES_PER_CASE * rules.cases_per_scene())))
+    fit = memory.units_that_fit(available, RULES_BASE_BYTES, RULES_BYTES_PER_CASE * rules.cases_per_scene())
     return (
         f"{cases:,} cases need about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB "
         f"available; at most {fit:,} scenes of each kind fit"

@@ -41,16 +41,14 @@ def memory_problem(
 ) -> str | None:
     """Why the batch cannot run here (None: it can): it would hold more than 80 % of the memory
     available (:func:`memory_bytes`); the message says how many seeds would fit."""
-    from socialnav.common.memory import shortfall
+    from socialnav.common.memory import shortfall, units_that_fit
 
     needed = memory_bytes(n_probabilities, n_seeds, duration_s, sample_interval_s)
     available = shortfall(needed)
     if available is None:
         return None
-    per_seed = memory_bytes(n_probabilities, 1, duration_s, sample_interval_s) - memory_bytes(
-        n_probabilities, 0, duration_s, sample_interval_s
-    )
-    fits = max(int((0.8 * available - BASE_BYTES) // per_seed), 0)
+    per_seed = memory_bytes(n_probabilities, 1, duration_s, sample_interval_s) - BASE_BYTES
+    fits = units_that_fit(available, BASE_BYTES, per_seed)
     return (
         f"{n_probabilities} probabilities x {n_seeds:,} seeds in one batch, {duration_s / 3600:g} h each, hold "
         f"about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB available; about "

@@ -46,11 +46,8 @@ class MapFileError(ValueError):
     """A map file that cannot be used; the message names the file and the field."""
 
 
-def _number(path, meta: dict, field: str, default=None) -> float:
-    """``meta[field]`` as a finite float (a YAML number or a numeric string, never a bool)."""
-    if field not in meta and default is None:
-        raise MapFileError(f"{path}: field '{field}' is missing")
-    value = meta.get(field, default)
+def _number(path, field: str, value) -> float:
+    """The YAML ``value`` of ``field`` as a finite float (a number or a numeric string, never a bool)."""
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise MapFileError(f"{path}: field '{field}': must be a number, got {value!r}")
     try:
@@ -108,17 +105,17 @@ def read_ros_map(path) -> tuple[np.ndarray, float, tuple[float, float]]:
     image_name = meta["image"]
     if not isinstance(image_name, str) or not image_name.strip():
         raise MapFileError(f"{path}: field 'image': must be the image file's name, got {image_name!r}")
-    resolution = _number(path, meta, "resolution")
+    resolution = _number(path, "resolution", meta["resolution"])
     if resolution <= 0:
         raise MapFileError(f"{path}: field 'resolution': must be a positive number of metres, got {resolution!r}")
     origin = meta["origin"]
     if not (isinstance(origin, list) and len(origin) in (2, 3)):
         raise MapFileError(f"{path}: field 'origin': must be [x, y, yaw], got {origin!r}")
-    xyz = [_number(path, {f"origin[{i}]": v}, f"origin[{i}]") for i, v in enumerate(origin)]
+    xyz = [_number(path, f"origin[{i}]", v) for i, v in enumerate(origin)]
     if len(xyz) == 3 and xyz[2] != 0:
         raise MapFileError(f"{path}: field 'origin': a rotated map (yaw {xyz[2]}) is not supported")
-    occupied = _number(path, meta, "occupied_thresh", DEFAULT_OCCUPIED_THRESH)
-    free = _number(path, meta, "free_thresh", DEFAULT_FREE_THRESH)
+    occupied = _number(path, "occupied_thresh", meta.get("occupied_thresh", DEFAULT_OCCUPIED_THRESH))
+    free = _number(path, "free_thresh", meta.get("free_thresh", DEFAULT_FREE_THRESH))
     for field, value in (("occupied_thresh", occupied), ("free_thresh", free)):
         if not 0 <= value <= 1:
             raise MapFileError(f"{path}: field '{field}': must be in [0, 1], got {value!r}")
