@@ -24,8 +24,10 @@ discovered structure, maximum likelihood parameters, and the do-queries of seed 
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
 import pathlib
+import shutil
 import tempfile
 
 import numpy as np
@@ -121,7 +123,11 @@ def learn_mle(bn, data: pd.DataFrame):
     distinct, weights = _distinct_rows(bn, data)
     with tempfile.TemporaryDirectory(prefix="socialnav-mle-") as folder:
         csv = pathlib.Path(folder) / "rows.csv"
-        distinct.to_csv(csv, na_rep="?", index=False)  # what pyAgrum's own DataFrame path writes
+        try:
+            distinct.to_csv(csv, na_rep="?", index=False)  # what pyAgrum's own DataFrame path writes
+        except OSError as e:  # pandas names no file: a full temporary folder would be a mystery
+            reason = f"{e.strerror or e} (the rows pyAgrum's learner reads, in the temporary folder: TMPDIR chooses it)"
+            raise OSError(e.errno, reason, str(csv)) from e
         learner = gum.BNLearner(str(csv), bn)
     for i, weight in enumerate(weights):
         learner.setRecordWeight(i, float(weight))
@@ -519,11 +525,9 @@ class CausalEngine:
     # -- persistence -----------------------------------------------------------------------
     def save(self, folder: str | pathlib.Path) -> pathlib.Path:
         """Write ``engine.bifxml`` (the network) and ``engine.json`` (bins, labels, period)."""
-        import pyagrum as gum
-
         folder = pathlib.Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        write_atomic(folder / BN_FILE, lambda tmp: gum.saveBN(self.bn, str(tmp)))
+        write_atomic(folder / BN_FILE, lambda tmp: _save_bn(self.bn, tmp))
         meta = {
             "period_s": self.period_s,
             "labels": self.labels,
@@ -554,3 +558,18 @@ class CausalEngine:
             np.asarray(meta["support_sw"]),
             meta.get("do_support"),
         )
+
+
+def _save_bn(bn, path: pathlib.Path) -> None:
+    """``gum.saveBN(bn, path)``, its failure as an ``OSError``: pyAgrum's C++ stream says only that
+    "writing in the ostream failed", with no errno, so the error says how much room was left
+    there (a full disk, the usual cause, shows as 0 MB) and a command reports it in one line
+    naming the file (:func:`common.atomic.naming` puts the final name on it)."""
+    import pyagrum as gum
+
+    try:
+        gum.saveBN(bn, str(path))
+    except gum.GumIOError as e:
+        free_mb = shutil.disk_usage(path.parent).free / 1e6
+        code = errno.ENOSPC if free_mb < 1 else errno.EIO
+        raise OSError(code, f"pyAgrum could not write it ({e}); {free_mb:.1f} MB free there") from e

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import os
 import pathlib
+import re
 from collections.abc import Callable, Iterator
 
 
@@ -35,9 +36,34 @@ def atomic_path(path: str | pathlib.Path) -> Iterator[pathlib.Path]:
     try:
         yield tmp
         os.replace(tmp, path)
+    except OSError as e:
+        named = naming(e, path, tmp)
+        if named is e:
+            raise
+        raise named from e
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def naming(error: OSError, path: pathlib.Path, tmp: pathlib.Path) -> OSError:
+    """``error``, raised while writing ``tmp`` for ``path``, as the error of writing ``path``.
+
+    A writer deep in a library often says what failed but not where: Pillow's PNG writer on a
+    full disk raises ``[Errno 28] No space left on device`` with no file name, pyarrow an
+    ``OSError`` with no ``errno`` whose message carries ``[errno 28]``, ``open`` names the
+    temporary (``.tmp-<pid>-name``), which is removed by then. The error returned names the file
+    the caller asked for and keeps the errno (from pyarrow's message where it has none), so that a
+    command can tell a full disk from a bug; an error naming some other file is returned as it is.
+    """
+    if error.filename is not None and os.fspath(error.filename) != os.fspath(tmp):
+        return error
+    code = error.errno
+    if code is None:
+        found = re.search(r"\[errno (\d+)\]", str(error), flags=re.IGNORECASE)
+        code = int(found.group(1)) if found else None
+    reason = error.strerror or (os.strerror(code) if code else str(error))
+    return OSError(code, reason, str(path))
 
 
 def write_atomic(path: str | pathlib.Path, write: Callable[[pathlib.Path], object]) -> pathlib.Path:

@@ -545,14 +545,19 @@ def staged(folder: str | pathlib.Path, marker: str, overwrite: bool, job: str = 
     (:func:`commit`); on error the staging folder is removed and the old run is untouched."""
     folder = pathlib.Path(folder)
     stage = folder / f"{STAGING_PREFIX}{os.getpid()}"
+    missing = [p for p in (folder, *folder.parents) if not _exists(p)]
     if _exists(stage):
         _remove(stage)
     stage.mkdir(parents=True)
     try:
         yield stage
-    except BaseException:
+    except BaseException as e:
         _remove(stage)
-        raise
+        _remove_made(missing)
+        named = _named_in_folder(e, stage, folder)
+        if named is e:
+            raise
+        raise named from e
     try:
         commit(folder, stage, marker, overwrite, job)
     except CommitStuck:
@@ -561,7 +566,28 @@ def staged(folder: str | pathlib.Path, marker: str, overwrite: bool, job: str = 
         if _exists(stage):
             with contextlib.suppress(OSError):
                 _remove(stage)
+        _remove_made(missing)
         raise
+
+
+def _named_in_folder(error: BaseException, stage: pathlib.Path, folder: pathlib.Path) -> BaseException:
+    """An ``OSError`` naming a file in the (removed) staging folder, as naming the file of the run
+    it was to become (``out/.staging-123/pictures/a.png`` -> ``out/pictures/a.png``); any other
+    error as it is."""
+    if not isinstance(error, OSError) or error.filename is None:
+        return error
+    path = pathlib.Path(os.fsdecode(error.filename))
+    if not path.is_relative_to(stage):
+        return error
+    return OSError(error.errno, error.strerror or str(error), str(folder / path.relative_to(stage)))
+
+
+def _remove_made(folders: Sequence[pathlib.Path]) -> None:
+    """Remove the ``folders`` a failed job created (deepest first) where they are still empty: a
+    run stopped by a full disk or Ctrl-C leaves no empty output folder behind."""
+    for made in folders:
+        with contextlib.suppress(OSError):
+            made.rmdir()
 
 
 __all__ = [

@@ -400,3 +400,124 @@ def test_a_manifest_naming_a_path_outside_is_not_a_manifest(tmp_path, entry):
     )
     with pytest.raises(runfolder.NotOurs, match="not a socialnav run manifest"):
         runfolder.read_manifest(folder)
+
+
+# ------------------------------------------------ the machine's faults: a full disk, Ctrl-C, SIGTERM
+
+
+@pytest.fixture
+def file_size_limit():
+    """Lower this process's file-size limit (``ulimit -f``) for one test, then put it back: a
+    write past it fails with EFBIG ("File too large"; Python ignores SIGXFSZ), the way a full
+    disk's writes fail with ENOSPC, with no file system mounted."""
+    import resource
+
+    before = resource.getrlimit(resource.RLIMIT_FSIZE)
+
+    def lower(limit_bytes: int) -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, before[1]))
+
+    yield lower
+    resource.setrlimit(resource.RLIMIT_FSIZE, before)
+
+
+def test_a_write_the_disk_refuses_names_the_file_asked_for(tmp_path, file_size_limit):
+    """Python's own write and pyarrow's (an OSError with no errno, '[errno 27]' in its message)
+    fail past the limit; the error names the final file, never the removed temporary, and keeps
+    the errno, and nothing is left under either name."""
+    import errno
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from socialnav.common.atomic import write_atomic
+
+    file_size_limit(10_000)
+    table = pa.table({"x": list(range(100_000))})
+    for name, write in (
+        ("bytes.bin", lambda tmp: tmp.write_bytes(b"x" * 20_000)),
+        ("table.parquet", lambda tmp: pq.write_table(table, tmp, compression="none")),
+    ):
+        with pytest.raises(OSError) as caught:
+            write_atomic(tmp_path / name, write)
+        assert caught.value.errno == errno.EFBIG, (name, caught.value)
+        assert caught.value.filename == str(tmp_path / name)
+        assert list(tmp_path.iterdir()) == []
+
+
+def test_an_error_naming_another_file_is_left_as_it_is(tmp_path):
+    from socialnav.common.atomic import write_atomic
+
+    with pytest.raises(FileNotFoundError) as caught:
+        write_atomic(tmp_path / "out.txt", lambda tmp: (tmp_path / "absent" / "input.csv").read_text())
+    assert caught.value.filename == str(tmp_path / "absent" / "input.csv")
+
+
+def test_a_staged_run_the_disk_refuses_keeps_the_old_run_and_names_the_run_s_file(tmp_path, file_size_limit):
+    """A staged job's write past the limit: the error names the file of the run it was to become
+    (not the staging folder's), the previous run stays whole, and a folder the job created is
+    removed with its staging folder."""
+    from socialnav.common.atomic import write_text_atomic
+
+    old = tmp_path / "old"
+    with runfolder.staged(old, "run.json", False, job="test") as stage:
+        write_text_atomic(stage / "run.json", "{}")
+        write_text_atomic(stage / "data" / "a.txt", "first run")
+    fresh = tmp_path / "new" / "run"
+    file_size_limit(1_000)
+    for folder in (old, fresh):
+        with pytest.raises(OSError) as caught:
+            with runfolder.staged(folder, "run.json", True, job="test") as stage:
+                write_text_atomic(stage / "data" / "a.txt", "x" * 2_000)
+        assert caught.value.filename == str(folder / "data" / "a.txt")
+    assert (old / "data" / "a.txt").read_text() == "first run"
+    assert not list(old.glob(f"{runfolder.STAGING_PREFIX}*"))
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_command_ends_a_machine_fault_in_one_line(tmp_path, file_size_limit, capsys):
+    """``cli.run_command``: a write past the limit is exit status 2 and one line naming the file;
+    Ctrl-C 130; a real SIGTERM to this process 143 (the handler's ``finally`` ran), with the
+    previous SIGTERM handler back afterwards; an error that is not the machine's propagates."""
+    import signal
+
+    from socialnav import cli
+    from socialnav.common.atomic import write_atomic
+
+    def write_too_much(args):
+        write_atomic(tmp_path / "big.bin", lambda tmp: tmp.write_bytes(b"x" * 20_000))
+        return 0
+
+    file_size_limit(10_000)
+    assert cli.run_command("socialnav test", write_too_much, None) == 2
+    assert capsys.readouterr().err.strip() == f"socialnav test: cannot write {tmp_path / 'big.bin'}: File too large"
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    assert cli.run_command("socialnav test", interrupted, None) == 130
+    assert capsys.readouterr().err.strip() == "socialnav test: interrupted"
+
+    cleaned = []
+
+    def terminated(args):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)  # the handler raises at the next bytecode
+            return 0
+        finally:
+            cleaned.append(True)
+
+    previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        assert cli.run_command("socialnav test", terminated, None) == 143
+        assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert cleaned == [True]
+    assert capsys.readouterr().err.strip() == "socialnav test: terminated (SIGTERM)"
+
+    def a_bug(args):
+        return (tmp_path / "absent.json").read_text()
+
+    with pytest.raises(FileNotFoundError):
+        cli.run_command("socialnav test", a_bug, None)

@@ -14,16 +14,27 @@ Runtime set-up (one XLA host device per core, JAX's persistent compilation cache
 before JAX is imported; the module of the command asked for (one a command, beside this file) is
 imported after it, and only that one (``socialnav simulate`` does not import the arena's or the
 causal pipeline's libraries).
+
+Faults of the machine end a command with one line, not a traceback: a full disk (or a quota, a
+file-size limit, a file system turned read-only, an I/O error) names the file it was writing,
+exit status 2; Ctrl-C says "interrupted", 130; SIGTERM (a batch scheduler's time limit, ``kill``)
+is taken as Ctrl-C is, so that the job's cleanup runs (a staged run folder removed, the previous
+run kept, the folder's lock released), 143. ``SOCIALNAV_VERBOSE=1`` shows the traceback instead.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
+import os
+import signal
 import sys
+from collections.abc import Callable
 
 from socialnav import runtime
 
-__all__ = ["COMMAND_MODULES", "build_parser", "main"]
+__all__ = ["COMMAND_MODULES", "MACHINE_FAULTS", "Terminated", "build_parser", "main", "run_command"]
 
 
 # Each command and the module beside this file that defines it: a command imports its own module
@@ -70,6 +81,44 @@ def _command(argv: list[str]) -> str | None:
     return next((a for a in argv if not a.startswith("-")), None)
 
 
+# The errnos of a machine that cannot hold or take what a job writes (not of bad input, not of a
+# bug): a full disk, a quota, the file-size limit (ulimit -f), a file system made read-only, a
+# device's I/O error.
+MACHINE_FAULTS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO})
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is, as Ctrl-C's KeyboardInterrupt is: the ``finally``
+    blocks and context managers that remove a job's temporaries run (Python's default for
+    SIGTERM ends the process at once, leaving a staged folder and the lock file)."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated(signal.Signals(signum).name)
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM raises :class:`Terminated` inside the block, where no one else handles it (the
+    default action, in the main thread); the previous handler is restored after."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGTERM) != signal.SIG_DFL:
+        yield
+        return
+    signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _command_words(args: argparse.Namespace) -> str:
+    """The command a user typed, as its messages name it: ``socialnav gscl rules``."""
+    sub = getattr(args, f"{args.command}_command", None)
+    return " ".join(["socialnav", args.command, *([sub] if sub else [])])
+
+
 def main(argv: list[str] | None = None) -> int:
     runtime.request_host_devices()
     runtime.request_wide_vectors()
@@ -78,7 +127,31 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(_command(argv)).parse_args(argv)
     args.argv = argv  # a run folder records the command that made it
-    return args.handler(args)
+    return run_command(_command_words(args), args.handler, args)
+
+
+def run_command(name: str, handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
+    """``handler(args)``'s exit status, a fault of the machine ended in one line on stderr naming
+    the command ``name`` (see the module's docstring): 2 for a write the machine refused, 130 for
+    Ctrl-C, 143 for SIGTERM. Any other error propagates, traceback and all (it is a bug, or the
+    handler's own to report); with ``SOCIALNAV_VERBOSE=1`` every error does."""
+    verbose = os.environ.get("SOCIALNAV_VERBOSE", "") not in ("", "0")
+    try:
+        with _sigterm_as_interrupt():
+            return handler(args)
+    except KeyboardInterrupt as e:
+        if verbose:
+            raise
+        terminated = isinstance(e, Terminated)
+        print(f"\n{name}: {'terminated (SIGTERM)' if terminated else 'interrupted'}", file=sys.stderr)
+        return 128 + int(signal.SIGTERM if terminated else signal.SIGINT)
+    except OSError as e:
+        if verbose or e.errno not in MACHINE_FAULTS:
+            raise
+        verb = "cannot read or write" if e.errno == errno.EIO else "cannot write"
+        where = f" {e.filename}:" if e.filename else ":"
+        print(f"{name}: {verb}{where} {e.strerror or e}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":
