@@ -1,13 +1,15 @@
 """Runtime set-up of the ``socialnav`` command: XLA host devices, vector width and JAX's
-compilation cache.
+compilation cache (kept on disk, and repaired where an entry was cut short).
 
 All must happen before JAX is imported to take full effect, which is why only the composition
-root does them (this module does not import JAX): library code never changes the process's
-devices or caches behind a user's back."""
+root does them (this module does not import JAX; the cache's repair uses JAX's own reading of an
+entry once JAX has warned about one): library code never changes the process's devices or caches
+behind a user's back."""
 
 from __future__ import annotations
 
 import os
+import re
 
 from socialnav.common.machine import cpu_isa, usable_cores
 
@@ -105,3 +107,68 @@ def quiet_third_party_logs() -> None:
         previous(unraisable)
 
     sys.unraisablehook = hook
+
+
+# JAX's warning when a cache entry cannot be read, naming the program (its entry's file is
+# ``<program>-<hash>-cache`` in the cache folder).
+_UNREADABLE_ENTRY = re.compile(r"Error reading persistent compilation cache entry for '([^'/]+)'")
+
+
+def repair_compilation_cache() -> None:
+    """Remove a compilation-cache entry that cannot be read when JAX warns about it, so that the
+    program compiled again is stored again.
+
+    JAX writes an entry in place (``path.write_bytes``) and never replaces an existing one: an
+    entry cut short (a full disk, a file-size limit, a process killed while writing it) stays in
+    the cache, and every later process reads it, warns "Error reading persistent compilation
+    cache entry for 'jit_step'" and compiles that program again, for good. Installed as a hook
+    on ``warnings.showwarning``: on that warning, each entry of that program in the cache folder
+    that JAX's own decompression refuses is removed (with its access-time file), before JAX
+    compiles it and writes it afresh. Entries that read are left alone; a warning filtered out
+    (``-W ignore``) repairs nothing; nothing happens without the warning.
+    """
+    import warnings
+
+    previous = warnings.showwarning
+    if getattr(previous, "repairs_compilation_cache", False):
+        return  # installed already (a second command run in one process)
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        found = _UNREADABLE_ENTRY.search(str(message))
+        if found:
+            removed = remove_unreadable_entries(found.group(1))
+            if removed:
+                message = f"{message} (removed {', '.join(removed)}: it is stored again once compiled)"
+        previous(message, category, filename, lineno, file, line)
+
+    show.repairs_compilation_cache = True
+    warnings.showwarning = show
+
+
+def remove_unreadable_entries(program: str, folder: str | None = None) -> list[str]:
+    """Remove the cache entries of ``program`` (``jit_step``) in ``folder`` (default: JAX's cache
+    folder) that JAX cannot decompress; returns their file names."""
+    import glob
+    import pathlib
+    import sys
+
+    if folder is None:
+        jax = sys.modules.get("jax")
+        folder = jax.config.jax_compilation_cache_dir if jax is not None else None
+    try:
+        from jax._src.compilation_cache import decompress_executable  # JAX's own reading of an entry
+    except ImportError:  # a JAX without it: leave the cache as JAX keeps it
+        return []
+    if not folder or not pathlib.Path(folder).is_dir():
+        return []
+    removed = []
+    for entry in sorted(pathlib.Path(folder).glob(f"{glob.escape(program)}-*-cache")):
+        try:
+            decompress_executable(entry.read_bytes())
+        except OSError:
+            continue  # gone or unreadable for another reason: not ours to remove
+        except Exception:
+            entry.unlink(missing_ok=True)
+            entry.with_name(entry.name.removesuffix("-cache") + "-atime").unlink(missing_ok=True)
+            removed.append(entry.name)
+    return removed

@@ -100,3 +100,44 @@ def test_a_trainings_hosts_are_its_lines_each_once_in_order():
     history = [{"epoch": 1}, {"epoch": 2, "host": here}, {"epoch": 3, "host": there}, {"epoch": 4, "host": here}]
     assert hosts_of(history) == [here, there]
     assert hosts_of([{"epoch": 1}]) == [] and hosts_of([]) == []
+
+
+CACHED_PROGRAM = """
+import sys, jax, jax.numpy as jnp
+from socialnav import runtime
+jax.config.update("jax_compilation_cache_dir", sys.argv[1])
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0)
+jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+if sys.argv[2] == "repair":
+    runtime.repair_compilation_cache()
+print(float(jax.jit(lambda x: jnp.sin(x) * 3)(1.0)))
+"""
+
+
+@pytest.mark.slow  # three processes compiling: 13 s
+def test_a_cache_entry_cut_short_is_stored_again_once_not_read_for_good(tmp_path):
+    """An entry cut short (as a full disk leaves it): JAX alone warns about it in every process
+    and keeps it; with the repair, the first process that meets it removes it and stores the
+    program again, and the next reads it without a word. Programs that read are left alone."""
+    cache = tmp_path / "cache"
+
+    def run(mode: str) -> str:
+        done = subprocess.run(
+            [sys.executable, "-c", CACHED_PROGRAM, str(cache), mode], cwd=ROOT, capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr
+        assert float(done.stdout) == pytest.approx(3 * 0.8414709848)
+        return done.stderr
+
+    assert "Error reading" not in run("repair")
+    (entry,) = cache.glob("jit__lambda-*-cache")
+    whole = entry.read_bytes()
+    (cache / "jit__other-0-cache").write_bytes(b"not ours to judge by name")  # another program's entry
+    entry.write_bytes(whole[: len(whole) // 2])
+    for _ in range(2):  # without the repair: the same warning every time, the entry kept cut short
+        assert "Error reading persistent compilation cache entry for 'jit__lambda'" in run("plain")
+        assert len(entry.read_bytes()) == len(whole) // 2
+    assert f"removed {entry.name}" in run("repair")
+    assert entry.exists() and runtime.remove_unreadable_entries("jit__lambda", str(cache)) == []  # stored again, whole
+    assert "Error reading" not in run("repair")
+    assert (cache / "jit__other-0-cache").exists()

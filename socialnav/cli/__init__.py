@@ -123,6 +123,7 @@ def main(argv: list[str] | None = None) -> int:
     runtime.request_host_devices()
     runtime.request_wide_vectors()
     runtime.request_compilation_cache()
+    runtime.repair_compilation_cache()
     runtime.quiet_third_party_logs()
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(_command(argv)).parse_args(argv)
