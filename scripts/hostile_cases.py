@@ -30,7 +30,9 @@ import math
 import os
 import pathlib
 import re
+import resource
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -56,6 +58,12 @@ class Case:
     fail_label: str = "wrong"  # what a failed check is called
     timeout_s: float = 120.0
     misleading: tuple[str, ...] = ()  # words that make an error vague even if it names the rest
+    # A full disk, as a file-size limit (``ulimit -f``: a write past it fails with EFBIG, "File
+    # too large", where ENOSPC needs a small file system mounted as root). The compilation cache
+    # is off in such a case: JAX writes its entries in place and never replaces one, so an entry
+    # cut short by the limit would stay in the user's cache.
+    file_size_limit_bytes: int | None = None
+    send_signal: tuple[int, float] | None = None  # (signal, seconds after the start): Ctrl-C, a scheduler's SIGTERM
 
 
 def scenario(tmp: pathlib.Path, file: str, mutate: Callable[[dict], object]) -> pathlib.Path:
@@ -975,6 +983,59 @@ def _timed_arena(tmp):
     return argv + ["navfn,snl_small,orca", "--variants", "6", "--no-progress"]
 
 
+# --- round eight: the machine's faults (a full disk, Ctrl-C, a scheduler's SIGTERM) ---------------
+
+FULL_DISK_BYTES = 20_000  # short of the largest file of every job below (a layer's picture is 17-29 kB)
+WHOLE_DAY = ["--worlds", "2", "--no-progress"]  # long enough (tens of seconds) to be stopped midway
+
+
+def _one_line(proc: subprocess.CompletedProcess, *words: str) -> bool:
+    """No traceback, and the last line of stderr holds ``words`` (case-insensitive)."""
+    lines = [line for line in (proc.stderr or "").splitlines() if line.strip()]
+    return "Traceback" not in (proc.stderr or "") and bool(lines) and all(w.lower() in lines[-1].lower() for w in words)
+
+
+def _nothing_left(folder: pathlib.Path) -> bool:
+    """``folder`` absent, or holding nothing (no staging folder, no lock file)."""
+    return not folder.exists() or not any(folder.iterdir())
+
+
+def _stopped_cleanly(code: int, words: str) -> Callable[[pathlib.Path, subprocess.CompletedProcess], bool]:
+    def check(tmp, proc):
+        return proc.returncode == code and _one_line(proc, words) and _nothing_left(tmp / "out")
+
+    return check
+
+
+NAMES_A_FILE = re.compile(r"cannot write /\S+: ")
+
+
+def _names_a_file(proc: subprocess.CompletedProcess) -> bool:
+    """Exit status 2 and one line (no traceback) naming the file the command could not write."""
+    lines = [line for line in (proc.stderr or "").splitlines() if line.strip()]
+    named = bool(lines) and NAMES_A_FILE.search(lines[-1]) is not None
+    return proc.returncode == 2 and _one_line(proc, "socialnav") and named
+
+
+def _full_disk_nothing_left(tmp, proc):
+    return _names_a_file(proc) and _nothing_left(tmp / "out")
+
+
+def _previous_engine(tmp):
+    """A finished ``learn`` run in ``tmp/out`` (the fixture's), then ``learn --overwrite`` into it."""
+    shutil.copytree(base_run() / "causal", tmp / "out")
+    (tmp / "before").mkdir()
+    for f in (tmp / "out").iterdir():
+        if f.is_file():
+            shutil.copy(f, tmp / "before" / f.name)
+    return [*SOCIALNAV, "learn", "--logs", str(base_run()), "--out", str(tmp / "out"), "--overwrite", "--no-progress"]
+
+
+def _previous_engine_kept(tmp, proc):
+    kept = all((tmp / "out" / f.name).read_bytes() == f.read_bytes() for f in (tmp / "before").iterdir())
+    return _names_a_file(proc) and kept and not list((tmp / "out").glob(".staging-*"))
+
+
 CASES: list[Case] = [
     # params.json: ranges and types
     Case(
@@ -1806,6 +1867,100 @@ CASES: list[Case] = [
         api=True,
     ),
     Case(
+        "r8 traceback: layers on a full disk",
+        command("layers", "--out", "{tmp}/img"),
+        ("socialnav layers: cannot write", ".png", "file too large"),
+        file_size_limit_bytes=FULL_DISK_BYTES,
+        timeout_s=300,
+    ),
+    Case(
+        "r8 traceback: learn on a full disk",
+        command("learn", "--logs", "{run}", "--out", "{tmp}/out", "--no-progress"),
+        check=_full_disk_nothing_left,
+        file_size_limit_bytes=FULL_DISK_BYTES,
+        timeout_s=300,
+    ),
+    Case(
+        "r8 traceback: learn --overwrite on a full disk (the old engine kept)",
+        _previous_engine,
+        check=_previous_engine_kept,
+        fail_label="data lost",
+        file_size_limit_bytes=FULL_DISK_BYTES,
+        timeout_s=300,
+    ),
+    Case(
+        "r8 traceback: evaluate on a full disk",
+        command(
+            "evaluate",
+            "--tables",
+            "{tables}",
+            "--replicas",
+            "1",
+            "--slots",
+            "S1",
+            "--out",
+            "{tmp}/out",
+            "--no-progress",
+        ),
+        check=_full_disk_nothing_left,
+        file_size_limit_bytes=FULL_DISK_BYTES,
+        timeout_s=300,
+    ),
+    Case(
+        "r8 traceback: gscl rules on a full disk",
+        command(
+            "gscl",
+            "rules",
+            "--run",
+            str(ROOT / "data" / "gscl" / "default"),
+            "--scenes",
+            "2",
+            "--out",
+            "{tmp}/r",
+            "--no-progress",
+        ),  # fmt: skip
+        ("socialnav gscl rules: cannot write", "rules", "file too large"),
+        file_size_limit_bytes=FULL_DISK_BYTES,
+        timeout_s=300,
+    ),
+    Case(
+        "r8 traceback: humans validate --quick on a full disk (an empty folder left)",
+        command("humans", "validate", "--quick", "--out", "{tmp}/out", "--no-progress"),
+        check=_full_disk_nothing_left,
+        file_size_limit_bytes=FULL_DISK_BYTES,
+        timeout_s=600,
+    ),
+    Case(
+        "r8 vague: arena on a full disk (no file named)",
+        command(
+            "arena",
+            "--scenes",
+            "casn_head_on",
+            "--methods",
+            "navfn",
+            "--variants",
+            "2",
+            "--out",
+            "{tmp}/a",
+            "--no-progress",
+        ),  # fmt: skip
+        ("socialnav arena: cannot write", "/a/", "file too large"),
+        file_size_limit_bytes=FULL_DISK_BYTES,
+        timeout_s=300,
+    ),
+    Case(
+        "r8 traceback: simulate stopped by Ctrl-C",
+        command("simulate", "--out", "{tmp}/out", *WHOLE_DAY),
+        check=_stopped_cleanly(130, "socialnav simulate: interrupted"),
+        send_signal=(signal.SIGINT, 20.0),
+    ),
+    Case(
+        "r8 leftovers: simulate stopped by SIGTERM (a scheduler's time limit)",
+        command("simulate", "--out", "{tmp}/out", *WHOLE_DAY),
+        check=_stopped_cleanly(143, "socialnav simulate: terminated (SIGTERM)"),
+        send_signal=(signal.SIGTERM, 20.0),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),
@@ -1826,6 +1981,37 @@ CASES: list[Case] = [
 API_ERROR = re.compile(r"^(ValueError|socialnav\.jaxsim\.scenario\.errors\.ScenarioError): ")
 
 
+def _run(case: Case, argv: list[str], tmp: pathlib.Path) -> subprocess.CompletedProcess:
+    """Run ``argv`` as the case says: under its file-size limit, sent its signal."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    limit = case.file_size_limit_bytes
+
+    def start() -> None:
+        signal.signal(signal.SIGINT, signal.SIG_DFL)  # a harness started with & ignores Ctrl-C; its cases do not
+        if limit is not None:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    if limit is not None:
+        env.pop("JAX_COMPILATION_CACHE_DIR", None)
+        env["SOCIALNAV_JAX_CACHE"] = "off"
+    with subprocess.Popen(
+        argv, cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, preexec_fn=start
+    ) as child:
+        try:
+            if case.send_signal is not None:
+                sig, after_s = case.send_signal
+                try:
+                    child.wait(timeout=after_s)  # finished first: the case did not test what it says
+                except subprocess.TimeoutExpired:
+                    child.send_signal(sig)
+            out, err = child.communicate(timeout=case.timeout_s)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.communicate()
+            raise
+    return subprocess.CompletedProcess(argv, child.returncode, out, err)
+
+
 def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
     """(outcome, the message's last line)."""
     try:
@@ -1834,14 +2020,7 @@ def classify(case: Case, tmp: pathlib.Path) -> tuple[str, str]:
         return "harness error", f"{type(e).__name__}: {e}"
     t0 = time.perf_counter()
     try:
-        proc = subprocess.run(
-            argv,
-            cwd=tmp,
-            capture_output=True,
-            text=True,
-            timeout=case.timeout_s,
-            env=dict(os.environ, PYTHONPATH=str(ROOT)),
-        )
+        proc = _run(case, argv, tmp)
     except subprocess.TimeoutExpired:
         return "hang", f"no answer in {case.timeout_s:.0f} s"
     proc.took_s = time.perf_counter() - t0  # for the checks of a run's own time estimate
