@@ -68,7 +68,9 @@ def request_compilation_cache(path: str | None = None) -> None:
 
     The folder is ``path``, else ``$SOCIALNAV_JAX_CACHE``, else ``~/.cache/socialnav-jax/xla``;
     ``SOCIALNAV_JAX_CACHE=off`` switches it off. Does nothing if ``JAX_COMPILATION_CACHE_DIR`` is
-    already set. Best called before ``import jax``; afterwards it updates JAX's config.
+    already set. A folder that cannot hold the cache (a file, read-only) is named in a one-line
+    warning and the cache left off, where JAX would silently compile everything in every process.
+    Best called before ``import jax``; afterwards it updates JAX's config.
     """
     import pathlib
     import sys
@@ -79,9 +81,31 @@ def request_compilation_cache(path: str | None = None) -> None:
     if setting.lower() in ("off", "0", "none", "false"):
         return
     folder = setting or str(pathlib.Path.home() / ".cache" / "socialnav-jax" / "xla")
+    problem = cache_folder_problem(folder)
+    if problem:  # JAX would run without its cache, silently compiling everything in every process
+        print(
+            f"socialnav: warning: the compilation cache {folder}: {problem}; running without it "
+            "(SOCIALNAV_JAX_CACHE names another folder, or 'off')",
+            file=sys.stderr,
+        )
+        return
     os.environ["JAX_COMPILATION_CACHE_DIR"] = folder
     if "jax" in sys.modules:
         sys.modules["jax"].config.update("jax_compilation_cache_dir", folder)
+
+
+def cache_folder_problem(folder: str) -> str | None:
+    """Why ``folder`` cannot hold the compilation cache (a file of that name, a folder that cannot
+    be made or written), creating it where it is missing; None if it can."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except FileExistsError:
+        return "a file, not a folder"
+    except OSError as e:
+        return f"cannot be made ({e.strerror or e})"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return "not writable"
+    return None
 
 
 def quiet_third_party_logs() -> None:

@@ -141,3 +141,19 @@ def test_a_cache_entry_cut_short_is_stored_again_once_not_read_for_good(tmp_path
     assert entry.exists() and runtime.remove_unreadable_entries("jit__lambda", str(cache)) == []  # stored again, whole
     assert "Error reading" not in run("repair")
     assert (cache / "jit__other-0-cache").exists()
+
+
+def test_a_cache_folder_that_cannot_hold_the_cache_is_named_and_left_off(tmp_path, monkeypatch, capsys):
+    """SOCIALNAV_JAX_CACHE naming a file (or a folder under one): a one-line warning naming it,
+    and no cache asked of JAX (which would run without one, saying nothing); a folder that can
+    hold it is made and asked for."""
+    monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
+    (tmp_path / "a-file").write_text("not a folder")
+    for folder, why in ((tmp_path / "a-file", "a file, not a folder"), (tmp_path / "a-file" / "xla", "cannot be made")):
+        monkeypatch.setenv("SOCIALNAV_JAX_CACHE", str(folder))
+        runtime.request_compilation_cache()
+        assert "JAX_COMPILATION_CACHE_DIR" not in os.environ
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(f"socialnav: warning: the compilation cache {folder}: {why}") and "\n" not in err
+    assert runtime.cache_folder_problem(str(tmp_path / "new" / "xla")) is None
+    assert (tmp_path / "new" / "xla").is_dir()
