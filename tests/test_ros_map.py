@@ -44,6 +44,18 @@ def test_trinary_averages_opacity_in_and_scale_leaves_translucent_pixels_free(tm
     assert _read(tmp_path, rgba, "mode: scale\n").tolist() == [1, 0, 1, 0, 0]
 
 
+def test_a_grey_image_with_a_transparent_shade_has_alpha_as_nav2_reads_it(tmp_path):
+    """A grey PNG whose tRNS chunk makes grey 0 transparent is read with an alpha channel, as
+    Nav2's image library reads any PNG with a tRNS chunk: opaque grey 60 averages its opacity in
+    (free), where the same pixels without the chunk make it a wall."""
+    grey = np.array([[60, 0, 255]], np.uint8)
+    (tmp_path / "m.yaml").write_text(YAML.format(image="m.png"))
+    for transparency, walls in ((0, [0, 1, 0]), (None, [1, 1, 0])):
+        extra = {} if transparency is None else {"transparency": transparency}
+        Image.fromarray(grey, mode="L").save(tmp_path / "m.png", **extra)
+        assert ros_map.read_ros_map(tmp_path / "m.yaml")[0][0].tolist() == walls, transparency
+
+
 def test_scale_mode_makes_a_wall_where_the_scaled_value_rounds_to_100(tmp_path):
     """Between the thresholds scale mode publishes rint((occ - free) / (occupied - free) * 100):
     with free 0.2 and occupied 0.7, grey 78 (occ 0.694, 98.8) rounds to 99 and is free, grey 77 (occ

@@ -20,7 +20,8 @@ lethal; every other cell, unknown ones included, is free (the GSCL network's inp
 free cells only, as a static layer with ``track_unknown_space`` false has). Per pixel, as
 ``map_io.cpp`` computes it: the shade is the mean of the red, green and blue channels in [0, 1]
 (grey images: the grey level; 16-bit images: over 65535), and in ``trinary`` mode an image with
-an alpha channel averages its opacity in as a fourth channel; ``occ`` is ``1 - shade``, or
+an alpha channel averages its opacity in as a fourth channel (a PNG with a ``tRNS`` chunk, grey or
+palette, has one, as Nav2's image library reads it); ``occ`` is ``1 - shade``, or
 ``shade`` with ``negate``. Then
 
 * ``trinary`` (the default): a wall where ``occ > occupied_thresh``;
@@ -67,7 +68,7 @@ def _shade(image, with_alpha: bool) -> tuple[np.ndarray, np.ndarray]:
         if grey.size and (grey.min() < 0 or grey.max() > 65535):
             raise ValueError(f"{mode} pixels outside 0..65535")
         return grey / 65535.0, np.ones(grey.shape, bool)
-    if mode in ("1", "L"):  # grey: the mean of three equal channels, without making them
+    if mode in ("1", "L") and "transparency" not in image.info:  # grey: the mean of three equal channels
         grey = np.asarray(image.convert("L"), np.float64) / 255.0
         return grey, np.ones(grey.shape, bool)
     has_alpha = "A" in image.getbands() or "transparency" in image.info
