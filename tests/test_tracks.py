@@ -112,6 +112,7 @@ def test_a_track_that_leaves_the_window_ends_where_it_leaves(tmp_path):
         ("frame,id,x,y\n100000000000000000000,a,1,2\n1,a,1,3\n", "column 'frame', row 2: .*within"),
         ("frame,id,x,y\nTrue,a,1,2\nFalse,a,1,3\n", "column 'frame': true/false"),
         ("frame,id,x,y,x\n0,a,1,2,5\n1,a,1,3,6\n", "column 'x' is given 2 times"),
+        ('"frame","id","x","y",x\n0,a,1,2,5\n1,a,1,3,6\n', "column 'x' is given 2 times"),  # quoted names
         ("frame;id;x;y\n0;a;1;2\n", "found frame;id;x;y.*comma-separated"),
     ],
 )

@@ -30,6 +30,7 @@ moves diagonally past a wall's corner (a move the planner cannot make).
 
 from __future__ import annotations
 
+import csv as csv_format
 import math
 import pathlib
 
@@ -81,8 +82,8 @@ def read_tracks(path) -> dict[object, np.ndarray]:
 
     names = [str(c) for c in df.columns]
     if csv:  # pandas renames a repeated column ("x", "x.1") and reads the first: which was meant?
-        with open(path, encoding="utf-8-sig", errors="replace") as f:
-            header = [h.strip() for h in f.readline().rstrip("\r\n").split(",")]
+        with open(path, encoding="utf-8-sig", errors="replace", newline="") as f:
+            header = [h.strip() for h in next(csv_format.reader([f.readline()]), [])]  # quoted names too
         twice = [c for c in REQUIRED_COLUMNS if header.count(c) > 1]
         if twice:
             raise TrackFileError(f"{path}: column '{twice[0]}' is given {header.count(twice[0])} times in the header")
