@@ -187,9 +187,7 @@ def check_writable(folder: str | pathlib.Path) -> None:
     except OSError as e:
         raise RunFolderError(f"{folder}: cannot write there ({e.strerror or e})") from None
     finally:
-        for made in missing:  # the job creates its folders when it writes, not before
-            with contextlib.suppress(OSError):
-                made.rmdir()
+        _remove_made(missing)  # the job creates its folders when it writes, not before
 
 
 def check_inputs(out: str | pathlib.Path, inputs: Iterable[str | pathlib.Path | None], option: str = "--out") -> None:

@@ -989,10 +989,19 @@ FULL_DISK_BYTES = 20_000  # short of the largest file of every job below (a laye
 WHOLE_DAY = ["--worlds", "2", "--no-progress"]  # long enough (tens of seconds) to be stopped midway
 
 
+def full_disk(name: str, make, expect_words: tuple[str, ...] = (), **fields) -> Case:
+    """A case run under :data:`FULL_DISK_BYTES`'s file-size limit (300 s unless ``timeout_s``)."""
+    return Case(name, make, expect_words, file_size_limit_bytes=FULL_DISK_BYTES, **{"timeout_s": 300, **fields})
+
+
+def _last_line(proc: subprocess.CompletedProcess) -> str:
+    return next((line for line in reversed((proc.stderr or "").splitlines()) if line.strip()), "")
+
+
 def _one_line(proc: subprocess.CompletedProcess, *words: str) -> bool:
     """No traceback, and the last line of stderr holds ``words`` (case-insensitive)."""
-    lines = [line for line in (proc.stderr or "").splitlines() if line.strip()]
-    return "Traceback" not in (proc.stderr or "") and bool(lines) and all(w.lower() in lines[-1].lower() for w in words)
+    last = _last_line(proc)
+    return "Traceback" not in (proc.stderr or "") and bool(last) and all(w.lower() in last.lower() for w in words)
 
 
 def _nothing_left(folder: pathlib.Path) -> bool:
@@ -1012,9 +1021,7 @@ NAMES_A_FILE = re.compile(r"cannot write /\S+: ")
 
 def _names_a_file(proc: subprocess.CompletedProcess) -> bool:
     """Exit status 2 and one line (no traceback) naming the file the command could not write."""
-    lines = [line for line in (proc.stderr or "").splitlines() if line.strip()]
-    named = bool(lines) and NAMES_A_FILE.search(lines[-1]) is not None
-    return proc.returncode == 2 and _one_line(proc, "socialnav") and named
+    return proc.returncode == 2 and _one_line(proc, "socialnav") and NAMES_A_FILE.search(_last_line(proc)) is not None
 
 
 def _full_disk_nothing_left(tmp, proc):
@@ -1866,87 +1873,48 @@ CASES: list[Case] = [
         ("n_worlds=100000000", "GB at once"),
         api=True,
     ),
-    Case(
+    full_disk(
         "r8 traceback: layers on a full disk",
         command("layers", "--out", "{tmp}/img"),
         ("socialnav layers: cannot write", ".png", "file too large"),
-        file_size_limit_bytes=FULL_DISK_BYTES,
-        timeout_s=300,
     ),
-    Case(
+    full_disk(
         "r8 traceback: learn on a full disk",
-        command("learn", "--logs", "{run}", "--out", "{tmp}/out", "--no-progress"),
+        command(*"learn --logs {run} --out {tmp}/out --no-progress".split()),
         check=_full_disk_nothing_left,
-        file_size_limit_bytes=FULL_DISK_BYTES,
-        timeout_s=300,
     ),
-    Case(
+    full_disk(
         "r8 traceback: learn --overwrite on a full disk (the old engine kept)",
         _previous_engine,
         check=_previous_engine_kept,
         fail_label="data lost",
-        file_size_limit_bytes=FULL_DISK_BYTES,
-        timeout_s=300,
     ),
-    Case(
+    full_disk(
         "r8 traceback: evaluate on a full disk",
-        command(
-            "evaluate",
-            "--tables",
-            "{tables}",
-            "--replicas",
-            "1",
-            "--slots",
-            "S1",
-            "--out",
-            "{tmp}/out",
-            "--no-progress",
-        ),
+        command(*"evaluate --tables {tables} --replicas 1 --slots S1 --out {tmp}/out --no-progress".split()),
         check=_full_disk_nothing_left,
-        file_size_limit_bytes=FULL_DISK_BYTES,
-        timeout_s=300,
     ),
-    Case(
+    full_disk(
         "r8 traceback: gscl rules on a full disk",
         command(
             "gscl",
             "rules",
             "--run",
             str(ROOT / "data" / "gscl" / "default"),
-            "--scenes",
-            "2",
-            "--out",
-            "{tmp}/r",
-            "--no-progress",
+            *"--scenes 2 --out {tmp}/r --no-progress".split(),
         ),  # fmt: skip
         ("socialnav gscl rules: cannot write", "rules", "file too large"),
-        file_size_limit_bytes=FULL_DISK_BYTES,
-        timeout_s=300,
     ),
-    Case(
+    full_disk(
         "r8 traceback: humans validate --quick on a full disk (an empty folder left)",
-        command("humans", "validate", "--quick", "--out", "{tmp}/out", "--no-progress"),
+        command(*"humans validate --quick --out {tmp}/out --no-progress".split()),
         check=_full_disk_nothing_left,
-        file_size_limit_bytes=FULL_DISK_BYTES,
         timeout_s=600,
     ),
-    Case(
+    full_disk(
         "r8 vague: arena on a full disk (no file named)",
-        command(
-            "arena",
-            "--scenes",
-            "casn_head_on",
-            "--methods",
-            "navfn",
-            "--variants",
-            "2",
-            "--out",
-            "{tmp}/a",
-            "--no-progress",
-        ),  # fmt: skip
+        command(*"arena --scenes casn_head_on --methods navfn --variants 2 --out {tmp}/a --no-progress".split()),
         ("socialnav arena: cannot write", "/a/", "file too large"),
-        file_size_limit_bytes=FULL_DISK_BYTES,
-        timeout_s=300,
     ),
     Case(
         "r8 traceback: simulate stopped by Ctrl-C",

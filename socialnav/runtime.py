@@ -108,6 +108,11 @@ def cache_folder_problem(folder: str) -> str | None:
     return None
 
 
+def verbose() -> bool:
+    """Whether ``SOCIALNAV_VERBOSE`` asks for everything: libraries' log lines and tracebacks."""
+    return os.environ.get("SOCIALNAV_VERBOSE", "") not in ("", "0")
+
+
 def quiet_third_party_logs() -> None:
     """Keep libraries' chatter out of the user's terminal: absl's log lines from orbax (``read_only=True,
     setting max_to_keep=None``, ``Given directory is read only``, its own error for a damaged checkpoint
@@ -116,7 +121,7 @@ def quiet_third_party_logs() -> None:
     import logging
     import sys
 
-    if os.environ.get("SOCIALNAV_VERBOSE", "") not in ("", "0"):
+    if verbose():
         return
     for name in ("absl", "asyncio", "orbax"):
         logging.getLogger(name).setLevel(logging.CRITICAL)

@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
-import os
 import signal
 import sys
 from collections.abc import Callable
@@ -136,7 +135,7 @@ def run_command(name: str, handler: Callable[[argparse.Namespace], int], args: a
     the command ``name`` (see the module's docstring): 2 for a write the machine refused, 130 for
     Ctrl-C, 143 for SIGTERM. Any other error propagates, traceback and all (it is a bug, or the
     handler's own to report); with ``SOCIALNAV_VERBOSE=1`` every error does."""
-    verbose = os.environ.get("SOCIALNAV_VERBOSE", "") not in ("", "0")
+    verbose = runtime.verbose()
     try:
         with _sigterm_as_interrupt():
             return handler(args)
