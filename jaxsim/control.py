@@ -37,6 +37,7 @@ import jax
 from flax import struct
 
 from socialnav.jaxsim.actor import Actor, ActorState, Observation, Params
+from socialnav.jaxsim.precision import require_float32
 
 Step = Callable[[Any, Any], tuple[Any, Any]]
 
@@ -82,6 +83,7 @@ def control_loop(
       ``((state, observation, actor_state) after T steps, records)``: the records stacked over
       the T steps (None without ``record``).
     """
+    require_float32("jaxsim.control.control_loop")
 
     def control(carry, key):
         state, observation, actor_state = carry

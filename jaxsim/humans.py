@@ -32,6 +32,7 @@ from flax import struct
 from socialnav.jaxsim import crowd, groups, orca, power_law, speed_model
 from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.params import SimParams
+from socialnav.jaxsim.precision import require_float32
 from socialnav.jaxsim.walkers import Aims, HumanStep, RobotDisc, Walkers
 
 HUMAN_MODELS = (
@@ -141,6 +142,7 @@ def step_humans(
         aims and speeds get the group terms (:func:`jaxsim.groups.group_aim`). ``None``: no
         groups, and nothing computed for them.
     """
+    require_float32("jaxsim.humans.step_humans")
     kind = kind_of(check_model(model))
     if group_id is not None:
         aims = groups.group_aim(params.group, people, aims, group_id)

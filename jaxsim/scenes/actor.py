@@ -24,6 +24,7 @@ from flax import struct
 
 from socialnav.jaxsim import control
 from socialnav.jaxsim.actor import Actor, ActorState, Params, replanning
+from socialnav.jaxsim.precision import require_float32
 from socialnav.jaxsim.scenes.env import Env, EnvState, Observation, TimeStep, action_problem
 
 __all__ = ["Actor", "ActorState", "Params", "StepRecord", "check_actor", "default_record", "replanning", "rollout"]
@@ -109,6 +110,7 @@ def rollout(
     ``record(observation, action, actor_state, timestep)`` stacked over steps
     (:class:`StepRecord` by default).
     """
+    require_float32("jaxsim.scenes.actor.rollout")
     n_steps = env.config.max_steps if n_steps is None else int(n_steps)
     key_reset, key_init, key_run = jax.random.split(key, 3)
     state, timestep = env.reset(key_reset, variant)
