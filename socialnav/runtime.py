@@ -3,7 +3,8 @@ compilation cache (kept on disk, and repaired where an entry was cut short).
 
 All must happen before JAX is imported to take full effect, which is why only the composition
 root does them (this module does not import JAX; the cache's repair uses JAX's own reading of an
-entry once JAX has warned about one): library code never changes the process's devices or caches
+entry once JAX has warned about one, and the check of ``JAX_PLATFORMS`` runs once the command's
+module has imported JAX): library code never changes the process's devices or caches
 behind a user's back."""
 
 from __future__ import annotations
@@ -59,6 +60,55 @@ def request_wide_vectors(cpuinfo: str | None = None) -> None:
     if _WIDTH_FLAG in flags or not cpu_has_avx512(cpuinfo):
         return
     os.environ["XLA_FLAGS"] = f"{flags} {_WIDTH_FLAG}={WIDE_VECTOR_BITS}".strip()
+
+
+# JAX's reading of a boolean environment variable (``jax._src.config.bool_env``): any other value
+# stops ``import jax`` with a ValueError.
+_JAX_FALSE = ("n", "no", "f", "false", "off", "0")
+
+
+def request_float32() -> None:
+    """Run JAX with its x64 switch off, as every program, seed and table of the toolkit is defined
+    (:mod:`jaxsim.precision`), where ``JAX_ENABLE_X64`` asks for it: a one-line note says the
+    setting is ignored, and the variable is set off for this process and the processes it starts
+    (a backend's workers). Measured under ``JAX_ENABLE_X64=1`` before: ``socialnav simulate`` wrote
+    other numbers from the same seed, and ``socialnav arena`` and ``socialnav humans validate``
+    failed with a traceback. A value JAX cannot read (``maybe``) is named and ignored the same way,
+    where ``import jax`` would stop with a traceback. Must run before ``import jax``."""
+    import sys
+
+    value = os.environ.get("JAX_ENABLE_X64")
+    if value is None or value.strip().lower() in _JAX_FALSE:
+        return
+    os.environ["JAX_ENABLE_X64"] = "0"
+    print(
+        f"socialnav: note: JAX_ENABLE_X64={value} ignored: the toolkit runs in float32, as its seeds and "
+        "tables are defined",
+        file=sys.stderr,
+    )
+
+
+def jax_platforms_problem() -> str | None:
+    """Why JAX cannot start the platforms ``JAX_PLATFORMS`` names (``cuda`` where no GPU or no JAX
+    for one is installed, ``tpu`` ...), in one line; None where it can, or where the variable is
+    unset (JAX then chooses, the CPU where nothing else starts). JAX's own error is a bare
+    ``AssertionError`` deep in the first array op for a platform no plugin provides (jax 0.10), a
+    traceback for one whose plugin fails. Imports JAX and starts its backends: call it where the
+    command's module has imported JAX anyway."""
+    platforms = os.environ.get("JAX_PLATFORMS", "").strip()
+    if not platforms:
+        return None
+    import jax
+
+    try:
+        jax.devices()
+    except (RuntimeError, AssertionError) as e:
+        reason = str(e).split(" (set JAX_PLATFORMS=")[0].strip() or "no installed JAX plugin provides it"
+        return (
+            f"JAX_PLATFORMS={platforms}: JAX cannot start it ({reason}); unset JAX_PLATFORMS to let JAX "
+            "choose (the CPU where nothing else starts), or install JAX for that platform"
+        )
+    return None
 
 
 def request_compilation_cache(path: str | None = None) -> None:

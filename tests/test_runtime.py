@@ -157,3 +157,63 @@ def test_a_cache_folder_that_cannot_hold_the_cache_is_named_and_left_off(tmp_pat
         assert err.startswith(f"socialnav: warning: the compilation cache {folder}: {why}") and "\n" not in err
     assert runtime.cache_folder_problem(str(tmp_path / "new" / "xla")) is None
     assert (tmp_path / "new" / "xla").is_dir()
+
+
+@pytest.mark.parametrize("value", ["1", "True", "maybe"])
+def test_x64_asked_for_is_turned_off_with_a_note(value, monkeypatch, capsys):
+    """``JAX_ENABLE_X64`` set true (or to what JAX cannot read): off for this process and its
+    children, and one line naming the value; set false or unset: untouched, nothing said."""
+    monkeypatch.setenv("JAX_ENABLE_X64", value)
+    runtime.request_float32()
+    assert os.environ["JAX_ENABLE_X64"] == "0"
+    err = capsys.readouterr().err.strip()
+    note = "ignored: the toolkit runs in float32, as its seeds and tables are defined"
+    assert err == f"socialnav: note: JAX_ENABLE_X64={value} {note}"
+    for value in ("off", "0"):
+        monkeypatch.setenv("JAX_ENABLE_X64", value)
+        runtime.request_float32()
+        assert os.environ["JAX_ENABLE_X64"] == value
+    monkeypatch.delenv("JAX_ENABLE_X64")
+    runtime.request_float32()
+    assert "JAX_ENABLE_X64" not in os.environ and capsys.readouterr().err == ""
+
+
+def test_platforms_unset_are_no_problem(monkeypatch):
+    monkeypatch.delenv("JAX_PLATFORMS", raising=False)
+    assert runtime.jax_platforms_problem() is None
+
+
+def _socialnav(argv: list[str], **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "socialnav", *argv],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONPATH": ROOT, **env},
+        timeout=300,
+    )
+
+
+def test_a_platform_jax_cannot_start_ends_the_command_in_one_line(tmp_path):
+    """``JAX_PLATFORMS`` naming a platform JAX has no backend for: exit status 2, one line naming
+    the variable and what to do, no run folder made (JAX's own error: a traceback, or for a
+    platform no plugin provides, a bare AssertionError)."""
+    out = tmp_path / "out"
+    proc = _socialnav(
+        ["simulate", "--hours", "0.01", "--out", str(out), "--no-progress"], JAX_PLATFORMS="nosuchplatform"
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    line = proc.stderr.strip()
+    assert "\n" not in line and line.startswith("socialnav simulate: JAX_PLATFORMS=nosuchplatform: JAX cannot start it")
+    assert "unset JAX_PLATFORMS" in line and not out.exists()
+
+
+@pytest.mark.slow  # two short days: 20 s
+def test_a_day_under_jax_enable_x64_is_the_float32_day(tmp_path):
+    """``JAX_ENABLE_X64=1`` in the user's environment: the command notes it and writes the logs it
+    writes without it, bit for bit (before, the same seed gave other numbers)."""
+    day = ["simulate", "--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress", "--out"]
+    x64 = _socialnav([*day, str(tmp_path / "x64")], JAX_ENABLE_X64="1")
+    plain = _socialnav([*day, str(tmp_path / "plain")], JAX_ENABLE_X64="0")
+    assert x64.returncode == 0 and plain.returncode == 0, x64.stderr + plain.stderr
+    assert "JAX_ENABLE_X64=1 ignored" in x64.stderr and "JAX_ENABLE_X64" not in plain.stderr
+    assert (tmp_path / "x64" / "logs.parquet").read_bytes() == (tmp_path / "plain" / "logs.parquet").read_bytes()

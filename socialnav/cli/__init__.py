@@ -20,6 +20,10 @@ file-size limit, a file system turned read-only, an I/O error) names the file it
 exit status 2; Ctrl-C says "interrupted", 130; SIGTERM (a batch scheduler's time limit, ``kill``)
 is taken as Ctrl-C is, so that the job's cleanup runs (a staged run folder removed, the previous
 run kept, the folder's lock released), 143. ``SOCIALNAV_VERBOSE=1`` shows the traceback instead.
+
+The environment a user brings is read here too: ``JAX_ENABLE_X64`` is ignored with a note (the
+toolkit runs in float32, :mod:`jaxsim.precision`), and a ``JAX_PLATFORMS`` that JAX cannot start
+(``cuda`` on a machine or a JAX without a GPU) ends the command in one line, exit status 2.
 """
 
 from __future__ import annotations
@@ -122,11 +126,16 @@ def main(argv: list[str] | None = None) -> int:
     runtime.request_host_devices()
     runtime.request_wide_vectors()
     runtime.request_compilation_cache()
+    runtime.request_float32()
     runtime.repair_compilation_cache()
     runtime.quiet_third_party_logs()
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(_command(argv)).parse_args(argv)
     args.argv = argv  # a run folder records the command that made it
+    problem = runtime.jax_platforms_problem()
+    if problem:
+        print(f"{_command_words(args)}: {problem}", file=sys.stderr)
+        return 2
     return run_command(_command_words(args), args.handler, args)
 
 
