@@ -64,6 +64,7 @@ class Case:
     # cut short by the limit would stay in the user's cache.
     file_size_limit_bytes: int | None = None
     send_signal: tuple[int, float] | None = None  # (signal, seconds after the start): Ctrl-C, a scheduler's SIGTERM
+    env: dict[str, str] = dataclasses.field(default_factory=dict)  # the user's environment variables
 
 
 def scenario(tmp: pathlib.Path, file: str, mutate: Callable[[dict], object]) -> pathlib.Path:
@@ -1043,6 +1044,93 @@ def _previous_engine_kept(tmp, proc):
     return _names_a_file(proc) and kept and not list((tmp / "out").glob(".staging-*"))
 
 
+# --- round nine: the environment a user brings ---------------------------------------------------
+
+SMALL_ARENA = [
+    "arena",
+    "--scenes",
+    "casn_head_on,gscl_group",
+    "--methods",
+    "navfn,gscl",
+    "--variants",
+    "2",
+    "--no-progress",
+]
+
+
+def _same_as_without(out: str, argv: list[str], files: tuple[str, ...], **env: str):
+    """A check: the case's run succeeded, and ``files`` in its ``out`` are byte for byte those of
+    the same command run again with ``env`` (the environment the case changed, put right)."""
+
+    def check(tmp, proc):
+        if proc.returncode != 0:
+            return False
+        plain = tmp / "plain"
+        again = [a.replace(str(tmp / out), str(plain)) for a in argv]
+        env_again = dict(os.environ, PYTHONPATH=str(ROOT), **env)
+        subprocess.run(again, capture_output=True, cwd=tmp, env=env_again, timeout=600)
+        return all((plain / f).is_file() and (tmp / out / f).read_bytes() == (plain / f).read_bytes() for f in files)
+
+    return check
+
+
+def _x64_case(name: str, argv: list[str], files: tuple[str, ...], **fields) -> Case:
+    """``argv`` (``{tmp}/out`` its run folder) under ``JAX_ENABLE_X64=1``, checked against the run
+    without it."""
+    make = command(*argv)
+    return Case(
+        name,
+        make,
+        check=lambda tmp, proc: _same_as_without("out", make(tmp), files, JAX_ENABLE_X64="0")(tmp, proc),
+        env={"JAX_ENABLE_X64": "1"},
+        **fields,
+    )
+
+
+ARENA_UNDER_X64 = (
+    "import jax\n"
+    "jax.config.update('jax_enable_x64', True)  # a notebook's set-up, for its own float64 work\n"
+    "from socialnav.data import SCENES_DIR\n"
+    "from socialnav.evaluation import arena\n"
+    "from socialnav.jaxsim.scenes import load_scene\n"
+    "episodes, _ = arena.run_scene(load_scene(SCENES_DIR / 'casn_head_on.json'), ['navfn'], 2)\n"
+)
+
+
+def _killed_then_again(tmp):
+    """``simulate`` killed by SIGKILL (no handler runs: the out-of-memory killer, ``kill -9``) 15 s
+    in, its lock and staging folder left; then the same command again, shorter."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    argv = [*SOCIALNAV, "simulate", "--out", str(tmp / "out"), *WHOLE_DAY]
+    with subprocess.Popen(argv, cwd=tmp, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env) as child:
+        time.sleep(15)
+        child.kill()
+    (tmp / "left.txt").write_text(" ".join(sorted(p.name for p in (tmp / "out").iterdir())))
+    return [*SOCIALNAV, "simulate", "--out", str(tmp / "out"), *SHORT_DAY]
+
+
+def _second_run_whole(tmp, proc):
+    names = sorted(p.name for p in (tmp / "out").iterdir())
+    killed_left = (tmp / "left.txt").read_text().split()
+    leftovers = [n for n in names if n == ".lock" or n.startswith(".staging")]
+    return proc.returncode == 0 and ".lock" in killed_left and "logs.parquet" in names and not leftovers
+
+
+def _arena_under_hash_seed_one(tmp):
+    """The small arena run under ``PYTHONHASHSEED=1`` into ``tmp/h1``; the case runs it under 2."""
+    argv = [*SOCIALNAV, *SMALL_ARENA, "--out"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONHASHSEED="1")
+    subprocess.run([*argv, str(tmp / "h1")], capture_output=True, cwd=tmp, env=env, timeout=600)
+    return [*argv, str(tmp / "h2")]
+
+
+def _same_tables(tmp, proc):
+    names = ("summary.csv", "stats.csv")
+    return proc.returncode == 0 and all(
+        (tmp / "h1" / n).is_file() and (tmp / "h1" / n).read_bytes() == (tmp / "h2" / n).read_bytes() for n in names
+    )
+
+
 CASES: list[Case] = [
     # params.json: ranges and types
     Case(
@@ -1928,6 +2016,56 @@ CASES: list[Case] = [
         check=_stopped_cleanly(143, "socialnav simulate: terminated (SIGTERM)"),
         send_signal=(signal.SIGTERM, 20.0),
     ),
+    _x64_case(
+        "r9 wrong: simulate under JAX_ENABLE_X64=1 (other numbers from the same seed)",
+        ["simulate", "--out", "{tmp}/out", *SHORT_DAY],
+        ("logs.parquet",),
+    ),
+    _x64_case(
+        "r9 traceback: arena under JAX_ENABLE_X64=1",
+        [*SMALL_ARENA, "--out", "{tmp}/out"],
+        ("summary.csv", "stats.csv"),
+        timeout_s=600,
+    ),
+    Case(
+        "r9 traceback: humans validate --quick under JAX_ENABLE_X64=1",
+        command(*"humans validate --quick --out {tmp}/out --no-progress".split()),
+        check=lambda tmp, proc: proc.returncode == 0 and (tmp / "out" / "summary.json").is_file(),
+        env={"JAX_ENABLE_X64": "1"},
+        timeout_s=600,
+    ),
+    Case(
+        "r9 traceback: the arena in Python under jax_enable_x64",
+        python_case(ARENA_UNDER_X64),
+        ("jax_enable_x64", "jax.enable_x64(False)"),
+        api=True,
+    ),
+    Case(
+        "r9 traceback: JAX_PLATFORMS=cuda where JAX has no GPU",
+        command("simulate", "--out", "{tmp}/out", *SHORT_DAY),
+        ("socialnav simulate", "JAX_PLATFORMS=cuda", "unset JAX_PLATFORMS"),
+        env={"JAX_PLATFORMS": "cuda"},
+    ),
+    Case(
+        "r9 traceback: JAX_PLATFORMS=tpu without a TPU",
+        command("simulate", "--out", "{tmp}/out", *SHORT_DAY),
+        ("socialnav simulate", "JAX_PLATFORMS=tpu", "libtpu"),
+        env={"JAX_PLATFORMS": "tpu"},
+    ),
+    Case(
+        "r9: XLA_FLAGS naming a flag XLA does not know",
+        command("simulate", "--out", "{tmp}/out", *SHORT_DAY),
+        ("XLA_FLAGS", "--xla_bogus_flag"),
+        env={"XLA_FLAGS": "--xla_bogus_flag=1"},
+    ),
+    Case("r9: simulate killed by SIGKILL, then run again", _killed_then_again, check=_second_run_whole, timeout_s=300),
+    Case(
+        "r9: the arena's tables under two hash seeds (PYTHONHASHSEED)",
+        _arena_under_hash_seed_one,
+        check=_same_tables,
+        env={"PYTHONHASHSEED": "2"},
+        timeout_s=600,
+    ),
     Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
@@ -1946,12 +2084,12 @@ CASES: list[Case] = [
 ]
 
 
-API_ERROR = re.compile(r"^(ValueError|socialnav\.jaxsim\.scenario\.errors\.ScenarioError): ")
+API_ERROR = re.compile(r"^(ValueError|RuntimeError|socialnav\.jaxsim\.scenario\.errors\.ScenarioError): ")
 
 
 def _run(case: Case, argv: list[str], tmp: pathlib.Path) -> subprocess.CompletedProcess:
     """Run ``argv`` as the case says: under its file-size limit, sent its signal."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), **case.env)
     limit = case.file_size_limit_bytes
 
     def start() -> None:
