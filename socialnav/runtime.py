@@ -104,9 +104,10 @@ def jax_platforms_problem() -> str | None:
         jax.devices()
     except (RuntimeError, AssertionError) as e:
         reason = str(e).split(" (set JAX_PLATFORMS=")[0].strip() or "no installed JAX plugin provides it"
+        install = " (a GPU: pip install -e '.[cuda12]')" if "cuda" in platforms.lower() else ""
         return (
             f"JAX_PLATFORMS={platforms}: JAX cannot start it ({reason}); unset JAX_PLATFORMS to let JAX "
-            "choose (the CPU where nothing else starts), or install JAX for that platform"
+            f"choose (the CPU where nothing else starts), or install JAX for that platform{install}"
         )
     return None
 
