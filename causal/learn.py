@@ -20,7 +20,7 @@ import numpy as np
 from socialnav.causal import discover, extract, plots, simulator_graph
 from socialnav.causal import engine as engine_lib
 from socialnav.common.atomic import write_bytes_atomic, write_text_atomic
-from socialnav.common.memory import available_bytes
+from socialnav.common.memory import available_bytes, too_big
 
 
 def write_tables(
@@ -41,9 +41,10 @@ ENGINE_BYTES_PER_SAMPLE = 820
 
 def check_memory(n_samples: int, available: int | None) -> None:
     """Raise :class:`causal.extract.LogError` when learning from ``n_samples`` samples needs more
-    than 80 % of the ``available`` bytes (None: not known, no check), before any work."""
+    than :data:`common.memory.USABLE_SHARE` of the ``available`` bytes (None: not known, no check),
+    before any work."""
     needed = n_samples * ENGINE_BYTES_PER_SAMPLE
-    if available is not None and needed > 0.8 * available:
+    if too_big(needed, available):
         raise extract.LogError(
             f"{n_samples:,} samples need about {needed / 1e9:.1f} GB to learn from, this machine has "
             f"{available / 1e9:.1f} GB available: learn from fewer worlds (--worlds) or subsample coarser (--step)"

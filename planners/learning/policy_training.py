@@ -46,6 +46,7 @@ import optax
 from flax import struct
 
 from socialnav.common import pytree
+from socialnav.common.memory import too_big
 from socialnav.jaxsim.actor import Actor
 from socialnav.jaxsim.control import control_loop
 from socialnav.jaxsim.scenes import env as env_lib
@@ -159,7 +160,7 @@ def size_problem(n_scenes: int, config: PPOConfig, available_bytes: int | None) 
             f"{size}(--rollout-steps): {per_update:,} transitions an update ({shape}), past the 2^31 the trainer counts"
         )
     needed = memory_bytes(n_scenes, config)
-    if available_bytes is not None and needed > 0.8 * available_bytes:
+    if too_big(needed, available_bytes):
         return (f"{size}(--rollout-steps): about {needed / 1e9:.1f} GB at once ({per_update:,} transitions an update: "
                 f"{shape}), this machine has {available_bytes / 1e9:.1f} GB available; fewer episodes or steps, "
                 "or fewer scenes")  # fmt: skip
