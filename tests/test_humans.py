@@ -567,6 +567,25 @@ def test_a_trajectory_fit_past_the_machines_memory_is_refused_with_the_windows_t
     tc.refuse_past_memory(compiled, sample, share=1.0)  # a few megabytes: fits
 
 
+def test_a_jülich_fit_past_the_machines_memory_is_refused_with_the_draws_that_fit_before_any_is_drawn():
+    """The gradient fit's program over ``1 + start_draws`` draws, compiled for the shapes alone:
+    what it holds grows with the draws (reverse mode keeps each draw's measured steps), more than
+    the loss alone does; a share of memory no program fits in is refused naming the draws and how
+    many would fit, a whole share is not."""
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import minimise
+
+    model = hv.HumanModel("collision_free_speed")
+    size = dict(length_m=6.0, warmup_steps=5, measured_steps=4)
+    one, four = (hc.fit_bytes(model, (1.0, 3.0), draws, **size) for draws in (0, 3))
+    forward = hc.fit_bytes(model, (1.0, 3.0), 3, gradient=False, **size)
+    assert 0 < one < four and forward < four
+    said = r"a gradient fit of collision_free_speed over 4 draws of each of 2 corridors holds about .* GB at once, "
+    with pytest.raises(minimise.FitTooLarge, match=said + r"this machine has .* GB available: about 0 start draws fit"):
+        hc.refuse_past_memory(model, (1.0, 3.0), 3, share=1e-9, **size)
+    hc.refuse_past_memory(model, (1.0, 3.0), 3, share=1.0, **size)  # a few megabytes: fits
+
+
 def _walked_by(truth: hv.HumanModel, fields):
     """Short corridors at 1.5, 2.5 and 3.5 /m² whose "data" is the speed ``truth`` walks there
     (s.d. 0.05 m/s): a calibration's known answer."""

@@ -49,6 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from socialnav.common.memory import USABLE_SHARE, shortfall
 from socialnav.evaluation.humans import measures, minimise
 from socialnav.evaluation.humans import validation as hv
 from socialnav.jaxsim import humans, power_law, speed_model
@@ -108,7 +109,7 @@ def corridors_at(model: hv.HumanModel, densities, speed_data, sd_data, seed: int
     draw_rngs = [np.random.default_rng([seed, d]) for d in range(1, start_draws + 1)]
     starts = []
     for rho in densities:
-        n = max(2, int(round(rho * width * length)))
+        n = people_in(rho, width, length)
         xy0 = [hv._starts(n, width, length, model.radius_m, rng)]
         speed = [hv.desired_speeds(model.crowd, n, rng)]
         for draw_rng in draw_rngs:
@@ -121,14 +122,72 @@ def corridors_at(model: hv.HumanModel, densities, speed_data, sd_data, seed: int
                      np.maximum(np.asarray(sd_data, float), 0.02), tuple(starts), width, length, **steps)  # fmt: skip
 
 
+def people_in(density: float, width_m: float, length_m: float) -> int:
+    """The people of a corridor at ``density`` persons/m² (at least two)."""
+    return max(2, int(round(density * width_m * length_m)))
+
+
+def training_bins(runs=TRAIN_RUNS):
+    """The density bins the training ``runs`` cover with at least 100 frames: their densities,
+    and the runs' mean speed and standard deviation there (a frame with ``density_bin``,
+    ``speed_mean``, ``speed_sd``)."""
+    bins = measures.binned(hv.data_fundamental_diagram(runs))
+    return bins[bins["n"] >= measures.MIN_BIN_FRAMES]
+
+
 def training_corridors(model: hv.HumanModel, seed: int = 0, runs=TRAIN_RUNS, start_draws: int = 0,
                        **size) -> Corridors:  # fmt: skip
     """The corridors of :func:`fd_loss` for the bins the training ``runs`` cover (with at least
     100 frames), against the runs' mean speed and standard deviation there (``start_draws``:
     :func:`corridors_at`'s)."""
-    bins = measures.binned(hv.data_fundamental_diagram(runs))
-    bins = bins[bins["n"] >= measures.MIN_BIN_FRAMES]
+    bins = training_bins(runs)
     return corridors_at(model, bins["density_bin"], bins["speed_mean"], bins["speed_sd"], seed, start_draws, **size)
+
+
+def fit_bytes(model: hv.HumanModel, densities, start_draws: int = 0, gradient: bool = True, fields=None,
+              **size) -> int | None:  # fmt: skip
+    """What a fit's program holds at once (XLA's count of its buffers) over corridors at
+    ``densities``, each walked from ``1 + start_draws`` draws of its people: with ``gradient``, the
+    loss and gradient of :func:`fit_gradient` (reverse mode keeps every measured step of every draw
+    for the gradient), without it the loss alone, as :func:`fit_nelder_mead` evaluates it. Compiled
+    for the shapes alone, so nothing is drawn or run (``size`` as :func:`corridors_at`'s). Measured
+    on the training runs' six bins: the gradient holds 1.24 GB a draw for the steering model and
+    0.68 GB for the collision-free speed model, the loss alone about 0.01 GB; compiling it takes
+    10-20 s here."""
+    width, length = size.get("width_m", 1.8), size.get("length_m", 20.0)
+    steps = {k: v for k, v in size.items() if k in ("warmup_steps", "measured_steps")}
+    draws = 1 + start_draws
+    shapes = tuple(
+        (jax.ShapeDtypeStruct((draws, n, 2), jnp.float32),) + (jax.ShapeDtypeStruct((draws, n), jnp.float32),) * 2
+        for n in (people_in(rho, width, length) for rho in densities)
+    )
+    ones = np.ones(len(densities))
+    template = Corridors(tuple(float(r) for r in densities), ones, ones, (), width, length, **steps)
+
+    def loss(theta, key, starts):
+        corridors = dataclasses.replace(template, starts=starts)
+        return fd_loss(model, corridors, theta, key, stop_warmup=gradient, fields=fields)
+
+    program = minimise.value_and_grad(loss, forward=model.name in FORWARD_MODE) if gradient else jax.jit(loss)
+    return minimise.held_bytes(program.lower(theta_of(model, fields), jax.random.key(0), shapes).compile())
+
+
+def refuse_past_memory(model: hv.HumanModel, densities, start_draws: int, gradient: bool = True,
+                       share: float = USABLE_SHARE, **size) -> None:  # fmt: skip
+    """Raise :class:`~evaluation.humans.minimise.FitTooLarge` where a fit over ``1 + start_draws``
+    draws of each corridor would hold more than ``share`` of the memory available
+    (:func:`fit_bytes`; nothing is checked where the available memory is not known), naming how
+    many draws fit, before any is drawn."""
+    needed = fit_bytes(model, densities, start_draws, gradient, **size)
+    available = None if needed is None else shortfall(needed, share)
+    if available is not None:
+        fits = max(0, int((1 + start_draws) * share * available / needed) - 1)
+        what = "gradient fit" if gradient else "fit"
+        raise minimise.FitTooLarge(
+            f"a {what} of {model.name} over {1 + start_draws:,} draws of each of {len(densities)} corridors "
+            f"holds about {needed / 1e9:.1f} GB at once, this machine has {available / 1e9:.1f} GB available: "
+            f"about {fits:,} start draws fit"
+        )
 
 
 def with_theta(model: hv.HumanModel, theta, fields=None) -> hv.HumanModel:

@@ -17,6 +17,19 @@ import numpy as np
 import optax
 
 
+class FitTooLarge(ValueError):
+    """A fit needs more memory at once than the machine has available."""
+
+
+def held_bytes(compiled) -> int | None:
+    """XLA's count of the buffers the compiled program ``compiled`` holds at once (its arguments,
+    outputs and temporaries); None where XLA gives none."""
+    stats = compiled.memory_analysis()
+    if stats is None:
+        return None
+    return stats.temp_size_in_bytes + stats.argument_size_in_bytes + stats.output_size_in_bytes
+
+
 def value_and_grad(loss: Callable, forward: bool = False) -> Callable:
     """``jit``-ed ``(theta, *args) -> (loss, d loss / d theta)``. ``forward``: by forward mode
     (one tangent a parameter), for a loss whose rollout holds a loop of unknown length that

@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from socialnav.common.memory import USABLE_SHARE, shortfall
 from socialnav.data import recorded
 from socialnav.evaluation.humans import measures, minimise
 from socialnav.evaluation.humans import validation as hv
@@ -81,21 +82,15 @@ def theta_of(model: hv.HumanModel, fields) -> jnp.ndarray:
                                jnp.float32))  # fmt: skip
 
 
-class FitTooLarge(ValueError):
-    """A fit's sample of windows needs more memory at once than the machine has available."""
+FitTooLarge = minimise.FitTooLarge  # a fit's sample of windows needs more memory than is available
 
 
-def refuse_past_memory(compiled, sample: hv.PredictionWindows, share: float = 0.8) -> None:
+def refuse_past_memory(compiled, sample: hv.PredictionWindows, share: float = USABLE_SHARE) -> None:
     """Raise :class:`FitTooLarge` where the compiled loss and gradient over ``sample`` need more
     than ``share`` of the memory available (XLA's own count of its buffers; nothing is checked where
     the available memory is not known)."""
-    from socialnav.common.memory import shortfall
-
-    stats = compiled.memory_analysis()
-    if stats is None:
-        return
-    needed = stats.temp_size_in_bytes + stats.argument_size_in_bytes + stats.output_size_in_bytes
-    available = shortfall(needed, share)
+    needed = minimise.held_bytes(compiled)
+    available = None if needed is None else shortfall(needed, share)
     if available is not None:
         windows, people = sample.start.shape[:2]
         fits = int(windows * share * available / needed)

@@ -159,6 +159,8 @@ def calibrate(args) -> int:
         return 2
     t0 = time.perf_counter()
     model = hv.HumanModel(args.model)
+    if _past_memory(model, args.start_draws, gradient=True):
+        return 2
     corridors = hc.training_corridors(model, args.seed, start_draws=args.start_draws)
     print(f"{args.model}: fitting {', '.join(hc.FITTED[args.model])} to the runs {', '.join(hc.TRAIN_RUNS)} "
           f"(densities {', '.join(f'{d:g}' for d in corridors.densities)} /m², {1 + args.start_draws} "
@@ -180,6 +182,23 @@ def calibrate(args) -> int:
         print(f"{label}: loss {fit['start']['loss']:.2f} -> {fit[label]['loss']:.2f}, {fit[label]['values']}")
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
+
+
+def _past_memory(model, start_draws: int, gradient: bool) -> bool:
+    """Whether a fit over ``1 + start_draws`` draws of each training corridor would not fit in the
+    memory available (said in one line), checked before any is drawn. One draw, the default, is
+    not checked (its program is the size of the validation's)."""
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import minimise
+
+    if not start_draws:
+        return False
+    try:
+        hc.refuse_past_memory(model, hc.training_bins()["density_bin"], start_draws, gradient)
+    except minimise.FitTooLarge as e:
+        print(f"socialnav humans calibrate: --start-draws {start_draws}: {e}", file=sys.stderr)
+        return True
+    return False
 
 
 def _progress_saver(out: pathlib.Path):
@@ -260,6 +279,8 @@ def _calibrate_joint(args) -> int:
     t0 = time.perf_counter()
     say = lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True)
     model, weights = hc.named_model(args.model), args.weights or jc.WEIGHTS
+    if _past_memory(model, args.start_draws, gradient=False):  # the joint fit is Nelder-Mead's alone
+        return 2
     fit, reference, results = jc.calibrate(model, weights, args.evaluations or 150, args.seed, args.start_draws, say,
                                            name=args.model)  # fmt: skip
     try:
