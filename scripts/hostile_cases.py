@@ -2058,6 +2058,18 @@ CASES: list[Case] = [
         ("XLA_FLAGS", "--xla_bogus_flag"),
         env={"XLA_FLAGS": "--xla_bogus_flag=1"},
     ),
+    Case(
+        "r9 hang: humans calibrate --model steering_speed --start-draws 10^4",
+        command(*"humans calibrate --model steering_speed --start-draws 10000 --out {tmp}/out".split()),
+        ("--start-draws 10000", "GB at once", "start draws fit"),
+        timeout_s=300,
+    ),
+    Case(
+        "r9 hang: humans calibrate --data joint --start-draws 10^5",
+        command(*"humans calibrate --data joint --model steering_speed --start-draws 100000 --out {tmp}/o".split()),
+        ("--start-draws 100000", "GB at once", "start draws fit"),
+        timeout_s=300,
+    ),
     Case("r9: simulate killed by SIGKILL, then run again", _killed_then_again, check=_second_run_whole, timeout_s=300),
     Case(
         "r9: the arena's tables under two hash seeds (PYTHONHASHSEED)",
