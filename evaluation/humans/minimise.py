@@ -40,6 +40,26 @@ def value_and_grad(loss: Callable, forward: bool = False) -> Callable:
     return jax.jit(lambda theta, *args: tangents(theta, *args)[::-1])
 
 
+def time_left(history, total: int, bound: str = "") -> str:
+    """``"; about 12 min to go"`` for ``total`` steps or evaluations, ``history``'s ``(k, loss,
+    seconds since the start)`` done so far, at the pace of those after the first (which compiles);
+    ``""`` before two are done or once all are. ``bound``: words before "about" (``"at most "``)."""
+    done = len(history)
+    if done < 2 or done >= total:
+        return ""
+    per_step_s = (history[-1][2] - history[0][2]) / (done - 1)
+    return f"; {bound}about {duration(per_step_s * (total - done))} to go"
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` in the unit a person reads it in: ``"45 s"``, ``"12 min"``, ``"3.5 h"``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
 def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTransformation, args=(),
          log=print, what: str = "loss {:.3f}", on_best: Callable | None = None):  # fmt: skip
     """``steps`` updates of ``optimizer`` from ``theta`` on ``loss_and_grad(theta, *args)``:
@@ -59,7 +79,8 @@ def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTr
             if on_best is not None:
                 on_best(theta, value, k + 1, history[-1][2])
         if k % 10 == 0 or k == steps - 1:
-            log(f"  gradient step {k}: {what.format(value)} ({time.perf_counter() - t0:.0f} s)")
+            left = time_left(history, steps)
+            log(f"  gradient step {k}: {what.format(value)} ({time.perf_counter() - t0:.0f} s{left})")
         if not all(bool(jnp.all(jnp.isfinite(g))) for g in jax.tree.leaves(grad)):
             log(f"  gradient step {k}: the gradient is not finite; the descent stops here")
             break
@@ -88,7 +109,8 @@ def nelder_mead(loss: Callable, theta, max_evaluations: int, fatol: float, args=
             if on_best is not None:
                 on_best(theta, value, len(history), history[-1][2])
         if len(history) % 20 == 0:
-            log(f"  Nelder-Mead evaluation {len(history)}: {what.format(best[0])}")
+            left = time_left(history, max_evaluations, "at most ")  # the search may stop before its last
+            log(f"  Nelder-Mead evaluation {len(history)}: {what.format(best[0])} ({history[-1][2]:.0f} s{left})")
         return value
 
     x0 = np.asarray(theta, float)
