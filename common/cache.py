@@ -14,3 +14,17 @@ def user_cache_folder(kind: str, variable: str) -> pathlib.Path:
         return pathlib.Path(setting)
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return pathlib.Path(base) / "socialnav-jax" / kind
+
+
+def folder_problem(folder: str | os.PathLike) -> str | None:
+    """Why ``folder`` cannot hold a cache (a file of that name, a folder that cannot be made or
+    written), in a few words, creating it where it is missing; None if it can."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except FileExistsError:
+        return "a file, not a folder"
+    except OSError as e:
+        return f"cannot be made ({e.strerror or e})"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return "not writable"
+    return None

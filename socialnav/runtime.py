@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import re
 
+from socialnav.common.cache import folder_problem
 from socialnav.common.machine import cpu_isa, usable_cores
 
 
@@ -88,6 +89,17 @@ def request_float32() -> None:
     )
 
 
+def variables_problem() -> str | None:
+    """The toolkit's own environment variables with a value it cannot use, in one line naming the
+    variable (``SOCIALNAV_GRID_SOLVER``: read by the planners when they first plan, deep in a
+    run); None where every one set is usable. Imports what reads them only where they are set."""
+    if os.environ.get("SOCIALNAV_GRID_SOLVER"):
+        from socialnav.planners.global_planners.grid_planner import solver_variable_problem
+
+        return solver_variable_problem()
+    return None
+
+
 def jax_platforms_problem() -> str | None:
     """Why JAX cannot start the platforms ``JAX_PLATFORMS`` names (``cuda`` where no GPU or no JAX
     for one is installed, ``tpu`` ...), in one line; None where it can, or where the variable is
@@ -146,17 +158,8 @@ def request_compilation_cache(path: str | None = None) -> None:
 
 
 def cache_folder_problem(folder: str) -> str | None:
-    """Why ``folder`` cannot hold the compilation cache (a file of that name, a folder that cannot
-    be made or written), creating it where it is missing; None if it can."""
-    try:
-        os.makedirs(folder, exist_ok=True)
-    except FileExistsError:
-        return "a file, not a folder"
-    except OSError as e:
-        return f"cannot be made ({e.strerror or e})"
-    if not os.access(folder, os.W_OK | os.X_OK):
-        return "not writable"
-    return None
+    """Why ``folder`` cannot hold the compilation cache (:func:`common.cache.folder_problem`)."""
+    return folder_problem(folder)
 
 
 def verbose() -> bool:

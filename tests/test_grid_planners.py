@@ -1,6 +1,8 @@
 """Grid planners: potentials equal scipy's Dijkstra, paths descend them, the smooth planner's
 gradient equals finite differences, a layer moves the path where it should."""
 
+import re
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -220,9 +222,16 @@ def test_dijkstra_falls_back_to_a_heap_where_buckets_do_not_fit(low, high):
 
 
 @pytest.mark.slow
-def test_the_solver_is_checked_and_the_sweeps_keep_their_options():
+def test_the_solver_is_checked_and_the_sweeps_keep_their_options(monkeypatch):
     t = np.ones((1, 5, 5), np.float32)
     with pytest.raises(ValueError, match="solver must be one of"):
         grid_planner.potentials(t, [[0, 0]], 0.1, solver="bfs")
     phi, rounds = grid_planner.potentials(t, [[0, 0]], 0.1, return_rounds=True)  # auto: the sweeps
+    monkeypatch.setenv("SOCIALNAV_GRID_SOLVER", "dijstra")  # a typo in the user's environment: named as such
+    said = "SOCIALNAV_GRID_SOLVER=dijstra: not a solver (one of auto, sweeps, dijkstra; unset: auto)"
+    assert grid_planner.solver_variable_problem() == said
+    with pytest.raises(ValueError, match=re.escape(said)):
+        grid_planner.potentials(t, [[0, 0]], 0.1)
+    monkeypatch.setenv("SOCIALNAV_GRID_SOLVER", "sweeps")
+    assert grid_planner.solver_variable_problem() is None
     assert int(rounds) >= 1 and float(phi[0, 4, 4]) == pytest.approx(4 * 0.1 * np.sqrt(2), rel=1e-6)

@@ -176,7 +176,7 @@ def test_a_window_of_frames_is_measured_as_from_every_frame():
     assert kept["frame"].min() < window[0] and len(kept) < len(rows)  # the speed's margin kept, the rest cut
 
 
-def test_the_datas_measures_are_read_back_from_disk_while_their_inputs_are_unchanged(tmp_path, monkeypatch):
+def test_the_datas_measures_are_read_back_from_disk_while_their_inputs_are_unchanged(tmp_path, monkeypatch, capsys):
     from socialnav.evaluation.humans import datacache
 
     monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", str(tmp_path / "cache"))
@@ -207,9 +207,14 @@ def test_the_datas_measures_are_read_back_from_disk_while_their_inputs_are_uncha
     kept("a"), kept("a")
     assert len(calls) == 8
     (tmp_path / "a file").write_text("")
-    monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", str(tmp_path / "a file" / "cache"))  # cannot be written
-    pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)
-    assert len(calls) == 9
+    for cannot in (tmp_path / "a file" / "cache", tmp_path / "a file"):  # under a file, a file
+        monkeypatch.setenv("SOCIALNAV_HUMANS_CACHE", str(cannot))
+        pd.testing.assert_frame_equal(kept("a"), first, check_exact=True)
+        kept("a")  # computed again, said once
+        warned = capsys.readouterr().err.strip()
+        assert warned.startswith(f"socialnav: warning: the pedestrian data's cache {cannot}: ") and "\n" not in warned
+        assert "SOCIALNAV_HUMANS_CACHE names another folder" in warned
+    assert len(calls) == 12
 
 
 def test_ade_fde_of_a_known_offset():

@@ -107,6 +107,16 @@ def test_no_compiler_is_a_clear_error(tmp_path, monkeypatch):
         native.build()
 
 
+@pytest.mark.skipif(shutil.which("c++") is None, reason="no C++ compiler here")
+def test_a_cache_that_cannot_hold_the_kernel_is_named_with_its_variable(tmp_path, monkeypatch):
+    """``SOCIALNAV_NATIVE_CACHE`` naming a file: the error (the warning's reason, the simulator
+    going on in XLA's code) names the folder, why, and the variable; it was ``[Errno 17] File exists``."""
+    (tmp_path / "a file").write_text("")
+    monkeypatch.setenv("SOCIALNAV_NATIVE_CACHE", str(tmp_path / "a file"))
+    with pytest.raises(RuntimeError, match=r"its cache .*a file: a file, not a folder; SOCIALNAV_NATIVE_CACHE names"):
+        native.build()
+
+
 @pytest.mark.parametrize(("value", "off"), [("off", True), ("0", True), ("FALSE", True), ("", False), ("1", False)])
 def test_the_switch(monkeypatch, value, off):
     monkeypatch.setenv("SOCIALNAV_NATIVE", value)

@@ -26,16 +26,30 @@ from collections.abc import Callable
 import pandas as pd
 
 from socialnav.common.atomic import write_text_atomic
-from socialnav.common.cache import user_cache_folder
+from socialnav.common.cache import folder_problem, user_cache_folder
 
 _OFF = ("off", "0", "none", "false")
 
 
 def folder() -> pathlib.Path | None:
-    """Where values are kept (None: switched off)."""
+    """Where values are kept (None: switched off, or a folder that cannot hold them: a file, not
+    writable, said once in a warning naming it)."""
     if os.environ.get("SOCIALNAV_HUMANS_CACHE", "").lower() in _OFF:
         return None
-    return user_cache_folder("humans", "SOCIALNAV_HUMANS_CACHE")
+    where = user_cache_folder("humans", "SOCIALNAV_HUMANS_CACHE")
+    problem = folder_problem(where)
+    if problem:
+        _warn_once(f"the pedestrian data's cache {where}: {problem}; its measures are computed again in every run "
+                   "(SOCIALNAV_HUMANS_CACHE names another folder, or 'off')")  # fmt: skip
+        return None
+    return where
+
+
+@functools.cache
+def _warn_once(message: str) -> None:
+    import sys
+
+    print(f"socialnav: warning: {message}", file=sys.stderr)
 
 
 @functools.lru_cache(maxsize=1)

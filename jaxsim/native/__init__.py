@@ -31,7 +31,7 @@ import subprocess
 import tempfile
 import warnings
 
-from socialnav.common.cache import user_cache_folder
+from socialnav.common.cache import folder_problem, user_cache_folder
 from socialnav.common.machine import cpu_flags, cpu_isa
 
 SOURCE = pathlib.Path(__file__).with_name("social_force.cc")
@@ -130,7 +130,9 @@ def build(source: pathlib.Path = SOURCE) -> pathlib.Path:
     target = folder / f"{source.stem}-{key}.so"
     if target.exists():
         return target
-    folder.mkdir(parents=True, exist_ok=True)
+    problem = folder_problem(folder)
+    if problem:
+        raise RuntimeError(f"its cache {folder}: {problem}; SOCIALNAV_NATIVE_CACHE names another folder")
     fd, tmp = tempfile.mkstemp(dir=folder, suffix=".so.tmp")
     os.close(fd)
     try:

@@ -178,11 +178,23 @@ def potentials(
     return (phi, rounds) if return_rounds else phi
 
 
+def solver_variable_problem() -> str | None:
+    """Why ``$SOCIALNAV_GRID_SOLVER`` names no solver, in one line naming it; None where it is unset
+    or names one."""
+    value = os.environ.get("SOCIALNAV_GRID_SOLVER")
+    if not value or value in SOLVERS:
+        return None
+    return f"SOCIALNAV_GRID_SOLVER={value}: not a solver (one of {', '.join(SOLVERS)}; unset: auto)"
+
+
 def _solver(solver: str) -> str:
     """The solver that runs: ``"auto"`` is ``$SOCIALNAV_GRID_SOLVER`` when set (``sweeps`` or
     ``dijkstra``), else Dijkstra where it is built and JAX's default backend is the CPU;
     ``"dijkstra"`` without a build runs the sweeps (with the build's warning)."""
     if solver == "auto" and os.environ.get("SOCIALNAV_GRID_SOLVER"):
+        problem = solver_variable_problem()
+        if problem:
+            raise ValueError(problem)
         solver = os.environ["SOCIALNAV_GRID_SOLVER"]
     if solver not in SOLVERS:
         raise ValueError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")

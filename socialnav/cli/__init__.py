@@ -132,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(_command(argv)).parse_args(argv)
     args.argv = argv  # a run folder records the command that made it
-    problem = runtime.jax_platforms_problem()
+    problem = runtime.jax_platforms_problem() or runtime.variables_problem()
     if problem:
         print(f"{_command_words(args)}: {problem}", file=sys.stderr)
         return 2
