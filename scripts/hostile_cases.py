@@ -64,7 +64,7 @@ class Case:
     # cut short by the limit would stay in the user's cache.
     file_size_limit_bytes: int | None = None
     send_signal: tuple[int, float] | None = None  # (signal, seconds after the start): Ctrl-C, a scheduler's SIGTERM
-    env: dict[str, str] = dataclasses.field(default_factory=dict)  # the user's environment variables
+    env: dict[str, str] = dataclasses.field(default_factory=dict)  # the user's environment ({tmp} as in make)
 
 
 def scenario(tmp: pathlib.Path, file: str, mutate: Callable[[dict], object]) -> pathlib.Path:
@@ -1131,6 +1131,21 @@ def _same_tables(tmp, proc):
     )
 
 
+def _beside_a_file(make: Callable[[pathlib.Path], list[str]]) -> Callable[[pathlib.Path], list[str]]:
+    """``make``, with a file ``{tmp}/a-file`` made first (for a variable naming it as a folder)."""
+
+    def made(tmp):
+        (tmp / "a-file").write_text("not a folder")
+        return make(tmp)
+
+    return made
+
+
+def _ran_and_named(variable: str):
+    """A check: the run succeeded and its stderr names ``variable`` (what it could not use)."""
+    return lambda tmp, proc: proc.returncode == 0 and variable in (proc.stderr or "")
+
+
 CASES: list[Case] = [
     # params.json: ranges and types
     Case(
@@ -2070,6 +2085,28 @@ CASES: list[Case] = [
         ("--start-draws 100000", "GB at once", "start draws fit"),
         timeout_s=300,
     ),
+    Case(
+        "r9 traceback: SOCIALNAV_GRID_SOLVER=dijstra (a typo)",
+        command(*SMALL_ARENA, "--out", "{tmp}/out"),
+        ("SOCIALNAV_GRID_SOLVER=dijstra", "sweeps"),
+        env={"SOCIALNAV_GRID_SOLVER": "dijstra"},
+        timeout_s=300,
+    ),
+    Case(
+        "r9 vague: SOCIALNAV_NATIVE_CACHE naming a file",
+        _beside_a_file(command("simulate", "--out", "{tmp}/out", *SHORT_DAY)),
+        check=_ran_and_named("SOCIALNAV_NATIVE_CACHE"),
+        env={"SOCIALNAV_NATIVE_CACHE": "{tmp}/a-file"},
+        fail_label="vague error",
+    ),
+    Case(
+        "r9 silent: SOCIALNAV_HUMANS_CACHE naming a file",
+        _beside_a_file(command(*"humans validate --quick --out {tmp}/out --no-progress".split())),
+        check=_ran_and_named("SOCIALNAV_HUMANS_CACHE"),
+        env={"SOCIALNAV_HUMANS_CACHE": "{tmp}/a-file"},
+        fail_label="wrong",
+        timeout_s=600,
+    ),
     Case("r9: simulate killed by SIGKILL, then run again", _killed_then_again, check=_second_run_whole, timeout_s=300),
     Case(
         "r9: the arena's tables under two hash seeds (PYTHONHASHSEED)",
@@ -2101,7 +2138,7 @@ API_ERROR = re.compile(r"^(ValueError|RuntimeError|socialnav\.jaxsim\.scenario\.
 
 def _run(case: Case, argv: list[str], tmp: pathlib.Path) -> subprocess.CompletedProcess:
     """Run ``argv`` as the case says: under its file-size limit, sent its signal."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT), **case.env)
+    env = dict(os.environ, PYTHONPATH=str(ROOT), **{k: v.replace("{tmp}", str(tmp)) for k, v in case.env.items()})
     limit = case.file_size_limit_bytes
 
     def start() -> None:
