@@ -72,10 +72,9 @@ def request_float32() -> None:
     """Run JAX with its x64 switch off, as every program, seed and table of the toolkit is defined
     (:mod:`jaxsim.precision`), where ``JAX_ENABLE_X64`` asks for it: a one-line note says the
     setting is ignored, and the variable is set off for this process and the processes it starts
-    (a backend's workers). Measured under ``JAX_ENABLE_X64=1`` before: ``socialnav simulate`` wrote
-    other numbers from the same seed, and ``socialnav arena`` and ``socialnav humans validate``
-    failed with a traceback. A value JAX cannot read (``maybe``) is named and ignored the same way,
-    where ``import jax`` would stop with a traceback. Must run before ``import jax``."""
+    (a backend's workers): under it the same seed gives other numbers and the arena's programs
+    fail to trace. A value JAX cannot read (``maybe``) is named and ignored the same way, where
+    ``import jax`` would stop with a traceback. Must run before ``import jax``."""
     import sys
 
     value = os.environ.get("JAX_ENABLE_X64")

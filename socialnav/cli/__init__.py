@@ -23,7 +23,8 @@ run kept, the folder's lock released), 143. ``SOCIALNAV_VERBOSE=1`` shows the tr
 
 The environment a user brings is read here too: ``JAX_ENABLE_X64`` is ignored with a note (the
 toolkit runs in float32, :mod:`jaxsim.precision`), and a ``JAX_PLATFORMS`` that JAX cannot start
-(``cuda`` on a machine or a JAX without a GPU) ends the command in one line, exit status 2.
+(``cuda`` on a machine or a JAX without a GPU), or a toolkit variable whose value it cannot use
+(``SOCIALNAV_GRID_SOLVER``), ends the command in one line, exit status 2.
 """
 
 from __future__ import annotations
