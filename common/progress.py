@@ -56,3 +56,24 @@ def iterate(iterable, desc: str, enabled: bool = True, **kwargs):
     from tqdm.auto import tqdm
 
     return tqdm(iterable, desc=desc, **kwargs)
+
+
+def time_left(history, total: int, bound: str = "") -> str:
+    """``"; about 12 min to go"`` for ``total`` steps (a fit's steps or evaluations, a validation's
+    draws), ``history``'s ``(k, value, seconds since the start)`` done so far, at the pace of those
+    after the first (which compiles); ``""`` before two are done or once all are. ``bound``: words
+    before "about" (``"at most "``: a search that may stop before its last)."""
+    done = len(history)
+    if done < 2 or done >= total:
+        return ""
+    per_step_s = (history[-1][2] - history[0][2]) / (done - 1)
+    return f"; {bound}about {duration(per_step_s * (total - done))} to go"
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` in the unit a person reads it in: ``"45 s"``, ``"12 min"``, ``"3.5 h"``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"

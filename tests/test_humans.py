@@ -546,13 +546,14 @@ def test_a_fits_log_lines_say_how_long_is_left_at_the_pace_after_the_compile():
     compiles), in the unit a person reads; nothing before two steps or after the last."""
     import optax
 
+    from socialnav.common.progress import duration, time_left
     from socialnav.evaluation.humans import minimise
 
     history = [(0, 1.0, 30.0), (1, 0.9, 32.0), (2, 0.8, 34.0)]  # 30 s to compile, then 2 s a step
-    assert minimise.time_left(history, 80) == "; about 3 min to go"  # 77 steps x 2 s: 154 s
-    assert minimise.time_left(history, 30, "at most ") == "; at most about 54 s to go"
-    assert minimise.time_left(history[:1], 80) == "" and minimise.time_left(history, 3) == ""
-    assert [minimise.duration(s) for s in (45, 720, 3 * 3600 + 1800)] == ["45 s", "12 min", "3.5 h"]
+    assert time_left(history, 80) == "; about 3 min to go"  # 77 steps x 2 s: 154 s
+    assert time_left(history, 30, "at most ") == "; at most about 54 s to go"
+    assert time_left(history[:1], 80) == "" and time_left(history, 3) == ""
+    assert [duration(s) for s in (45, 720, 3 * 3600 + 1800)] == ["45 s", "12 min", "3.5 h"]
     said = []
     minimise.adam(minimise.value_and_grad(lambda th: jnp.sum(th**2)), jnp.ones(2), 12, optax.adam(0.1), log=said.append)
     assert re.fullmatch(r"  gradient step 10: loss \d\.\d{3} \(\d+ s; about \d+ s to go\)", said[1])

@@ -16,6 +16,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from socialnav.common.progress import time_left
+
 
 class FitTooLarge(ValueError):
     """A fit needs more memory at once than the machine has available."""
@@ -38,26 +40,6 @@ def value_and_grad(loss: Callable, forward: bool = False) -> Callable:
         return jax.jit(jax.value_and_grad(loss))
     tangents = jax.jacfwd(lambda theta, *args: (loss(theta, *args),) * 2, has_aux=True)
     return jax.jit(lambda theta, *args: tangents(theta, *args)[::-1])
-
-
-def time_left(history, total: int, bound: str = "") -> str:
-    """``"; about 12 min to go"`` for ``total`` steps or evaluations, ``history``'s ``(k, loss,
-    seconds since the start)`` done so far, at the pace of those after the first (which compiles);
-    ``""`` before two are done or once all are. ``bound``: words before "about" (``"at most "``)."""
-    done = len(history)
-    if done < 2 or done >= total:
-        return ""
-    per_step_s = (history[-1][2] - history[0][2]) / (done - 1)
-    return f"; {bound}about {duration(per_step_s * (total - done))} to go"
-
-
-def duration(seconds: float) -> str:
-    """``seconds`` in the unit a person reads it in: ``"45 s"``, ``"12 min"``, ``"3.5 h"``."""
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    if seconds < 90 * 60:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
 
 
 def adam(loss_and_grad: Callable, theta, steps: int, optimizer: optax.GradientTransformation, args=(),

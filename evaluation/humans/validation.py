@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import time
 
 import jax
 import jax.numpy as jnp
@@ -39,6 +40,7 @@ import numpy as np
 import pandas as pd
 from flax import struct
 
+from socialnav.common.progress import time_left
 from socialnav.data import WAREHOUSE_DIR, recorded
 from socialnav.evaluation.humans import datacache, measures
 from socialnav.jaxsim import geometry, groups, humans, orca, power_law, speed_model
@@ -739,10 +741,13 @@ def validate(
                for e in ("ade", "fde")}  # fmt: skip
     verdicts["eth_ucy_average_vs_cv"] = average
     verdicts["eth_ucy_average_clearly_ahead"] = bool(measures.clearly_ahead(average["ade_m"][2], average["fde_m"][2]))
-    draws, scores = [], []
+    draws, scores, walked = [], [], []  # walked: (draw, 0, seconds since the first began) as each ends
+    began = time.perf_counter()
     for draw in range(1, start_draws + 1):
-        progress(f"{label}: the fundamental diagram from disordered start {draw} of {start_draws}")
+        left = time_left(walked, start_draws)
+        progress(f"{label}: the fundamental diagram from disordered start {draw} of {start_draws}{left}")
         drawn, drawn_bodies = model_fundamental_diagram(model, seed=seed + 100 * draw, packed=True, **size)
+        walked.append((draw, 0.0, time.perf_counter() - began))
         bins = measures.binned(drawn)
         score = measures.band_score(measures.against_band(bins, data["fd_bins"]))
         draws.append(bins.assign(draw=draw))
