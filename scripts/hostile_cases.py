@@ -1058,33 +1058,21 @@ SMALL_ARENA = [
 ]
 
 
-def _same_as_without(out: str, argv: list[str], files: tuple[str, ...], **env: str):
-    """A check: the case's run succeeded, and ``files`` in its ``out`` are byte for byte those of
-    the same command run again with ``env`` (the environment the case changed, put right)."""
+def _x64_case(name: str, argv: list[str], files: tuple[str, ...], **fields) -> Case:
+    """``argv`` (``{tmp}/out`` its run folder) under ``JAX_ENABLE_X64=1``, checked against the same
+    command run again without it: ``files`` byte for byte."""
+    make = command(*argv)
 
     def check(tmp, proc):
         if proc.returncode != 0:
             return False
-        plain = tmp / "plain"
-        again = [a.replace(str(tmp / out), str(plain)) for a in argv]
-        env_again = dict(os.environ, PYTHONPATH=str(ROOT), **env)
-        subprocess.run(again, capture_output=True, cwd=tmp, env=env_again, timeout=600)
-        return all((plain / f).is_file() and (tmp / out / f).read_bytes() == (plain / f).read_bytes() for f in files)
+        out, plain = tmp / "out", tmp / "plain"
+        again = [a.replace(str(out), str(plain)) for a in make(tmp)]
+        env = dict(os.environ, PYTHONPATH=str(ROOT), JAX_ENABLE_X64="0")
+        subprocess.run(again, capture_output=True, cwd=tmp, env=env, timeout=600)
+        return all((plain / f).is_file() and (out / f).read_bytes() == (plain / f).read_bytes() for f in files)
 
-    return check
-
-
-def _x64_case(name: str, argv: list[str], files: tuple[str, ...], **fields) -> Case:
-    """``argv`` (``{tmp}/out`` its run folder) under ``JAX_ENABLE_X64=1``, checked against the run
-    without it."""
-    make = command(*argv)
-    return Case(
-        name,
-        make,
-        check=lambda tmp, proc: _same_as_without("out", make(tmp), files, JAX_ENABLE_X64="0")(tmp, proc),
-        env={"JAX_ENABLE_X64": "1"},
-        **fields,
-    )
+    return Case(name, make, check=check, env={"JAX_ENABLE_X64": "1"}, **fields)
 
 
 ARENA_UNDER_X64 = (

@@ -143,7 +143,7 @@ def request_compilation_cache(path: str | None = None) -> None:
     if setting.lower() in ("off", "0", "none", "false"):
         return
     folder = setting or str(pathlib.Path.home() / ".cache" / "socialnav-jax" / "xla")
-    problem = cache_folder_problem(folder)
+    problem = folder_problem(folder)
     if problem:  # JAX would run without its cache, silently compiling everything in every process
         print(
             f"socialnav: warning: the compilation cache {folder}: {problem}; running without it "
@@ -156,9 +156,7 @@ def request_compilation_cache(path: str | None = None) -> None:
         sys.modules["jax"].config.update("jax_compilation_cache_dir", folder)
 
 
-def cache_folder_problem(folder: str) -> str | None:
-    """Why ``folder`` cannot hold the compilation cache (:func:`common.cache.folder_problem`)."""
-    return folder_problem(folder)
+cache_folder_problem = folder_problem  # why a folder cannot hold the compilation cache (common.cache)
 
 
 def verbose() -> bool:
