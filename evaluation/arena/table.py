@@ -213,20 +213,42 @@ def settings(request: TableRequest) -> dict:
         "socialnav_version": __version__,
     }
     chosen["scene_digests"] = {
-        name: scene_digest(spec.file, held_out, chosen, turned=spec.turned_from is not None)
+        name: scene_digest(
+            spec.file, held_out, chosen, turned=spec.turned_from is not None, recording_file=user_recording_file(spec)
+        )
         for (spec, held_out), name in zip(request.runs, request.names, strict=True)
     }
     chosen["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in request.specs}
+    files = {s.name: user_recording_file(s) for s in request.specs if user_recording_file(s) is not None}
+    if files:  # absent without a user's recording: earlier runs' settings stay the same
+        chosen["recording_file_digests"] = {
+            name: hashlib.sha256(file.read_bytes()).hexdigest()[:16] for name, file in files.items()
+        }
     return chosen
 
 
-def scene_digest(spec_file: pathlib.Path, held_out: bool, settings: dict, turned: bool = False) -> str:
-    """A scene's results are these when this digest matches: the scene file's bytes, the held-out
+def user_recording_file(spec) -> pathlib.Path | None:
+    """The user's recording a scene plays (its ``recording.file``), or None."""
+    file = (spec.recording or {}).get("file")
+    return None if file is None else pathlib.Path(file)
+
+
+def scene_digest(
+    spec_file: pathlib.Path,
+    held_out: bool,
+    settings: dict,
+    turned: bool = False,
+    recording_file: pathlib.Path | None = None,
+) -> str:
+    """A scene's results are these when this digest matches: the scene file's bytes (and those of
+    the user's recording it plays, ``recording_file``), the held-out
     and turned flags, and every setting that changes an episode (methods, variants, seed, shard layout, the
     GSCL model, the source files of the ``--actor`` factories, the human model, the ``--params``
     file's text, the metrics' and the toolkit's versions)."""
     h = hashlib.sha256()
     h.update(pathlib.Path(spec_file).read_bytes())
+    if recording_file is not None:  # only then: a shipped scene's digest as before
+        h.update(pathlib.Path(recording_file).read_bytes())
     keys = (
         "methods",
         "variants",

@@ -30,7 +30,7 @@ Format (``N``: a number or ``[lo, hi]``, drawn uniformly per variant; ``P``: ``[
      "people_in_global_plan": true,                             # optional, see below
      "variants_of": "gscl_crowded_entrance",                    # optional, see below
      "recording": {"run": "biwi_hotel", "playback": "replayed" | "reactive",
-                   "window_within_s": [0, 480]}}                # optional, see below
+                   "window_within_s": [0, 480]}}                # optional, see below ("file", "frames_per_s" for "run")
 
 Every key of the file is one of these, where it stands (a ``walks_with`` on a stream, or a
 misspelt ``start_S``, is an error naming the field, not a default used in silence); a key that
@@ -96,7 +96,11 @@ episodes.
 
 ``recording`` (optional): the scene's people are a recorded crowd, a window of ``timeout_s``
 seconds of the shipped run ``run`` (:func:`socialnav.data.recorded.run_names`: the ETH/UCY
-scenes, the Jülich corridors; positions in the run's own frame) per variant, drawn from the
+scenes, the Jülich corridors; positions in the run's own frame) or of the user's own ``file``
+instead (the toolkit's tracks file, :mod:`socialnav.data.track_file`: ``frame, id, x, y`` rows in
+metres, its path relative to the scene file's folder, with ``frames_per_s``, the frame numbers'
+rate; its people must walk inside ``bounds_m``; ``socialnav arena-scene`` writes a scene for one)
+per variant, drawn from the
 run's ``window_within_s``; a held-out variant's window lies wholly outside it, in the rest of the
 run (:mod:`jaxsim.scenes.recording`). Such a scene has no scripted ``people`` (``[]``). Two
 ``playback`` modes: ``replayed``, everyone moves exactly as recorded and ignores the robot (as
@@ -548,24 +552,54 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
 MAX_PEOPLE_SLOTS = 64
 
 
-def _recording(r: _Reader, rec: Any, timeout_s: float, people: list) -> dict:
-    """The ``recording`` block: the run (known, readable), the playback mode, the windows' range
-    (room for an evaluated window inside it and a held-out one outside), the slots it needs."""
+def _recording(r: _Reader, rec: Any, timeout_s: float, people: list, bounds: tuple) -> dict:
+    """The ``recording`` block: the shipped run or the user's file (known, readable, its people
+    inside ``bounds_m``), the playback mode, the windows' range (room for an evaluated window
+    inside it and a held-out one outside), the slots it needs."""
     from socialnav.data.recorded import RecordedDataError
+    from socialnav.data.track_file import TrackFileError
     from socialnav.jaxsim.scenes import recording as recording_lib
 
-    run = r.get(rec, "recording", "run")
-    if not isinstance(run, str):
-        r.fail("recording.run", f"expected a run's name, got {run!r}")
+    run = r.get(rec, "recording", "run", None)
+    file_name = r.get(rec, "recording", "file", None)
+    if (run is None) == (file_name is None):
+        r.fail("recording", "expected either 'run' (a shipped recording) or 'file' (your own), not both or neither")
+    where = "recording.run" if file_name is None else "recording.file"
+    file = None
+    if file_name is None:
+        if not isinstance(run, str):
+            r.fail(where, f"expected a run's name, got {run!r}")
+    else:
+        if not isinstance(file_name, str) or not file_name:
+            r.fail(where, f"expected a file's path (relative to the scene file's folder), got {file_name!r}")
+        file = (r.file.parent / file_name).resolve()
+        if not file.is_file():
+            r.fail(where, f"{file}: {'not a file' if file.exists() else 'no such file'}")
+        frames_per_s = r.get(rec, "recording", "frames_per_s")
+        if isinstance(frames_per_s, list):
+            r.fail("recording.frames_per_s", f"expected the frame numbers' rate (one number), got {frames_per_s!r}")
+        frames_per_s = r.number(frames_per_s, "recording.frames_per_s", 1e-3, 1e6)[0]
     try:
-        data = recording_lib.load_recording(run)
+        if file is None:
+            data = recording_lib.load_recording(run)
+        else:
+            data = recording_lib.load_recording_file(file, frames_per_s)
     except KeyError as e:
-        r.fail("recording.run", e.args[0])
-    except RecordedDataError as e:
-        r.fail("recording.run", str(e))
+        r.fail(where, e.args[0])
+    except (RecordedDataError, TrackFileError) as e:
+        r.fail(where, str(e))
+    if file is not None:
+        run = data.run
+        lo, hi = data.xy.min(0), data.xy.max(0)
+        if lo[0] < bounds[0] or hi[0] > bounds[1] or lo[1] < bounds[2] or hi[1] > bounds[3]:
+            r.fail(
+                where,
+                f"its people walk x {lo[0]:.2f} to {hi[0]:.2f} m, y {lo[1]:.2f} to {hi[1]:.2f} m, outside bounds_m "
+                f"[{', '.join(f'{b:g}' for b in bounds)}]: widen the bounds or give the positions in the scene's frame",
+            )
     slots = recording_lib.slots_needed(data)
     if slots > MAX_PEOPLE_SLOTS:
-        r.fail("recording.run", f"{run} has up to {slots} people at once: {MAX_PEOPLE_SLOTS} allowed")
+        r.fail(where, f"{run} has up to {slots} people at once: {MAX_PEOPLE_SLOTS} allowed")
     playback = r.get(rec, "recording", "playback")
     if playback not in PLAYBACKS:
         r.fail("recording.playback", f"expected one of {', '.join(PLAYBACKS)}, got {playback!r}")
@@ -580,7 +614,8 @@ def _recording(r: _Reader, rec: Any, timeout_s: float, people: list) -> dict:
         )
     if people:
         r.fail("people", "a scene with a recording has no scripted people (expected [])")
-    return {"run": run, "playback": playback, "within_s": within, "slots": slots, "mirror_y_m": None}
+    recording = {"run": run, "playback": playback, "within_s": within, "slots": slots, "mirror_y_m": None}
+    return recording if file is None else {**recording, "file": str(file), "frames_per_s": frames_per_s}
 
 
 def load_scene(file: str | pathlib.Path) -> SceneSpec:
@@ -667,7 +702,7 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         r.fail("variants_of", f"expected a scene's name, got {variants_of!r} ({name_problem(variants_of)})")
     _check_placements(r, robot, people)
     recording_obj = r.get(obj, "", "recording", None)
-    recording = None if recording_obj is None else _recording(r, recording_obj, timeout, people)
+    recording = None if recording_obj is None else _recording(r, recording_obj, timeout, people, bounds)
     source = str(r.get(obj, "", "source", ""))
     r.check_every_field_read()
     return SceneSpec(

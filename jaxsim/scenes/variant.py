@@ -321,7 +321,7 @@ def _recorded_window(spec: SceneSpec, rng: np.random.Generator, draw: _Drawer, n
     ``robot.start``; both are drawn again until nobody recorded is within
     :data:`RECORDED_START_CLEAR_M` of the start at time 0 (``ValueError`` after 200 tries)."""
     rec = spec.recording
-    data = recording_lib.load_recording(rec["run"])
+    data = recording_lib.load(rec)
     intervals = recording_lib.window_starts_s(rec["within_s"], spec.timeout_s, data.duration_s, held_out)
     n_samples = recording_lib.samples_per_episode(spec.timeout_s)
     for _ in range(200):

@@ -8,6 +8,7 @@
     socialnav gscl generate|train|evaluate ...                      # GSCL (seed 002)
     socialnav layers --out docs/img                                 # the social cost layers, pictured
     socialnav arena --out runs/arena                                # methods x scenes x variants, closed loop
+    socialnav arena-scene my_crowd.csv --out scenes                 # your own recording as arena scenes
     socialnav humans validate --out runs/humans                     # the human models against real pedestrians
 
 Runtime set-up (one XLA host device per core, JAX's persistent compilation cache) happens here,
@@ -52,6 +53,7 @@ COMMAND_MODULES = {
     "gscl": "gscl",
     "layers": "layers",
     "arena": "arena",
+    "arena-scene": "scene",
     "policy": "policy",
     "referee": "referee",
     "humans": "humans",

@@ -72,7 +72,8 @@ def add_parser(sub) -> None:
         type=comma_names,
         default=None,
         help="scene names or .json files (default: the 14 seed scenes); 'recorded' names the recorded-crowd scenes "
-        "(data/scenes/recorded: ETH/UCY and Jülich crowds, replayed and reactive); 'geometry' the seeds' scenes at "
+        "(data/scenes/recorded: ETH/UCY and Jülich crowds, replayed and reactive; socialnav arena-scene makes them of "
+        "your own recording); 'geometry' the seeds' scenes at "
         "angles the papers did not test (data/scenes/geometry: the crossing at 60 and 120 deg)",
     )
     p.add_argument(
@@ -101,8 +102,8 @@ def add_parser(sub) -> None:
         "--human-model",
         choices=HUMAN_MODELS,
         default="social_force",
-        help="how the people move: the warehouse's social force (default), ORCA, or a velocity model with bodies "
-        "(collision_free_speed, anticipation, and their _calibrated fits: docs/humans.md measures each against real "
+        help="how the people move (default social_force, the warehouse's; ORCA, the velocity models with bodies, "
+        "the steering speed model, the power law and their _calibrated fits: docs/humans.md measures each against real "
         "pedestrians)",
     )
     p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")

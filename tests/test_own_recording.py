@@ -1,0 +1,140 @@
+"""A user's own recording in the arena (``recording.file``, ``socialnav arena-scene``): a tracks
+file of a shipped run resamples to that run exactly and makes the shipped scene by the same
+rules; a bad file is one error naming the file (and the person, the frames); a scene whose
+recording changes is a new scene to a resumed run."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from socialnav.cli import main
+from socialnav.data import RECORDED_SCENES_DIR, recorded
+from socialnav.data.track_file import TrackFileError
+from socialnav.evaluation.arena import table
+from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenes import recording as recording_lib
+from socialnav.jaxsim.scenes.spec import load_scene
+from socialnav.jaxsim.scenes.variant import sample_variants
+
+RUN = "crowds_zara01"  # zara1's test recording: 360 s, up to 21 people at once
+FPS = "25"  # its frame numbers are its 25 fps video's (every 10th annotated)
+
+
+@pytest.fixture(scope="module")
+def rows():
+    """The run as a tracks file's rows: ``frame, id, x, y``."""
+    shipped = recorded.trajectories(RUN)
+    return pd.DataFrame({"frame": shipped["frame"], "id": shipped["person"], "x": shipped["x_m"], "y": shipped["y_m"]})
+
+
+@pytest.fixture
+def csv(tmp_path, rows):
+    path = tmp_path / "crowd.csv"
+    rows.to_csv(path, index=False)
+    return path
+
+
+def test_a_csv_of_a_shipped_run_resamples_to_that_run_exactly(csv):
+    mine, shipped = recording_lib.load_recording_file(csv, float(FPS)), recording_lib.load_recording(RUN)
+    assert mine.run == "crowd.csv" and mine.n_samples == shipped.n_samples
+    for field in ("first", "last", "offset", "xy"):
+        np.testing.assert_array_equal(getattr(mine, field), getattr(shipped, field))
+
+
+def test_the_command_writes_the_shipped_scene_by_the_same_rules_and_refuses_to_overwrite(csv, tmp_path, capsys):
+    out = tmp_path / "scenes"
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--name", "zara1", "--out", str(out)]) == 0
+    for playback in ("replayed", "reactive"):
+        mine = json.loads((out / f"zara1_{playback}.json").read_text())
+        shipped = json.loads((RECORDED_SCENES_DIR / f"zara1_{playback}.json").read_text())
+        assert mine["recording"].pop("file") == "../crowd.csv" and mine["recording"].pop("frames_per_s") == 25
+        assert shipped["recording"].pop("run") == RUN
+        mine.pop("source"), shipped.pop("source")
+        assert mine == shipped
+        spec = load_scene(out / f"zara1_{playback}.json")
+        assert spec.recording["file"] == str(csv.resolve()) and spec.n_people_slots == 21
+    before = (out / "zara1_replayed.json").read_bytes()
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--name", "zara1", "--out", str(out)]) == 2
+    assert "--overwrite" in capsys.readouterr().err and (out / "zara1_replayed.json").read_bytes() == before
+
+
+def test_a_scene_of_a_user_file_replays_its_windows(csv, tmp_path):
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--out", str(tmp_path)]) == 0
+    spec = load_scene(tmp_path / "crowd_replayed.json")
+    variants = sample_variants(spec, 0, 3, n_slots=spec.n_people_slots)
+    data = recording_lib.load_recording_file(csv, float(FPS))
+    n = recording_lib.samples_per_episode(spec.timeout_s)
+    for k in range(3):
+        first = int(round(float(variants.window_start_s[k]) / recording_lib.RECORD_DT_S))
+        xy, present = recording_lib.window(data, first, n, spec.n_people_slots)
+        np.testing.assert_array_equal(variants.track_present[k, : spec.n_people_slots], present)
+        np.testing.assert_array_equal(variants.track_xy[k, : spec.n_people_slots], xy)
+        assert present.any()
+
+
+@pytest.mark.parametrize(
+    "edit, fps, words",
+    [
+        (lambda r: r.assign(x=r["x"] * 1000), 25, r"person \d+ moves .* m/s between frames \d+ and \d+ .*metres"),
+        (lambda r: r, 2500, r"moves .* m/s .* at 2500 frames a second .*the rate of the frame numbers"),
+        (lambda r: r.groupby("id").head(1), 25, "nobody is seen for 0.1 s or more"),
+        (lambda r: r.iloc[[0, 1, 2, 1]], 25, "appears twice in frame"),
+        (lambda r: r.rename(columns={"frame": "t"}), 25, "column 'frame' is missing"),
+    ],
+)
+def test_a_bad_recording_file_is_one_error_naming_the_file(rows, tmp_path, edit, fps, words):
+    path = tmp_path / "bad.csv"
+    edit(rows).to_csv(path, index=False)
+    with pytest.raises(TrackFileError, match=words) as e:
+        recording_lib.load_recording_file(path, fps)
+    assert str(path) in str(e.value)
+
+
+@pytest.mark.parametrize(
+    "mutate, words",
+    [
+        (lambda s: s["recording"].update(file="gone.csv"), "no such file"),
+        (lambda s: s["recording"].update(run=RUN), "either 'run'"),
+        (lambda s: s["recording"].pop("file"), "either 'run'"),
+        (lambda s: s["recording"].update(file=3), "expected a file's path"),
+        (lambda s: s.update(bounds_m=[0, 10, 0, 10]), r"outside bounds_m \[0, 10, 0, 10\]"),
+        (lambda s: s["recording"].pop("frames_per_s"), "missing field"),
+        (lambda s: s["recording"].update(frames_per_s=[20, 30]), "one number"),
+        (lambda s: s["recording"].update(frames_per_s=0), "expected a value in"),
+    ],
+)
+def test_a_scene_whose_recording_file_cannot_be_played_is_refused_naming_the_field(csv, tmp_path, mutate, words):
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--out", str(tmp_path)]) == 0
+    scene = json.loads((tmp_path / "crowd_replayed.json").read_text())
+    mutate(scene)
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(scene))
+    with pytest.raises(ScenarioError, match=words) as e:
+        load_scene(path)
+    assert e.value.field.startswith("recording") and str(path) in str(e.value)
+
+
+def test_a_recording_too_crowded_for_a_scene_writes_no_scene(rows, tmp_path, capsys):
+    crowd = tmp_path / "crowd.csv"
+    copies = [rows.assign(id=rows["id"] + 10_000 * k, x=rows["x"] + 0.01 * k) for k in range(4)]
+    pd.concat(copies).to_csv(crowd, index=False)
+    assert main(["arena-scene", str(crowd), "--frames-per-s", FPS, "--out", str(tmp_path / "scenes")]) == 2
+    assert "64 allowed" in capsys.readouterr().err
+    assert not list((tmp_path / "scenes").iterdir())
+
+
+def test_the_scene_digest_changes_with_the_recording_file_and_not_without_one(csv, tmp_path):
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--out", str(tmp_path)]) == 0
+    scene = tmp_path / "crowd_replayed.json"
+    settings = {"metrics_version": 1, "socialnav_version": "x"}
+    before = table.scene_digest(scene, False, settings, recording_file=csv)
+    assert table.scene_digest(scene, False, settings) != before
+    assert table.scene_digest(scene, False, settings, recording_file=csv) == before
+    csv.write_text(csv.read_text() + "99999,0,1.0,1.0\n")  # one more row
+    assert table.scene_digest(scene, False, settings, recording_file=csv) != before
+    spec = load_scene(scene)
+    assert table.user_recording_file(spec) == csv.resolve()
