@@ -1134,6 +1134,97 @@ def _ran_and_named(variable: str):
     return lambda tmp, proc: proc.returncode == 0 and variable in (proc.stderr or "")
 
 
+# --- round ten: a user's own recording in the arena ----------------------------------------------
+
+
+def _tracks(tmp: pathlib.Path, edit: Callable[[object], object] = lambda rows: rows) -> pathlib.Path:
+    """ETH/UCY's zara01 written as a user's tracks file (``frame, id, x, y``; frames of a 25 fps
+    video), ``edit`` applied to its rows (a pandas DataFrame)."""
+    import pandas as pd
+
+    from socialnav.data import recorded
+
+    shipped = recorded.trajectories("crowds_zara01")
+    rows = pd.DataFrame({"frame": shipped["frame"], "id": shipped["person"], "x": shipped["x_m"], "y": shipped["y_m"]})
+    path = tmp / "tracks.csv"
+    edit(rows).to_csv(path, index=False)
+    return path
+
+
+def _arena_scene_of(edit: Callable[[object], object] = lambda rows: rows, fps: str = "25"):
+    """``socialnav arena-scene`` on the edited tracks file, into ``{tmp}/scenes``."""
+    return lambda tmp: [
+        *SOCIALNAV,
+        "arena-scene",
+        str(_tracks(tmp, edit)),
+        "--frames-per-s",
+        fps,
+        "--out",
+        str(tmp / "scenes"),
+    ]
+
+
+def _five_copies(rows):
+    """The recording five times over, each copy 1 cm aside under other ids."""
+    import pandas as pd
+
+    return pd.concat([rows.assign(id=rows["id"] + 1000 * k, x=rows["x"] + 0.01 * k) for k in range(5)])
+
+
+def _arena_on_scene(edit_scene: Callable[[dict], object], variants: str = "2"):
+    """The arena (NavFn) on the tracks file's replayed scene, ``edit_scene`` applied to its JSON."""
+
+    def make(tmp):
+        made = subprocess.run(_arena_scene_of()(tmp), capture_output=True, text=True, timeout=120)
+        if made.returncode:
+            raise RuntimeError(made.stderr)
+        path = tmp / "scenes" / "tracks_replayed.json"
+        scene = json.loads(path.read_text())
+        edit_scene(scene)
+        path.write_text(json.dumps(scene))
+        return [
+            *SOCIALNAV,
+            "arena",
+            "--scenes",
+            str(path),
+            "--methods",
+            "navfn",
+            "--variants",
+            variants,
+            "--out",
+            str(tmp / "out"),
+            "--no-progress",
+        ]
+
+    return make
+
+
+def _edited_recording_then_resumed(tmp):
+    """An arena run on the tracks file's scenes; one person's position edited in the file; the
+    same command again (a resume)."""
+    argv = _arena_on_scene(lambda scene: None)(tmp)
+    first = subprocess.run(argv, capture_output=True, text=True, timeout=300)
+    if first.returncode:
+        raise RuntimeError(first.stderr)
+    tracks = tmp / "tracks.csv"
+    lines = tracks.read_text().splitlines()
+    frame, pid, x, y = lines[5].split(",")
+    lines[5] = ",".join([frame, pid, str(float(x) + 0.5), y])
+    tracks.write_text("\n".join(lines) + "\n")
+    return argv
+
+
+def _arena_ran(tmp, proc):
+    """The run's summary holds the scene's NavFn row over its 2 variants."""
+    import pandas as pd
+
+    summary = tmp / "out" / "summary.csv"
+    if proc.returncode or not summary.is_file():
+        return False
+    rows = pd.read_csv(summary)
+    return list(rows["scene"]) == ["tracks_replayed"] and list(rows["n"]) == [2]
+
+
 CASES: list[Case] = [
     # params.json: ranges and types
     Case(
@@ -2102,6 +2193,55 @@ CASES: list[Case] = [
         check=_same_tables,
         env={"PYTHONHASHSEED": "2"},
         timeout_s=600,
+    ),
+    Case(
+        "r10: a tracks file in millimetres",
+        _arena_scene_of(lambda r: r.assign(x=r["x"] * 1000, y=r["y"] * 1000)),
+        ("tracks.csv", "person", "m/s between frames", "metres"),
+    ),
+    Case(
+        "r10: --frames-per-s ten times the file's",
+        _arena_scene_of(fps="250"),
+        ("tracks.csv", "250 frames a second", "rate of the frame numbers"),
+    ),
+    Case(
+        "r10: frame numbers of milliseconds at --frames-per-s 25",
+        _arena_scene_of(lambda r: r.assign(frame=r["frame"] * 40)),
+        ("tracks.csv", "--frames-per-s 25", "nobody walks faster"),
+    ),
+    Case(
+        "r10: a recording with 105 people at once",
+        _arena_scene_of(_five_copies),
+        ("tracks.csv", "64 allowed"),
+    ),
+    Case(
+        "r10: a recording shorter than a window",
+        _arena_scene_of(lambda r: r[r["frame"] < r["frame"].min() + 500]),
+        ("window_within_s", "shorter than one window"),
+    ),
+    Case(
+        "r10: a scene whose recording file is gone",
+        _arena_on_scene(lambda s: s["recording"].update(file="gone.csv")),
+        ("tracks_replayed.json", "recording.file", "no such file"),
+        timeout_s=300,
+    ),
+    Case(
+        "r10: a scene's bounds narrower than its recorded people",
+        _arena_on_scene(lambda s: s.update(bounds_m=[0, 10, 0, 10])),
+        ("tracks_replayed.json", "recording.file", "outside bounds_m"),
+        timeout_s=300,
+    ),
+    Case(
+        "r10: a recording edited between a run and its resume",
+        _edited_recording_then_resumed,
+        ("out", "other settings", "recording_file_digests", "--overwrite"),
+        timeout_s=600,
+    ),
+    Case(
+        "r10: a user's recording through arena-scene and the arena",
+        _arena_on_scene(lambda s: None),
+        check=_arena_ran,
+        timeout_s=300,
     ),
     Case(
         "r4 silent: a waypoint's made-up speed",
