@@ -1164,6 +1164,11 @@ def _arena_scene_of(edit: Callable[[object], object] = lambda rows: rows, fps: s
     ]
 
 
+def _first_fifteen(rows):
+    """Each person's first 15 frames: tracks too short for 8 observed and 12 predicted."""
+    return rows[rows.groupby("id").cumcount() < 15]
+
+
 def _five_copies(rows):
     """The recording five times over, each copy 1 cm aside under other ids."""
     import pandas as pd
@@ -2242,6 +2247,38 @@ CASES: list[Case] = [
         _arena_on_scene(lambda s: None),
         check=_arena_ran,
         timeout_s=300,
+    ),
+    Case(
+        "r10: humans predict on tracks shorter than the protocol's 20 samples",
+        lambda tmp: [
+            *SOCIALNAV,
+            "humans",
+            "predict",
+            "--tracks",
+            str(_tracks(tmp, _first_fifteen)),
+            "--frames-per-s",
+            "25",
+            "--out",
+            str(tmp / "out"),
+            "--no-progress",
+        ],  # fmt: skip
+        ("tracks.csv", "nobody is seen in 20 samples", "longest track has 15"),
+    ),
+    Case(
+        "r10: humans predict on a tracks file in centimetres",
+        lambda tmp: [
+            *SOCIALNAV,
+            "humans",
+            "predict",
+            "--tracks",
+            str(_tracks(tmp, lambda r: r.assign(x=r["x"] * 100, y=r["y"] * 100))),
+            "--frames-per-s",
+            "25",
+            "--out",
+            str(tmp / "out"),
+            "--no-progress",
+        ],  # fmt: skip
+        ("tracks.csv", "m/s between frames", "metres"),
     ),
     Case(
         "r4 silent: a waypoint's made-up speed",

@@ -138,3 +138,39 @@ def test_the_scene_digest_changes_with_the_recording_file_and_not_without_one(cs
     assert table.scene_digest(scene, False, settings, recording_file=csv) != before
     spec = load_scene(scene)
     assert table.user_recording_file(spec) == csv.resolve()
+
+
+def test_the_prediction_test_on_a_tracks_file_of_a_test_split_gives_the_validation_s_figures(rows, tmp_path):
+    from socialnav.evaluation.humans import calibration, validation
+
+    path = tmp_path / "zara1.csv"
+    rows.to_csv(path, index=False)
+    out = tmp_path / "predict"
+    argv = ["humans", "predict", "--tracks", str(path), "--frames-per-s", FPS, "--models", "social_force"]
+    assert main([*argv, "--out", str(out), "--no-progress"]) == 0
+    table = pd.read_csv(out / "prediction.csv").set_index(["model", "aim"])
+    assert json.loads((out / "summary.json").read_text())["sample_s"] == pytest.approx(0.4)
+    # zara1's test split is crowds_zara01 whole: the same windows, the same figures
+    cv = validation.eth_ucy_prediction(None, "zara1")
+    along = validation.eth_ucy_prediction(calibration.named_model("social_force"), "zara1")
+    assert table.loc[("constant_velocity", "velocity"), "ade_m"] == pytest.approx(cv["ade_m"], abs=1e-9)
+    assert table.loc[("constant_velocity", "velocity"), "samples"] == cv["samples"]
+    for key in ("ade_m", "fde_m", "ade_vs_cv_m", "ade_vs_cv_low_m", "ade_vs_cv_high_m"):
+        assert table.loc[("social_force", "velocity"), key] == pytest.approx(along[key], abs=1e-6)
+    assert table.loc[("social_force", "destination"), "ade_m"] < table.loc[("social_force", "velocity"), "ade_m"]
+
+
+def test_the_prediction_test_reads_a_fast_tracker_at_the_protocol_s_interval(rows, tmp_path):
+    from socialnav.evaluation.humans import own_recording
+
+    fine = rows.assign(frame=rows["frame"] // 10)  # one frame number every 0.4 s: a 2.5 fps tracker
+    path = tmp_path / "fine.csv"
+    fine.to_csv(path, index=False)
+    coarse = own_recording.recording_rows(path, 2.5, sample_s=0.8)  # every other frame
+    gaps = np.diff(np.unique(coarse["frame"]))
+    assert gaps.min() == 2 and not (gaps % 2).any()  # every other frame (the longer gaps: nobody there)
+    assert own_recording.recording_rows(path, 2.5)["frame"].nunique() == fine["frame"].nunique()
+    short = rows[rows.groupby("id").cumcount() < 15]
+    short.to_csv(path, index=False)
+    with pytest.raises(ValueError, match="nobody is seen in 20 samples.*the longest track has 15"):
+        own_recording.recording_windows(own_recording.recording_rows(path, 25.0))

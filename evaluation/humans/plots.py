@@ -180,3 +180,36 @@ def joint_tradeoff(rows: list[dict], data: dict, title: str, path: pathlib.Path)
     held.legend(fontsize=7)
     fig.suptitle(title, fontsize=10)
     return figures.save(fig, path)
+
+
+def recording_prediction(table, title: str, path: pathlib.Path) -> pathlib.Path:
+    """A user's recording (:func:`evaluation.humans.own_recording.predict`'s table): ADE and FDE of
+    constant velocity and each model (aimed along its velocity; hatched: at the true destination),
+    and each model's error minus constant velocity's with its 95 % interval (below 0: ahead)."""
+    models = [m for m in dict.fromkeys(table["model"]) if m != "constant_velocity"]
+    colours = {"constant_velocity": "0.5", **dict(zip(models, COLOURS * (len(models) // len(COLOURS) + 1)))}
+    fig = figures.figure(figsize=(11.0, 3.6), layout="constrained")
+    bars = fig.add_subplot(1, 2, 1)
+    width = 0.8 / len(table)
+    for j, r in enumerate(table.itertuples()):
+        hatch = "//" if r.aim == "destination" else ""
+        label = r.model if r.aim == "velocity" else f"{r.model}, true destination"
+        x = np.arange(2) + (j - len(table) / 2 + 0.5) * width
+        bars.bar(x, [r.ade_m, r.fde_m], width, color=colours[r.model], hatch=hatch, label=label, edgecolor="k", lw=0.3)
+    bars.set_xticks(np.arange(2), ["ADE", "FDE"])
+    bars.set_ylabel("error (m)")
+    bars.legend(fontsize=7)
+    diff = fig.add_subplot(1, 2, 2)
+    scored = table[table["model"] != "constant_velocity"].reset_index(drop=True)
+    for j, r in enumerate(scored.itertuples()):
+        for k, metric in enumerate(("ade", "fde")):
+            d, low, high = (getattr(r, f"{metric}_vs_cv{s}_m") for s in ("", "_low", "_high"))
+            x = k + (j - len(scored) / 2 + 0.5) * (0.8 / max(1, len(scored)))
+            marker = "s" if r.aim == "destination" else "o"
+            diff.errorbar(x, d, [[d - low], [high - d]], fmt=marker, color=colours[r.model], capsize=3, ms=4)
+    diff.axhline(0.0, color="0.5", lw=0.8)
+    diff.set_xticks(np.arange(2), ["ADE", "FDE"])
+    diff.set_ylabel("minus constant velocity's (m)")
+    diff.set_title("95 % intervals; below 0: ahead (squares: true destination)", fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    return figures.save(fig, path)

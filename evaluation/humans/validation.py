@@ -609,7 +609,15 @@ def eth_ucy_prediction(
     ``..._high_m`` (:func:`evaluation.humans.measures.paired_difference`); with ``per_person``
     also ``per_person``: ``{"ade": (model's, constant velocity's, window), "fde": ...}``, each
     scored person's errors and window, what the interval is drawn from."""
-    w = prediction_windows(scene, split, reach_m)
+    return prediction_scores(model, prediction_windows(scene, split, reach_m), aim, seed, groups, per_person)
+
+
+def prediction_scores(
+    model: HumanModel | None, w: PredictionWindows, aim: str = "velocity", seed: int = 0, groups: bool = False,
+    per_person: bool = False,
+) -> dict:  # fmt: skip
+    """:func:`eth_ucy_prediction`'s figures for any windows ``w`` (:func:`windows_of`: a shipped
+    split, or a user's recording)."""
     if model is None:
         predicted = w.constant_velocity
     else:

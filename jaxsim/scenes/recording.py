@@ -107,9 +107,9 @@ def _load_file(file: pathlib.Path, frames_per_s: float, version: tuple[int, int]
 
 
 def file_rows(file: str | pathlib.Path, frames_per_s: float):
-    """A user's tracks file as ``person, t_s, x_m, y_m`` rows (a pandas DataFrame; ``person``
-    numbers the file's ids in their sorted order, ``t_s`` is the frame over ``frames_per_s``),
-    checked as :func:`load_recording_file` says."""
+    """A user's tracks file as ``person, frame, t_s, x_m, y_m`` rows (a pandas DataFrame;
+    ``person`` numbers the file's ids in their sorted order, ``t_s`` is the frame over
+    ``frames_per_s``), checked as :func:`load_recording_file` says."""
     import pandas as pd
 
     from socialnav.data.track_file import TrackFileError, read_tracks
@@ -129,7 +129,15 @@ def file_rows(file: str | pathlib.Path, frames_per_s: float):
             )
     return pd.concat(
         [
-            pd.DataFrame({"person": i, "t_s": t[:, 0] / frames_per_s, "x_m": t[:, 1], "y_m": t[:, 2]})
+            pd.DataFrame(
+                {
+                    "person": i,
+                    "frame": t[:, 0].astype(np.int64),
+                    "t_s": t[:, 0] / frames_per_s,
+                    "x_m": t[:, 1],
+                    "y_m": t[:, 2],
+                }  # fmt: skip
+            )
             for i, t in enumerate(tracks.values())
         ],
         ignore_index=True,

@@ -1,8 +1,9 @@
-"""``socialnav humans validate|calibrate``: the human models against real pedestrians.
+"""``socialnav humans validate|predict|calibrate``: the human models against real pedestrians.
 
     socialnav humans validate --out runs/humans                       # the social force
     socialnav humans validate --models social_force,orca --quick --out runs/humans-quick
     socialnav humans validate --fit runs/calibration/fit.json --out runs/humans-fit   # a fit of one's own
+    socialnav humans predict --tracks my_tracks.csv --frames-per-s 25 --models social_force,orca   # your data
     socialnav humans calibrate --model collision_free_speed --out runs/calibration
     socialnav humans calibrate --data joint --model steering_speed_calibrated --out runs/joint
 
@@ -70,6 +71,29 @@ def add_parser(top) -> None:
     v.add_argument("--no-progress", action="store_true", help="print the headline only")
     v.set_defaults(handler=validate)
 
+    p = sub.add_parser(
+        "predict",
+        help="each human model against your own recording: ETH/UCY's prediction test on a tracks file",
+        description="ETH/UCY's prediction test on your own recording (a tracks file: CSV or Parquet rows of frame, "
+        "id, x, y, positions in metres; the file socialnav arena-scene and gscl fit-tracks read): every person "
+        "present for 20 samples is observed for 8 and predicted for 12 by constant velocity and by each model "
+        "(aimed along their last observed velocity, and at their true final position), in open space. Writes "
+        "prediction.csv, prediction.png and summary.json and prints a line a predictor.",
+    )
+    p.add_argument("--tracks", type=pathlib.Path, required=True, help="the recording: a .csv or .parquet tracks file")
+    p.add_argument("--frames-per-s", type=positive_float, required=True,
+                   help="how far the file's frame numbers advance in a second")  # fmt: skip
+    p.add_argument("--models", type=comma_names, default=["social_force"], help="human models (default social_force)")
+    p.add_argument("--sample-s", type=positive_float, default=0.4,
+                   help="the protocol's sample interval: the file is read every this many seconds, to the nearest "
+                        "whole number of its frame steps (default 0.4, ETH/UCY's 2.5 Hz)")  # fmt: skip
+    p.add_argument("--out", type=output_folder, default=pathlib.Path("runs/humans-predict"),
+                   help="folder (default runs/humans-predict)")  # fmt: skip
+    p.add_argument("--seed", type=seed_int, default=0)
+    p.add_argument("--overwrite", action="store_true", help="replace the run in --out whole once the new one is done")
+    p.add_argument("--no-progress", action="store_true", help="print the result lines only")
+    p.set_defaults(handler=predict)
+
     c = sub.add_parser(
         "calibrate",
         help="fit a human model's parameters to the Jülich training runs, by gradient and by Nelder-Mead",
@@ -107,6 +131,78 @@ def add_parser(top) -> None:
                         "0: one draw, a dense crowd on a lattice)")  # fmt: skip
     c.add_argument("--overwrite", action="store_true", help="replace the run in --out whole once the new one is done")
     c.set_defaults(handler=calibrate)
+
+
+PREDICT_JOB = "socialnav humans predict"
+PREDICT_FILES = ("prediction.csv", "prediction.png", "summary.json")
+
+
+def predict(args) -> int:
+    import hashlib
+
+    import numpy as np
+
+    from socialnav.data.track_file import TrackFileError
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import own_recording
+    from socialnav.evaluation.humans import plots as human_plots
+
+    def fail(message: str) -> int:
+        print(f"{PREDICT_JOB}: {message}", file=sys.stderr)
+        return 2
+
+    unknown = [m for m in args.models if m not in HUMAN_MODELS]
+    if unknown:
+        return fail(f"--models: unknown {', '.join(unknown)} (known: {', '.join(HUMAN_MODELS)})")
+    if not args.tracks.is_file():
+        return fail(f"--tracks {args.tracks}: no such file")
+    try:
+        runfolder.prepare(args.out, PREDICT_FILES, args.overwrite, marker="summary.json", job=PREDICT_JOB)
+        runfolder.check_writable(args.out)
+    except runfolder.RunFolderError as e:
+        return fail(f"--out {e}")
+    t0 = time.perf_counter()
+    say = (
+        (lambda what: None)
+        if args.no_progress
+        else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
+    )
+    try:
+        rows = own_recording.recording_rows(args.tracks, args.frames_per_s, args.sample_s)
+        windows = own_recording.recording_windows(rows)
+    except TrackFileError as e:
+        return fail(str(e))
+    except ValueError as e:
+        return fail(f"{args.tracks} at --frames-per-s {args.frames_per_s:g}, --sample-s {args.sample_s:g}: {e}")
+    sample_s = float(np.median(windows.frame_s))
+    say(f"{args.tracks}: {len(windows.frame_s)} windows of 20 samples {sample_s:g} s apart, "
+        f"{int(windows.complete.sum())} people scored")  # fmt: skip
+    models = {name: hc.named_model(name) for name in args.models}
+    table = own_recording.predict(models, windows, args.seed, say)
+    summary = {
+        "tracks": str(args.tracks),
+        "tracks_sha256": hashlib.sha256(args.tracks.read_bytes()).hexdigest(),
+        "frames_per_s": args.frames_per_s,
+        "sample_s": sample_s,
+        "windows": len(windows.frame_s),
+        "scored": int(windows.complete.sum()),
+        "models": list(args.models),
+        "seed": args.seed,
+        "command": ["socialnav", *getattr(args, "argv", [])],
+    }
+    try:
+        with runfolder.staged(args.out, "summary.json", args.overwrite, job=PREDICT_JOB) as stage:
+            table.to_csv(stage / "prediction.csv", index=False)
+            human_plots.recording_prediction(
+                table, f"{args.tracks.name}: 8 samples observed, 12 predicted, {sample_s:g} s apart",
+                stage / "prediction.png",
+            )  # fmt: skip
+            (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+    except runfolder.RunFolderError as e:
+        return fail(f"--out {e}")
+    print("\n".join(own_recording.headline(table)))
+    print(f"wrote {args.out}/{{{', '.join(PREDICT_FILES)}}} in {time.perf_counter() - t0:.0f} s")
+    return 0
 
 
 CALIBRATE_JOB = "socialnav humans calibrate"

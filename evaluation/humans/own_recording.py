@@ -1,0 +1,101 @@
+"""Human models against a user's own recording: the prediction test of ETH/UCY (8 samples
+observed, 12 predicted, every person aimed along their last observed velocity or at their true
+final position; ADE and FDE against constant velocity, with 95 % intervals) on a tracks file
+(``socialnav humans predict``).
+
+The file is the toolkit's tracks file (:mod:`socialnav.data.track_file`), checked as the arena's
+recorded crowds check it (:func:`jaxsim.scenes.recording.file_rows`). It is read at the protocol's
+sample interval, :data:`SAMPLE_S` by default (ETH/UCY's 2.5 Hz): every k-th frame of the file's
+frame step, k the whole number nearest to ``sample_s`` over that step (a file sampled more
+coarsely keeps its own step, as ``biwi_eth``'s 2/3 s is kept). A recording has no map of its
+walls: the models walk in open space, as on ETH/UCY.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+import pandas as pd
+
+from socialnav.common import memory
+from socialnav.evaluation.humans import report, validation
+from socialnav.jaxsim.scenes import recording
+
+SAMPLE_S = 0.4  # the protocol's sample interval: ETH/UCY's 2.5 Hz
+AIMS = ("velocity", "destination")
+# Bytes a window holds per person present: the observed and future positions (20 samples of 2
+# float64), the constant-velocity prediction (12 of 2 float64) and a model's (12 of 2 float32).
+WINDOW_BYTES_PER_PERSON = (20 + 12) * 2 * 8 + 12 * 2 * 4
+
+
+def recording_rows(file: str | pathlib.Path, frames_per_s: float, sample_s: float = SAMPLE_S) -> pd.DataFrame:
+    """The tracks file's rows as :func:`socialnav.data.recorded.trajectories` gives a shipped
+    run's (``run`` the file's name, ``person, frame, t_s, x_m, y_m``), read every ``sample_s``
+    seconds as the module's docstring says. Raises
+    :class:`~socialnav.data.track_file.TrackFileError` (naming the file) for a bad file."""
+    file = pathlib.Path(file)
+    rows = recording.file_rows(file, frames_per_s)
+    frames = np.unique(rows["frame"].to_numpy())
+    step = int(np.median(np.diff(frames))) if len(frames) > 1 else 1
+    every = max(1, round(sample_s * frames_per_s / step)) * step
+    keep = (rows["frame"] - frames[0]) % every == 0
+    rows = rows[keep.to_numpy()]
+    return pd.DataFrame({"run": file.name, **{c: rows[c].to_numpy() for c in ("person", "frame", "t_s", "x_m", "y_m")}})
+
+
+def windows_needed_bytes(rows: pd.DataFrame) -> float:
+    """About the memory the prediction windows of ``rows`` hold at once: one window a sample,
+    each as wide as the most people present at one sample."""
+    per_frame = rows.groupby("frame").size()
+    return float(len(per_frame) * per_frame.max() * WINDOW_BYTES_PER_PERSON)
+
+
+def recording_windows(rows: pd.DataFrame) -> validation.PredictionWindows:
+    """The prediction windows of ``rows`` (:func:`validation.windows_of`). Raises ``ValueError``
+    where nobody is seen in 20 consecutive samples (nothing to score) or the windows would not fit
+    in memory."""
+    span = validation.PREDICT_OBSERVED + validation.PREDICT_FRAMES
+    needed = windows_needed_bytes(rows)
+    available = memory.shortfall(needed)
+    if available is not None:
+        raise ValueError(
+            f"its prediction windows hold about {needed / 1e9:.1f} GB at once, this machine has "
+            f"{available / 1e9:.1f} GB available: predict a part of the recording at a time"
+        )
+    seen = rows.groupby("person")["frame"].nunique()
+    if seen.max() < span:
+        raise ValueError(
+            f"nobody is seen in {span} samples ({validation.PREDICT_OBSERVED} observed, "
+            f"{validation.PREDICT_FRAMES} predicted); the longest track has {seen.max()}: nothing to score"
+        )
+    try:
+        return validation.windows_of(rows)
+    except ValueError as e:  # every track long enough, none in consecutive samples
+        raise ValueError(f"nobody is seen in {span} consecutive samples: nothing to score ({e})") from None
+
+
+def predict(models: dict, windows: validation.PredictionWindows, seed: int = 0, say=lambda what: None) -> pd.DataFrame:
+    """One row per predictor and aim: constant velocity, then each of ``models`` (label ->
+    :class:`validation.HumanModel`) aimed along the velocity and at the destination, with
+    :func:`validation.prediction_scores`' columns (``ade_m``, ``fde_m``, ``samples``, ``grouped``,
+    and for a model its difference from constant velocity with a 95 % interval)."""
+    rows = [{"model": "constant_velocity", "aim": "velocity", **validation.prediction_scores(None, windows)}]
+    for label, model in models.items():
+        for aim in AIMS:
+            say(f"{label}, aimed {'along the velocity' if aim == 'velocity' else 'at the destination'}")
+            rows.append({"model": label, "aim": aim, **validation.prediction_scores(model, windows, aim, seed)})
+    return pd.DataFrame(rows)
+
+
+def headline(table: pd.DataFrame) -> list[str]:
+    """One line per predictor: ADE / FDE and, for a model, how far from constant velocity."""
+    lines = []
+    for r in table.itertuples():
+        line = f"{r.model:>34} {r.aim:>11}: ADE {r.ade_m:.3f} m, FDE {r.fde_m:.3f} m"
+        if r.model != "constant_velocity":
+            ade = report.interval((r.ade_vs_cv_m, r.ade_vs_cv_low_m, r.ade_vs_cv_high_m))
+            fde = report.interval((r.fde_vs_cv_m, r.fde_vs_cv_low_m, r.fde_vs_cv_high_m))
+            line += f"; minus constant velocity's: ADE {ade}, FDE {fde}"
+        lines.append(line)
+    return lines
