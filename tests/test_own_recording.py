@@ -174,3 +174,12 @@ def test_the_prediction_test_reads_a_fast_tracker_at_the_protocol_s_interval(row
     short.to_csv(path, index=False)
     with pytest.raises(ValueError, match="nobody is seen in 20 samples.*the longest track has 15"):
         own_recording.recording_windows(own_recording.recording_rows(path, 25.0))
+
+
+def test_the_command_refuses_an_out_that_is_a_file_and_a_name_that_cannot_name_files(csv, tmp_path, capsys):
+    a_file = tmp_path / "a-file"
+    a_file.write_text("mine")
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--out", str(a_file)]) == 2
+    assert "a file, not a folder" in capsys.readouterr().err and a_file.read_text() == "mine"
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--name", "../up", "--out", str(tmp_path)]) == 2
+    assert "cannot name the scene files" in capsys.readouterr().err

@@ -93,9 +93,11 @@ def run(args) -> int:
     existing = [str(t) for t in targets if t.exists()]
     if existing and not args.overwrite:
         return fail(f"{', '.join(existing)} exist(s): give --overwrite to replace, or another --name or --out")
-    args.out.mkdir(parents=True, exist_ok=True)
+    if args.out.exists() and not args.out.is_dir():
+        return fail(f"--out {args.out}: a file, not a folder")
     staged = [temporary_path(t) for t in targets]  # beside their targets: the recording's path is relative
     try:
+        args.out.mkdir(parents=True, exist_ok=True)
         specs = []
         for scene, tmp, target in zip(scenes, staged, targets, strict=True):  # checked as the arena reads them
             tmp.write_text(json.dumps(scene, indent=1) + "\n", encoding="utf-8")
@@ -105,6 +107,8 @@ def run(args) -> int:
                 return fail(f"the scene it makes is refused: {str(e).replace(str(tmp), str(target))}")
         for tmp, target in zip(staged, targets, strict=True):
             os.replace(tmp, target)
+    except OSError as e:  # a folder that cannot be made or written (a full disk is named the same way)
+        return fail(f"--out {args.out}: cannot write {e.filename or args.out} ({e.strerror or e})")
     finally:
         for tmp in staged:
             tmp.unlink(missing_ok=True)
