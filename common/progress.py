@@ -67,11 +67,15 @@ def time_left(history, total: int, bound: str = "") -> str:
     if done < 2 or done >= total:
         return ""
     per_step_s = (history[-1][2] - history[0][2]) / (done - 1)
-    return f"; {bound}about {duration(per_step_s * (total - done))} to go"
+    left = duration(per_step_s * (total - done))
+    return f"; {left} to go" if left == "under a second" else f"; {bound}about {left} to go"
 
 
 def duration(seconds: float) -> str:
-    """``seconds`` in the unit a person reads it in: ``"45 s"``, ``"12 min"``, ``"3.5 h"``."""
+    """``seconds`` in the unit a person reads it in: ``"45 s"``, ``"12 min"``, ``"3.5 h"``
+    (``"under a second"`` below half a second, which ``"0 s"`` would misread as done)."""
+    if seconds < 0.5:
+        return "under a second"
     if seconds < 90:
         return f"{seconds:.0f} s"
     if seconds < 90 * 60:

@@ -553,10 +553,11 @@ def test_a_fits_log_lines_say_how_long_is_left_at_the_pace_after_the_compile():
     assert time_left(history, 80) == "; about 3 min to go"  # 77 steps x 2 s: 154 s
     assert time_left(history, 30, "at most ") == "; at most about 54 s to go"
     assert time_left(history[:1], 80) == "" and time_left(history, 3) == ""
-    assert [duration(s) for s in (45, 720, 3 * 3600 + 1800)] == ["45 s", "12 min", "3.5 h"]
+    assert time_left([(0, 1.0, 30.0), (1, 0.9, 30.1), (2, 0.8, 30.2)], 4) == "; under a second to go"
+    assert [duration(s) for s in (0.2, 45, 720, 3 * 3600 + 1800)] == ["under a second", "45 s", "12 min", "3.5 h"]
     said = []
     minimise.adam(minimise.value_and_grad(lambda th: jnp.sum(th**2)), jnp.ones(2), 12, optax.adam(0.1), log=said.append)
-    assert re.fullmatch(r"  gradient step 10: loss \d\.\d{3} \(\d+ s; about \d+ s to go\)", said[1])
+    assert re.fullmatch(r"  gradient step 10: loss \d\.\d{3} \(\d+ s; (about \d+ s|under a second) to go\)", said[1])
 
 
 def test_adam_stops_where_the_gradient_is_not_finite_and_keeps_the_best_so_far():
