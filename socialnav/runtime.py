@@ -225,6 +225,31 @@ def repair_compilation_cache() -> None:
     warnings.showwarning = show
 
 
+def one_line_warnings() -> None:
+    """Show the toolkit's own warnings (a message that starts with ``socialnav.``: the C++
+    kernels that could not be built) as the commands' other warnings are, one line on stderr,
+    ``socialnav: warning: <message>``, without Python's file, line and source line; other warnings
+    keep Python's format. ``SOCIALNAV_VERBOSE=1`` keeps Python's format for all."""
+    import sys
+    import warnings
+
+    previous = warnings.showwarning
+    if verbose() or getattr(previous, "one_line", False):
+        return
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if not str(message).startswith("socialnav."):
+            previous(message, category, filename, lineno, file, line)
+            return
+        try:
+            print(f"socialnav: warning: {message}", file=sys.stderr if file is None else file)
+        except OSError:  # no terminal left to say it on (as Python's own showwarning)
+            pass
+
+    show.one_line = True
+    warnings.showwarning = show
+
+
 def remove_unreadable_entries(program: str, folder: str | None = None) -> list[str]:
     """Remove the cache entries of ``program`` (``jit_step``) in ``folder`` (default: JAX's cache
     folder) that JAX cannot decompress; returns their file names."""

@@ -217,3 +217,25 @@ def test_a_day_under_jax_enable_x64_is_the_float32_day(tmp_path):
     assert x64.returncode == 0 and plain.returncode == 0, x64.stderr + plain.stderr
     assert "JAX_ENABLE_X64=1 ignored" in x64.stderr and "JAX_ENABLE_X64" not in plain.stderr
     assert (tmp_path / "x64" / "logs.parquet").read_bytes() == (tmp_path / "plain" / "logs.parquet").read_bytes()
+
+
+WARNINGS_PROGRAM = """
+import warnings
+from socialnav import runtime
+runtime.one_line_warnings()
+runtime.one_line_warnings()  # a second command in one process installs it once
+warnings.warn("socialnav.jaxsim.native: XLA's slower code (no compiler)")
+warnings.warn("a library's own warning")
+"""
+
+
+def test_the_toolkits_own_warnings_are_one_line_and_others_keep_pythons_format(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "SOCIALNAV_VERBOSE"}
+    done = subprocess.run([sys.executable, "-c", WARNINGS_PROGRAM], capture_output=True, text=True, env=env)
+    err = done.stderr.splitlines()
+    assert err[0] == "socialnav: warning: socialnav.jaxsim.native: XLA's slower code (no compiler)"
+    assert "UserWarning: a library's own warning" in err[1] and "<string>" in err[1]  # Python's format
+    verbose = subprocess.run(
+        [sys.executable, "-c", WARNINGS_PROGRAM], capture_output=True, text=True, env={**env, "SOCIALNAV_VERBOSE": "1"}
+    )
+    assert "UserWarning: socialnav.jaxsim.native" in verbose.stderr and "socialnav: warning" not in verbose.stderr

@@ -131,6 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     runtime.request_compilation_cache()
     runtime.request_float32()
     runtime.repair_compilation_cache()
+    runtime.one_line_warnings()
     runtime.quiet_third_party_logs()
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(_command(argv)).parse_args(argv)
