@@ -174,6 +174,9 @@ def test_the_prediction_test_reads_a_fast_tracker_at_the_protocol_s_interval(row
     short.to_csv(path, index=False)
     with pytest.raises(ValueError, match="nobody is seen in 20 samples.*the longest track has 15"):
         own_recording.recording_windows(own_recording.recording_rows(path, 25.0))
+    out = tmp_path / "out"
+    assert main(["humans", "predict", "--tracks", str(path), "--frames-per-s", FPS, "--out", str(out)]) == 2
+    assert not out.exists()  # a bad file leaves no folder behind
 
 
 def test_the_command_refuses_an_out_that_is_a_file_and_a_name_that_cannot_name_files(csv, tmp_path, capsys):

@@ -156,24 +156,24 @@ def predict(args) -> int:
         return fail(f"--models: unknown {', '.join(unknown)} (known: {', '.join(HUMAN_MODELS)})")
     if not args.tracks.is_file():
         return fail(f"--tracks {args.tracks}: no such file")
-    try:
-        runfolder.prepare(args.out, PREDICT_FILES, args.overwrite, marker="summary.json", job=PREDICT_JOB)
-        runfolder.check_writable(args.out)
-    except runfolder.RunFolderError as e:
-        return fail(f"--out {e}")
     t0 = time.perf_counter()
-    say = (
-        (lambda what: None)
-        if args.no_progress
-        else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
-    )
-    try:
+    try:  # the file first: a bad one leaves no folder behind
         rows = own_recording.recording_rows(args.tracks, args.frames_per_s, args.sample_s)
         windows = own_recording.recording_windows(rows)
     except TrackFileError as e:
         return fail(str(e))
     except ValueError as e:
         return fail(f"{args.tracks} at --frames-per-s {args.frames_per_s:g}, --sample-s {args.sample_s:g}: {e}")
+    try:
+        runfolder.prepare(args.out, PREDICT_FILES, args.overwrite, marker="summary.json", job=PREDICT_JOB)
+        runfolder.check_writable(args.out)
+    except runfolder.RunFolderError as e:
+        return fail(f"--out {e}")
+    say = (
+        (lambda what: None)
+        if args.no_progress
+        else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
+    )
     sample_s = float(np.median(windows.frame_s))
     say(f"{args.tracks}: {len(windows.frame_s)} windows of 20 samples {sample_s:g} s apart, "
         f"{int(windows.complete.sum())} people scored")  # fmt: skip
