@@ -186,3 +186,21 @@ def test_the_command_refuses_an_out_that_is_a_file_and_a_name_that_cannot_name_f
     assert "a file, not a folder" in capsys.readouterr().err and a_file.read_text() == "mine"
     assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--name", "../up", "--out", str(tmp_path)]) == 2
     assert "cannot name the scene files" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # a PPO update compiled: about 15 s
+def test_a_policy_trains_on_a_scene_of_ones_own_and_resumes_from_another_folder(csv, tmp_path, monkeypatch):
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--out", str(tmp_path / "scenes")]) == 0
+    tiny = ["--envs-per-scene", "2", "--rollout-steps", "8", "--no-progress"]
+    monkeypatch.chdir(tmp_path)
+    run = tmp_path / "ppo"
+    assert (
+        main(["policy", "train", "--out", str(run), "--scenes", "scenes/crowd_reactive.json", "--updates", "1", *tiny])
+        == 0
+    )
+    recorded = json.loads((run / "config.json").read_text())["ppo"]["scenes"]
+    assert recorded == [str(tmp_path / "scenes" / "crowd_reactive.json")]  # absolute: found from anywhere
+    monkeypatch.chdir(tmp_path / "scenes")
+    assert main(["policy", "train", "--out", str(run), "--scenes", "crowd_reactive.json", "--updates", "2", *tiny]) == 0
+    lines = (run / "metrics.jsonl").read_text().splitlines()
+    assert [json.loads(line)["update"] for line in lines] == [1, 2]

@@ -42,9 +42,10 @@ def add_parser(top) -> None:
         "--scenes",
         type=comma_names,
         default=None,
-        help="comma-separated built-in scenes to train on, each a name (a seed scene or a recorded-crowd "
-        "scene, which trains on its own training windows), 'seed' or 'recorded' for all of either, or a "
-        "pattern such as '*_reactive' (default: seed)",
+        help="comma-separated scenes to train on, each a name (a seed scene or a recorded-crowd "
+        "scene, which trains on its own training windows), 'seed' or 'recorded' for all of either, a "
+        "pattern such as '*_reactive', or a scene file of your own (.json: socialnav arena-scene makes them of "
+        "your recording) (default: seed)",
     )
     tr.add_argument(
         "--human-model",
@@ -145,7 +146,12 @@ def _train(args) -> int:
     asked = None
     if args.scenes:
         # a group's name, a shell pattern (fnmatch) over the scenes' names, or a name
-        expand = lambda name: groups.get(name) or fnmatch.filter(available, name) or [name]
+        # (a scene file of one's own by its absolute path: a resume from another folder finds it)
+        expand = lambda name: (
+            [str(pathlib.Path(name).resolve())]
+            if name.endswith(".json")
+            else groups.get(name) or fnmatch.filter(available, name) or [name]
+        )
         asked = tuple(dict.fromkeys(n for name in args.scenes for n in expand(name)))
     try:
         config = _config(args, asked or ())
@@ -153,6 +159,7 @@ def _train(args) -> int:
         print(f"socialnav policy train: {err}", file=sys.stderr)
         return 2
     names = list(config.scenes) or list(seed_scenes)
+    available.update({n: pathlib.Path(n) for n in names if n.endswith(".json")})  # a file of one's own
     unknown = [n for n in names if n not in available]
     if unknown:
         print(
