@@ -3,11 +3,11 @@
     python scripts/build_recorded_scenes.py            # writes the files, prints one line each
 
 One scene per recording and playback mode (``<name>_replayed``, ``<name>_reactive``): the five
-ETH/UCY test scenes (``univ`` from ``students003``: ``students001`` has up to 79 people at once,
-above the scene format's 64 slots) and the two Jülich corridors that have room to cross. Every
-number comes from the recording by the rules of :mod:`socialnav.jaxsim.scenes.from_recording`
-(the Jülich corridors with their walkable area and walls; ETH/UCY ships no map of its walls), so
-nothing is chosen after seeing a result.
+ETH/UCY test scenes (``univ`` from ``students003``: ``students001`` needs 76 slots, people at once
+with each slot's gaps counted, above the scene format's 64) and the two Jülich corridors that have
+room to cross. Every number comes from the recording by the rules of
+:mod:`socialnav.jaxsim.scenes.from_recording` (the Jülich corridors with their walkable area and
+walls; ETH/UCY ships no map of its walls), so nothing is chosen after seeing a result.
 
 The scenes are committed; this script is their record and rebuilds them.
 """
