@@ -1169,11 +1169,11 @@ def _first_fifteen(rows):
     return rows[rows.groupby("id").cumcount() < 15]
 
 
-def _five_copies(rows):
-    """The recording five times over, each copy 1 cm aside under other ids."""
+def _seven_copies(rows):
+    """The recording seven times over, each copy 1 cm aside under other ids (147 people at once)."""
     import pandas as pd
 
-    return pd.concat([rows.assign(id=rows["id"] + 1000 * k, x=rows["x"] + 0.01 * k) for k in range(5)])
+    return pd.concat([rows.assign(id=rows["id"] + 1000 * k, x=rows["x"] + 0.01 * k) for k in range(7)])
 
 
 def _arena_on_scene(edit_scene: Callable[[dict], object], variants: str = "2"):
@@ -2215,9 +2215,9 @@ CASES: list[Case] = [
         ("tracks.csv", "--frames-per-s 25", "nobody walks faster"),
     ),
     Case(
-        "r10: a recording with 105 people at once",
-        _arena_scene_of(_five_copies),
-        ("tracks.csv", "64 allowed"),
+        "r10: a recording with 147 people at once",
+        _arena_scene_of(_seven_copies),
+        ("tracks.csv", "128 allowed"),
     ),
     Case(
         "r10: a recording shorter than a window",

@@ -120,10 +120,10 @@ def test_a_scene_whose_recording_file_cannot_be_played_is_refused_naming_the_fie
 
 def test_a_recording_too_crowded_for_a_scene_writes_no_scene(rows, tmp_path, capsys):
     crowd = tmp_path / "crowd.csv"
-    copies = [rows.assign(id=rows["id"] + 10_000 * k, x=rows["x"] + 0.01 * k) for k in range(4)]
+    copies = [rows.assign(id=rows["id"] + 10_000 * k, x=rows["x"] + 0.01 * k) for k in range(7)]  # 147 at once
     pd.concat(copies).to_csv(crowd, index=False)
     assert main(["arena-scene", str(crowd), "--frames-per-s", FPS, "--out", str(tmp_path / "scenes")]) == 2
-    assert "64 allowed" in capsys.readouterr().err
+    assert "up to 147 people at once: 128 allowed" in capsys.readouterr().err
     assert not list((tmp_path / "scenes").iterdir())
 
 

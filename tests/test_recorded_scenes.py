@@ -146,6 +146,13 @@ def test_windows_are_drawn_inside_their_range_held_out_ones_wholly_outside_and_b
         assert start >= hi - 1e-3 or start + spec.timeout_s <= lo + 1e-3
 
 
+def test_every_shipped_recording_fits_a_scene():
+    from socialnav.jaxsim.scenes.spec import MAX_PEOPLE_SLOTS
+
+    slots = {run: recording_lib.slots_needed(recording_lib.load_recording(run)) for run in recorded.run_names()}
+    assert max(slots.values()) <= MAX_PEOPLE_SLOTS and slots["students001"] == 76
+
+
 def test_every_shipped_recorded_scene_loads_and_the_arena_finds_them():
     from socialnav.cli.arena import RECORDED, _scene_files
 
@@ -163,7 +170,7 @@ def test_every_shipped_recorded_scene_loads_and_the_arena_finds_them():
     [
         (lambda r, o: r.update(run="nowhere"), "recording.run", "no recorded run 'nowhere'"),
         (lambda r, o: r.update(run=3), "recording.run", "expected a run's name"),
-        (lambda r, o: r.update(run="students001"), "recording.run", "64 allowed"),
+        (lambda r, o: r.update(run="students001"), "recording.run", "outside bounds_m"),  # univ's, not hotel's
         (lambda r, o: r.update(playback="replay"), "recording.playback", "expected one of replayed, reactive"),
         (lambda r, o: r.update(window_within_s=[0, 10]), "recording.window_within_s", "shorter than one window"),
         (lambda r, o: r.update(window_within_s=[0, 9000]), "recording.window_within_s[1]", "expected a value in"),

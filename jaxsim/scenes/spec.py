@@ -99,10 +99,10 @@ seconds of the shipped run ``run`` (:func:`socialnav.data.recorded.run_names`: t
 scenes, the Jülich corridors; positions in the run's own frame) or of the user's own ``file``
 instead (the toolkit's tracks file, :mod:`socialnav.data.track_file`: ``frame, id, x, y`` rows in
 metres, its path relative to the scene file's folder, with ``frames_per_s``, the frame numbers'
-rate; its people must walk inside ``bounds_m``; ``socialnav arena-scene`` writes a scene for one)
-per variant, drawn from the
+rate; ``socialnav arena-scene`` writes a scene for one) per variant, drawn from the
 run's ``window_within_s``; a held-out variant's window lies wholly outside it, in the rest of the
-run (:mod:`jaxsim.scenes.recording`). Such a scene has no scripted ``people`` (``[]``). Two
+run (:mod:`jaxsim.scenes.recording`); the recording's people must walk inside ``bounds_m``, at
+most :data:`MAX_PEOPLE_SLOTS` at once. Such a scene has no scripted ``people`` (``[]``). Two
 ``playback`` modes: ``replayed``, everyone moves exactly as recorded and ignores the robot (as
 SocNavBench replays ETH/UCY: a collision is then the robot's by construction); ``reactive``, each
 person heads for where they are recorded 1 s ahead, by the run's human model, so they yield to
@@ -549,7 +549,11 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
                 )
 
 
-MAX_PEOPLE_SLOTS = 64
+# The most people a scene holds at once (scripted, or a recording's peak with each slot's gaps):
+# every shipped recording fits (the densest, the Jülich corridor uo-180-180-070, needs 77 slots;
+# ETH/UCY's students001 76), run padded to 128. What a step costs grows with the people:
+# docs/performance.md, "Human models at crowd scale".
+MAX_PEOPLE_SLOTS = 128
 
 
 def _recording(r: _Reader, rec: Any, timeout_s: float, people: list, bounds: tuple) -> dict:
@@ -588,15 +592,14 @@ def _recording(r: _Reader, rec: Any, timeout_s: float, people: list, bounds: tup
         r.fail(where, e.args[0])
     except (RecordedDataError, TrackFileError) as e:
         r.fail(where, str(e))
-    if file is not None:
-        run = data.run
-        lo, hi = data.xy.min(0), data.xy.max(0)
-        if lo[0] < bounds[0] or hi[0] > bounds[1] or lo[1] < bounds[2] or hi[1] > bounds[3]:
-            r.fail(
-                where,
-                f"its people walk x {lo[0]:.2f} to {hi[0]:.2f} m, y {lo[1]:.2f} to {hi[1]:.2f} m, outside bounds_m "
-                f"[{', '.join(f'{b:g}' for b in bounds)}]: widen the bounds or give the positions in the scene's frame",
-            )
+    run = data.run
+    lo, hi = data.xy.min(0), data.xy.max(0)
+    if lo[0] < bounds[0] or hi[0] > bounds[1] or lo[1] < bounds[2] or hi[1] > bounds[3]:
+        r.fail(
+            where,
+            f"its people walk x {lo[0]:.2f} to {hi[0]:.2f} m, y {lo[1]:.2f} to {hi[1]:.2f} m, outside bounds_m "
+            f"[{', '.join(f'{b:g}' for b in bounds)}]: widen the bounds or give the positions in the scene's frame",
+        )
     slots = recording_lib.slots_needed(data)
     if slots > MAX_PEOPLE_SLOTS:
         r.fail(where, f"{run} has up to {slots} people at once: {MAX_PEOPLE_SLOTS} allowed")
