@@ -1137,26 +1137,29 @@ def _ran_and_named(variable: str):
 # --- round ten: a user's own recording in the arena ----------------------------------------------
 
 
-def _tracks(tmp: pathlib.Path, edit: Callable[[object], object] = lambda rows: rows) -> pathlib.Path:
-    """ETH/UCY's zara01 written as a user's tracks file (``frame, id, x, y``; frames of a 25 fps
-    video), ``edit`` applied to its rows (a pandas DataFrame)."""
+def _tracks(
+    tmp: pathlib.Path, edit: Callable[[object], object] = lambda rows: rows, run: str = "crowds_zara01"
+) -> pathlib.Path:
+    """A shipped recording (ETH/UCY's zara01 unless ``run`` names another) written as a user's
+    tracks file (``frame, id, x, y``; frames of a 25 fps video), ``edit`` applied to its rows (a
+    pandas DataFrame)."""
     import pandas as pd
 
     from socialnav.data import recorded
 
-    shipped = recorded.trajectories("crowds_zara01")
+    shipped = recorded.trajectories(run)
     rows = pd.DataFrame({"frame": shipped["frame"], "id": shipped["person"], "x": shipped["x_m"], "y": shipped["y_m"]})
     path = tmp / "tracks.csv"
     edit(rows).to_csv(path, index=False)
     return path
 
 
-def _arena_scene_of(edit: Callable[[object], object] = lambda rows: rows, fps: str = "25"):
+def _arena_scene_of(edit: Callable[[object], object] = lambda rows: rows, fps: str = "25", run: str = "crowds_zara01"):
     """``socialnav arena-scene`` on the edited tracks file, into ``{tmp}/scenes``."""
     return lambda tmp: [
         *SOCIALNAV,
         "arena-scene",
-        str(_tracks(tmp, edit)),
+        str(_tracks(tmp, edit, run)),
         "--frames-per-s",
         fps,
         "--out",
@@ -2223,6 +2226,11 @@ CASES: list[Case] = [
         "r10: a recording shorter than a window",
         _arena_scene_of(lambda r: r[r["frame"] < r["frame"].min() + 500]),
         ("window_within_s", "shorter than one window"),
+    ),
+    Case(
+        "r10: a crowd that never leaves the robot's start (the Jülich bottleneck)",
+        _arena_scene_of(run="bottleneck_040_c_56"),
+        ("tracks.csv", "robot.start", "no start clear of the recorded people"),
     ),
     Case(
         "r10: a scene whose recording file is gone",

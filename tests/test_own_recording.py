@@ -204,3 +204,18 @@ def test_a_policy_trains_on_a_scene_of_ones_own_and_resumes_from_another_folder(
     assert main(["policy", "train", "--out", str(run), "--scenes", "crowd_reactive.json", "--updates", "2", *tiny]) == 0
     lines = (run / "metrics.jsonl").read_text().splitlines()
     assert [json.loads(line)["update"] for line in lines] == [1, 2]
+
+
+def test_a_start_the_recorded_people_never_leave_is_refused_when_the_scene_is_read(rows, tmp_path):
+    frames = np.unique(rows["frame"])
+    stander = pd.DataFrame({"frame": frames, "id": 99_999, "x": 2.0, "y": 2.0})  # standing there all along
+    path = tmp_path / "crowd.csv"
+    pd.concat([rows, stander]).to_csv(path, index=False)
+    assert main(["arena-scene", str(path), "--frames-per-s", FPS, "--out", str(tmp_path)]) == 0
+    scene = json.loads((tmp_path / "crowd_replayed.json").read_text())
+    scene["robot"]["start"] = [[2.0, 2.0], [2.0, 2.0]]  # the start moved onto them
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps(scene))
+    with pytest.raises(ScenarioError, match="no start clear of the recorded people") as e:
+        load_scene(edited)
+    assert e.value.field == "robot.start" and str(edited) in str(e.value)

@@ -708,7 +708,7 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
     recording = None if recording_obj is None else _recording(r, recording_obj, timeout, people, bounds)
     source = str(r.get(obj, "", "source", ""))
     r.check_every_field_read()
-    return SceneSpec(
+    spec = SceneSpec(
         file=file,
         name=name,
         source=source,
@@ -726,6 +726,13 @@ def load_scene(file: str | pathlib.Path) -> SceneSpec:
         recording=recording,
         variants_of=variants_of,
     )
+    if recording is not None:
+        from socialnav.jaxsim.scenes.variant import recorded_start_problem
+
+        problem = recorded_start_problem(spec)
+        if problem is not None:
+            raise problem
+    return spec
 
 
 # A person's fields that are points (ranges per axis) and angles (degree ranges): what a mirror or

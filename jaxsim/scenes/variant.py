@@ -16,6 +16,7 @@ import numpy as np
 from flax import struct
 
 from socialnav.jaxsim.params import PERSON_RADIUS_M, TIAGO_RADIUS_M
+from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenes import recording as recording_lib
 from socialnav.jaxsim.scenes.spec import KIND, TURNED_DEG, SceneSpec, turn_bounds_m, turn_points
 
@@ -314,27 +315,47 @@ def turn_variant(variant: Variant, bounds_m) -> Variant:
     )
 
 
+START_DRAWS = 200  # windows and starts drawn for a recorded variant before its scene is refused
+
+
 def _recorded_window(spec: SceneSpec, rng: np.random.Generator, draw: _Drawer, n: int, held_out: bool):
     """A recorded scene's window and robot start: ``(track_xy, track_present, start_s, robot_xy)``.
 
     The window is drawn from the file's ``window_within_s`` (held out: outside it), the start from
     ``robot.start``; both are drawn again until nobody recorded is within
-    :data:`RECORDED_START_CLEAR_M` of the start at time 0 (``ValueError`` after 200 tries)."""
+    :data:`RECORDED_START_CLEAR_M` of the start at time 0 (a :class:`ScenarioError` naming
+    ``robot.start`` after :data:`START_DRAWS` tries)."""
     rec = spec.recording
     data = recording_lib.load(rec)
     intervals = recording_lib.window_starts_s(rec["within_s"], spec.timeout_s, data.duration_s, held_out)
     n_samples = recording_lib.samples_per_episode(spec.timeout_s)
-    for _ in range(200):
+    for _ in range(START_DRAWS):
         first = recording_lib.draw_window_start(rng, intervals)
         xy, present = recording_lib.window(data, first, n_samples, n, rec["mirror_y_m"])
         robot_xy = draw.point(spec.robot["start"])
         gap = np.linalg.norm(xy[present[:, 0], 0] - robot_xy, axis=-1)
         if np.all(gap >= RECORDED_START_CLEAR_M):
             return xy, present, first * recording_lib.RECORD_DT_S, robot_xy
-    raise ValueError(
-        f"{spec.file}: robot.start: no start clear of the recorded people ({RECORDED_START_CLEAR_M:.3f} m) "
-        "in 200 draws of a window and a start"
+    raise ScenarioError(
+        spec.file,
+        "robot.start",
+        f"no start clear of the recorded people ({RECORDED_START_CLEAR_M:.3f} m) in {START_DRAWS} draws of a "
+        f"{'held-out ' if held_out else ''}window and a start: the start lies where they walk; move it",
     )
+
+
+def recorded_start_problem(spec: SceneSpec) -> ScenarioError | None:
+    """The error a recorded scene's variants would meet (None where there is none): a robot start
+    never clear of the recorded people in :data:`START_DRAWS` draws of an evaluated window, or
+    of a held-out one (a stream of its own, not a variant's). Checked when the scene is read, so
+    that a start inside the crowd's path is refused before any work, not in a variant's draw."""
+    for held_out in (False, True):
+        rng = np.random.default_rng((0, 3, int(held_out)))  # 3: no variant's stream
+        try:
+            _recorded_window(spec, rng, _Drawer(rng, held_out), spec.n_people_slots, held_out)
+        except ScenarioError as e:
+            return e
+    return None
 
 
 def sample_variants(

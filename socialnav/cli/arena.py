@@ -438,9 +438,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
     table.start(out, settings, {**backend_lib.describe(args), **_command(args)})
     digests = settings["scene_digests"]
     shards = [backend_lib.Shard(*shard) for shard in table.plan_shards(out, request, digests)]
+    from socialnav.jaxsim.scenario.errors import ScenarioError
+
     try:
         backend_lib.run_with_args(table.compute_shard, table.save_shard, shards, args, desc="arena", unit="episodes")
-    except backend_lib.BackendError as e:
+    except (backend_lib.BackendError, ScenarioError) as e:  # a variant that cannot be drawn: its scene named
         return _fail(str(e))
     episodes = table.join_scenes(out, request, digests)
     tables = table.write_tables(out, episodes)

@@ -104,7 +104,7 @@ def run(args) -> int:
             try:
                 specs.append(load_scene(tmp))
             except ScenarioError as e:
-                return fail(f"the scene it makes is refused: {str(e).replace(str(tmp), str(target))}")
+                return fail(f"{file}: the scene it makes is refused: {str(e).replace(str(tmp), str(target))}")
         for tmp, target in zip(staged, targets, strict=True):
             os.replace(tmp, target)
     except OSError as e:  # a folder that cannot be made or written (a full disk is named the same way)
