@@ -1172,6 +1172,20 @@ def _first_fifteen(rows):
     return rows[rows.groupby("id").cumcount() < 15]
 
 
+def _arena_scene_with_map_at(origin_m: float):
+    """``socialnav arena-scene`` on zara01's tracks with a free 25 x 22 m ROS map whose origin is
+    ``(origin_m, origin_m)``."""
+
+    def make(tmp):
+        from PIL import Image
+
+        Image.new("L", (250, 220), 254).save(tmp / "map.pgm")
+        (tmp / "map.yaml").write_text(f"image: map.pgm\nresolution: 0.1\norigin: [{origin_m}, {origin_m}, 0.0]\n")
+        return [*_arena_scene_of()(tmp), "--map", str(tmp / "map.yaml")]
+
+    return make
+
+
 def _seven_copies(rows):
     """The recording seven times over, each copy 1 cm aside under other ids (147 people at once)."""
     import pandas as pd
@@ -2231,6 +2245,11 @@ CASES: list[Case] = [
         "r10: a crowd that never leaves the robot's start (the Jülich bottleneck)",
         _arena_scene_of(run="bottleneck_040_c_56"),
         ("tracks.csv", "robot.start", "no start clear of the recorded people"),
+    ),
+    Case(
+        "r10: arena-scene --map of another place (another frame)",
+        _arena_scene_with_map_at(100.0),
+        ("tracks.csv", "map.yaml", "% of the positions lie on the map"),
     ),
     Case(
         "r10: a scene whose recording file is gone",

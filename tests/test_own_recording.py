@@ -219,3 +219,62 @@ def test_a_start_the_recorded_people_never_leave_is_refused_when_the_scene_is_re
     with pytest.raises(ScenarioError, match="no start clear of the recorded people") as e:
         load_scene(edited)
     assert e.value.field == "robot.start" and str(edited) in str(e.value)
+
+
+def test_the_walls_of_an_occupancy_grid_are_boxes_covering_exactly_its_occupied_cells():
+    from socialnav.jaxsim.scenes.from_recording import walls_from_occupancy
+
+    rng = np.random.default_rng(0)
+    occupied = rng.random((40, 50)) < 0.3
+    occupied[10:20, 5:30] = True  # a block: a few boxes, not 250
+    resolution, origin = 0.1, (-1.0, 2.0)
+    walls = np.array(walls_from_occupancy(occupied, resolution, origin, [-1.0, 4.0, 2.0, 6.0]))
+    centres_x = origin[0] + (np.arange(50) + 0.5) * resolution
+    centres_y = origin[1] + (np.arange(40) + 0.5) * resolution
+    gx, gy = np.meshgrid(centres_x, centres_y)
+    covered = np.zeros_like(occupied)
+    for x0, x1, y0, y1 in walls:
+        covered |= (gx > x0) & (gx < x1) & (gy > y0) & (gy < y1)
+    np.testing.assert_array_equal(covered, occupied)
+    assert len(walls) < occupied.sum() / 2
+    inside = np.array(walls_from_occupancy(occupied, resolution, origin, [0.0, 1.0, 3.0, 3.5]))  # clipped
+    assert inside[:, 0].min() >= 0.0 and inside[:, 1].max() <= 1.0 and inside[:, 2].min() >= 3.0
+    assert inside[:, 3].max() <= 3.5 and len(inside) > 0
+
+
+def _ros_map(folder, walls, res=0.1, origin=(-5.0, -5.0), size=(250, 220)):
+    """A ROS map (YAML and PGM) of ``walls`` (boxes, m) in a free room."""
+    from PIL import Image
+
+    w, h = size
+    image = np.full((h, w), 254, np.uint8)
+    for x0, x1, y0, y1 in walls:
+        c0, c1 = round((x0 - origin[0]) / res), round((x1 - origin[0]) / res)
+        r0, r1 = round((y0 - origin[1]) / res), round((y1 - origin[1]) / res)
+        image[h - r1 : h - r0, c0:c1] = 0  # image row 0 at the top
+    Image.fromarray(image).save(folder / "map.pgm")
+    (folder / "map.yaml").write_text(f"image: map.pgm\nresolution: {res}\norigin: [{origin[0]}, {origin[1]}, 0.0]\n")
+    return folder / "map.yaml"
+
+
+def test_a_map_gives_the_scene_its_walls_and_a_map_in_another_frame_is_refused(csv, tmp_path, capsys):
+    map_yaml = _ros_map(tmp_path, [(-5.0, 20.0, -5.0, -1.2), (2.0, 3.0, 12.6, 13.6)])
+    out = tmp_path / "scenes"
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--map", str(map_yaml), "--out", str(out)]) == 0
+    assert "2 wall boxes" in capsys.readouterr().out
+    walls = load_scene(out / "crowd_reactive.json").walls_m
+    np.testing.assert_allclose(walls, [[-2.0, 17.0, -2.0, -1.2], [2.0, 3.0, 12.6, 13.6]], atol=1e-4)
+    elsewhere = _ros_map(tmp_path, [], origin=(100.0, 100.0))  # the map of another place
+    assert (
+        main(
+            ["arena-scene", str(csv), "--frames-per-s", FPS, "--map", str(elsewhere), "--out", str(out), "--overwrite"]
+        )
+        == 2
+    )
+    assert "% of the positions lie on the map" in capsys.readouterr().err
+    across = _ros_map(tmp_path, [(5.0, 6.0, -5.0, 17.0)])  # a wall across the crowd's path
+    assert (
+        main(["arena-scene", str(csv), "--frames-per-s", FPS, "--map", str(across), "--out", str(out), "--overwrite"])
+        == 0
+    )
+    assert "of the recorded positions lie in its walls" in capsys.readouterr().out

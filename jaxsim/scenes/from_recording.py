@@ -2,8 +2,10 @@
 ``scripts/build_recorded_scenes.py``): nothing in it is chosen after seeing a result.
 
 * bounds: the recording's extent, one metre wider on every side, rounded out to whole metres
-  (a corridor with a known geometry: its walkable area); walls: the corridor's (a recording
-  without a geometry has none: the planners see open ground);
+  (a corridor with a known geometry: its walkable area); walls: the corridor's, or those of a map
+  of the place (an occupancy grid, ``socialnav arena-scene --map``: its occupied cells inside the
+  bounds, merged into boxes, :func:`walls_from_occupancy`); without either, none (the planners see
+  open ground);
 * the robot crosses the crowd's main flow: the flow is the principal axis of the people's
   velocities (sign ignored); the robot's start and goal lie on the perpendicular through the
   people's median position, at the 15th and 85th percentiles of their positions along it (a
@@ -50,6 +52,50 @@ def flow_axis(rows) -> np.ndarray:
     return vectors[:, -1]
 
 
+def open_ground_bounds(rows) -> list[float]:
+    """``[xmin, xmax, ymin, ymax]`` (m) of a recording without a geometry: its people's extent, one
+    metre wider on every side, rounded out to whole metres."""
+    xy = rows[["x_m", "y_m"]].to_numpy()
+    lo, hi = np.floor(xy.min(0) - 1.0), np.ceil(xy.max(0) + 1.0)
+    return [float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])]
+
+
+def walls_from_occupancy(occupied, resolution_m: float, origin_xy_m, bounds_m) -> list[list[float]]:
+    """The occupied cells of an occupancy grid (``occupied`` (H, W), truthy where a wall is; row 0
+    at ``origin_xy_m``'s y, the bottom, as a ROS map's OccupancyGrid) that overlap ``bounds_m``,
+    as scene walls ``[xmin, xmax, ymin, ymax]`` (m): each row's runs of occupied cells, a run
+    continued by the same run in the rows above merged into one box (exactly the cells, fewer
+    boxes than cells), clipped to the bounds."""
+    occupied = np.asarray(occupied) > 0
+    x0, y0 = float(origin_xy_m[0]), float(origin_xy_m[1])
+    xmin, xmax, ymin, ymax = (float(b) for b in bounds_m)
+    cols = slice(max(0, int(np.floor((xmin - x0) / resolution_m))), max(0, int(np.ceil((xmax - x0) / resolution_m))))
+    rows = slice(max(0, int(np.floor((ymin - y0) / resolution_m))), max(0, int(np.ceil((ymax - y0) / resolution_m))))
+    part = occupied[rows, cols]
+    c_off, r_off = cols.start, rows.start
+    boxes, open_runs = [], {}  # (first column, end column) -> first row of the box growing upward
+    for r in range(part.shape[0] + 1):
+        line = part[r] if r < part.shape[0] else np.zeros(part.shape[1], bool)
+        edges = np.flatnonzero(np.diff(np.concatenate([[False], line, [False]]).astype(np.int8)))
+        runs = set(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+        for run in [k for k in open_runs if k not in runs]:
+            first = open_runs.pop(run)
+            boxes.append((run[0], run[1], first, r))
+        for run in runs:
+            open_runs.setdefault(run, r)
+    walls = []
+    for c0, c1, r0, r1 in sorted(boxes, key=lambda b: (b[2], b[0])):
+        box = [
+            max(xmin, x0 + (c_off + c0) * resolution_m),
+            min(xmax, x0 + (c_off + c1) * resolution_m),
+            max(ymin, y0 + (r_off + r0) * resolution_m),
+            min(ymax, y0 + (r_off + r1) * resolution_m),
+        ]
+        if box[0] < box[1] and box[2] < box[3]:
+            walls.append([round(v, 4) for v in box])
+    return walls
+
+
 def recorded_scene(
     rows,
     name: str,
@@ -58,6 +104,7 @@ def recorded_scene(
     duration_s: float,
     source: str,
     geometry: dict | None = None,
+    walls: list | None = None,
 ) -> dict:
     """The scene (a dict in the scene format, :func:`jaxsim.scenes.spec.load_scene`) of the
     recording whose ``person, t_s, x_m, y_m`` ``rows`` last ``duration_s`` seconds once
@@ -70,21 +117,25 @@ def recorded_scene(
       geometry: a corridor's (:func:`socialnav.data.recorded.run_info`'s ``geometry``: the
         walkable polygon, obstacles, measurement area and width, the corridor along x from y = 0),
         or None for open ground.
+      walls: without a geometry, the scene's walls (boxes inside :func:`open_ground_bounds`, from
+        a map: :func:`walls_from_occupancy`); None or ``[]``: none.
     """
     if playback not in PLAYBACKS:
         raise ValueError(f"playback: expected one of {', '.join(PLAYBACKS)}, got {playback!r}")
     xy = rows[["x_m", "y_m"]].to_numpy()
-    walls = []
     if geometry is None:
+        walls = [list(w) for w in (walls or [])]
         flow = flow_axis(rows)
         across = np.array([-flow[1], flow[0]])
-        lo, hi = np.floor(xy.min(0) - 1.0), np.ceil(xy.max(0) + 1.0)
-        bounds = [lo[0], hi[0], lo[1], hi[1]]
+        bounds = open_ground_bounds(rows)
         centre = np.median(xy, axis=0)
         along = (xy - centre) @ across
         start = centre + np.percentile(along, 15) * across
         goal = centre + np.percentile(along, 85) * across
     else:
+        if walls:
+            raise ValueError("walls come from the geometry of a corridor: give one or the other")
+        walls = []
         polygon = np.array(geometry["walkable_polygon_m"])
         bounds = [polygon[:, 0].min(), polygon[:, 0].max(), polygon[:, 1].min(), polygon[:, 1].max()]
         for obstacle in geometry["obstacles_m"]:

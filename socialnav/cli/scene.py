@@ -44,6 +44,14 @@ def add_parser(top) -> None:
         help="how far the file's frame numbers advance in a second (25 for frames of a 25 fps video, even if "
         "only every 10th is in the file)",
     )
+    parser.add_argument(
+        "--map",
+        type=pathlib.Path,
+        default=None,
+        metavar="MAP.yaml",
+        help="a ROS map of the place (map_server's YAML and image, in the tracks' frame): its walls inside the "
+        "scene's bounds become the scene's walls (default: none, open ground)",
+    )
     parser.add_argument("--name", default=None, help="the scenes' name (default: the file's name without its suffix)")
     parser.add_argument(
         "--out", type=output_folder, default=pathlib.Path("scenes"), help="folder of the scene files (default scenes)"
@@ -60,6 +68,7 @@ def run(args) -> int:
     from socialnav.jaxsim.scenes import from_recording
     from socialnav.jaxsim.scenes import recording as recording_lib
     from socialnav.jaxsim.scenes.spec import load_scene
+    from socialnav.planners.learning.ros_map import MapFileError
 
     def fail(message: str) -> int:
         print(f"{JOB}: {message}", file=sys.stderr)
@@ -71,9 +80,14 @@ def run(args) -> int:
         return fail(f"--name {name!r} cannot name the scene files ({name_problem(name)}): use {SAFE_NAME_RULE}")
     if not file.is_file():
         return fail(f"{file}: no such file")
+    if args.map is not None and not args.map.is_file():
+        return fail(f"--map {args.map}: no such file")
     try:
         rows = recording_lib.file_rows(file, args.frames_per_s)
         duration_s = recording_lib.load_recording_file(file, args.frames_per_s).duration_s
+        walls, notes = None, []
+        if args.map is not None:
+            walls, notes = _map_walls(file, args.map, rows, from_recording.open_ground_bounds(rows))
         scenes = [
             from_recording.recorded_scene(
                 rows,
@@ -82,10 +96,11 @@ def run(args) -> int:
                 {"file": os.path.relpath(file.resolve(), args.out.resolve()), "frames_per_s": args.frames_per_s},
                 duration_s,
                 f"{file.name} (your recording): the robot crosses the main flow; {playback} ({JOB})",
+                walls=walls,
             )
             for playback in from_recording.PLAYBACKS
         ]
-    except TrackFileError as e:  # names the file
+    except (TrackFileError, MapFileError) as e:  # names the file
         return fail(str(e))
     except ValueError as e:
         return fail(f"{file} at --frames-per-s {args.frames_per_s:g}: {e}")
@@ -118,5 +133,38 @@ def run(args) -> int:
             f"{target}: {file.name}, {duration_s:.0f} s, up to {spec.n_people_slots} people at once; the robot from "
             f"({sx:.1f}, {sy:.1f}) to ({gx:.1f}, {gy:.1f}) m, timeout {spec.timeout_s:g} s"
         )
+    for note in notes:
+        print(note)
     print(f"run them: socialnav arena --scenes {','.join(str(t) for t in targets)} --out runs/{name}")
     return 0
+
+
+def _map_walls(tracks_file: pathlib.Path, map_file: pathlib.Path, rows, bounds_m) -> tuple[list, list[str]]:
+    """The walls of the ROS map ``map_file`` inside ``bounds_m`` (scene boxes), and the notes to
+    print: how many boxes, and the share of the recorded positions that lie in a wall (people
+    the map does not know of: replayed they walk through it, reactive ones are kept out of it).
+    Raises ``TrackFileError`` where under 80 % of the positions lie on the map (another frame,
+    other units: :func:`planners.learning.tracks.check_on_map`)."""
+    import numpy as np
+
+    from socialnav.jaxsim.scenes import from_recording
+    from socialnav.planners.learning.ros_map import read_ros_map
+    from socialnav.planners.learning.tracks import check_on_map
+
+    occupancy, resolution_m, origin = read_ros_map(map_file)
+    tracks = {p: g[["frame", "x_m", "y_m"]].to_numpy() for p, g in rows.groupby("person")}
+    check_on_map(tracks, occupancy, resolution_m, origin, tracks_file, map_file)
+    walls = from_recording.walls_from_occupancy(occupancy, resolution_m, origin, bounds_m)
+    xy = rows[["x_m", "y_m"]].to_numpy()
+    col = np.floor((xy[:, 0] - origin[0]) / resolution_m).astype(int)
+    row = np.floor((xy[:, 1] - origin[1]) / resolution_m).astype(int)
+    on = (row >= 0) & (row < occupancy.shape[0]) & (col >= 0) & (col < occupancy.shape[1])
+    in_wall = np.zeros(len(xy), bool)
+    in_wall[on] = np.asarray(occupancy)[row[on], col[on]] > 0
+    notes = [f"{map_file}: {len(walls)} wall boxes inside the scene's bounds"]
+    if in_wall.any():
+        notes.append(
+            f"{map_file}: {100 * in_wall.mean():.1f} % of the recorded positions lie in its walls (replayed, those "
+            "people walk through them; reactive, they are kept out)"
+        )
+    return walls, notes
