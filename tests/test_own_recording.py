@@ -278,3 +278,47 @@ def test_a_map_gives_the_scene_its_walls_and_a_map_in_another_frame_is_refused(c
         == 0
     )
     assert "of the recorded positions lie in its walls" in capsys.readouterr().out
+
+
+def test_a_recording_is_cut_in_time_for_its_calibration_and_the_command_asks_for_the_file(rows, tmp_path, capsys):
+    from socialnav.evaluation.humans import own_recording
+
+    path = tmp_path / "zara.csv"
+    rows.to_csv(path, index=False)
+    train, test = own_recording.split_rows(own_recording.recording_rows(path, 25.0))
+    assert train["frame"].max() < test["frame"].min() and len(train) > 2 * len(test) > 0
+    out = str(tmp_path / "fit")
+    assert main(["humans", "calibrate", "--data", "tracks", "--out", out]) == 2
+    assert "--data tracks goes with --tracks and --frames-per-s" in capsys.readouterr().err
+    assert main(["humans", "calibrate", "--tracks", str(path), "--frames-per-s", FPS, "--out", out]) == 2
+    assert main(["humans", "calibrate", "--data", "tracks", "--tracks", str(path), "--frames-per-s", FPS,
+                 "--model", "power_law", "--out", out]) == 2  # fmt: skip
+    assert "the power law's gradient" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # a gradient and a search through the crowd step: about 15 s
+def test_a_model_is_calibrated_on_the_first_two_thirds_of_a_recording_and_scored_on_the_rest(rows, tmp_path, capsys):
+    path = tmp_path / "zara.csv"
+    rows.to_csv(path, index=False)
+    out = tmp_path / "fit"
+    argv = ["humans", "calibrate", "--data", "tracks", "--tracks", str(path), "--frames-per-s", FPS, "--model",
+            "collision_free_speed_calibrated", "--steps", "4", "--evaluations", "6", "--sample", "32"]  # fmt: skip
+    assert main([*argv, "--out", str(out)]) == 0
+    fit = json.loads((out / "fit.json").read_text())
+    row = fit["scenes"][0]
+    assert fit["data"] == "tracks" and row["scene"] == "zara.csv" and row["sample_windows"] == 32
+    assert min(h[1] for h in row["gradient_history"]) <= row["gradient_history"][0][1]
+    assert set(fit["vs_cv"]) == {"start", "gradient", "nelder_mead"}
+    low, high = fit["vs_cv"]["start"]["ade_m"][1:]
+    assert low <= fit["vs_cv"]["start"]["ade_m"][0] <= high
+    assert (out / "curve.png").is_file() and "fitted by gradient: test ADE/FDE" in capsys.readouterr().out
+
+
+def test_a_difference_without_an_interval_says_why_instead_of_printing_nan():
+    from socialnav.evaluation.humans import measures, report
+
+    error, baseline = np.array([0.5, 0.4, 0.6]), np.array([0.4, 0.4, 0.4])
+    d, low, high = measures.paired_difference(error, baseline, np.array([0, 1, 2]))  # one block of 20 windows
+    assert d == pytest.approx(0.1) and np.isnan(low) and np.isnan(high)
+    assert report.interval((d, low, high)) == "+0.100 [no interval: fewer than 2 blocks of 20 windows]"
+    assert report.interval((0.1, 0.05, 0.15)) == "+0.100 [+0.050, +0.150]"

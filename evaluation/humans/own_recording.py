@@ -14,6 +14,7 @@ walls: the models walk in open space, as on ETH/UCY.
 from __future__ import annotations
 
 import pathlib
+import time
 
 import numpy as np
 import pandas as pd
@@ -98,4 +99,72 @@ def headline(table: pd.DataFrame) -> list[str]:
             fde = report.interval((r.fde_vs_cv_m, r.fde_vs_cv_low_m, r.fde_vs_cv_high_m))
             line += f"; minus constant velocity's: ADE {ade}, FDE {fde}"
         lines.append(line)
+    return lines
+
+
+TRAIN_SHARE = 2 / 3  # a calibration fits on the recording's first two thirds and scores on the rest
+
+
+def split_rows(rows: pd.DataFrame, train_share: float = TRAIN_SHARE) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """``rows`` cut in time: the frames of the first ``train_share`` of the recording's span (the
+    fit's) and the rest (its test), so that no window of one shares a sample with the other."""
+    frames = rows["frame"].to_numpy()
+    cut = frames.min() + train_share * (frames.max() - frames.min())
+    return rows[frames < cut], rows[frames >= cut]
+
+
+def calibrate(model: validation.HumanModel, rows: pd.DataFrame, name: str, steps: int = 60,
+              learning_rate: float = 0.2, evaluations: int = 60, sample: int = 256, seed: int = 0,
+              log=print) -> dict:  # fmt: skip
+    """``model``'s prediction parameters (the ETH/UCY fit's fields,
+    :data:`evaluation.humans.trajectory_calibration.FITTED`) fitted to a user's recording by
+    gradient through the crowd step and by Nelder-Mead (:func:`~evaluation.humans.trajectory_calibration.fit_and_score`)
+    on ``sample`` windows of its first two thirds, scored on the last third, which the fit never
+    reads (:func:`split_rows`). Returns the record ``socialnav humans calibrate --data tracks``
+    writes as ``fit.json``: the model (``name``), the fields, their values at the start, one row
+    (``"scenes"``, its ``"scene"`` the file's name) and ``"vs_cv"``, each method's test ADE and FDE
+    minus constant velocity's with a 95 % interval (the block bootstrap). Raises ``ValueError``
+    where a part has nothing to score."""
+    from socialnav.evaluation.humans import measures
+    from socialnav.evaluation.humans import trajectory_calibration as tc
+
+    t0 = time.perf_counter()
+    parts = split_rows(rows)
+    windows = []
+    for part, label in zip(parts, ("its first two thirds (the fit's)", "its last third (the test)"), strict=True):
+        try:
+            windows.append(recording_windows(part))
+        except ValueError as e:
+            raise ValueError(f"{label}: {e}") from None
+    train, test = windows
+    fields = tc.FITTED[model.name]
+    row = tc.fit_and_score(model, fields, train, test, steps, learning_rate, evaluations, sample, seed, log)
+    ade_cv, fde_cv, window = tc.errors(None, test)
+    vs_cv = {}
+    for method in ("start", "gradient", "nelder_mead"):
+        if method not in row:
+            continue
+        fitted = (
+            model if method == "start" else tc.with_values(model, fields, [row[f"{method}_values"][f] for f in fields])
+        )
+        ade, fde, _ = tc.errors(fitted, test, seed=seed)
+        vs_cv[method] = {f"{e}_m": [round(x, 4) for x in measures.paired_difference(err, cv, window, seed=seed)]
+                         for e, err, cv in (("ade", ade, ade_cv), ("fde", fde, fde_cv))}  # fmt: skip
+    scene = str(rows["run"].iloc[0])
+    return {"model": name, "data": "tracks", "fields": list(fields), "start": tc.values_of(model, fields),
+            "scenes": [{"scene": scene, "test_windows": len(test.start), **row}], "vs_cv": vs_cv, "seed": seed,
+            "seconds": round(time.perf_counter() - t0, 1), "complete": True}  # fmt: skip
+
+
+def calibration_lines(fit: dict) -> list[str]:
+    """A recording's fit in a line a method: its test ADE/FDE and, for the model, its difference
+    from constant velocity with the 95 % interval."""
+    row = fit["scenes"][0]
+    lines = [f"constant velocity: test ADE/FDE {row['constant_velocity'][0]:.3f} / {row['constant_velocity'][1]:.3f} m "
+             f"({row['test_windows']} windows of the last third)"]  # fmt: skip
+    for key, label in (("start", "as given"), ("gradient", "fitted by gradient"), ("nelder_mead", "Nelder-Mead")):
+        if key in row:
+            d = fit["vs_cv"][key]
+            lines.append(f"{label}: test ADE/FDE {row[key][0]:.3f} / {row[key][1]:.3f} m; minus constant velocity's: "
+                         f"ADE {report.interval(d['ade_m'])}, FDE {report.interval(d['fde_m'])}")  # fmt: skip
     return lines

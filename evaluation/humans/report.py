@@ -58,8 +58,11 @@ def write_validation(folder: pathlib.Path, data: dict, results: dict, quick: boo
 
 
 def interval(difference) -> str:
-    """``[d, low, high]`` as ``+0.012 [+0.004, +0.020]``."""
+    """``[d, low, high]`` as ``+0.012 [+0.004, +0.020]`` (``+0.012 [no interval: ...]`` where the
+    windows hold fewer than two blocks to resample: :func:`evaluation.humans.measures.paired_difference`)."""
     d, low, high = difference
+    if low != low or high != high:  # NaN
+        return f"{d:+.3f} [no interval: fewer than 2 blocks of 20 windows]"
     return f"{d:+.3f} [{low:+.3f}, {high:+.3f}]"
 
 

@@ -185,41 +185,55 @@ def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_U
     fields = FITTED[model.name] if fields is None else fields
     rows = []
     for scene in scenes:
-        train = hv.prediction_windows(scene, "train")
-        test = hv.prediction_windows(scene, "test")
-        pick = np.random.default_rng(seed).choice(len(train.start), size=min(sample, len(train.start)), replace=False)
-        log(f"{scene}: fitting on {len(pick)} windows of the other scenes (its training split)")
-        fixed = train.take(np.sort(pick))
+        log(f"{scene}: fitting on the other scenes (its training split)")
         try:
-            fitted, history = fit_gradient(model, fields, fixed, steps, learning_rate, log=log)
+            train, test = hv.prediction_windows(scene, "train"), hv.prediction_windows(scene, "test")
+            row = fit_and_score(model, fields, train, test, steps, learning_rate, evaluations, sample, seed, log)
         except FitTooLarge as e:
             raise FitTooLarge(f"{scene}: {e}") from None
-        row = {
-            "scene": scene,
-            "train_windows": len(train.start),
-            "sample_windows": len(fixed.start),
-            "constant_velocity": scored(None, test),
-            "start": scored(model, test),
-            "gradient": scored(fitted, test),
-            "gradient_values": values_of(fitted, fields),
-            "gradient_history": history,
-            "sample_loss": {"start": history[0][1], "gradient": min(h[1] for h in history)},
-        }
-        if evaluations:
-            by_search, search_history = fit_nelder_mead(model, fields, fixed, evaluations, log=log)
-            row.update(nelder_mead=scored(by_search, test), nelder_mead_values=values_of(by_search, fields),
-                       nelder_mead_history=search_history)  # fmt: skip
-            row["sample_loss"]["nelder_mead"] = min(h[1] for h in search_history)
-        log(
-            f"  {scene} test ADE/FDE: constant velocity {row['constant_velocity'][0]:.3f}/"
-            f"{row['constant_velocity'][1]:.3f}, as given {row['start'][0]:.3f}/{row['start'][1]:.3f}, "
-            f"by gradient {row['gradient'][0]:.3f}/{row['gradient'][1]:.3f}"
-            + (f", by Nelder-Mead {row['nelder_mead'][0]:.3f}/{row['nelder_mead'][1]:.3f}" if evaluations else "")
-        )
-        rows.append(row)
+        rows.append({"scene": scene, **row})
+        log(f"  {scene} test ADE/FDE: {row_line(row)}")
         if on_scene is not None:
             on_scene(list(rows))
     return rows
+
+
+def fit_and_score(model: hv.HumanModel, fields, train: hv.PredictionWindows, test: hv.PredictionWindows,
+                  steps: int = 60, learning_rate: float = 0.2, evaluations: int = 60, sample: int = 256,
+                  seed: int = 0, log=print) -> dict:  # fmt: skip
+    """One fit on ``sample`` windows drawn from ``train`` (by gradient; by Nelder-Mead too when
+    ``evaluations`` > 0), scored on ``test``: the test ADE/FDE of constant velocity, of ``model``
+    as given and as fitted, the fitted values, the loss curves on the training sample (a row of
+    :func:`leave_one_scene_out`, without its scene)."""
+    pick = np.random.default_rng(seed).choice(len(train.start), size=min(sample, len(train.start)), replace=False)
+    log(f"  fitting on {len(pick)} training windows of {len(train.start)}")
+    fixed = train.take(np.sort(pick))
+    fitted, history = fit_gradient(model, fields, fixed, steps, learning_rate, log=log)
+    row = {
+        "train_windows": len(train.start),
+        "sample_windows": len(fixed.start),
+        "constant_velocity": scored(None, test),
+        "start": scored(model, test),
+        "gradient": scored(fitted, test),
+        "gradient_values": values_of(fitted, fields),
+        "gradient_history": history,
+        "sample_loss": {"start": history[0][1], "gradient": min(h[1] for h in history)},
+    }
+    if evaluations:
+        by_search, search_history = fit_nelder_mead(model, fields, fixed, evaluations, log=log)
+        row.update(nelder_mead=scored(by_search, test), nelder_mead_values=values_of(by_search, fields),
+                   nelder_mead_history=search_history)  # fmt: skip
+        row["sample_loss"]["nelder_mead"] = min(h[1] for h in search_history)
+    return row
+
+
+def row_line(row: dict) -> str:
+    """A fit's test figures in one line: constant velocity's, as given, by each method."""
+    return (
+        f"constant velocity {row['constant_velocity'][0]:.3f}/{row['constant_velocity'][1]:.3f}, as given "
+        f"{row['start'][0]:.3f}/{row['start'][1]:.3f}, by gradient {row['gradient'][0]:.3f}/{row['gradient'][1]:.3f}"
+        + (f", by Nelder-Mead {row['nelder_mead'][0]:.3f}/{row['nelder_mead'][1]:.3f}" if "nelder_mead" in row else "")
+    )
 
 
 def calibrate(model: hv.HumanModel, scenes=recorded.ETH_UCY_SCENES, steps: int = 60, learning_rate: float = 0.2,

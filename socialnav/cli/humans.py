@@ -107,12 +107,17 @@ def add_parser(top) -> None:
     )
     c.add_argument("--model", choices=CALIBRATABLE, default="collision_free_speed",
                    help="the model to fit, from its parameters (a _calibrated one: from the Jülich fit)")  # fmt: skip
-    c.add_argument("--data", choices=("juelich", "eth_ucy", "joint"), default="juelich",
+    c.add_argument("--data", choices=("juelich", "eth_ucy", "joint", "tracks"), default="juelich",
                    help="juelich: the fundamental diagram of the training runs (default); eth_ucy: the prediction "
                         "ADE, one fit a scene on its training split, scored on its test split; joint: both at once "
                         "(the diagram's loss + w x the percent ADE behind constant velocity on the ETH/UCY "
                         "recordings no scene tests on), one fit a --weights value, each scored by the "
-                        "validation")  # fmt: skip
+                        "validation; tracks: the prediction ADE on your own recording (--tracks, --frames-per-s), "
+                        "fitted on its first two thirds and scored on the last")  # fmt: skip
+    c.add_argument("--tracks", type=pathlib.Path, default=None,
+                   help="with --data tracks: your recording (a tracks file: frame, id, x, y)")  # fmt: skip
+    c.add_argument("--frames-per-s", type=positive_float, default=None,
+                   help="with --data tracks: how far the file's frame numbers advance in a second")  # fmt: skip
     c.add_argument("--weights", type=comma_positive_floats, default=None,
                    help="with --data joint: the exchange rates w swept (0.03,0.1,0.3,1)")  # fmt: skip
     c.add_argument("--scenes", type=comma_names, default=None, help="with --data eth_ucy: the held-out scenes (all)")
@@ -237,8 +242,18 @@ def calibrate(args) -> int:
             "socialnav humans calibrate: --start-draws goes with --data juelich or joint (corridors)", file=sys.stderr
         )
         return 2
+    if (args.data == "tracks") != (args.tracks is not None) or (args.tracks is None) != (args.frames_per_s is None):
+        print("socialnav humans calibrate: --data tracks goes with --tracks and --frames-per-s (both), and they with "
+              "it", file=sys.stderr)  # fmt: skip
+        return 2
+    if args.data == "tracks" and (args.start_draws or args.scenes is not None):
+        print("socialnav humans calibrate: --data tracks fits one recording (no --start-draws, --scenes)",
+              file=sys.stderr)  # fmt: skip
+        return 2
     if args.data == "eth_ucy":
         return _calibrate_trajectories(args)
+    if args.data == "tracks":
+        return _calibrate_recording(args)
     if args.data == "joint":
         return _calibrate_joint(args)
     if args.model.endswith("_calibrated") or args.scenes is not None:
@@ -346,6 +361,54 @@ def _calibrate_trajectories(args) -> int:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
         return 2
     print("\n".join(report.trajectory_fit_lines(fit)))
+    print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+def _calibrate_recording(args) -> int:
+    """``--data tracks``: :func:`evaluation.humans.own_recording.calibrate` on the user's file."""
+    from socialnav.data.track_file import TrackFileError
+    from socialnav.evaluation.humans import calibration as hc
+    from socialnav.evaluation.humans import own_recording
+    from socialnav.evaluation.humans import plots as human_plots
+    from socialnav.evaluation.humans import trajectory_calibration as tc
+
+    if args.model.startswith("power_law"):
+        print("socialnav humans calibrate: --data tracks fits the velocity models and ORCA (the power law's gradient "
+              "is not finite over a recording's windows: docs/humans.md)", file=sys.stderr)  # fmt: skip
+        return 2
+    if not args.tracks.is_file():
+        print(f"socialnav humans calibrate: --tracks {args.tracks}: no such file", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+    try:
+        rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
+        model = hc.named_model(args.model)
+        print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to {args.tracks} (its first two thirds; "
+              "scored on the last)", flush=True)  # fmt: skip
+        evaluations = 60 if args.evaluations is None else args.evaluations
+        fit = own_recording.calibrate(model, rows, args.model, args.steps or 60, args.learning_rate or 0.2,
+                                      evaluations, args.sample, args.seed)  # fmt: skip
+    except TrackFileError as e:
+        print(f"socialnav humans calibrate: {e}", file=sys.stderr)
+        return 2
+    except tc.FitTooLarge as e:
+        print(f"socialnav humans calibrate: --sample {args.sample}: {e}", file=sys.stderr)
+        return 2
+    except ValueError as e:
+        print(
+            f"socialnav humans calibrate: {args.tracks} at --frames-per-s {args.frames_per_s:g}: {e}", file=sys.stderr
+        )
+        return 2
+    fit["tracks"] = str(args.tracks)
+    try:
+        with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
+            human_plots.trajectory_fit(fit["scenes"], f"{args.model} on {args.tracks.name}", stage / "curve.png")
+            (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
+    except runfolder.RunFolderError as e:
+        print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
+        return 2
+    print("\n".join(own_recording.calibration_lines(fit)))
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
