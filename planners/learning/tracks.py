@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from socialnav.data.track_file import REQUIRED_COLUMNS, TrackFileError, read_tracks  # noqa: F401  (their old home)
+from socialnav.data.track_file import REQUIRED_COLUMNS, TrackFileError, read_tracks  # noqa: F401  (re-exported)
 from socialnav.models import grid
 from socialnav.models.inference import input_map
 from socialnav.planners.learning.irl import Demonstrations, K, path_moves
