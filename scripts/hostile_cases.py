@@ -1167,6 +1167,12 @@ def _arena_scene_of(edit: Callable[[object], object] = lambda rows: rows, fps: s
     ]
 
 
+def _predict_on(edit: Callable[[object], object]):
+    """``socialnav humans predict`` on zara01's tracks, ``edit`` applied to them."""
+    return lambda tmp: [*SOCIALNAV, "humans", "predict", "--tracks", str(_tracks(tmp, edit)), "--frames-per-s", "25",
+                        "--out", str(tmp / "out"), "--no-progress"]  # fmt: skip
+
+
 def _first_fifteen(rows):
     """Each person's first 15 frames: tracks too short for 8 observed and 12 predicted."""
     return rows[rows.groupby("id").cumcount() < 15]
@@ -2277,34 +2283,12 @@ CASES: list[Case] = [
     ),
     Case(
         "r10: humans predict on tracks shorter than the protocol's 20 samples",
-        lambda tmp: [
-            *SOCIALNAV,
-            "humans",
-            "predict",
-            "--tracks",
-            str(_tracks(tmp, _first_fifteen)),
-            "--frames-per-s",
-            "25",
-            "--out",
-            str(tmp / "out"),
-            "--no-progress",
-        ],  # fmt: skip
+        _predict_on(_first_fifteen),
         ("tracks.csv", "nobody is seen in 20 samples", "longest track has 15"),
     ),
     Case(
         "r10: humans predict on a tracks file in centimetres",
-        lambda tmp: [
-            *SOCIALNAV,
-            "humans",
-            "predict",
-            "--tracks",
-            str(_tracks(tmp, lambda r: r.assign(x=r["x"] * 100, y=r["y"] * 100))),
-            "--frames-per-s",
-            "25",
-            "--out",
-            str(tmp / "out"),
-            "--no-progress",
-        ],  # fmt: skip
+        _predict_on(lambda r: r.assign(x=r["x"] * 100, y=r["y"] * 100)),
         ("tracks.csv", "m/s between frames", "metres"),
     ),
     Case(

@@ -113,6 +113,20 @@ def split_rows(rows: pd.DataFrame, train_share: float = TRAIN_SHARE) -> tuple[pd
     return rows[frames < cut], rows[frames >= cut]
 
 
+def split_windows(rows: pd.DataFrame) -> tuple[validation.PredictionWindows, validation.PredictionWindows]:
+    """The prediction windows of :func:`split_rows`' two parts, the fit's and the test's; raises
+    ``ValueError`` naming the part where one has nothing to score."""
+    windows = []
+    for part, label in zip(
+        split_rows(rows), ("its first two thirds (the fit's)", "its last third (the test)"), strict=True
+    ):
+        try:
+            windows.append(recording_windows(part))
+        except ValueError as e:
+            raise ValueError(f"{label}: {e}") from None
+    return windows[0], windows[1]
+
+
 def calibrate(model: validation.HumanModel, rows: pd.DataFrame, name: str, steps: int = 60,
               learning_rate: float = 0.2, evaluations: int = 60, sample: int = 256, seed: int = 0,
               log=print) -> dict:  # fmt: skip
@@ -129,14 +143,7 @@ def calibrate(model: validation.HumanModel, rows: pd.DataFrame, name: str, steps
     from socialnav.evaluation.humans import trajectory_calibration as tc
 
     t0 = time.perf_counter()
-    parts = split_rows(rows)
-    windows = []
-    for part, label in zip(parts, ("its first two thirds (the fit's)", "its last third (the test)"), strict=True):
-        try:
-            windows.append(recording_windows(part))
-        except ValueError as e:
-            raise ValueError(f"{label}: {e}") from None
-    train, test = windows
+    train, test = split_windows(rows)
     fields = tc.FITTED[model.name]
     row = tc.fit_and_score(model, fields, train, test, steps, learning_rate, evaluations, sample, seed, log)
     ade_cv, fde_cv, window = tc.errors(None, test)

@@ -220,6 +220,11 @@ def calibrate(args) -> int:
     from socialnav.evaluation.humans import plots as human_plots
     from socialnav.evaluation.humans import validation as hv
 
+    if args.data == "tracks" or args.tracks is not None or args.frames_per_s is not None:
+        problem = _read_recording(args)  # before --out is made: a bad file leaves no folder behind
+        if problem:
+            print(f"socialnav humans calibrate: {problem}", file=sys.stderr)
+            return 2
     try:
         runfolder.prepare(args.out, CALIBRATE_RESULTS, args.overwrite, marker="fit.json", job=CALIBRATE_JOB)
         runfolder.check_writable(args.out)
@@ -241,14 +246,6 @@ def calibrate(args) -> int:
         print(
             "socialnav humans calibrate: --start-draws goes with --data juelich or joint (corridors)", file=sys.stderr
         )
-        return 2
-    if (args.data == "tracks") != (args.tracks is not None) or (args.tracks is None) != (args.frames_per_s is None):
-        print("socialnav humans calibrate: --data tracks goes with --tracks and --frames-per-s (both), and they with "
-              "it", file=sys.stderr)  # fmt: skip
-        return 2
-    if args.data == "tracks" and (args.start_draws or args.scenes is not None):
-        print("socialnav humans calibrate: --data tracks fits one recording (no --start-draws, --scenes)",
-              file=sys.stderr)  # fmt: skip
         return 2
     if args.data == "eth_ucy":
         return _calibrate_trajectories(args)
@@ -330,7 +327,6 @@ def _calibrate_trajectories(args) -> int:
     """``--data eth_ucy``: :func:`evaluation.humans.trajectory_calibration.calibrate`."""
     from socialnav.data import recorded
     from socialnav.evaluation.humans import calibration as hc
-    from socialnav.evaluation.humans import plots as human_plots
     from socialnav.evaluation.humans import report
     from socialnav.evaluation.humans import trajectory_calibration as tc
 
@@ -351,47 +347,68 @@ def _calibrate_trajectories(args) -> int:
     except tc.FitTooLarge as e:
         print(f"socialnav humans calibrate: --sample {args.sample}: {e}", file=sys.stderr)
         return 2
+    replace = args.overwrite or (args.out / PROGRESS).exists()
+    title = f"{args.model} on ETH/UCY, leave one scene out"
+    return _write_trajectory_fit(args, fit, title, report.trajectory_fit_lines(fit), replace, t0)
+
+
+def _write_trajectory_fit(args, fit: dict, title: str, lines: list[str], replace: bool, t0: float) -> int:
+    """A prediction fit's ``fit.json`` and ``curve.png`` committed to ``--out`` as one, then its
+    ``lines`` printed."""
+    from socialnav.evaluation.humans import plots as human_plots
+
     try:
-        replace = args.overwrite or (args.out / PROGRESS).exists()
         with runfolder.staged(args.out, "fit.json", replace, job=CALIBRATE_JOB) as stage:
-            human_plots.trajectory_fit(fit["scenes"], f"{args.model} on ETH/UCY, leave one scene out",
-                                       stage / "curve.png")  # fmt: skip
+            human_plots.trajectory_fit(fit["scenes"], title, stage / "curve.png")
             (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
     except runfolder.RunFolderError as e:
         print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
         return 2
-    print("\n".join(report.trajectory_fit_lines(fit)))
+    print("\n".join(lines))
     print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
     return 0
 
 
-def _calibrate_recording(args) -> int:
-    """``--data tracks``: :func:`evaluation.humans.own_recording.calibrate` on the user's file."""
+def _read_recording(args) -> str | None:
+    """``--data tracks``: why its options or file cannot be used (None: they can; the file's rows
+    are then ``args.tracks_rows``), checked before the run folder is made."""
     from socialnav.data.track_file import TrackFileError
+    from socialnav.evaluation.humans import own_recording
+
+    if args.data != "tracks" or args.tracks is None or args.frames_per_s is None:
+        return "--data tracks goes with --tracks and --frames-per-s (both), and they with it"
+    if args.start_draws or args.scenes is not None or args.weights is not None:
+        return "--data tracks fits one recording (no --start-draws, --scenes, --weights)"
+    if args.model.startswith("power_law"):
+        return ("--data tracks fits the velocity models and ORCA (the power law's gradient is not finite over a "
+                "recording's windows: docs/humans.md)")  # fmt: skip
+    if not args.tracks.is_file():
+        return f"--tracks {args.tracks}: no such file"
+    try:
+        args.tracks_rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
+        own_recording.split_windows(args.tracks_rows)  # each part has someone to score
+    except TrackFileError as e:
+        return str(e)
+    except ValueError as e:
+        return f"{args.tracks} at --frames-per-s {args.frames_per_s:g}: {e}"
+    return None
+
+
+def _calibrate_recording(args) -> int:
+    """``--data tracks``: :func:`evaluation.humans.own_recording.calibrate` on the user's file
+    (read by :func:`_read_recording`)."""
     from socialnav.evaluation.humans import calibration as hc
     from socialnav.evaluation.humans import own_recording
-    from socialnav.evaluation.humans import plots as human_plots
     from socialnav.evaluation.humans import trajectory_calibration as tc
 
-    if args.model.startswith("power_law"):
-        print("socialnav humans calibrate: --data tracks fits the velocity models and ORCA (the power law's gradient "
-              "is not finite over a recording's windows: docs/humans.md)", file=sys.stderr)  # fmt: skip
-        return 2
-    if not args.tracks.is_file():
-        print(f"socialnav humans calibrate: --tracks {args.tracks}: no such file", file=sys.stderr)
-        return 2
     t0 = time.perf_counter()
     try:
-        rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
         model = hc.named_model(args.model)
         print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to {args.tracks} (its first two thirds; "
               "scored on the last)", flush=True)  # fmt: skip
         evaluations = 60 if args.evaluations is None else args.evaluations
-        fit = own_recording.calibrate(model, rows, args.model, args.steps or 60, args.learning_rate or 0.2,
-                                      evaluations, args.sample, args.seed)  # fmt: skip
-    except TrackFileError as e:
-        print(f"socialnav humans calibrate: {e}", file=sys.stderr)
-        return 2
+        fit = own_recording.calibrate(model, args.tracks_rows, args.model, args.steps or 60,
+                                      args.learning_rate or 0.2, evaluations, args.sample, args.seed)  # fmt: skip
     except tc.FitTooLarge as e:
         print(f"socialnav humans calibrate: --sample {args.sample}: {e}", file=sys.stderr)
         return 2
@@ -401,16 +418,8 @@ def _calibrate_recording(args) -> int:
         )
         return 2
     fit["tracks"] = str(args.tracks)
-    try:
-        with runfolder.staged(args.out, "fit.json", args.overwrite, job=CALIBRATE_JOB) as stage:
-            human_plots.trajectory_fit(fit["scenes"], f"{args.model} on {args.tracks.name}", stage / "curve.png")
-            (stage / "fit.json").write_text(json.dumps(fit, indent=1) + "\n")
-    except runfolder.RunFolderError as e:
-        print(f"socialnav humans calibrate: --out {e}", file=sys.stderr)
-        return 2
-    print("\n".join(own_recording.calibration_lines(fit)))
-    print(f"wrote {args.out}/{{fit.json, curve.png}} in {time.perf_counter() - t0:.0f} s")
-    return 0
+    title = f"{args.model} on {args.tracks.name}"
+    return _write_trajectory_fit(args, fit, title, own_recording.calibration_lines(fit), args.overwrite, t0)
 
 
 def _calibrate_joint(args) -> int:
