@@ -219,11 +219,9 @@ def settings(request: TableRequest) -> dict:
         for (spec, held_out), name in zip(request.runs, request.names, strict=True)
     }
     chosen["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in request.specs}
-    files = {s.name: user_recording_file(s) for s in request.specs if user_recording_file(s) is not None}
-    if files:  # absent without a user's recording: earlier runs' settings stay the same
-        chosen["recording_file_digests"] = {
-            name: hashlib.sha256(file.read_bytes()).hexdigest()[:16] for name, file in files.items()
-        }
+    files = {s.name: user_recording_file(s) for s in request.specs}
+    if any(files.values()):  # absent without a user's recording: earlier runs' settings stay the same
+        chosen["recording_file_digests"] = {name: file_sha256(f)[:16] for name, f in files.items() if f is not None}
     return chosen
 
 
@@ -231,6 +229,18 @@ def user_recording_file(spec) -> pathlib.Path | None:
     """The user's recording a scene plays (its ``recording.file``), or None."""
     file = (spec.recording or {}).get("file")
     return None if file is None else pathlib.Path(file)
+
+
+def file_sha256(path: pathlib.Path) -> str:
+    """The SHA-256 of the file at ``path``, read once while its size and modification time stay
+    (a recording is digested for each of its scene's rows and for the run's settings)."""
+    stat = pathlib.Path(path).stat()
+    return _sha256_of(pathlib.Path(path).resolve(), stat.st_size, stat.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=32)
+def _sha256_of(path: pathlib.Path, size: int, mtime_ns: int) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def scene_digest(
@@ -248,7 +258,7 @@ def scene_digest(
     h = hashlib.sha256()
     h.update(pathlib.Path(spec_file).read_bytes())
     if recording_file is not None:  # only then: a shipped scene's digest as before
-        h.update(pathlib.Path(recording_file).read_bytes())
+        h.update(file_sha256(recording_file).encode())
     keys = (
         "methods",
         "variants",

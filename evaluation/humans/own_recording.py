@@ -127,37 +127,25 @@ def split_windows(rows: pd.DataFrame) -> tuple[validation.PredictionWindows, val
     return windows[0], windows[1]
 
 
-def calibrate(model: validation.HumanModel, rows: pd.DataFrame, name: str, steps: int = 60,
-              learning_rate: float = 0.2, evaluations: int = 60, sample: int = 256, seed: int = 0,
-              log=print) -> dict:  # fmt: skip
+def calibrate(model: validation.HumanModel, train: validation.PredictionWindows, test: validation.PredictionWindows,
+              name: str, scene: str, steps: int = 60, learning_rate: float = 0.2, evaluations: int = 60,
+              sample: int = 256, seed: int = 0, log=print) -> dict:  # fmt: skip
     """``model``'s prediction parameters (the ETH/UCY fit's fields,
     :data:`evaluation.humans.trajectory_calibration.FITTED`) fitted to a user's recording by
     gradient through the crowd step and by Nelder-Mead (:func:`~evaluation.humans.trajectory_calibration.fit_and_score`)
-    on ``sample`` windows of its first two thirds, scored on the last third, which the fit never
-    reads (:func:`split_rows`). Returns the record ``socialnav humans calibrate --data tracks``
-    writes as ``fit.json``: the model (``name``), the fields, their values at the start, one row
-    (``"scenes"``, its ``"scene"`` the file's name) and ``"vs_cv"``, each method's test ADE and FDE
-    minus constant velocity's with a 95 % interval (the block bootstrap). Raises ``ValueError``
-    where a part has nothing to score."""
-    from socialnav.evaluation.humans import measures
+    on ``sample`` windows of its first two thirds (``train``), scored on the last third (``test``),
+    which the fit never reads (:func:`split_windows`). Returns the record ``socialnav humans
+    calibrate --data tracks`` writes as ``fit.json``: the model (``name``), the fields, their values
+    at the start, one row (``"scenes"``, its ``"scene"`` the file's name, ``scene``) and ``"vs_cv"``,
+    each method's test ADE and FDE minus constant velocity's with a 95 % interval (the block
+    bootstrap)."""
     from socialnav.evaluation.humans import trajectory_calibration as tc
 
     t0 = time.perf_counter()
-    train, test = split_windows(rows)
     fields = tc.FITTED[model.name]
-    row = tc.fit_and_score(model, fields, train, test, steps, learning_rate, evaluations, sample, seed, log)
-    ade_cv, fde_cv, window = tc.errors(None, test)
-    vs_cv = {}
-    for method in ("start", "gradient", "nelder_mead"):
-        if method not in row:
-            continue
-        fitted = (
-            model if method == "start" else tc.with_values(model, fields, [row[f"{method}_values"][f] for f in fields])
-        )
-        ade, fde, _ = tc.errors(fitted, test, seed=seed)
-        vs_cv[method] = {f"{e}_m": [round(x, 4) for x in measures.paired_difference(err, cv, window, seed=seed)]
-                         for e, err, cv in (("ade", ade, ade_cv), ("fde", fde, fde_cv))}  # fmt: skip
-    scene = str(rows["run"].iloc[0])
+    row = tc.fit_and_score(model, fields, train, test, steps, learning_rate, evaluations, sample, seed, log,
+                           intervals=True)  # fmt: skip
+    vs_cv = row.pop("vs_cv")
     return {"model": name, "data": "tracks", "fields": list(fields), "start": tc.values_of(model, fields),
             "scenes": [{"scene": scene, "test_windows": len(test.start), **row}], "vs_cv": vs_cv, "seed": seed,
             "seconds": round(time.perf_counter() - t0, 1), "complete": True}  # fmt: skip

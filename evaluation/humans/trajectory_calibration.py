@@ -142,12 +142,6 @@ def errors(model: hv.HumanModel | None, w: hv.PredictionWindows, groups: bool = 
     return ade, fde, np.nonzero(w.complete)[0]
 
 
-def scored(model: hv.HumanModel | None, w: hv.PredictionWindows, groups: bool = True, seed: int = 0) -> tuple:
-    """``(ADE, FDE)`` (m) of ``model`` (None: constant velocity) on windows ``w``."""
-    ade, fde, _ = errors(model, w, groups, seed)
-    return float(ade.mean()), float(fde.mean())
-
-
 def average_vs_cv(model: hv.HumanModel, rows: list[dict], method: str = "nelder_mead", fields=None,
                   groups: bool = True, seed: int = 0) -> dict:  # fmt: skip
     """How far ``method``'s fits (``"gradient"`` or ``"nelder_mead"``) in ``rows`` (of
@@ -200,30 +194,48 @@ def leave_one_scene_out(model: hv.HumanModel, fields=None, scenes=recorded.ETH_U
 
 def fit_and_score(model: hv.HumanModel, fields, train: hv.PredictionWindows, test: hv.PredictionWindows,
                   steps: int = 60, learning_rate: float = 0.2, evaluations: int = 60, sample: int = 256,
-                  seed: int = 0, log=print) -> dict:  # fmt: skip
+                  seed: int = 0, log=print, intervals: bool = False) -> dict:  # fmt: skip
     """One fit on ``sample`` windows drawn from ``train`` (by gradient; by Nelder-Mead too when
     ``evaluations`` > 0), scored on ``test``: the test ADE/FDE of constant velocity, of ``model``
     as given and as fitted, the fitted values, the loss curves on the training sample (a row of
-    :func:`leave_one_scene_out`, without its scene)."""
+    :func:`leave_one_scene_out`, without its scene). With ``intervals``, also ``"vs_cv"``: each of
+    ``start``, ``gradient`` and ``nelder_mead``'s test ADE and FDE minus constant velocity's with a
+    95 % interval (:func:`evaluation.humans.measures.paired_difference`), from the same predictions."""
     pick = np.random.default_rng(seed).choice(len(train.start), size=min(sample, len(train.start)), replace=False)
     log(f"  fitting on {len(pick)} training windows of {len(train.start)}")
     fixed = train.take(np.sort(pick))
     fitted, history = fit_gradient(model, fields, fixed, steps, learning_rate, log=log)
+    # each predictor's per-person errors on the test windows, taken once: their means are the row's
+    # figures, and (with ``intervals``) their paired differences from constant velocity's
+    predicted = {
+        "constant_velocity": errors(None, test),
+        "start": errors(model, test),
+        "gradient": errors(fitted, test),
+    }
+    mean = lambda key: (float(predicted[key][0].mean()), float(predicted[key][1].mean()))
     row = {
         "train_windows": len(train.start),
         "sample_windows": len(fixed.start),
-        "constant_velocity": scored(None, test),
-        "start": scored(model, test),
-        "gradient": scored(fitted, test),
+        "constant_velocity": mean("constant_velocity"),
+        "start": mean("start"),
+        "gradient": mean("gradient"),
         "gradient_values": values_of(fitted, fields),
         "gradient_history": history,
         "sample_loss": {"start": history[0][1], "gradient": min(h[1] for h in history)},
     }
     if evaluations:
         by_search, search_history = fit_nelder_mead(model, fields, fixed, evaluations, log=log)
-        row.update(nelder_mead=scored(by_search, test), nelder_mead_values=values_of(by_search, fields),
+        predicted["nelder_mead"] = errors(by_search, test)
+        row.update(nelder_mead=mean("nelder_mead"), nelder_mead_values=values_of(by_search, fields),
                    nelder_mead_history=search_history)  # fmt: skip
         row["sample_loss"]["nelder_mead"] = min(h[1] for h in search_history)
+    if intervals:
+        ade_cv, fde_cv, window = predicted.pop("constant_velocity")
+        row["vs_cv"] = {
+            key: {f"{e}_m": [round(x, 4) for x in measures.paired_difference(err, cv, window, seed=seed)]
+                  for e, err, cv in (("ade", ade, ade_cv), ("fde", fde, fde_cv))}
+            for key, (ade, fde, _) in predicted.items()
+        }  # fmt: skip
     return row
 
 

@@ -371,7 +371,8 @@ def _write_trajectory_fit(args, fit: dict, title: str, lines: list[str], replace
 
 def _read_recording(args) -> str | None:
     """``--data tracks``: why its options or file cannot be used (None: they can; the file's rows
-    are then ``args.tracks_rows``), checked before the run folder is made."""
+    are then ``args.tracks_windows``, the fit's and the test's prediction windows), checked before
+    the run folder is made."""
     from socialnav.data.track_file import TrackFileError
     from socialnav.evaluation.humans import own_recording
 
@@ -385,8 +386,8 @@ def _read_recording(args) -> str | None:
     if not args.tracks.is_file():
         return f"--tracks {args.tracks}: no such file"
     try:
-        args.tracks_rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
-        own_recording.split_windows(args.tracks_rows)  # each part has someone to score
+        rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
+        args.tracks_windows = own_recording.split_windows(rows)  # the fit's and the test's; each scores someone
     except TrackFileError as e:
         return str(e)
     except ValueError as e:
@@ -407,15 +408,10 @@ def _calibrate_recording(args) -> int:
         print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to {args.tracks} (its first two thirds; "
               "scored on the last)", flush=True)  # fmt: skip
         evaluations = 60 if args.evaluations is None else args.evaluations
-        fit = own_recording.calibrate(model, args.tracks_rows, args.model, args.steps or 60,
+        fit = own_recording.calibrate(model, *args.tracks_windows, args.model, args.tracks.name, args.steps or 60,
                                       args.learning_rate or 0.2, evaluations, args.sample, args.seed)  # fmt: skip
     except tc.FitTooLarge as e:
         print(f"socialnav humans calibrate: --sample {args.sample}: {e}", file=sys.stderr)
-        return 2
-    except ValueError as e:
-        print(
-            f"socialnav humans calibrate: {args.tracks} at --frames-per-s {args.frames_per_s:g}: {e}", file=sys.stderr
-        )
         return 2
     fit["tracks"] = str(args.tracks)
     title = f"{args.model} on {args.tracks.name}"
