@@ -24,7 +24,10 @@ change recompiles), the constants in :class:`HumanParams` are traced. People who
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import math
+from collections.abc import Mapping
 
 import jax
 from flax import struct
@@ -94,6 +97,52 @@ def human_params(model: str, crowd_params: SimParams, orca_params: orca.ORCAPara
     chosen_orca = orca.ORCAParams() if orca_params is None else orca_params
     chosen_group = groups.GroupParams() if group is None else group
     return HumanParams(crowd_params, chosen_orca, speed, anticipation, chosen_group, power)
+
+
+def parts_of(model: str) -> tuple[str, ...]:
+    """The fields of :class:`HumanParams` whose constants human ``model`` reads: its own and the
+    walking groups' (every model steps by ``crowd.dt_s``, the run's step, which no fit sets)."""
+    return (PARAMS_OF[kind_of(check_model(model))], "group")
+
+
+def values_problem(model: str, values: Mapping[str, float]) -> str | None:
+    """Why ``values`` (``"<part>.<field>"`` -> number, the form a calibration's ``fit.json`` holds)
+    cannot set human ``model``'s constants: a part the model does not read (:func:`parts_of`), a
+    field its part does not have, a value that is not a finite positive number; None if it can."""
+    for path, value in values.items():
+        part, _, field = str(path).partition(".")
+        if part not in parts_of(model):
+            return f"{path}: {model} reads {' and '.join(parts_of(model))}, not {part!r}"
+        known = [f.name for f in dataclasses.fields(_PART_TYPES[part]) if f.name != "dt_s"]
+        if field not in known:
+            return f"{path}: not a field of {part} ({', '.join(known)})"
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value <= 0:
+            return f"{path}: {value!r} is not a finite positive number"
+    return None
+
+
+def with_values(model: str, params: HumanParams, values: Mapping[str, float]) -> HumanParams:
+    """``params`` with each ``"<part>.<field>"`` of ``values`` set (a fit of human ``model``, as
+    ``socialnav humans calibrate`` writes them); raises ``ValueError`` naming the first value
+    :func:`values_problem` refuses."""
+    problem = values_problem(model, values)
+    if problem is not None:
+        raise ValueError(problem)
+    parts: dict[str, dict[str, float]] = {}
+    for path, value in values.items():
+        part, _, field = path.partition(".")
+        parts.setdefault(part, {})[field] = float(value)
+    return params.replace(**{part: getattr(params, part).replace(**fields) for part, fields in parts.items()})
+
+
+_PART_TYPES = {
+    "crowd": SimParams,
+    "orca": orca.ORCAParams,
+    "speed": speed_model.SpeedModelParams,
+    "anticipation": speed_model.AnticipationParams,
+    "group": groups.GroupParams,
+    "power_law": power_law.PowerLawParams,
+}
 
 
 # Each model's step (the one signature of :mod:`jaxsim.walkers`) and the field of

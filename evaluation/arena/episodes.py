@@ -25,7 +25,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import ThreadPoolExecutor
 
 import jax
@@ -157,8 +157,10 @@ def setup_scene(
     robot: robot_lib.RobotParams = robot_lib.RobotParams(),
     crowd: SimParams | None = None,
     reward: env_lib.RewardParams = env_lib.RewardParams(),
+    human_values: Mapping[str, float] | None = None,
 ) -> SceneSetup:
-    """Everything a scene's episodes share, with ``robot``. Raises
+    """Everything a scene's episodes share, with ``robot``, its people's constants set by
+    ``human_values`` (a calibration's fit, :func:`jaxsim.scenes.env.make_env`). Raises
     :class:`~jaxsim.scenario.errors.ScenarioError` for a scene no method can finish with that
     robot (:func:`jaxsim.scenes.reachable.scene_problem`)."""
     refuse_unfinishable(spec, robot, config.env.goal_tolerance_m)
@@ -166,7 +168,7 @@ def setup_scene(
     n_periods = int(math.ceil(spec.timeout_s / period_s))
     env_config = dataclasses.replace(config.env, max_steps=n_periods * config.replan_every_steps)
     crowd = crowd_params() if crowd is None else crowd
-    env = env_lib.make_env(spec, env_config, robot, crowd, reward, config.grid_resolution_m)
+    env = env_lib.make_env(spec, env_config, robot, crowd, reward, config.grid_resolution_m, human_values=human_values)
     occ = np.asarray(env.occupancy.values)
     grid = env.occupancy.spec
     obstacles = np.asarray(costmap.obstacle_layer(occ, grid, float(robot.radius_m)))

@@ -10,7 +10,7 @@ trajectories it keeps (:mod:`evaluation.arena.report`'s frames).
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import jax
 import jax.numpy as jnp
@@ -109,6 +109,7 @@ def run_scene(
     user_actors: dict[str, Callable] | None = None,
     params: ArenaParams | None = None,
     n_devices: int | None = None,
+    human_values: Mapping[str, float] | None = None,
 ):
     """Every method on variants ``first .. first + n_variants - 1`` of one scene:
     ``(episodes frame, trajectories frame or None)``. ``held_out``: the scene mirrored
@@ -121,13 +122,16 @@ def run_scene(
     (:func:`planners.layers.gscl`: a :class:`~socialnav.models.inference.SocialCostModel`, its
     weights traced, so another checkpoint of the same network reuses the compiled program; or a
     function of the maps). ``n_devices``: host devices the methods run
-    on at the same time (:func:`evaluation.arena.episodes.run_spread`; default: every local one)."""
+    on at the same time (:func:`evaluation.arena.episodes.run_spread`; default: every local one).
+    ``human_values``: the people's constants as a calibration fitted them (``"<part>.<field>"`` ->
+    number, :func:`jaxsim.humans.with_values`; default: ``config.env.human_model``'s own)."""
     name = row_name(spec.name, held_out, spec.turned_from is not None)
     if held_out:
         spec = mirror(spec)
     params = ArenaParams() if params is None else params
     robot = params.robot
-    setup = arena.setup_scene(spec, config, robot, arena.crowd_params())  # its env has the run's people and robot
+    # its env has the run's people and robot
+    setup = arena.setup_scene(spec, config, robot, arena.crowd_params(), human_values=human_values)
     arena.release_programs_if_crowded(caches=(_metrics_program,), key=arena.program_key(setup))
     measure = metrics_function(spec.rule, setup.n_periods, config, float(robot.radius_m))
     episodes, trajectories = [], []

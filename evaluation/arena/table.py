@@ -98,6 +98,9 @@ class TableRequest:
         input (:func:`socialnav.models.inference.rotation_averaged`: a map that turns with the scene,
         at 4 times the inference).
       human_model: how the people move (:data:`socialnav.jaxsim.scenes.people.HUMAN_MODELS`).
+      human_values: ``("<part>.<field>", value)`` pairs setting that model's constants (a
+        calibration's fit, :func:`socialnav.evaluation.humans.fit_file.read_fit`; empty: the
+        name's own); human_fit: where they came from (the fit file and method), for the record.
       params_file, params_text: the ``--params`` file and its text ("" for the seeds' values).
       actor_specs: users' actor factories, ``MODULE:FUNCTION`` with a file path made absolute.
       policy_run, policy_digest: a trained policy's run folder and its digest, or None.
@@ -115,6 +118,8 @@ class TableRequest:
     gscl_run: pathlib.Path | None = None
     gscl_rotations: int = 1
     human_model: str = "social_force"
+    human_values: tuple[tuple[str, float], ...] = ()
+    human_fit: str | None = None
     params_file: pathlib.Path | None = None
     params_text: str = ""
     actor_specs: tuple[str, ...] = ()
@@ -200,6 +205,10 @@ def settings(request: TableRequest) -> dict:
         "gscl_model": None if request.gscl_run is None else model_identity(request.gscl_run),
         **({"gscl_rotations": request.gscl_rotations} if request.gscl_rotations != 1 else {}),
         "human_model": request.human_model,
+        # absent without a fit: earlier runs' settings and digests stay the same
+        **(
+            {"human_fit": request.human_fit, "human_values": dict(request.human_values)} if request.human_values else {}
+        ),
         "params_file": None if request.params_file is None else str(request.params_file),
         "params": request.params_text or None,  # None without a file: earlier runs' digests stay valid
         "actors": list(request.actor_specs),
@@ -253,7 +262,8 @@ def scene_digest(
     """A scene's results are these when this digest matches: the scene file's bytes (and those of
     the user's recording it plays, ``recording_file``), the held-out
     and turned flags, and every setting that changes an episode (methods, variants, seed, shard layout, the
-    GSCL model, the source files of the ``--actor`` factories, the human model, the ``--params``
+    GSCL model, the source files of the ``--actor`` factories, the human model and its fitted
+    constants, the ``--params``
     file's text, the metrics' and the toolkit's versions)."""
     h = hashlib.sha256()
     h.update(pathlib.Path(spec_file).read_bytes())
@@ -273,6 +283,8 @@ def scene_digest(
     chosen = {k: settings.get(k) for k in keys}
     if settings.get("policy_model") is not None:  # absent without --policy-run: earlier digests stay valid
         chosen["policy_model"] = settings["policy_model"]
+    if settings.get("human_values"):  # absent without --human-fit: earlier digests stay valid
+        chosen["human_values"] = settings["human_values"]
     if settings.get("gscl_rotations", 1) != 1:  # absent at 1: earlier digests stay valid
         chosen["gscl_rotations"] = settings["gscl_rotations"]
     row = {"held_out": held_out, **({"turned": True} if turned else {})}  # an unturned row's digest as before
@@ -352,6 +364,7 @@ def plan_shards(out: pathlib.Path, request: TableRequest, digests: dict) -> list
                 request.params_text or "",
                 None if request.policy_run is None else str(request.policy_run.resolve()),
                 request.gscl_rotations,
+                request.human_values,
             )
             output = runfolder.inside(out, shard_file(out, name, digests[name], first))
             shards.append((f"{name}[{first}:{first + n}]", output, args, n * len(request.methods)))
@@ -393,12 +406,14 @@ def compute_shard(
     params_text="",
     policy_run=None,
     gscl_rotations=1,
+    human_values=(),
 ):
     """One shard: every method on variants ``first .. first + n - 1`` of a scene (a Ray task with
     ``--backend ray``): ``(episodes frame, trajectories frame or None)``. ``actor_specs``: the
     ``--actor`` factories, loaded here (in the worker); ``params_text``: the ``--params`` file's
     text (parsed here, so a worker needs no access to the file); ``policy_run``: a trained
-    policy's run folder (``--policy-run``), restored here. The GSCL weights enter the
+    policy's run folder (``--policy-run``), restored here; ``human_values``: the people's
+    constants as a calibration fitted them (pairs, :class:`TableRequest`). The GSCL weights enter the
     episode program traced: a second checkpoint of the same network compiles nothing new (with
     ``gscl_rotations`` 4 the rotation-averaged prediction closes over them instead)."""
     from socialnav.evaluation.arena import params as arena_params
@@ -423,6 +438,7 @@ def compute_shard(
         held_out=held_out,
         user_actors=users,
         params=arena_params.parse(params_text, "--params") if params_text else None,
+        human_values=dict(human_values),
     )
 
 

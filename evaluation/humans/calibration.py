@@ -367,55 +367,19 @@ FIT_METHODS = ("gradient", "nelder_mead")
 
 
 def fitted_models(path, methods=FIT_METHODS) -> dict[str, hv.HumanModel]:
-    """The models a Jülich fit (``socialnav humans calibrate``'s ``fit.json`` at ``path``) found,
-    one a method of ``methods``, labelled ``<folder>:<method>``: its model with the fitted values.
-    An unfinished fit (its ``progress.json``, ``"complete": false``) gives the best point of each
-    method that has one. Raises ``ValueError`` naming the file and the field where the file is not
-    such a fit."""
-    import json
-    import pathlib
+    """The models a fit file (``socialnav humans calibrate``'s ``fit.json`` at ``path``, a Jülich
+    fit or one of a user's recording) found, one a method of ``methods``, labelled
+    ``<folder>:<method>``: its model with the fitted values. An unfinished fit (its
+    ``progress.json``, ``"complete": false``) gives the best point of each method that has one.
+    Raises ``ValueError`` naming the file and the field where the file is not such a fit
+    (:func:`evaluation.humans.fit_file.read_points`)."""
+    from socialnav.evaluation.humans import fit_file
+    from socialnav.evaluation.humans import trajectory_calibration as tc
 
-    path = pathlib.Path(path)
-    try:
-        fit = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise ValueError(f"{path}: not a readable fit.json ({e})") from None
-    if not isinstance(fit, dict):
-        raise ValueError(f"{path}: not a fit (expected a JSON object)")
-    if fit.get("data", "juelich") != "juelich":
-        raise ValueError(f"{path}: data: a {fit['data']!r} fit holds one fit a scene or a weight; only a Jülich "
-                         "fit (--data juelich) is one model")  # fmt: skip
-    name = fit.get("model")
-    if name not in FITTED:
-        raise ValueError(f"{path}: model: {name!r} is not a model the calibration fits ({', '.join(FITTED)})")
-    complete = fit.get("complete", True)  # a fit.json written before the field was: finished
-    if not isinstance(complete, bool):
-        raise ValueError(f"{path}: complete: {complete!r} is not true or false")
-    models = {}
-    for method in methods:
-        entry = fit.get(method)
-        if entry is None and not complete:
-            continue  # the fit stopped before this method found a point
-        values = entry.get("values") if isinstance(entry, dict) else None
-        if not isinstance(values, dict):
-            raise ValueError(f"{path}: {method}.values: missing")
-        wrong = sorted(set(values) ^ set(FITTED[name]))
-        if wrong:
-            raise ValueError(f"{path}: {method}.values: expected the fields {', '.join(FITTED[name])}, got "
-                             f"{', '.join(values)}")  # fmt: skip
-        bad = [
-            f
-            for f, v in values.items()
-            if isinstance(v, bool) or not (isinstance(v, int | float) and np.isfinite(v) and v > 0)
-        ]
-        if bad:
-            raise ValueError(f"{path}: {method}.values.{bad[0]}: {values[bad[0]]!r} is not a positive number")
-        models[f"{path.parent.name}:{method}"] = with_fitted(
-            named_model(name), {f: float(v) for f, v in values.items()}
-        )
-    if not models:
-        raise ValueError(f"{path}: an unfinished fit with no point yet of {', '.join(methods)}")
-    return models
+    return {
+        p.label: tc.with_values(named_model(p.model), list(p.values), list(p.values.values()))
+        for p in fit_file.read_points(path, tuple(methods)).values()
+    }
 
 
 def with_fitted(model: hv.HumanModel, values: dict) -> hv.HumanModel:

@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+from collections.abc import Mapping
 from typing import Any
 
 import jax
@@ -42,6 +43,7 @@ from flax import struct
 from socialnav.data import WAREHOUSE_DIR
 from socialnav.jaxsim import humans, speed_model
 from socialnav.jaxsim.grid import Grid, GridSpec
+from socialnav.jaxsim.groups import GroupParams
 from socialnav.jaxsim.orca import ORCAParams
 from socialnav.jaxsim.params import BODY_RADIUS_M, BODY_RADIUS_SOURCE, PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
@@ -234,7 +236,10 @@ class Env:
       reward: the reward's weights.
       orca: ORCA's constants (used with ``config.human_model = "orca"``).
       velocity: a velocity model's constants (:mod:`jaxsim.speed_model`; used with
-        ``config.human_model`` one of them; None otherwise).
+        ``config.human_model`` one of them), or a fitted power law's; None otherwise (the power
+        law's constants then its name's).
+      group: the walking groups' terms (:class:`~jaxsim.groups.GroupParams`, Moussaïd's unless
+        a fit set them).
       config: static settings.
       walking_groups: static, the scene has walkers who walk together (``walks_with``): the
         crowd step computes the group terms (:mod:`jaxsim.groups`) only then.
@@ -250,6 +255,7 @@ class Env:
     reward: RewardParams
     orca: ORCAParams
     velocity: Any = None
+    group: GroupParams = GroupParams()
     config: EnvConfig = struct.field(pytree_node=False, default=EnvConfig())
     walking_groups: bool = struct.field(pytree_node=False, default=False)
     recorded: bool = struct.field(pytree_node=False, default=False)
@@ -260,7 +266,7 @@ class Env:
         """The constants the people's model runs with (:func:`jaxsim.humans.human_params`): the
         social force's with the env's step, ORCA's and the velocity model's (or the power law's)."""
         crowd = self.crowd.replace(dt_s=self.config.dt_s)
-        return humans.human_params(self.config.human_model, crowd, self.orca, self.velocity)
+        return humans.human_params(self.config.human_model, crowd, self.orca, self.velocity, self.group)
 
     def robot_radius_felt_m(self):
         """The robot's radius as the people's model feels it. A velocity model's people keep their
@@ -269,7 +275,7 @@ class Env:
         keeps off it by the bodies the metrics measure, and "a person walked into the robot" is not
         an artefact of two radii. The other models' people have the env's body (ORCA) or none (the
         social force)."""
-        if self.velocity is None:
+        if humans.kind_of(self.config.human_model) not in speed_model.VELOCITY_MODELS:
             return self.robot.radius_m
         return self.robot.radius_m + jnp.maximum(self.config.person_radius_m - self.velocity.radius_m, 0.0)
 
@@ -485,15 +491,18 @@ def make_env(
     reward: RewardParams = RewardParams(),
     occupancy_resolution_m: float = 0.2,
     orca: ORCAParams | None = None,
+    human_values: Mapping[str, float] | None = None,
 ) -> Env:
     """The environment of a :class:`~jaxsim.scenes.spec.SceneSpec` (host side, once per scene).
 
     ``crowd`` defaults to the warehouse's social force constants (the arena's people are the
     same walkers); ``orca`` to ORCA's defaults with ``config.person_radius_m`` as its people's
-    radius (the body the env counts contacts with). ``config.max_steps`` is kept as given (see
-    :func:`episode_steps`). Raises ``ValueError`` where a step at the robot's top speed is not
-    shorter than its radius (:func:`jaxsim.scenes.robot.step_length_problem`: the body could pass
-    through a wall).
+    radius (the body the env counts contacts with). ``human_values`` (``"<part>.<field>"`` ->
+    number: a calibration's fit, :func:`jaxsim.humans.with_values`) set the human model's
+    constants over its name's own; ``ValueError`` for one the model does not read.
+    ``config.max_steps`` is kept as given (see :func:`episode_steps`). Raises ``ValueError`` where
+    a step at the robot's top speed is not shorter than its radius
+    (:func:`jaxsim.scenes.robot.step_length_problem`: the body could pass through a wall).
     """
     problem = robot_lib.step_length_problem(robot, config.dt_s)
     if problem is not None:
@@ -506,9 +515,15 @@ def make_env(
     world = world.replace(walls_m=jnp.asarray(pad_walls(world.walls_m)))
     occ, (x0, y0) = world_lib.occupancy(spec, occupancy_resolution_m)
     grid = Grid(jnp.asarray(occ), GridSpec(*occ.shape, occupancy_resolution_m, x0, y0))
-    velocity = None
-    if humans.kind_of(config.human_model) in speed_model.VELOCITY_MODELS:
-        velocity = speed_model.params_of(config.human_model)
+    kind = humans.kind_of(config.human_model)
+    velocity = speed_model.params_of(config.human_model) if kind in speed_model.VELOCITY_MODELS else None
+    group = GroupParams()
+    if human_values:
+        people = humans.human_params(config.human_model, crowd, orca, velocity)
+        people = humans.with_values(config.human_model, people, human_values)
+        orca, group = people.orca, people.group
+        if kind in (*speed_model.VELOCITY_MODELS, "power_law"):
+            velocity = getattr(people, humans.PARAMS_OF[kind])
     return Env(
         world=world,
         occupancy=grid,
@@ -517,6 +532,7 @@ def make_env(
         reward=reward,
         orca=orca,
         velocity=velocity,
+        group=group,
         config=config,
         walking_groups=any(p.get("walks_with") is not None for p in spec.people),
         recorded=spec.recording is not None,

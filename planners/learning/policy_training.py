@@ -47,6 +47,7 @@ from flax import struct
 
 from socialnav.common import pytree
 from socialnav.common.memory import too_big
+from socialnav.jaxsim import humans
 from socialnav.jaxsim.actor import Actor
 from socialnav.jaxsim.control import control_loop
 from socialnav.jaxsim.scenes import env as env_lib
@@ -83,6 +84,8 @@ class PPOConfig:
       human_model: how the people the policy trains among move
         (:data:`jaxsim.scenes.people.HUMAN_MODELS`; the arena's default, the social force, unless
         asked). A run that predates the setting trained among the social force.
+      human_values: ``("<part>.<field>", value)`` pairs setting that model's constants (a
+        calibration's fit, ``socialnav policy train --human-fit``; empty: the name's own).
     """
 
     scenes: tuple[str, ...] = ()
@@ -104,10 +107,14 @@ class PPOConfig:
     checkpoint_every: int = 10
     policy: policy_lib.PolicyConfig = policy_lib.PolicyConfig()
     human_model: str = "social_force"
+    human_values: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self):
         if self.human_model not in HUMAN_MODELS:
             raise ValueError(f"human_model must be one of {', '.join(HUMAN_MODELS)}, got {self.human_model!r}")
+        problem = humans.values_problem(self.human_model, dict(self.human_values))
+        if problem is not None:
+            raise ValueError(f"human_values: {problem}")
         for name in ("envs_per_scene", "rollout_steps", "updates", "epochs", "minibatches", "pool_per_scene"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -115,13 +122,23 @@ class PPOConfig:
             raise ValueError(f"checkpoint_every must be >= 1, got {self.checkpoint_every}")
 
     def to_json(self) -> dict:
-        return {**dataclasses.asdict(self), "scenes": list(self.scenes), "policy": self.policy.to_json()}
+        fitted = {"human_values": dict(self.human_values)} if self.human_values else {}  # absent: as earlier runs
+        return {
+            **{k: v for k, v in dataclasses.asdict(self).items() if k != "human_values"},
+            "scenes": list(self.scenes),
+            "policy": self.policy.to_json(),
+            **fitted,
+        }
 
     @classmethod
     def from_json(cls, d: dict) -> PPOConfig:
         d = dict(d)
         d["scenes"] = tuple(d.get("scenes", ()))
         d["policy"] = policy_lib.PolicyConfig.from_json(d["policy"])
+        values = d.get("human_values", {})
+        if not isinstance(values, dict):
+            raise ValueError(f"human_values: expected a table of fields, got {values!r}")
+        d["human_values"] = tuple(sorted(values.items()))
         known = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(d) - known)
         if unknown:
@@ -177,12 +194,13 @@ def reward_params() -> env_lib.RewardParams:
 ARENA_PERIOD_STEPS = 10
 
 
-def scene_env(spec: SceneSpec, human_model: str = "social_force") -> env_lib.Env:
+def scene_env(spec: SceneSpec, human_model: str = "social_force", human_values=()) -> env_lib.Env:
     """The environment of ``spec`` as the arena runs it (the env's default step, the timeout in
-    whole replanning periods), its people moved by ``human_model``, with :func:`reward_params`."""
+    whole replanning periods), its people moved by ``human_model`` with its constants set by
+    ``human_values`` (pairs, :attr:`PPOConfig.human_values`), with :func:`reward_params`."""
     steps = env_lib.episode_steps(spec.timeout_s, env_lib.EnvConfig.dt_s, ARENA_PERIOD_STEPS)
     config = env_lib.EnvConfig(max_steps=steps, human_model=human_model)
-    return env_lib.make_env(spec, config, reward=reward_params())
+    return env_lib.make_env(spec, config, reward=reward_params(), human_values=dict(human_values))
 
 
 @struct.dataclass
@@ -235,7 +253,7 @@ class Batch:
 
 def make_scene(spec: SceneSpec, config: PPOConfig, gscl_weights=None) -> Scene:
     """``spec``'s env and its training pool with the pool's guidance fields (host side)."""
-    env = scene_env(spec, config.human_model)
+    env = scene_env(spec, config.human_model, config.human_values)
     pool = sample_variants(
         spec, config.seed, config.pool_per_scene, n_slots=padded_slots(spec.n_people_slots), training=True
     )

@@ -5,6 +5,7 @@ socialnav arena --scenes casn_static_person,casn_head_on --methods navfn,casn --
 socialnav arena --scenes my_scene.json --out runs/mine             # a scene file of your own
 socialnav arena --gscl-run runs/gscl                               # GSCL with your own model, not the shipped one
 socialnav arena --params my_params.toml                            # the robot's and layers' parameters
+socialnav arena --human-fit runs/calibration-mine/fit.json         # people as your calibration fitted them
 socialnav arena --held-out                                         # and every scene mirrored, ranges exceeded
 socialnav arena --turned                                           # and every scene turned a quarter turn
 socialnav arena --gscl-rotations 4                                 # GSCL's map averaged over 4 quarter turns
@@ -101,10 +102,18 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--human-model",
         choices=HUMAN_MODELS,
-        default="social_force",
+        default=None,
         help="how the people move (default social_force, the warehouse's; ORCA, the velocity models with bodies, "
         "the steering speed model, the power law and their _calibrated fits: docs/humans.md measures each against real "
         "pedestrians)",
+    )
+    p.add_argument(
+        "--human-fit",
+        default=None,
+        metavar="FIT_JSON[:METHOD]",
+        help="the people as a calibration fitted them, in place of --human-model: socialnav humans calibrate's "
+        "fit.json (of the Jülich corridors or of your own recording, --data tracks), its model with the fitted "
+        "constants; METHOD gradient or nelder_mead (default: the one of lower training loss)",
     )
     p.add_argument("--variants", type=positive_int, default=100, help="variants per scene (default 100)")
     p.add_argument(
@@ -330,9 +339,12 @@ def _request(args, shown_as: pathlib.Path):
         params = arena_params.ArenaParams() if args.params is None else arena_params.load(args.params)
     except arena_params.ParamsFileError as e:
         return _fail(f"--params {e}")
+    people = _human_fit(args)
+    if isinstance(people, int):
+        return people
     files = _scene_files(args.scenes, SCENES_DIR, RECORDED_SCENES_DIR, GEOMETRY_SCENES_DIR)
     try:
-        runfolder.check_inputs(shown_as, [*files, gscl_run, args.params, args.policy_run])
+        runfolder.check_inputs(shown_as, [*files, gscl_run, args.params, args.policy_run, people and people.file])
         specs = [load_scene(f) for f in files]
         refuse_unfinishable_scenes(specs, params.robot)  # no method could finish (or break its rule)
     except (ScenarioError, runfolder.NotOurs) as e:
@@ -385,7 +397,9 @@ def _request(args, shown_as: pathlib.Path):
         keep_trajectories=args.keep_trajectories,
         gscl_run=gscl_run,
         gscl_rotations=args.gscl_rotations,
-        human_model=args.human_model,
+        human_model=(args.human_model or "social_force") if people is None else people.model,
+        human_values=() if people is None else tuple(sorted(people.values.items())),
+        human_fit=None if people is None else f"{people.file.resolve()}:{people.method}",
         params_file=args.params,
         params_text=params.text,
         actor_specs=tuple(actor_specs),
@@ -393,6 +407,23 @@ def _request(args, shown_as: pathlib.Path):
         policy_digest=policy_digest,
         animate=tuple(args.animate),
     )
+
+
+def _human_fit(args):
+    """``--human-fit``'s people (:class:`~socialnav.evaluation.humans.fit_file.FittedPeople`),
+    None without it, or the exit status of a one-line refusal."""
+    if args.human_fit is None:
+        return None
+    if args.human_model is not None:
+        return _fail("--human-fit names its own human model (the one its fit started from): leave out --human-model")
+    from socialnav.evaluation.humans import fit_file
+
+    try:
+        people = fit_file.read_option(args.human_fit)
+    except ValueError as e:
+        return _fail(f"--human-fit {e}")
+    print(f"arena: {fit_file.describe(people)}", flush=True)
+    return people
 
 
 def _command(args) -> dict:

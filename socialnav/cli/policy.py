@@ -54,6 +54,14 @@ def add_parser(top) -> None:
         help="how the people trained among move (default social_force, the arena's default; a recorded scene's "
         "reactive people follow their recording through it)",
     )
+    tr.add_argument(
+        "--human-fit",
+        default=None,
+        metavar="FIT_JSON[:METHOD]",
+        help="the people as a calibration fitted them, in place of --human-model: socialnav humans calibrate's "
+        "fit.json (Jülich or --data tracks), its model with the fitted constants; METHOD gradient or nelder_mead "
+        "(default: the one of lower training loss)",
+    )
     tr.add_argument("--updates", type=positive_int, default=None, help="PPO updates in all (default 300)")
     tr.add_argument(
         "--envs-per-scene", type=positive_int, default=None, help="episodes stepped at once per scene (default 64)"
@@ -91,6 +99,18 @@ def _config(args, scene_names: tuple[str, ...]):
         "human_model": args.human_model,
     }
     given = {k: v for k, v in given.items() if v is not None}
+    if args.human_fit is not None:
+        from socialnav.evaluation.humans import fit_file
+
+        if args.human_model is not None:
+            raise ValueError("--human-fit names its own human model (the one its fit started from): leave out "
+                             "--human-model")  # fmt: skip
+        try:
+            people = fit_file.read_option(args.human_fit)
+        except ValueError as e:
+            raise ValueError(f"--human-fit {e}") from None
+        print(f"socialnav policy train: {fit_file.describe(people)}")
+        given.update(human_model=people.model, human_values=tuple(sorted(people.values.items())))
     if args.gscl_run is not None and args.social_layer != "gscl":
         raise ValueError("--gscl-run goes with --social-layer gscl")
     if args.social_layer == "gscl" and args.gscl_run is None:
