@@ -213,6 +213,7 @@ def simulate_to_parquet(
     chunk_budget_bytes: int = CHUNK_BUDGET_BYTES,
     first_world: int = 0,
     human_model: str = "social_force",
+    human_values=(),
 ) -> RunSummary:
     """Simulate ``n_worlds`` worlds for ``duration_s`` and write ``logs.parquet`` + ``run.json``.
 
@@ -233,6 +234,8 @@ def simulate_to_parquet(
         first_world + n_worlds - 1``, the same worlds as in one run of them all).
       human_model: how the workers move (:data:`jaxsim.humans.HUMAN_MODELS`; recorded in
         ``run.json``).
+      human_values: ``("<part>.<field>", value)`` pairs setting that model's constants (a
+        calibration's fit, :func:`jaxsim.world.build_world`; recorded in ``run.json`` when given).
 
     Raises:
       ValueError: on inconsistent sizes, or a batch whose estimate (:func:`estimate_memory_bytes`)
@@ -266,7 +269,7 @@ def simulate_to_parquet(
     out.mkdir(parents=True, exist_ok=True)
 
     start = time.perf_counter()
-    world = world_lib.build_world(scenario, human_model)
+    world = world_lib.build_world(scenario, human_model, human_values)
     keys = rollout.world_keys(seed, n_worlds, first_world)
     states = rollout.init_batch(p, world, driver, keys)
     per_sample = 4 * (scenario.n_waypoints + p.n_workers * (4 if log_positions else 2) + 32)
@@ -332,6 +335,7 @@ def simulate_to_parquet(
         n_worlds=n_worlds,
         first_world=first_world,
         human_model=human_model,
+        **({"human_values": dict(world.human_values)} if world.human_values else {}),
         duration_s=duration_s,
         sample_interval_s=sample_interval_s,
         rows=rows,

@@ -187,6 +187,8 @@ def move(
     model = world.human_model
     # ORCA's people are the warehouse's workers' bodies; a velocity model keeps its own (fitted) radius.
     bundle = humans.human_params(model, params, orca.ORCAParams(radius_m=params.worker_radius_m))
+    if world.human_values:  # a calibration's fit (build_world checked them)
+        bundle = humans.with_values(model, bundle, dict(world.human_values))
     people = humans.step_humans(model, bundle, world.wall_field, people, aims, robot, (u1, u2))
     return w.replace(x_m=people.x_m, y_m=people.y_m, vx_mps=people.vx_mps, vy_mps=people.vy_mps)
 

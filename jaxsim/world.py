@@ -45,6 +45,9 @@ class World:
       parking: parking waypoint index; charging_station: charger index; robot_start: start index.
       human_model: how the workers move (static: a change recompiles;
         :data:`jaxsim.humans.HUMAN_MODELS`, default the social force).
+      human_values: ``("<part>.<field>", value)`` pairs setting that model's constants (a
+        calibration's fit, :func:`jaxsim.humans.with_values`; empty: the name's own). Static, as
+        the model is: a warehouse run walks one fit, compiled in.
     """
 
     waypoint_x_m: jax.Array
@@ -66,6 +69,7 @@ class World:
     charging_station: int = struct.field(pytree_node=False)
     robot_start: int = struct.field(pytree_node=False)
     human_model: str = struct.field(pytree_node=False, default="social_force")
+    human_values: tuple[tuple[str, float], ...] = struct.field(pytree_node=False, default=())
 
     @property
     def n_waypoints(self) -> int:
@@ -122,12 +126,18 @@ def _geometry(
     return field, hgrid, rgrid
 
 
-def build_world(scenario: Scenario, human_model: str = "social_force") -> World:
+def build_world(scenario: Scenario, human_model: str = "social_force", human_values=()) -> World:
     """Precompute the static arrays of ``scenario`` (distance field, routes, schedule); its
-    workers move by ``human_model`` (:data:`jaxsim.humans.HUMAN_MODELS`)."""
-    from socialnav.jaxsim.humans import check_model  # humans -> orca -> world: imported here
+    workers move by ``human_model`` (:data:`jaxsim.humans.HUMAN_MODELS`), its constants set by
+    ``human_values`` (``("<part>.<field>", value)`` pairs or a mapping; ``ValueError`` for one the
+    model does not read)."""
+    from socialnav.jaxsim.humans import check_model, values_problem  # humans -> orca -> world: imported here
 
     check_model(human_model)
+    human_values = tuple(sorted(dict(human_values).items()))
+    problem = values_problem(human_model, dict(human_values))
+    if problem is not None:
+        raise ValueError(problem)
     p = scenario.params
     bounds = world_bounds(scenario)
     field, hgrid, rgrid = _geometry(
@@ -168,4 +178,5 @@ def build_world(scenario: Scenario, human_model: str = "social_force") -> World:
         charging_station=scenario.charging_station,
         robot_start=scenario.robot_start,
         human_model=human_model,
+        human_values=tuple((k, float(v)) for k, v in human_values),
     )

@@ -29,7 +29,7 @@ STAGING = ".shards"
 
 def compute_shard(
     scenario_dir, overrides, first, n, duration_s, seed, sample_interval_s, log_positions, snap_t,
-    human_model="social_force",
+    human_model="social_force", human_values=(),
 ):  # fmt: skip
     """Simulate one shard of worlds (here or in a Ray worker): ``(Parquet bytes, summary dict)``."""
     from socialnav.jaxsim import logs
@@ -46,6 +46,7 @@ def compute_shard(
             route_follower(shortest_path_plan(scenario), build_world(scenario)),
             n_worlds=n,
             human_model=human_model,
+            human_values=human_values,
             duration_s=duration_s,
             seed=seed,
             sample_interval_s=sample_interval_s,
@@ -98,6 +99,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
         "log_positions": args.log_positions,
         "snapshot_time_s": snap_t,
         "human_model": args.human_model,
+        **({"human_values": dict(args.human_values)} if args.human_values else {}),
     }
     backend_lib.staging_folder(staging, settings)  # another run's parts are not ours to reuse
     scenario_dir = None if args.scenario is None else str(pathlib.Path(args.scenario).resolve())
@@ -116,6 +118,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
                 args.log_positions,
                 snap_t if first == 0 else None,
                 args.human_model,
+                args.human_values,
             ),
             work=min(size, args.worlds - first),
         )
@@ -150,6 +153,7 @@ def run_sharded(args, scenario, overrides: dict, duration_s: float, snap_t: floa
         compile_s=max(s["compile_s"] for s in summaries),
         agent_steps_per_s=agent_steps / wall,
         human_model=args.human_model,
+        **({"human_values": dict(args.human_values)} if args.human_values else {}),
         shards=[{"first_world": s["first_world"], "n_worlds": s["n_worlds"]} for s in summaries],
         **backend_lib.describe(args),
         final=final,

@@ -211,3 +211,35 @@ def test_a_policy_trains_among_a_fits_people_and_a_resume_with_another_fit_is_re
     assert "human_values" in capsys.readouterr().err
     assert main(["policy", "train", "--updates", "2", "--human-fit", str(path), "--human-model", "orca", *tiny]) == 2
     assert "leave out --human-model" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # three warehouse runs of 10 minutes: about 15 s
+def test_the_warehouse_workers_walk_a_fit_and_the_run_records_it(tmp_path, capsys):
+    """The warehouse day with a fit's constants: values equal to the preset's give the preset's
+    log bit for bit, another time gap another log; ``run.json`` records the values."""
+    from socialnav.jaxsim import logs
+    from socialnav.jaxsim.route_follower import route_follower
+    from socialnav.jaxsim.scenario import WAREHOUSE_DIR, load_scenario
+    from socialnav.jaxsim.world import build_world
+    from socialnav.planners.warehouse.routes import shortest_path_plan
+
+    scenario = load_scenario(WAREHOUSE_DIR)
+    with pytest.raises(ValueError, match="social_force reads crowd and group, not 'speed'"):
+        build_world(scenario, "social_force", {"speed.time_gap_s": 0.5})
+    own = {"speed.time_gap_s": float(PRESET.time_gap_s), "speed.radius_m": float(PRESET.radius_m)}
+    logged = {}
+    for label, values in (("named", ()), ("own", own), ("other", {"speed.time_gap_s": 0.3})):
+        driver = route_follower(shortest_path_plan(scenario), build_world(scenario))
+        logs.simulate_to_parquet(scenario, tmp_path / label, driver, n_worlds=1, duration_s=600.0, progress=False,
+                                 log_positions=True, human_model="collision_free_speed_calibrated",
+                                 human_values=values)  # fmt: skip
+        logged[label] = pd.read_parquet(tmp_path / label / "logs.parquet")
+    pd.testing.assert_frame_equal(logged["named"], logged["own"], check_exact=True)
+    walked = [frame.filter(regex=r"^worker_(x|y)_").to_numpy() for frame in (logged["named"], logged["other"])]
+    assert walked[0].size and np.isfinite(walked[0]).any() and not np.allclose(*walked, equal_nan=True)
+    assert json.loads((tmp_path / "other" / "run.json").read_text())["human_values"] == {"speed.time_gap_s": 0.3}
+    assert "human_values" not in json.loads((tmp_path / "named" / "run.json").read_text())
+    path = write(tmp_path / "mine", tracks_fit())
+    out = str(tmp_path / "cli")
+    assert main(["simulate", "--hours", "0.01", "--human-fit", str(path), "--human-model", "orca", "--out", out]) == 2
+    assert "leave out --human-model" in capsys.readouterr().err

@@ -87,9 +87,17 @@ def add_parser(sub) -> None:
     sim.add_argument(
         "--human-model",
         choices=HUMAN_MODELS,
-        default="social_force",
+        default=None,
         help="how the workers move (default social_force, the warehouse's; docs/humans.md measures each against "
         "real pedestrians)",
+    )
+    sim.add_argument(
+        "--human-fit",
+        default=None,
+        metavar="FIT_JSON[:METHOD]",
+        help="the workers as a calibration fitted them, in place of --human-model: socialnav humans calibrate's "
+        "fit.json (Jülich or --data tracks), its model with the fitted constants; METHOD gradient or nelder_mead "
+        "(default: the one of lower training loss)",
     )
     sim.add_argument(
         "--shard-worlds",
@@ -103,8 +111,31 @@ def add_parser(sub) -> None:
     sim.set_defaults(handler=run)
 
 
+def _human_fit(args: argparse.Namespace) -> str | None:
+    """``--human-fit``'s model and values into ``args.human_model`` and ``args.human_values``
+    (the named model's own without it); why not, in one line."""
+    args.human_values = ()
+    if args.human_fit is None:
+        args.human_model = args.human_model or "social_force"
+        return None
+    if args.human_model is not None:
+        return "--human-fit names its own human model (the one its fit started from): leave out --human-model"
+    from socialnav.evaluation.humans import fit_file
+
+    try:
+        people = fit_file.read_option(args.human_fit)
+    except ValueError as e:
+        return f"--human-fit {e}"
+    print(f"simulate: {fit_file.describe(people)}", flush=True)
+    args.human_model, args.human_values = people.model, tuple(sorted(people.values.items()))
+    return None
+
+
 @locks_folder(lambda args: args.out, "simulate")
 def run(args: argparse.Namespace) -> int:
+    problem = _human_fit(args)  # sets args.human_model and args.human_values
+    if problem is not None:
+        return _usage(problem)
     overrides = {}
     if args.slot_length_s is not None:
         overrides["slot_length_s"] = args.slot_length_s
@@ -168,6 +199,7 @@ def run(args: argparse.Namespace) -> int:
                     snapshot_time_s=snap_t,
                     progress=not args.no_progress,
                     human_model=args.human_model,
+                    human_values=args.human_values,
                 )
             pictures = []
             if run.snapshot is not None:
