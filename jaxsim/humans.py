@@ -99,6 +99,12 @@ def human_params(model: str, crowd_params: SimParams, orca_params: orca.ORCAPara
     return HumanParams(crowd_params, chosen_orca, speed, anticipation, chosen_group, power)
 
 
+# The widest body radius a fit may set: the fits here find 0.15-0.30 m (docs/humans.md), and a body
+# wider than a scene's corridors is no person (the speed model's step gives NaN from about 3 m in
+# gscl_group's corridor); 1 m leaves any measured person inside it.
+MAX_BODY_RADIUS_M = 1.0
+
+
 def parts_of(model: str) -> tuple[str, ...]:
     """The fields of :class:`HumanParams` whose constants human ``model`` reads: its own and the
     walking groups' (every model steps by ``crowd.dt_s``, the run's step, which no fit sets)."""
@@ -108,7 +114,8 @@ def parts_of(model: str) -> tuple[str, ...]:
 def values_problem(model: str, values: Mapping[str, float]) -> str | None:
     """Why ``values`` (``"<part>.<field>"`` -> number, the form a calibration's ``fit.json`` holds)
     cannot set human ``model``'s constants: a part the model does not read (:func:`parts_of`), a
-    field its part does not have, a value that is not a finite positive number; None if it can."""
+    field its part does not have, a value that is not a finite positive number, a body radius past
+    :data:`MAX_BODY_RADIUS_M`; None if it can."""
     for path, value in values.items():
         part, _, field = str(path).partition(".")
         if part not in parts_of(model):
@@ -118,6 +125,8 @@ def values_problem(model: str, values: Mapping[str, float]) -> str | None:
             return f"{path}: not a field of {part} ({', '.join(known)})"
         if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value <= 0:
             return f"{path}: {value!r} is not a finite positive number"
+        if field == "radius_m" and value > MAX_BODY_RADIUS_M:
+            return f"{path}: {value!r} m is wider than a person's body (at most {MAX_BODY_RADIUS_M:g} m)"
     return None
 
 

@@ -58,6 +58,7 @@ def test_a_fits_values_set_the_models_constants_and_a_value_it_does_not_read_is_
         ({"speed.time_gap_s": 0.0}, "0.0 is not a finite positive number"),
         ({"speed.time_gap_s": True}, "True is not a finite positive number"),
         ({"speed.time_gap_s": float("nan")}, "nan is not a finite positive number"),
+        ({"speed.radius_m": 3.0}, "speed.radius_m: 3.0 m is wider than a person's body (at most 1 m)"),
     ):
         with pytest.raises(ValueError, match=re.escape(words)):
             humans.with_values("steering_speed_calibrated", params, values)
@@ -243,3 +244,24 @@ def test_the_warehouse_workers_walk_a_fit_and_the_run_records_it(tmp_path, capsy
     out = str(tmp_path / "cli")
     assert main(["simulate", "--hours", "0.01", "--human-fit", str(path), "--human-model", "orca", "--out", out]) == 2
     assert "leave out --human-model" in capsys.readouterr().err
+
+
+def test_an_episode_whose_people_are_lost_to_nan_is_refused_naming_where():
+    """A present person whose position is not finite would pass the metrics unseen (NaN compares
+    false): the scene's run stops, naming the scene, method, variant and time. Absent people's
+    slots may hold anything."""
+    from types import SimpleNamespace
+
+    from socialnav.evaluation.arena.episodes import ArenaConfig
+    from socialnav.evaluation.arena.run import refuse_lost_people
+    from socialnav.jaxsim.scenario.errors import ScenarioError
+
+    spec = load_scene(SCENES_DIR / "gscl_group.json")
+    xy = np.zeros((2, 5, 3, 2), np.float32)  # 2 episodes, 5 steps, 3 people
+    present = np.ones((2, 5, 3), bool)
+    present[:, :, 2] = False
+    xy[:, :, 2] = np.nan  # an absent slot: not a loss
+    refuse_lost_people(spec, "navfn", SimpleNamespace(people_xy_m=xy, people_present=present), 10, ArenaConfig())
+    xy[1, 3, 1, 0] = np.inf
+    with pytest.raises(ScenarioError, match=r"person 1's position is not finite at t = 0\.4 s of variant 11 \(navfn\)"):
+        refuse_lost_people(spec, "navfn", SimpleNamespace(people_xy_m=xy, people_present=present), 10, ArenaConfig())

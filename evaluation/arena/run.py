@@ -14,12 +14,14 @@ from collections.abc import Callable, Mapping
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pandas as pd
 
 from socialnav.evaluation.arena import episodes as arena
 from socialnav.evaluation.arena import nav_metrics
 from socialnav.evaluation.arena.params import ArenaParams
 from socialnav.evaluation.arena.report import episode_frame, trajectory_frame
+from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenes.actor import Actor, check_actor
 from socialnav.jaxsim.scenes.spec import SceneSpec, mirror
 from socialnav.jaxsim.scenes.variant import Variant, sample_variants
@@ -154,7 +156,9 @@ def run_scene(
     )
     results = arena.run_spread(runs, variants, n_devices)
     without = next(results)
+    refuse_lost_people(spec, "without the robot", without, first, config)
     for method, tr in zip(methods, results):
+        refuse_lost_people(spec, method, tr, first, config)
         metrics = measure(tr, variants, without)
         episodes.append(episode_frame(name, method, first, metrics, tr.wall_contacts, tr.invalid_actions))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.env.dt_s)
@@ -165,6 +169,25 @@ def run_scene(
     return pd.concat(episodes, ignore_index=True), (
         pd.concat(trajectories, ignore_index=True) if trajectories else None
     )
+
+
+def refuse_lost_people(spec: SceneSpec, method: str, tr: arena.Trajectory, first: int, config) -> None:
+    """Raise :class:`~jaxsim.scenario.errors.ScenarioError` naming the scene, the method, the
+    variant and the time where a present person's position in ``tr`` (a batch of episodes) is
+    not finite: the metrics would pass over them (NaN compares false) and the table would count
+    a crowd that is not there. A human model's constants can do it (a body wider than the scene's
+    corridors), so the message names them."""
+    xy, present = np.asarray(tr.people_xy_m), np.asarray(tr.people_present)
+    lost = present & ~np.isfinite(xy).all(axis=-1)
+    if not lost.any():
+        return
+    variant, step, person = (int(i[0]) for i in np.nonzero(lost))
+    model = config.env.human_model
+    raise ScenarioError(
+        spec.file, "people", f"person {person}'s position is not finite at t = {(step + 1) * config.env.dt_s:.1f} s "
+        f"of variant {first + variant} ({method}): the people's model ({model}) failed; check its constants "
+        "(--human-fit) or the scene's walls"
+    )  # fmt: skip
 
 
 def user_actor(factory: Callable, env, n_people: int | None = None) -> tuple[Actor, object]:
