@@ -1242,6 +1242,74 @@ def _edited_recording_then_resumed(tmp):
     return argv
 
 
+# --- round eleven: a calibration's fit as the people of a run (--human-fit) -----------------------
+
+_FIT_FIELDS = ["speed.time_gap_s", "speed.neighbor_strength", "speed.neighbor_range_m", "group.gaze_per_rad",
+               "group.attraction_mps2"]  # fmt: skip
+
+
+def _tracks_fit() -> dict:
+    """A ``humans calibrate --data tracks`` record, as the command writes it (its fields)."""
+    row = {"scene": "mine.csv", "gradient_values": dict(zip(_FIT_FIELDS, [0.17, 4.7, 0.027, 0.41, 2.5], strict=True)),
+           "nelder_mead_values": dict(zip(_FIT_FIELDS, [0.03, 11.2, 0.005, 0.2, 518.0], strict=True)),
+           "sample_loss": {"start": 0.53, "gradient": 0.448, "nelder_mead": 0.449}}  # fmt: skip
+    return {"model": "collision_free_speed_calibrated", "data": "tracks", "fields": list(_FIT_FIELDS),
+            "scenes": [row], "complete": True}  # fmt: skip
+
+
+def _with_fit(mutate: Callable[[dict], object] = lambda fit: None, option: str = "{fit}", job: str = ""):
+    """A small arena run (or ``job``) with ``--human-fit`` of ``_tracks_fit()`` written to
+    ``{tmp}/calibration/fit.json`` after ``mutate``; ``option`` the option's text."""
+
+    def make(tmp):
+        fit = _tracks_fit()
+        mutate(fit)
+        (tmp / "calibration").mkdir()
+        (tmp / "calibration" / "fit.json").write_text(json.dumps(fit))  # NaN written as NaN, as Python does
+        given = option.replace("{fit}", str(tmp / "calibration" / "fit.json")).replace("{tmp}", str(tmp))
+        small = ["arena", "--scenes", "gscl_group", "--methods", "navfn", "--variants", "2", "--out", str(tmp / "out"),
+                 "--no-progress"]  # fmt: skip
+        argv = job.replace("{tmp}", str(tmp)).split() or small
+        return [*SOCIALNAV, *argv, "--human-fit", given]
+
+    return make
+
+
+def _both_values(field: str, value) -> Callable[[dict], None]:
+    def mutate(fit):
+        row = fit["scenes"][0]
+        if field not in fit["fields"]:
+            fit["fields"].append(field)
+        for method in ("gradient", "nelder_mead"):
+            row[f"{method}_values"][field] = value
+
+    return mutate
+
+
+def _stopped_after_the_gradient(fit):
+    fit["complete"] = False
+    del fit["scenes"][0]["nelder_mead_values"]
+
+
+def _arena_then_another_fit(tmp):
+    """An arena run with the fit's gradient point, then the same command with its search's."""
+    argv = _with_fit(option="{fit}:gradient")(tmp)
+    first = subprocess.run(argv, capture_output=True, text=True, timeout=300)
+    if first.returncode:
+        raise RuntimeError(first.stderr)
+    return [*argv[:-1], str(tmp / "calibration" / "fit.json") + ":nelder_mead"]
+
+
+def _ran_with_fit(tmp, proc):
+    """The run holds the fit's gradient values under its model's name."""
+    run = tmp / "out" / "run.json"
+    if proc.returncode or not run.is_file():
+        return False
+    meta = json.loads(run.read_text())
+    return (meta.get("human_model") == "collision_free_speed_calibrated"
+            and meta.get("human_values") == _tracks_fit()["scenes"][0]["gradient_values"])  # fmt: skip
+
+
 def _arena_ran(tmp, proc):
     """The run's summary holds the scene's NavFn row over its 2 variants."""
     import pandas as pd
@@ -2290,6 +2358,63 @@ CASES: list[Case] = [
         "r10: humans predict on a tracks file in centimetres",
         _predict_on(lambda r: r.assign(x=r["x"] * 100, y=r["y"] * 100)),
         ("tracks.csv", "m/s between frames", "metres"),
+    ),
+    Case(
+        "r11: --human-fit of an ETH/UCY fit (one fit a held-out scene)",
+        _with_fit(lambda fit: fit.update(data="eth_ucy")),
+        ("fit.json", "data", "one fit a scene"),
+    ),
+    Case(
+        "r11: --human-fit with a NaN time gap",
+        _with_fit(_both_values("speed.time_gap_s", float("nan"))),
+        ("fit.json", "speed.time_gap_s", "not a positive number"),
+    ),
+    Case(
+        "r11: --human-fit with a body 3 m wide",
+        _with_fit(_both_values("speed.radius_m", 3.0)),
+        ("fit.json", "speed.radius_m", "wider than a person's body"),
+    ),
+    Case(
+        "r11: --human-fit of ORCA holding a speed model's time gap",
+        _with_fit(lambda fit: fit.update(model="orca")),
+        ("fit.json", "speed.time_gap_s", "orca reads orca and group"),
+    ),
+    Case(
+        "r11: --human-fit :nelder_mead of a fit stopped before the search",
+        _with_fit(_stopped_after_the_gradient, "{fit}:nelder_mead"),
+        ("fit.json", "no point yet of nelder_mead"),
+    ),
+    Case(
+        "r11: --human-fit with a training loss that is text",
+        _with_fit(lambda fit: fit["scenes"][0]["sample_loss"].update(gradient="low")),
+        ("fit.json", "gradient", "training loss 'low'"),
+    ),
+    Case(
+        "r11: --human-fit and --human-model both",
+        lambda tmp: [*_with_fit()(tmp), "--human-model", "orca"],
+        ("--human-fit", "leave out --human-model"),
+    ),
+    Case(
+        "r11: --human-fit inside the run's --out (an --overwrite could remove it)",
+        _with_fit(job="arena --scenes gscl_group --methods navfn --variants 2 --out {tmp}/calibration --no-progress"),
+        ("calibration", "contains the job's input"),
+    ),
+    Case(
+        "r11: simulate --human-fit naming a folder without a fit",
+        _with_fit(option="{tmp}", job="simulate --hours 0.01 --out {tmp}/wh --no-progress"),
+        ("--human-fit", "a folder without a fit.json"),
+    ),
+    Case(
+        "r11: an arena run resumed with another fit's people",
+        _arena_then_another_fit,
+        ("out", "human_values", "--overwrite"),
+        timeout_s=600,
+    ),
+    Case(
+        "r11: --human-fit of the calibration's folder, through the arena",
+        _with_fit(option="{tmp}/calibration:gradient"),
+        check=_ran_with_fit,
+        timeout_s=300,
     ),
     Case(
         "r4 silent: a waypoint's made-up speed",

@@ -118,6 +118,9 @@ def test_a_fit_file_is_read_as_its_model_and_the_method_of_lower_training_loss(t
         "gradient",
     )
     assert fit_file.split_option("fit.json") == (fit_file.pathlib.Path("fit.json"), "best")
+    assert fit_file.read_option(f"{path.parent}:gradient") == fit_file.read_fit(path, "gradient")  # its folder
+    with pytest.raises(ValueError, match="a folder without a fit.json"):
+        fit_file.read_option(str(tmp_path))
 
 
 @pytest.mark.parametrize(

@@ -149,8 +149,14 @@ def read_fit(path, method: str = "best") -> FittedPeople:
 
 def read_option(text: str) -> FittedPeople:
     """The commands' ``--human-fit FIT_JSON[:METHOD]`` read (:func:`split_option`,
-    :func:`read_fit`); ``ValueError`` naming the file and the field."""
+    :func:`read_fit`); a calibration's folder stands for its ``fit.json`` (or, for a fit stopped
+    before its end, its ``progress.json``). ``ValueError`` naming the file and the field."""
     path, method = split_option(text)
+    if path.is_dir():
+        inside = [path / name for name in ("fit.json", "progress.json") if (path / name).is_file()]
+        if not inside:
+            raise ValueError(f"{path}: a folder without a fit.json (socialnav humans calibrate --out writes one)")
+        path = inside[0]
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
     return read_fit(path, method)
