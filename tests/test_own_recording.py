@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 
+import jax
 import numpy as np
 import pandas as pd
 import pytest
@@ -290,6 +291,8 @@ def test_a_recording_is_cut_in_time_for_its_calibration_and_the_command_asks_for
     out = str(tmp_path / "fit")
     assert main(["humans", "calibrate", "--data", "tracks", "--out", out]) == 2
     assert "--data tracks goes with --tracks and --frames-per-s" in capsys.readouterr().err
+    assert main(["humans", "calibrate", "--map", str(path), "--out", out]) == 2  # a map without --data tracks
+    assert "--data tracks goes with --tracks and --frames-per-s (both; --map too" in capsys.readouterr().err
     assert main(["humans", "calibrate", "--tracks", str(path), "--frames-per-s", FPS, "--out", out]) == 2
     assert main(["humans", "calibrate", "--data", "tracks", "--tracks", str(path), "--frames-per-s", FPS,
                  "--model", "power_law", "--out", out]) == 2  # fmt: skip
@@ -303,15 +306,18 @@ def test_a_model_is_calibrated_on_the_first_two_thirds_of_a_recording_and_scored
     out = tmp_path / "fit"
     argv = ["humans", "calibrate", "--data", "tracks", "--tracks", str(path), "--frames-per-s", FPS, "--model",
             "collision_free_speed_calibrated", "--steps", "4", "--evaluations", "6", "--sample", "32"]  # fmt: skip
-    assert main([*argv, "--out", str(out)]) == 0
+    walls = _ros_map(tmp_path, [(-5.0, 20.0, -5.0, -1.2)])  # the pavement's edge below the crowd
+    assert main([*argv, "--map", str(walls), "--out", str(out)]) == 0
     fit = json.loads((out / "fit.json").read_text())
+    said = capsys.readouterr().out
+    assert fit["map"] == str(walls) and "1 wall boxes within 5 m of the people" in said
     row = fit["scenes"][0]
     assert fit["data"] == "tracks" and row["scene"] == "zara.csv" and row["sample_windows"] == 32
     assert min(h[1] for h in row["gradient_history"]) <= row["gradient_history"][0][1]
     assert set(fit["vs_cv"]) == {"start", "gradient", "nelder_mead"}
     low, high = fit["vs_cv"]["start"]["ade_m"][1:]
     assert low <= fit["vs_cv"]["start"]["ade_m"][0] <= high
-    assert (out / "curve.png").is_file() and "fitted by gradient: test ADE/FDE" in capsys.readouterr().out
+    assert (out / "curve.png").is_file() and "fitted by gradient: test ADE/FDE" in said
 
 
 def test_a_difference_without_an_interval_says_why_instead_of_printing_nan():
@@ -322,3 +328,63 @@ def test_a_difference_without_an_interval_says_why_instead_of_printing_nan():
     assert d == pytest.approx(0.1) and np.isnan(low) and np.isnan(high)
     assert report.interval((d, low, high)) == "+0.100 [no interval: fewer than 2 blocks of 20 windows]"
     assert report.interval((0.1, 0.05, 0.15)) == "+0.100 [+0.050, +0.150]"
+
+
+def _walker_towards(tmp_path, speed_mps=1.25, samples=24):
+    """A tracks file of one person walking along +x at y = 5 m from x = 1 m, a sample every 0.4 s
+    (frame numbers of a 25 fps video, every 10th)."""
+    x = 1.0 + speed_mps * 0.4 * np.arange(samples)
+    path = tmp_path / "walker.csv"
+    pd.DataFrame({"frame": 10 * np.arange(samples), "id": 1, "x": x, "y": 5.0}).to_csv(path, index=False)
+    return path
+
+
+def test_a_map_keeps_the_predicted_people_out_of_its_walls_and_far_walls_change_nothing(tmp_path, capsys):
+    """Known answer: a person walking at a wall 1.5 m ahead of their last observed position is
+    predicted (12 samples of 0.4 s, constant velocity 6 m on) to stop before it with the map, and
+    to walk through it without; walls far from everyone leave the prediction as in open space."""
+    from socialnav.evaluation.humans import calibration, own_recording, validation
+
+    path = _walker_towards(tmp_path)
+    rows = own_recording.recording_rows(path, 25.0)
+    model = calibration.named_model("collision_free_speed_calibrated")
+    predict = validation.window_predictor(model.name, model.dt_s)
+    ahead = []
+    for walls in ([(6.0, 7.0, 0.0, 10.0)], [(0.0, 20.0, 9.5, 10.0)]):  # across the path; along it, 4.5 m away
+        folder = tmp_path / f"map{len(ahead)}"
+        folder.mkdir()
+        field, notes = own_recording.recording_walls(path, _ros_map(folder, walls, origin=(0.0, 0.0), size=(200, 100)),
+                                                     rows)  # fmt: skip
+        windows = own_recording.recording_windows(rows, field)
+        open_ground = own_recording.recording_windows(rows)
+        key = jax.random.key(0)
+        ahead.append(
+            (np.asarray(predict(model.params, windows, key)), np.asarray(predict(model.params, open_ground, key)))
+        )
+    (across, through), (beside, alone) = ahead
+    first = 0  # the first window: last observed at x = 1 + 7 x 0.5 = 4.5 m
+    assert through[first, 0, -1, 0] > 7.0  # open space: on through where the wall is
+    assert across[first, 0, :, 0].max() < 6.0 - float(model.radius_m) + 0.05  # with the map: stops before it
+    np.testing.assert_allclose(beside, alone, atol=1e-4)  # a wall 4.5 m to the side: nothing changes
+    assert "1 wall boxes within 5 m of the people" in notes[0]
+
+
+def test_the_prediction_command_walks_the_models_between_the_maps_walls_and_records_it(tmp_path, capsys):
+    path = _walker_towards(tmp_path)
+    across = _ros_map(tmp_path, [(6.0, 7.0, 0.0, 10.0)], origin=(0.0, 0.0), size=(200, 100))
+    argv = ["humans", "predict", "--tracks", str(path), "--frames-per-s", FPS, "--models",
+            "collision_free_speed_calibrated", "--no-progress"]  # fmt: skip
+    assert main([*argv, "--out", str(tmp_path / "open")]) == 0
+    assert main([*argv, "--map", str(across), "--out", str(tmp_path / "walls")]) == 0
+    scores = {k: pd.read_csv(tmp_path / k / "prediction.csv").set_index(["model", "aim"]) for k in ("open", "walls")}
+    along = ("collision_free_speed_calibrated", "velocity")
+    assert scores["walls"].loc[along, "ade_m"] != scores["open"].loc[along, "ade_m"]  # the walls changed the walk
+    summary = json.loads((tmp_path / "walls" / "summary.json").read_text())
+    assert summary["map"] == str(across) and len(summary["map_sha256"]) == 64
+    assert "map" not in json.loads((tmp_path / "open" / "summary.json").read_text())
+    elsewhere = _ros_map(tmp_path / "open", [], origin=(100.0, 100.0))
+    capsys.readouterr()
+    assert main([*argv, "--map", str(elsewhere), "--out", str(tmp_path / "x")]) == 2
+    assert "% of the positions lie on the map" in capsys.readouterr().err and not (tmp_path / "x").exists()
+    assert main([*argv, "--map", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "x")]) == 2
+    assert "--map" in capsys.readouterr().err

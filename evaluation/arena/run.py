@@ -10,6 +10,7 @@ trajectories it keeps (:mod:`evaluation.arena.report`'s frames).
 from __future__ import annotations
 
 import functools
+import itertools
 from collections.abc import Callable, Mapping
 
 import jax
@@ -156,9 +157,13 @@ def run_scene(
     )
     results = arena.run_spread(runs, variants, n_devices)
     without = next(results)
-    refuse_lost_people(spec, "without the robot", without, first, config)
-    for method, tr in zip(methods, results):
-        refuse_lost_people(spec, method, tr, first, config)
+    for method, tr in itertools.chain([("without the robot", without)], zip(methods, results)):  # as they come
+        lost = lost_people(tr.people_xy_m, tr.people_present, first, config.env.dt_s)
+        if lost is not None:  # the scene named, as a variant that cannot be drawn is
+            raise ScenarioError(spec.file, "people", f"{lost} ({method}): the people's model "
+                                f"({config.env.human_model}) failed; check its constants (--human-fit)")  # fmt: skip
+        if tr is without:
+            continue
         metrics = measure(tr, variants, without)
         episodes.append(episode_frame(name, method, first, metrics, tr.wall_contacts, tr.invalid_actions))
         kept = trajectory_frame(name, method, first, tr, keep_trajectories, config.env.dt_s)
@@ -171,23 +176,18 @@ def run_scene(
     )
 
 
-def refuse_lost_people(spec: SceneSpec, method: str, tr: arena.Trajectory, first: int, config) -> None:
-    """Raise :class:`~jaxsim.scenario.errors.ScenarioError` naming the scene, the method, the
-    variant and the time where a present person's position in ``tr`` (a batch of episodes) is
-    not finite: the metrics would pass over them (NaN compares false) and the table would count
-    a crowd that is not there. A human model's constants can do it (a body wider than the scene's
-    corridors), so the message names them."""
-    xy, present = np.asarray(tr.people_xy_m), np.asarray(tr.people_present)
+def lost_people(people_xy_m, people_present, first: int, dt_s: float) -> str | None:
+    """Where a present person's position in a batch of episodes (``people_xy_m`` (B, T, P, 2),
+    ``people_present`` (B, T, P)) is not finite, in words (the first such person, variant
+    ``first + b`` and time), or None. The metrics would pass over them (NaN compares false) and the
+    table count a crowd that is not there; a human model's constants can do it (a body wider than
+    the scene's corridors)."""
+    xy, present = np.asarray(people_xy_m), np.asarray(people_present)
     lost = present & ~np.isfinite(xy).all(axis=-1)
     if not lost.any():
-        return
+        return None
     variant, step, person = (int(i[0]) for i in np.nonzero(lost))
-    model = config.env.human_model
-    raise ScenarioError(
-        spec.file, "people", f"person {person}'s position is not finite at t = {(step + 1) * config.env.dt_s:.1f} s "
-        f"of variant {first + variant} ({method}): the people's model ({model}) failed; check its constants "
-        "(--human-fit) or the scene's walls"
-    )  # fmt: skip
+    return f"person {person}'s position is not finite at t = {(step + 1) * dt_s:.1f} s of variant {first + variant}"
 
 
 def user_actor(factory: Callable, env, n_people: int | None = None) -> tuple[Actor, object]:

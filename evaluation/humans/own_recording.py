@@ -7,8 +7,9 @@ The file is the toolkit's tracks file (:mod:`socialnav.data.track_file`), checke
 recorded crowds check it (:func:`jaxsim.scenes.recording.file_rows`). It is read at the protocol's
 sample interval, :data:`SAMPLE_S` by default (ETH/UCY's 2.5 Hz): every k-th frame of the file's
 frame step, k the whole number nearest to ``sample_s`` over that step (a file sampled more
-coarsely keeps its own step, as ``biwi_eth``'s 2/3 s is kept). A recording has no map of its
-walls: the models walk in open space, as on ETH/UCY.
+coarsely keeps its own step, as ``biwi_eth``'s 2/3 s is kept). Without a map of its walls the
+models walk in open space, as on ETH/UCY; with one (a ROS map, :func:`recording_walls`) they
+walk between its walls, as the arena's scenes of the file do.
 """
 
 from __future__ import annotations
@@ -52,8 +53,33 @@ def windows_needed_bytes(rows: pd.DataFrame) -> float:
     return float(len(per_frame) * per_frame.max() * WINDOW_BYTES_PER_PERSON)
 
 
-def recording_windows(rows: pd.DataFrame) -> validation.PredictionWindows:
-    """The prediction windows of ``rows`` (:func:`validation.windows_of`). Raises ``ValueError``
+# How far past the people the wall field of a map reaches (m): a prediction 12 samples ahead stays
+# inside it (an 8 m/s step from the outermost person in 0.4 s samples reaches 38 m, no walker).
+WALLS_MARGIN_M = 5.0
+
+
+def recording_walls(tracks_file, map_file, rows: pd.DataFrame, resolution_m: float = 0.05):
+    """``(walls, notes)``: the wall field of ROS map ``map_file`` (:func:`validation.walls_field`;
+    None where the map has no wall near the people) over the people of ``rows`` and
+    :data:`WALLS_MARGIN_M` around them, and the lines to print (how many wall boxes, the share of
+    positions inside a wall). Raises :class:`~socialnav.data.track_file.TrackFileError` where
+    under 80 % of the positions lie on the map (another frame or other units) and
+    :class:`~socialnav.planners.learning.ros_map.MapFileError` for a map that cannot be read."""
+    from socialnav.planners.learning.tracks import map_walls
+
+    lo, hi = rows[["x_m", "y_m"]].min().to_numpy(), rows[["x_m", "y_m"]].max().to_numpy()
+    bounds = (lo[0] - WALLS_MARGIN_M, hi[0] + WALLS_MARGIN_M, lo[1] - WALLS_MARGIN_M, hi[1] + WALLS_MARGIN_M)
+    boxes, in_walls = map_walls(tracks_file, map_file, rows, bounds)
+    notes = [f"{map_file}: {len(boxes)} wall boxes within {WALLS_MARGIN_M:g} m of the people"]
+    if in_walls:
+        notes.append(f"{map_file}: {100 * in_walls:.1f} % of the recorded positions lie in its walls (people the "
+                     "map does not know of: their predictions start inside a wall)")  # fmt: skip
+    return validation.walls_field(boxes, bounds, resolution_m), notes
+
+
+def recording_windows(rows: pd.DataFrame, walls=None) -> validation.PredictionWindows:
+    """The prediction windows of ``rows`` (:func:`validation.windows_of`), walked between
+    ``walls`` (:func:`recording_walls`; None: open ground). Raises ``ValueError``
     where nobody is seen in 20 consecutive samples (nothing to score) or the windows would not fit
     in memory."""
     span = validation.PREDICT_OBSERVED + validation.PREDICT_FRAMES
@@ -71,7 +97,7 @@ def recording_windows(rows: pd.DataFrame) -> validation.PredictionWindows:
             f"{validation.PREDICT_FRAMES} predicted); the longest track has {seen.max()}: nothing to score"
         )
     try:
-        return validation.windows_of(rows)
+        return validation.windows_of(rows).replace(walls=walls)
     except ValueError as e:  # every track long enough, none in consecutive samples
         raise ValueError(f"nobody is seen in {span} consecutive samples: nothing to score ({e})") from None
 
@@ -113,15 +139,16 @@ def split_rows(rows: pd.DataFrame, train_share: float = TRAIN_SHARE) -> tuple[pd
     return rows[frames < cut], rows[frames >= cut]
 
 
-def split_windows(rows: pd.DataFrame) -> tuple[validation.PredictionWindows, validation.PredictionWindows]:
-    """The prediction windows of :func:`split_rows`' two parts, the fit's and the test's; raises
-    ``ValueError`` naming the part where one has nothing to score."""
+def split_windows(rows: pd.DataFrame, walls=None) -> tuple[validation.PredictionWindows, validation.PredictionWindows]:
+    """The prediction windows of :func:`split_rows`' two parts, the fit's and the test's, walked
+    between ``walls`` (None: open ground); raises ``ValueError`` naming the part where one has
+    nothing to score."""
     windows = []
     for part, label in zip(
         split_rows(rows), ("its first two thirds (the fit's)", "its last third (the test)"), strict=True
     ):
         try:
-            windows.append(recording_windows(part))
+            windows.append(recording_windows(part, walls))
         except ValueError as e:
             raise ValueError(f"{label}: {e}") from None
     return windows[0], windows[1]

@@ -502,7 +502,8 @@ class PredictionWindows:
     together over the observed frames, ``future`` (W, P, 12, 2) the truth (0 where a person is
     absent: only the ``complete`` count), ``complete`` who is scored, ``constant_velocity``
     (W, P, 12, 2) the baseline's prediction, ``frame_s`` (W floats) the seconds between two
-    samples."""
+    samples; ``walls`` the recording's wall field (a :class:`~jaxsim.grid.Grid` of signed distance
+    and normal, :func:`walls_field`), or None: open ground, as ETH/UCY ships no walls."""
 
     start: np.ndarray
     velocity: np.ndarray
@@ -516,6 +517,7 @@ class PredictionWindows:
     # static (a tuple of floats): a calibration passes the windows through jit, and the steps a
     # window's horizon takes are part of the program
     frame_s: tuple = struct.field(pytree_node=False, default=())
+    walls: Grid | None = None
 
     def take(self, index, bucket: int = 16) -> PredictionWindows:
         """The windows at ``index`` (an index array or slice), their people cut to the most any
@@ -523,8 +525,21 @@ class PredictionWindows:
         the rounding bounds the shapes a jit compiles for)."""
         people = int(np.asarray(self.present)[index].sum(axis=1).max(initial=1))
         keep = min(self.start.shape[1], -(-people // bucket) * bucket)
-        arrays = (getattr(self, f.name)[index][:, :keep] for f in dataclasses.fields(self) if f.name != "frame_s")
-        return PredictionWindows(*arrays, tuple(np.asarray(self.frame_s)[index].tolist()))
+        arrays = (getattr(self, f.name)[index][:, :keep] for f in dataclasses.fields(self) if f.name not in _WHOLE)
+        return PredictionWindows(*arrays, tuple(np.asarray(self.frame_s)[index].tolist()), self.walls)
+
+
+_WHOLE = ("frame_s", "walls")  # PredictionWindows' fields that are not (W, P, ...) arrays
+
+
+def walls_field(boxes_m, bounds_m, resolution_m: float = 0.05) -> Grid | None:
+    """The wall field of wall boxes ``boxes_m`` ((K, 4) xmin, xmax, ymin, ymax) over ``bounds_m``
+    (xmin, xmax, ymin, ymax), as the corridors' (:func:`corridor_field`); None without a box."""
+    if not len(boxes_m):
+        return None
+    field = geometry.build_distance_field(np.asarray(boxes_m, np.float32), tuple(bounds_m), resolution_m)
+    values = np.stack([field.sdf_m, field.normal_x, field.normal_y], axis=-1)
+    return Grid.of_samples(jnp.asarray(values), float(field.origin_m[0]), float(field.origin_m[1]), resolution_m)
 
 
 @functools.lru_cache(maxsize=16)
@@ -550,7 +565,7 @@ def windows_of(rows, reach_m: float = 1.0) -> PredictionWindows:
                                 goal.astype(np.float32), measures.walking_groups(observed, reach_m),
                                 np.nan_to_num(future), complete, cv, tuple(frame_s.tolist()))  # fmt: skip
     for f in dataclasses.fields(windows):
-        if f.name != "frame_s":
+        if f.name not in _WHOLE:
             getattr(windows, f.name).setflags(write=False)  # shared by the cache
     return windows
 
@@ -562,31 +577,32 @@ def window_predictor(name: str, dt_s: float, aim: str = "velocity", groups: bool
     differentiates with respect to ``params`` (:class:`~jaxsim.humans.HumanParams`). Windows
     of one sample interval are stepped together, each interval for its own 12 samples (a batch of
     ETH/UCY's 0.4 s windows does not pay for biwi_eth's 8 s horizon)."""
-    field = _open_field()
+    open_ground = _open_field()
 
-    def one(params, xy, v, s, here, g, gid, key, frame_s):
+    def one(params, field, xy, v, s, here, g, gid, key, frame_s):
         along = lambda p: v * 10.0 / jnp.maximum(jnp.linalg.norm(v, axis=-1, keepdims=True), 1e-6)
         towards = lambda p: g - p
         return _predict(name, params, field, xy, v, along if aim == "velocity" else towards, s, here, key, frame_s,
                         dt_s, gid if groups else None)  # fmt: skip
 
     @functools.partial(jax.jit, static_argnames="frame_s")
-    def batched(params, start, velocity, speed, present, goal, group_id, key, frame_s):
+    def batched(params, field, start, velocity, speed, present, goal, group_id, key, frame_s):
         keys = jax.random.split(key, start.shape[0])
-        return jax.vmap(functools.partial(one, frame_s=frame_s), in_axes=(None, 0, 0, 0, 0, 0, 0, 0))(
-            params, start, velocity, speed, present, goal, group_id, keys)  # fmt: skip
+        return jax.vmap(functools.partial(one, frame_s=frame_s), in_axes=(None, None, 0, 0, 0, 0, 0, 0, 0))(
+            params, field, start, velocity, speed, present, goal, group_id, keys)  # fmt: skip
 
     def predict(params, w: PredictionWindows, key):
+        field = open_ground if w.walls is None else w.walls
         intervals = np.unique(np.asarray(w.frame_s))
         if len(intervals) == 1:
-            return batched(params, w.start, w.velocity, w.speed, w.present, w.goal, w.group_id, key,
+            return batched(params, field, w.start, w.velocity, w.speed, w.present, w.goal, w.group_id, key,
                            frame_s=float(intervals[0]))  # fmt: skip
         parts, order = [], []
         for k, interval in enumerate(intervals):
             index = np.flatnonzero(np.asarray(w.frame_s) == interval)  # static; the arrays may be traced
             part = (w.start[index], w.velocity[index], w.speed[index], w.present[index], w.goal[index],
                     w.group_id[index])  # fmt: skip
-            parts.append(batched(params, *part, jax.random.fold_in(key, k), frame_s=float(interval)))
+            parts.append(batched(params, field, *part, jax.random.fold_in(key, k), frame_s=float(interval)))
             order.append(index)
         return jnp.concatenate(parts)[np.argsort(np.concatenate(order))]
 

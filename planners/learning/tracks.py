@@ -85,6 +85,28 @@ def check_on_map(
     return share
 
 
+def map_walls(tracks_file, map_file, rows, bounds_m) -> tuple[list, float]:
+    """``(walls, in_walls)``: the walls of the ROS map ``map_file`` inside ``bounds_m`` (boxes,
+    :func:`jaxsim.scenes.from_recording.walls_from_occupancy`) and the share of the recorded
+    positions of ``rows`` that lie in a wall (people the map does not know of). Raises
+    ``TrackFileError`` where under 80 % of the positions lie on the map (another frame, other
+    units: :func:`check_on_map`); ``MapFileError`` for a map that cannot be read."""
+    from socialnav.jaxsim.scenes import from_recording
+    from socialnav.planners.learning.ros_map import read_ros_map
+
+    occupancy, resolution_m, origin = read_ros_map(map_file)
+    tracks = {p: g[["frame", "x_m", "y_m"]].to_numpy() for p, g in rows.groupby("person")}
+    check_on_map(tracks, occupancy, resolution_m, origin, tracks_file, map_file)
+    walls = from_recording.walls_from_occupancy(occupancy, resolution_m, origin, bounds_m)
+    xy = rows[["x_m", "y_m"]].to_numpy()
+    col = np.floor((xy[:, 0] - origin[0]) / resolution_m).astype(int)
+    row = np.floor((xy[:, 1] - origin[1]) / resolution_m).astype(int)
+    on = (row >= 0) & (row < occupancy.shape[0]) & (col >= 0) & (col < occupancy.shape[1])
+    in_wall = np.zeros(len(xy), bool)
+    in_wall[on] = np.asarray(occupancy)[row[on], col[on]] > 0
+    return walls, float(in_wall.mean()) if len(xy) else 0.0
+
+
 def _dense(points_local_m: np.ndarray) -> np.ndarray:
     """(K, 2) points along the polyline of local points (M, 2), at most ``SAMPLE_M`` apart."""
     dense = [points_local_m[:1]]

@@ -77,13 +77,17 @@ def add_parser(top) -> None:
         description="ETH/UCY's prediction test on your own recording (a tracks file: CSV or Parquet rows of frame, "
         "id, x, y, positions in metres; the file socialnav arena-scene and gscl fit-tracks read): every person "
         "present for 20 samples is observed for 8 and predicted for 12 by constant velocity and by each model "
-        "(aimed along their last observed velocity, and at their true final position), in open space. Writes "
+        "(aimed along their last observed velocity, and at their true final position), in open space or between the "
+        "walls of --map. Writes "
         "prediction.csv, prediction.png and summary.json and prints a line a predictor.",
     )
     p.add_argument("--tracks", type=pathlib.Path, required=True, help="the recording: a .csv or .parquet tracks file")
     p.add_argument("--frames-per-s", type=positive_float, required=True,
                    help="how far the file's frame numbers advance in a second")  # fmt: skip
     p.add_argument("--models", type=comma_names, default=["social_force"], help="human models (default social_force)")
+    p.add_argument("--map", type=pathlib.Path, default=None,
+                   help="a ROS map of the place (map_server's YAML and image, in the tracks' frame): the models "
+                        "walk between its walls (default: open space, as on ETH/UCY)")  # fmt: skip
     p.add_argument("--sample-s", type=positive_float, default=0.4,
                    help="the protocol's sample interval: the file is read every this many seconds, to the nearest "
                         "whole number of its frame steps (default 0.4, ETH/UCY's 2.5 Hz)")  # fmt: skip
@@ -118,6 +122,9 @@ def add_parser(top) -> None:
                    help="with --data tracks: your recording (a tracks file: frame, id, x, y)")  # fmt: skip
     c.add_argument("--frames-per-s", type=positive_float, default=None,
                    help="with --data tracks: how far the file's frame numbers advance in a second")  # fmt: skip
+    c.add_argument("--map", type=pathlib.Path, default=None,
+                   help="with --data tracks: a ROS map of the place (map_server's YAML and image, in the tracks' "
+                        "frame): the models walk between its walls (default: open space)")  # fmt: skip
     c.add_argument("--weights", type=comma_positive_floats, default=None,
                    help="with --data joint: the exchange rates w swept (0.03,0.1,0.3,1)")  # fmt: skip
     c.add_argument("--scenes", type=comma_names, default=None, help="with --data eth_ucy: the held-out scenes (all)")
@@ -151,6 +158,7 @@ def predict(args) -> int:
     from socialnav.evaluation.humans import calibration as hc
     from socialnav.evaluation.humans import own_recording
     from socialnav.evaluation.humans import plots as human_plots
+    from socialnav.planners.learning.ros_map import MapFileError
 
     def fail(message: str) -> int:
         print(f"{PREDICT_JOB}: {message}", file=sys.stderr)
@@ -161,11 +169,14 @@ def predict(args) -> int:
         return fail(f"--models: unknown {', '.join(unknown)} (known: {', '.join(HUMAN_MODELS)})")
     if not args.tracks.is_file():
         return fail(f"--tracks {args.tracks}: no such file")
+    if args.map is not None and not args.map.is_file():
+        return fail(f"--map {args.map}: no such file")
     t0 = time.perf_counter()
-    try:  # the file first: a bad one leaves no folder behind
+    try:  # the files first: a bad one leaves no folder behind
         rows = own_recording.recording_rows(args.tracks, args.frames_per_s, args.sample_s)
-        windows = own_recording.recording_windows(rows)
-    except TrackFileError as e:
+        walls, notes = (None, []) if args.map is None else own_recording.recording_walls(args.tracks, args.map, rows)
+        windows = own_recording.recording_windows(rows, walls)
+    except (TrackFileError, MapFileError) as e:
         return fail(str(e))
     except ValueError as e:
         return fail(f"{args.tracks} at --frames-per-s {args.frames_per_s:g}, --sample-s {args.sample_s:g}: {e}")
@@ -182,6 +193,8 @@ def predict(args) -> int:
     sample_s = float(np.median(windows.frame_s))
     say(f"{args.tracks}: {len(windows.frame_s)} windows of 20 samples {sample_s:g} s apart, "
         f"{int(windows.complete.sum())} people scored")  # fmt: skip
+    for note in notes:
+        say(note)
     models = {name: hc.named_model(name) for name in args.models}
     table = own_recording.predict(models, windows, args.seed, say)
     summary = {
@@ -192,6 +205,7 @@ def predict(args) -> int:
         "windows": len(windows.frame_s),
         "scored": int(windows.complete.sum()),
         "models": list(args.models),
+        **_map_record(args.map),
         "seed": args.seed,
         "command": ["socialnav", *getattr(args, "argv", [])],
     }
@@ -220,7 +234,7 @@ def calibrate(args) -> int:
     from socialnav.evaluation.humans import plots as human_plots
     from socialnav.evaluation.humans import validation as hv
 
-    if args.data == "tracks" or args.tracks is not None or args.frames_per_s is not None:
+    if args.data == "tracks" or args.tracks is not None or args.frames_per_s is not None or args.map is not None:
         problem = _read_recording(args)  # before --out is made: a bad file leaves no folder behind
         if problem:
             print(f"socialnav humans calibrate: {problem}", file=sys.stderr)
@@ -369,15 +383,33 @@ def _write_trajectory_fit(args, fit: dict, title: str, lines: list[str], replace
     return 0
 
 
+def _map_record(map_file: pathlib.Path | None) -> dict:
+    """What a run notes of its ``--map`` (nothing without one: earlier runs' records unchanged):
+    the YAML's path and the SHA-256 of the YAML and its image."""
+    if map_file is None:
+        return {}
+    import hashlib
+
+    import numpy as np
+
+    from socialnav.planners.learning.ros_map import read_ros_map
+
+    occupancy, _, _ = read_ros_map(map_file)  # read before: a bad map was refused
+    digest = hashlib.sha256(map_file.read_bytes())
+    digest.update(np.ascontiguousarray(occupancy).tobytes())
+    return {"map": str(map_file), "map_sha256": digest.hexdigest()}
+
+
 def _read_recording(args) -> str | None:
     """``--data tracks``: why its options or file cannot be used (None: they can; the file's rows
     are then ``args.tracks_windows``, the fit's and the test's prediction windows), checked before
     the run folder is made."""
     from socialnav.data.track_file import TrackFileError
     from socialnav.evaluation.humans import own_recording
+    from socialnav.planners.learning.ros_map import MapFileError
 
     if args.data != "tracks" or args.tracks is None or args.frames_per_s is None:
-        return "--data tracks goes with --tracks and --frames-per-s (both), and they with it"
+        return "--data tracks goes with --tracks and --frames-per-s (both; --map too if given), and they with it"
     if args.start_draws or args.scenes is not None or args.weights is not None:
         return "--data tracks fits one recording (no --start-draws, --scenes, --weights)"
     if args.model.startswith("power_law"):
@@ -385,10 +417,14 @@ def _read_recording(args) -> str | None:
                 "recording's windows: docs/humans.md)")  # fmt: skip
     if not args.tracks.is_file():
         return f"--tracks {args.tracks}: no such file"
+    if args.map is not None and not args.map.is_file():
+        return f"--map {args.map}: no such file"
     try:
         rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
-        args.tracks_windows = own_recording.split_windows(rows)  # the fit's and the test's; each scores someone
-    except TrackFileError as e:
+        walls, args.map_notes = (None, []) if args.map is None else own_recording.recording_walls(args.tracks, args.map,
+                                                                                                  rows)  # fmt: skip
+        args.tracks_windows = own_recording.split_windows(rows, walls)  # the fit's and the test's; each scores someone
+    except (TrackFileError, MapFileError) as e:
         return str(e)
     except ValueError as e:
         return f"{args.tracks} at --frames-per-s {args.frames_per_s:g}: {e}"
@@ -407,6 +443,8 @@ def _calibrate_recording(args) -> int:
         model = hc.named_model(args.model)
         print(f"{args.model}: fitting {', '.join(tc.FITTED[model.name])} to {args.tracks} (its first two thirds; "
               "scored on the last)", flush=True)  # fmt: skip
+        for note in getattr(args, "map_notes", []):
+            print(note, flush=True)
         evaluations = 60 if args.evaluations is None else args.evaluations
         fit = own_recording.calibrate(model, *args.tracks_windows, args.model, args.tracks.name, args.steps or 60,
                                       args.learning_rate or 0.2, evaluations, args.sample, args.seed)  # fmt: skip
@@ -414,6 +452,7 @@ def _calibrate_recording(args) -> int:
         print(f"socialnav humans calibrate: --sample {args.sample}: {e}", file=sys.stderr)
         return 2
     fit["tracks"] = str(args.tracks)
+    fit.update(_map_record(args.map))
     title = f"{args.model} on {args.tracks.name}"
     return _write_trajectory_fit(args, fit, title, own_recording.calibration_lines(fit), args.overwrite, t0)
 

@@ -69,6 +69,7 @@ def run(args) -> int:
     from socialnav.jaxsim.scenes import recording as recording_lib
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners.learning.ros_map import MapFileError
+    from socialnav.planners.learning.tracks import map_walls
 
     def fail(message: str) -> int:
         print(f"{JOB}: {message}", file=sys.stderr)
@@ -87,7 +88,11 @@ def run(args) -> int:
         duration_s = recording_lib.load_recording_file(file, args.frames_per_s).duration_s
         walls, notes = None, []
         if args.map is not None:
-            walls, notes = _map_walls(file, args.map, rows, from_recording.open_ground_bounds(rows))
+            walls, in_walls = map_walls(file, args.map, rows, from_recording.open_ground_bounds(rows))
+            notes = [f"{args.map}: {len(walls)} wall boxes inside the scene's bounds"]
+            if in_walls:
+                notes.append(f"{args.map}: {100 * in_walls:.1f} % of the recorded positions lie in its walls "
+                             "(replayed, those people walk through them; reactive, they are kept out)")  # fmt: skip
         scenes = [
             from_recording.recorded_scene(
                 rows,
@@ -137,34 +142,3 @@ def run(args) -> int:
         print(note)
     print(f"run them: socialnav arena --scenes {','.join(str(t) for t in targets)} --out runs/{name}")
     return 0
-
-
-def _map_walls(tracks_file: pathlib.Path, map_file: pathlib.Path, rows, bounds_m) -> tuple[list, list[str]]:
-    """The walls of the ROS map ``map_file`` inside ``bounds_m`` (scene boxes), and the notes to
-    print: how many boxes, and the share of the recorded positions that lie in a wall (people
-    the map does not know of: replayed they walk through it, reactive ones are kept out of it).
-    Raises ``TrackFileError`` where under 80 % of the positions lie on the map (another frame,
-    other units: :func:`planners.learning.tracks.check_on_map`)."""
-    import numpy as np
-
-    from socialnav.jaxsim.scenes import from_recording
-    from socialnav.planners.learning.ros_map import read_ros_map
-    from socialnav.planners.learning.tracks import check_on_map
-
-    occupancy, resolution_m, origin = read_ros_map(map_file)
-    tracks = {p: g[["frame", "x_m", "y_m"]].to_numpy() for p, g in rows.groupby("person")}
-    check_on_map(tracks, occupancy, resolution_m, origin, tracks_file, map_file)
-    walls = from_recording.walls_from_occupancy(occupancy, resolution_m, origin, bounds_m)
-    xy = rows[["x_m", "y_m"]].to_numpy()
-    col = np.floor((xy[:, 0] - origin[0]) / resolution_m).astype(int)
-    row = np.floor((xy[:, 1] - origin[1]) / resolution_m).astype(int)
-    on = (row >= 0) & (row < occupancy.shape[0]) & (col >= 0) & (col < occupancy.shape[1])
-    in_wall = np.zeros(len(xy), bool)
-    in_wall[on] = np.asarray(occupancy)[row[on], col[on]] > 0
-    notes = [f"{map_file}: {len(walls)} wall boxes inside the scene's bounds"]
-    if in_wall.any():
-        notes.append(
-            f"{map_file}: {100 * in_wall.mean():.1f} % of the recorded positions lie in its walls (replayed, those "
-            "people walk through them; reactive, they are kept out)"
-        )
-    return walls, notes
