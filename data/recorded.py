@@ -81,7 +81,7 @@ def _table():
     return table
 
 
-def _frame_numbers_per_s(info: dict) -> float:
+def frame_numbers_per_s(info: dict) -> float:
     """How far a run's frame number advances in a second (its sample rate times its frame step)."""
     return float(info["frames_per_s"]) * float(info.get("frame_step", 1))
 
@@ -100,7 +100,7 @@ def trajectories(runs: Sequence[str] | str | None = None, dataset: str | None = 
     rows = table[table["run"].isin(names)]
     # A frame number counts the source's own frames: ETH/UCY's are the 25 fps video's, of which
     # every 10th is annotated (2.5 Hz, ``frame_step`` 10); the Jülich runs number every sample.
-    fps = rows["run"].map({name: _frame_numbers_per_s(run_info(name)) for name in names})
+    fps = rows["run"].map({name: frame_numbers_per_s(run_info(name)) for name in names})
     return pd.DataFrame(
         {
             "run": rows["run"].to_numpy(),
@@ -136,6 +136,7 @@ __all__ = [
     "PEDESTRIANS_DIR",
     "RecordedDataError",
     "eth_ucy_split",
+    "frame_numbers_per_s",
     "run_info",
     "run_names",
     "trajectories",

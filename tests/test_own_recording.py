@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 import pytest
@@ -388,3 +389,45 @@ def test_the_prediction_command_walks_the_models_between_the_maps_walls_and_reco
     assert "% of the positions lie on the map" in capsys.readouterr().err and not (tmp_path / "x").exists()
     assert main([*argv, "--map", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "x")]) == 2
     assert "--map" in capsys.readouterr().err
+
+
+def test_a_shipped_corridors_walls_are_its_walkable_areas_sides_and_its_ends_stay_open():
+    """Known answer (``uo-145-180-180``: a corridor x 0-1.8 m, y -4 to 4 m, wider ends): the wall
+    field is 0.9 m at the corridor's middle and 0.05 m beside a side wall, no recorded position
+    lies in a wall, and the ends the people walk out of hold no wall (a person 0.1 m from the
+    polygon's end is 1 m from any wall). ETH/UCY records none."""
+    from socialnav.evaluation.humans import shipped_windows
+
+    field = shipped_windows.run_walls("uo-145-180-180")
+    sdf = lambda x, y: float(field.lookup(jnp.float32(x), jnp.float32(y))[0])
+    assert sdf(0.9, 0.0) == pytest.approx(0.9, abs=0.03) and sdf(0.05, 0.0) == pytest.approx(0.05, abs=0.03)
+    assert sdf(0.9, -6.4) > 0.9 and sdf(0.9, 7.9) > 0.9  # the ends: open
+    people = recorded.trajectories("uo-145-180-180")
+    inside = np.asarray(field.lookup(jnp.asarray(people["x_m"], jnp.float32), jnp.asarray(people["y_m"], jnp.float32)))
+    assert inside[..., 0].min() > 0.0
+    assert shipped_windows.run_walls("crowds_zara01") is None
+
+
+def test_the_prediction_command_reads_a_shipped_run_and_an_eth_ucy_one_gives_the_validations_figures(tmp_path, capsys):
+    from socialnav.evaluation.humans import validation
+
+    out = tmp_path / "zara"
+    assert (
+        main(["humans", "predict", "--run", RUN, "--models", "social_force", "--no-progress", "--out", str(out)]) == 0
+    )
+    table = pd.read_csv(out / "prediction.csv").set_index(["model", "aim"])
+    cv = validation.eth_ucy_prediction(None, "zara1")  # zara1's test split is crowds_zara01 whole
+    assert table.loc[("constant_velocity", "velocity"), "ade_m"] == pytest.approx(cv["ade_m"], abs=1e-9)
+    assert json.loads((out / "summary.json").read_text())["walls"] is False
+    argv = ["humans", "predict", "--out", str(tmp_path / "x")]
+    for extra, words in (
+        (["--run", RUN, "--tracks", "t.csv"], "one of them"),
+        ([], "give --tracks"),
+        (["--run", "ghosts"], "--run ghosts: not a shipped recording"),
+        (["--run", RUN, "--frames-per-s", "25"], "no --frames-per-s"),
+        (["--tracks", "t.csv", "--frames-per-s", "25", "--no-walls"], "--no-walls goes with --run"),
+        (["--tracks", "t.csv"], "--tracks goes with --frames-per-s"),
+    ):
+        assert main([*argv, *extra]) == 2, extra
+        assert words in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()

@@ -17,11 +17,11 @@ from __future__ import annotations
 import pathlib
 import time
 
-import numpy as np
 import pandas as pd
 
 from socialnav.common import memory
 from socialnav.evaluation.humans import report, validation
+from socialnav.evaluation.humans.shipped_windows import every_sample
 from socialnav.jaxsim.scenes import recording
 
 SAMPLE_S = 0.4  # the protocol's sample interval: ETH/UCY's 2.5 Hz
@@ -37,12 +37,7 @@ def recording_rows(file: str | pathlib.Path, frames_per_s: float, sample_s: floa
     seconds as the module's docstring says. Raises
     :class:`~socialnav.data.track_file.TrackFileError` (naming the file) for a bad file."""
     file = pathlib.Path(file)
-    rows = recording.file_rows(file, frames_per_s)
-    frames = np.unique(rows["frame"].to_numpy())
-    step = int(np.median(np.diff(frames))) if len(frames) > 1 else 1
-    every = max(1, round(sample_s * frames_per_s / step)) * step
-    keep = (rows["frame"] - frames[0]) % every == 0
-    rows = rows[keep.to_numpy()]
+    rows = every_sample(recording.file_rows(file, frames_per_s), frames_per_s, sample_s)
     return pd.DataFrame({"run": file.name, **{c: rows[c].to_numpy() for c in ("person", "frame", "t_s", "x_m", "y_m")}})
 
 

@@ -81,9 +81,13 @@ def add_parser(top) -> None:
         "walls of --map. Writes "
         "prediction.csv, prediction.png and summary.json and prints a line a predictor.",
     )
-    p.add_argument("--tracks", type=pathlib.Path, required=True, help="the recording: a .csv or .parquet tracks file")
-    p.add_argument("--frames-per-s", type=positive_float, required=True,
-                   help="how far the file's frame numbers advance in a second")  # fmt: skip
+    p.add_argument("--tracks", type=pathlib.Path, default=None, help="the recording: a .csv or .parquet tracks file")
+    p.add_argument("--frames-per-s", type=positive_float, default=None,
+                   help="with --tracks: how far the file's frame numbers advance in a second")  # fmt: skip
+    p.add_argument("--run", default=None,
+                   help="a shipped recording instead of --tracks (a Jülich run or an ETH/UCY file), between the "
+                        "walls of its recorded walkable area where it has one")  # fmt: skip
+    p.add_argument("--no-walls", action="store_true", help="with --run: open space even where the run records walls")
     p.add_argument("--models", type=comma_names, default=["social_force"], help="human models (default social_force)")
     p.add_argument("--map", type=pathlib.Path, default=None,
                    help="a ROS map of the place (map_server's YAML and image, in the tracks' frame): the models "
@@ -150,15 +154,12 @@ PREDICT_FILES = ("prediction.csv", "prediction.png", "summary.json")
 
 
 def predict(args) -> int:
-    import hashlib
 
     import numpy as np
 
-    from socialnav.data.track_file import TrackFileError
     from socialnav.evaluation.humans import calibration as hc
     from socialnav.evaluation.humans import own_recording
     from socialnav.evaluation.humans import plots as human_plots
-    from socialnav.planners.learning.ros_map import MapFileError
 
     def fail(message: str) -> int:
         print(f"{PREDICT_JOB}: {message}", file=sys.stderr)
@@ -167,19 +168,11 @@ def predict(args) -> int:
     unknown = [m for m in args.models if m not in HUMAN_MODELS]
     if unknown:
         return fail(f"--models: unknown {', '.join(unknown)} (known: {', '.join(HUMAN_MODELS)})")
-    if not args.tracks.is_file():
-        return fail(f"--tracks {args.tracks}: no such file")
-    if args.map is not None and not args.map.is_file():
-        return fail(f"--map {args.map}: no such file")
     t0 = time.perf_counter()
-    try:  # the files first: a bad one leaves no folder behind
-        rows = own_recording.recording_rows(args.tracks, args.frames_per_s, args.sample_s)
-        walls, notes = (None, []) if args.map is None else own_recording.recording_walls(args.tracks, args.map, rows)
-        windows = own_recording.recording_windows(rows, walls)
-    except (TrackFileError, MapFileError) as e:
-        return fail(str(e))
-    except ValueError as e:
-        return fail(f"{args.tracks} at --frames-per-s {args.frames_per_s:g}, --sample-s {args.sample_s:g}: {e}")
+    read = _prediction_input(args)  # the files first: a bad one leaves no folder behind
+    if isinstance(read, str):
+        return fail(read)
+    windows, notes, record, name = read
     try:
         runfolder.prepare(args.out, PREDICT_FILES, args.overwrite, marker="summary.json", job=PREDICT_JOB)
         runfolder.check_writable(args.out)
@@ -191,21 +184,18 @@ def predict(args) -> int:
         else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
     )
     sample_s = float(np.median(windows.frame_s))
-    say(f"{args.tracks}: {len(windows.frame_s)} windows of 20 samples {sample_s:g} s apart, "
+    say(f"{name}: {len(windows.frame_s)} windows of 20 samples {sample_s:g} s apart, "
         f"{int(windows.complete.sum())} people scored")  # fmt: skip
     for note in notes:
         say(note)
     models = {name: hc.named_model(name) for name in args.models}
     table = own_recording.predict(models, windows, args.seed, say)
     summary = {
-        "tracks": str(args.tracks),
-        "tracks_sha256": hashlib.sha256(args.tracks.read_bytes()).hexdigest(),
-        "frames_per_s": args.frames_per_s,
+        **record,
         "sample_s": sample_s,
         "windows": len(windows.frame_s),
         "scored": int(windows.complete.sum()),
         "models": list(args.models),
-        **_map_record(args.map),
         "seed": args.seed,
         "command": ["socialnav", *getattr(args, "argv", [])],
     }
@@ -213,7 +203,7 @@ def predict(args) -> int:
         with runfolder.staged(args.out, "summary.json", args.overwrite, job=PREDICT_JOB) as stage:
             table.to_csv(stage / "prediction.csv", index=False)
             human_plots.recording_prediction(
-                table, f"{args.tracks.name}: 8 samples observed, 12 predicted, {sample_s:g} s apart",
+                table, f"{name}: 8 samples observed, 12 predicted, {sample_s:g} s apart",
                 stage / "prediction.png",
             )  # fmt: skip
             (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
@@ -222,6 +212,50 @@ def predict(args) -> int:
     print("\n".join(own_recording.headline(table)))
     print(f"wrote {args.out}/{{{', '.join(PREDICT_FILES)}}} in {time.perf_counter() - t0:.0f} s")
     return 0
+
+
+def _prediction_input(args):
+    """``humans predict``'s windows, the lines to print about them, what ``summary.json`` notes of
+    the input and its name (``(windows, notes, record, name)``), or why not in one line."""
+    import hashlib
+
+    from socialnav.data import recorded
+    from socialnav.data.track_file import TrackFileError
+    from socialnav.evaluation.humans import own_recording, shipped_windows
+    from socialnav.planners.learning.ros_map import MapFileError
+
+    if (args.tracks is None) == (args.run is None):
+        return "give --tracks (your recording, with --frames-per-s) or --run (a shipped one), one of them"
+    if args.run is not None:
+        if args.frames_per_s is not None or args.map is not None:
+            return (
+                "--run reads a shipped recording at its own rate, between its recorded walls (no --frames-per-s, --map)"
+            )
+        if args.run not in recorded.run_names():
+            return f"--run {args.run}: not a shipped recording (known: {', '.join(recorded.run_names())})"
+        windows = shipped_windows.run_windows(args.run, args.sample_s, walls=not args.no_walls)
+        walls = "left out (--no-walls)" if args.no_walls else "none recorded" if windows.walls is None else "recorded"
+        notes = [f"{args.run}: walls {walls}"]
+        return windows, notes, {"run": args.run, "walls": windows.walls is not None}, args.run
+    if args.no_walls:
+        return "--no-walls goes with --run (a tracks file walks in open space unless --map)"
+    if args.frames_per_s is None:
+        return "--tracks goes with --frames-per-s (how far the file's frame numbers advance in a second)"
+    if not args.tracks.is_file():
+        return f"--tracks {args.tracks}: no such file"
+    if args.map is not None and not args.map.is_file():
+        return f"--map {args.map}: no such file"
+    try:
+        rows = own_recording.recording_rows(args.tracks, args.frames_per_s, args.sample_s)
+        walls, notes = (None, []) if args.map is None else own_recording.recording_walls(args.tracks, args.map, rows)
+        windows = own_recording.recording_windows(rows, walls)
+    except (TrackFileError, MapFileError) as e:
+        return str(e)
+    except ValueError as e:
+        return f"{args.tracks} at --frames-per-s {args.frames_per_s:g}, --sample-s {args.sample_s:g}: {e}"
+    record = {"tracks": str(args.tracks), "tracks_sha256": hashlib.sha256(args.tracks.read_bytes()).hexdigest(),
+              "frames_per_s": args.frames_per_s, **_map_record(args.map)}  # fmt: skip
+    return windows, notes, record, args.tracks.name
 
 
 CALIBRATE_JOB = "socialnav humans calibrate"
