@@ -66,8 +66,8 @@ def split_option(text: str) -> tuple[pathlib.Path, str]:
 
 def read_points(path, methods=METHODS) -> dict[str, FittedPeople]:
     """The point of each of ``methods`` in the fit file at ``path`` (a stopped fit's
-    ``progress.json``: those it has). Raises ``ValueError`` naming the file and the field where the file is not a fit of
-    one model."""
+    ``progress.json``: those it has). Raises ``ValueError`` naming the file and the field where
+    the file is not a fit of one model."""
     path = pathlib.Path(path)
     try:
         fit = json.loads(path.read_text())
