@@ -86,9 +86,8 @@ def read_points(path, methods=METHODS) -> dict[str, FittedPeople]:
     if data == "juelich":
         if name not in hc.FITTED:
             raise ValueError(f"{path}: model: {name!r} is not a model the calibration fits ({', '.join(hc.FITTED)})")
-        entries = {m: fit.get(m) for m in METHODS}
         fields = hc.FITTED[name]
-        points = {m: _juelich_point(e) for m, e in entries.items() if m in methods}
+        points = {m: _juelich_point(fit.get(m)) for m in METHODS if m in methods}
     else:
         if not isinstance(name, str) or name not in humans.HUMAN_MODELS:
             raise ValueError(f"{path}: model: {name!r} is not a human model ({', '.join(humans.HUMAN_MODELS)})")
@@ -113,15 +112,14 @@ def read_points(path, methods=METHODS) -> dict[str, FittedPeople]:
         bad = [f for f, v in values.items() if not _positive(v)]
         if bad:
             raise ValueError(f"{path}: {method}.values.{bad[0]}: {values[bad[0]]!r} is not a positive number")
-        model = name
         if data == "juelich":  # its fields are its own part's (the record predates "<part>.<field>")
             values = {f"{humans.PARAMS_OF[name]}.{f}": v for f, v in values.items()}
-        problem = humans.values_problem(model, values)
+        problem = humans.values_problem(name, values)
         if problem is not None:
             raise ValueError(f"{path}: {method}.values.{problem}")
         if loss is not None and not (_number(loss) and loss >= 0):
             raise ValueError(f"{path}: {method}: its training loss {loss!r} is not a finite number >= 0")
-        found[method] = FittedPeople(model, {k: float(v) for k, v in values.items()}, method,
+        found[method] = FittedPeople(name, {k: float(v) for k, v in values.items()}, method,
                                      None if loss is None else float(loss), path, data, complete)  # fmt: skip
     if not found:
         raise ValueError(f"{path}: an unfinished fit with no point yet of {', '.join(methods)}")
