@@ -431,3 +431,30 @@ def test_the_prediction_command_reads_a_shipped_run_and_an_eth_ucy_one_gives_the
         assert main([*argv, *extra]) == 2, extra
         assert words in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_a_maps_speckle_is_left_out_by_area_and_its_walls_kept(csv, tmp_path, capsys):
+    """Known answer: a wall and 40 one-cell specks (0.01 m² each at 0.1 m): every occupied cell a
+    wall by default; with --min-wall-m2 0.05 the specks go and the wall stays, box for box; two
+    specks touching at a corner are one piece."""
+    from socialnav.planners.learning.tracks import without_specks
+
+    grid = np.zeros((20, 30), bool)
+    grid[2:4, 5:25] = True  # a wall of 40 cells: 0.4 m²
+    grid[10, 10] = grid[11, 11] = True  # two cells touching at a corner: one piece of 0.02 m²
+    np.testing.assert_array_equal(without_specks(grid, 0.1, 0.03), np.isin(np.arange(30), range(5, 25))[None, :]
+                                  & np.isin(np.arange(20), (2, 3))[:, None])  # fmt: skip
+    assert without_specks(grid, 0.1, 0.02)[11, 11] and without_specks(grid, 0.1, 0.0).sum() == grid.sum()
+    rng = np.random.default_rng(0)
+    wall = (-5.0, 20.0, -5.0, -1.2)
+    specks = [(x, x + 0.1, y, y + 0.1) for x, y in zip(rng.uniform(0, 15, 40).round(1), rng.uniform(0, 12, 40).round(1),
+                                                        strict=True)]  # fmt: skip
+    speckled = _ros_map(tmp_path, [wall, *specks])
+    argv = ["arena-scene", str(csv), "--frames-per-s", FPS, "--map", str(speckled), "--overwrite"]
+    assert main([*argv, "--out", str(tmp_path / "all")]) == 0
+    assert main([*argv, "--min-wall-m2", "0.05", "--out", str(tmp_path / "clean")]) == 0
+    every = load_scene(tmp_path / "all" / "crowd_reactive.json").walls_m
+    clean = load_scene(tmp_path / "clean" / "crowd_reactive.json").walls_m
+    assert len(clean) == 1 and len(every) > 30  # the wall alone; specks inside the bounds as well
+    assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--min-wall-m2", "0.05", "--out", str(tmp_path)]) == 2
+    assert "--min-wall-m2 goes with --map" in capsys.readouterr().err

@@ -53,10 +53,11 @@ def windows_needed_bytes(rows: pd.DataFrame) -> float:
 WALLS_MARGIN_M = 5.0
 
 
-def recording_walls(tracks_file, map_file, rows: pd.DataFrame, resolution_m: float = 0.05):
+def recording_walls(tracks_file, map_file, rows: pd.DataFrame, resolution_m: float = 0.05, min_wall_m2: float = 0.0):
     """``(walls, notes)``: the wall field of ROS map ``map_file`` (:func:`validation.walls_field`;
     None where the map has no wall near the people) over the people of ``rows`` and
-    :data:`WALLS_MARGIN_M` around them, and the lines to print (how many wall boxes, the share of
+    :data:`WALLS_MARGIN_M` around them (its pieces under ``min_wall_m2`` left out:
+    :func:`planners.learning.tracks.without_specks`), and the lines to print (how many wall boxes, the share of
     positions inside a wall). Raises :class:`~socialnav.data.track_file.TrackFileError` where
     under 80 % of the positions lie on the map (another frame or other units) and
     :class:`~socialnav.planners.learning.ros_map.MapFileError` for a map that cannot be read."""
@@ -64,7 +65,7 @@ def recording_walls(tracks_file, map_file, rows: pd.DataFrame, resolution_m: flo
 
     lo, hi = rows[["x_m", "y_m"]].min().to_numpy(), rows[["x_m", "y_m"]].max().to_numpy()
     bounds = (lo[0] - WALLS_MARGIN_M, hi[0] + WALLS_MARGIN_M, lo[1] - WALLS_MARGIN_M, hi[1] + WALLS_MARGIN_M)
-    boxes, in_walls = map_walls(tracks_file, map_file, rows, bounds)
+    boxes, in_walls = map_walls(tracks_file, map_file, rows, bounds, min_wall_m2)
     notes = [f"{map_file}: {len(boxes)} wall boxes within {WALLS_MARGIN_M:g} m of the people"]
     if in_walls:
         notes.append(f"{map_file}: {100 * in_walls:.1f} % of the recorded positions lie in its walls (people the "

@@ -85,18 +85,35 @@ def check_on_map(
     return share
 
 
-def map_walls(tracks_file, map_file, rows, bounds_m) -> tuple[list, float]:
+def without_specks(occupied, resolution_m: float, min_area_m2: float) -> np.ndarray:
+    """``occupied`` (H, W) less its connected pieces (cells touching at a side or a corner) of
+    less than ``min_area_m2``: a map's speckle (a SLAM map's stray hits), not walls. 0 keeps
+    every occupied cell."""
+    occupied = np.asarray(occupied) > 0
+    if min_area_m2 <= 0:
+        return occupied
+    from scipy import ndimage
+
+    labels, _ = ndimage.label(occupied, structure=np.ones((3, 3), bool))
+    keep = np.bincount(labels.ravel()) * resolution_m**2 >= min_area_m2
+    keep[0] = False  # the free cells
+    return keep[labels]
+
+
+def map_walls(tracks_file, map_file, rows, bounds_m, min_wall_m2: float = 0.0) -> tuple[list, float]:
     """``(walls, in_walls)``: the walls of the ROS map ``map_file`` inside ``bounds_m`` (boxes,
-    :func:`jaxsim.scenes.from_recording.walls_from_occupancy`) and the share of the recorded
-    positions of ``rows`` that lie in a wall (people the map does not know of). Raises
-    ``TrackFileError`` where under 80 % of the positions lie on the map (another frame, other
-    units: :func:`check_on_map`); ``MapFileError`` for a map that cannot be read."""
+    :func:`jaxsim.scenes.from_recording.walls_from_occupancy`; pieces under ``min_wall_m2`` left
+    out, :func:`without_specks`) and the share of the recorded positions of ``rows`` that lie in a
+    wall (people the map does not know of). Raises ``TrackFileError`` where under 80 % of the
+    positions lie on the map (another frame, other units: :func:`check_on_map`); ``MapFileError``
+    for a map that cannot be read."""
     from socialnav.jaxsim.scenes import from_recording
     from socialnav.planners.learning.ros_map import read_ros_map
 
     occupancy, resolution_m, origin = read_ros_map(map_file)
     tracks = {p: g[["frame", "x_m", "y_m"]].to_numpy() for p, g in rows.groupby("person")}
     check_on_map(tracks, occupancy, resolution_m, origin, tracks_file, map_file)
+    occupancy = without_specks(occupancy, resolution_m, min_wall_m2)
     walls = from_recording.walls_from_occupancy(occupancy, resolution_m, origin, bounds_m)
     xy = rows[["x_m", "y_m"]].to_numpy()
     col = np.floor((xy[:, 0] - origin[0]) / resolution_m).astype(int)

@@ -22,6 +22,7 @@ import time
 from socialnav.cli.argtypes import (
     comma_names,
     comma_positive_floats,
+    non_negative_float,
     non_negative_int,
     output_folder,
     positive_float,
@@ -92,6 +93,9 @@ def add_parser(top) -> None:
     p.add_argument("--map", type=pathlib.Path, default=None,
                    help="a ROS map of the place (map_server's YAML and image, in the tracks' frame): the models "
                         "walk between its walls (default: open space, as on ETH/UCY)")  # fmt: skip
+    p.add_argument("--min-wall-m2", type=non_negative_float, default=0.0,
+                   help="with --map: leave out the map's occupied pieces smaller than this many square metres "
+                        "(a SLAM map's speckle; default 0: every occupied cell is a wall)")  # fmt: skip
     p.add_argument("--sample-s", type=positive_float, default=0.4,
                    help="the protocol's sample interval: the file is read every this many seconds, to the nearest "
                         "whole number of its frame steps (default 0.4, ETH/UCY's 2.5 Hz)")  # fmt: skip
@@ -129,6 +133,9 @@ def add_parser(top) -> None:
     c.add_argument("--map", type=pathlib.Path, default=None,
                    help="with --data tracks: a ROS map of the place (map_server's YAML and image, in the tracks' "
                         "frame): the models walk between its walls (default: open space)")  # fmt: skip
+    c.add_argument("--min-wall-m2", type=non_negative_float, default=0.0,
+                   help="with --map: leave out the map's occupied pieces smaller than this many square metres "
+                        "(a SLAM map's speckle; default 0: every occupied cell is a wall)")  # fmt: skip
     c.add_argument("--weights", type=comma_positive_floats, default=None,
                    help="with --data joint: the exchange rates w swept (0.03,0.1,0.3,1)")  # fmt: skip
     c.add_argument("--scenes", type=comma_names, default=None, help="with --data eth_ucy: the held-out scenes (all)")
@@ -227,7 +234,7 @@ def _prediction_input(args):
     if (args.tracks is None) == (args.run is None):
         return "give --tracks (your recording, with --frames-per-s) or --run (a shipped one), one of them"
     if args.run is not None:
-        if args.frames_per_s is not None or args.map is not None:
+        if args.frames_per_s is not None or args.map is not None or args.min_wall_m2:
             return (
                 "--run reads a shipped recording at its own rate, between its recorded walls (no --frames-per-s, --map)"
             )
@@ -245,9 +252,15 @@ def _prediction_input(args):
         return f"--tracks {args.tracks}: no such file"
     if args.map is not None and not args.map.is_file():
         return f"--map {args.map}: no such file"
+    if args.min_wall_m2 and args.map is None:
+        return "--min-wall-m2 goes with --map"
     try:
         rows = own_recording.recording_rows(args.tracks, args.frames_per_s, args.sample_s)
-        walls, notes = (None, []) if args.map is None else own_recording.recording_walls(args.tracks, args.map, rows)
+        walls, notes = (
+            (None, [])
+            if args.map is None
+            else own_recording.recording_walls(args.tracks, args.map, rows, min_wall_m2=args.min_wall_m2)
+        )
         windows = own_recording.recording_windows(rows, walls)
     except (TrackFileError, MapFileError) as e:
         return str(e)
@@ -268,7 +281,8 @@ def calibrate(args) -> int:
     from socialnav.evaluation.humans import plots as human_plots
     from socialnav.evaluation.humans import validation as hv
 
-    if args.data == "tracks" or args.tracks is not None or args.frames_per_s is not None or args.map is not None:
+    recording_options = (args.tracks, args.frames_per_s, args.map, args.min_wall_m2 or None)
+    if args.data == "tracks" or any(option is not None for option in recording_options):
         problem = _read_recording(args)  # before --out is made: a bad file leaves no folder behind
         if problem:
             print(f"socialnav humans calibrate: {problem}", file=sys.stderr)
@@ -453,10 +467,15 @@ def _read_recording(args) -> str | None:
         return f"--tracks {args.tracks}: no such file"
     if args.map is not None and not args.map.is_file():
         return f"--map {args.map}: no such file"
+    if args.min_wall_m2 and args.map is None:
+        return "--min-wall-m2 goes with --map"
     try:
         rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
-        walls, args.map_notes = (None, []) if args.map is None else own_recording.recording_walls(args.tracks, args.map,
-                                                                                                  rows)  # fmt: skip
+        walls, args.map_notes = (
+            (None, [])
+            if args.map is None
+            else own_recording.recording_walls(args.tracks, args.map, rows, min_wall_m2=args.min_wall_m2)
+        )
         args.tracks_windows = own_recording.split_windows(rows, walls)  # the fit's and the test's; each scores someone
     except (TrackFileError, MapFileError) as e:
         return str(e)

@@ -20,7 +20,7 @@ import os
 import pathlib
 import sys
 
-from socialnav.cli.argtypes import output_folder, positive_float
+from socialnav.cli.argtypes import non_negative_float, output_folder, positive_float
 
 JOB = "socialnav arena-scene"
 
@@ -51,6 +51,13 @@ def add_parser(top) -> None:
         metavar="MAP.yaml",
         help="a ROS map of the place (map_server's YAML and image, in the tracks' frame): its walls inside the "
         "scene's bounds become the scene's walls (default: none, open ground)",
+    )
+    parser.add_argument(
+        "--min-wall-m2",
+        type=non_negative_float,
+        default=0.0,
+        help="with --map: leave out the map's occupied pieces smaller than this many square metres (a SLAM map's "
+        "speckle; default 0: every occupied cell is a wall)",
     )
     parser.add_argument("--name", default=None, help="the scenes' name (default: the file's name without its suffix)")
     parser.add_argument(
@@ -83,12 +90,14 @@ def run(args) -> int:
         return fail(f"{file}: no such file")
     if args.map is not None and not args.map.is_file():
         return fail(f"--map {args.map}: no such file")
+    if args.min_wall_m2 and args.map is None:
+        return fail("--min-wall-m2 goes with --map")
     try:
         rows = recording_lib.file_rows(file, args.frames_per_s)
         duration_s = recording_lib.load_recording_file(file, args.frames_per_s).duration_s
         walls, notes = None, []
         if args.map is not None:
-            walls, in_walls = map_walls(file, args.map, rows, from_recording.open_ground_bounds(rows))
+            walls, in_walls = map_walls(file, args.map, rows, from_recording.open_ground_bounds(rows), args.min_wall_m2)
             notes = [f"{args.map}: {len(walls)} wall boxes inside the scene's bounds"]
             if in_walls:
                 notes.append(f"{args.map}: {100 * in_walls:.1f} % of the recorded positions lie in its walls "
