@@ -161,7 +161,6 @@ PREDICT_FILES = ("prediction.csv", "prediction.png", "summary.json")
 
 
 def predict(args) -> int:
-
     import numpy as np
 
     from socialnav.evaluation.humans import calibration as hc
@@ -179,7 +178,7 @@ def predict(args) -> int:
     read = _prediction_input(args)  # the files first: a bad one leaves no folder behind
     if isinstance(read, str):
         return fail(read)
-    windows, notes, record, name = read
+    windows, notes, record, label = read
     try:
         runfolder.prepare(args.out, PREDICT_FILES, args.overwrite, marker="summary.json", job=PREDICT_JOB)
         runfolder.check_writable(args.out)
@@ -191,7 +190,7 @@ def predict(args) -> int:
         else (lambda what: print(f"[{time.perf_counter() - t0:5.0f} s] {what}", flush=True))
     )
     sample_s = float(np.median(windows.frame_s))
-    say(f"{name}: {len(windows.frame_s)} windows of 20 samples {sample_s:g} s apart, "
+    say(f"{label}: {len(windows.frame_s)} windows of 20 samples {sample_s:g} s apart, "
         f"{int(windows.complete.sum())} people scored")  # fmt: skip
     for note in notes:
         say(note)
@@ -210,7 +209,7 @@ def predict(args) -> int:
         with runfolder.staged(args.out, "summary.json", args.overwrite, job=PREDICT_JOB) as stage:
             table.to_csv(stage / "prediction.csv", index=False)
             human_plots.recording_prediction(
-                table, f"{name}: 8 samples observed, 12 predicted, {sample_s:g} s apart",
+                table, f"{label}: 8 samples observed, 12 predicted, {sample_s:g} s apart",
                 stage / "prediction.png",
             )  # fmt: skip
             (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
@@ -223,7 +222,7 @@ def predict(args) -> int:
 
 def _prediction_input(args):
     """``humans predict``'s windows, the lines to print about them, what ``summary.json`` notes of
-    the input and its name (``(windows, notes, record, name)``), or why not in one line."""
+    the input and its label (``(windows, notes, record, label)``), or why not in one line."""
     import hashlib
 
     from socialnav.data import recorded
@@ -236,7 +235,8 @@ def _prediction_input(args):
     if args.run is not None:
         if args.frames_per_s is not None or args.map is not None or args.min_wall_m2:
             return (
-                "--run reads a shipped recording at its own rate, between its recorded walls (no --frames-per-s, --map)"
+                "--run reads a shipped recording at its own rate, between its recorded walls (no --frames-per-s, "
+                "--map, --min-wall-m2)"
             )
         if args.run not in recorded.run_names():
             return f"--run {args.run}: not a shipped recording (known: {', '.join(recorded.run_names())})"
@@ -433,7 +433,7 @@ def _write_trajectory_fit(args, fit: dict, title: str, lines: list[str], replace
 
 def _map_record(map_file: pathlib.Path | None) -> dict:
     """What a run notes of its ``--map`` (nothing without one: earlier runs' records unchanged):
-    the YAML's path and the SHA-256 of the YAML and its image."""
+    the YAML's path and the SHA-256 of the YAML's text and the occupancy it reads."""
     if map_file is None:
         return {}
     import hashlib
