@@ -458,3 +458,24 @@ def test_a_maps_speckle_is_left_out_by_area_and_its_walls_kept(csv, tmp_path, ca
     assert len(clean) == 1 and len(every) > 30  # the wall alone; specks inside the bounds as well
     assert main(["arena-scene", str(csv), "--frames-per-s", FPS, "--min-wall-m2", "0.05", "--out", str(tmp_path)]) == 2
     assert "--min-wall-m2 goes with --map" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # two predictions of a corridor run by ORCA, and the script's: 10-25 s
+def test_the_corridor_prediction_script_writes_the_commands_figures_and_marks_a_fit_run(tmp_path, capsys):
+    """``scripts/corridor_prediction.py`` on one run is ``humans predict --run`` on it, between the
+    walls and with ``--no-walls``, figure for figure; the table marks a run the Jülich fit read."""
+    from tests.script_loader import load
+
+    script = load("corridor_prediction")
+    run = "uo-050-180-180"  # one of the Jülich fit's training runs, the lightest corridor
+    assert script.main(["--runs", run, "--models", "orca", "--out", str(tmp_path / "table")]) == 0
+    rows = pd.read_csv(tmp_path / "table" / "prediction.csv")
+    for walls, extra in ((True, []), (False, ["--no-walls"])):
+        out = tmp_path / f"walls-{walls}"
+        assert main(["humans", "predict", "--run", run, "--models", "orca", "--no-progress", "--out", str(out),
+                     *extra]) == 0  # fmt: skip
+        command = pd.read_csv(out / "prediction.csv")
+        mine = rows[rows["walls"] == walls].drop(columns=["run", "walls", "scored"]).reset_index(drop=True)
+        pd.testing.assert_frame_equal(mine, command)
+    assert f"| {run} (fit) |" in (tmp_path / "table" / "table.md").read_text()
+    assert script.main(["--runs", "ghosts", "--out", str(tmp_path / "x")]) == 2
