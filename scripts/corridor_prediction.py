@@ -74,7 +74,7 @@ def markdown(rows: pd.DataFrame, aim: str = "velocity") -> str:
             f"{cell(indexed.loc[(run, True, m, aim)])} / {cell(indexed.loc[(run, False, m, aim)])}" for m in models
         ]
         name = f"{run} (fit)" if run in TRAIN_RUNS else run
-        lines.append(f"| {name} | {cv['scored']} | {cv['ade_m']:.3f} | " + " | ".join(cells) + " |")
+        lines.append(f"| {name} | {int(cv['scored'])} | {cv['ade_m']:.3f} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
