@@ -335,7 +335,7 @@ def simulate_to_parquet(
         n_worlds=n_worlds,
         first_world=first_world,
         human_model=human_model,
-        **({"human_values": dict(world.human_values)} if world.human_values else {}),
+        **({"human_values": dict(sorted(dict(human_values).items()))} if human_values else {}),
         duration_s=duration_s,
         sample_interval_s=sample_interval_s,
         rows=rows,

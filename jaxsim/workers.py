@@ -24,12 +24,12 @@ import jax
 import jax.numpy as jnp
 import jax.scipy.special as jss
 
-from socialnav.jaxsim import humans, orca
+from socialnav.jaxsim import humans
 from socialnav.jaxsim import social_force as sf
 from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.state import ACTIVITY, LEFT, WAITING, WALKING, WorkerState
 from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
-from socialnav.jaxsim.world import World
+from socialnav.jaxsim.world import World, worker_params
 
 # Share of the destination disc's radius within which a worker's activity spot is drawn.
 SPOT_RADIUS_FRACTION = 0.7
@@ -185,10 +185,9 @@ def move(
     aims = Aims(dx, dy, speed, w.desired_speed_mps)
     robot = RobotDisc(robot_x, robot_y, robot_vx, robot_vy, params.robot_radius_m)
     model = world.human_model
-    # ORCA's people are the warehouse's workers' bodies; a velocity model keeps its own (fitted) radius.
-    bundle = humans.human_params(model, params, orca.ORCAParams(radius_m=params.worker_radius_m))
-    if world.human_values:  # a calibration's fit (build_world checked them)
-        bundle = humans.with_values(model, bundle, dict(world.human_values))
+    bundle = worker_params(model, params)
+    for part, fields in world.human_parts.items():  # a calibration's fit, if any (build_world checked it)
+        bundle = bundle.replace(**{part: getattr(bundle, part).replace(**fields)})
     people = humans.step_humans(model, bundle, world.wall_field, people, aims, robot, (u1, u2))
     return w.replace(x_m=people.x_m, y_m=people.y_m, vx_mps=people.vx_mps, vy_mps=people.vy_mps)
 

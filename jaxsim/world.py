@@ -8,6 +8,7 @@ pytree once per scenario; every rollout then takes it as an ordinary (unbatched)
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import jax
@@ -17,6 +18,7 @@ from flax import struct
 
 from socialnav.jaxsim import geometry, graph
 from socialnav.jaxsim.grid import Grid
+from socialnav.jaxsim.params import SimParams
 from socialnav.jaxsim.scenario import Scenario
 
 # Area simulated around the walls: the building plus the open parking lot north of its door.
@@ -45,9 +47,10 @@ class World:
       parking: parking waypoint index; charging_station: charger index; robot_start: start index.
       human_model: how the workers move (static: a change recompiles;
         :data:`jaxsim.humans.HUMAN_MODELS`, default the social force).
-      human_values: ``("<part>.<field>", value)`` pairs setting that model's constants (a
-        calibration's fit, :func:`jaxsim.humans.with_values`; empty: the name's own). Static, as
-        the model is: a warehouse run walks one fit, compiled in.
+      human_parts: the constants a calibration's fit set, by part of
+        :class:`jaxsim.humans.HumanParams` (``{"speed": {"time_gap_s": 0.42, ...}, ...}``,
+        traced: another fit reuses the compiled day; empty: the name's own constants),
+        :func:`build_world`'s ``human_values``.
     """
 
     waypoint_x_m: jax.Array
@@ -69,7 +72,7 @@ class World:
     charging_station: int = struct.field(pytree_node=False)
     robot_start: int = struct.field(pytree_node=False)
     human_model: str = struct.field(pytree_node=False, default="social_force")
-    human_values: tuple[tuple[str, float], ...] = struct.field(pytree_node=False, default=())
+    human_parts: dict = dataclasses.field(default_factory=dict)
 
     @property
     def n_waypoints(self) -> int:
@@ -131,13 +134,17 @@ def build_world(scenario: Scenario, human_model: str = "social_force", human_val
     workers move by ``human_model`` (:data:`jaxsim.humans.HUMAN_MODELS`), its constants set by
     ``human_values`` (``("<part>.<field>", value)`` pairs or a mapping; ``ValueError`` for one the
     model does not read)."""
-    from socialnav.jaxsim.humans import check_model, values_problem  # humans -> orca -> world: imported here
+    from socialnav.jaxsim import humans  # humans -> orca -> world: imported here
 
-    check_model(human_model)
-    human_values = tuple(sorted(dict(human_values).items()))
-    problem = values_problem(human_model, dict(human_values))
+    humans.check_model(human_model)
+    human_values = dict(human_values)
+    problem = humans.values_problem(human_model, human_values)
     if problem is not None:
         raise ValueError(problem)
+    human_parts: dict[str, dict[str, jax.Array]] = {}
+    for path, value in sorted(human_values.items()):
+        part, _, field = path.partition(".")
+        human_parts.setdefault(part, {})[field] = jnp.float32(value)
     p = scenario.params
     bounds = world_bounds(scenario)
     field, hgrid, rgrid = _geometry(
@@ -178,5 +185,14 @@ def build_world(scenario: Scenario, human_model: str = "social_force", human_val
         charging_station=scenario.charging_station,
         robot_start=scenario.robot_start,
         human_model=human_model,
-        human_values=tuple((k, float(v)) for k, v in human_values),
+        human_parts=human_parts,
     )
+
+
+def worker_params(human_model: str, params: SimParams):
+    """The constants the warehouse's workers walk by (:class:`jaxsim.humans.HumanParams`): the
+    run's social force, and ORCA's people with the workers' bodies; a velocity model keeps its
+    own (fitted) radius."""
+    from socialnav.jaxsim import humans, orca  # humans -> orca -> world: imported here
+
+    return humans.human_params(human_model, params, orca.ORCAParams(radius_m=params.worker_radius_m))
