@@ -90,12 +90,7 @@ def add_parser(top) -> None:
                         "walls of its recorded walkable area where it has one")  # fmt: skip
     p.add_argument("--no-walls", action="store_true", help="with --run: open space even where the run records walls")
     p.add_argument("--models", type=comma_names, default=["social_force"], help="human models (default social_force)")
-    p.add_argument("--map", type=pathlib.Path, default=None,
-                   help="a ROS map of the place (map_server's YAML and image, in the tracks' frame): the models "
-                        "walk between its walls (default: open space, as on ETH/UCY)")  # fmt: skip
-    p.add_argument("--min-wall-m2", type=non_negative_float, default=0.0,
-                   help="with --map: leave out the map's occupied pieces smaller than this many square metres "
-                        "(a SLAM map's speckle; default 0: every occupied cell is a wall)")  # fmt: skip
+    _add_map_options(p, "with --tracks: ")
     p.add_argument("--sample-s", type=positive_float, default=0.4,
                    help="the protocol's sample interval: the file is read every this many seconds, to the nearest "
                         "whole number of its frame steps (default 0.4, ETH/UCY's 2.5 Hz)")  # fmt: skip
@@ -130,12 +125,7 @@ def add_parser(top) -> None:
                    help="with --data tracks: your recording (a tracks file: frame, id, x, y)")  # fmt: skip
     c.add_argument("--frames-per-s", type=positive_float, default=None,
                    help="with --data tracks: how far the file's frame numbers advance in a second")  # fmt: skip
-    c.add_argument("--map", type=pathlib.Path, default=None,
-                   help="with --data tracks: a ROS map of the place (map_server's YAML and image, in the tracks' "
-                        "frame): the models walk between its walls (default: open space)")  # fmt: skip
-    c.add_argument("--min-wall-m2", type=non_negative_float, default=0.0,
-                   help="with --map: leave out the map's occupied pieces smaller than this many square metres "
-                        "(a SLAM map's speckle; default 0: every occupied cell is a wall)")  # fmt: skip
+    _add_map_options(c, "with --data tracks: ")
     c.add_argument("--weights", type=comma_positive_floats, default=None,
                    help="with --data joint: the exchange rates w swept (0.03,0.1,0.3,1)")  # fmt: skip
     c.add_argument("--scenes", type=comma_names, default=None, help="with --data eth_ucy: the held-out scenes (all)")
@@ -157,6 +147,18 @@ def add_parser(top) -> None:
 
 
 PREDICT_JOB = "socialnav humans predict"
+
+
+def _add_map_options(parser, when: str) -> None:
+    """``--map`` and ``--min-wall-m2``: the walls of a tracks file's place."""
+    parser.add_argument("--map", type=pathlib.Path, default=None,
+                        help=f"{when}a ROS map of the place (map_server's YAML and image, in the tracks' frame): the "
+                             "models walk between its walls (default: open space, as on ETH/UCY)")  # fmt: skip
+    parser.add_argument("--min-wall-m2", type=non_negative_float, default=0.0,
+                        help="with --map: leave out the map's occupied pieces smaller than this many square metres "
+                             "(a SLAM map's speckle; default 0: every occupied cell is a wall)")  # fmt: skip
+
+
 PREDICT_FILES = ("prediction.csv", "prediction.png", "summary.json")
 
 
@@ -248,19 +250,11 @@ def _prediction_input(args):
         return "--no-walls goes with --run (a tracks file walks in open space unless --map)"
     if args.frames_per_s is None:
         return "--tracks goes with --frames-per-s (how far the file's frame numbers advance in a second)"
-    if not args.tracks.is_file():
-        return f"--tracks {args.tracks}: no such file"
-    if args.map is not None and not args.map.is_file():
-        return f"--map {args.map}: no such file"
-    if args.min_wall_m2 and args.map is None:
-        return "--min-wall-m2 goes with --map"
+    problem = _files_problem(args)
+    if problem:
+        return problem
     try:
-        rows = own_recording.recording_rows(args.tracks, args.frames_per_s, args.sample_s)
-        walls, notes = (
-            (None, [])
-            if args.map is None
-            else own_recording.recording_walls(args.tracks, args.map, rows, min_wall_m2=args.min_wall_m2)
-        )
+        rows, walls, notes = _tracks_and_walls(args, args.sample_s)
         windows = own_recording.recording_windows(rows, walls)
     except (TrackFileError, MapFileError) as e:
         return str(e)
@@ -431,6 +425,31 @@ def _write_trajectory_fit(args, fit: dict, title: str, lines: list[str], replace
     return 0
 
 
+def _files_problem(args) -> str | None:
+    """Why ``--tracks``, ``--map`` and ``--min-wall-m2`` cannot be read (a file that is not
+    there, a speck area without a map), or None."""
+    if not args.tracks.is_file():
+        return f"--tracks {args.tracks}: no such file"
+    if args.map is not None and not args.map.is_file():
+        return f"--map {args.map}: no such file"
+    if args.min_wall_m2 and args.map is None:
+        return "--min-wall-m2 goes with --map"
+    return None
+
+
+def _tracks_and_walls(args, sample_s: float):
+    """``(rows, walls, notes)``: the tracks file's rows read every ``sample_s`` seconds, the wall
+    field of ``--map`` (None without one) and the lines to print about it. Raises what
+    :func:`own_recording.recording_rows` and :func:`own_recording.recording_walls` raise."""
+    from socialnav.evaluation.humans import own_recording
+
+    rows = own_recording.recording_rows(args.tracks, args.frames_per_s, sample_s)
+    if args.map is None:
+        return rows, None, []
+    walls, notes = own_recording.recording_walls(args.tracks, args.map, rows, min_wall_m2=args.min_wall_m2)
+    return rows, walls, notes
+
+
 def _map_record(map_file: pathlib.Path | None) -> dict:
     """What a run notes of its ``--map`` (nothing without one: earlier runs' records unchanged):
     the YAML's path and the SHA-256 of the YAML's text and the occupancy it reads."""
@@ -463,19 +482,11 @@ def _read_recording(args) -> str | None:
     if args.model.startswith("power_law"):
         return ("--data tracks fits the velocity models and ORCA (the power law's gradient is not finite over a "
                 "recording's windows: docs/humans.md)")  # fmt: skip
-    if not args.tracks.is_file():
-        return f"--tracks {args.tracks}: no such file"
-    if args.map is not None and not args.map.is_file():
-        return f"--map {args.map}: no such file"
-    if args.min_wall_m2 and args.map is None:
-        return "--min-wall-m2 goes with --map"
+    problem = _files_problem(args)
+    if problem:
+        return problem
     try:
-        rows = own_recording.recording_rows(args.tracks, args.frames_per_s)
-        walls, args.map_notes = (
-            (None, [])
-            if args.map is None
-            else own_recording.recording_walls(args.tracks, args.map, rows, min_wall_m2=args.min_wall_m2)
-        )
+        rows, walls, args.map_notes = _tracks_and_walls(args, own_recording.SAMPLE_S)
         args.tracks_windows = own_recording.split_windows(rows, walls)  # the fit's and the test's; each scores someone
     except (TrackFileError, MapFileError) as e:
         return str(e)
