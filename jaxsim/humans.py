@@ -137,11 +137,18 @@ def with_values(model: str, params: HumanParams, values: Mapping[str, float]) ->
     problem = values_problem(model, values)
     if problem is not None:
         raise ValueError(problem)
-    parts: dict[str, dict[str, float]] = {}
+    parts = by_part({path: float(value) for path, value in values.items()})
+    return params.replace(**{part: getattr(params, part).replace(**fields) for part, fields in parts.items()})
+
+
+def by_part(values: Mapping[str, object]) -> dict[str, dict[str, object]]:
+    """``{"<part>.<field>": value}`` as ``{part: {field: value}}`` (the values as given: numbers,
+    or traced arrays in a fit), for ``params.replace(part=params.part.replace(**fields))``."""
+    parts: dict[str, dict[str, object]] = {}
     for path, value in values.items():
         part, _, field = path.partition(".")
-        parts.setdefault(part, {})[field] = float(value)
-    return params.replace(**{part: getattr(params, part).replace(**fields) for part, fields in parts.items()})
+        parts.setdefault(part, {})[field] = value
+    return parts
 
 
 _PART_TYPES = {

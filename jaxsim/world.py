@@ -141,10 +141,7 @@ def build_world(scenario: Scenario, human_model: str = "social_force", human_val
     problem = humans.values_problem(human_model, human_values)
     if problem is not None:
         raise ValueError(problem)
-    human_parts: dict[str, dict[str, jax.Array]] = {}
-    for path, value in sorted(human_values.items()):
-        part, _, field = path.partition(".")
-        human_parts.setdefault(part, {})[field] = jnp.float32(value)
+    human_parts = humans.by_part({path: jnp.float32(value) for path, value in sorted(human_values.items())})
     p = scenario.params
     bounds = world_bounds(scenario)
     field, hgrid, rgrid = _geometry(

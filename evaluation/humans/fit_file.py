@@ -160,6 +160,22 @@ def read_option(text: str) -> FittedPeople:
     return read_fit(path, method)
 
 
+def for_command(human_fit: str | None, human_model: str | None) -> FittedPeople | None:
+    """The people of a command's ``--human-fit`` (:func:`read_option`), None without one;
+    ``ValueError`` with the command's one line where it cannot be used (given beside
+    ``--human-model``, a bad file)."""
+    if human_fit is None:
+        return None
+    if human_model is not None:
+        raise ValueError(
+            "--human-fit names its own human model (the one its fit started from): leave out --human-model"
+        )
+    try:
+        return read_option(human_fit)
+    except ValueError as e:
+        raise ValueError(f"--human-fit {e}") from None
+
+
 def describe(people: FittedPeople) -> str:
     """One line: the model, the file and method, the training loss and the values."""
     loss = "" if people.training_loss is None else f", training loss {people.training_loss:.3g}"
@@ -191,4 +207,5 @@ def _positive(value) -> bool:
     return _number(value) and value > 0
 
 
-__all__ = ["CHOICES", "METHODS", "FittedPeople", "describe", "read_fit", "read_option", "read_points", "split_option"]
+__all__ = ["CHOICES", "METHODS", "FittedPeople", "describe", "for_command", "read_fit", "read_option", "read_points",
+           "split_option"]  # fmt: skip

@@ -33,6 +33,7 @@ from socialnav.common.memory import USABLE_SHARE, shortfall
 from socialnav.data import recorded
 from socialnav.evaluation.humans import measures, minimise
 from socialnav.evaluation.humans import validation as hv
+from socialnav.jaxsim import humans
 
 _GROUP = ("group.gaze_per_rad", "group.attraction_mps2")
 FITTED = {
@@ -52,10 +53,7 @@ FORWARD_MODE = ("orca",)
 
 def with_values(model: hv.HumanModel, fields, values) -> hv.HumanModel:
     """``model`` with each ``"<part>.<field>"`` of ``fields`` set to the matching value."""
-    parts: dict = {}
-    for path, value in zip(fields, values, strict=True):
-        part, field = path.split(".")
-        parts.setdefault(part, {})[field] = value
+    parts = humans.by_part(dict(zip(fields, values, strict=True)))
     return dataclasses.replace(model, **{p: getattr(model, p).replace(**f) for p, f in parts.items()})
 
 

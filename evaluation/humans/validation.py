@@ -137,9 +137,7 @@ def corridor_field(width_m: float, length_m: float) -> Grid:
         [[-length_m - 2, 2 * length_m + 2, -1.0, 0.0], [-length_m - 2, 2 * length_m + 2, width_m, width_m + 1.0]],
         np.float32,
     )
-    field = geometry.build_distance_field(walls, (-length_m - 2, 2 * length_m + 2, -1.5, width_m + 1.5), 0.05)
-    values = np.stack([field.sdf_m, field.normal_x, field.normal_y], axis=-1)
-    return Grid.of_samples(jnp.asarray(values), float(field.origin_m[0]), float(field.origin_m[1]), 0.05)
+    return walls_field(walls, (-length_m - 2, 2 * length_m + 2, -1.5, width_m + 1.5), 0.05)
 
 
 def _starts(n: int, width_m: float, length_m: float, radius_m: float, rng: np.random.Generator,

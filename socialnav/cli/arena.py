@@ -414,14 +414,12 @@ def _human_fit(args):
     None without it, or the exit status of a one-line refusal."""
     if args.human_fit is None:
         return None
-    if args.human_model is not None:
-        return _fail("--human-fit names its own human model (the one its fit started from): leave out --human-model")
     from socialnav.evaluation.humans import fit_file
 
     try:
-        people = fit_file.read_option(args.human_fit)
+        people = fit_file.for_command(args.human_fit, args.human_model)
     except ValueError as e:
-        return _fail(f"--human-fit {e}")
+        return _fail(str(e))
     print(f"arena: {fit_file.describe(people)}", flush=True)
     return people
 

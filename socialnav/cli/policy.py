@@ -102,13 +102,7 @@ def _config(args, scene_names: tuple[str, ...]):
     if args.human_fit is not None:
         from socialnav.evaluation.humans import fit_file
 
-        if args.human_model is not None:
-            raise ValueError("--human-fit names its own human model (the one its fit started from): leave out "
-                             "--human-model")  # fmt: skip
-        try:
-            people = fit_file.read_option(args.human_fit)
-        except ValueError as e:
-            raise ValueError(f"--human-fit {e}") from None
+        people = fit_file.for_command(args.human_fit, args.human_model)
         print(f"socialnav policy train: {fit_file.describe(people)}")
         given.update(human_model=people.model, human_values=tuple(sorted(people.values.items())))
     if args.gscl_run is not None and args.social_layer != "gscl":

@@ -118,14 +118,12 @@ def _human_fit(args: argparse.Namespace) -> str | None:
     if args.human_fit is None:
         args.human_model = args.human_model or "social_force"
         return None
-    if args.human_model is not None:
-        return "--human-fit names its own human model (the one its fit started from): leave out --human-model"
     from socialnav.evaluation.humans import fit_file
 
     try:
-        people = fit_file.read_option(args.human_fit)
+        people = fit_file.for_command(args.human_fit, args.human_model)
     except ValueError as e:
-        return f"--human-fit {e}"
+        return str(e)
     print(f"simulate: {fit_file.describe(people)}", flush=True)
     args.human_model, args.human_values = people.model, tuple(sorted(people.values.items()))
     return None
