@@ -48,7 +48,7 @@ from socialnav.jaxsim.orca import ORCAParams
 from socialnav.jaxsim.params import BODY_RADIUS_M, BODY_RADIUS_SOURCE, PERSON_RADIUS_M, SimParams
 from socialnav.jaxsim.scenario.loader import load_scenario
 from socialnav.jaxsim.scenes import people as people_lib
-from socialnav.jaxsim.scenes import perception, specs
+from socialnav.jaxsim.scenes import perception, routes, specs
 from socialnav.jaxsim.scenes import robot as robot_lib
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.variant import Variant
@@ -246,6 +246,9 @@ class Env:
       recorded: static, the scene's people are a recorded crowd (:mod:`jaxsim.scenes.people`;
         replayed or reactive as each variant says, so both playbacks of a recording share one
         compiled program).
+      routed: static, a walker of the scene may walk round the walls by the corners of its way
+        (:func:`jaxsim.scenes.routes.may_route`); without, the people step without the corners'
+        bookkeeping.
     """
 
     world: SceneWorld
@@ -259,6 +262,7 @@ class Env:
     config: EnvConfig = struct.field(pytree_node=False, default=EnvConfig())
     walking_groups: bool = struct.field(pytree_node=False, default=False)
     recorded: bool = struct.field(pytree_node=False, default=False)
+    routed: bool = struct.field(pytree_node=False, default=False)
 
     # ------------------------------------------------------------------ API
 
@@ -322,6 +326,7 @@ class Env:
             state.step,
             state.variant.walking_group if self.walking_groups else None,
             self.recorded,
+            self.routed,
         )
         robot = robot_lib.step_robot(self.robot, self.world, state.robot, v, w, cfg.dt_s)
         goal = state.variant.goal_xy
@@ -536,6 +541,7 @@ def make_env(
         config=config,
         walking_groups=any(p.get("walks_with") is not None for p in spec.people),
         recorded=spec.recording is not None,
+        routed=routes.may_route(spec.people, spec.walls_m),
     )
 
 

@@ -3,7 +3,10 @@
 Walkers, stream members and served queue members move by the run's human model through the one
 crowd function the warehouse uses too (:func:`jaxsim.humans.step_humans`; by default the
 warehouse's social force, :func:`jaxsim.crowd.step_crowd`), with the robot as an agent they
-avoid unless ``ignore_robot``. People waiting in a queue step straight up to their place in line, one
+avoid unless ``ignore_robot``. A walker or stream member whose straight line crosses a wall heads
+for the corners of its way round the walls in turn (:attr:`Variant.waypoints_xy`,
+:mod:`jaxsim.scenes.routes`), each passed when reached or when the point after it comes in sight
+(:func:`corner_passed`). People waiting in a queue step straight up to their place in line, one
 place after another (:func:`queue_place`).
 Standing people (and group members) stay where they stand, as the seeds' subjects did; a group
 member turns to face the group's centre at its ``turn_at_s``.
@@ -23,7 +26,8 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim import humans, rng
+from socialnav.jaxsim import geometry, humans, rng
+from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenes.recording import LOOKAHEAD_SAMPLES, RECORD_DT_S
 from socialnav.jaxsim.scenes.spec import KIND
 from socialnav.jaxsim.scenes.variant import Variant
@@ -44,14 +48,16 @@ REACTIVE_MAX_SPEED_MPS = 2.0
 @struct.dataclass
 class PeopleState:
     """(P,) people: xy (P, 2), velocity (P, 2), heading (P,), present (P,) bool (in the scene),
-    leg (P,) int32 (a back-and-forth walker: 0 towards its end, 1 back), done (P,) bool (a
-    walker that has arrived for good, a stream member or queue member that has left)."""
+    leg (P,) int32 (a back-and-forth walker: 0 towards its end, 1 back), waypoint (P,) int32 (the
+    corners of its way round the walls passed on this leg, :attr:`Variant.waypoints_xy`), done
+    (P,) bool (a walker that has arrived for good, a stream member or queue member that has left)."""
 
     xy: jnp.ndarray
     velocity: jnp.ndarray
     heading: jnp.ndarray
     present: jnp.ndarray
     leg: jnp.ndarray
+    waypoint: jnp.ndarray
     done: jnp.ndarray
 
 
@@ -66,6 +72,7 @@ def init_people(v: Variant) -> PeopleState:
         heading=jnp.asarray(v.heading0),
         present=present,
         leg=jnp.zeros(n, jnp.int32),
+        waypoint=jnp.zeros(n, jnp.int32),
         done=jnp.zeros(n, bool),
     )
 
@@ -84,14 +91,20 @@ def queue_place(v: Variant, time_s):
     return v.queue_place - jnp.maximum(steps, 0)
 
 
-def targets(v: Variant, s: PeopleState, time_s):
-    """Where each person is going now: (target (P, 2), desired speed (P,), mobile (P,) bool)."""
+def targets(v: Variant, s: PeopleState, time_s, routed: bool = False):
+    """Where each person is going now: (target (P, 2), desired speed (P,), mobile (P,) bool).
+    ``routed`` (static): walkers head for the corners of their way round the walls first
+    (:attr:`jaxsim.scenes.env.Env.routed`; without, straight for their leg's end)."""
     walk = v.kind == KIND["walk"]
     queue = v.kind == KIND["queue"]
     stream = v.kind == KIND["stream"]
     started = time_s >= v.start_s
-    # Walkers and stream members: towards the end of their leg (or back, on a return leg).
-    leg_target = jnp.where((s.leg == 1)[:, None], v.start_xy, v.end_xy)
+    # Walkers and stream members: towards the end of their leg (or back, on a return leg), by the
+    # corners of their way round the walls first.
+    leg_target = leg_end(v, s.leg)
+    if routed:
+        to_corner = (s.waypoint < v.n_waypoints)[:, None]
+        leg_target = jnp.where(to_corner, corner(v, s.leg, s.waypoint), leg_target)
     # Queue members: their place, moved up once per interval; past the head, the exit.
     place = queue_place(v, time_s)
     queue_target = jnp.where(
@@ -103,6 +116,35 @@ def targets(v: Variant, s: PeopleState, time_s):
     speed = jnp.where(queue, jnp.where(place >= 0, queue_speed, v.speed_mps), v.speed_mps)
     mobile = s.present & ~s.done & (((walk | stream) & started) | (queue & (distance > AT_PLACE_M)))
     return target, speed, mobile
+
+
+def leg_end(v: Variant, leg):
+    """(P, 2) where each walker's leg ``leg`` (P,) ends: its end, or its start on a return leg."""
+    return jnp.where((leg == 1)[:, None], v.start_xy, v.end_xy)
+
+
+def corner(v: Variant, leg, passed):
+    """(P, 2) the corner each walker on leg ``leg`` (P,) heads for after passing ``passed`` (P,) of
+    them: the variant's waypoints in order, backwards on a return leg (clipped to the array where
+    none is left; :func:`targets` then takes the leg's end)."""
+    index = jnp.where(leg == 1, v.n_waypoints - 1 - passed, passed)
+    index = jnp.clip(index, 0, v.waypoints_xy.shape[-2] - 1)
+    return jnp.take_along_axis(v.waypoints_xy, index[:, None, None], axis=-2)[:, 0]
+
+
+def corner_passed(v: Variant, s: PeopleState, xy, walls_m):
+    """(P,) bool: a walker heading for a corner of its way (``s.waypoint < n_waypoints``) at ``xy``
+    (P, 2) has passed it: it is within :data:`ARRIVED_M` of it, or the point after it (the next
+    corner or the leg's end) is in sight past the walls grown by a person's body
+    (:data:`jaxsim.params.PERSON_RADIUS_M`), so the body clears the wall's corner going straight
+    there."""
+    heading_for_corner = s.waypoint < v.n_waypoints
+    here = corner(v, s.leg, s.waypoint)
+    after = jnp.where((s.waypoint + 1 < v.n_waypoints)[:, None], corner(v, s.leg, s.waypoint + 1), leg_end(v, s.leg))
+    grown = walls_m + jnp.array([-PERSON_RADIUS_M, PERSON_RADIUS_M, -PERSON_RADIUS_M, PERSON_RADIUS_M])
+    in_sight = ~geometry.segment_hits_boxes(xy, after, grown, xp=jnp)
+    reached = jnp.linalg.norm(here - xy, axis=-1) < ARRIVED_M
+    return heading_for_corner & (reached | in_sight)
 
 
 def _sample(time_s):
@@ -163,6 +205,7 @@ def step_people(
     step,
     group_id=None,
     recorded: bool = False,
+    routed: bool = False,
 ) -> PeopleState:
     """One step of ``constants.crowd.dt_s``: behaviours, then the human model on the mobile people.
 
@@ -180,6 +223,9 @@ def step_people(
       recorded: static, the people are a recorded crowd (every one of them), played back as
         ``v.reactive`` says: both ways are computed and one kept, so a recording's replayed and
         reactive scenes share one compiled program.
+      routed: static, walkers and stream members walk the corners of their way round the walls
+        (:attr:`Variant.waypoints_xy`; :func:`jaxsim.scenes.routes.may_route`); False: straight
+        for their leg's end, without the corners' bookkeeping (their variants have no corners).
     """
     humans.check_model(model)
     dt = constants.crowd.dt_s
@@ -189,7 +235,7 @@ def step_people(
         replayed = _moved(s, *after)
         reactive = _reactive(model, constants, world, v, s, robot, step, group_id, after)
         return jax.tree_util.tree_map(lambda a, b: jnp.where(v.reactive, a, b), reactive, replayed)
-    target, speed, mobile = targets(v, s, time_s)
+    target, speed, mobile = targets(v, s, time_s, routed)
     u = _uniforms(v, step, s.xy.shape[0], model)
     walkers = Walkers.of(s.xy, s.velocity, s.present, mobile, v.ignore_robot)
     # pedsim's cap is the desired speed (a queue member's slows down to its place)
@@ -211,18 +257,23 @@ def step_people(
     turned = jnp.where(time_s >= v.turn_at_s, v.heading_turned, v.heading0)
     heading = jnp.where(moving, jnp.arctan2(new_v[:, 1], new_v[:, 0]), jnp.where(v.kind == 0, turned, s.heading))
 
-    arrived = jnp.linalg.norm(target - xy, axis=-1) < ARRIVED_M
     walk = v.kind == KIND["walk"]
     stream = v.kind == KIND["stream"]
     queue = v.kind == KIND["queue"]
+    arrived = jnp.linalg.norm(target - xy, axis=-1) < ARRIVED_M
+    passed = jnp.zeros_like(arrived)
+    if routed:  # a corner passed, the next one (or the leg's end) is the target from the next step
+        passed = mobile & (walk | stream) & corner_passed(v, s, xy, world.walls_m)
+        arrived = arrived & (s.waypoint >= v.n_waypoints)  # only the leg's end is an arrival
     place = queue_place(v, time_s)
     flip = mobile & walk & arrived & v.back_and_forth
     leg = jnp.where(flip, 1 - s.leg, s.leg)
+    waypoint = jnp.where(flip, 0, jnp.where(passed, s.waypoint + 1, s.waypoint))
     done = s.done | (mobile & arrived & ((walk & ~v.back_and_forth) | stream | (queue & (place < 0))))
     leaves = done & (stream | queue)
     enters = v.valid & stream & (time_s + dt >= v.start_s) & ~done
     present = jnp.where(stream, enters, s.present & ~leaves)
-    return PeopleState(xy=xy, velocity=new_v, heading=heading, present=present, leg=leg, done=done)
+    return PeopleState(xy=xy, velocity=new_v, heading=heading, present=present, leg=leg, waypoint=waypoint, done=done)
 
 
 def _reactive(

@@ -3,9 +3,10 @@ enough for the robot, time enough to go it, and rule boxes the robot can enter.
 
 A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to
 the end and scores every method 0 % goal success: a table of an impossible task that reads like
-one of bad methods. :func:`scene_problem` finds such a scene before any episode runs, from the
-walls alone (people move, so they can block a way only for a while; they are not counted): a
-goal within the goal tolerance of a start (:func:`arrival_problem`), a goal past the walls
+one of bad methods; a walker whose end no person can reach round the walls would stand against a
+wall all episode (:func:`people_problem`). :func:`scene_problem` finds such a scene before any
+episode runs, from the walls alone (people move, so they can block a way only for a while; they
+are not counted): a goal within the goal tolerance of a start (:func:`arrival_problem`), a goal past the walls
 (:func:`goal_problem`), a timeout shorter than the straight line from start to
 goal takes at the robot's top speed (:func:`time_problem`: a bound no way round a wall or a person
 can beat), and a rule's box (``visit``, ``keep_right``) the robot cannot enter
@@ -33,6 +34,7 @@ import numpy as np
 import scipy.ndimage
 
 from socialnav.jaxsim import geometry
+from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.jaxsim.scenes.spec import SceneSpec, range_gap_m
@@ -155,6 +157,31 @@ def rule_problem(regions, start: Range, rules: Iterable[tuple[str, dict]], robot
     return None
 
 
+def people_problem(people, bounds_m, walls_m: np.ndarray, person_radius_m: float = PERSON_RADIUS_M) -> Problem | None:
+    """``people[i].to`` of the first walker or stream of a scene's ``people``
+    (:attr:`~jaxsim.scenes.spec.SceneSpec.people`) whose end, for some start and end its ranges
+    draw (their middles and corners), no person's body can reach from its start round the walls
+    (K, 4) within ``bounds_m`` (:func:`free_regions` for a body of ``person_radius_m``); None when
+    every walker has a way.
+    A way round the walls is walked by its corners (:mod:`jaxsim.scenes.routes`); one that does
+    not exist would hold the walker against a wall for the whole episode."""
+    moving = [(i, p) for i, p in enumerate(people) if p["behaviour"] in ("walk", "stream")]
+    if not moving:
+        return None
+    regions = free_regions(bounds_m, walls_m, person_radius_m)
+    for i, person in moving:
+        for sx, sy in _corners_and_middle(person["start"]):
+            near = _regions_near(regions, (sx, sy), person_radius_m)
+            for ex, ey in _corners_and_middle(person["end"]):
+                if not near & _regions_near(regions, (ex, ey), person_radius_m):
+                    return (
+                        f"people[{i}].to",
+                        f"({ex:g}, {ey:g}) cannot be reached from people[{i}].from ({sx:g}, {sy:g}) by a person "
+                        f"({person_radius_m:g} m body, a way {2 * person_radius_m:g} m wide): the walls close the way",
+                    )
+    return None
+
+
 def refuse_unfinishable(
     spec: SceneSpec, robot: RobotParams, goal_tolerance_m: float, check_timeout: bool = True
 ) -> None:
@@ -174,15 +201,17 @@ def scene_problem(
     check_timeout: bool = True,
 ) -> Problem | None:
     """``(field, why)`` of the first reason no method can finish the scene, or be told apart by
-    its rule, with this robot (a start within the goal tolerance, the goal, the timeout, then the
-    rule and held-out rule's boxes, both written in the file's frame); None when there is none.
+    its rule, with this robot (a walker with no way to its end, :func:`people_problem`; a start
+    within the goal tolerance, the goal, the timeout, then the rule and held-out rule's boxes,
+    both written in the file's frame); None when there is none.
     ``check_timeout=False`` leaves the scene's ``timeout_s`` out, where something else sets an
     episode's length."""
     regions = free_regions(spec.bounds_m, spec.walls_m, robot_radius_m)
     start, goal = spec.robot["start"], spec.robot["goal"]
     rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
     return (
-        arrival_problem(start, goal, goal_tolerance_m)
+        people_problem(spec.people, spec.bounds_m, spec.walls_m)
+        or arrival_problem(start, goal, goal_tolerance_m)
         or goal_problem(regions, start, goal, robot_radius_m, goal_tolerance_m)
         or (time_problem(start, goal, spec.timeout_s, max_speed_mps, goal_tolerance_m) if check_timeout else None)
         or rule_problem(regions, start, rules, robot_radius_m)

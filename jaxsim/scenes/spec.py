@@ -37,7 +37,10 @@ misspelt ``start_S``, is an error naming the field, not a default used in silenc
 starts with ``_`` is a note for people (``"_comment": "..."``) and is not read.
 
 Behaviours: a **standing** person stays put; a **walker** goes from ``from`` to ``to`` at
-``speed_mps`` from ``start_s`` on (back and forth if asked), by the social force; a **group** is
+``speed_mps`` from ``start_s`` on (back and forth if asked), by the run's human model, round the
+walls by the corners of the shortest way where its straight line crosses one
+(:mod:`jaxsim.scenes.routes`; a walker no body can get through to its end is refused,
+:func:`jaxsim.scenes.reachable.people_problem`); a **group** is
 ``size`` (2-6) standing people on a circle facing its centre (``in``) or away (``out``), turning
 inward at ``turn_inward_at_s`` if given (seed 002's lab scene); a **queue** is ``length`` people
 behind ``head`` facing ``towards_deg``, spaced ``spacing_m``: every ``advance_every_s`` its first

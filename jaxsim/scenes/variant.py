@@ -18,6 +18,7 @@ from flax import struct
 from socialnav.jaxsim.params import PERSON_RADIUS_M, TIAGO_RADIUS_M
 from socialnav.jaxsim.scenario.errors import ScenarioError
 from socialnav.jaxsim.scenes import recording as recording_lib
+from socialnav.jaxsim.scenes import routes
 from socialnav.jaxsim.scenes.spec import KIND, TURNED_DEG, SceneSpec, turn_bounds_m, turn_points
 
 # A recorded scene's robot starts at least this far from everyone recorded there at time 0
@@ -35,6 +36,10 @@ class Variant:
       valid: (P,) bool, the slot holds a person of this variant.
       xy0: (P, 2) initial position (a stream's entry point); heading0: (P,) initial heading.
       start_xy, end_xy: (P, 2) a walker's or stream member's legs.
+      waypoints_xy: (P, W, 2) the corners of a walker's or stream member's way round the walls
+        from ``start_xy`` to ``end_xy`` (:func:`jaxsim.scenes.routes.waypoints`; W =
+        :data:`~jaxsim.scenes.routes.MAX_WAYPOINTS`, the first ``n_waypoints`` used; a return leg
+        walks them backwards); n_waypoints: (P,) int32, 0 where the straight line crosses no wall.
       speed_mps: (P,) desired speed; start_s: (P,) when a walker sets off or a stream member enters.
       back_and_forth, ignore_robot: (P,) bool.
       turn_at_s: (P,) when a group member turns inward (``inf``: never); heading_turned: (P,) after.
@@ -60,6 +65,8 @@ class Variant:
     heading0: np.ndarray
     start_xy: np.ndarray
     end_xy: np.ndarray
+    waypoints_xy: np.ndarray
+    n_waypoints: np.ndarray
     speed_mps: np.ndarray
     start_s: np.ndarray
     back_and_forth: np.ndarray
@@ -141,6 +148,17 @@ def walking_groups(spec: SceneSpec, slot_of: list[int], n_slots: int) -> np.ndar
     return np.array([label[k] if k in linked else -1 for k in range(n_slots)], np.int32)
 
 
+def _route(walls_m, bounds_m, start: np.ndarray, end: np.ndarray, a: dict, slot: int) -> float:
+    """Fill slot ``slot``'s way round the walls (K, 4) within ``bounds_m`` in the variant's arrays
+    ``a`` (none where the straight line crosses no wall) and return its first heading (rad),
+    towards its first corner or its end. Raises :class:`~jaxsim.scenes.routes.NoRoute`."""
+    corners = routes.waypoints(start, end, walls_m, bounds_m)
+    a["waypoints_xy"][slot, : len(corners)] = corners
+    a["n_waypoints"][slot] = len(corners)
+    first = corners[0] if len(corners) else end
+    return math.atan2(first[1] - start[1], first[0] - start[0])
+
+
 def sample_variant(
     spec: SceneSpec, seed: int, k: int, held_out: bool = False, n_slots: int = 0, training: bool = False
 ) -> Variant:
@@ -175,6 +193,8 @@ def sample_variant(
         heading0=f32(n),
         start_xy=f32((n, 2)),
         end_xy=f32((n, 2)),
+        waypoints_xy=f32((n, routes.MAX_WAYPOINTS, 2)),
+        n_waypoints=np.zeros(n, np.int32),
         speed_mps=f32(n),
         start_s=f32(n),
         back_and_forth=np.zeros(n, bool),
@@ -191,6 +211,13 @@ def sample_variant(
     )
     slot, group_index = 0, 0
     slot_of = []
+
+    def route(start, end, slot) -> float:  # the way round the walls; no way: the person's field named
+        try:
+            return _route(spec.walls_m, spec.bounds_m, start, end, a, slot)
+        except routes.NoRoute as e:
+            raise ScenarioError(spec.file, f"people[{len(slot_of) - 1}].to", str(e)) from None
+
     for person in spec.people:
         slot_of.append(slot)
         b = person["behaviour"]
@@ -204,7 +231,7 @@ def sample_variant(
             start, end = draw.point(person["start"]), draw.point(person["end"])
             a["kind"][slot] = KIND["walk"]
             a["xy0"][slot], a["start_xy"][slot], a["end_xy"][slot] = start, start, end
-            a["heading0"][slot] = math.atan2(end[1] - start[1], end[0] - start[0])
+            a["heading0"][slot] = route(start, end, slot)
             a["speed_mps"][slot] = draw.number(person["speed_mps"], (0.05, 3.0))
             a["start_s"][slot] = draw.number(person["start_s"], (0.0, np.inf))
             a["back_and_forth"][slot] = person["back_and_forth"]
@@ -258,7 +285,7 @@ def sample_variant(
                 start, end = draw.point(person["start"]), draw.point(person["end"])
                 a["kind"][slot + m] = KIND["stream"]
                 a["xy0"][slot + m], a["start_xy"][slot + m], a["end_xy"][slot + m] = start, start, end
-                a["heading0"][slot + m] = math.atan2(end[1] - start[1], end[0] - start[0])
+                a["heading0"][slot + m] = route(start, end, slot + m)
                 a["speed_mps"][slot + m] = draw.number(person["speed_mps"], (0.05, 3.0))
                 a["start_s"][slot + m] = start0 + m * interval
                 a["ignore_robot"][slot + m] = person["ignore_robot"]
@@ -304,7 +331,7 @@ def turn_variant(variant: Variant, bounds_m) -> Variant:
     def step(v):  # a displacement: turned without the centre
         return np.stack([-v[..., 1], v[..., 0]], axis=-1).astype(v.dtype)
 
-    points = ("xy0", "start_xy", "end_xy", "queue_head", "exit_xy", "track_xy", "robot_xy", "goal_xy")
+    points = ("xy0", "start_xy", "end_xy", "waypoints_xy", "queue_head", "exit_xy", "track_xy", "robot_xy", "goal_xy")
     return variant.replace(
         **{name: turn_points(getattr(variant, name), bounds_m) for name in points},
         queue_step=step(variant.queue_step),
