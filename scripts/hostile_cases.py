@@ -1310,6 +1310,38 @@ def _ran_with_fit(tmp, proc):
             and meta.get("human_values") == _tracks_fit()["scenes"][0]["gradient_values"])  # fmt: skip
 
 
+def _walker_into_a_room(left_wall: list[list[float]]):
+    """``socialnav arena`` on seed 001's static person with a side room in the upper right (x in
+    [1.6, 3.4], y in [1.1, 2.85]; its left wall ``left_wall``) and a walker from (-3, 0.5) to the
+    room's middle (2.5, 2): the straight line crosses the room's left wall."""
+    room = [[1.5, 3.5, 1.0, 1.1], [3.4, 3.5, 1.0, 2.85], *left_wall]
+    walker = {"behaviour": "walk", "from": [-3, 0.5], "to": [2.5, 2.0], "speed_mps": 1.0, "start_s": 0}
+
+    def mutate(obj):
+        obj["walls"] += room
+        obj["people"].append(walker)
+        obj["timeout_s"] = 40
+
+    def make(tmp):
+        argv = arena_scene(mutate)(tmp)
+        return [*argv, "--keep-trajectories", "2"]
+
+    return make
+
+
+def _walker_got_in(tmp, proc):
+    """The run finished and in both variants the walker (slot 1) ends inside the side room, within
+    the arena's arrival distance of its end."""
+    import pandas as pd
+
+    files = list((tmp / "a" / "trajectories").glob("*.parquet"))
+    if proc.returncode or not files:
+        return False
+    rows = pd.read_parquet(files[0])
+    last = rows.sort_values("t_s").groupby("variant").tail(1)
+    return len(last) == 2 and bool((((last["p1_x"] - 2.5) ** 2 + (last["p1_y"] - 2.0) ** 2) < 0.3**2).all())
+
+
 def _arena_ran(tmp, proc):
     """The run's summary holds the scene's NavFn row over its 2 variants."""
     import pandas as pd
@@ -2414,6 +2446,22 @@ CASES: list[Case] = [
         "r11: --human-fit of the calibration's folder, through the arena",
         _with_fit(option="{tmp}/calibration:gradient"),
         check=_ran_with_fit,
+        timeout_s=300,
+    ),
+    Case(
+        "r12: a walker into a closed room",
+        _walker_into_a_room([[1.5, 1.6, 1.0, 2.85]]),
+        ("scene.json", "people[1].to", "no way from (-3, 0.5) to (2.5, 2)"),
+    ),
+    Case(
+        "r12: a walker into a room by a door 0.4 m wide",
+        _walker_into_a_room([[1.5, 1.6, 1.0, 2.0], [1.5, 1.6, 2.4, 2.85]]),
+        ("scene.json", "people[1].to", "a way 0.5 m wide"),
+    ),
+    Case(
+        "r12: a walker into a room by a door 1 m wide, round its post",
+        _walker_into_a_room([[1.5, 1.6, 1.0, 1.85]]),
+        check=_walker_got_in,
         timeout_s=300,
     ),
     Case(

@@ -74,14 +74,18 @@ def test_a_line_in_the_open_has_no_corners_and_a_closed_wall_or_a_maze_has_no_wa
         routes.waypoints([0.0, -4.9], [0.0, 4.9], np.array(zigzag), BOUNDS)
 
 
-def _door_scene(tmp_path, door=(2.0, 3.0)):
+def _people_problem(spec):
+    return people_problem(spec.people, spec.bounds_m, spec.walls_m)
+
+
+def _door_scene(tmp_path, door=(2.0, 3.0), walls=None):
     """The door room with a walker through the door, one going back and forth through it and a
     stream of two, and the robot's start and goal on the walker's side (the robot stands aside in
     the people-only run)."""
     obj = {
         "name": "door_room",
         "bounds_m": list(BOUNDS),
-        "walls": [[-5, door[0], -0.1, 0.1], [door[1], 5, -0.1, 0.1]],
+        "walls": [[-5, door[0], -0.1, 0.1], [door[1], 5, -0.1, 0.1]] if walls is None else walls,
         "robot": {"start": [-4, 4], "yaw_deg": 0, "goal": [4, 4]},
         "timeout_s": 60,
         "people": [
@@ -138,18 +142,23 @@ def test_people_walk_through_the_door_and_back_where_without_their_corners_the_w
 
 def test_a_walker_with_no_way_is_refused_naming_its_field_and_shipped_people_walk_in_the_open(tmp_path):
     spec = load_scene(_door_scene(tmp_path, door=(2.0, 2.4)))  # a 0.4 m door
-    assert people_problem(spec.people, spec.bounds_m, spec.walls_m)[0] == "people[0].to"
+    assert _people_problem(spec)[0] == "people[0].to"
     with pytest.raises(ScenarioError, match=r"people\[0\]\.to"):
         sample_variant(spec, 0, 0)
     from socialnav.evaluation.arena import episodes as arena
 
-    with pytest.raises(ScenarioError, match=r"door_room\.json.*people\[0\]\.to.*cannot be reached"):
+    with pytest.raises(ScenarioError, match=r"door_room\.json.*people\[0\]\.to.*no way from \(-3, 3\) to \(-3, -3\)"):
         arena.setup_scene(spec)
+    # A way of more corners than a variant holds is refused when the scene is read too.
+    zigzag = [[-5, 4, y - 0.05, y + 0.05] if k % 2 else [-4, 5, y - 0.05, y + 0.05]
+              for k, y in enumerate(np.linspace(-2.5, 2.5, 10).tolist())]  # fmt: skip
+    problem = _people_problem(load_scene(_door_scene(tmp_path, walls=zigzag)))
+    assert problem[0] == "people[0].to" and f"more than {routes.MAX_WAYPOINTS}" in problem[1]
     # Every shipped scene: its walkers' straight lines cross no wall, in its variants, held out
     # and turned, so their people walk as they did before there were routes.
     for file in sorted((DATA_DIR / "scenes").rglob("*.json")):
         shipped = load_scene(file)
-        assert people_problem(shipped.people, shipped.bounds_m, shipped.walls_m) is None, file.name
+        assert _people_problem(shipped) is None, file.name
         for each in (shipped, turn(shipped)):
             assert not sample_variants(each, 0, 10).n_waypoints.any(), file.name
         assert not sample_variants(mirror(shipped), 0, 10, held_out=True).n_waypoints.any(), file.name

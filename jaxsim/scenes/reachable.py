@@ -13,16 +13,17 @@ can beat), and a rule's box (``visit``, ``keep_right``) the robot cannot enter
 (:func:`rule_problem`): a ``visit`` no method can keep, or a ``keep_right`` every method keeps by
 never being inside it.
 
-How: the robot's centre can be where the exact distance to every wall box and to the scene's
-bounds (the planners' edge of the world) is at least its radius. Those cells of a grid of
-:data:`RESOLUTION_M` form connected regions (8 neighbours, :func:`scipy.ndimage.label`); the goal
-is reachable when a cell within the goal tolerance of it lies in a region the robot's start
-reaches, for the middle and every corner of the start's and the goal's ranges; a rule's box can
-be entered when a cell inside it does. The grid errs towards "reachable": a cell counts as free
-when its clearance is up to one cell short of the radius, so a way the robot fits through is never
-refused (whatever the grid's offset or the way's angle), one narrower than the robot by up to two
-cells (10 cm) may pass, and one narrower by more is refused: the check refuses what is clearly
-impossible, not what is tight.
+How: the robot's centre can be where the exact distance to every wall box and to the scene's bounds
+(the planners' edge of the world) is at least its radius. Those cells of a grid of
+:data:`~jaxsim.scenes.routes.RESOLUTION_M` form connected regions (8 neighbours,
+:func:`scipy.ndimage.label`; :func:`~jaxsim.scenes.routes.free_regions`); the goal is reachable
+when a cell within the goal tolerance of it lies in a region the robot's start reaches, for the
+middle and every corner of the start's and the goal's ranges; a rule's box can be entered when a
+cell inside it does. The grid errs towards "reachable": a cell counts as free when its clearance is
+up to one cell short of the radius, so a way the robot fits through is never refused (whatever the
+grid's offset or the way's angle), one narrower than the robot by up to two cells (10 cm) may pass,
+and one narrower by more is refused: the check refuses what is clearly impossible, not what is
+tight.
 """
 
 from __future__ import annotations
@@ -31,15 +32,12 @@ import itertools
 from collections.abc import Iterable, Iterator
 
 import numpy as np
-import scipy.ndimage
 
-from socialnav.jaxsim import geometry
-from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenario.errors import ScenarioError
+from socialnav.jaxsim.scenes import routes
 from socialnav.jaxsim.scenes.robot import RobotParams
+from socialnav.jaxsim.scenes.routes import free_regions
 from socialnav.jaxsim.scenes.spec import SceneSpec, range_gap_m
-
-RESOLUTION_M = 0.05
 
 Range = tuple[tuple[float, float], tuple[float, float]]  # a scene's point: ((x0, x1), (y0, y1)) in metres
 Problem = tuple[str, str]  # (the scene file's field, why)
@@ -49,21 +47,6 @@ def _corners_and_middle(point: Range) -> list[tuple[float, float]]:
     """A point's range as its middle and its four corners."""
     (x0, x1), (y0, y1) = point
     return [((x0 + x1) / 2, (y0 + y1) / 2), *itertools.product((x0, x1), (y0, y1))]
-
-
-def free_regions(bounds_m, walls_m: np.ndarray, robot_radius_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(labels, xs, ys)``: (H, W) int over ``bounds_m``, 0 where the robot's centre cannot be
-    (closer than its radius, less one cell, to a wall box (K, 4) or the bounds), else the number of
-    the connected region the cell belongs to; the cells' centres (W,) and (H,) in metres."""
-    xmin, xmax, ymin, ymax = bounds_m
-    xs = xmin + (np.arange(int(np.ceil((xmax - xmin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
-    ys = ymin + (np.arange(int(np.ceil((ymax - ymin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
-    gx, gy = np.meshgrid(xs, ys)
-    clearance = np.minimum.reduce([gx - xmin, xmax - gx, gy - ymin, ymax - gy])
-    if len(walls_m):
-        clearance = np.minimum(clearance, geometry.box_signed_distance(gx, gy, walls_m)[0])
-    labels, _ = scipy.ndimage.label(clearance >= robot_radius_m - RESOLUTION_M, structure=np.ones((3, 3)))
-    return labels, xs, ys
 
 
 def _regions_near(regions, xy, within_m: float) -> set[int]:
@@ -157,28 +140,21 @@ def rule_problem(regions, start: Range, rules: Iterable[tuple[str, dict]], robot
     return None
 
 
-def people_problem(people, bounds_m, walls_m: np.ndarray, person_radius_m: float = PERSON_RADIUS_M) -> Problem | None:
+def people_problem(people, bounds_m, walls_m: np.ndarray) -> Problem | None:
     """``people[i].to`` of the first walker or stream of a scene's ``people``
-    (:attr:`~jaxsim.scenes.spec.SceneSpec.people`) whose end, for some start and end its ranges
-    draw (their middles and corners), no person's body can reach from its start round the walls
-    (K, 4) within ``bounds_m`` (:func:`free_regions` for a body of ``person_radius_m``); None when
-    every walker has a way.
-    A way round the walls is walked by its corners (:mod:`jaxsim.scenes.routes`); one that does
-    not exist would hold the walker against a wall for the whole episode."""
-    moving = [(i, p) for i, p in enumerate(people) if p["behaviour"] in ("walk", "stream")]
-    if not moving:
-        return None
-    regions = free_regions(bounds_m, walls_m, person_radius_m)
-    for i, person in moving:
-        for sx, sy in _corners_and_middle(person["start"]):
-            near = _regions_near(regions, (sx, sy), person_radius_m)
-            for ex, ey in _corners_and_middle(person["end"]):
-                if not near & _regions_near(regions, (ex, ey), person_radius_m):
-                    return (
-                        f"people[{i}].to",
-                        f"({ex:g}, {ey:g}) cannot be reached from people[{i}].from ({sx:g}, {sy:g}) by a person "
-                        f"({person_radius_m:g} m body, a way {2 * person_radius_m:g} m wide): the walls close the way",
-                    )
+    (:attr:`~jaxsim.scenes.spec.SceneSpec.people`) that, for some start and end its ranges draw
+    (their middles and corners), has no way round the walls (K, 4) within ``bounds_m`` a person's
+    body fits through, or one of more corners than a variant holds
+    (:func:`jaxsim.scenes.routes.waypoints`); None when every walker has its way. Such a walker
+    would stand against a wall all episode."""
+    for i, person in enumerate(people):
+        if person["behaviour"] not in ("walk", "stream"):
+            continue
+        for start, end in itertools.product(_corners_and_middle(person["start"]), _corners_and_middle(person["end"])):
+            try:
+                routes.waypoints(start, end, walls_m, bounds_m)
+            except routes.NoRoute as e:
+                return f"people[{i}].to", str(e)
     return None
 
 

@@ -10,7 +10,7 @@ the walls (waypoints), each passed when reached or when the point after it comes
 (:func:`jaxsim.scenes.people.step_people`). A walker whose straight line crosses no wall walks it
 as before, so scenes whose people walk in the open (every shipped one) are unchanged, bit for bit.
 
-How (:func:`waypoints`): the free space is the cells of :func:`jaxsim.scenes.reachable.free_regions`'
+How (:func:`waypoints`): the free space is the cells of :func:`free_regions`'
 grid (0.05 m) where a person's body fits, with :data:`ROUTE_MARGIN_M` to spare where the way is
 wide enough and without it where it is not; scipy's Dijkstra over its 8-connected cells gives the
 shortest path of cells from the start's to the end's; the path is then pulled taut (from each
@@ -27,13 +27,16 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import scipy.ndimage
 import scipy.sparse
 import scipy.sparse.csgraph
 
 from socialnav.jaxsim import geometry
 from socialnav.jaxsim.params import PERSON_RADIUS_M
-from socialnav.jaxsim.scenes import reachable
 
+# The free space's cells (m): the robot's way to its goal (:mod:`jaxsim.scenes.reachable`) and a
+# walker's way round the walls.
+RESOLUTION_M = 0.05
 # Corners a walker's way may turn at: the variant's waypoint arrays have this many slots whatever
 # the scene (the compiled programs do not depend on a scene's routes).
 MAX_WAYPOINTS = 8
@@ -45,6 +48,21 @@ ROUTE_MARGIN_M = 0.1
 class NoRoute(ValueError):
     """A walker's end cannot be reached from its start by a person's body, or only round more than
     :data:`MAX_WAYPOINTS` corners (the message says which)."""
+
+
+def free_regions(bounds_m, walls_m: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(labels, xs, ys)``: (H, W) int over ``bounds_m``, 0 where a body's centre cannot be
+    (closer than ``radius_m``, less one cell, to a wall box (K, 4) or the bounds), else the number of
+    the connected region the cell belongs to; the cells' centres (W,) and (H,) in metres."""
+    xmin, xmax, ymin, ymax = bounds_m
+    xs = xmin + (np.arange(int(np.ceil((xmax - xmin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
+    ys = ymin + (np.arange(int(np.ceil((ymax - ymin) / RESOLUTION_M))) + 0.5) * RESOLUTION_M
+    gx, gy = np.meshgrid(xs, ys)
+    clearance = np.minimum.reduce([gx - xmin, xmax - gx, gy - ymin, ymax - gy])
+    if len(walls_m):
+        clearance = np.minimum(clearance, geometry.box_signed_distance(gx, gy, walls_m)[0])
+    labels, _ = scipy.ndimage.label(clearance >= radius_m - RESOLUTION_M, structure=np.ones((3, 3)))
+    return labels, xs, ys
 
 
 def may_route(people, walls_m: np.ndarray) -> bool:
@@ -86,12 +104,19 @@ def waypoints(start_xy, end_xy, walls_m: np.ndarray, bounds_m, radius_m: float =
     """(k, 2) float32 the corners between ``start_xy`` and ``end_xy`` (2,) of the shortest way round
     the walls (K, 4) within ``bounds_m`` for a body of ``radius_m`` (0 <= k <= :data:`MAX_WAYPOINTS`;
     neither end included; none where the straight line crosses no wall). Raises :class:`NoRoute`."""
-    start_xy, end_xy = np.asarray(start_xy, np.float64), np.asarray(end_xy, np.float64)
     walls_m = np.asarray(walls_m, np.float64).reshape(-1, 4)
     if not crosses_walls(start_xy, end_xy, walls_m):
         return np.zeros((0, 2), np.float32)
-    walls_key = tuple(map(tuple, walls_m.tolist()))
-    bounds_key = tuple(float(b) for b in bounds_m)
+    keys = (tuple(map(tuple, walls_m.tolist())), tuple(float(b) for b in bounds_m), float(radius_m))
+    start, end = (tuple(np.asarray(xy, np.float64).tolist()) for xy in (start_xy, end_xy))
+    return _corners(start, end, *keys).copy()
+
+
+@functools.lru_cache(maxsize=1024)
+def _corners(start: tuple, end: tuple, walls_key: tuple, bounds_key: tuple, radius_m: float) -> np.ndarray:
+    """:func:`waypoints` of a way that crosses a wall, cached (a scene's checks and its variants ask
+    for the same ways again)."""
+    start_xy, end_xy = np.asarray(start, np.float64), np.asarray(end, np.float64)
     for clearance_m in (radius_m + ROUTE_MARGIN_M, radius_m):  # with room to spare, then without
         free, xs, ys, graph = _free_graph(walls_key, bounds_key, float(clearance_m))
         path = _cell_path(free, xs, ys, graph, start_xy, end_xy, clearance_m)
@@ -150,15 +175,15 @@ def _in_sight(a, bs, free, xs, ys, clearance_m: float, a_is_start: bool, end_ind
 @functools.lru_cache(maxsize=32)
 def _free_graph(walls_key: tuple, bounds_key: tuple, clearance_m: float):
     """``(free (H, W) bool, xs (W,), ys (H,), graph)``: the cells where a body keeps ``clearance_m``
-    from the walls and bounds (:func:`~jaxsim.scenes.reachable.free_regions`: up to one cell
+    from the walls and bounds (:func:`free_regions`: up to one cell
     short of it) and the 8-connected graph over them, each edge the distance between the cells'
     centres (a scene's walkers share it)."""
     walls_m = np.asarray(walls_key, np.float64).reshape(-1, 4)
-    labels, xs, ys = reachable.free_regions(bounds_key, walls_m, clearance_m)
+    labels, xs, ys = free_regions(bounds_key, walls_m, clearance_m)
     free = labels > 0
     h, w = free.shape
     index = np.arange(h * w).reshape(h, w)
-    step = reachable.RESOLUTION_M
+    step = RESOLUTION_M
     rows, cols, weights = [], [], []
     ya, xa = np.nonzero(free)
     for dy, dx in ((0, 1), (1, 0), (1, 1), (1, -1)):
