@@ -1,17 +1,16 @@
 """Whether a scene can be finished and judged at all: a way from the start to the goal wide
 enough for the robot, time enough to go it, and rule boxes the robot can enter.
 
-A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to
-the end and scores every method 0 % goal success: a table of an impossible task that reads like
-one of bad methods; a walker whose end no person can reach round the walls would stand against a
-wall all episode (:func:`people_problem`). :func:`scene_problem` finds such a scene before any
-episode runs, from the walls alone (people move, so they can block a way only for a while; they
-are not counted): a goal within the goal tolerance of a start (:func:`arrival_problem`), a goal past the walls
-(:func:`goal_problem`), a timeout shorter than the straight line from start to
-goal takes at the robot's top speed (:func:`time_problem`: a bound no way round a wall or a person
-can beat), and a rule's box (``visit``, ``keep_right``) the robot cannot enter
-(:func:`rule_problem`): a ``visit`` no method can keep, or a ``keep_right`` every method keeps by
-never being inside it.
+A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to the
+end and scores every method 0 % goal success: a table of an impossible task that reads like one of
+bad methods; a walker whose end no person can reach round the walls would stand against a wall all
+episode (:func:`people_problem`). :func:`scene_problem` finds such a scene before any episode runs,
+from the walls alone (people move, so they can block a way only for a while; they are not counted):
+a goal within the goal tolerance of a start (:func:`arrival_problem`), a goal past the walls
+(:func:`goal_problem`), a timeout shorter than the straight line from start to goal takes at the
+robot's top speed (:func:`time_problem`: a bound no way round a wall or a person can beat), and a
+rule's box (``visit``, ``keep_right``) the robot cannot enter (:func:`rule_problem`): a ``visit``
+no method can keep, or a ``keep_right`` every method keeps by never being inside it.
 
 How: the robot's centre can be where the exact distance to every wall box and to the scene's bounds
 (the planners' edge of the world) is at least its radius. Those cells of a grid of

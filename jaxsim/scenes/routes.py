@@ -16,8 +16,9 @@ wide enough and without it where it is not; scipy's Dijkstra over its 8-connecte
 shortest path of cells from the start's to the end's; the path is then pulled taut (from each
 corner, the farthest path cell in straight sight of it: the segment between them over free cells
 only, as Theta*'s line of sight on a grid).
-A way with more than :data:`MAX_WAYPOINTS` corners, or none, is a
-:class:`~jaxsim.scenario.errors.ScenarioError` naming the walker's field. Written here because no
+A way with more than :data:`MAX_WAYPOINTS` corners, or none, raises :class:`NoRoute`, which the
+scene's reader turns into a :class:`~jaxsim.scenario.errors.ScenarioError` naming the walker's
+field (:func:`jaxsim.scenes.reachable.people_problem`). Written here because no
 maintained library in the toolkit's dependencies routes a body through axis-aligned boxes; the
 shortest path itself is scipy's.
 """
@@ -71,8 +72,9 @@ def may_route(people, walls_m: np.ndarray) -> bool:
     out ones included: some wall box meets the box that holds both of its ranges,
     each widened by half its width (a held-out draw lies at most that far outside its range). False
     means no variant has a corner to walk (a segment stays in any box holding both its ends), so
-    the scene's people step without the corners' bookkeeping (:attr:`jaxsim.scenes.env.Env.routed`):
-    every shipped scene's do, as fast as before."""
+    the scene's people step without the corners' bookkeeping (:attr:`jaxsim.scenes.env.Env.routed`),
+    as fast as before (all shipped scenes but ``snape_two_walking``, whose corridor wall meets a
+    walker's box; its people walk the same steps either way, no line of theirs crossing a wall)."""
     walls_m = np.asarray(walls_m, np.float64).reshape(-1, 4)
     if len(walls_m) == 0:
         return False
@@ -157,7 +159,7 @@ def _in_sight(a, bs, free, xs, ys, clearance_m: float, a_is_start: bool, end_ind
     sampled every quarter cell; near a walker's own start and end (``a_is_start``, ``bs[end_index]``),
     which may lie closer to a wall than the free cells do, within ``clearance_m`` of that point
     anything goes."""
-    step = float(xs[1] - xs[0])
+    step = RESOLUTION_M
     length = np.linalg.norm(bs - a, axis=-1)
     n = int(np.ceil(length.max() / (step / 4))) + 2
     t = np.linspace(0.0, 1.0, n)
