@@ -6,7 +6,7 @@ warehouse's social force, :func:`jaxsim.crowd.step_crowd`), with the robot as an
 avoid unless ``ignore_robot``. A walker or stream member whose straight line crosses a wall heads
 for the corners of its way round the walls in turn (:attr:`Variant.waypoints_xy`,
 :mod:`jaxsim.scenes.routes`), each passed when reached or when the point after it comes in sight
-(:func:`corner_passed`). People waiting in a queue step straight up to their place in line, one
+(:func:`next_in_sight`). People waiting in a queue step straight up to their place in line, one
 place after another (:func:`queue_place`).
 Standing people (and group members) stay where they stand, as the seeds' subjects did; a group
 member turns to face the group's centre at its ``turn_at_s``.
@@ -26,12 +26,12 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
-from socialnav.jaxsim import geometry, humans, rng
+from socialnav.jaxsim import humans, rng
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenes.recording import LOOKAHEAD_SAMPLES, RECORD_DT_S
 from socialnav.jaxsim.scenes.spec import KIND
 from socialnav.jaxsim.scenes.variant import Variant
-from socialnav.jaxsim.scenes.world import SceneWorld
+from socialnav.jaxsim.scenes.world import SceneWorld, segment_blocked
 from socialnav.jaxsim.walkers import Aims, RobotDisc, Walkers
 
 ARRIVED_M = 0.3  # a walker within this distance of its target has arrived
@@ -132,19 +132,14 @@ def corner(v: Variant, leg, passed):
     return jnp.take_along_axis(v.waypoints_xy, index[:, None, None], axis=-2)[:, 0]
 
 
-def corner_passed(v: Variant, s: PeopleState, xy, walls_m):
-    """(P,) bool: a walker heading for a corner of its way (``s.waypoint < n_waypoints``) at ``xy``
-    (P, 2) has passed it: it is within :data:`ARRIVED_M` of it, or the point after it (the next
-    corner or the leg's end) is in sight past the walls grown by a person's body
+def next_in_sight(v: Variant, s: PeopleState, xy, walls_m):
+    """(P,) bool: from ``xy`` (P, 2), the point after the corner each walker heads for (the next
+    corner, or the leg's end) is in sight past the walls grown by a person's body
     (:data:`jaxsim.params.PERSON_RADIUS_M`), so the body clears the wall's corner going straight
-    there."""
-    heading_for_corner = s.waypoint < v.n_waypoints
-    here = corner(v, s.leg, s.waypoint)
+    there: the corner is passed (:func:`step_people`, as it is when reached)."""
     after = jnp.where((s.waypoint + 1 < v.n_waypoints)[:, None], corner(v, s.leg, s.waypoint + 1), leg_end(v, s.leg))
     grown = walls_m + jnp.array([-PERSON_RADIUS_M, PERSON_RADIUS_M, -PERSON_RADIUS_M, PERSON_RADIUS_M])
-    in_sight = ~geometry.segment_hits_boxes(xy, after, grown, xp=jnp)
-    reached = jnp.linalg.norm(here - xy, axis=-1) < ARRIVED_M
-    return heading_for_corner & (reached | in_sight)
+    return ~segment_blocked(xy, after, grown)
 
 
 def _sample(time_s):
@@ -260,11 +255,12 @@ def step_people(
     walk = v.kind == KIND["walk"]
     stream = v.kind == KIND["stream"]
     queue = v.kind == KIND["queue"]
-    arrived = jnp.linalg.norm(target - xy, axis=-1) < ARRIVED_M
+    arrived = jnp.linalg.norm(target - xy, axis=-1) < ARRIVED_M  # at the target: a corner or the leg's end
     passed = jnp.zeros_like(arrived)
     if routed:  # a corner passed, the next one (or the leg's end) is the target from the next step
-        passed = mobile & (walk | stream) & corner_passed(v, s, xy, world.walls_m)
-        arrived = arrived & (s.waypoint >= v.n_waypoints)  # only the leg's end is an arrival
+        to_corner = s.waypoint < v.n_waypoints
+        passed = mobile & (walk | stream) & to_corner & (arrived | next_in_sight(v, s, xy, world.walls_m))
+        arrived = arrived & ~to_corner  # only the leg's end is an arrival
     place = queue_place(v, time_s)
     flip = mobile & walk & arrived & v.back_and_forth
     leg = jnp.where(flip, 1 - s.leg, s.leg)

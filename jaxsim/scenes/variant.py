@@ -148,17 +148,6 @@ def walking_groups(spec: SceneSpec, slot_of: list[int], n_slots: int) -> np.ndar
     return np.array([label[k] if k in linked else -1 for k in range(n_slots)], np.int32)
 
 
-def _route(walls_m, bounds_m, start: np.ndarray, end: np.ndarray, a: dict, slot: int) -> float:
-    """Fill slot ``slot``'s way round the walls (K, 4) within ``bounds_m`` in the variant's arrays
-    ``a`` (none where the straight line crosses no wall) and return its first heading (rad),
-    towards its first corner or its end. Raises :class:`~jaxsim.scenes.routes.NoRoute`."""
-    corners = routes.waypoints(start, end, walls_m, bounds_m)
-    a["waypoints_xy"][slot, : len(corners)] = corners
-    a["n_waypoints"][slot] = len(corners)
-    first = corners[0] if len(corners) else end
-    return math.atan2(first[1] - start[1], first[0] - start[0])
-
-
 def sample_variant(
     spec: SceneSpec, seed: int, k: int, held_out: bool = False, n_slots: int = 0, training: bool = False
 ) -> Variant:
@@ -212,11 +201,18 @@ def sample_variant(
     slot, group_index = 0, 0
     slot_of = []
 
-    def route(start, end, slot) -> float:  # the way round the walls; no way: the person's field named
+    def route(start, end, slot) -> float:
+        """Fill ``slot``'s way round the walls (:func:`jaxsim.scenes.routes.waypoints`; none where
+        the straight line crosses no wall) and return its first heading (rad), towards its first
+        corner or its end; no way is a :class:`ScenarioError` naming the person's ``to``."""
         try:
-            return _route(spec.walls_m, spec.bounds_m, start, end, a, slot)
+            corners = routes.waypoints(start, end, spec.walls_m, spec.bounds_m)
         except routes.NoRoute as e:
             raise ScenarioError(spec.file, f"people[{len(slot_of) - 1}].to", str(e)) from None
+        a["waypoints_xy"][slot, : len(corners)] = corners
+        a["n_waypoints"][slot] = len(corners)
+        first = corners[0] if len(corners) else end
+        return math.atan2(first[1] - start[1], first[0] - start[0])
 
     for person in spec.people:
         slot_of.append(slot)
