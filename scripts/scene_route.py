@@ -15,7 +15,10 @@ callee's on the call stack), where a return is also a module's own function goin
 it made. Constructors count as the stops they are.
 
 This counts what runs, not what the code's text could reach: a call through a variable, a
-``jax.jit`` or a backend's shard is followed because it runs. ``--tree`` imports the toolkit from
+``jax.jit`` or a backend's shard is followed because it runs, and so is one in another thread (the
+arena runs its methods' episodes in one thread per host device,
+:func:`evaluation.arena.episodes.run_spread`: the episode programs' tracing, the env's ``reset``
+and ``step`` among it, runs there). ``--tree`` imports the toolkit from
 another checkout's folders (the layout of ``pyproject.toml``'s ``package-dir``), so two versions
 are counted by the same script.
 """
@@ -28,6 +31,7 @@ import importlib.util
 import pathlib
 import sys
 import tempfile
+import threading
 
 PARTS = ("causal", "common", "data", "evaluation", "jaxsim", "models", "planners")
 SCENE = "casn_head_on"
@@ -96,11 +100,13 @@ def route(out: pathlib.Path) -> tuple[list[tuple[str, str]], list[tuple[str, str
                 climbs.append(stop)
 
     argv = ["arena", "--scenes", SCENE, "--methods", "navfn", "--variants", "2", "--out", str(out), "--no-progress"]
+    threading.setprofile(note)  # the threads the run starts (run_spread's, one per device)
     sys.setprofile(note)
     try:
         code = main(argv)
     finally:
         sys.setprofile(None)
+        threading.setprofile(None)
     if code != 0:
         raise SystemExit(f"socialnav {' '.join(argv)} failed ({code})")
     return stops, climbs

@@ -209,8 +209,9 @@ def test_the_scene_route_is_counted_as_it_runs():
 @pytest.mark.slow
 def test_the_scene_route_of_an_arena_run_reaches_the_scenes_table(tmp_path):
     """The route of a real ``socialnav arena`` run: the scene file read, then the episodes built
-    from it (the environment, the method's episode function, the variants), then the scene's
-    episodes joined in the run folder, in that order, and no climb back up."""
+    from it (the environment, the method's episode function, the variants, the episodes themselves,
+    which run in the arena's device threads), then the scene's episodes joined in the run folder, in
+    that order, and no climb back up."""
     import script_loader
 
     stops, climbs = script_loader.load("scene_route").route(tmp_path / "arena")
@@ -218,6 +219,6 @@ def test_the_scene_route_of_an_arena_run_reaches_the_scenes_table(tmp_path):
     order = [f"{module}:{function}" for module, function in stops]
     wanted = ["jaxsim.scenes.spec:load_scene", "jaxsim.scenes.env:make_env",
               "evaluation.arena.episodes:episode_function", "jaxsim.scenes.variant:sample_variants",
-              "evaluation.arena.table:finish_scene"]  # fmt: skip
+              "jaxsim.scenes.actor:rollout", "evaluation.arena.table:finish_scene"]  # fmt: skip
     where = [order.index(w) for w in wanted]  # ValueError names a stop the route missed
     assert where == sorted(where)
