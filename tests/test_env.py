@@ -464,16 +464,16 @@ def test_a_velocity_models_people_feel_the_robot_widened_to_the_envs_bodies(setu
     narrower than the env's person (0.25 m) whose contacts the metrics count: they feel the robot
     widened by the difference, so the contact distance is the env's; the social force's people
     feel the robot as it is."""
-    from socialnav.jaxsim.scenes.env import EnvConfig, make_env
+    from socialnav.jaxsim.scenes.env import EnvConfig, felt_robot_radius_m, make_env
     from socialnav.jaxsim.speed_model import CALIBRATED
 
     steering = make_env(setup.spec, EnvConfig(human_model="steering_speed_calibrated"))
     body = CALIBRATED["steering_speed_calibrated"].radius_m
-    felt = float(steering.robot_radius_felt_m())
+    felt = float(felt_robot_radius_m(steering.config, steering.robot, steering.velocity))
     assert felt == pytest.approx(steering.robot.radius_m + steering.config.person_radius_m - body)
     assert felt + body == pytest.approx(steering.robot.radius_m + steering.config.person_radius_m)
     plain = make_env(setup.spec, EnvConfig())
-    assert float(plain.robot_radius_felt_m()) == pytest.approx(plain.robot.radius_m)
+    assert float(felt_robot_radius_m(plain.config, plain.robot, plain.velocity)) == pytest.approx(plain.robot.radius_m)
 
 
 def _counting_actor(every_steps: int) -> Actor:

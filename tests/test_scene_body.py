@@ -15,7 +15,7 @@ from socialnav.jaxsim.scenes.spec import load_scene
 
 def test_the_l_hallways_person_is_hidden_until_the_corner():
     spec = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
-    world = world_lib.build_scene_world(spec)
+    world = world_lib.build_scene_world(spec.walls_m, spec.bounds_m)
     person = jnp.array([[1.4, 2.3]])
     present = jnp.array([True])
     assert not bool(perception.visible(world, jnp.array([-5.0, 0.0]), person, present)[0])
@@ -44,7 +44,7 @@ def test_wall_distance_is_exact():
 @pytest.mark.slow
 def test_wall_clearance_is_the_wall_distance_in_both_layouts():
     spec = load_scene(DATA_DIR / "scenes" / "snape_static_table_fridge.json")  # 7 boxes, one inside
-    walls = world_lib.build_scene_world(spec).walls_m
+    walls = world_lib.build_scene_world(spec.walls_m, spec.bounds_m).walls_m
     xmin, xmax, ymin, ymax = spec.bounds_m
     rng = np.random.default_rng(0)
     points = jnp.asarray(
@@ -65,7 +65,7 @@ def test_wall_clearance_is_the_wall_distance_in_both_layouts():
 @pytest.mark.slow
 def test_the_base_never_puts_its_body_into_a_wall():
     spec = load_scene(DATA_DIR / "scenes" / "gscl_l_hallway.json")
-    world = world_lib.build_scene_world(spec)
+    world = world_lib.build_scene_world(spec.walls_m, spec.bounds_m)
     params = robot_lib.RobotParams()
     state = robot_lib.init_robot(jnp.array([-3.0, 0.0]), jnp.float32(1.2))  # heading into the wall
     for _ in range(80):

@@ -310,13 +310,14 @@ def test_a_turned_scene_is_the_scene_a_quarter_turn_on(file):
 
     rng = np.random.default_rng(0)
     points = np.stack([rng.uniform(x0, x1, 500), rng.uniform(y0, y1, 500)], 1)
-    walls, turned_walls = world_lib._boxes(spec), world_lib._boxes(turned)
+    walls = world_lib.wall_boxes(spec.walls_m, spec.bounds_m)
+    turned_walls = world_lib.wall_boxes(turned.walls_m, turned.bounds_m)
     before = geometry.box_signed_distance(points[:, 0], points[:, 1], walls)[0]
     moved = turn_points(points, about)
     after = geometry.box_signed_distance(moved[:, 0], moved[:, 1], turned_walls)[0]
     np.testing.assert_allclose(after, before, atol=1e-6)
 
-    occ, (ox, oy) = world_lib.occupancy(turned, 0.2)
+    occ, (ox, oy) = world_lib.occupancy(turned.walls_m, turned.bounds_m, 0.2, (spec.walls_m, spec.bounds_m))
     rows, cols = np.meshgrid(np.arange(occ.shape[0]), np.arange(occ.shape[1]), indexing="ij")
     cx, cy = ox + (cols + 0.5) * 0.2, oy + (rows + 0.5) * 0.2
     sd = geometry.box_signed_distance(cx, cy, turned_walls)[0]

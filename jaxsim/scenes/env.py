@@ -267,21 +267,8 @@ class Env:
     # ------------------------------------------------------------------ API
 
     def human_params(self) -> humans.HumanParams:
-        """The constants the people's model runs with (:func:`jaxsim.humans.human_params`): the
-        social force's with the env's step, ORCA's and the velocity model's (or the power law's)."""
-        crowd = self.crowd.replace(dt_s=self.config.dt_s)
-        return humans.human_params(self.config.human_model, crowd, self.orca, self.velocity, self.group)
-
-    def robot_radius_felt_m(self):
-        """The robot's radius as the people's model feels it. A velocity model's people keep their
-        own fitted body (0.16-0.18 m), narrower than the person the env counts contacts with
-        (``config.person_radius_m``, 0.25 m): the robot is widened by the difference, so a person
-        keeps off it by the bodies the metrics measure, and "a person walked into the robot" is not
-        an artefact of two radii. The other models' people have the env's body (ORCA) or none (the
-        social force)."""
-        if humans.kind_of(self.config.human_model) not in speed_model.VELOCITY_MODELS:
-            return self.robot.radius_m
-        return self.robot.radius_m + jnp.maximum(self.config.person_radius_m - self.velocity.radius_m, 0.0)
+        """The constants the people's model runs with (:func:`people_constants` of this env)."""
+        return people_constants(self.config, self.crowd, self.orca, self.velocity, self.group)
 
     def reset(self, key: jax.Array, variant: Variant) -> tuple[EnvState, TimeStep]:
         """The episode of ``variant`` at time 0 (the variant fixes the people and the crowd's
@@ -298,8 +285,8 @@ class Env:
             reached=jnp.array(False),
             key=key,
         )
-        state, observation = self._perceive(state)
-        info = self._info(state, jnp.array(False), jnp.array(False))
+        state, observation = perceive(self.world, self.occupancy, self.config, state)
+        info = step_info(state, self.robot.radius_m, self.config.person_radius_m, jnp.array(False), jnp.array(False))
         zero = jnp.float32(0.0)
         return state, TimeStep(observation, zero, jnp.array(False), jnp.array(False), info)
 
@@ -318,11 +305,11 @@ class Env:
         w = jnp.where(stop, 0.0, action[1])
         people = people_lib.step_people(
             cfg.human_model,
-            self.human_params(),
+            people_constants(cfg, self.crowd, self.orca, self.velocity, self.group),
             self.world,
             state.variant,
             state.people,
-            RobotDisc.of(state.robot.xy, state.robot.velocity, self.robot_radius_felt_m()),
+            RobotDisc.of(state.robot.xy, state.robot.velocity, felt_robot_radius_m(cfg, self.robot, self.velocity)),
             state.step,
             state.variant.walking_group if self.walking_groups else None,
             self.recorded,
@@ -332,11 +319,11 @@ class Env:
         goal = state.variant.goal_xy
         reached_now = jnp.linalg.norm(robot.xy - goal) < cfg.goal_tolerance_m
         new = state.replace(people=people, robot=robot, step=state.step + 1, reached=state.reached | reached_now)
-        new, observation = self._perceive(new)
+        new, observation = perceive(self.world, self.occupancy, cfg, new)
         wall_contact = robot.wall_contacts > state.robot.wall_contacts
-        info = self._info(new, wall_contact, invalid)
+        info = step_info(new, self.robot.radius_m, cfg.person_radius_m, wall_contact, invalid)
         progress_m = jnp.linalg.norm(state.robot.xy - goal) - jnp.linalg.norm(robot.xy - goal)
-        reward = self._reward(info, ~state.reached & new.reached, progress_m, state.reached)
+        reward = step_reward(self.reward, cfg.dt_s, info, ~state.reached & new.reached, progress_m, state.reached)
         terminated = new.reached
         truncated = (new.step >= cfg.max_steps) & ~terminated
         return new, TimeStep(observation, reward, terminated, truncated, info)
@@ -374,76 +361,107 @@ class Env:
             maximum=(float(r.max_speed_mps), float(r.max_turn_rate_rps)),
         )
 
-    # ------------------------------------------------------------------ parts
 
-    def _perceive(self, state: EnvState) -> tuple[EnvState, Observation]:
-        cfg = self.config
-        people, robot = state.people, state.robot
-        seen = perception.visible(self.world, robot.xy, people.xy, people.present, cfg.sensor_range_m)
-        tracks, velocity = perception.observe(state.tracks, people.xy, seen, cfg.dt_s)
-        observation = Observation(
-            robot_xy_m=robot.xy,
-            robot_yaw_rad=robot.yaw,
-            robot_speed_mps=robot.speed,
-            robot_turn_rate_rps=robot.turn_rate,
-            goal_xy_m=jnp.asarray(state.variant.goal_xy, jnp.float32),
-            people_xy_m=jnp.where(seen[:, None], people.xy, 0.0),
-            people_heading_rad=jnp.where(seen, people.heading, 0.0),
-            people_velocity_mps=velocity,
-            people_visible=seen,
-            occupancy=self._window(robot.xy, robot.yaw),
-            time_s=state.step.astype(jnp.float32) * cfg.dt_s,
-        )
-        return state.replace(tracks=tracks), observation
+# ---------------------------------------------------------------------- the step's parts
+# Pure functions of the facts they read (the env's step passes them in), so a reader of one
+# part needs nothing else of the env.
 
-    def _window(self, xy, yaw):
-        """(C, C) occupancy around ``xy`` in the robot's frame (nearest cell; off the map: 1)."""
-        cfg = self.config
-        c = cfg.window_cells
-        if c == 0:
-            return jnp.zeros((0, 0), jnp.float32)
-        offsets = (jnp.arange(c, dtype=jnp.float32) - (c - 1) / 2) * cfg.window_resolution_m
-        fwd, left = jnp.meshgrid(offsets, -offsets[::-1], indexing="ij")  # row: forward, col: left
-        cos, sin = jnp.cos(yaw), jnp.sin(yaw)
-        x = xy[0] + cos * fwd - sin * left
-        y = xy[1] + sin * fwd + cos * left
-        grid = self.occupancy
-        h, w = grid.spec.shape
-        row, col = grid.nearest_cell(x, y)
-        inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
-        return jnp.where(inside, grid.lookup(x, y), 1.0)
 
-    def _info(self, state: EnvState, wall_contact, invalid_action) -> StepInfo:
-        people, robot = state.people, state.robot
-        gap = jnp.linalg.norm(people.xy - robot.xy, axis=-1) - self.robot.radius_m - self.config.person_radius_m
-        nearest = jnp.min(jnp.where(people.present, gap, jnp.inf))
-        return StepInfo(
-            people_xy_m=people.xy,
-            people_heading_rad=people.heading,
-            people_present=people.present,
-            reached=state.reached,
-            person_contact=nearest < 0.0,
-            wall_contact=wall_contact,
-            nearest_person_m=nearest,
-            invalid_action=invalid_action,
-        )
+def people_constants(config: EnvConfig, crowd: SimParams, orca: ORCAParams, velocity, group: GroupParams):
+    """The constants the people's model (``config.human_model``) runs with
+    (:func:`jaxsim.humans.human_params`): the social force's ``crowd`` with the env's step
+    ``config.dt_s``, ORCA's and the velocity model's (or the power law's) as :class:`Env` holds them."""
+    return humans.human_params(config.human_model, crowd.replace(dt_s=config.dt_s), orca, velocity, group)
 
-    def _reward(self, info: StepInfo, arrived, progress_m, was_reached):
-        r = self.reward
-        discomfort = jnp.where(
-            (info.nearest_person_m >= 0.0) & (info.nearest_person_m < r.discomfort_distance_m),
-            r.discomfort_weight * (info.nearest_person_m - r.discomfort_distance_m) * self.config.dt_s,
-            0.0,
-        )
-        reward = (
-            r.goal_reward * arrived
-            + r.collision_penalty * info.person_contact
-            + discomfort
-            + r.progress_weight * progress_m
-            + r.wall_penalty * info.wall_contact
-            + r.time_penalty
-        )
-        return jnp.where(was_reached, 0.0, reward).astype(jnp.float32)
+
+def felt_robot_radius_m(config: EnvConfig, robot: robot_lib.RobotParams, velocity):
+    """The robot's radius as the people's model feels it. A velocity model's people keep their
+    own fitted body (``velocity.radius_m``, 0.16-0.18 m), narrower than the person the env counts
+    contacts with (``config.person_radius_m``, 0.25 m): the robot is widened by the difference, so
+    a person keeps off it by the bodies the metrics measure, and "a person walked into the robot"
+    is not an artefact of two radii. The other models' people have the env's body (ORCA) or none
+    (the social force)."""
+    if humans.kind_of(config.human_model) not in speed_model.VELOCITY_MODELS:
+        return robot.radius_m
+    return robot.radius_m + jnp.maximum(config.person_radius_m - velocity.radius_m, 0.0)
+
+
+def perceive(world: SceneWorld, occupancy: Grid, config: EnvConfig, state: EnvState) -> tuple[EnvState, Observation]:
+    """What the robot senses in ``state``: the people in range and in line of sight past
+    ``world``'s walls, their velocities from the tracks (updated in the returned state), and the
+    walls around it (:func:`occupancy_window` of ``occupancy``)."""
+    people, robot = state.people, state.robot
+    seen = perception.visible(world, robot.xy, people.xy, people.present, config.sensor_range_m)
+    tracks, velocity = perception.observe(state.tracks, people.xy, seen, config.dt_s)
+    observation = Observation(
+        robot_xy_m=robot.xy,
+        robot_yaw_rad=robot.yaw,
+        robot_speed_mps=robot.speed,
+        robot_turn_rate_rps=robot.turn_rate,
+        goal_xy_m=jnp.asarray(state.variant.goal_xy, jnp.float32),
+        people_xy_m=jnp.where(seen[:, None], people.xy, 0.0),
+        people_heading_rad=jnp.where(seen, people.heading, 0.0),
+        people_velocity_mps=velocity,
+        people_visible=seen,
+        occupancy=occupancy_window(occupancy, config.window_cells, config.window_resolution_m, robot.xy, robot.yaw),
+        time_s=state.step.astype(jnp.float32) * config.dt_s,
+    )
+    return state.replace(tracks=tracks), observation
+
+
+def occupancy_window(occupancy: Grid, cells: int, resolution_m: float, xy, yaw):
+    """(C, C) = (``cells``, ``cells``) occupancy around ``xy`` (2,) in the frame of heading
+    ``yaw`` (rows forward, columns left; nearest cell; off the map: 1)."""
+    if cells == 0:
+        return jnp.zeros((0, 0), jnp.float32)
+    offsets = (jnp.arange(cells, dtype=jnp.float32) - (cells - 1) / 2) * resolution_m
+    fwd, left = jnp.meshgrid(offsets, -offsets[::-1], indexing="ij")  # row: forward, col: left
+    cos, sin = jnp.cos(yaw), jnp.sin(yaw)
+    x = xy[0] + cos * fwd - sin * left
+    y = xy[1] + sin * fwd + cos * left
+    h, w = occupancy.spec.shape
+    row, col = occupancy.nearest_cell(x, y)
+    inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
+    return jnp.where(inside, occupancy.lookup(x, y), 1.0)
+
+
+def step_info(state: EnvState, robot_radius_m, person_radius_m: float, wall_contact, invalid_action) -> StepInfo:
+    """The true quantities of ``state`` (:class:`StepInfo`): the people, the smallest gap between
+    the robot's body and a present person's (inf with nobody present) and whether it is a contact."""
+    people, robot = state.people, state.robot
+    gap = jnp.linalg.norm(people.xy - robot.xy, axis=-1) - robot_radius_m - person_radius_m
+    nearest = jnp.min(jnp.where(people.present, gap, jnp.inf))
+    return StepInfo(
+        people_xy_m=people.xy,
+        people_heading_rad=people.heading,
+        people_present=people.present,
+        reached=state.reached,
+        person_contact=nearest < 0.0,
+        wall_contact=wall_contact,
+        nearest_person_m=nearest,
+        invalid_action=invalid_action,
+    )
+
+
+def step_reward(reward: RewardParams, dt_s: float, info: StepInfo, arrived, progress_m, was_reached):
+    """() float32, one step's reward by ``reward``'s weights: the goal reached this step
+    (``arrived``), a person's contact, the discomfort of a person nearer than its distance, the
+    ``progress_m`` towards the goal, a wall's contact and the time; 0 once the goal was reached."""
+    r = reward
+    discomfort = jnp.where(
+        (info.nearest_person_m >= 0.0) & (info.nearest_person_m < r.discomfort_distance_m),
+        r.discomfort_weight * (info.nearest_person_m - r.discomfort_distance_m) * dt_s,
+        0.0,
+    )
+    total = (
+        r.goal_reward * arrived
+        + r.collision_penalty * info.person_contact
+        + discomfort
+        + r.progress_weight * progress_m
+        + r.wall_penalty * info.wall_contact
+        + r.time_penalty
+    )
+    return jnp.where(was_reached, 0.0, total).astype(jnp.float32)
 
 
 def action_problem(shape, dtype) -> str | None:
@@ -516,9 +534,10 @@ def make_env(
         orca = ORCAParams(radius_m=config.person_radius_m)
     if crowd is None:
         crowd = load_scenario(WAREHOUSE_DIR).params
-    world = world_lib.build_scene_world(spec)
+    world = world_lib.build_scene_world(spec.walls_m, spec.bounds_m)
     world = world.replace(walls_m=jnp.asarray(pad_walls(world.walls_m)))
-    occ, (x0, y0) = world_lib.occupancy(spec, occupancy_resolution_m)
+    unturned = None if spec.turned_from is None else (spec.turned_from.walls_m, spec.turned_from.bounds_m)
+    occ, (x0, y0) = world_lib.occupancy(spec.walls_m, spec.bounds_m, occupancy_resolution_m, unturned)
     grid = Grid(jnp.asarray(occ), GridSpec(*occ.shape, occupancy_resolution_m, x0, y0))
     kind = humans.kind_of(config.human_model)
     velocity = speed_model.params_of(config.human_model) if kind in speed_model.VELOCITY_MODELS else None

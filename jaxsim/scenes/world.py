@@ -3,8 +3,6 @@ people's wall force, the robot's contact), and the occupancy grid a planner rast
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -13,7 +11,6 @@ from flax import struct
 from socialnav.jaxsim import geometry
 from socialnav.jaxsim.grid import Grid
 from socialnav.jaxsim.scenes import spec as spec_lib
-from socialnav.jaxsim.scenes.spec import SceneSpec
 
 FIELD_RESOLUTION_M = 0.05
 
@@ -27,43 +24,49 @@ class SceneWorld:
     wall_field: Grid
 
 
-def _boxes(spec: SceneSpec) -> np.ndarray:
-    if len(spec.walls_m):
-        return spec.walls_m
-    xmin, xmax, ymin, ymax = spec.bounds_m  # no walls: one box far outside keeps shapes fixed
+def wall_boxes(walls_m, bounds_m) -> np.ndarray:
+    """(K, 4) a scene's wall boxes ``walls_m``; for a scene without walls, one box far outside its
+    ``bounds_m`` (``xmin, xmax, ymin, ymax``), which keeps the shapes fixed."""
+    if len(walls_m):
+        return walls_m
+    xmin, xmax, ymin, ymax = bounds_m
     return np.array([[xmax + 100.0, xmax + 101.0, ymax + 100.0, ymax + 101.0]], np.float32)
 
 
-def build_scene_world(spec: SceneSpec) -> SceneWorld:
-    """Precompute a scene's walls (host side, numpy; the result is a pytree of arrays)."""
-    boxes = _boxes(spec)
-    field = geometry.build_distance_field(boxes, spec.bounds_m, FIELD_RESOLUTION_M)
+def build_scene_world(walls_m, bounds_m) -> SceneWorld:
+    """A scene's walls ``walls_m`` (K, 4) within ``bounds_m`` as boxes and a distance field (host
+    side, numpy, once per scene; the result is a pytree of arrays)."""
+    boxes = wall_boxes(walls_m, bounds_m)
+    field = geometry.build_distance_field(boxes, bounds_m, FIELD_RESOLUTION_M)
     values = np.stack([field.sdf_m, field.normal_x, field.normal_y], axis=-1)
     grid = Grid.of_samples(jnp.asarray(values), float(field.origin_m[0]), float(field.origin_m[1]), FIELD_RESOLUTION_M)
     return SceneWorld(walls_m=jnp.asarray(boxes), wall_field=grid)
 
 
-def occupancy(spec: SceneSpec, resolution_m: float) -> tuple[np.ndarray, tuple[float, float]]:
-    """(H, W) float32 occupancy (1 where a cell centre lies in a wall or off the scene's bounds'
-    border cells) over ``spec.bounds_m``, and its origin (x, y).
+def occupancy(
+    walls_m, bounds_m, resolution_m: float, turned_from: tuple | None = None
+) -> tuple[np.ndarray, tuple[float, float]]:
+    """(H, W) float32 occupancy (1 where a cell centre lies in one of the walls ``walls_m`` or in
+    the border cells of ``bounds_m``) over ``bounds_m``, and its origin (x, y).
 
-    A turned scene (:func:`jaxsim.scenes.spec.turn`) gets the grid of the scene it was turned
-    from, turned a quarter turn (``np.rot90(grid, -1)``): a wall face exactly half a cell from a
-    cell's centre is inside or outside by float rounding, which a turn decides differently (86
-    such cells at 0.2 m in gscl_group), so rasterised afresh the turned walls would differ by a
-    cell here and there. Exact at the cells :data:`~jaxsim.scenes.spec.TURN_CELL_M` divides
-    into whole numbers (0.2, 0.1, 0.05 m)."""
-    if spec.turned_from is not None and _whole(spec_lib.TURN_CELL_M / resolution_m):
-        original = dataclasses.replace(spec.turned_from, bounds_m=spec_lib.turn_bounds_m(spec.turned_from.bounds_m))
-        grid, _ = occupancy(original, resolution_m)
-        return np.ascontiguousarray(np.rot90(grid, -1)), (spec.bounds_m[0], spec.bounds_m[2])
-    xmin, xmax, ymin, ymax = spec.bounds_m
+    ``turned_from``: for a turned scene (:func:`jaxsim.scenes.spec.turn`), the ``(walls_m,
+    bounds_m)`` of the scene it was turned from, whose grid it gets, turned a quarter turn
+    (``np.rot90(grid, -1)``): a wall face exactly half a cell from a cell's centre is inside or
+    outside by float rounding, which a turn decides differently (86 such cells at 0.2 m in
+    gscl_group), so rasterised afresh the turned walls would differ by a cell here and there.
+    Exact at the cells :data:`~jaxsim.scenes.spec.TURN_CELL_M` divides into whole numbers (0.2,
+    0.1, 0.05 m)."""
+    if turned_from is not None and _whole(spec_lib.TURN_CELL_M / resolution_m):
+        original_walls, original_bounds = turned_from
+        grid, _ = occupancy(original_walls, spec_lib.turn_bounds_m(original_bounds), resolution_m)
+        return np.ascontiguousarray(np.rot90(grid, -1)), (bounds_m[0], bounds_m[2])
+    xmin, xmax, ymin, ymax = bounds_m
     width = int(np.ceil((xmax - xmin) / resolution_m))
     height = int(np.ceil((ymax - ymin) / resolution_m))
     xs = xmin + (np.arange(width) + 0.5) * resolution_m
     ys = ymin + (np.arange(height) + 0.5) * resolution_m
     gx, gy = np.meshgrid(xs, ys)
-    sd, _, _ = geometry.box_signed_distance(gx, gy, _boxes(spec))
+    sd, _, _ = geometry.box_signed_distance(gx, gy, wall_boxes(walls_m, bounds_m))
     occ = (sd <= resolution_m / 2).astype(np.float32)
     occ[[0, -1], :] = 1.0  # the scene's edge is a wall for the planner
     occ[:, [0, -1]] = 1.0

@@ -350,7 +350,7 @@ def simulated_tracks(spec, seed: int = 0, variants: int = 20, seconds: float | N
     from socialnav.jaxsim.walkers import RobotDisc
 
     params = load_scenario(WAREHOUSE_DIR).params
-    world = build_scene_world(spec)
+    world = build_scene_world(spec.walls_m, spec.bounds_m)
     stacked = jax.tree.map(jnp.asarray, sample_variants(spec, seed, variants))
     every = max(1, round(TRACK_PERIOD_S / float(params.dt_s)))
     frames = int((spec.timeout_s if seconds is None else seconds) / (every * float(params.dt_s)))
@@ -378,5 +378,6 @@ def simulated_tracks(spec, seed: int = 0, variants: int = 20, seconds: float | N
             on = np.flatnonzero(present[k, :, p])
             if len(on):
                 out[f"{k}:{p}"] = np.column_stack([k * per_variant + on, xy[k, on, p]]).astype(np.float64)
-    occ, origin = occupancy(spec, resolution_m)
+    unturned = None if spec.turned_from is None else (spec.turned_from.walls_m, spec.turned_from.bounds_m)
+    occ, origin = occupancy(spec.walls_m, spec.bounds_m, resolution_m, unturned)
     return out, occ, resolution_m, origin
