@@ -28,9 +28,11 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
+from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenes import world as world_lib
 from socialnav.jaxsim.scenes.actor import Actor, replanning
-from socialnav.jaxsim.scenes.env import Env, Observation
+from socialnav.jaxsim.scenes.env import Observation
+from socialnav.jaxsim.scenes.robot import RobotParams
 from socialnav.planners import stack
 from socialnav.planners.layers import CostLayer, costmap
 from socialnav.planners.layers.scene import Scene
@@ -116,20 +118,20 @@ def stack_map(objects, grid: costmap.GridSpec, occupancy, walls_m) -> StackMap:
 
 
 def stack_params(
-    env: Env,
+    robot: RobotParams,
     map_: StackMap,
     safety_margin_m: float = 0.1,
-    person_radius_m: float | None = None,
+    person_radius_m: float = PERSON_RADIUS_M,
     layer: CostLayer | None = None,
     layers: stack.LayerParams | None = None,
     method: stack.StackConfig | None = None,
     people_are_obstacles: bool = True,
 ) -> StackParams:
-    """A stack's params for ``env`` (its robot's limits) on ``map_``; ``layers`` default to
+    """A stack's params for a robot of limits ``robot`` (an env's ``robot``) on ``map_``, among
+    people of body ``person_radius_m`` (an env's ``config.person_radius_m``); ``layers`` default to
     ``method``'s (:func:`planners.stack.layer_params`); ``layer``: the stack's social layer, whose
     params these carry (default: ``method``'s from ``layers``, :func:`planners.stack.cost_layer`;
     without a method, NavFn's: none)."""
-    person = env.config.person_radius_m if person_radius_m is None else person_radius_m
     if layers is None:
         layers = stack.layer_params(method) if method is not None else stack.LayerParams()
     if layer is None:
@@ -137,10 +139,10 @@ def stack_params(
     return StackParams(
         layers=layers,
         map=map_,
-        max_speed_mps=jnp.float32(env.robot.max_speed_mps),
-        robot_radius_m=jnp.float32(env.robot.radius_m),
+        max_speed_mps=jnp.float32(robot.max_speed_mps),
+        robot_radius_m=jnp.float32(robot.radius_m),
         safety_margin_m=jnp.float32(safety_margin_m),
-        person_radius_m=jnp.float32(person),
+        person_radius_m=jnp.float32(person_radius_m),
         layer=layer.params,
         people_are_obstacles=jnp.asarray(people_are_obstacles),
         local_costmap_half_m=jnp.float32(LOCAL_COSTMAP_HALF_M),

@@ -80,7 +80,7 @@ def test_the_global_planner_leaves_the_people_to_the_social_layer_when_the_scene
     obs = _observation([(2.0, 0.0)], goal=(3.8, 0.0)).replace(robot_xy_m=jnp.array([0.0, 0.0], jnp.float32))
     offsets = {}
     for seen in (True, False):
-        params = actors.stack_params(setup.env, setup.map, people_are_obstacles=seen)
+        params = actors.stack_params(setup.env.robot, setup.map, people_are_obstacles=seen)
         st = actor.plan(params, actor.init(jax.random.PRNGKey(0), obs), obs, jax.random.PRNGKey(0))
         path = np.asarray(st.path[: int(st.path_len)])
         offsets[seen] = np.abs(path[:, 1]).max()
@@ -89,7 +89,7 @@ def test_the_global_planner_leaves_the_people_to_the_social_layer_when_the_scene
     # A person inside the local costmap's window (1.5 m, Nav2's 3 m x 3 m) is an obstacle either way:
     # the path the robot follows is the one its controller would keep clear of them.
     near = _observation([(1.2, 0.0)], goal=(3.8, 0.0)).replace(robot_xy_m=jnp.array([0.0, 0.0], jnp.float32))
-    params = actors.stack_params(setup.env, setup.map, people_are_obstacles=False)
+    params = actors.stack_params(setup.env.robot, setup.map, people_are_obstacles=False)
     assert float(params.local_costmap_half_m) == actors.LOCAL_COSTMAP_HALF_M == 1.5
     st = actor.plan(params, actor.init(jax.random.PRNGKey(0), near), near, jax.random.PRNGKey(0))
     assert np.abs(np.asarray(st.path[: int(st.path_len)])[:, 1]).max() > 0.4
@@ -115,7 +115,7 @@ def test_a_forbidden_social_cost_is_inflated_with_the_walls_and_a_graded_one_is_
     widest = {}
     for level in (sc.FORBIDDEN, sc.GRADED_TOP):
         layer = layers.gscl(_band_costs(level))
-        params = actors.stack_params(setup.env, setup.map, layer=layer, people_are_obstacles=False)
+        params = actors.stack_params(setup.env.robot, setup.map, layer=layer, people_are_obstacles=False)
         actor = actors.stack_parts(METHODS["gscl"], setup.grid, 0.275, layer=layer)
         st = actor.plan(params, actor.init(jax.random.PRNGKey(0), obs), obs, jax.random.PRNGKey(0))
         path = np.asarray(st.path[: int(st.path_len)])

@@ -208,8 +208,8 @@ def test_dropping_the_compiled_programs_between_scenes_changes_no_episode():
     assert arena.release_programs_if_crowded(share=0.0)
     assert arena.memory_maps()[0] < held  # the programs' code is unmapped
     assert not arena.release_programs_if_crowded()  # far below half the limit now
-    key = arena.program_key(arena.setup_scene(spec, config))
-    assert key == arena.program_key(arena.setup_scene(load_scene(HOTEL), config))  # both playbacks: one program
+    key = arena.setup_scene(spec, config).program_key
+    assert key == arena.setup_scene(load_scene(HOTEL), config).program_key  # both playbacks: one program
     assert arena.release_programs_if_crowded(share=0.0, key=key)
     assert not arena.release_programs_if_crowded(share=0.0, key=key)  # the same scene's programs are kept
     after, _ = arena_run.run_scene(spec, ["orca"], 3, config=config)

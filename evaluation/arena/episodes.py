@@ -127,6 +127,9 @@ class SceneSetup:
       obstacle_costs: (H, W) the walls' inflated layer on ``grid``.
       n_periods: replanning periods per episode.
       n_slots: people slots the variants are padded to.
+      program_key: what picks the scene's compiled programs: its grid, its env's structure and
+        array shapes, its people slots and episode length (a scene and its held-out mirror, or a
+        recording's replayed and reactive scenes, share one; :func:`release_programs_if_crowded`).
     """
 
     spec: SceneSpec
@@ -136,6 +139,7 @@ class SceneSetup:
     obstacle_costs: np.ndarray
     n_periods: int
     n_slots: int
+    program_key: tuple
 
     @property
     def world(self) -> world_lib.SceneWorld:
@@ -172,6 +176,8 @@ def setup_scene(
     occ = np.asarray(env.occupancy.values)
     grid = env.occupancy.spec
     obstacles = np.asarray(costmap.obstacle_layer(occ, grid, float(robot.radius_m)))
+    n_slots = padded_slots(spec.n_people_slots)
+    leaves, structure = jax.tree_util.tree_flatten(env)
     return SceneSetup(
         spec=spec,
         grid=grid,
@@ -179,7 +185,8 @@ def setup_scene(
         map=actors.stack_map(spec.objects, grid, occ, env.world.walls_m),
         obstacle_costs=obstacles,
         n_periods=n_periods,
-        n_slots=padded_slots(spec.n_people_slots),
+        n_slots=n_slots,
+        program_key=(grid, n_slots, n_periods, structure, tuple(np.shape(leaf) for leaf in leaves)),
     )
 
 
@@ -268,10 +275,9 @@ def episode_key(variant: Variant) -> jax.Array:
     return jax.random.fold_in(jax.random.key(0), variant.seed_u32)
 
 
-def run_episode(env: env_lib.Env, actor: Actor, params, variant: Variant) -> Trajectory:
-    """One episode of ``variant`` in ``env`` driven by ``actor`` (``actor`` static; vmap it over
-    variants): :func:`jaxsim.scenes.actor.rollout` with the arena's record."""
-    (state, _), records = rollout(env, actor, params, variant, episode_key(variant), record=_record)
+def trajectory_of(records: tuple, wall_contacts) -> Trajectory:
+    """One episode's :class:`Trajectory` from its rollout's stacked records (:func:`_record`'s)
+    and the base's count of wall contacts at its end."""
     robot_xy, yaw, speed, pxy, pheading, present, seen, reached, gain, pred_d, invalid = records
     return Trajectory(
         robot_xy_m=robot_xy,
@@ -284,7 +290,7 @@ def run_episode(env: env_lib.Env, actor: Actor, params, variant: Variant) -> Tra
         reached=reached,
         speed_gain=gain,
         predicted_distance_m=pred_d,
-        wall_contacts=state.robot.wall_contacts,
+        wall_contacts=wall_contacts,
         invalid_actions=jnp.sum(invalid, dtype=jnp.int32),
     )
 
@@ -295,7 +301,8 @@ LANES = 8
 
 @functools.lru_cache(maxsize=64)
 def _episode_program(actor: Actor):
-    """``(env, params, variants) -> Trajectory``, jitted, vmapped over variants; one per actor
+    """``(env, params, variants) -> Trajectory``, jitted, vmapped over variants (each episode
+    :func:`jaxsim.scenes.actor.rollout` with the arena's record, :func:`trajectory_of`); one per actor
     (the env's and the params' arrays are arguments: scenes of equal padded shapes and every
     value of a parameter share its compilations)."""
 
@@ -314,7 +321,12 @@ def _episode_program(actor: Actor):
         n = jax.tree_util.tree_leaves(variants)[0].shape[0]
         padded = -(-n // LANES) * LANES
         grown = jax.tree_util.tree_map(lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], padded - n, 0)]), variants)
-        out = jax.vmap(lambda v: run_episode(env, actor, params, v))(grown)
+
+        def episode(variant):  # under the variant's own key (episode_key): the same in any batch
+            (state, _), records = rollout(env, actor, params, variant, episode_key(variant), record=_record)
+            return trajectory_of(records, state.robot.wall_contacts)
+
+        out = jax.vmap(episode)(grown)
         return jax.tree_util.tree_map(lambda a: a[:n], out)
 
     return jax.jit(batch)
@@ -384,16 +396,9 @@ def _method_actor(method, grid, robot_radius_m, config, layer) -> Actor:
     )
 
 
-def scene_env(
-    setup: SceneSetup, crowd: SimParams | None = None, robot_params: robot_lib.RobotParams | None = None
-) -> env_lib.Env:
-    """The scene's env with other people's constants or robot limits (None: the setup's own)."""
-    env = setup.env
-    if robot_params is not None:
-        env = env.replace(robot=robot_params)
-    if crowd is not None:
-        env = env.replace(crowd=crowd)
-    return env
+def _replaced(crowd: SimParams | None, robot_params: robot_lib.RobotParams | None) -> dict:
+    """The env fields a caller gives instead of the scene's own (None: the scene's)."""
+    return {name: value for name, value in (("crowd", crowd), ("robot", robot_params)) if value is not None}
 
 
 def actor_function(setup: SceneSetup, actor: Actor, params, env: env_lib.Env | None = None):
@@ -423,12 +428,12 @@ def episode_function(
     the method's, :func:`planners.stack.layer_params`), traced: a sweep reuses the program.
     ``crowd`` and ``robot_params``: the people's constants and the robot's limits (default: the
     scene's env's, :func:`setup_scene`)."""
-    env = scene_env(setup, crowd, robot_params)
+    env = setup.env.replace(**_replaced(crowd, robot_params))
     robot_params = env.robot
     layer = stack.cost_layer(method, layers, gscl_model)  # both default to the method's layers
     actor = method_actor(stack.program_config(method), setup.grid, float(robot_params.radius_m), config, layer)
     params = actors.stack_params(
-        env,
+        robot_params,
         setup.map,
         config.safety_margin_m,
         config.env.person_radius_m,
@@ -461,21 +466,13 @@ def memory_maps() -> tuple[int, int] | None:
         return None
 
 
-def program_key(setup: SceneSetup) -> tuple:
-    """What picks a scene's compiled programs: its grid, its env's structure and array shapes,
-    its people slots and episode length (a scene and its held-out mirror, or a recording's replayed
-    and reactive scenes, share one)."""
-    leaves, structure = jax.tree_util.tree_flatten(setup.env)
-    return (setup.grid, setup.n_slots, setup.n_periods, structure, tuple(np.shape(leaf) for leaf in leaves))
-
-
 _previous_key: list = [None]  # the program key of the scene run last (release_programs_if_crowded)
 
 
 def release_programs_if_crowded(share: float = MAP_SHARE_BEFORE_RELEASE, caches=(), key=None) -> bool:
     """Drop every compiled program (JAX's caches, the arena's actor and program caches and the
     ``functools.lru_cache`` caches in ``caches``) when the process holds more than ``share`` of its
-    memory-map limit (:func:`memory_maps`); True if it did. A ``key`` (:func:`program_key`) equal
+    memory-map limit (:func:`memory_maps`); True if it did. A ``key`` (:attr:`SceneSetup.program_key`) equal
     to the previous call's keeps them: the next scene runs the same programs. The programs compile
     again when next called, to the same code (tested bit for bit)."""
     previous, _previous_key[0] = _previous_key[0], key
@@ -510,7 +507,7 @@ def baseline_function(
     """``variants -> Trajectory`` of a reactive baseline (``orca``, ``social_force``, ``dwa``);
     ``rule_params`` (default: the baseline's) are traced. ``crowd`` and ``robot_params``: the
     people's constants and the robot's limits (default: the scene's env's, :func:`setup_scene`)."""
-    env = scene_env(setup, crowd, robot_params)
+    env = setup.env.replace(**_replaced(crowd, robot_params))
     robot_params = env.robot
     actor = baseline_actor(name, setup.grid, float(robot_params.radius_m), config)
     params = baselines.baseline_params(
@@ -550,5 +547,5 @@ def without_robot(variants: Variant) -> Variant:
 
 def counterfactual_function(setup: SceneSetup, crowd: SimParams | None = None):
     """``variants -> Trajectory`` of the people without the robot (:func:`without_robot`)."""
-    run = actor_function(setup, STAND_STILL, (), scene_env(setup, crowd))
+    run = actor_function(setup, STAND_STILL, (), setup.env.replace(**_replaced(crowd, None)))
     return lambda variants: run(without_robot(variants))

@@ -135,7 +135,7 @@ def run_scene(
     robot = params.robot
     # its env has the run's people and robot
     setup = arena.setup_scene(spec, config, robot, arena.crowd_params(), human_values=human_values)
-    arena.release_programs_if_crowded(caches=(_metrics_program,), key=arena.program_key(setup))
+    arena.release_programs_if_crowded(caches=(_metrics_program,), key=setup.program_key)
     measure = metrics_function(spec.rule, setup.n_periods, config, float(robot.radius_m))
     episodes, trajectories = [], []
     user_actors = user_actors or {}

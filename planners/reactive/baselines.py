@@ -70,5 +70,7 @@ def baseline_params(
     """A baseline's params in ``env`` on ``map_`` (``rule_params`` default: the baseline's);
     ``people_are_obstacles``: whether its guiding path plans round the seen people."""
     rule_params = BASELINES[name].default_params(env) if rule_params is None else rule_params
-    guide = actors.stack_params(env, map_, safety_margin_m, people_are_obstacles=people_are_obstacles)
+    guide = actors.stack_params(
+        env.robot, map_, safety_margin_m, env.config.person_radius_m, people_are_obstacles=people_are_obstacles
+    )
     return reactive.ReactiveParams(guide=guide, robot=env.robot, rule=rule_params)
