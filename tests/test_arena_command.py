@@ -115,12 +115,13 @@ def test_the_time_estimate_is_a_range_that_grows_with_the_work():
     from socialnav.jaxsim.scenes.spec import load_scene
 
     specs = [load_scene(SCENES_DIR / f"{n}.json") for n in ("casn_head_on", "gscl_group")]
-    low, high = estimate_s(specs, 3, 6, False)
+    timeouts = [spec.timeout_s for spec in specs]
+    low, high = estimate_s(timeouts, 3, 6, False)
     assert STARTUP_S < low < high
-    assert estimate_s(specs, 3, 60, False)[0] > low and estimate_s(specs, 4, 6, False)[1] > high
-    more_low, more_high = estimate_s(specs, 3, 6, True)
+    assert estimate_s(timeouts, 3, 60, False)[0] > low and estimate_s(timeouts, 4, 6, False)[1] > high
+    more_low, more_high = estimate_s(timeouts, 3, 6, True)
     assert more_low > low and more_high > high
-    assert estimate_s(specs, 3, 6, True, turned=True)[0] > more_low  # its own programs and episodes
+    assert estimate_s(timeouts, 3, 6, True, turned=True)[0] > more_low  # its own programs and episodes
     programs = len(specs) * (3 + 2)
     assert low - STARTUP_S == pytest.approx(programs * COMPILE_S_PER_PROGRAM[0] + (40 + 60) * 6 * 3 / 6000.0)
 

@@ -139,7 +139,7 @@ def test_the_scene_digest_changes_with_the_recording_file_and_not_without_one(cs
     csv.write_text(csv.read_text() + "99999,0,1.0,1.0\n")  # one more row
     assert table.scene_digest(scene, False, settings, recording_file=csv) != before
     spec = load_scene(scene)
-    assert table.user_recording_file(spec) == csv.resolve()
+    assert table.user_recording_file(spec.recording) == csv.resolve()
 
 
 def test_the_prediction_test_on_a_tracks_file_of_a_test_split_gives_the_validation_s_figures(rows, tmp_path):

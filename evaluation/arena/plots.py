@@ -20,14 +20,15 @@ def _people_columns(frame: pd.DataFrame) -> int:
     return sum(1 for c in frame.columns if c.startswith("p") and c.endswith("_present"))
 
 
-def _draw_scene(ax, spec: SceneSpec):
+def _draw_scene(ax, walls_m, objects, bounds_m):
+    """A scene's walls (K, 4) boxes, objects (``(name, polygon, cost)``) and bounds on ``ax``."""
     from matplotlib.patches import Polygon, Rectangle
 
-    for x0, x1, y0, y1 in spec.walls_m:
+    for x0, x1, y0, y1 in walls_m:
         ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, color="0.3"))
-    for _, poly, _ in spec.objects:
+    for _, poly, _ in objects:
         ax.add_patch(Polygon(poly, closed=True, color="tab:olive", alpha=0.3))
-    xmin, xmax, ymin, ymax = spec.bounds_m
+    xmin, xmax, ymin, ymax = bounds_m
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal")
@@ -45,7 +46,7 @@ def paths_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0) -
     axes = fig.subplots(1, len(methods), squeeze=False)[0]
     for ax, method in zip(axes, methods, strict=True):
         g = frame[frame["method"] == method]
-        _draw_scene(ax, spec)
+        _draw_scene(ax, spec.walls_m, spec.objects, spec.bounds_m)
         for p in range(n_people):
             here = g[f"p{p}_present"].to_numpy()
             if here.any():
@@ -130,7 +131,7 @@ def animation(
         figsize=(3.6, 3.6 * (spec.bounds_m[3] - spec.bounds_m[2]) / (spec.bounds_m[1] - spec.bounds_m[0]))
     )
     ax = fig.subplots()
-    _draw_scene(ax, spec)
+    _draw_scene(ax, spec.walls_m, spec.objects, spec.bounds_m)
     trail = ax.plot([], [], color="tab:blue", lw=1)[0]
     robot = Circle((0, 0), TIAGO_RADIUS_M, color="tab:blue")
     ax.add_patch(robot)

@@ -154,13 +154,15 @@ class TableRequest:
         return [row_name(spec.name, held_out, spec.turned_from is not None) for spec, held_out in self.runs]
 
 
-def estimate_s(specs, n_methods: int, variants: int, held_out: bool, turned: bool = False) -> tuple[float, float]:
-    """``(low, high)`` seconds a run of ``specs`` x ``n_methods`` x ``variants`` takes here
-    (see the constants above; a turned scene's grid has other shapes, so it compiles its own
-    programs)."""
-    programs = len(specs) * (n_methods + 2) * (2 if turned else 1)
+def estimate_s(
+    timeouts_s: Sequence[float], n_methods: int, variants: int, held_out: bool, turned: bool = False
+) -> tuple[float, float]:
+    """``(low, high)`` seconds a run of scenes with these ``timeouts_s`` x ``n_methods`` x
+    ``variants`` takes here (see the constants above; a turned scene's grid has other shapes, so
+    it compiles its own programs)."""
+    programs = len(timeouts_s) * (n_methods + 2) * (2 if turned else 1)
     rows = 1 + int(held_out) + int(turned)
-    simulated = sum(spec.timeout_s for spec in specs) * rows * variants * n_methods
+    simulated = sum(timeouts_s) * rows * variants * n_methods
     return tuple(
         STARTUP_S + programs * c + simulated / rate for c, rate in zip(COMPILE_S_PER_PROGRAM, SIMULATED_S_PER_S)
     )
@@ -223,20 +225,24 @@ def settings(request: TableRequest) -> dict:
     }
     chosen["scene_digests"] = {
         name: scene_digest(
-            spec.file, held_out, chosen, turned=spec.turned_from is not None, recording_file=user_recording_file(spec)
+            spec.file,
+            held_out,
+            chosen,
+            turned=spec.turned_from is not None,
+            recording_file=user_recording_file(spec.recording),
         )
         for (spec, held_out), name in zip(request.runs, request.names, strict=True)
     }
     chosen["scene_file_digests"] = {s.name: hashlib.sha256(s.file.read_bytes()).hexdigest()[:16] for s in request.specs}
-    files = {s.name: user_recording_file(s) for s in request.specs}
+    files = {s.name: user_recording_file(s.recording) for s in request.specs}
     if any(files.values()):  # absent without a user's recording: earlier runs' settings stay the same
         chosen["recording_file_digests"] = {name: file_sha256(f)[:16] for name, f in files.items() if f is not None}
     return chosen
 
 
-def user_recording_file(spec) -> pathlib.Path | None:
-    """The user's recording a scene plays (its ``recording.file``), or None."""
-    file = (spec.recording or {}).get("file")
+def user_recording_file(recording: dict | None) -> pathlib.Path | None:
+    """The user's recording a scene plays (its ``recording``'s ``file``), or None."""
+    file = (recording or {}).get("file")
     return None if file is None else pathlib.Path(file)
 
 
@@ -561,17 +567,6 @@ class _Shard:
     work: float
 
 
-def refuse_unfinishable_scenes(specs: Sequence[SceneSpec], robot) -> None:
-    """Raise :class:`~jaxsim.scenario.errors.ScenarioError` for the first of ``specs`` that no
-    method can finish with ``robot`` (:class:`~jaxsim.scenes.robot.RobotParams`) at the arena's
-    goal tolerance, naming the scene file and field (:func:`jaxsim.scenes.reachable.scene_problem`)."""
-    from socialnav.evaluation.arena.episodes import ArenaConfig
-    from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
-
-    for spec in specs:
-        refuse_unfinishable(spec, robot, ArenaConfig().env.goal_tolerance_m)
-
-
 def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     """The whole table into the run folder ``out`` (made if missing; a run with the same settings
     is resumed): its episodes as one frame and the tables :func:`write_tables` wrote.
@@ -587,10 +582,13 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     """
     from socialnav.common.memory import shortfall
     from socialnav.evaluation.arena import params as arena_params
+    from socialnav.evaluation.arena.episodes import ArenaConfig
+    from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
 
     out = pathlib.Path(out)
     params = arena_params.parse(request.params_text, "--params") if request.params_text else arena_params.ArenaParams()
-    refuse_unfinishable_scenes(request.specs, params.robot)
+    for spec in request.specs:  # no method could finish it (or break its rule): refused before any work
+        refuse_unfinishable(spec, params.robot, ArenaConfig().env.goal_tolerance_m)
     needed = memory_bytes(request)
     available = shortfall(needed)
     if available is not None:

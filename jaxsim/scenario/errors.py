@@ -11,9 +11,11 @@ class ScenarioError(ValueError):
     Attributes:
       file: the file at fault.
       field: the JSON field at fault (dotted path).
+      reason: what is wrong with it, in words (the message without the file and the field).
     """
 
     def __init__(self, file: pathlib.Path | str, field: str, message: str):
         self.file = pathlib.Path(file)
         self.field = field
+        self.reason = message
         super().__init__(f"{self.file}: field '{field}': {message}")

@@ -4,7 +4,7 @@ enough for the robot, time enough to go it, and rule boxes the robot can enter.
 A scene whose walls close the way to the goal, or leave a gap narrower than the robot, runs to the
 end and scores every method 0 % goal success: a table of an impossible task that reads like one of
 bad methods; a walker whose end no person can reach round the walls would stand against a wall all
-episode (:func:`people_problem`). :func:`scene_problem` finds such a scene before any episode runs,
+episode (:func:`people_problem`). :func:`refuse_unfinishable` finds such a scene before any episode runs,
 from the walls alone (people move, so they can block a way only for a while; they are not counted):
 a goal within the goal tolerance of a start (:func:`arrival_problem`), a goal past the walls
 (:func:`goal_problem`), a timeout shorter than the straight line from start to goal takes at the
@@ -160,10 +160,23 @@ def people_problem(people, bounds_m, walls_m: np.ndarray) -> Problem | None:
 def refuse_unfinishable(
     spec: SceneSpec, robot: RobotParams, goal_tolerance_m: float, check_timeout: bool = True
 ) -> None:
-    """:func:`scene_problem` for ``robot`` as an error: a
-    :class:`~jaxsim.scenario.errors.ScenarioError` naming the scene file and its field, or nothing."""
+    """Raise :class:`~jaxsim.scenario.errors.ScenarioError`, naming the scene file and its field,
+    for the first reason no method can finish the scene, or be told apart by its rule, with
+    ``robot`` (a walker with no way to its end, :func:`people_problem`; a start within the goal
+    tolerance, the goal, the timeout, then the rule and held-out rule's boxes, both written in the
+    file's frame); nothing when there is none. ``check_timeout=False`` leaves the scene's
+    ``timeout_s`` out, where something else sets an episode's length."""
     radius_m, speed_mps = float(robot.radius_m), float(robot.max_speed_mps)
-    problem = scene_problem(spec, radius_m, speed_mps, goal_tolerance_m, check_timeout)
+    regions = free_regions(spec.bounds_m, spec.walls_m, radius_m)
+    start, goal = spec.robot["start"], spec.robot["goal"]
+    rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
+    problem = (
+        people_problem(spec.people, spec.bounds_m, spec.walls_m)
+        or arrival_problem(start, goal, goal_tolerance_m)
+        or goal_problem(regions, start, goal, radius_m, goal_tolerance_m)
+        or (time_problem(start, goal, spec.timeout_s, speed_mps, goal_tolerance_m) if check_timeout else None)
+        or rule_problem(regions, start, rules, radius_m)
+    )
     if problem is not None:
         raise ScenarioError(spec.file, *problem)
 
@@ -175,19 +188,11 @@ def scene_problem(
     goal_tolerance_m: float,
     check_timeout: bool = True,
 ) -> Problem | None:
-    """``(field, why)`` of the first reason no method can finish the scene, or be told apart by
-    its rule, with this robot (a walker with no way to its end, :func:`people_problem`; a start
-    within the goal tolerance, the goal, the timeout, then the rule and held-out rule's boxes,
-    both written in the file's frame); None when there is none.
-    ``check_timeout=False`` leaves the scene's ``timeout_s`` out, where something else sets an
-    episode's length."""
-    regions = free_regions(spec.bounds_m, spec.walls_m, robot_radius_m)
-    start, goal = spec.robot["start"], spec.robot["goal"]
-    rules = [("rule", spec.rule)] + ([("held_out_rule", spec.held_out_rule)] if spec.held_out_rule else [])
-    return (
-        people_problem(spec.people, spec.bounds_m, spec.walls_m)
-        or arrival_problem(start, goal, goal_tolerance_m)
-        or goal_problem(regions, start, goal, robot_radius_m, goal_tolerance_m)
-        or (time_problem(start, goal, spec.timeout_s, max_speed_mps, goal_tolerance_m) if check_timeout else None)
-        or rule_problem(regions, start, rules, robot_radius_m)
-    )
+    """:func:`refuse_unfinishable`'s reason as a value, for a robot of ``robot_radius_m`` and
+    ``max_speed_mps``: ``(field, why)``, or None when there is none."""
+    robot = RobotParams(max_speed_mps=max_speed_mps, radius_m=robot_radius_m)
+    try:
+        refuse_unfinishable(spec, robot, goal_tolerance_m, check_timeout)
+    except ScenarioError as e:
+        return e.field, e.reason
+    return None

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import zlib
+from collections.abc import Sequence
 
 import numpy as np
 from flax import struct
@@ -135,11 +136,12 @@ def padded_slots(n_slots: int) -> int:
     return max(2, 1 << (max(int(n_slots), 1) - 1).bit_length())
 
 
-def walking_groups(spec: SceneSpec, slot_of: list[int], n_slots: int) -> np.ndarray:
-    """(n_slots,) int32: the walkers linked by ``walks_with`` (chains joined) share the lowest
-    slot among them as their id; everyone else -1."""
+def walking_groups(people: Sequence[dict], slot_of: list[int], n_slots: int) -> np.ndarray:
+    """(n_slots,) int32: the walkers of a scene's ``people`` (its file's entries, person ``i`` in
+    slot ``slot_of[i]``) linked by ``walks_with`` (chains joined) share the lowest slot among them
+    as their id; everyone else -1."""
     label = np.arange(n_slots)
-    mates = [(i, p.get("walks_with")) for i, p in enumerate(spec.people)]
+    mates = [(i, p.get("walks_with")) for i, p in enumerate(people)]
     links = [(slot_of[i], slot_of[k]) for i, k in mates if k is not None]
     for _ in range(len(links)):
         for a, b in links:
@@ -287,7 +289,7 @@ def sample_variant(
                 a["ignore_robot"][slot + m] = person["ignore_robot"]
                 a["valid"][slot + m] = True
             slot += person["count"]
-    a["walking_group"] = walking_groups(spec, slot_of, n)
+    a["walking_group"] = walking_groups(spec.people, slot_of, n)
     robot = spec.robot
     if spec.recording is None:
         track_xy, track_present = recording_lib.empty_tracks(n)

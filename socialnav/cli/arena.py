@@ -281,9 +281,11 @@ def _request(args, shown_as: pathlib.Path):
     from socialnav.common import runfolder
     from socialnav.data import GEOMETRY_SCENES_DIR, RECORDED_SCENES_DIR, SCENES_DIR
     from socialnav.evaluation.arena import actor_spec
+    from socialnav.evaluation.arena.episodes import ArenaConfig
     from socialnav.evaluation.arena.run import HELD_OUT, TURNED
-    from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model, refuse_unfinishable_scenes
+    from socialnav.evaluation.arena.table import POLICY_METHOD, TableRequest, gscl_model
     from socialnav.jaxsim.scenario.errors import ScenarioError
+    from socialnav.jaxsim.scenes.reachable import refuse_unfinishable
     from socialnav.jaxsim.scenes.spec import load_scene
     from socialnav.planners.reactive.baselines import BASELINES
     from socialnav.planners.stack import METHODS
@@ -346,7 +348,8 @@ def _request(args, shown_as: pathlib.Path):
     try:
         runfolder.check_inputs(shown_as, [*files, gscl_run, args.params, args.policy_run, people and people.file])
         specs = [load_scene(f) for f in files]
-        refuse_unfinishable_scenes(specs, params.robot)  # no method could finish (or break its rule)
+        for spec in specs:  # no method could finish it (or break its rule)
+            refuse_unfinishable(spec, params.robot, ArenaConfig().env.goal_tolerance_m)
     except (ScenarioError, runfolder.NotOurs) as e:
         return _fail(str(e))
     if actor_specs:  # each factory called once here: a bad one fails before any work
@@ -455,7 +458,11 @@ def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
             "pass --overwrite to replace it whole, or choose another --out"
         )
     low, high = table.estimate_s(
-        request.specs, len(request.methods), request.variants, request.held_out, request.turned
+        [spec.timeout_s for spec in request.specs],
+        len(request.methods),
+        request.variants,
+        request.held_out,
+        request.turned,
     )
     print(
         f"arena: {len(request.runs)} scene run(s) x {len(request.methods)} method(s) x {request.variants} variant(s) "
