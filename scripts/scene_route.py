@@ -99,6 +99,11 @@ def route(out: pathlib.Path) -> tuple[list[tuple[str, str]], list[tuple[str, str
             if climbs_back_up(module, toolkit_callers(frame)) and stop not in climbs:
                 climbs.append(stop)
 
+    import jax
+
+    # A program traced earlier in this process (by another test, say) is not traced again, and
+    # its calls would not run: every one is forgotten first, so the route is the same in any process.
+    jax.clear_caches()
     argv = ["arena", "--scenes", SCENE, "--methods", "navfn", "--variants", "2", "--out", str(out), "--no-progress"]
     threading.setprofile(note)  # the threads the run starts (run_spread's, one per device)
     sys.setprofile(note)
