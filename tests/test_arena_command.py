@@ -46,7 +46,7 @@ def test_run_table_refuses_a_table_no_machine_holds_before_writing(tmp_path):
 
     request = table.TableRequest(specs=(load_scene(SCENES_DIR / "casn_static_person.json"),), methods=("navfn",),
                                  variants=10**12)  # fmt: skip
-    with pytest.raises(ValueError, match=r"TableRequest.variants 1,000,000,000,000: about .* GB at once"):
+    with pytest.raises(table.TableTooLarge, match=r"TableRequest.variants 1,000,000,000,000: about .* GB at once"):
         table.run_table(tmp_path / "out", request)
     assert not (tmp_path / "out").exists()
 
@@ -71,9 +71,10 @@ def test_arena_command_writes_tables_resumes_and_refuses_other_settings(tmp_path
 
 
 def test_the_table_made_from_python_is_the_one_the_command_makes_and_resumes(tmp_path, capsys):
-    """``evaluation.arena.table.run_table`` is the command's work without the command: the command
-    run after it on the same folder finds every scene done (nothing recomputed, the same summary),
-    and a request with other settings is refused with the folder named."""
+    """``evaluation.arena.table.run_table`` is the command's work without the command (the command
+    calls it): the command run after it on the same folder finds every scene done (nothing
+    recomputed, the same summary), and a request with other settings is refused with the folder
+    named."""
     from socialnav import cli
     from socialnav.common import runfolder
     from socialnav.data import SCENES_DIR
@@ -97,7 +98,7 @@ def test_the_table_made_from_python_is_the_one_the_command_makes_and_resumes(tmp
     assert cli.main([*args, "--no-progress"]) == 0
     assert (out / "episodes" / "casn_static_person.parquet").stat().st_mtime_ns == stamp
     assert (out / "summary.csv").read_text() == summary
-    with pytest.raises(ValueError, match="other settings .*variants"):
+    with pytest.raises(table.SettingsConflict, match="other settings .*variants"):
         table.run_table(out, dataclasses.replace(request, variants=3))
     foreign = tmp_path / "mine"
     foreign.mkdir()

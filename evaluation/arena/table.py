@@ -567,19 +567,50 @@ class _Shard:
     work: float
 
 
-def run_table(out, request: TableRequest, run_shards: Callable | None = None):
-    """The whole table into the run folder ``out`` (made if missing; a run with the same settings
-    is resumed): its episodes as one frame and the tables :func:`write_tables` wrote.
+class TableTooLarge(ValueError):
+    """A table would hold more than the memory available (:func:`memory_bytes`): ``needed_bytes``
+    at once where the machine has ``available_bytes``."""
 
-    ``run_shards(compute, save, shards)`` runs the shards (objects with ``name``, ``output``,
-    ``args``, ``work``); default: one after the other in this process (the command line passes
-    :func:`socialnav.backend.run_shards` for a progress bar and Ray). Raises ``ValueError`` where
-    ``out`` holds a run with other settings or the table would hold more than 80 % of the memory
-    available (:func:`memory_bytes`), :class:`socialnav.common.runfolder.NotOurs` where it holds
-    another job's files, :class:`~jaxsim.scenario.errors.ScenarioError` where no method can finish a
-    scene with the run's robot (before anything is written). Unlike the command it takes
-    no lock on ``out``: one run a folder.
+    def __init__(self, variants: int, needed_bytes: float, available_bytes: float):
+        self.needed_bytes, self.available_bytes = needed_bytes, available_bytes
+        super().__init__(
+            f"TableRequest.variants {variants:,}: about {needed_bytes / 1e9:.1f} GB at once, this machine has "
+            f"{available_bytes / 1e9:.1f} GB available; fewer variants, or shard_variants for the shards"
+        )
+
+
+class SettingsConflict(ValueError):
+    """The run folder holds a run with other settings (``conflict``, in words: :func:`settings_conflict`)."""
+
+    def __init__(self, out: pathlib.Path, conflict: str):
+        self.conflict = conflict
+        super().__init__(f"{out} holds a run with {conflict} ({out / 'run.json'})")
+
+
+@dataclasses.dataclass(frozen=True)
+class TablePlan:
+    """A table's run folder started and its work cut (:func:`plan_table`).
+
+    Attributes:
+      digests: every scene row's digest (``run.json``'s ``scene_digests``).
+      shards: the shards still to compute (objects with ``name``, ``output``, ``args``, ``work``:
+        ``compute_shard(*args)``, saved by :func:`save_shard`).
+      needed_bytes: what the table holds at once (:func:`memory_bytes`).
     """
+
+    digests: dict
+    shards: list
+    needed_bytes: float
+
+
+def plan_table(out, request: TableRequest, recorded: dict | None = None) -> TablePlan:
+    """Check a table, start its run folder ``out`` (made if missing; a run with the same settings
+    is resumed) and cut its work into shards. ``recorded``: what ``run.json`` notes without
+    comparing it on a resume (the backend, the command line). Raises, before anything is written:
+    :class:`~jaxsim.scenario.errors.ScenarioError` where no method can finish a scene with the
+    run's robot; :class:`TableTooLarge` where the table would hold more than 80 % of the memory
+    available (:func:`memory_bytes`); :class:`socialnav.common.runfolder.NotOurs` where ``out``
+    holds another job's files; :class:`SettingsConflict` where it holds a run with other settings."""
     from socialnav.common.memory import shortfall
     from socialnav.evaluation.arena import params as arena_params
     from socialnav.evaluation.arena.episodes import ArenaConfig
@@ -592,21 +623,38 @@ def run_table(out, request: TableRequest, run_shards: Callable | None = None):
     needed = memory_bytes(request)
     available = shortfall(needed)
     if available is not None:
-        raise ValueError(
-            f"TableRequest.variants {request.variants:,}: about {needed / 1e9:.1f} GB at once, this machine has "
-            f"{available / 1e9:.1f} GB available; fewer variants, or shard_variants for the shards"
-        )
+        raise TableTooLarge(request.variants, needed, available)
     runfolder.claim(out, JOB, RESULTS)  # never writes over files no arena run wrote
     chosen = settings(request)
     conflict = settings_conflict(out, chosen)
     if conflict is not None:
-        raise ValueError(f"{out} holds a run with {conflict} ({out / 'run.json'})")
-    start(out, chosen)
+        raise SettingsConflict(out, conflict)
+    start(out, chosen, recorded)
     digests = chosen["scene_digests"]
-    shards = [_Shard(*s) for s in plan_shards(out, request, digests)]
-    (run_shards or _run_here)(compute_shard, save_shard, shards)
-    episodes = join_scenes(out, request, digests)
+    return TablePlan(digests, [_Shard(*s) for s in plan_shards(out, request, digests)], needed)
+
+
+def finish_table(out, request: TableRequest, plan: TablePlan):
+    """Once ``plan``'s shards are computed: every scene joined in ``out``
+    (:func:`join_scenes`) and the tables written; ``(episodes frame, tables)``
+    (:func:`write_tables`)."""
+    out = pathlib.Path(out)
+    episodes = join_scenes(out, request, plan.digests)
     return episodes, write_tables(out, episodes)
+
+
+def run_table(out, request: TableRequest, run_shards: Callable | None = None, recorded: dict | None = None):
+    """The whole table into the run folder ``out``: :func:`plan_table`, the shards computed, then
+    :func:`finish_table`; returns ``(episodes frame, tables)``. ``socialnav arena`` is these three
+    steps with the shards run by :func:`socialnav.backend.run_with_args` (a progress bar, Ray).
+
+    ``run_shards(compute, save, shards)`` runs the shards; default: one after the other in this
+    process. Raises what :func:`plan_table` raises, before anything is written. Unlike the command
+    it takes no lock on ``out``: one run a folder.
+    """
+    plan = plan_table(out, request, recorded)
+    (run_shards or _run_here)(compute_shard, save_shard, plan.shards)
+    return finish_table(out, request, plan)
 
 
 def start(out: pathlib.Path, chosen: dict, recorded: dict | None = None) -> None:

@@ -434,54 +434,49 @@ def _command(args) -> dict:
 
 
 def _run_into(args, out: pathlib.Path, shown_as: pathlib.Path) -> int:
+    """The table of the parsed ``args`` into ``out`` (:func:`evaluation.arena.table.plan_table`,
+    the shards on the chosen backend, :func:`~evaluation.arena.table.finish_table`), its refusals
+    in the options' words, its tables printed."""
     from socialnav import backend as backend_lib
-    from socialnav.common.memory import shortfall
     from socialnav.evaluation.arena import table
+    from socialnav.jaxsim.scenario.errors import ScenarioError
 
     request = _request(args, shown_as)
     if isinstance(request, int):
         return request
     n_episodes = len(request.runs) * request.variants * len(request.methods)
-    needed = table.memory_bytes(request)
-    available = shortfall(needed)
-    if available is not None:
+    # The backend is recorded, not compared: both give the same episodes for the same shards.
+    recorded = {**backend_lib.describe(args), **_command(args)}
+    try:
+        plan = table.plan_table(out, request, recorded)
+    except table.TableTooLarge as e:
         return _fail(
-            f"--variants {args.variants}: about {needed / 1e9:.1f} GB at once "
+            f"--variants {args.variants}: about {e.needed_bytes / 1e9:.1f} GB at once "
             f"({n_episodes:,} episodes' rows and a shard of {request.per_shard:,} variants in flight), this machine "
-            f"has {available / 1e9:.1f} GB available; lower --variants, or --shard-variants for the shards"
+            f"has {e.available_bytes / 1e9:.1f} GB available; lower --variants, or --shard-variants for the shards"
         )
-    settings = table.settings(request)
-    conflict = table.settings_conflict(out, settings)
-    if conflict is not None:
+    except table.SettingsConflict as e:
         return _fail(
-            f"{shown_as} holds a run with {conflict} ({shown_as / 'run.json'}); "
+            f"{shown_as} holds a run with {e.conflict} ({shown_as / 'run.json'}); "
             "pass --overwrite to replace it whole, or choose another --out"
         )
-    low, high = table.estimate_s(
-        [spec.timeout_s for spec in request.specs],
-        len(request.methods),
-        request.variants,
-        request.held_out,
-        request.turned,
-    )
+    except ScenarioError as e:
+        return _fail(str(e))
+    timeouts_s = [spec.timeout_s for spec in request.specs]
+    low, high = table.estimate_s(timeouts_s, len(request.methods), request.variants, request.held_out, request.turned)
     print(
         f"arena: {len(request.runs)} scene run(s) x {len(request.methods)} method(s) x {request.variants} variant(s) "
         f"= {n_episodes:,} episodes; about {_duration(low)} to {_duration(high)} (on 2 cores, compilation included; "
-        f"less with programs an earlier run left in the cache), at most {needed / 1e9:.2f} GB at once",
+        f"less with programs an earlier run left in the cache), at most {plan.needed_bytes / 1e9:.2f} GB at once",
         flush=True,
     )
-    # The backend is recorded, not compared: both give the same episodes for the same shards.
-    table.start(out, settings, {**backend_lib.describe(args), **_command(args)})
-    digests = settings["scene_digests"]
-    shards = [backend_lib.Shard(*shard) for shard in table.plan_shards(out, request, digests)]
-    from socialnav.jaxsim.scenario.errors import ScenarioError
-
     try:
-        backend_lib.run_with_args(table.compute_shard, table.save_shard, shards, args, desc="arena", unit="episodes")
+        backend_lib.run_with_args(
+            table.compute_shard, table.save_shard, plan.shards, args, desc="arena", unit="episodes"
+        )
     except (backend_lib.BackendError, ScenarioError) as e:  # a variant that cannot be drawn: its scene named
         return _fail(str(e))
-    episodes = table.join_scenes(out, request, digests)
-    tables = table.write_tables(out, episodes)
+    _, tables = table.finish_table(out, request, plan)
     _print_tables(tables, [spec.recording["playback"] for spec in request.specs if spec.recording is not None])
     return 0
 
