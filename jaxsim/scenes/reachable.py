@@ -147,7 +147,7 @@ def people_problem(people, bounds_m, walls_m: np.ndarray) -> Problem | None:
     (:func:`jaxsim.scenes.routes.waypoints`); None when every walker has its way. Such a walker
     would stand against a wall all episode."""
     for i, person in enumerate(people):
-        if person["behaviour"] not in ("walk", "stream"):
+        if person["behaviour"] not in routes.WALKERS:
             continue
         for start, end in itertools.product(_corners_and_middle(person["start"]), _corners_and_middle(person["end"])):
             try:

@@ -35,6 +35,9 @@ import scipy.sparse.csgraph
 from socialnav.jaxsim import geometry
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 
+# The behaviours that walk from a start to an end (``from``, ``to``): the people who may need a way.
+WALKERS = ("walk", "stream")
+
 # The free space's cells (m): the robot's way to its goal (:mod:`jaxsim.scenes.reachable`) and a
 # walker's way round the walls.
 RESOLUTION_M = 0.05
@@ -79,7 +82,7 @@ def may_route(people, walls_m: np.ndarray) -> bool:
     if len(walls_m) == 0:
         return False
     for person in people:
-        if person["behaviour"] not in ("walk", "stream"):
+        if person["behaviour"] not in WALKERS:
             continue
         (ax, ay), (bx, by) = person["start"], person["end"]
         x0, x1 = min(_widened(ax)[0], _widened(bx)[0]), max(_widened(ax)[1], _widened(bx)[1])
