@@ -1347,6 +1347,36 @@ def _walker_got_in(end_xy: tuple[float, float]):
     return check
 
 
+def _queue_into_a_room(left_wall: list[list[float]]):
+    """``socialnav arena`` on seed 001's static person with the side room of
+    :func:`_walker_into_a_room` (its left wall ``left_wall``) and a queue of three whose head is at
+    (0.5, 2) facing the room and whose exit is in it at (2.5, 1.4): the served leave across the
+    room's left wall."""
+    queue = {"behaviour": "queue", "head": [0.5, 2.0], "towards_deg": 0, "length": 3, "spacing_m": 0.7,
+             "advance_every_s": 5, "exit": [2.5, 1.4]}  # fmt: skip
+
+    def mutate(obj):
+        obj["walls"] += [[1.5, 3.5, 1.0, 1.1], [3.4, 3.5, 1.0, 2.85], *left_wall]
+        obj["people"].append(queue)
+        obj["timeout_s"] = 40
+
+    def make(tmp):
+        return [*arena_scene(mutate)(tmp), "--keep-trajectories", "2"]
+
+    return make
+
+
+def _queue_left(tmp, proc):
+    """The run finished and in both variants every queue member (slots 1-3) has left by the end."""
+    import pandas as pd
+
+    files = list((tmp / "a" / "trajectories").glob("*.parquet"))
+    if proc.returncode or not files:
+        return False
+    last = pd.read_parquet(files[0]).sort_values("t_s").groupby("variant").tail(1)
+    return len(last) == 2 and not last[["p1_present", "p2_present", "p3_present"]].to_numpy().any()
+
+
 def _arena_ran(tmp, proc):
     """The run's summary holds the scene's NavFn row over its 2 variants."""
     import pandas as pd
@@ -2467,6 +2497,17 @@ CASES: list[Case] = [
         "r12: a walker into a room by a door 1 m wide, round its post",
         _walker_into_a_room([[1.5, 1.6, 1.0, 1.85]], end_xy=(2.5, 1.4)),
         check=_walker_got_in((2.5, 1.4)),
+        timeout_s=300,
+    ),
+    Case(
+        "r13: a queue whose exit is in a closed room",
+        _queue_into_a_room([[1.5, 1.6, 1.0, 2.85]]),
+        ("scene.json", "people[1].exit", "no way from (0.5, 2) to (2.5, 1.4)"),
+    ),
+    Case(
+        "r13: a queue whose exit is in a room by a door 1 m wide, round its post",
+        _queue_into_a_room([[1.5, 1.6, 1.0, 1.85]]),
+        check=_queue_left,
         timeout_s=300,
     ),
     Case(

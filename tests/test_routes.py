@@ -173,3 +173,59 @@ def test_a_turned_scene_turns_its_walkers_corners_with_it(tmp_path):
     np.testing.assert_allclose(turned.waypoints_xy[0, : n[0]], expected, atol=1e-6)
     first = drawn.waypoints_xy[0, 0] - drawn.start_xy[0]
     assert drawn.heading0[0] == pytest.approx(math.atan2(first[1], first[0]), abs=1e-6)  # faces its first corner
+
+
+def _queue_scene(tmp_path, door=(2.0, 3.0)):
+    """A queue of four at a counter below the wall of :data:`DOOR_WALLS`, its exit above it: served
+    at the head (-3, -2), a person leaves through the door for (-3, 3)."""
+    obj = {
+        "name": "queue_room",
+        "bounds_m": list(BOUNDS),
+        "walls": [[-5, door[0], -0.1, 0.1], [door[1], 5, -0.1, 0.1]],
+        "robot": {"start": [4, -4], "yaw_deg": 180, "goal": [0, -4]},
+        "timeout_s": 60,
+        "people": [
+            {
+                "behaviour": "queue",
+                "head": [-3, -2],
+                "towards_deg": 180,
+                "length": 4,
+                "spacing_m": 0.7,
+                "advance_every_s": 5,
+                "exit": [-3, 3],
+            },
+        ],  # fmt: skip
+        "rule": {"type": "min_distance", "distance_m": 0.5},
+    }
+    path = tmp_path / "queue_room.json"
+    path.write_text(json.dumps(obj))
+    return path
+
+
+def test_a_queues_served_people_leave_for_an_exit_round_the_walls_where_straight_they_stay(tmp_path):
+    """Served at the head, a queue member walks to the exit by the corners of its way round the
+    wall (the way is the queue's own: ``people[0].exit`` named where there is none)."""
+    from socialnav.evaluation.arena import episodes as arena
+
+    spec = load_scene(_queue_scene(tmp_path))
+    setup = arena.setup_scene(spec)
+    assert routes.may_route(spec.people, spec.walls_m) and setup.env.routed
+    routed = sample_variants(spec, 0, 1, n_slots=setup.n_slots)
+    assert (routed.n_waypoints[0, :4] > 0).all()  # each member has the head's way to the exit
+    straight = routed.replace(n_waypoints=np.zeros_like(routed.n_waypoints))  # as they walked before
+    both = jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a, b]), routed, straight)
+    trajectory = arena.counterfactual_function(setup)(jax.tree_util.tree_map(jnp.asarray, both))
+    xy, present = np.asarray(trajectory.people_xy_m), np.asarray(trajectory.people_present)
+    # Routed: all four served (every 5 s) and gone through the door by the end of the minute.
+    assert present[0, 0, :4].all() and not present[0, -1, :4].any()
+    crossed = np.sign(xy[0, 1:, :4, 1]) != np.sign(xy[0, :-1, :4, 1])
+    assert all(((xy[0, 1:, p, 0][crossed[:, p]] > 2.0) & (xy[0, 1:, p, 0][crossed[:, p]] < 3.0)).all()
+               for p in range(4))  # fmt: skip
+    # Straight: the served stand against the wall's underside for the rest of the minute.
+    assert present[1, -1, :4].all() and (xy[1, -1, :4, 1] < 0.0).all()
+    closed = load_scene(_queue_scene(tmp_path, door=(2.0, 2.4)))  # a 0.4 m door
+    assert _people_problem(closed)[0] == "people[0].exit"
+    with pytest.raises(
+        ScenarioError, match=r"queue_room\.json.*people\[0\]\.exit.*no way from \(-3, -2\) to \(-3, 3\)"
+    ):
+        arena.setup_scene(closed)

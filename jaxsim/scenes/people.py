@@ -93,8 +93,9 @@ def queue_place(v: Variant, time_s):
 
 def targets(v: Variant, s: PeopleState, time_s, routed: bool = False):
     """Where each person is going now: (target (P, 2), desired speed (P,), mobile (P,) bool).
-    ``routed`` (static): walkers head for the corners of their way round the walls first
-    (:attr:`jaxsim.scenes.env.Env.routed`; without, straight for their leg's end)."""
+    ``routed`` (static): walkers and served queue members head for the corners of their way round
+    the walls first (:attr:`jaxsim.scenes.env.Env.routed`; without, straight for their leg's end
+    or the exit)."""
     walk = v.kind == KIND["walk"]
     queue = v.kind == KIND["queue"]
     stream = v.kind == KIND["stream"]
@@ -105,10 +106,12 @@ def targets(v: Variant, s: PeopleState, time_s, routed: bool = False):
     if routed:
         to_corner = (s.waypoint < v.n_waypoints)[:, None]
         leg_target = jnp.where(to_corner, corner(v, s.leg, s.waypoint), leg_target)
-    # Queue members: their place, moved up once per interval; past the head, the exit.
+    # Queue members: their place, moved up once per interval; past the head, the exit (their leg's
+    # end), by the corners of its way round the walls first.
     place = queue_place(v, time_s)
+    exit_target = leg_target if routed else v.exit_xy
     queue_target = jnp.where(
-        (place >= 0)[:, None], v.queue_head + jnp.maximum(place, 0)[:, None] * v.queue_step, v.exit_xy
+        (place >= 0)[:, None], v.queue_head + jnp.maximum(place, 0)[:, None] * v.queue_step, exit_target
     )
     target = jnp.where(queue[:, None], queue_target, jnp.where((walk | stream)[:, None], leg_target, s.xy))
     distance = jnp.linalg.norm(target - s.xy, axis=-1)
@@ -218,9 +221,10 @@ def step_people(
       recorded: static, the people are a recorded crowd (every one of them), played back as
         ``v.reactive`` says: both ways are computed and one kept, so a recording's replayed and
         reactive scenes share one compiled program.
-      routed: static, walkers and stream members walk the corners of their way round the walls
-        (:attr:`Variant.waypoints_xy`; :func:`jaxsim.scenes.routes.may_route`); False: straight
-        for their leg's end, without the corners' bookkeeping (their variants have no corners).
+      routed: static, walkers, stream members and served queue members walk the corners of their
+        way round the walls (:attr:`Variant.waypoints_xy`; :func:`jaxsim.scenes.routes.may_route`);
+        False: straight for their leg's end or exit, without the corners' bookkeeping (their
+        variants have no corners).
     """
     humans.check_model(model)
     dt = constants.crowd.dt_s
@@ -257,11 +261,12 @@ def step_people(
     queue = v.kind == KIND["queue"]
     arrived = jnp.linalg.norm(target - xy, axis=-1) < ARRIVED_M  # at the target: a corner or the leg's end
     passed = jnp.zeros_like(arrived)
+    place = queue_place(v, time_s)
     if routed:  # a corner passed, the next one (or the leg's end) is the target from the next step
         to_corner = s.waypoint < v.n_waypoints
-        passed = mobile & (walk | stream) & to_corner & (arrived | next_in_sight(v, s, xy, world.walls_m))
+        on_way = walk | stream | (queue & (place < 0))  # a queue member once served
+        passed = mobile & on_way & to_corner & (arrived | next_in_sight(v, s, xy, world.walls_m))
         arrived = arrived & ~to_corner  # only the leg's end is an arrival
-    place = queue_place(v, time_s)
     flip = mobile & walk & arrived & v.back_and_forth
     leg = jnp.where(flip, 1 - s.leg, s.leg)
     waypoint = jnp.where(flip, 0, jnp.where(passed, s.waypoint + 1, s.waypoint))

@@ -140,20 +140,22 @@ def rule_problem(regions, start: Range, rules: Iterable[tuple[str, dict]], robot
 
 
 def people_problem(people, bounds_m, walls_m: np.ndarray) -> Problem | None:
-    """``people[i].to`` of the first walker or stream of a scene's ``people``
-    (:attr:`~jaxsim.scenes.spec.SceneSpec.people`) that, for some start and end its ranges draw
-    (their middles and corners), has no way round the walls (K, 4) within ``bounds_m`` a person's
-    body fits through, or one of more corners than a variant holds
-    (:func:`jaxsim.scenes.routes.waypoints`); None when every walker has its way. Such a walker
-    would stand against a wall all episode."""
+    """``people[i].to`` (a queue's ``people[i].exit``) of the first walker, stream or queue of a
+    scene's ``people`` (:attr:`~jaxsim.scenes.spec.SceneSpec.people`) that, for some start and end
+    its ranges draw (their middles and corners; a queue's head and exit), has no way round the
+    walls (K, 4) within ``bounds_m`` a person's body fits through, or one of more corners than a
+    variant holds (:func:`jaxsim.scenes.routes.waypoints`); None when every one has its way. Such
+    a person would stand against a wall all episode."""
     for i, person in enumerate(people):
-        if person["behaviour"] not in routes.WALKERS:
+        if person["behaviour"] not in routes.WAYS:
             continue
-        for start, end in itertools.product(_corners_and_middle(person["start"]), _corners_and_middle(person["end"])):
+        start_field, end_field, named = routes.WAYS[person["behaviour"]]
+        ends = itertools.product(_corners_and_middle(person[start_field]), _corners_and_middle(person[end_field]))
+        for start, end in ends:
             try:
                 routes.waypoints(start, end, walls_m, bounds_m)
             except routes.NoRoute as e:
-                return f"people[{i}].to", str(e)
+                return f"people[{i}].{named}", str(e)
     return None
 
 

@@ -35,8 +35,10 @@ import scipy.sparse.csgraph
 from socialnav.jaxsim import geometry
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 
-# The behaviours that walk from a start to an end (``from``, ``to``): the people who may need a way.
-WALKERS = ("walk", "stream")
+# The people who may need a way round the walls, by behaviour: the spec's fields their way runs
+# between, and the scene file's field an error about it names. A walker or stream member walks
+# from its start to its end; a queue's served member leaves from the head for the exit.
+WAYS = {"walk": ("start", "end", "to"), "stream": ("start", "end", "to"), "queue": ("head", "exit", "exit")}
 
 # The free space's cells (m): the robot's way to its goal (:mod:`jaxsim.scenes.reachable`) and a
 # walker's way round the walls.
@@ -70,9 +72,10 @@ def free_regions(bounds_m, walls_m: np.ndarray, radius_m: float) -> tuple[np.nda
 
 
 def may_route(people, walls_m: np.ndarray) -> bool:
-    """Whether a walker's or stream member's straight line can cross a wall box (K, 4) in any
-    variant of a scene with these ``people`` (:attr:`~jaxsim.scenes.spec.SceneSpec.people`), held
-    out ones included: some wall box meets the box that holds both of its ranges,
+    """Whether the straight line of a walker, a stream member or a queue's served member
+    (:data:`WAYS`) can cross a wall box (K, 4) in any variant of a scene with these ``people``
+    (:attr:`~jaxsim.scenes.spec.SceneSpec.people`), held out ones included: some wall box meets
+    the box that holds both of its ranges,
     each widened by half its width (a held-out draw lies at most that far outside its range). False
     means no variant has a corner to walk (a segment stays in any box holding both its ends), so
     the scene's people step without the corners' bookkeeping (:attr:`jaxsim.scenes.env.Env.routed`),
@@ -82,9 +85,10 @@ def may_route(people, walls_m: np.ndarray) -> bool:
     if len(walls_m) == 0:
         return False
     for person in people:
-        if person["behaviour"] not in WALKERS:
+        if person["behaviour"] not in WAYS:
             continue
-        (ax, ay), (bx, by) = person["start"], person["end"]
+        start, end, _ = WAYS[person["behaviour"]]
+        (ax, ay), (bx, by) = person[start], person[end]
         x0, x1 = min(_widened(ax)[0], _widened(bx)[0]), max(_widened(ax)[1], _widened(bx)[1])
         y0, y1 = min(_widened(ay)[0], _widened(by)[0]), max(_widened(ay)[1], _widened(by)[1])
         meets = (walls_m[:, 0] <= x1) & (walls_m[:, 1] >= x0) & (walls_m[:, 2] <= y1) & (walls_m[:, 3] >= y0)

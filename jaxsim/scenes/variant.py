@@ -203,14 +203,14 @@ def sample_variant(
     slot, group_index = 0, 0
     slot_of = []
 
-    def route(start, end, slot) -> float:
+    def route(start, end, slot, field: str = "to") -> float:
         """Fill ``slot``'s way round the walls (:func:`jaxsim.scenes.routes.waypoints`; none where
         the straight line crosses no wall) and return its first heading (rad), towards its first
-        corner or its end; no way is a :class:`ScenarioError` naming the person's ``to``."""
+        corner or its end; no way is a :class:`ScenarioError` naming the person's ``field``."""
         try:
             corners = routes.waypoints(start, end, spec.walls_m, spec.bounds_m)
         except routes.NoRoute as e:
-            raise ScenarioError(spec.file, f"people[{len(slot_of) - 1}].to", str(e)) from None
+            raise ScenarioError(spec.file, f"people[{len(slot_of) - 1}].{field}", str(e)) from None
         a["waypoints_xy"][slot, : len(corners)] = corners
         a["n_waypoints"][slot] = len(corners)
         first = corners[0] if len(corners) else end
@@ -274,6 +274,7 @@ def sample_variant(
                 a["queue_head"][slot + m], a["queue_step"][slot + m] = head, back
                 a["queue_interval_s"][slot + m] = interval
                 a["exit_xy"][slot + m] = exit_xy
+                route(head, exit_xy, slot + m, "exit")  # served, from the head round the walls
                 a["valid"][slot + m] = True
             slot += int(person["length"][1])
         else:  # stream
