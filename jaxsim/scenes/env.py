@@ -246,9 +246,9 @@ class Env:
       recorded: static, the scene's people are a recorded crowd (:mod:`jaxsim.scenes.people`;
         replayed or reactive as each variant says, so both playbacks of a recording share one
         compiled program).
-      routed: static, a walker of the scene may walk round the walls by the corners of its way
-        (:func:`jaxsim.scenes.routes.may_route`); without, the people step without the corners'
-        bookkeeping.
+      routed: static, a walker of the scene (or a queue's served member) may walk round the walls
+        by the corners of its way (:func:`jaxsim.scenes.routes.may_route`); without, the people
+        step without the corners' bookkeeping.
     """
 
     world: SceneWorld

@@ -7,8 +7,9 @@ said. Pedestrian simulators route their agents instead (JuPedSim steers each age
 shortest path through the walkable area to its next waypoint; Vadere follows a floor field, the
 geodesic distance to the target): here such a walker walks the corners of the shortest way round
 the walls (waypoints), each passed when reached or when the point after it comes into sight
-(:func:`jaxsim.scenes.people.step_people`). A walker whose straight line crosses no wall walks it
-as before, so scenes whose people walk in the open (every shipped one) are unchanged, bit for bit.
+(:func:`jaxsim.scenes.people.step_people`). A queue's served member leaves the head for the exit
+the same way (:data:`WAYS`). A walker whose straight line crosses no wall walks it as before, so
+scenes whose people walk in the open (every shipped one) are unchanged, bit for bit.
 
 How (:func:`waypoints`): the free space is the cells of :func:`free_regions`'
 grid (0.05 m) where a person's body fits, with :data:`ROUTE_MARGIN_M` to spare where the way is
@@ -18,7 +19,7 @@ corner, the farthest path cell in straight sight of it: the segment between them
 only, as Theta*'s line of sight on a grid).
 A way with more than :data:`MAX_WAYPOINTS` corners, or none, raises :class:`NoRoute`, which the
 scene's reader turns into a :class:`~jaxsim.scenario.errors.ScenarioError` naming the walker's
-field (:func:`jaxsim.scenes.reachable.people_problem`). Written here because no
+field, or the queue's (:func:`jaxsim.scenes.reachable.people_problem`). Written here because no
 maintained library in the toolkit's dependencies routes a body through axis-aligned boxes; the
 shortest path itself is scipy's.
 """
