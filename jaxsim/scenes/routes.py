@@ -139,7 +139,8 @@ def _corners(start: tuple, end: tuple, walls_key: tuple, bounds_key: tuple, radi
             if len(corners) > MAX_WAYPOINTS:
                 raise NoRoute(
                     f"the way round the walls turns at {len(corners)} corners, more than {MAX_WAYPOINTS}: "
-                    "split the walk into walkers with ends in sight of each other"
+                    "bring its ends (a queue's head and exit) nearer, or split a walk into walkers with ends "
+                    "in sight of each other"
                 )
             return corners.astype(np.float32)
     raise NoRoute(
