@@ -245,7 +245,8 @@ def step_people(
     # people a body apart would spread the line sideways by up to half a metre, and a robot
     # coming up behind would push them out of line); once served they walk to the exit by the
     # human model like anyone else.
-    in_line = (v.kind == KIND["queue"]) & (queue_place(v, time_s) >= 0) & mobile
+    place = queue_place(v, time_s)
+    in_line = (v.kind == KIND["queue"]) & (place >= 0) & mobile
     to_place = target - s.xy
     gap = jnp.linalg.norm(to_place, axis=-1, keepdims=True)
     line_v = to_place / jnp.maximum(gap, 1e-9) * jnp.minimum(speed[:, None], gap / dt)
@@ -261,7 +262,6 @@ def step_people(
     queue = v.kind == KIND["queue"]
     arrived = jnp.linalg.norm(target - xy, axis=-1) < ARRIVED_M  # at the target: a corner or the leg's end
     passed = jnp.zeros_like(arrived)
-    place = queue_place(v, time_s)
     if routed:  # a corner passed, the next one (or the leg's end) is the target from the next step
         to_corner = s.waypoint < v.n_waypoints
         on_way = walk | stream | (queue & (place < 0))  # a queue member once served
