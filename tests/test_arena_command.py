@@ -38,6 +38,30 @@ def test_a_table_request_refuses_a_method_or_a_scene_named_twice():
     assert table.TableRequest(specs=(spec,), methods=("navfn", "casn")).methods == ("navfn", "casn")
 
 
+def test_the_scene_pictures_read_the_nearest_person_and_the_row_from_the_trajectories_alone(tmp_path):
+    """The distance and speed pictures need no scene: the nearest present person (a 3-4-5
+    triangle; an absent person nearer is passed over) and the row's name come from the frame."""
+    import matplotlib.image
+
+    from socialnav.evaluation.arena import plots
+
+    frame = pd.DataFrame({
+        "scene": "casn_head_on@held_out", "method": "snape_social_eband", "variant": 0,
+        "t_s": [0.1, 0.2, 0.3], "robot_x": 0.0, "robot_y": 0.0, "robot_speed": [0.2, 0.4, 0.6],
+        "speed_gain": 1.0, "reached": [False, False, True],
+        "p0_x": 3.0, "p0_y": 4.0, "p0_present": True,
+        "p1_x": 0.5, "p1_y": 0.0, "p1_present": [False, True, False],
+    })  # fmt: skip
+    assert plots.nearest_distance(frame).tolist() == [5.0, 0.5, 5.0]
+    assert plots._scene_name(frame) == "casn_head_on@held_out" and plots._scene_name(frame.iloc[:0]) == ""
+    for drawn in (
+        plots.distance_figure(frame, tmp_path / "distance.png"),
+        plots.speed_figure(frame, "snape_social_eband", tmp_path / "speed.png"),
+    ):
+        height, width, _ = matplotlib.image.imread(drawn).shape
+        assert height > 100 and width > 100
+
+
 @pytest.mark.skipif(available_bytes() is None, reason="no /proc/meminfo here: no memory check")
 def test_run_table_refuses_a_table_no_machine_holds_before_writing(tmp_path):
     from socialnav.data import SCENES_DIR

@@ -20,6 +20,11 @@ def _people_columns(frame: pd.DataFrame) -> int:
     return sum(1 for c in frame.columns if c.startswith("p") and c.endswith("_present"))
 
 
+def _scene_name(frame: pd.DataFrame) -> str:
+    """The scene row a trajectories frame is of (its ``scene`` column), or "" for an empty one."""
+    return str(frame["scene"].iloc[0]) if len(frame) else ""
+
+
 def _draw_scene(ax, walls_m, objects, bounds_m):
     """A scene's walls (K, 4) boxes, objects (``(name, polygon, cost)``) and bounds on ``ax``."""
     from matplotlib.patches import Polygon, Rectangle
@@ -58,7 +63,7 @@ def paths_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0) -
         ax.plot(g["robot_x"].to_numpy()[:stop], g["robot_y"].to_numpy()[:stop], color="tab:blue", lw=1.5)
         ax.plot(g["robot_x"].iloc[0], g["robot_y"].iloc[0], "o", color="black", ms=3)
         ax.set_title(method + ("" if upto.any() else " (no goal)"), fontsize=8)
-    fig.suptitle(f"{frame['scene'].iloc[0] if len(frame) else spec.name}, variant {variant}", fontsize=9)
+    fig.suptitle(f"{_scene_name(frame) or spec.name}, variant {variant}", fontsize=9)
     return figures.save(fig, path, dpi=80)
 
 
@@ -74,8 +79,9 @@ def nearest_distance(frame: pd.DataFrame) -> np.ndarray:
     return np.where(present, np.hypot(px - rx, py - ry), np.inf).min(axis=1)
 
 
-def distance_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0) -> pathlib.Path:
-    """Distance to the nearest person over time, one line per method, Hall's zones shaded."""
+def distance_figure(frame: pd.DataFrame, path, variant: int = 0) -> pathlib.Path:
+    """Distance to the nearest person over time, one line per method, Hall's zones shaded (the
+    scene row named from ``frame``)."""
     frame = frame[frame["variant"] == variant]
     fig = figures.figure(figsize=(5.0, 2.6))
     ax = fig.subplots()
@@ -91,13 +97,13 @@ def distance_figure(spec: SceneSpec, frame: pd.DataFrame, path, variant: int = 0
     ax.set_ylabel("nearest person (m)")
     ax.set_ylim(0, 6)
     ax.legend(fontsize=6, ncol=2)
-    ax.set_title(f"{frame['scene'].iloc[0] if len(frame) else spec.name}, variant {variant}", fontsize=9)
+    ax.set_title(f"{_scene_name(frame)}, variant {variant}", fontsize=9)
     return figures.save(fig, path, dpi=90)
 
 
-def speed_figure(spec: SceneSpec, frame: pd.DataFrame, method: str, path, variant: int = 0) -> pathlib.Path:
+def speed_figure(frame: pd.DataFrame, method: str, path, variant: int = 0) -> pathlib.Path:
     """The robot's speed and the local planner's speed gain over time, with the distance to the
-    nearest person (seed 004 Fig. 13)."""
+    nearest person (seed 004 Fig. 13), the scene row named from ``frame``."""
     g = frame[(frame["variant"] == variant) & (frame["method"] == method)]
     fig = figures.figure(figsize=(5.0, 2.6))
     ax = fig.subplots()
@@ -111,7 +117,7 @@ def speed_figure(spec: SceneSpec, frame: pd.DataFrame, method: str, path, varian
     twin.plot(t, np.where(np.isfinite(d), d, np.nan), color="tab:red", lw=0.8, label="nearest person (m)")
     twin.set_ylabel("nearest person (m)", color="tab:red")
     ax.legend(fontsize=7, loc="upper left")
-    ax.set_title(f"{spec.name}: {method}, variant {variant}", fontsize=9)
+    ax.set_title(f"{_scene_name(frame)}: {method}, variant {variant}", fontsize=9)
     return figures.save(fig, path, dpi=90)
 
 
