@@ -2511,6 +2511,11 @@ CASES: list[Case] = [
         timeout_s=300,
     ),
     Case(
+        "r14: a queue whose line runs through a thin wall",
+        arena_scene(lambda o: o["walls"].append([2.65, 2.7, -1.0, 1.0]), scene="gscl_queue"),
+        ("scene.json", "people[0].length", "walls[5] stands between"),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),

@@ -177,6 +177,8 @@ def _queue_person(obj):
         (lambda o: _queue_person(o).update(length=20, spacing_m=3.0), "people[0].length", "the line's place 3"),
         (lambda o: _queue_person(o).update(towards_deg=180), "people[0].length", "walls["),
         (lambda o: _queue_person(o).update(towards_deg=[-10, 100]), "people[0].length", "towards_deg"),
+        # a thin wall across the line: the people waiting step straight up through it
+        (lambda o: o["walls"].append([2.65, 2.7, -1.0, 1.0]), "people[0].length", "walls[5] stands between"),
         # the rules' geometry: a queue rule's head outside the scene or inside a wall is never broken
         (lambda o: o["rule"]["rules"][0].update(head=[300, 0]), "rule.rules[0].head", "outside bounds_m"),
         (lambda o: o["rule"]["rules"][0].update(head=[5.0, 0.0]), "rule.rules[0].head", "inside walls[4]"),

@@ -125,6 +125,7 @@ import numpy as np
 
 from socialnav.common import strict_json
 from socialnav.common.names import SAFE_NAME_RULE, is_safe_name, name_problem
+from socialnav.jaxsim import geometry
 from socialnav.jaxsim.params import PERSON_RADIUS_M
 from socialnav.jaxsim.scenario.errors import ScenarioError
 
@@ -272,10 +273,12 @@ def _extremes(value, legal=(-math.inf, math.inf)) -> list[float]:
 
 def _check_queue_line(r: _Reader, queue: dict, where: str, bounds, walls_m: np.ndarray) -> None:
     """Every place of a queue's line (``head`` moved back ``m * spacing_m`` against
-    ``towards_deg``, for m up to ``length - 1``) inside ``bounds_m`` and outside every wall, for
-    the head's corners and the ends and middle of the direction's and spacing's ranges (held-out
-    draws included; between the directions checked, every 45 degrees as well). The exit and the
-    head are checked as points already."""
+    ``towards_deg``, for m up to ``length - 1``) inside ``bounds_m`` and outside every wall, and
+    no wall between a place and the next one up the line (the people waiting in line step
+    straight up to their place, :func:`jaxsim.scenes.people.step_people`: they would walk through
+    it), for the head's corners and the ends and middle of the direction's and spacing's ranges
+    (held-out draws included; between the directions checked, every 45 degrees as well). The exit
+    and the head are checked as points already."""
     (hx0, hx1), (hy0, hy1) = queue["head"]
     lo, hi = _extremes(queue["towards_deg"])[0], _extremes(queue["towards_deg"])[-1]
     angles = sorted({lo, hi, (lo + hi) / 2, *(45.0 * k for k in range(math.ceil(lo / 45), math.floor(hi / 45) + 1))})
@@ -296,6 +299,17 @@ def _check_queue_line(r: _Reader, queue: dict, where: str, bounds, walls_m: np.n
                     for k, (wx0, wx1, wy0, wy1) in enumerate(walls_m):
                         if wx0 <= x <= wx1 and wy0 <= y <= wy1:
                             r.fail(f"{where}.length", f"{place} lies inside walls[{k}]")
+                    ahead = (x - back[0], y - back[1])
+                    if not len(walls_m) or not geometry.segment_hits_boxes(ahead, (x, y), walls_m):
+                        continue
+                    for k, wall in enumerate(walls_m):  # the wall in the way, for the message
+                        if geometry.segment_hits_boxes(ahead, (x, y), wall[None]):
+                            r.fail(
+                                f"{where}.length",
+                                f"walls[{k}] stands between {place} and the place ahead of it at "
+                                f"({ahead[0]:.2f}, {ahead[1]:.2f}) m: the people in line step straight "
+                                "up to their places and would walk through it",
+                            )
 
 
 def _check_group_circle(r: _Reader, group: dict, where: str, bounds, walls_m: np.ndarray) -> None:
