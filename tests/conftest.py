@@ -42,8 +42,20 @@ runtime.request_compilation_cache()
 # The C++ social force (jaxsim.native) is built afresh into a folder of this session's own, once
 # (about 3 s; the processes the tests start inherit it): every run checks the build from source.
 _session_folder("SOCIALNAV_NATIVE_CACHE", "socialnav-native-")
-# The recorded runs' Voronoi measures (evaluation.humans.datacache) likewise: never the user's home.
-_session_folder("SOCIALNAV_HUMANS_CACHE", "socialnav-humans-")
+# The recorded runs' Voronoi measures (evaluation.humans.datacache: PedPy's cells, 42 s of one core
+# on the 2-core AMD EPYC, the same in every session) kept like the compiled programs, beside them:
+# never the user's own folder, and read back only while the data, the code that measures it and
+# the libraries' versions are unchanged (the cache's key). Per processor, as NumPy's results may
+# differ in their last bits from one instruction set to another; about half a megabyte a version
+# of that code, pruned past HUMANS_CACHE_MAX_BYTES.
+HUMANS_CACHE_MAX_BYTES = 64 * 1024**2
+if "SOCIALNAV_HUMANS_CACHE" not in os.environ:
+    import xla_cache
+
+    try:
+        os.environ["SOCIALNAV_HUMANS_CACHE"] = str(xla_cache.made_folder("-humans", HUMANS_CACHE_MAX_BYTES))
+    except OSError:  # no writable cache folder in the home: one of the session's own, removed at its end
+        _session_folder("SOCIALNAV_HUMANS_CACHE", "socialnav-humans-")
 
 from plans import scipy_shortest_plan  # noqa: E402  (after the folders above are set)
 

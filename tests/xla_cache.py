@@ -46,10 +46,12 @@ def processor() -> str:
     return re.sub(r"[^A-Za-z0-9.]+", "-", name).strip("-").lower()
 
 
-def kept_folder() -> pathlib.Path:
-    """The test sessions' compilation cache on this processor (see the module docstring)."""
+def kept_folder(suffix: str = "") -> pathlib.Path:
+    """The test sessions' compilation cache on this processor (see the module docstring), or with
+    ``suffix`` another folder they keep beside it (``-humans``: the recorded pedestrians' measures,
+    tests/conftest.py)."""
     cache = os.environ.get("XDG_CACHE_HOME") or str(pathlib.Path.home() / ".cache")
-    return pathlib.Path(cache) / "socialnav-jax" / "tests" / processor()
+    return pathlib.Path(cache) / "socialnav-jax" / "tests" / (processor() + suffix)
 
 
 def prune(folder: pathlib.Path, max_bytes: int = MAX_BYTES) -> int:
@@ -83,12 +85,12 @@ def prune(folder: pathlib.Path, max_bytes: int = MAX_BYTES) -> int:
     return removed
 
 
-def made_folder() -> pathlib.Path:
-    """:func:`kept_folder`, made if missing and pruned (:func:`prune`); OSError if it cannot be
-    made (a read-only home)."""
-    folder = kept_folder()
+def made_folder(suffix: str = "", max_bytes: int = MAX_BYTES) -> pathlib.Path:
+    """:func:`kept_folder`, made if missing and pruned to ``max_bytes`` (:func:`prune`); OSError if
+    it cannot be made (a read-only home)."""
+    folder = kept_folder(suffix)
     folder.mkdir(parents=True, exist_ok=True)
-    prune(folder)
+    prune(folder, max_bytes)
     return folder
 
 
