@@ -102,6 +102,14 @@ def test_the_kept_cache_is_one_folder_per_processor_and_is_pruned_oldest_first(t
     assert sorted(p.name for p in folder.iterdir()) == ["entry4-cache", "entry5-cache"]
     assert xla_cache.prune(tmp_path / "nowhere") == 0
     assert xla_cache.made_folder() == folder  # there already: kept
+    # the pedestrians' measures beside it, one folder per processor too, pruned to their own cap
+    humans = xla_cache.made_folder("-humans", max_bytes=250)
+    assert humans == folder.parent / f"{folder.name}-humans" and humans.is_dir()
+    for k in range(3):
+        (humans / f"measure{k}.json").write_bytes(b"x" * 100)
+        os.utime(humans / f"measure{k}.json", (1000 + k, 1000 + k))
+    assert xla_cache.made_folder("-humans", max_bytes=250) == humans  # 300 bytes: down to 125
+    assert [p.name for p in humans.iterdir()] == ["measure2.json"]
     (tmp_path / "file").write_text("not a folder")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "file"))
     with pytest.raises(OSError):  # the conftest then uses a folder of the session's own
