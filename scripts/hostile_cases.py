@@ -2516,6 +2516,11 @@ CASES: list[Case] = [
         ("scene.json", "people[0].length", "walls[5] stands between"),
     ),
     Case(
+        "r14: a group of six on a circle of 0.3 m",
+        arena_scene(lambda o: o["people"][0].update(size=[6, 6], radius_m=[0.3, 0.3]), scene="gscl_group"),
+        ("scene.json", "people[0].radius_m", "closer than two bodies", "at least 0.50 m"),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),

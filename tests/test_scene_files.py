@@ -210,6 +210,30 @@ def test_a_group_whose_circle_reaches_a_wall_or_out_of_the_scene_is_refused(tmp_
     assert e.value.field == "people[0].radius_m"
 
 
+@pytest.mark.parametrize(
+    "size, radius_m, refused",
+    [
+        ([6, 6], [0.3, 0.3], True),  # neighbours 0.30 m apart: refused, naming the radius needed (0.50 m)
+        ([6, 6], [0.5, 0.5], False),  # exactly two bodies apart
+        ([3, 5], [0.5, 0.9], True),  # five at the held-out draw's 0.3 m: 0.35 m apart
+        ([3, 5], [0.8, 0.9], False),  # five at 0.75 m: 0.88 m apart
+    ],
+)
+def test_a_group_whose_members_would_stand_inside_each_other_is_refused(tmp_path, size, radius_m, refused):
+    """Neighbours on a group's circle at least two bodies apart at its largest size and smallest
+    radius (held-out draws included), as two people placed at the start are: the members stand
+    where they are put."""
+    path = _mutated(tmp_path, lambda o: o["people"][0].update(size=size, radius_m=radius_m))
+    if not refused:
+        assert load_scene(path).people[0]["radius_m"] == tuple(radius_m)
+        return
+    with pytest.raises(ScenarioError, match=r"stand 0\.\d\d m apart, closer than two bodies") as e:
+        load_scene(path)
+    assert e.value.field == "people[0].radius_m"
+    if size == [6, 6]:
+        assert "at least 0.50 m" in str(e.value)
+
+
 def test_every_generated_queue_place_lies_inside_the_scene_and_clear_of_walls():
     """The check's promise, measured on the generator: every queue place of 200 variants of the
     shipped queue, evaluation and held-out draws alike, lies inside the bounds and no wall."""

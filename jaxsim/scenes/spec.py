@@ -316,9 +316,21 @@ def _check_group_circle(r: _Reader, group: dict, where: str, bounds, walls_m: np
     """Every member of a group (on its circle of ``radius_m`` about ``centre``, ``size`` of them
     spaced evenly from ``rotation_deg``) inside ``bounds_m`` and outside every wall, for the
     centre's corners, the radius's and rotation's ends and middle (held-out draws included; a
-    rotation range every 10 degrees) and every size drawn."""
+    rotation range every 10 degrees) and every size drawn; and neighbours on the circle at least two
+    bodies apart (:data:`~socialnav.jaxsim.params.PERSON_RADIUS_M`) at the largest size and the
+    smallest radius drawn, as two people placed at the start are (:func:`_check_placements`): the
+    members stand where they are put, so closer they would stand inside each other all episode."""
     (cx0, cx1), (cy0, cy1) = group["centre"]
     radii = _extremes(group["radius_m"], (0.3, 5.0))
+    largest = int(group["size"][1])
+    apart_m = 2 * radii[0] * math.sin(math.pi / largest)  # the chord between neighbours
+    if apart_m < 2 * PERSON_RADIUS_M - 1e-9:
+        r.fail(
+            f"{where}.radius_m",
+            f"{largest} members on a circle of radius_m {radii[0]:g} stand {apart_m:.2f} m apart, closer than "
+            f"two bodies ({2 * PERSON_RADIUS_M:g} m): two people in one place; for {largest} members the smallest "
+            f"radius drawn (held-out draws included) must be at least {PERSON_RADIUS_M / math.sin(math.pi / largest):.2f} m",
+        )
     lo, hi = _extremes(group["rotation_deg"])[0], _extremes(group["rotation_deg"])[-1]
     rotations = np.linspace(lo, hi, max(2, math.ceil((hi - lo) / 10.0) + 1)) if hi > lo else [lo]
     sizes = range(2, int(group["size"][1]) + 1)
