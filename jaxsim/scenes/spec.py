@@ -325,11 +325,12 @@ def _check_group_circle(r: _Reader, group: dict, where: str, bounds, walls_m: np
     largest = int(group["size"][1])
     apart_m = 2 * radii[0] * math.sin(math.pi / largest)  # the chord between neighbours
     if apart_m < 2 * PERSON_RADIUS_M - 1e-9:
+        needed_m = PERSON_RADIUS_M / math.sin(math.pi / largest)
         r.fail(
             f"{where}.radius_m",
             f"{largest} members on a circle of radius_m {radii[0]:g} stand {apart_m:.2f} m apart, closer than "
             f"two bodies ({2 * PERSON_RADIUS_M:g} m): two people in one place; for {largest} members the smallest "
-            f"radius drawn (held-out draws included) must be at least {PERSON_RADIUS_M / math.sin(math.pi / largest):.2f} m",
+            f"radius drawn (held-out draws included) must be at least {needed_m:.2f} m",
         )
     lo, hi = _extremes(group["rotation_deg"])[0], _extremes(group["rotation_deg"])[-1]
     rotations = np.linspace(lo, hi, max(2, math.ceil((hi - lo) / 10.0) + 1)) if hi > lo else [lo]
