@@ -41,10 +41,11 @@ Behaviours: a **standing** person stays put; a **walker** goes from ``from`` to 
 walls by the corners of the shortest way where its straight line crosses one
 (:mod:`jaxsim.scenes.routes`; a walker no body can get through to its end is refused,
 :func:`jaxsim.scenes.reachable.people_problem`); a **group** is
-``size`` (2-6) standing people on a circle facing its centre (``in``) or away (``out``), turning
-inward at ``turn_inward_at_s`` if given (seed 002's lab scene); a **queue** is ``length`` people
-behind ``head`` facing ``towards_deg``, spaced ``spacing_m``: every ``advance_every_s`` its first
-person leaves for ``exit`` and the rest step up; a **stream** is ``count`` walkers entering at
+``size`` (2-6) standing people on a circle of ``radius_m`` facing its centre (``in``) or away
+(``out``), turning inward at ``turn_inward_at_s`` if given (seed 002's lab scene), neighbours at
+least two bodies apart; a **queue** is ``length`` people behind ``head`` facing ``towards_deg``,
+spaced ``spacing_m``, no wall across its line: every ``advance_every_s`` its first person leaves
+for ``exit`` and the rest step up; a **stream** is ``count`` walkers entering at
 ``from`` every ``interval_s`` from ``start_s``, leaving the scene at ``to``. ``ignore_robot``
 (walkers, streams): the person does not avoid the robot, as the seeds' test subjects walked their
 course. ``walks_with`` (walkers): the index in ``people`` of another walker this one walks
