@@ -2521,6 +2521,19 @@ CASES: list[Case] = [
         ("scene.json", "people[0].radius_m", "closer than two bodies", "at least 0.50 m"),
     ),
     Case(
+        "r14: a person standing on a group's circle",
+        arena_scene(
+            lambda o: o["people"].append({"behaviour": "standing", "position": [2.75, 0.0], "heading_deg": 0}),
+            scene="gscl_group",
+        ),
+        ("scene.json", "people[2].position", "of the circle of people[0]"),
+    ),
+    Case(
+        "r14: two groups on one spot",
+        arena_scene(lambda o: o["people"].append(dict(o["people"][0])), scene="gscl_group"),
+        ("scene.json", "people[2].centre", "the circle of people[2] can pass within 0.5 m"),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),

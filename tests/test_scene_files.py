@@ -234,6 +234,49 @@ def test_a_group_whose_members_would_stand_inside_each_other_is_refused(tmp_path
         assert "at least 0.50 m" in str(e.value)
 
 
+def _standing(xy):
+    return {"behaviour": "standing", "position": [[v, v] for v in xy], "heading_deg": [0, 0]}
+
+
+@pytest.mark.parametrize(
+    "added, field, words",
+    [  # gscl_group's group: centre (1-2, -0.3-0.3), radius 1.0-1.5 (0.75-1.75 held out)
+        (_standing((2.75, 0.0)), "people[2].position", "of the circle of people[0]"),  # on the circle
+        # inside the circle but 0.58 m from a centre it can be drawn at, a member 0.75 m out: 0.17 m apart
+        (_standing((1.5, 0.0)), "people[2].position", "a member could stand where this person does"),
+        (_standing((4.5, 0.0)), None, None),  # 0.75 m past the widest circle
+        (
+            {"behaviour": "group", "centre": [1.5, 0.0], "size": 3, "radius_m": 0.5, "facing": "in", "rotation_deg": 0},
+            "people[2].centre",
+            "the circle of people[2] can pass within 0.5 m",
+        ),  # fmt: skip
+        (
+            {
+                "behaviour": "group",
+                "centre": [4.5, -2.8],
+                "size": 3,
+                "radius_m": 0.5,
+                "facing": "in",
+                "rotation_deg": 0,
+            },
+            None,
+            None,
+        ),  # fmt: skip
+    ],
+)
+def test_a_person_or_a_group_where_a_groups_member_could_stand_is_refused(tmp_path, added, field, words):
+    """A group's members stand anywhere on its circle (the rotation and size drawn), so a person
+    placed at the start, or another group's circle, within two bodies of that circle is two
+    people in one place."""
+    path = _mutated(tmp_path, lambda o: o["people"].append(added))
+    if field is None:
+        assert len(load_scene(path).people) == 3
+        return
+    with pytest.raises(ScenarioError) as e:
+        load_scene(path)
+    assert e.value.field == field and words in str(e.value), str(e.value)
+
+
 def test_every_generated_queue_place_lies_inside_the_scene_and_clear_of_walls():
     """The check's promise, measured on the generator: every queue place of 200 variants of the
     shipped queue, evaluation and held-out draws alike, lies inside the bounds and no wall."""

@@ -529,6 +529,23 @@ def range_gap_m(a, b) -> float:
     return math.hypot(dx, dy)
 
 
+def range_span_m(a, b) -> float:
+    """The largest distance between two points drawn from ranges ``((x0, x1), (y0, y1))``."""
+    (ax0, ax1), (ay0, ay1) = a
+    (bx0, bx1), (by0, by1) = b
+    return math.hypot(max(abs(bx1 - ax0), abs(ax1 - bx0)), max(abs(by1 - ay0), abs(ay1 - by0)))
+
+
+def _circles_can_meet(gap_m: float, span_m: float, radii_a, radii_b, within_m: float) -> bool:
+    """Whether two circles, their centres ``gap_m .. span_m`` apart and their radii drawn from
+    ``radii_a`` and ``radii_b`` (``(lo, hi)``; a point is a circle of radius 0), can pass within
+    ``within_m`` of each other: the nearest points of circles of radii r1, r2 whose centres are d
+    apart are ``max(d - r1 - r2, |r1 - r2| - d, 0)`` apart."""
+    (lo_a, hi_a), (lo_b, hi_b) = radii_a, radii_b
+    least_difference = max(0.0, lo_a - hi_b, lo_b - hi_a)
+    return gap_m < hi_a + hi_b + within_m and span_m > least_difference - within_m
+
+
 def _placed_at_start(person: dict) -> list[tuple[str, tuple]]:
     """Where a person stands when the episode starts: (field, point range) pairs."""
     b = person["behaviour"]
@@ -544,7 +561,8 @@ def _placed_at_start(person: dict) -> list[tuple[str, tuple]]:
 
 def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
     """Refuse what no episode can use: the goal at the start, a person on the robot's start
-    (or on its circle, for a group), two people in one place at the start."""
+    (or on its circle, for a group), two people in one place at the start (a person placed at the
+    start within two bodies of another, or of a group's circle, or two groups' circles)."""
     from socialnav.jaxsim.scenes.robot import RobotParams
 
     robot_radius = RobotParams().radius_m
@@ -577,6 +595,29 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
                 r.fail(
                     f"people[{j}].{kj}",
                     f"can be within {2 * PERSON_RADIUS_M} m of people[{i}].{ki}: two people in one place at the start",
+                )
+    # A group's members stand anywhere on its circle (the rotation and size drawn): a person placed
+    # at the start, or another group's circle, that it can pass within two bodies of is refused.
+    groups = [(i, p) for i, p in enumerate(people) if p["behaviour"] == "group"]
+    for g, (i, group) in enumerate(groups):
+        radii = _extremes(group["radius_m"], (0.3, 5.0))
+        ring = (radii[0], radii[-1])
+        for j, key, point in placed:
+            gap, span = range_gap_m(group["centre"], point), range_span_m(group["centre"], point)
+            if _circles_can_meet(gap, span, ring, (0.0, 0.0), 2 * PERSON_RADIUS_M):
+                r.fail(
+                    f"people[{j}].{key}",
+                    f"can be within {2 * PERSON_RADIUS_M} m of the circle of people[{i}] (a group, radius_m "
+                    f"{ring[0]:g}-{ring[1]:g} with held-out draws): a member could stand where this person does",
+                )
+        for j, other in groups[g + 1 :]:
+            other_radii = _extremes(other["radius_m"], (0.3, 5.0))
+            gap, span = range_gap_m(group["centre"], other["centre"]), range_span_m(group["centre"], other["centre"])
+            if _circles_can_meet(gap, span, ring, (other_radii[0], other_radii[-1]), 2 * PERSON_RADIUS_M):
+                r.fail(
+                    f"people[{j}].centre",
+                    f"the circle of people[{j}] can pass within {2 * PERSON_RADIUS_M} m of the circle of people[{i}] "
+                    "(both groups, held-out draws included): members of the two could stand in one place",
                 )
 
 
