@@ -2534,6 +2534,14 @@ CASES: list[Case] = [
         ("scene.json", "people[2].centre", "the circle of people[2] can pass within 0.5 m"),
     ),
     Case(
+        "r14: a person standing in a queue's line",
+        arena_scene(
+            lambda o: o["people"].append({"behaviour": "standing", "position": [1.6, 0.0], "heading_deg": 0}),
+            scene="gscl_queue",
+        ),
+        ("scene.json", "people[1].position", "of people[0]: two people in one place"),
+    ),
+    Case(
         "r4 silent: a waypoint's made-up speed",
         simulate_with("waypoints.json", lambda o: o["waypoints"][2].update(speed_mps=0.5)),
         ("waypoints.json", "waypoints[2].speed_mps", "unknown"),

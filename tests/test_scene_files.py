@@ -166,6 +166,10 @@ def test_the_placement_check_uses_the_body_the_arena_measures_contacts_with(tmp_
         assert load_scene(path).people[0]["behaviour"] == "standing"
 
 
+def _standing(xy):
+    return {"behaviour": "standing", "position": [[v, v] for v in xy], "heading_deg": [0, 0]}
+
+
 def _queue_person(obj):
     (queue,) = [p for p in obj["people"] if p["behaviour"] == "queue"]
     return queue
@@ -177,6 +181,9 @@ def _queue_person(obj):
         (lambda o: _queue_person(o).update(length=20, spacing_m=3.0), "people[0].length", "the line's place 3"),
         (lambda o: _queue_person(o).update(towards_deg=180), "people[0].length", "walls["),
         (lambda o: _queue_person(o).update(towards_deg=[-10, 100]), "people[0].length", "towards_deg"),
+        # someone placed on the line, or the robot's start on it: two in one place (a place 1.2-2.0 m)
+        (lambda o: o["people"].append(_standing((1.6, 0.0))), "people[1].position", "of people[0]: two people"),
+        (lambda o: o["robot"].update(start=[1.6, 0.0]), "people[0].length", "would stand on the robot"),
         # a thin wall across the line: the people waiting step straight up through it
         (lambda o: o["walls"].append([2.65, 2.7, -1.0, 1.0]), "people[0].length", "walls[5] stands between"),
         # the rules' geometry: a queue rule's head outside the scene or inside a wall is never broken
@@ -232,10 +239,6 @@ def test_a_group_whose_members_would_stand_inside_each_other_is_refused(tmp_path
     assert e.value.field == "people[0].radius_m"
     if size == [6, 6]:
         assert "at least 0.50 m" in str(e.value)
-
-
-def _standing(xy):
-    return {"behaviour": "standing", "position": [[v, v] for v in xy], "heading_deg": [0, 0]}
 
 
 @pytest.mark.parametrize(

@@ -281,8 +281,7 @@ def _check_queue_line(r: _Reader, queue: dict, where: str, bounds, walls_m: np.n
     (held-out draws included; between the directions checked, every 45 degrees as well). The exit
     and the head are checked as points already."""
     (hx0, hx1), (hy0, hy1) = queue["head"]
-    lo, hi = _extremes(queue["towards_deg"])[0], _extremes(queue["towards_deg"])[-1]
-    angles = sorted({lo, hi, (lo + hi) / 2, *(45.0 * k for k in range(math.ceil(lo / 45), math.floor(hi / 45) + 1))})
+    angles = _queue_angles(queue)
     spacings = _extremes(queue["spacing_m"], (0.3, 3.0))
     last = int(queue["length"][1]) - 1
     xmin, xmax, ymin, ymax = bounds
@@ -546,16 +545,43 @@ def _circles_can_meet(gap_m: float, span_m: float, radii_a, radii_b, within_m: f
     return gap_m < hi_a + hi_b + within_m and span_m > least_difference - within_m
 
 
-def _placed_at_start(person: dict) -> list[tuple[str, tuple]]:
-    """Where a person stands when the episode starts: (field, point range) pairs."""
+def _queue_angles(queue: dict) -> list[float]:
+    """The directions (deg) a queue's line is checked at: the ends and middle of ``towards_deg``'s
+    draws (held-out ones included) and every multiple of 45 degrees between them (so a box over
+    them bounds the arc: its extremes lie at the ends or at multiples of 90)."""
+    lo, hi = _extremes(queue["towards_deg"])[0], _extremes(queue["towards_deg"])[-1]
+    return sorted({lo, hi, (lo + hi) / 2, *(45.0 * k for k in range(math.ceil(lo / 45), math.floor(hi / 45) + 1))})
+
+
+def _queue_places(queue: dict) -> list[tuple[str, tuple]]:
+    """Where a queue's people stand at the start: ``(what, point range)`` of its head and of each
+    place m behind it (``head`` moved back ``m * spacing_m`` against ``towards_deg``), each place's
+    range the box over the head's range and the direction's and spacing's draws."""
+    (hx0, hx1), (hy0, hy1) = queue["head"]
+    spacings = _extremes(queue["spacing_m"], (0.3, 3.0))
+    backs = [
+        (-sp * math.cos(math.radians(a)), -sp * math.sin(math.radians(a)))
+        for a in _queue_angles(queue)
+        for sp in spacings
+    ]
+    places = [("head", queue["head"])]
+    for m in range(1, int(queue["length"][1])):
+        xs, ys = [m * bx for bx, _ in backs], [m * by for _, by in backs]
+        places.append((f"the line's place {m}", ((hx0 + min(xs), hx1 + max(xs)), (hy0 + min(ys), hy1 + max(ys)))))
+    return places
+
+
+def _placed_at_start(person: dict) -> list[tuple[str, str, tuple]]:
+    """Where a person (a queue: each of its people) stands when the episode starts: ``(field, what,
+    point range)``, ``what`` naming it in a message."""
     b = person["behaviour"]
     if b == "standing":
-        return [("position", person["position"])]
+        return [("position", "position", person["position"])]
     if b in ("walk", "stream"):
         starts_at_once = person["start_s"][0] == 0.0
-        return [("from", person["start"])] if starts_at_once else []
+        return [("from", "from", person["start"])] if starts_at_once else []
     if b == "queue":
-        return [("head", person["head"])]
+        return [("head" if what == "head" else "length", what, point) for what, point in _queue_places(person)]
     return []
 
 
@@ -573,14 +599,15 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
         )
     placed = []
     for i, person in enumerate(people):
-        for key, point in _placed_at_start(person):
+        for key, what, point in _placed_at_start(person):
+            here = "" if what == key else f"{what}: "
             if range_gap_m(point, robot["start"]) < robot_radius + PERSON_RADIUS_M:
                 r.fail(
                     f"people[{i}].{key}",
-                    f"can be within {robot_radius + PERSON_RADIUS_M:.3f} m of robot.start: the person would stand "
-                    f"on the robot (radii {PERSON_RADIUS_M} m and {robot_radius} m)",
+                    f"{here}can be within {robot_radius + PERSON_RADIUS_M:.3f} m of robot.start: the person would "
+                    f"stand on the robot (radii {PERSON_RADIUS_M} m and {robot_radius} m)",
                 )
-            placed.append((i, key, point))
+            placed.append((i, key, what, point))
         if person["behaviour"] == "group":
             (cx0, cx1), (cy0, cy1) = person["centre"]
             sx, sy = (sum(robot["start"][0]) / 2, sum(robot["start"][1]) / 2)
@@ -590,11 +617,15 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
                 r.fail(f"people[{i}].centre", "the group's circle passes over robot.start: a member would stand on it")
     for a in range(len(placed)):
         for b in range(a + 1, len(placed)):
-            (i, ki, pi), (j, kj, pj) = placed[a], placed[b]
+            (i, ki, wi, pi), (j, kj, wj, pj) = placed[a], placed[b]
+            if i == j:  # a queue's own places: its spacing_m (legal from 0.3 m) sets them
+                continue
             if range_gap_m(pi, pj) < 2 * PERSON_RADIUS_M:
+                here = "" if wj == kj else f"{wj}: "
+                other = f"people[{i}].{ki}" if wi == ki else f"{wi} of people[{i}]"
                 r.fail(
                     f"people[{j}].{kj}",
-                    f"can be within {2 * PERSON_RADIUS_M} m of people[{i}].{ki}: two people in one place at the start",
+                    f"{here}can be within {2 * PERSON_RADIUS_M} m of {other}: two people in one place at the start",
                 )
     # A group's members stand anywhere on its circle (the rotation and size drawn): a person placed
     # at the start, or another group's circle, that it can pass within two bodies of is refused.
@@ -602,12 +633,13 @@ def _check_placements(r: _Reader, robot: dict, people: list[dict]) -> None:
     for g, (i, group) in enumerate(groups):
         radii = _extremes(group["radius_m"], (0.3, 5.0))
         ring = (radii[0], radii[-1])
-        for j, key, point in placed:
+        for j, key, what, point in placed:
             gap, span = range_gap_m(group["centre"], point), range_span_m(group["centre"], point)
             if _circles_can_meet(gap, span, ring, (0.0, 0.0), 2 * PERSON_RADIUS_M):
+                here = "" if what == key else f"{what}: "
                 r.fail(
                     f"people[{j}].{key}",
-                    f"can be within {2 * PERSON_RADIUS_M} m of the circle of people[{i}] (a group, radius_m "
+                    f"{here}can be within {2 * PERSON_RADIUS_M} m of the circle of people[{i}] (a group, radius_m "
                     f"{ring[0]:g}-{ring[1]:g} with held-out draws): a member could stand where this person does",
                 )
         for j, other in groups[g + 1 :]:
