@@ -1329,6 +1329,21 @@ def _walker_into_a_room(left_wall: list[list[float]], end_xy: tuple[float, float
     return make
 
 
+def _pass_behind_a_routed_walker(tmp: pathlib.Path) -> list[str]:
+    """``socialnav arena`` on :func:`_walker_into_a_room`'s scene with a 1 m door (the walker routed
+    round its post), its rule ``pass_behind`` that walker: the rule reads the straight line."""
+    room = [[1.5, 3.5, 1.0, 1.1], [3.4, 3.5, 1.0, 2.85], [1.5, 1.6, 1.0, 1.85]]
+    walker = {"behaviour": "walk", "from": [-3, 0.5], "to": [2.5, 1.4], "speed_mps": 1.0, "start_s": 0}
+
+    def mutate(obj):
+        obj["walls"] += room
+        obj["people"].append(walker)
+        obj["rule"] = {"type": "pass_behind", "person": 1}
+        obj["timeout_s"] = 40
+
+    return arena_scene(mutate)(tmp)
+
+
 def _walker_got_in(end_xy: tuple[float, float]):
     """The run finished and in both variants the walker (slot 1) ends within the arena's arrival
     distance (0.3 m) of ``end_xy``."""
@@ -2540,6 +2555,11 @@ CASES: list[Case] = [
             scene="gscl_queue",
         ),
         ("scene.json", "people[1].position", "of people[0]: two people in one place"),
+    ),
+    Case(
+        "r14: pass_behind a walker routed round a wall",
+        _pass_behind_a_routed_walker,
+        ("scene.json", "rule.person", "crosses a wall"),
     ),
     Case(
         "r4 silent: a waypoint's made-up speed",

@@ -280,6 +280,23 @@ def test_a_person_or_a_group_where_a_groups_member_could_stand_is_refused(tmp_pa
     assert e.value.field == field and words in str(e.value), str(e.value)
 
 
+@pytest.mark.parametrize("pillar, refused", [([0.3, 0.7, -0.2, 0.2], True), ([2.0, 2.4, -0.2, 0.2], False)])
+def test_pass_behind_a_walker_whose_line_crosses_a_wall_is_refused(tmp_path, pillar, refused):
+    """seed 001's crossing (the walker from x 0-1 at y 2.7 to x 0-1 at y -2.7) with a pillar: on
+    the walker's line the walker is routed round it and pass_behind would judge the robot against
+    a line nobody walks; beside it the scene reads as before."""
+    obj = json.loads((DATA_DIR / "scenes" / "casn_crossing.json").read_text())
+    obj["walls"].append(pillar)
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(obj))
+    if not refused:
+        assert load_scene(path).rule == {"type": "pass_behind", "person": 0}
+        return
+    with pytest.raises(ScenarioError, match="person 0's straight line from .* crosses a wall") as e:
+        load_scene(path)
+    assert e.value.field == "rule.person"
+
+
 def test_every_generated_queue_place_lies_inside_the_scene_and_clear_of_walls():
     """The check's promise, measured on the generator: every queue place of 200 variants of the
     shipped queue, evaluation and held-out draws alike, lies inside the bounds and no wall."""

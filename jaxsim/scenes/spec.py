@@ -446,6 +446,30 @@ def _person(r: _Reader, p: dict, where: str, bounds, walls_m: np.ndarray) -> tup
     return out, count
 
 
+def _range_points(value) -> list[tuple[float, float]]:
+    """A point range's corners and middle (``((x0, x1), (y0, y1))``)."""
+    (x0, x1), (y0, y1) = value
+    return [(x0, y0), (x0, y1), (x1, y0), (x1, y1), ((x0 + x1) / 2, (y0 + y1) / 2)]
+
+
+def _check_straight_walk(r: _Reader, walker: dict, where: str, i: int, walls_m: np.ndarray) -> None:
+    """A ``pass_behind`` rule's walker walks straight from ``from`` to ``to``: the rule judges the
+    robot against that line (:func:`evaluation.arena.nav_metrics.rule_satisfied`), and a walker
+    whose line crosses a wall walks round it instead (:mod:`jaxsim.scenes.routes`), so the rule
+    would judge a way nobody walks. Checked at the ranges' corners and middles."""
+    if not len(walls_m):
+        return
+    for start in _range_points(walker["start"]):
+        for end in _range_points(walker["end"]):
+            if geometry.segment_hits_boxes(start, end, walls_m):
+                r.fail(
+                    where,
+                    f"person {i}'s straight line from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g}) m "
+                    "crosses a wall: the walker walks round it, and pass_behind judges the robot against that "
+                    "straight line; give the rule a walker whose way crosses no wall",
+                )
+
+
 def _rule(r: _Reader, rule: Any, where: str, people: list[dict], bounds, walls_m: np.ndarray) -> dict:
     kind = r.get(rule, where, "type")
     if kind not in RULES:
@@ -488,6 +512,7 @@ def _rule(r: _Reader, rule: Any, where: str, people: list[dict], bounds, walls_m
             r.fail(f"{where}.person", f"expected a person index in [0, {len(people)}), got {i!r}")
         if people[i]["behaviour"] != "walk":
             r.fail(f"{where}.person", f"person {i} is a {people[i]['behaviour']!r}, not a walker")
+        _check_straight_walk(r, people[i], f"{where}.person", i, walls_m)
         return {"type": kind, "person": i}
     if kind == "queue":
         return {
