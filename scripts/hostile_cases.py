@@ -1329,6 +1329,12 @@ def _walker_into_a_room(left_wall: list[list[float]], end_xy: tuple[float, float
     return make
 
 
+def _standing_in(scene: str, xy: tuple[float, float]) -> Callable[[pathlib.Path], list[str]]:
+    """``socialnav arena`` on a built-in scene with a person standing at ``xy`` added."""
+    person = {"behaviour": "standing", "position": list(xy), "heading_deg": 0}
+    return arena_scene(lambda o: o["people"].append(person), scene=scene)
+
+
 def _pass_behind_a_routed_walker(tmp: pathlib.Path) -> list[str]:
     """``socialnav arena`` on :func:`_walker_into_a_room`'s scene with a 1 m door (the walker routed
     round its post), its rule ``pass_behind`` that walker: the rule reads the straight line."""
@@ -2537,10 +2543,7 @@ CASES: list[Case] = [
     ),
     Case(
         "r14: a person standing on a group's circle",
-        arena_scene(
-            lambda o: o["people"].append({"behaviour": "standing", "position": [2.75, 0.0], "heading_deg": 0}),
-            scene="gscl_group",
-        ),
+        _standing_in("gscl_group", (2.75, 0.0)),
         ("scene.json", "people[2].position", "of the circle of people[0]"),
     ),
     Case(
@@ -2550,10 +2553,7 @@ CASES: list[Case] = [
     ),
     Case(
         "r14: a person standing in a queue's line",
-        arena_scene(
-            lambda o: o["people"].append({"behaviour": "standing", "position": [1.6, 0.0], "heading_deg": 0}),
-            scene="gscl_queue",
-        ),
+        _standing_in("gscl_queue", (1.6, 0.0)),
         ("scene.json", "people[1].position", "of people[0]: two people in one place"),
     ),
     Case(

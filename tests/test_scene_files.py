@@ -170,6 +170,10 @@ def _standing(xy):
     return {"behaviour": "standing", "position": [[v, v] for v in xy], "heading_deg": [0, 0]}
 
 
+def _small_group(centre):
+    return {"behaviour": "group", "centre": list(centre), "size": 3, "radius_m": 0.5, "facing": "in", "rotation_deg": 0}
+
+
 def _queue_person(obj):
     (queue,) = [p for p in obj["people"] if p["behaviour"] == "queue"]
     return queue
@@ -248,23 +252,8 @@ def test_a_group_whose_members_would_stand_inside_each_other_is_refused(tmp_path
         # inside the circle but 0.58 m from a centre it can be drawn at, a member 0.75 m out: 0.17 m apart
         (_standing((1.5, 0.0)), "people[2].position", "a member could stand where this person does"),
         (_standing((4.5, 0.0)), None, None),  # 0.75 m past the widest circle
-        (
-            {"behaviour": "group", "centre": [1.5, 0.0], "size": 3, "radius_m": 0.5, "facing": "in", "rotation_deg": 0},
-            "people[2].centre",
-            "the circle of people[2] can pass within 0.5 m",
-        ),  # fmt: skip
-        (
-            {
-                "behaviour": "group",
-                "centre": [4.5, -2.8],
-                "size": 3,
-                "radius_m": 0.5,
-                "facing": "in",
-                "rotation_deg": 0,
-            },
-            None,
-            None,
-        ),  # fmt: skip
+        (_small_group((1.5, 0.0)), "people[2].centre", "the circle of people[2] can pass within 0.5 m"),
+        (_small_group((4.5, -2.8)), None, None),  # 3.5 m from the first's nearest centre
     ],
 )
 def test_a_person_or_a_group_where_a_groups_member_could_stand_is_refused(tmp_path, added, field, words):

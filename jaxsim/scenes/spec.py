@@ -459,15 +459,17 @@ def _check_straight_walk(r: _Reader, walker: dict, where: str, i: int, walls_m: 
     would judge a way nobody walks. Checked at the ranges' corners and middles."""
     if not len(walls_m):
         return
-    for start in _range_points(walker["start"]):
-        for end in _range_points(walker["end"]):
-            if geometry.segment_hits_boxes(start, end, walls_m):
-                r.fail(
-                    where,
-                    f"person {i}'s straight line from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g}) m "
-                    "crosses a wall: the walker walks round it, and pass_behind judges the robot against that "
-                    "straight line; give the rule a walker whose way crosses no wall",
-                )
+    starts, ends = np.array(_range_points(walker["start"])), np.array(_range_points(walker["end"]))
+    starts, ends = np.repeat(starts, len(ends), axis=0), np.tile(ends, (len(starts), 1))  # every pair
+    hits = geometry.segment_hits_boxes(starts, ends, walls_m)
+    if hits.any():
+        start, end = starts[np.argmax(hits)], ends[np.argmax(hits)]
+        r.fail(
+            where,
+            f"person {i}'s straight line from ({start[0]:g}, {start[1]:g}) to ({end[0]:g}, {end[1]:g}) m "
+            "crosses a wall: the walker walks round it, and pass_behind judges the robot against that "
+            "straight line; give the rule a walker whose way crosses no wall",
+        )
 
 
 def _rule(r: _Reader, rule: Any, where: str, people: list[dict], bounds, walls_m: np.ndarray) -> dict:
