@@ -1,7 +1,7 @@
 """Atomic file writes: write to a temporary name in the same folder, then rename.
 
 A reader never sees a half-written file under the final name, and a killed writer leaves at
-most a ``.tmp-*`` file beside it. ``os.replace`` is atomic on POSIX and Windows when both names
+most a ``.socialnav-tmp-*`` file beside it. ``os.replace`` is atomic on POSIX and Windows when both names
 are on one file system, which a temporary in the same folder guarantees.
 """
 
@@ -16,9 +16,11 @@ from collections.abc import Callable, Iterator
 
 def temporary_path(path: str | pathlib.Path) -> pathlib.Path:
     """The temporary name used for ``path``: same folder and suffix (so libraries that pick a
-    format from the suffix, matplotlib and numpy among them, still see it), hidden prefix."""
+    format from the suffix, matplotlib and numpy among them, still see it), hidden prefix: the
+    toolkit's own (``.socialnav-tmp-<pid>-``), so that a job's clean-up never takes a user's file
+    for its own."""
     path = pathlib.Path(path)
-    return path.with_name(f".tmp-{os.getpid()}-{path.name}")
+    return path.with_name(f".socialnav-tmp-{os.getpid()}-{path.name}")
 
 
 @contextlib.contextmanager
@@ -52,7 +54,7 @@ def naming(error: OSError, path: pathlib.Path, tmp: pathlib.Path) -> OSError:
     A writer deep in a library often says what failed but not where: Pillow's PNG writer on a
     full disk raises ``[Errno 28] No space left on device`` with no file name, pyarrow an
     ``OSError`` with no ``errno`` whose message carries ``[errno 28]``, ``open`` names the
-    temporary (``.tmp-<pid>-name``), which is removed by then. The error returned names the file
+    temporary (``.socialnav-tmp-<pid>-name``), which is removed by then. The error returned names the file
     the caller asked for and keeps the errno (from pyarrow's message where it has none), so that a
     command can tell a full disk from a bug; an error naming some other file is returned as it is.
     """

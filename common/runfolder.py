@@ -15,22 +15,23 @@ path of every file it wrote. The manifest is what makes a folder a run:
   or containing an input (``learn --logs L --out L``).
 
 Jobs that replace a run whole (``simulate``, ``learn``, ``evaluate``, ``ablation``) write into a
-private ``.staging-<pid>`` folder (:func:`staged`) and commit when it is complete
+private ``.socialnav-staging-<pid>`` folder (:func:`staged`) and commit when it is complete
 (:func:`commit`), under the folder's lock (:mod:`common.runlock`), in this order:
 
 1. the manifest is rewritten as a journal listing the old run's files and the new one's, so that
    at every later instant each file of either run is listed;
-2. the old run's files are renamed into ``.old-<pid>/`` (its marker first: from then on the
+2. the old run's files are renamed into ``.socialnav-old-<pid>/`` (its marker first: from then on the
    folder reads as an incomplete run, never as a mix of two);
 3. the new run's files are renamed into place, its marker last;
-4. the manifest is rewritten with the new run's files only, then ``.old-<pid>/`` is removed.
+4. the manifest is rewritten with the new run's files only, then ``.socialnav-old-<pid>/`` is
+   removed.
 
 Renames within one file system do not copy and do not fail for lack of space. If any step of 2-3
 raises (a file that cannot be moved: read-only, busy, gone), every rename done so far is undone
 in reverse and the old run is left whole, with one line naming the file; if even the undo fails,
 the message says which files are where. A kill (no clean-up) at any point is settled by the next
 job on the folder (:func:`recover`): with the new marker in place the commit is finished,
-otherwise the old run is put back. Removing ``.old-<pid>/`` at the end is best effort: a file
+otherwise the old run is put back. Removing ``.socialnav-old-<pid>/`` at the end is best effort: a file
 that cannot be removed is named in a warning and left for the next job, never a failure.
 
 Jobs that add to a folder as they go (``arena``, ``gscl train``, ``gscl evaluate``/``rules``,
@@ -55,13 +56,17 @@ from socialnav.common.runlock import LOCK_FILE, RunFolderError
 
 MANIFEST = ".socialnav-run.json"
 MANIFEST_FORMAT = "socialnav-run/1"
-STAGING_PREFIX = ".staging-"
-OLD_PREFIX = ".old-"
+STAGING_PREFIX = ".socialnav-staging-"
+OLD_PREFIX = ".socialnav-old-"
 # What a killed job of this toolkit leaves at the top of a run folder: a temporary of
-# common.atomic (.tmp-<pid>-<name>), a staging folder (.staging-<pid>) or a folder of the old
-# run's files moved aside (.old-<pid>). Only these exact forms are removed: a user's own
-# ``.tmp-notes`` is not ours.
-_LEFTOVER = re.compile(r"^(\.tmp-\d+-.+|\.staging-\d+|\.old-\d+)$")
+# common.atomic (.socialnav-tmp-<pid>-<name>), a staging folder (.socialnav-staging-<pid>) or a
+# folder of the old run's files moved aside (.socialnav-old-<pid>). Only these exact forms are
+# removed, each under the toolkit's own prefix: an --out may be a user's folder, whose
+# ``.old-2024/`` or ``.tmp-1-draft.txt`` is not ours.
+_LEFTOVER = re.compile(r"^\.socialnav-(tmp-\d+-.+|staging-\d+|old-\d+)$")
+# The scratch names of versions before the prefix: recognised only where a manifest's journal
+# names them (an interrupted commit of such a version), never by their look alone.
+_JOURNALED = re.compile(r"^\.(socialnav-)?(staging|old)-\d+$")
 
 
 class PreviousRun(RunFolderError):
@@ -182,7 +187,7 @@ def check_writable(folder: str | pathlib.Path) -> None:
     missing = [p for p in (folder, *folder.parents) if not _exists(p)]
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".tmp-0-probe-"):
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".socialnav-tmp-0-probe-"):
             pass
     except OSError as e:
         raise RunFolderError(f"{folder}: cannot write there ({e.strerror or e})") from None
@@ -247,16 +252,18 @@ def owned_files(folder: pathlib.Path, manifest: Manifest | None = None, with_run
 
 def clear_leftovers(folder: pathlib.Path, warn: Callable[[str], None] | None = None) -> list[str]:
     """Settle an interrupted commit (:func:`recover`) and remove what a killed job of this
-    toolkit left at the top of ``folder`` (``.tmp-<pid>-*``, ``.staging-<pid>``,
-    ``.old-<pid>``, nothing else); returns the names removed. A leftover that cannot be removed
+    toolkit left at the top of ``folder`` (``.socialnav-tmp-<pid>-*``, ``.socialnav-staging-<pid>``,
+    ``.socialnav-old-<pid>``, and the scratch folders an interrupted commit's journal names;
+    nothing else); returns the names removed. A leftover that cannot be removed
     is named through ``warn`` and kept."""
     folder = pathlib.Path(folder)
     if not folder.is_dir():
         return []
+    journaled = _journal_scratch(folder)
     recover(folder)
     gone = []
     for entry in folder.iterdir():
-        if _LEFTOVER.match(entry.name):
+        if _LEFTOVER.match(entry.name) or entry.name in journaled:
             try:
                 _remove(entry)
                 gone.append(entry.name)
@@ -264,6 +271,19 @@ def clear_leftovers(folder: pathlib.Path, warn: Callable[[str], None] | None = N
                 if warn is not None:
                     warn(f"cannot remove {entry}: {e.strerror or e} (left for later)")
     return sorted(gone)
+
+
+def _journal_scratch(folder: pathlib.Path) -> set[str]:
+    """The staging and aside folders an interrupted commit's journal names (ours by that record,
+    whatever version of the toolkit named them); empty where there is no journal."""
+    try:
+        manifest = read_manifest(folder)
+    except NotOurs:
+        return set()
+    if manifest is None or manifest.journal is None:
+        return set()
+    names = {str(manifest.journal.get(key, "")) for key in ("stage", "aside")}
+    return {name for name in names if _JOURNALED.match(name)}
 
 
 def claim(
@@ -510,7 +530,7 @@ def recover(folder: pathlib.Path) -> str | None:
     journal = manifest.journal
     old, new = list(journal.get("old", [])), list(journal.get("new", []))
     stage, aside = folder / str(journal.get("stage", "")), folder / str(journal.get("aside", ""))
-    if not (_LEFTOVER.match(stage.name) and _LEFTOVER.match(aside.name)):
+    if not (_JOURNALED.match(stage.name) and _JOURNALED.match(aside.name)):
         return None
     if stage.is_symlink() or aside.is_symlink():
         raise NotOurs(f"{folder / MANIFEST}: the journal's {stage.name} or {aside.name} is a symbolic link; refused")
@@ -570,7 +590,7 @@ def staged(folder: str | pathlib.Path, marker: str, overwrite: bool, job: str = 
 
 def _named_in_folder(error: BaseException, stage: pathlib.Path, folder: pathlib.Path) -> BaseException:
     """An ``OSError`` naming a file in the (removed) staging folder, as naming the file of the run
-    it was to become (``out/.staging-123/pictures/a.png`` -> ``out/pictures/a.png``); any other
+    it was to become (``out/.socialnav-staging-123/pictures/a.png`` -> ``out/pictures/a.png``); any other
     error as it is."""
     if not isinstance(error, OSError) or error.filename is None:
         return error

@@ -1,10 +1,12 @@
 """One writer per run folder: an advisory lock that a second job on the same folder is refused by.
 
 ``with run_lock(folder, "socialnav simulate"):`` takes an exclusive ``flock`` on
-``folder/.lock`` without waiting; if another process holds it, :class:`RunLocked` names the
+``folder/.socialnav-lock`` without waiting; if another process holds it, :class:`RunLocked` names the
 holder (its command, pid, host and start time, written in the file). The file is removed when
 the job ends; the operating system drops the lock when its process ends, killed or not, so a
-crashed run leaves at most an unlocked ``.lock`` file that the next job takes over. Within one
+crashed run leaves at most an unlocked ``.socialnav-lock`` file that the next job takes over. The
+name is the toolkit's own: an ``--out`` may be a user's folder, and a user's ``.lock`` there is
+not ours to truncate or remove. Within one
 process the lock is re-entrant (``socialnav run`` holds its folder while its steps take it again).
 POSIX only: elsewhere it does nothing.
 """
@@ -18,7 +20,7 @@ import pathlib
 import socket
 from collections.abc import Iterator
 
-LOCK_FILE = ".lock"
+LOCK_FILE = ".socialnav-lock"
 _held: dict[pathlib.Path, int] = {}  # folder -> depth, locks this process holds
 
 
@@ -59,7 +61,7 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
     while True:
         try:
             folder.mkdir(parents=True, exist_ok=True)
-            # O_NOFOLLOW: a .lock that is a symbolic link is refused, never opened: the lock's
+            # O_NOFOLLOW: a lock file that is a symbolic link is refused, never opened: the lock's
             # truncate and write would land in whatever file it points to, outside the folder.
             fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
         except OSError as e:

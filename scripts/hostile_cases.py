@@ -445,13 +445,13 @@ def _overwritten_whole(tmp, proc):
 def _stale_temporary(tmp):
     out = tmp / "out"
     out.mkdir()
-    (out / ".tmp-99999-logs.parquet").write_bytes(b"half a file from a killed run")
+    (out / ".socialnav-tmp-99999-logs.parquet").write_bytes(b"half a file from a killed run")
     return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY]
 
 
 def _no_stale_left(tmp, proc):
     out = tmp / "out"
-    return proc.returncode == 0 and not list(out.glob(".tmp-*")) and (out / "logs.parquet").exists()
+    return proc.returncode == 0 and not list(out.glob(".socialnav-tmp-*")) and (out / "logs.parquet").exists()
 
 
 def _same_day(tmp, proc):
@@ -473,7 +473,7 @@ INJECT_REMOVE_FAILURE = (
     "shutil.rmtree = failing(shutil.rmtree)\n"
     "_replace = os.replace\n"
     "def replace(src, dst, *a, **k):\n"
-    "    if os.path.basename(str(src)) == FAIL and '.staging-' not in str(src):\n"
+    "    if os.path.basename(str(src)) == FAIL and '.socialnav-staging-' not in str(src):\n"
     "        raise PermissionError(1, 'Operation not permitted', str(src))\n"
     "    return _replace(src, dst, *a, **k)\n"
     "os.replace = replace\n"
@@ -505,6 +505,35 @@ def _overwrite_user_folder(*job: str) -> Callable[[pathlib.Path], list[str]]:
         return command(*job, "--out", "{tmp}/mine", "--overwrite")(tmp)
 
     return make
+
+
+# A user's hidden files named as the toolkit's scratch files were before round fifteen gave them
+# its prefix: its lock (opened, truncated and removed by every job) and a killed job's
+# temporary, staging and aside folders (removed by the next job's clean-up as its own).
+LOOK_ALIKES = {
+    ".lock": b"a user's lock",
+    ".tmp-1-draft.txt": b"a draft",
+    ".old-2024/thesis.tex": b"last year's thesis",
+    ".staging-1/plan.txt": b"a plan",
+}
+
+
+def _look_alikes_in_out(*job: str) -> Callable[[pathlib.Path], list[str]]:
+    """``job`` with ``--out {tmp}/mine``, a folder holding a user's :data:`LOOK_ALIKES`."""
+
+    def make(tmp):
+        mine = tmp / "mine"
+        for name, content in LOOK_ALIKES.items():
+            (mine / name).parent.mkdir(parents=True, exist_ok=True)
+            (mine / name).write_bytes(content)
+        (tmp / "expected.json").write_text(json.dumps({k: v.decode() for k, v in LOOK_ALIKES.items()}))
+        return command(*job, "--out", "{tmp}/mine")(tmp)
+
+    return make
+
+
+def _look_alikes_kept(tmp, proc):
+    return proc.returncode == 0 and _user_files_kept(tmp, proc)
 
 
 def _user_files_kept(tmp, proc):
@@ -926,16 +955,17 @@ def _symlinked_manifest(tmp):
 
 
 def _symlinked_lock(tmp):
-    """A run folder whose ``.lock`` is a symbolic link to a user's file beside it."""
+    """A run folder whose lock file (``.socialnav-lock``; ``.lock`` before round fifteen) is a
+    symbolic link to a user's file beside it."""
     out = tmp / "out"
     out.mkdir()
     (tmp / "precious.txt").write_text("the user's")
-    (out / ".lock").symlink_to(tmp / "precious.txt")
+    (out / ".socialnav-lock").symlink_to(tmp / "precious.txt")
     return [*SOCIALNAV, "simulate", "--out", str(out), *SHORT_DAY]
 
 
 def _lock_target_kept(tmp, proc):
-    return (tmp / "precious.txt").read_text() == "the user's" and proc.returncode != 0 and ".lock" in proc.stderr
+    return (tmp / "precious.txt").read_text() == "the user's" and proc.returncode != 0 and "-lock" in proc.stderr
 
 
 def _victim_kept(tmp, proc):
@@ -1041,7 +1071,7 @@ def _previous_engine(tmp):
 
 def _previous_engine_kept(tmp, proc):
     kept = all((tmp / "out" / f.name).read_bytes() == f.read_bytes() for f in (tmp / "before").iterdir())
-    return _names_a_file(proc) and kept and not list((tmp / "out").glob(".staging-*"))
+    return _names_a_file(proc) and kept and not list((tmp / "out").glob(".socialnav-staging-*"))
 
 
 # --- round nine: the environment a user brings ---------------------------------------------------
@@ -1100,8 +1130,8 @@ def _killed_then_again(tmp):
 def _second_run_whole(tmp, proc):
     names = sorted(p.name for p in (tmp / "out").iterdir())
     killed_left = (tmp / "left.txt").read_text().split()
-    leftovers = [n for n in names if n == ".lock" or n.startswith(".staging")]
-    return proc.returncode == 0 and ".lock" in killed_left and "logs.parquet" in names and not leftovers
+    leftovers = [n for n in names if n == ".socialnav-lock" or n.startswith(".socialnav-staging")]
+    return proc.returncode == 0 and ".socialnav-lock" in killed_left and "logs.parquet" in names and not leftovers
 
 
 def _arena_under_hash_seed_one(tmp):
@@ -2560,6 +2590,33 @@ CASES: list[Case] = [
         "r14: pass_behind a walker routed round a wall",
         _pass_behind_a_routed_walker,
         ("scene.json", "rule.person", "crosses a wall"),
+    ),
+    Case(
+        "r15 lost: simulate --out a folder holding a user's .lock, .old-2024/, .staging-1/, .tmp-1-draft.txt",
+        _look_alikes_in_out("simulate", *SHORT_DAY),
+        check=_look_alikes_kept,
+        fail_label="data lost",
+    ),
+    Case(
+        "r15 lost: learn --out a folder holding the same",
+        _look_alikes_in_out("learn", "--logs", "{run}", "--no-progress"),
+        check=_look_alikes_kept,
+        fail_label="data lost",
+        timeout_s=300,
+    ),
+    Case(
+        "r15 lost: arena --out a folder holding the same",
+        _look_alikes_in_out(*"arena --scenes casn_head_on --methods navfn --variants 2 --no-progress".split()),
+        check=_look_alikes_kept,
+        fail_label="data lost",
+        timeout_s=300,
+    ),
+    Case(
+        "r15 lost: evaluate --out a folder holding the same",
+        _look_alikes_in_out("evaluate", "--tables", "{tables}", "--replicas", "1", "--slots", "S1", "--no-progress"),
+        check=_look_alikes_kept,
+        fail_label="data lost",
+        timeout_s=300,
     ),
     Case(
         "r4 silent: a waypoint's made-up speed",

@@ -62,7 +62,7 @@ def test_local_shards_compute_what_is_missing_and_a_rerun_after_a_killed_driver_
     assert calls == [0, 1, 2, 3]  # 0 and 1 were not computed again
     assert [json.loads(s.output.read_text()) for s in shards] == [0, 1, 4, 9]
     assert backend.run_shards(compute, _write_number, shards, progress=False) == 0
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".tmp")]  # nothing half written
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".socialnav-tmp")]  # nothing half written
 
 
 def test_unknown_backend_and_missing_ray_are_one_line_errors(tmp_path, monkeypatch):

@@ -366,7 +366,7 @@ def test_layers_command_writes_one_picture_per_scene_type(tmp_path):
     assert cli.main(["layers", "--out", str(tmp_path)]) == 0
     written = sorted(p.name for p in tmp_path.glob("*.png"))
     assert written == sorted(f"layers_{name}.png" for name in plots.demo_scenes())
-    assert not list(tmp_path.glob(".tmp-*"))
+    assert not list(tmp_path.glob(".socialnav-tmp-*"))
 
 
 @pytest.mark.slow

@@ -24,6 +24,7 @@ import textwrap
 import pytest
 
 from socialnav.common import runfolder
+from socialnav.common.runlock import run_lock
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -40,7 +41,8 @@ KILLER = textwrap.dedent(
     def counted(fn):
         def wrapper(*a, **k):
             paths = [os.path.realpath(str(x)) for x in a if isinstance(x, (str, os.PathLike))]
-            if any(p.startswith(FOLDER) and (SKIP_STAGED == "0" or "/.staging-" not in p[len(FOLDER):]) for p in paths):
+            staged = lambda p: "/.socialnav-staging-" in p[len(FOLDER):]
+            if any(p.startswith(FOLDER) and (SKIP_STAGED == "0" or not staged(p)) for p in paths):
                 count[0] += 1
                 if count[0] == KILL_AT:
                     os._exit(9)
@@ -222,9 +224,10 @@ def test_a_commit_failing_at_every_file_operation_leaves_one_whole_run(tmp_path,
 
 
 def _entries(folder: pathlib.Path) -> list[str]:
-    """The folder's entries, pid-stamped names (``.tmp-<pid>-*``, ``.staging-<pid>``,
-    ``.old-<pid>``) with the pid written as ``PID``, so that two jobs' folders compare."""
-    stamped = re.compile(r"^(\.(?:tmp|staging|old)-)\d+")
+    """The folder's entries, pid-stamped names (``.socialnav-tmp-<pid>-*``,
+    ``.socialnav-staging-<pid>``, ``.socialnav-old-<pid>``) with the pid written as ``PID``, so
+    that two jobs' folders compare."""
+    stamped = re.compile(r"^(\.socialnav-(?:tmp|staging|old)-)\d+")
     return sorted(stamped.sub(r"\1PID", p.relative_to(folder).as_posix()) for p in folder.rglob("*"))
 
 
@@ -273,9 +276,9 @@ def test_simulate_killed_at_every_file_operation(tmp_path):
             with pytest.raises(runfolder.PreviousRun, match="--overwrite"):
                 runfolder.prepare(folder, RESULTS, overwrite=False, job="socialnav simulate")
         runfolder.clear_leftovers(folder)  # what the next job does first, here without its cost
-        # The killed job's .lock stays until the next job takes it over (its holder is dead).
+        # The killed job's lock file stays until the next job takes it over (its holder is dead).
         left = {p.name for p in folder.iterdir() if p.name.startswith(".")}
-        assert left - {".lock"} == {runfolder.MANIFEST}
+        assert left - {runfolder.LOCK_FILE} == {runfolder.MANIFEST}
         if (folder / "run.json").exists():
             assert json.loads((folder / "run.json").read_text())["seed"] in (0, 1)
         if k in (1, n_ops // 2, n_ops):  # the whole next job, at the first, a middle and the last kill
@@ -284,7 +287,19 @@ def test_simulate_killed_at_every_file_operation(tmp_path):
             assert [p.name for p in folder.iterdir() if p.name.startswith(".")] == [runfolder.MANIFEST]
 
 
-USER_FILES = {"notes.txt": "my notes", "data/measurements.csv": "t,x\n0,1\n", "logs.txt": "not a run", ".keep": ""}
+USER_FILES = {
+    "notes.txt": "my notes",
+    "data/measurements.csv": "t,x\n0,1\n",
+    "logs.txt": "not a run",
+    ".keep": "",
+    # A user's hidden files under the names the toolkit's scratch files had before they took its
+    # prefix (its lock, a killed job's temporary, staging and aside folders): a job truncated and
+    # removed the first and cleared the others as its own leftovers.
+    ".lock": "a user's lock",
+    ".tmp-1-draft.txt": "a draft",
+    ".old-2024/thesis.tex": "last year's thesis",
+    ".staging-1/plan.txt": "a plan",
+}
 
 
 def _commands(learned_run):
@@ -388,6 +403,53 @@ def test_a_journal_naming_a_file_through_a_symbolic_link_is_not_settled(tmp_path
         runfolder.clear_leftovers(folder)
     assert (victim / "precious.txt").read_text() == "the user's thesis"
     assert _state(folder) == "old"
+
+
+LOOK_ALIKES = {name: text for name, text in USER_FILES.items() if name.startswith(".") and name != ".keep"}
+
+
+def test_only_the_toolkits_own_leftovers_are_cleared(tmp_path):
+    """A killed job's scratch entries carry the toolkit's prefix and are removed by the next job's
+    clean-up; a user's hidden files that look like scratch (``.old-2024/``, ``.tmp-1-...``) are
+    not, nor a user's ``.lock``, which the job's lock never opens."""
+    folder = tmp_path / "mine"
+    for name, text in LOOK_ALIKES.items():
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        (folder / name).write_text(text)
+    (folder / ".socialnav-tmp-4242-logs.parquet").write_text("half a file")
+    (folder / ".socialnav-staging-4242").mkdir()
+    (folder / ".socialnav-old-4242" / "causal").mkdir(parents=True)
+    gone = runfolder.clear_leftovers(folder)
+    assert gone == [".socialnav-old-4242", ".socialnav-staging-4242", ".socialnav-tmp-4242-logs.parquet"]
+    with run_lock(folder, "test"):
+        assert (folder / runfolder.LOCK_FILE).read_text().startswith("test (pid ")
+    assert {p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file()} == set(LOOK_ALIKES)
+    assert all((folder / name).read_text() == text for name, text in LOOK_ALIKES.items())
+
+
+def test_a_commit_interrupted_under_the_older_scratch_names_is_settled_and_cleared(tmp_path):
+    """A journal naming ``.staging-7`` and ``.old-7`` (the names before the toolkit's prefix): the
+    journal makes them ours, so the old run is put back and both folders go; a user's
+    ``.old-2024/`` beside them stays."""
+    folder = tmp_path / "run"
+    folder.mkdir()
+    _write_old(folder)
+    (folder / ".old-2024").mkdir()
+    (folder / ".old-2024" / "thesis.tex").write_text("last year's thesis")
+    stage, aside = folder / ".staging-7", folder / ".old-7"
+    for name, text in NEW.items():
+        (stage / name).parent.mkdir(parents=True, exist_ok=True)
+        (stage / name).write_text(text)
+    (aside / "causal").mkdir(parents=True)
+    for name in OLD:  # killed after step 2: the old run's files aside, none of the new in place
+        (folder / name).rename(aside / name)
+    manifest = runfolder.read_manifest(folder)
+    journal = {"old": sorted(OLD), "new": sorted(NEW), "stage": stage.name, "aside": aside.name}
+    runfolder.write_manifest(folder, runfolder.Manifest("test", "run.json", manifest.files, journal))
+    assert _state(folder) == "incomplete"
+    assert runfolder.clear_leftovers(folder) == [".old-7", ".staging-7"]
+    assert _state(folder) == "old" and runfolder.read_manifest(folder).journal is None
+    assert (folder / ".old-2024" / "thesis.tex").read_text() == "last year's thesis"
 
 
 @pytest.mark.slow

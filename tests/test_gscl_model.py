@@ -238,7 +238,7 @@ def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path,
         cli.main(["gscl", "generate", "--out", str(tmp_path / "d.csv")])
     with pytest.raises(SystemExit, match="unknown family"):
         cli.main(["gscl", "generate", "--out", str(out), "--count", "corridor=3"])
-    with pytest.raises(SystemExit, match="exists; pass --overwrite"):  # a dataset is never replaced silently
+    with pytest.raises(SystemExit, match=r"d\.npz, .*d\.json exist\(s\); pass --overwrite"):  # never replaced silently
         cli.main(["gscl", "generate", "--out", str(out), "--scale", "0.001"])
     again = ["gscl", "generate", "--out", str(out), "--scale", "0.001", "--count", "queue=5", "--overwrite"]
     assert cli.main(again) == 0
@@ -248,6 +248,12 @@ def test_cli_generate_writes_what_generate_makes_and_refuses_bad_input(tmp_path,
         cli.main(["gscl", "evaluate", "--run", str(tmp_path / "nothing")])
     assert not (tmp_path / "d.csv").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.json", "d.npz"]  # the dataset and how it was made
+    # A user's notes.json where the record of notes.npz would go: refused as it is, --overwrite or not.
+    (tmp_path / "notes.json").write_text('{"mine": 1}')
+    for overwrite in ([], ["--overwrite"]):
+        with pytest.raises(SystemExit, match=r"notes\.json is not the record 'gscl generate' writes"):
+            cli.main(["gscl", "generate", "--out", str(tmp_path / "notes.npz"), "--count", "queue=1", *overwrite])
+    assert (tmp_path / "notes.json").read_text() == '{"mine": 1}' and not (tmp_path / "notes.npz").exists()
     # A run folder with other settings is refused before anything is written to it.
     run = tmp_path / "run"
     run.mkdir()

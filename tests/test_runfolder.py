@@ -45,7 +45,7 @@ def test_simulate_refuses_a_previous_run_and_overwrite_replaces_it_whole(tmp_pat
     runfolder.record(out / "causal", "socialnav learn", ["report.json"], marker="report.json")
     mine = _user_files(out)
     (out / "causal" / "my-plot.png").write_text("a picture of mine")
-    (out / ".tmp-4242-logs.parquet").write_bytes(b"half a file of a killed run")
+    (out / ".socialnav-tmp-4242-logs.parquet").write_bytes(b"half a file of a killed run")
     assert cli.main(["simulate", "--out", str(out), "--overwrite", *SHORT]) == 0
     assert "removed what a killed job left" in capsys.readouterr().out
     assert json.loads((out / "run.json").read_text())["seed"] == 0

@@ -90,7 +90,7 @@ def test_a_lock_file_that_is_a_symbolic_link_is_refused_and_its_target_untouched
     out = tmp_path / "out"
     out.mkdir()
     (out / LOCK_FILE).symlink_to(precious)
-    with pytest.raises(RunFolderError, match=r"\.lock is a symbolic link \(to .*precious\.txt\)"):
+    with pytest.raises(RunFolderError, match=r"\.socialnav-lock is a symbolic link \(to .*precious\.txt\)"):
         with run_lock(out, "socialnav simulate"):
             pass
     assert cli.main(["simulate", "--out", str(out), "--worlds", "1", "--hours", "0.01"]) == 2

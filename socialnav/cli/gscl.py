@@ -440,17 +440,19 @@ def _check_dataset_target(out: pathlib.Path, overwrite: bool) -> None:
     if out.is_dir():
         raise SystemExit(f"socialnav gscl generate: --out {out} is a folder; give the .npz file to write")
     if out.exists() or provenance.exists():
-        if not overwrite:
-            raise SystemExit(f"socialnav gscl generate: --out {out} exists; pass --overwrite to replace it")
         try:
             ours = set(json.loads(provenance.read_text())) >= {"seed", "counts"}
         except (OSError, ValueError, TypeError):
             ours = False
-        if not ours:
+        if not ours:  # --overwrite would not replace it either: said first
+            found = f"{provenance} is not" if provenance.exists() else f"{out} exists without"
             raise SystemExit(
-                f"socialnav gscl generate: --out {out}: {provenance} is not the record 'gscl generate' writes beside "
-                "its datasets, so the file is not replaced: move it away or choose another --out"
+                f"socialnav gscl generate: --out {out}: {found} the record 'gscl generate' writes beside "
+                "its datasets, so no file is replaced: move it away or choose another --out"
             )
+        if not overwrite:
+            existing = ", ".join(str(f) for f in (out, provenance) if f.exists())
+            raise SystemExit(f"socialnav gscl generate: --out {out}: {existing} exist(s); pass --overwrite to replace")
     try:
         check_writable(out.parent)
     except RunFolderError as e:
