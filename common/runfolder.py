@@ -93,17 +93,23 @@ class Manifest:
       files: relative POSIX paths of every file the run wrote; an entry ending in ``/`` is a
         working folder the job owns whole (``shards/``, ``checkpoints/``).
       journal: during a commit only: ``{"old": [...], "new": [...], "stage": name, "aside": name}``.
+      name: the name of the folder the job wrote it in (:func:`write_manifest` records it; None in
+        a manifest of a version that did not): a run kept inside another under another name is a
+        user's copy, never a result derived from it (:func:`owned_files`).
     """
 
     job: str
     marker: str | None
     files: tuple[str, ...]
     journal: dict | None = None
+    name: str | None = None
 
     def to_json(self) -> str:
         raw = {"format": MANIFEST_FORMAT, "job": self.job, "marker": self.marker, "files": list(self.files)}
         if self.journal is not None:
             raw["journal"] = self.journal
+        if self.name is not None:
+            raw["name"] = self.name
         return json.dumps(raw, indent=1) + "\n"
 
 
@@ -131,14 +137,17 @@ def read_manifest(folder: str | pathlib.Path) -> Manifest | None:
         ok = False
     if not ok:
         raise NotOurs(f"{path}: not a socialnav run manifest (damaged or foreign); remove the folder yourself")
-    return Manifest(raw["job"], raw.get("marker"), tuple(files), journal if isinstance(journal, dict) else None)
+    name = raw.get("name") if isinstance(raw.get("name"), str) else None
+    return Manifest(raw["job"], raw.get("marker"), tuple(files), journal if isinstance(journal, dict) else None, name)
 
 
 def write_manifest(folder: pathlib.Path, manifest: Manifest) -> None:
-    """Write ``folder``'s manifest atomically (a temporary beside it, then a rename)."""
+    """Write ``folder``'s manifest atomically (a temporary beside it, then a rename), with the
+    folder's name as the job writes it (:attr:`Manifest.name`)."""
     from socialnav.common.atomic import write_text_atomic
 
-    write_text_atomic(pathlib.Path(folder) / MANIFEST, manifest.to_json())
+    named = dataclasses.replace(manifest, name=pathlib.Path(folder).resolve().name)
+    write_text_atomic(pathlib.Path(folder) / MANIFEST, named.to_json())
 
 
 def _safe_relative(rel: str) -> bool:
@@ -225,8 +234,9 @@ def _exists(path: pathlib.Path) -> bool:
 
 def owned_files(folder: pathlib.Path, manifest: Manifest | None = None, with_runs_inside: bool = True) -> list[str]:
     """The files of ``folder``'s run that exist (working folders expanded), its manifest
-    included, and, with ``with_runs_inside``, those of every run in a subfolder (a later job's
-    results kept beside it: ``causal/``, ``evaluation/``, ``arena/``), each by its own manifest."""
+    included, and, with ``with_runs_inside``, those of every run derived from it in a subfolder
+    (a later job's results kept beside it: ``causal/``, ``evaluation/``, ``arena/``; each by its
+    own manifest, ``_derived_from``)."""
     folder = pathlib.Path(folder)
     manifest = manifest if manifest is not None else read_manifest(folder)
     found: list[str] = []
@@ -246,8 +256,21 @@ def owned_files(folder: pathlib.Path, manifest: Manifest | None = None, with_run
                 continue
             if manifest is not None and any(f.startswith(sub.name + "/") for f in manifest.files):
                 continue  # a folder of this run's own, not a run of its own
-            found += [f"{sub.name}/{rel}" for rel in owned_files(sub)]
+            inner = read_manifest(sub)
+            if _derived_from(manifest, sub, inner):
+                found += [f"{sub.name}/{rel}" for rel in owned_files(sub, inner)]
     return list(dict.fromkeys(found))
+
+
+def _derived_from(manifest: Manifest | None, sub: pathlib.Path, inner: Manifest | None) -> bool:
+    """Whether the run in ``sub`` (its manifest ``inner``) is a result derived from the run of the
+    folder holding it (``manifest``), and so goes with that run: another job's run, still under
+    the name its job wrote it in. A run of the same job (a copy of the folder's run kept inside
+    it) or one under another name (``causal/`` copied to ``causal-monday/``) is a user's copy. A
+    manifest written before the name was recorded is judged by its job alone."""
+    if manifest is None or inner is None or inner.job == manifest.job:
+        return False
+    return inner.name in (None, sub.name)
 
 
 def clear_leftovers(folder: pathlib.Path, warn: Callable[[str], None] | None = None) -> list[str]:

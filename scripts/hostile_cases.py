@@ -536,6 +536,29 @@ def _look_alikes_kept(tmp, proc):
     return proc.returncode == 0 and _user_files_kept(tmp, proc)
 
 
+def _copy_kept_inside(copy: Callable[[pathlib.Path], tuple[pathlib.Path, pathlib.Path]]):
+    """``simulate --overwrite`` on a copy of the base run (its ``causal/`` inside) where the user
+    kept a copy, ``copy(out) -> (source, kept)``, inside the run's folder."""
+
+    def make(tmp):
+        out = tmp / "out"
+        shutil.copytree(base_run(), out)
+        source, kept = copy(out)
+        shutil.copytree(source, tmp / "copy", ignore=shutil.ignore_patterns("causal") if source == out else None)
+        (tmp / "copy").rename(kept)
+        files = {p.relative_to(tmp).as_posix(): p.read_bytes().hex() for p in kept.rglob("*") if p.is_file()}
+        (tmp / "expected.json").write_text(json.dumps(files))
+        return [*SOCIALNAV, "simulate", "--out", str(out), "--overwrite", *SHORT_DAY]
+
+    return make
+
+
+def _copy_untouched(tmp, proc):
+    files = json.loads((tmp / "expected.json").read_text())
+    same = all((tmp / rel).is_file() and (tmp / rel).read_bytes().hex() == h for rel, h in files.items())
+    return proc.returncode == 0 and same and not (tmp / "out" / "causal" / "engine_tables.npz").exists()
+
+
 def _user_files_kept(tmp, proc):
     files = {k: v.encode() for k, v in json.loads((tmp / "expected.json").read_text()).items()}
     return _untouched(tmp / "mine", files)
@@ -2617,6 +2640,18 @@ CASES: list[Case] = [
         check=_look_alikes_kept,
         fail_label="data lost",
         timeout_s=300,
+    ),
+    Case(
+        "r15 lost: simulate --overwrite, the previous run copied by the user into its folder's backup-monday/",
+        _copy_kept_inside(lambda out: (out, out / "backup-monday")),
+        check=_copy_untouched,
+        fail_label="data lost",
+    ),
+    Case(
+        "r15 lost: simulate --overwrite, the run's causal/ copied by the user to causal-monday/",
+        _copy_kept_inside(lambda out: (out / "causal", out / "causal-monday")),
+        check=_copy_untouched,
+        fail_label="data lost",
     ),
     Case(
         "r4 silent: a waypoint's made-up speed",

@@ -405,6 +405,38 @@ def test_a_journal_naming_a_file_through_a_symbolic_link_is_not_settled(tmp_path
     assert _state(folder) == "old"
 
 
+def test_overwrite_takes_the_runs_derived_from_the_old_one_and_keeps_a_users_copies(tmp_path):
+    """``--overwrite`` removes the old run with the runs later jobs derived from it inside its
+    folder (another job's run under the name it was written in, or, in a manifest older than the
+    name, any other job's run), never a user's copy kept there: the folder's run copied into
+    ``backup/`` (the same job) or a derived run copied under another name (``learned-monday/``)."""
+    folder = tmp_path / "run"
+    folder.mkdir()
+    _write_old(folder)
+    shutil.copytree(folder, tmp_path / "copy")
+    (tmp_path / "copy").rename(folder / "backup")
+    for name in ("learned", "legacy"):
+        (folder / name).mkdir()
+        (folder / name / "report.json").write_text(f"{name} of the old run")
+        runfolder.record(folder / name, "socialnav learn", ["report.json"], marker="report.json")
+    shutil.copytree(folder / "learned", folder / "learned-monday")
+    legacy = json.loads((folder / "legacy" / runfolder.MANIFEST).read_text())
+    assert legacy.pop("name") == "legacy"  # as a version before the name wrote it
+    (folder / "legacy" / runfolder.MANIFEST).write_text(json.dumps(legacy))
+    kept = {p: p.read_bytes() for p in (folder / "backup").rglob("*") if p.is_file()}
+    kept[folder / "learned-monday" / "report.json"] = b"learned of the old run"
+
+    runfolder.prepare(folder, ("run.json", "logs.parquet", "snapshot.png", "causal"), overwrite=True, job="test")
+    with runfolder.staged(folder, "run.json", overwrite=True, job="test") as stage:
+        for name, text in NEW.items():
+            (stage / name).parent.mkdir(parents=True, exist_ok=True)
+            (stage / name).write_text(text)
+    assert all((folder / name).read_text() == text for name, text in NEW.items())
+    assert not (folder / "learned" / "report.json").exists() and not (folder / "legacy" / "report.json").exists()
+    assert {p: p.read_bytes() for p in kept} == kept and len(kept) == 8
+    assert runfolder.read_manifest(folder / "backup").name == "run"  # the copy says where its job wrote it
+
+
 LOOK_ALIKES = {name: text for name, text in USER_FILES.items() if name.startswith(".") and name != ".keep"}
 
 
