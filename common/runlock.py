@@ -56,7 +56,7 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
         return
     if folder.exists() and not folder.is_dir():
         raise RunFolderError(f"{folder} is a file, not a folder")
-    created = not folder.exists()
+    made = [p for p in (folder, *folder.parents) if not p.exists()]  # deepest first
     path = folder / LOCK_FILE
     while True:
         try:
@@ -65,6 +65,7 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
             # truncate and write would land in whatever file it points to, outside the folder.
             fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
         except OSError as e:
+            _remove_empty(made)
             if path.is_symlink():
                 raise RunFolderError(
                     f"{path} is a symbolic link (to {os.readlink(path)}): the lock is not taken through it; remove it"
@@ -92,8 +93,19 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
         finally:
             del _held[folder]
             path.unlink(missing_ok=True)  # removed while still held, so nobody locks a file on its way out
-            if created and folder.is_dir() and not any(folder.iterdir()):
-                folder.rmdir()  # a job that wrote nothing leaves no folder behind
+            _remove_empty(made)  # a job that wrote nothing leaves no folder behind, nor the ones above it
             fcntl.flock(fd, fcntl.LOCK_UN)
     finally:
         os.close(fd)
+
+
+def _remove_empty(made: list[pathlib.Path]) -> None:
+    """Remove the folders of ``made`` (deepest first, those the lock created) that are still
+    empty, stopping at the first that is not."""
+    for folder in made:
+        try:
+            if any(folder.iterdir()):
+                return
+            folder.rmdir()
+        except OSError:  # gone or not ours to remove: leave the rest
+            return

@@ -70,6 +70,47 @@ def test_a_job_refused_on_bad_input_leaves_no_folder(tmp_path):
     out = tmp_path / "never"
     assert cli.main(["simulate", "--out", str(out), "--scenario", str(tmp_path / "missing")]) == 2
     assert not out.exists()
+    nested = tmp_path / "a" / "b" / "never"  # nor the folders above it that the job made
+    assert cli.main(["simulate", "--out", str(nested), "--scenario", str(tmp_path / "missing")]) == 2
+    assert list(tmp_path.iterdir()) == []
+
+
+# Every command that writes a run folder, with the least it parses; the lock is taken first.
+WRITERS = {
+    "humans validate": ["humans", "validate", "--quick"],
+    "humans predict": ["humans", "predict", "--run", "uo-050-180-180"],
+    "humans calibrate": ["humans", "calibrate"],
+    "gscl evaluate": ["gscl", "evaluate", "--run", "data/gscl/default"],
+    "gscl rules": ["gscl", "rules", "--run", "data/gscl/default"],
+    "gscl export": ["gscl", "export", "--run", "data/gscl/default"],
+    "gscl fit-tracks": ["gscl", "fit-tracks", "--scene", "gscl_queue"],
+    "gscl train": ["gscl", "train"],
+    "layers": ["layers"],
+    "simulate": ["simulate"],
+    "arena": ["arena", "--scenes", "casn_head_on"],
+    "run": ["run"],
+    "ablation": ["ablation"],
+    "evaluate": ["evaluate"],
+    "referee": ["referee"],
+    "policy train": ["policy", "train"],
+}
+
+
+@pytest.mark.parametrize("command", list(WRITERS))
+def test_every_command_that_writes_a_folder_waits_for_no_one(command, tmp_path, capsys):
+    """A second job on a folder another job is writing is refused at once naming the holder, by
+    every command that writes one (the humans and gscl model commands wrote without the lock: a
+    second one's clean-up could remove the first one's staging folder)."""
+    folder = tmp_path / "run"
+    holder = _holder(folder)
+    try:
+        assert cli.main([*WRITERS[command], "--out", str(folder)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"socialnav {command}: --out: ") and f"pid {holder.pid}" in err, err
+        assert sorted(p.name for p in folder.iterdir()) == [LOCK_FILE]
+    finally:
+        holder.kill()
+        holder.wait()
 
 
 def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys):

@@ -543,6 +543,16 @@ def _an_earlier_training_run(folder: pathlib.Path) -> bool:
     return True
 
 
+def _evaluation_lock(args) -> pathlib.Path | None:
+    """The folder ``gscl evaluate`` and ``rules`` lock: ``--out``, else ``RUN/evaluation`` of a
+    training run that exists (None otherwise: the handler names what is wrong)."""
+    from socialnav.models.inference import WEIGHTS_FILE
+
+    if args.out is not None:
+        return args.out
+    return args.run / "evaluation" if args.run.is_dir() and not (args.run / WEIGHTS_FILE).is_file() else None
+
+
 def _evaluation_folder(args, names: tuple[str, ...]) -> pathlib.Path:
     """``--out`` (default RUN/evaluation), checked before the work: a folder this job may write
     ``names`` into."""
@@ -561,6 +571,7 @@ def _parameters(config) -> int:
     return unet.parameter_count(steps.abstract_model(config))  # shapes only: nothing drawn
 
 
+@locks_folder(_evaluation_lock, "gscl evaluate")
 def _evaluate(args) -> int:
     from socialnav.models import evaluation
 
@@ -579,6 +590,7 @@ def _evaluate(args) -> int:
     return 0
 
 
+@locks_folder(_evaluation_lock, "gscl rules")
 def _rules(args) -> int:
     from socialnav.models import evaluation, rules
     from socialnav.models.inference import WEIGHTS_FILE
@@ -643,6 +655,7 @@ def _scene_specs(names):
     return [load_scene(f) for f in files]
 
 
+@locks_folder(lambda args: args.out, "gscl fit-tracks")
 def _fit_tracks(args) -> int:
     """A model fitted to a user's tracks, exported with a card of what went into it."""
     import datetime
@@ -718,6 +731,7 @@ def _fit_tracks(args) -> int:
     return 0
 
 
+@locks_folder(lambda args: args.out, "gscl export")
 def _export(args) -> int:
     """The run's model alone, with a card of how it was made and what it reaches
     (:func:`models.evaluation.exported_model`)."""

@@ -32,6 +32,7 @@ from socialnav.cli.argtypes import (
 from socialnav.common import runfolder
 from socialnav.common.atomic import write_text_atomic
 from socialnav.jaxsim.scenes.people import HUMAN_MODELS
+from socialnav.locking import locks_folder
 
 JOB = "socialnav humans validate"
 CALIBRATABLE = ("collision_free_speed", "anticipation", "orca", "steering_speed", "power_law",
@@ -162,6 +163,7 @@ def _add_map_options(parser, when: str) -> None:
 PREDICT_FILES = ("prediction.csv", "prediction.png", "summary.json")
 
 
+@locks_folder(lambda args: args.out, "humans predict")
 def predict(args) -> int:
     import numpy as np
 
@@ -270,6 +272,7 @@ PROGRESS = "progress.json"  # what a running fit has found so far, replaced by f
 CALIBRATE_RESULTS = ("fit.json", "curve.png", "held_out", PROGRESS)
 
 
+@locks_folder(lambda args: args.out, "humans calibrate")
 def calibrate(args) -> int:
     from socialnav.evaluation.humans import calibration as hc
     from socialnav.evaluation.humans import plots as human_plots
@@ -565,6 +568,7 @@ def _calibrate_joint(args) -> int:
     return 0
 
 
+@locks_folder(lambda args: args.out, "humans validate")
 def validate(args) -> int:
     from socialnav.evaluation.humans import calibration as hc
     from socialnav.evaluation.humans import report

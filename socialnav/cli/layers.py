@@ -10,6 +10,7 @@ import pathlib
 import sys
 
 from socialnav.cli.argtypes import output_folder
+from socialnav.locking import locks_folder
 
 
 def add_parser(top) -> None:
@@ -32,6 +33,7 @@ def add_parser(top) -> None:
 JOB = "socialnav layers"
 
 
+@locks_folder(lambda args: args.out, "layers")
 def run(args) -> int:
     from socialnav.common import runfolder
     from socialnav.planners import plots
