@@ -12,18 +12,19 @@ import textwrap
 import pytest
 
 from socialnav import cli
-from socialnav.common.runlock import LOCK_FILE, RunFolderError, RunLocked, run_lock
+from socialnav.common.runlock import LOCK_FILE, RunFolderError, RunLocked, read_lock, run_lock
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
-def _holder(folder: pathlib.Path) -> subprocess.Popen:
-    """Another process holding ``folder``'s lock until its stdin closes."""
+def _holder(folder: pathlib.Path, lock: str = 'run_lock({folder!r}, "socialnav simulate")') -> subprocess.Popen:
+    """Another process holding ``folder``'s lock (``lock``, a writer's by default) until its
+    stdin closes."""
     code = textwrap.dedent(
         f"""
         import sys
-        from socialnav.common.runlock import run_lock
-        with run_lock({str(folder)!r}, "socialnav simulate"):
+        from socialnav.common.runlock import read_lock, run_lock
+        with {lock.format(folder=str(folder))}:
             print("held", flush=True)
             sys.stdin.read()
         """
@@ -138,3 +139,44 @@ def test_a_lock_file_that_is_a_symbolic_link_is_refused_and_its_target_untouched
     err = capsys.readouterr().err
     assert err.startswith("socialnav simulate: --out: ") and "symbolic link" in err and err.count("\n") == 1
     assert precious.read_text() == "mine" and (out / LOCK_FILE).is_symlink()
+
+
+SHORT = ["--worlds", "1", "--slots", "1", "--slot-length-s", "60", "--no-progress"]
+ADVICE = "wait for it or choose another --out"
+
+
+def test_a_run_being_read_is_not_replaced_and_a_run_being_replaced_is_not_read(tmp_path, capsys):
+    """``learn`` reading a run holds it shared: ``simulate --overwrite`` on it is refused while it
+    reads (the commit would rename the logs away under it), and ``learn`` is refused while a
+    writer holds the run; readers share, and the last one out removes the lock file."""
+    run = tmp_path / "run"
+    assert cli.main(["simulate", "--out", str(run), *SHORT]) == 0
+    logs = (run / "logs.parquet").read_bytes()
+    capsys.readouterr()
+    reader = _holder(run, "read_lock({folder!r})")
+    try:
+        assert cli.main(["simulate", "--out", str(run), "--overwrite", "--seed", "3", *SHORT]) == 2
+        err = capsys.readouterr().err
+        assert err == f"socialnav simulate: --out: {run} is being read by another socialnav job; {ADVICE}\n"
+        assert (run / "logs.parquet").read_bytes() == logs
+        with read_lock(run), read_lock(run):  # readers share, in one process and beside another
+            assert (run / LOCK_FILE).exists()
+    finally:
+        reader.kill()
+        reader.wait()
+    with read_lock(run):
+        pass
+    assert not (run / LOCK_FILE).exists()  # the last reader out removed it
+
+    writer = _holder(run)
+    try:
+        out = tmp_path / "engine"
+        assert cli.main(["learn", "--logs", str(run), "--out", str(out), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(
+            f"socialnav learn: --logs: {run} is being written by socialnav simulate (pid {writer.pid} "
+        )
+        assert err.endswith("wait for it to finish before reading the run\n") and not out.exists()
+    finally:
+        writer.kill()
+        writer.wait()

@@ -202,7 +202,7 @@ def _out_folder(args) -> pathlib.Path:
     return args.out or args.tables.parent.parent / "evaluation"
 
 
-@locks_folder(_out_folder, "evaluate")
+@locks_folder(_out_folder, "evaluate", reads=lambda args: [("--tables", args.tables.parent)])
 def run(args: argparse.Namespace) -> int:
     try:
         scenario = load_scenario(args.scenario or WAREHOUSE_DIR)

@@ -83,7 +83,7 @@ RESULTS = ("report.json", "engine_tables.npz", "engine.json", "engine.bifxml", "
 JOB = "socialnav learn"
 
 
-@locks_folder(_out_folder, "learn")
+@locks_folder(_out_folder, "learn", reads=lambda args: [("--logs", args.logs)])
 def run(args: argparse.Namespace) -> int:
     out = _out_folder(args)
     try:
