@@ -102,8 +102,6 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
     try:
         folder.mkdir(parents=True, exist_ok=True)
         fd = _lock_file(folder, fcntl.LOCK_EX, "wait for it or choose another --out")
-    except RunLocked:
-        raise
     except OSError as e:
         _remove_empty(made)
         if path.is_symlink():
@@ -163,14 +161,14 @@ def read_lock(folder: str | pathlib.Path) -> Iterator[pathlib.Path]:
     path = folder / LOCK_FILE
     try:
         fd = _lock_file(folder, fcntl.LOCK_SH, "wait for it to finish before reading the run")
-    except RunLocked:
-        raise
     except OSError:
         if path.is_symlink():
             raise RunFolderError(
                 f"{path} is a symbolic link (to {os.readlink(path)}): the lock is not taken through it; remove it"
             ) from None
-        yield folder  # cannot be made here (read-only): nobody can write the run either
+        fd = None  # cannot be made here (read-only): nobody can write the run either
+    if fd is None:
+        yield folder
         return
     try:
         yield folder
