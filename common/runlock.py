@@ -38,6 +38,12 @@ class RunLocked(RunFolderError):
     """Another process is writing the run folder, or reading it; the message names it."""
 
 
+def _linked(path: pathlib.Path) -> RunFolderError:
+    """The refusal of a lock file that is a symbolic link (never opened through it)."""
+    target = os.readlink(path)
+    return RunFolderError(f"{path} is a symbolic link (to {target}): the lock is not taken through it; remove it")
+
+
 def _holder_of(fd: int) -> str:
     """Who holds the lock file open at ``fd``: a writer's line, else the readers (who write none)."""
     text = os.pread(fd, 1000, 0).decode("utf-8", "replace").strip()
@@ -105,9 +111,7 @@ def run_lock(folder: str | pathlib.Path, job: str) -> Iterator[pathlib.Path]:
     except OSError as e:
         _remove_empty(made)
         if path.is_symlink():
-            raise RunFolderError(
-                f"{path} is a symbolic link (to {os.readlink(path)}): the lock is not taken through it; remove it"
-            ) from None
+            raise _linked(path) from None
         raise RunFolderError(f"{folder}: cannot write there ({e.strerror or e})") from None
     try:
         since = datetime.datetime.now().isoformat(timespec="seconds")
@@ -163,9 +167,7 @@ def read_lock(folder: str | pathlib.Path) -> Iterator[pathlib.Path]:
         fd = _lock_file(folder, fcntl.LOCK_SH, "wait for it to finish before reading the run")
     except OSError:
         if path.is_symlink():
-            raise RunFolderError(
-                f"{path} is a symbolic link (to {os.readlink(path)}): the lock is not taken through it; remove it"
-            ) from None
+            raise _linked(path) from None
         fd = None  # cannot be made here (read-only): nobody can write the run either
     if fd is None:
         yield folder
